@@ -1,0 +1,60 @@
+#include "app/command_line.h"
+
+#include <algorithm>
+
+namespace netlab::app {
+
+CommandLine::CommandLine(const std::vector<std::string>& args,
+                         const std::vector<std::string>& flags,
+                         const std::vector<std::string>& options) {
+  auto is = [](const std::vector<std::string>& list, const std::string& name) {
+    return std::find(list.begin(), list.end(), name) != list.end();
+  };
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& arg = args[i];
+    if (arg.rfind("--", 0) != 0 || arg == "--") {
+      positional_.push_back(arg);
+      continue;
+    }
+    std::string name = arg.substr(2), value;
+    bool has_value = false;
+    if (const size_t eq = name.find('='); eq != std::string::npos) {
+      value = name.substr(eq + 1);
+      name = name.substr(0, eq);
+      has_value = true;
+    }
+    if (is(flags, name)) {
+      if (has_value) throw UsageError("--" + name + " takes no value");
+      flags_[name] = true;
+    } else if (is(options, name)) {
+      if (!has_value) {
+        if (i + 1 >= args.size()) throw UsageError("--" + name + " needs a value");
+        value = args[++i];
+      }
+      values_[name].push_back(value);
+    } else {
+      throw UsageError("unknown option --" + name);
+    }
+  }
+}
+
+bool CommandLine::Flag(const std::string& name) const { return flags_.count(name) > 0; }
+
+std::optional<std::string> CommandLine::Option(const std::string& name) const {
+  const auto it = values_.find(name);
+  if (it == values_.end() || it->second.empty()) return std::nullopt;
+  return it->second.back();
+}
+
+std::vector<std::string> CommandLine::Options(const std::string& name) const {
+  const auto it = values_.find(name);
+  return it == values_.end() ? std::vector<std::string>{} : it->second;
+}
+
+std::string CommandLine::Required(const std::string& name) const {
+  const auto value = Option(name);
+  if (!value) throw UsageError("--" + name + " is required");
+  return *value;
+}
+
+}  // namespace netlab::app

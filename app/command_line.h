@@ -1,0 +1,37 @@
+#pragma once
+// Argument parsing shared by netlab's subcommands: positional arguments, `--flag`, `--key VALUE`
+// (or `--key=VALUE`), and repeated keys. Unknown options are an error naming them.
+
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace netlab::app {
+
+// A usage error: the command prints it with its --help hint and exits with status 2.
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class CommandLine {
+ public:
+  // `flags` take no value; `options` take one value each (and may repeat).
+  CommandLine(const std::vector<std::string>& args, const std::vector<std::string>& flags,
+              const std::vector<std::string>& options);
+
+  bool Flag(const std::string& name) const;
+  std::optional<std::string> Option(const std::string& name) const;  // last given value
+  std::vector<std::string> Options(const std::string& name) const;   // every value, in order
+  std::string Required(const std::string& name) const;
+  const std::vector<std::string>& positional() const { return positional_; }
+
+ private:
+  std::map<std::string, std::vector<std::string>> values_;
+  std::map<std::string, bool> flags_;
+  std::vector<std::string> positional_;
+};
+
+}  // namespace netlab::app

@@ -1,0 +1,21 @@
+#pragma once
+// The subcommands of the `netlab` executable. Each takes the arguments after its name and returns
+// the process exit status: 0 success, 1 failure (bad input, unstable run), 2 usage error.
+
+#include <string>
+#include <vector>
+
+namespace netlab::app {
+
+struct Command {
+  const char* name;
+  const char* summary;
+  int (*run)(const std::vector<std::string>& args);
+};
+
+// All subcommands, in the order `netlab --help` lists them.
+const std::vector<Command>& Commands();
+
+int RunSimulate(const std::vector<std::string>& args);
+
+}  // namespace netlab::app

@@ -1,0 +1,54 @@
+// netlab: the experiment-side workstation for validating throw-net simulations.
+// `netlab <subcommand> --help` documents each subcommand.
+
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "app/commands.h"
+
+namespace netlab::app {
+
+const std::vector<Command>& Commands() {
+  static const std::vector<Command> commands = {
+      {"simulate", "run a Cosserat-rod net simulation from a scenario file", RunSimulate},
+  };
+  return commands;
+}
+
+namespace {
+
+void PrintUsage(std::FILE* out) {
+  std::fprintf(out,
+               "usage: netlab <subcommand> [options]\n\n"
+               "netlab calibrates the cameras of a throw-net experiment, helps label the net's\n"
+               "knots, reconstructs their 3D tracks and scores simulations against them.\n\n"
+               "subcommands:\n");
+  for (const Command& c : Commands()) std::fprintf(out, "  %-12s %s\n", c.name, c.summary);
+  std::fprintf(out, "\n`netlab <subcommand> --help` for the options of each.\n");
+}
+
+}  // namespace
+}  // namespace netlab::app
+
+int main(int argc, char** argv) {
+  using netlab::app::Commands;
+  const std::vector<std::string> args(argv + 1, argv + argc);
+  if (args.empty()) {
+    netlab::app::PrintUsage(stderr);
+    return 2;
+  }
+  if (args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
+    netlab::app::PrintUsage(stdout);
+    return 0;
+  }
+  if (args[0] == "--version") {
+    std::printf("netlab 0.1.0\n");
+    return 0;
+  }
+  for (const auto& command : Commands())
+    if (args[0] == command.name) return command.run({args.begin() + 1, args.end()});
+  std::fprintf(stderr, "netlab: unknown subcommand '%s'\n\n", args[0].c_str());
+  netlab::app::PrintUsage(stderr);
+  return 2;
+}

@@ -1,0 +1,56 @@
+#include "libnetsim/forces/bend_twist_force.h"
+
+#include "libnetsim/rotation.h"
+
+namespace netlab::netsim {
+
+BendTwistForce::BendTwistForce(const Model& model) {
+  for (const BendPair& p : model.bend_pairs)
+    if (p.damping.squaredNorm() > 0.0) damped_ = true;
+}
+
+void BendTwistForce::Accumulate(const Model& model, const State& state, double /*dt*/,
+                                ForceBuffers& out) const {
+  const Quaterniond* q = state.q.data();
+  const Vector3d* w = state.w.data();
+  Vector3d* tau = out.torque.data();
+  for (const BendPair& p : model.bend_pairs) {
+    const LogResult log = LogMap(q[p.segment_a].conjugate() * q[p.segment_b]);
+    Vector3d g = p.stiffness.cwiseProduct(log.phi - p.rest_phi);
+    if (damped_) {
+      const Vector3d rate = ApplyJrInv(log, w[p.segment_b]) - ApplyJlInv(log, w[p.segment_a]);
+      g += p.damping.cwiseProduct(rate);
+    }
+    g *= p.inv_length;
+    // tau_a = Jl^-1^T g = Jr^-1 g;  tau_b = -Jr^-1^T g = -Jl^-1 g.
+    tau[p.segment_a] += ApplyJrInv(log, g);
+    tau[p.segment_b] -= ApplyJlInv(log, g);
+  }
+}
+
+double BendTwistForce::Energy(const Model& model, const State& state) const {
+  double energy = 0.0;
+  for (const BendPair& p : model.bend_pairs) {
+    const LogResult log = LogMap(state.q[p.segment_a].conjugate() * state.q[p.segment_b]);
+    const Vector3d d = log.phi - p.rest_phi;
+    energy += 0.5 * p.inv_length * d.dot(p.stiffness.cwiseProduct(d));
+  }
+  return energy;
+}
+
+void BendTwistForce::AddStiffnessBounds(const Model& model, const State& /*state*/,
+                                        StiffnessBounds& bounds) const {
+  for (const BendPair& p : model.bend_pairs) {
+    const double la = model.segments[p.segment_a].rest_length;
+    const double lb = model.segments[p.segment_b].rest_length;
+    // Rotations scaled by their segment's length: self entry K/l, neighbour entry scaled by la/lb.
+    const double k = p.stiffness.maxCoeff() * p.inv_length;
+    const double c = p.damping.maxCoeff() * p.inv_length;
+    bounds.segment_stiffness[p.segment_a] += k * (1.0 + la / lb);
+    bounds.segment_stiffness[p.segment_b] += k * (1.0 + lb / la);
+    bounds.segment_damping[p.segment_a] += c * (1.0 + la / lb);
+    bounds.segment_damping[p.segment_b] += c * (1.0 + lb / la);
+  }
+}
+
+}  // namespace netlab::netsim

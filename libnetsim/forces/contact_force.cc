@@ -1,0 +1,121 @@
+#include "libnetsim/forces/contact_force.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace netlab::netsim {
+
+double RigidBody::SignedDistance(const Vector3d& p, double t, Vector3d* normal_out) const {
+  const Vector3d c = center + t * velocity;
+  switch (shape) {
+    case Shape::kSphere: {
+      const Vector3d d = p - c;
+      const double r = d.norm();
+      *normal_out = r > 0.0 ? Vector3d(d / r) : Vector3d::UnitZ();
+      return r - radius;
+    }
+    case Shape::kPlane:
+      *normal_out = normal;
+      return normal.dot(p - c);
+    case Shape::kBox: {
+      const Vector3d local = orientation.conjugate() * (p - c);
+      const Vector3d d = local.cwiseAbs() - half_extents;
+      const Vector3d outside = d.cwiseMax(0.0);
+      const double outside_norm = outside.norm();
+      Vector3d n_local;
+      double dist;
+      if (outside_norm > 0.0) {
+        n_local = outside.cwiseProduct(local.cwiseSign()) / outside_norm;
+        dist = outside_norm;
+      } else {
+        int axis;
+        dist = d.maxCoeff(&axis);
+        n_local = Vector3d::Zero();
+        n_local[axis] = local[axis] >= 0.0 ? 1.0 : -1.0;
+      }
+      *normal_out = orientation * n_local;
+      return dist;
+    }
+  }
+  return 0.0;
+}
+
+bool RigidBody::IsValid(std::string* error) const {
+  auto fail = [&](const std::string& message) {
+    if (error) *error = message;
+    return false;
+  };
+  if (!center.allFinite() || !velocity.allFinite()) return fail("center and velocity must be finite");
+  if (shape == Shape::kSphere && !(radius > 0.0)) return fail("radius must be > 0");
+  if (shape == Shape::kBox && !(half_extents.minCoeff() > 0.0)) return fail("size must be > 0");
+  if (shape == Shape::kPlane && !(std::abs(normal.norm() - 1.0) < 1e-9))
+    return fail("normal must be a unit vector");
+  if (!(friction >= 0.0)) return fail("friction must be >= 0");
+  if (!(stiffness >= 0.0)) return fail("stiffness must be >= 0");
+  if (!(damping_ratio >= 0.0)) return fail("damping_ratio must be >= 0");
+  return true;
+}
+
+void ContactForce::Accumulate(const Model& model, const State& state, double dt,
+                              ForceBuffers& out) const {
+  const int n = model.num_nodes();
+  for (const RigidBody& body : bodies_) {
+    for (int i = 0; i < n; ++i) {
+      if (model.node_inv_mass[i] == 0.0) continue;  // pinned nodes do not take contact forces
+      Vector3d normal;
+      const double depth =
+          model.node_radius[i] - body.SignedDistance(state.x[i], state.time, &normal);
+      if (depth <= 0.0) continue;
+      if (depth > out.max_penetration) {
+        out.max_penetration = depth;
+        out.max_penetration_node = i;
+      }
+      const double m = model.node_mass[i];
+      const double k = Stiffness(body, m);
+      const double c = 2.0 * body.damping_ratio * std::sqrt(k * m);
+      const Vector3d v_rel = state.v[i] - body.velocity;
+      const double vn = v_rel.dot(normal);
+      const double fn = k * depth - c * vn;
+      if (fn <= 0.0) continue;
+      Vector3d f = fn * normal;
+      if (body.friction > 0.0) {
+        const Vector3d vt = v_rel - vn * normal;
+        const double speed = vt.norm();
+        if (speed > 0.0) {
+          double ft = body.friction * fn * speed /
+                      std::sqrt(speed * speed + friction_velocity_ * friction_velocity_);
+          if (dt > 0.0) ft = std::min(ft, m * speed / dt);
+          f -= (ft / speed) * vt;
+        }
+      }
+      out.force[i] += f;
+    }
+  }
+}
+
+double ContactForce::Energy(const Model& model, const State& state) const {
+  double energy = 0.0;
+  for (const RigidBody& body : bodies_) {
+    for (int i = 0; i < model.num_nodes(); ++i) {
+      Vector3d normal;
+      const double depth =
+          model.node_radius[i] - body.SignedDistance(state.x[i], state.time, &normal);
+      if (depth > 0.0) energy += 0.5 * Stiffness(body, model.node_mass[i]) * depth * depth;
+    }
+  }
+  return energy;
+}
+
+void ContactForce::AddStiffnessBounds(const Model& model, const State& /*state*/,
+                                      StiffnessBounds& bounds) const {
+  for (const RigidBody& body : bodies_) {
+    for (int i = 0; i < model.num_nodes(); ++i) {
+      const double m = model.node_mass[i];
+      const double k = Stiffness(body, m);
+      bounds.node_stiffness[i] += k;
+      bounds.node_damping[i] += 2.0 * body.damping_ratio * std::sqrt(k * m);
+    }
+  }
+}
+
+}  // namespace netlab::netsim

@@ -1,0 +1,119 @@
+#include "libnetsim/run_scenario.h"
+
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <memory>
+#include <sstream>
+
+#include "libnetsim/track_file.h"
+
+namespace netlab::netsim {
+
+std::string RunSummary::BriefReport() const {
+  std::ostringstream os;
+  os << std::setprecision(4);
+  os << "scenario " << scenario << ": " << (stable ? "stable" : "UNSTABLE") << "\n";
+  os << "  model       " << nodes << " nodes, " << segments << " segments, " << knots
+     << " knots\n";
+  os << "  forces      ";
+  for (size_t i = 0; i < active.size(); ++i) os << (i ? ", " : "") << active[i];
+  os << "\n";
+  os << "  integrator  " << integrator << ", dt " << dt << " s (stability limit " << dt_limit
+     << " s, rotational inertia scaled up to x" << max_inertia_scale << ")\n";
+  os << "  run         " << steps << " steps to t = " << sim_time << " s in " << wall_s
+     << " s wall: " << segment_steps_per_s / 1e6 << " M segment-steps/s, " << real_time_factor
+     << " x real time\n";
+  if (!max_penetration_at.empty())
+    os << "  contact     deepest penetration " << max_penetration * 1e3 << " mm at "
+       << max_penetration_at << "\n";
+  os << "  energy      kinetic " << energy.kinetic << " J, elastic " << energy.elastic
+     << " J, potential " << energy.potential << " J\n";
+  for (const auto& [name, p] : probes)
+    os << "  probe       " << name << " at (" << p.x() << ", " << p.y() << ", " << p.z()
+       << ") m\n";
+  if (!output.empty()) os << "  output      " << frames << " frames in " << output << "\n";
+  if (!error.empty()) os << "  error       " << error << "\n";
+  return os.str();
+}
+
+RunSummary RunScenario(const Scenario& scenario, const RunOptions& options) {
+  BuiltScenario built = BuildScenario(scenario);
+  Simulation& sim = *built.simulation;
+  const Model& model = sim.model();
+
+  RunSummary summary;
+  summary.scenario = scenario.name;
+  summary.integrator = IntegratorName(scenario.simulation.integrator);
+  summary.dt = sim.dt();
+  summary.dt_limit = sim.stability().dt_limit;
+  summary.max_inertia_scale = sim.stability().max_inertia_scale;
+  summary.nodes = model.num_nodes();
+  summary.segments = model.num_segments();
+  summary.knots = model.num_knots();
+  summary.active = sim.active_forces();
+
+  // Output frames every `steps_per_frame` steps; an automatic dt divides the interval exactly.
+  const long steps_per_frame =
+      std::max(1L, std::lround(scenario.output_interval / sim.dt()));
+  const long total_steps = std::lround(scenario.duration / sim.dt());
+
+  std::unique_ptr<TrackFileWriter> writer;
+  if (!options.out_path.empty()) {
+    TrackFileWriter::Layout layout;
+    layout.nodes = scenario.store_nodes ? model.num_nodes() : 0;
+    layout.grid = built.knot_grid;
+    layout.net = built.knot_net;
+    layout.net_names = built.net_names;
+    layout.probe_names = built.probe_names;
+    layout.scenario = scenario.text;
+    writer = std::make_unique<TrackFileWriter>(options.out_path, layout);
+  }
+  std::vector<Vector3d> knots(built.knot_nodes.size()), probes(built.probe_nodes.size());
+  auto write_frame = [&] {
+    if (!writer) return;
+    const State& s = sim.state();
+    for (size_t k = 0; k < knots.size(); ++k) knots[k] = s.x[built.knot_nodes[k]];
+    for (size_t p = 0; p < probes.size(); ++p) probes[p] = s.x[built.probe_nodes[p]];
+    writer->AppendFrame(s.time, s.x, knots, probes);
+  };
+
+  const auto start = std::chrono::steady_clock::now();
+  write_frame();
+  const long progress_every = std::max(1L, total_steps / 50);
+  for (long step = 1; step <= total_steps; ++step) {
+    if (!sim.Step()) break;
+    if (step % steps_per_frame == 0) write_frame();
+    if (options.progress && step % progress_every == 0)
+      options.progress(static_cast<double>(step) / total_steps);
+  }
+  summary.wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  const State& s = sim.state();
+  summary.steps = sim.steps_taken();
+  summary.sim_time = s.time;
+  summary.segment_steps_per_s =
+      summary.wall_s > 0.0 ? summary.segments * static_cast<double>(summary.steps) / summary.wall_s
+                           : 0.0;
+  summary.real_time_factor = summary.wall_s > 0.0 ? s.time / summary.wall_s : 0.0;
+  summary.max_penetration = sim.max_penetration();
+  if (sim.max_penetration_node() >= 0)
+    summary.max_penetration_at = model.DescribeNode(sim.max_penetration_node());
+  for (size_t p = 0; p < built.probe_nodes.size(); ++p)
+    summary.probes.emplace_back(built.probe_names[p], s.x[built.probe_nodes[p]]);
+  summary.energy = sim.ComputeEnergy();
+  if (writer) summary.frames = writer->frames();
+  if (sim.failure()) {
+    summary.stable = false;
+    summary.error = sim.failure()->message;
+    if (writer)
+      summary.error += "; the frames up to the failure are in " + writer->partial_path();
+  } else if (writer) {
+    writer->Commit();
+    summary.output = options.out_path;
+  }
+  return summary;
+}
+
+}  // namespace netlab::netsim

@@ -1,0 +1,141 @@
+#pragma once
+// The time stepper: a fixed Model, a changing State, a set of forces and an explicit integrator.
+//
+//   Simulation sim(std::move(model), std::move(state), std::move(forces), options);
+//   while (sim.state().time < t_end)
+//     if (!sim.Step()) { report(sim.failure()->message); break; }
+//
+// Integrators (chosen by SimulationOptions::integrator, tested by one parameterised suite):
+//   explicit  symplectic Euler, the paper's explicit scheme: v += dt a(x, v); x += dt v.
+//             First order; one force evaluation per step.
+//   verlet    velocity Verlet (kick-drift-kick). Second order for conservative forces; damping
+//             forces are evaluated with the half-step velocity, so they keep first order.
+// Rotations follow the same schemes with the body-frame Euler equation
+// I dw/dt = tau - w x (I w) and q <- q Exp(w dt).
+//
+// A bad number is never carried on: after each step every velocity is checked (NaN, or a node
+// faster than max_speed, or a segment turning by more than 1 rad in one step) and the run stops
+// with a Failure naming the time, the node or segment and the quantity.
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "libnetsim/forces/force.h"
+#include "libnetsim/model.h"
+#include "libnetsim/stability.h"
+
+namespace netlab::netsim {
+
+class ContactForce;
+
+enum class IntegratorType { kSymplecticEuler, kVelocityVerlet };
+
+// "explicit" / "verlet".
+std::string IntegratorName(IntegratorType type);
+// Parses "explicit" (also "symplectic_euler") or "verlet"; false on anything else.
+bool ParseIntegratorType(const std::string& text, IntegratorType* type);
+
+struct SimulationOptions {
+  IntegratorType integrator = IntegratorType::kSymplecticEuler;
+  // Time step, s. 0 chooses safety * (estimated stability limit) automatically.
+  double dt = 0.0;
+  // Fraction of the estimated stability limit used when dt is automatic; the estimate is an upper
+  // bound on every frequency, so values up to 1 are stable for the initial configuration.
+  double safety = 0.9;
+  // When > 0 (s), an automatic dt is lowered so that this interval is a whole number of steps
+  // (output frames land exactly on multiples of it).
+  double align_interval = 0.0;
+  bool scale_rotational_inertia = true;  // stability.h
+  double contact_frequency_ratio = 0.5;  // contact_force.h
+  // Reset all velocities whenever the kinetic energy falls (dynamic relaxation to a static
+  // equilibrium). Changes the dynamics: only for statics.
+  bool kinetic_damping = false;
+  double max_speed = 1e3;  // m/s: a node faster than this stops the run as a blow-up
+
+  // True if the options are usable; otherwise false with the offending field named in *error.
+  bool IsValid(std::string* error) const;
+};
+
+struct Energy {
+  double kinetic = 0.0;    // J, translation and rotation
+  double elastic = 0.0;    // J, stretching, bending, torsion and the coupling penalty
+  double potential = 0.0;  // J, gravity, centrifugal, point forces and contact penalty
+  double total() const { return kinetic + elastic + potential; }
+};
+
+// Why a run stopped early.
+struct Failure {
+  double time = 0.0;    // s, the time of the state that holds the bad value
+  int node = -1;        // the node, or -1
+  int segment = -1;     // the segment, or -1
+  std::string quantity; // "velocity", "angular velocity"
+  std::string message;  // all of the above in one sentence, for the user
+};
+
+class Simulation {
+ public:
+  // Takes ownership of everything. Prepares the stability estimate (and scales rotational inertia
+  // when asked). Throws std::invalid_argument on invalid options or an unusable model.
+  Simulation(Model model, State state, std::vector<std::unique_ptr<Force>> forces,
+             const SimulationOptions& options);
+
+  const Model& model() const { return model_; }
+  const State& state() const { return state_; }
+  // The state may be edited between steps (tests, interactive tools).
+  State& mutable_state() {
+    forces_current_ = false;
+    return state_;
+  }
+  const SimulationOptions& options() const { return options_; }
+
+  double dt() const { return dt_; }
+  const StabilityReport& stability() const { return stability_; }
+  // Names of the forces in use, in evaluation order.
+  std::vector<std::string> active_forces() const;
+
+  // One step; false when the step produced a NaN or blow-up (see failure()).
+  bool Step();
+  // Up to `steps` steps; false on failure.
+  bool Advance(long steps);
+  // Runs with kinetic damping until every node force is below `force_tolerance` (N) and every
+  // segment torque below `torque_tolerance` (N m), or until `max_time` (s) of pseudo-time has
+  // passed. True when converged. Velocities are zero afterwards.
+  bool Relax(double max_time, double force_tolerance, double torque_tolerance);
+
+  const std::optional<Failure>& failure() const { return failure_; }
+  long steps_taken() const { return steps_; }
+  Energy ComputeEnergy() const;
+
+  // Deepest contact penetration seen so far (m) and its node (-1: no contact yet).
+  double max_penetration() const { return max_penetration_; }
+  int max_penetration_node() const { return max_penetration_node_; }
+  // Forces of the last evaluation.
+  const ForceBuffers& forces() const { return buffers_; }
+  // Evaluates all forces at the current state into forces().
+  void EvaluateForces();
+
+ private:
+  // v += h a; returns false (and records the failure) on a bad velocity.
+  bool Kick(double h);
+  void Drift(double h);
+  double KineticEnergy() const;
+
+  Model model_;
+  State state_;
+  std::vector<std::unique_ptr<Force>> forces_;
+  SimulationOptions options_;
+  StabilityReport stability_;
+  double dt_ = 0.0;
+  bool gyroscopic_ = false;  // any segment with unequal principal inertias
+  bool forces_current_ = false;
+  ForceBuffers buffers_;
+  std::optional<Failure> failure_;
+  long steps_ = 0;
+  double max_penetration_ = 0.0;
+  int max_penetration_node_ = -1;
+  double last_kinetic_ = 0.0;
+};
+
+}  // namespace netlab::netsim

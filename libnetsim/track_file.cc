@@ -1,0 +1,256 @@
+#include "libnetsim/track_file.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+
+#include "libnetsim/hdf5_util.h"
+
+namespace netlab::netsim {
+namespace {
+
+void RenameInto(const std::string& from, const std::string& to) {
+  std::error_code error;
+  std::filesystem::rename(from, to, error);
+  if (error) throw std::runtime_error(to + ": cannot rename " + from + " into place: " +
+                                      error.message());
+}
+
+void WriteRootAttributes(hid_t file, const std::string& source) {
+  h5::WriteStringAttribute(file, "format", kTrackFileFormat);
+  h5::WriteStringAttribute(file, "version", "1");
+  h5::WriteStringAttribute(file, "source", source);
+}
+
+std::string JoinNames(const std::vector<std::string>& names) {
+  std::string joined;
+  for (size_t i = 0; i < names.size(); ++i) joined += (i ? "\n" : "") + names[i];
+  return joined;
+}
+
+std::vector<std::string> SplitNames(const std::string& text) {
+  std::vector<std::string> names;
+  size_t start = 0;
+  while (!text.empty() && start <= text.size()) {
+    const size_t end = text.find('\n', start);
+    names.push_back(text.substr(start, end - start));
+    if (end == std::string::npos) break;
+    start = end + 1;
+  }
+  return names;
+}
+
+void WriteGrid(hid_t knots, const std::vector<std::array<int, 2>>& grid, const std::vector<int>& net,
+               const std::vector<std::string>& net_names) {
+  std::vector<int32_t> flat;
+  for (const auto& g : grid) {
+    flat.push_back(g[0]);
+    flat.push_back(g[1]);
+  }
+  h5::WriteDataset(knots, "grid", H5T_NATIVE_INT32, {grid.size(), 2}, flat.data());
+  h5::SetUnits(knots, "grid", "(row, col)");
+  std::vector<int32_t> nets(grid.size(), 0);
+  for (size_t k = 0; k < net.size() && k < nets.size(); ++k) nets[k] = net[k];
+  h5::WriteDataset(knots, "net", H5T_NATIVE_INT32, {nets.size()}, nets.data());
+  h5::SetUnits(knots, "net", "index");
+  h5::Id dataset(H5Dopen2(knots, "net", H5P_DEFAULT));
+  h5::WriteStringAttribute(dataset.get(), "names", JoinNames(net_names));
+}
+
+}  // namespace
+
+int KnotTracks::FindKnot(int row, int col, int net_index) const {
+  for (size_t k = 0; k < grid.size(); ++k) {
+    const int n = net.empty() ? 0 : net[k];
+    if (grid[k][0] == row && grid[k][1] == col && n == net_index) return static_cast<int>(k);
+  }
+  return -1;
+}
+
+void KnotTracks::CheckConsistent() const {
+  const size_t cells = time.size() * grid.size();
+  auto fail = [](const std::string& what) { throw std::invalid_argument("knot tracks: " + what); };
+  if (position.size() != cells) fail("position must hold frames x knots entries");
+  if (valid.size() != cells) fail("valid must hold frames x knots entries");
+  if (!net.empty() && net.size() != grid.size()) fail("net must hold one entry per knot");
+  if (!covariance.empty() && covariance.size() != cells) fail("covariance size");
+  if (!reprojection_error_px.empty() && reprojection_error_px.size() != cells)
+    fail("reprojection_error_px size");
+}
+
+void WriteKnotTracks(const std::string& path, const KnotTracks& tracks) {
+  tracks.CheckConsistent();
+  const std::string partial = path + ".partial";
+  {
+    h5::Id file = h5::CreateFile(partial);
+    WriteRootAttributes(file.get(), tracks.source);
+    const hsize_t t = tracks.time.size(), k = tracks.grid.size();
+    h5::WriteDataset(file.get(), "time", H5T_NATIVE_DOUBLE, {t}, tracks.time.data());
+    h5::SetUnits(file.get(), "time", "s");
+    h5::Id knots = h5::CreateGroup(file.get(), "knots");
+    WriteGrid(knots.get(), tracks.grid, tracks.net, tracks.net_names);
+    h5::WriteDataset(knots.get(), "position", H5T_NATIVE_DOUBLE, {t, k, 3},
+                     tracks.position.data(), 4);
+    h5::SetUnits(knots.get(), "position", "m");
+    h5::WriteDataset(knots.get(), "valid", H5T_NATIVE_UINT8, {t, k}, tracks.valid.data(), 4);
+    h5::SetUnits(knots.get(), "valid", "1");
+    if (!tracks.covariance.empty()) {
+      h5::WriteDataset(knots.get(), "covariance", H5T_NATIVE_DOUBLE, {t, k, 3, 3},
+                       tracks.covariance.data(), 4);
+      h5::SetUnits(knots.get(), "covariance", "m^2");
+    }
+    if (!tracks.reprojection_error_px.empty()) {
+      h5::WriteDataset(knots.get(), "reprojection_error_px", H5T_NATIVE_DOUBLE, {t, k},
+                       tracks.reprojection_error_px.data(), 4);
+      h5::SetUnits(knots.get(), "reprojection_error_px", "px");
+    }
+    if (!tracks.scenario.empty()) h5::WriteStringDataset(file.get(), "scenario", tracks.scenario);
+    H5Fflush(file.get(), H5F_SCOPE_GLOBAL);
+  }
+  RenameInto(partial, path);
+}
+
+KnotTracks ReadKnotTracks(const std::string& path, bool /*read_nodes*/) {
+  h5::Id file = h5::OpenFileReadOnly(path);
+  const hid_t f = file.get();
+  auto fail = [&](const std::string& what) { throw std::runtime_error(path + ": " + what); };
+  const std::string format = h5::ReadStringAttribute(f, "format");
+  if (format != kTrackFileFormat)
+    fail("not a knot-track file (root attribute format is '" + format + "', expected '" +
+         kTrackFileFormat + "')");
+  for (const char* name : {"/time", "/knots/position", "/knots/grid", "/knots/valid"})
+    if (!h5::Exists(f, name)) fail(std::string("missing dataset ") + name);
+
+  KnotTracks tracks;
+  tracks.source = h5::ReadStringAttribute(f, "source");
+  const auto time_dims = h5::DatasetDims(f, "/time");
+  const auto grid_dims = h5::DatasetDims(f, "/knots/grid");
+  if (time_dims.size() != 1) fail("/time must be 1-D");
+  if (grid_dims.size() != 2 || grid_dims[1] != 2) fail("/knots/grid must be [K,2]");
+  const hsize_t t = time_dims[0], k = grid_dims[0];
+  auto expect = [&](const char* name, std::vector<hsize_t> dims) {
+    if (h5::DatasetDims(f, name) != dims) {
+      std::string shape;
+      for (hsize_t d : dims) shape += (shape.empty() ? "" : ",") + std::to_string(d);
+      fail(std::string(name) + " must have shape [" + shape + "] to match /time and /knots/grid");
+    }
+  };
+  expect("/knots/position", {t, k, 3});
+  expect("/knots/valid", {t, k});
+
+  tracks.time.resize(t);
+  h5::ReadDataset(f, "/time", H5T_NATIVE_DOUBLE, tracks.time.data());
+  std::vector<int32_t> grid(2 * k);
+  h5::ReadDataset(f, "/knots/grid", H5T_NATIVE_INT32, grid.data());
+  for (hsize_t i = 0; i < k; ++i) tracks.grid.push_back({grid[2 * i], grid[2 * i + 1]});
+  if (h5::Exists(f, "/knots/net")) {
+    expect("/knots/net", {k});
+    tracks.net.resize(k);
+    h5::ReadDataset(f, "/knots/net", H5T_NATIVE_INT32, tracks.net.data());
+    h5::Id dataset(H5Dopen2(f, "/knots/net", H5P_DEFAULT));
+    tracks.net_names = SplitNames(h5::ReadStringAttribute(dataset.get(), "names"));
+  }
+  tracks.position.resize(t * k);
+  h5::ReadDataset(f, "/knots/position", H5T_NATIVE_DOUBLE, tracks.position.data());
+  tracks.valid.resize(t * k);
+  h5::ReadDataset(f, "/knots/valid", H5T_NATIVE_UINT8, tracks.valid.data());
+  if (h5::Exists(f, "/knots/covariance")) {
+    expect("/knots/covariance", {t, k, 3, 3});
+    tracks.covariance.resize(t * k);
+    h5::ReadDataset(f, "/knots/covariance", H5T_NATIVE_DOUBLE, tracks.covariance.data());
+  }
+  if (h5::Exists(f, "/knots/reprojection_error_px")) {
+    expect("/knots/reprojection_error_px", {t, k});
+    tracks.reprojection_error_px.resize(t * k);
+    h5::ReadDataset(f, "/knots/reprojection_error_px", H5T_NATIVE_DOUBLE,
+                    tracks.reprojection_error_px.data());
+  }
+  if (h5::Exists(f, "/scenario")) tracks.scenario = h5::ReadStringDataset(f, "/scenario");
+  return tracks;
+}
+
+std::vector<std::vector<Eigen::Vector3d>> ReadNodePositions(const std::string& path) {
+  h5::Id file = h5::OpenFileReadOnly(path);
+  std::vector<std::vector<Eigen::Vector3d>> frames;
+  if (!h5::Exists(file.get(), "/nodes/position")) return frames;
+  const auto dims = h5::DatasetDims(file.get(), "/nodes/position");
+  if (dims.size() != 3 || dims[2] != 3)
+    throw std::runtime_error(path + ": /nodes/position must be [T,N,3]");
+  std::vector<Eigen::Vector3d> flat(dims[0] * dims[1]);
+  h5::ReadDataset(file.get(), "/nodes/position", H5T_NATIVE_DOUBLE, flat.data());
+  for (hsize_t i = 0; i < dims[0]; ++i)
+    frames.emplace_back(flat.begin() + i * dims[1], flat.begin() + (i + 1) * dims[1]);
+  return frames;
+}
+
+struct TrackFileWriter::Handles {
+  h5::Id file, time, knots, valid, nodes;
+  std::vector<h5::Id> probes;
+};
+
+TrackFileWriter::TrackFileWriter(const std::string& path, const Layout& layout)
+    : path_(path), partial_path_(path + ".partial"), layout_(layout),
+      handles_(std::make_unique<Handles>()) {
+  Handles& h = *handles_;
+  h.file = h5::CreateFile(partial_path_);
+  const hid_t f = h.file.get();
+  WriteRootAttributes(f, layout.source);
+  const hsize_t k = layout.grid.size();
+  // ~64 frames per chunk for small nets, fewer for big ones (chunks of at most ~1 MB).
+  const hsize_t per_frame = std::max<hsize_t>({k, static_cast<hsize_t>(layout.nodes), 1}) * 24;
+  const hsize_t chunk = std::clamp<hsize_t>((1u << 20) / per_frame, 1, 64);
+  h.time = h5::CreateFrameDataset(f, "time", H5T_NATIVE_DOUBLE, {}, 256);
+  h5::SetUnits(f, "time", "s");
+  h5::Id knots_group = h5::CreateGroup(f, "knots");
+  WriteGrid(knots_group.get(), layout.grid, layout.net, layout.net_names);
+  h.knots = h5::CreateFrameDataset(knots_group.get(), "position", H5T_NATIVE_DOUBLE, {k, 3}, chunk);
+  h5::SetUnits(knots_group.get(), "position", "m");
+  h.valid = h5::CreateFrameDataset(knots_group.get(), "valid", H5T_NATIVE_UINT8, {k}, chunk);
+  h5::SetUnits(knots_group.get(), "valid", "1");
+  if (layout.nodes > 0) {
+    h5::Id nodes_group = h5::CreateGroup(f, "nodes");
+    h.nodes = h5::CreateFrameDataset(nodes_group.get(), "position", H5T_NATIVE_DOUBLE,
+                                     {static_cast<hsize_t>(layout.nodes), 3}, chunk);
+    h5::SetUnits(nodes_group.get(), "position", "m");
+  }
+  if (!layout.probe_names.empty()) {
+    h5::Id probes_group = h5::CreateGroup(f, "probes");
+    for (const std::string& name : layout.probe_names) {
+      h.probes.push_back(
+          h5::CreateFrameDataset(probes_group.get(), name, H5T_NATIVE_DOUBLE, {3}, 256));
+      h5::SetUnits(probes_group.get(), name, "m");
+    }
+  }
+  if (!layout.scenario.empty()) h5::WriteStringDataset(f, "scenario", layout.scenario);
+}
+
+TrackFileWriter::~TrackFileWriter() = default;
+
+void TrackFileWriter::AppendFrame(double time, const std::vector<Eigen::Vector3d>& nodes,
+                                  const std::vector<Eigen::Vector3d>& knots,
+                                  const std::vector<Eigen::Vector3d>& probes) {
+  if (!handles_) throw std::logic_error("TrackFileWriter: AppendFrame after Commit");
+  if (knots.size() != layout_.grid.size() || probes.size() != layout_.probe_names.size() ||
+      (layout_.nodes > 0 && static_cast<int>(nodes.size()) != layout_.nodes))
+    throw std::invalid_argument("TrackFileWriter: frame does not match the layout");
+  Handles& h = *handles_;
+  const hsize_t frame = static_cast<hsize_t>(frames_);
+  h5::AppendFrame(h.time.get(), H5T_NATIVE_DOUBLE, &time, frame);
+  h5::AppendFrame(h.knots.get(), H5T_NATIVE_DOUBLE, knots.data(), frame);
+  const std::vector<uint8_t> valid(knots.size(), 1);
+  h5::AppendFrame(h.valid.get(), H5T_NATIVE_UINT8, valid.data(), frame);
+  if (layout_.nodes > 0) h5::AppendFrame(h.nodes.get(), H5T_NATIVE_DOUBLE, nodes.data(), frame);
+  for (size_t p = 0; p < probes.size(); ++p)
+    h5::AppendFrame(h.probes[p].get(), H5T_NATIVE_DOUBLE, probes[p].data(), frame);
+  ++frames_;
+}
+
+void TrackFileWriter::Commit() {
+  if (!handles_) return;
+  H5Fflush(handles_->file.get(), H5F_SCOPE_GLOBAL);
+  handles_.reset();
+  RenameInto(partial_path_, path_);
+}
+
+}  // namespace netlab::netsim

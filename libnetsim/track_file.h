@@ -1,0 +1,108 @@
+#pragma once
+// The knot-track file: the common currency of netlab. `netlab simulate` writes it, `netlab
+// triangulate` writes it, `netlab score` reads two of them. This is its one reader and writer.
+//
+// Layout (HDF5; every dataset has a "units" attribute):
+//   /time                         [T]        float64  s
+//   /knots/position               [T,K,3]    float64  m, simulation/world frame
+//   /knots/grid                   [K,2]      int32    (row, col) of each knot in its net
+//   /knots/net                    [K]        int32    index of the knot's net (attribute "names")
+//   /knots/valid                  [T,K]      uint8    1 where the position is known
+//   /knots/covariance             [T,K,3,3]  float64  m^2       (optional: measured tracks)
+//   /knots/reprojection_error_px  [T,K]      float64  px        (optional: measured tracks)
+//   /nodes/position               [T,N,3]    float64  m         (optional: simulations)
+//   /probes/<name>                [T,3]      float64  m         (optional: simulations)
+//   /scenario                     string     the scenario YAML  (optional: simulations)
+// Root attributes: "format" = "netlab-knot-tracks", "version" = "1", "source" (the command).
+// Files are written to "<path>.partial" and renamed into place when complete, so an interrupted
+// write never replaces a good file.
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace netlab::netsim {
+
+inline constexpr char kTrackFileFormat[] = "netlab-knot-tracks";
+
+struct KnotTracks {
+  std::vector<double> time;                   // [T], s
+  std::vector<std::array<int, 2>> grid;       // [K], (row, col)
+  std::vector<int> net;                       // [K], net index; empty: every knot in net 0
+  std::vector<std::string> net_names;         // names of the nets
+  std::vector<Eigen::Vector3d> position;      // [T*K], frame-major: position[t * K + k], m
+  std::vector<uint8_t> valid;                 // [T*K]
+  std::vector<Eigen::Matrix3d> covariance;    // [T*K] m^2, or empty
+  std::vector<double> reprojection_error_px;  // [T*K], or empty
+  std::string source;                         // e.g. "netlab simulate"
+  std::string scenario;                       // scenario YAML, or empty
+
+  int frames() const { return static_cast<int>(time.size()); }
+  int knots() const { return static_cast<int>(grid.size()); }
+  const Eigen::Vector3d& Position(int frame, int knot) const {
+    return position[static_cast<size_t>(frame) * grid.size() + knot];
+  }
+  bool Valid(int frame, int knot) const {
+    return valid[static_cast<size_t>(frame) * grid.size() + knot] != 0;
+  }
+  // Index of knot (row, col) of net `net`, or -1.
+  int FindKnot(int row, int col, int net_index = 0) const;
+  // Throws std::invalid_argument if the arrays disagree in size.
+  void CheckConsistent() const;
+};
+
+// Writes `tracks` to `path` (via "<path>.partial" and a rename). Throws std::runtime_error.
+void WriteKnotTracks(const std::string& path, const KnotTracks& tracks);
+
+// Reads a knot-track file. Throws std::runtime_error naming the file and the dataset when the file
+// is missing, not HDF5, not a knot-track file, or its datasets disagree in shape.
+KnotTracks ReadKnotTracks(const std::string& path, bool read_nodes = false);
+
+// Node positions of a simulation file, [T][N] (empty if the file has none).
+std::vector<std::vector<Eigen::Vector3d>> ReadNodePositions(const std::string& path);
+
+// Streams a simulation into a knot-track file, one frame at a time (a run may be longer than
+// memory allows, and an interrupted one keeps what it wrote in "<path>.partial").
+class TrackFileWriter {
+ public:
+  struct Layout {
+    int nodes = 0;                               // node count, 0: no /nodes
+    std::vector<std::array<int, 2>> grid;        // knots
+    std::vector<int> net;                        // net index per knot
+    std::vector<std::string> net_names;
+    std::vector<std::string> probe_names;
+    std::string source = "netlab simulate";
+    std::string scenario;                        // stored as /scenario when not empty
+  };
+
+  // Creates "<path>.partial". Throws std::runtime_error if it cannot.
+  TrackFileWriter(const std::string& path, const Layout& layout);
+  ~TrackFileWriter();
+  TrackFileWriter(const TrackFileWriter&) = delete;
+  TrackFileWriter& operator=(const TrackFileWriter&) = delete;
+
+  // nodes: N positions (ignored when Layout::nodes is 0); knots: K positions; probes: one per
+  // probe name. Every knot of a simulation is valid.
+  void AppendFrame(double time, const std::vector<Eigen::Vector3d>& nodes,
+                   const std::vector<Eigen::Vector3d>& knots,
+                   const std::vector<Eigen::Vector3d>& probes);
+  int frames() const { return frames_; }
+
+  // Closes the file and renames it to `path`. Without Commit the partial file stays.
+  void Commit();
+  const std::string& partial_path() const { return partial_path_; }
+
+ private:
+  struct Handles;
+  std::string path_;
+  std::string partial_path_;
+  Layout layout_;
+  int frames_ = 0;
+  std::unique_ptr<Handles> handles_;
+};
+
+}  // namespace netlab::netsim
