@@ -46,6 +46,17 @@ struct BendPair {
   Vector3d rest_phi = Vector3d::Zero();    // rest relative rotation vector, rad (0: straight)
 };
 
+// The joint between a clamped rod end and its fixed frame. Bending and torsion act over half the
+// end segment (from the clamped node to the segment's centre), so the curvature at the clamp is
+// resolved like any other joint's and the discretisation stays second order.
+struct AnchorJoint {
+  int segment = 0;                          // the rod's end segment
+  Quaterniond frame = Quaterniond::Identity();  // the clamp's fixed orientation
+  double inv_length = 0.0;                  // 2 / rest length of the segment, 1/m
+  Vector3d stiffness = Vector3d::Zero();    // (EI, EI, GJ), N m^2
+  Vector3d damping = Vector3d::Zero();      // (c_b, c_b, c_t), N m^2 s
+};
+
 struct RodInfo {
   std::string name;
   int material = 0;
@@ -91,6 +102,7 @@ struct Model {
   std::vector<Vector3d> segment_inertia;      // body-frame principal moments (I1, I2, I3), kg m^2
   std::vector<Vector3d> segment_inv_inertia;  // 1/(kg m^2); 0 for clamped segments
   std::vector<BendPair> bend_pairs;
+  std::vector<AnchorJoint> anchors;  // clamped rod ends
 
   std::vector<Material> materials;
   std::vector<RodInfo> rods;

@@ -154,14 +154,21 @@ int ModelBuilder::AddRod(const RodSpec& spec) {
   info.num_segments = spec.segments;
   model_.rods.push_back(info);
 
-  // Boundary conditions: an infinite mass (inverse 0) holds a node, an infinite inertia a frame.
+  // Boundary conditions: an infinite mass (inverse 0) holds a node; a clamp adds a bending joint
+  // between the end segment and the fixed initial frame of that segment.
   auto fix = [&](Fixity fixity, int node, int segment) {
     if (fixity == Fixity::kFree) return;
     model_.node_inv_mass[node] = -1.0;  // marker, resolved in Build()
     state_.v[node].setZero();
     if (fixity == Fixity::kClamped) {
-      model_.segment_inv_inertia[segment].setZero();
-      state_.w[segment].setZero();
+      const Material& m = model_.materials[spec.material];
+      AnchorJoint anchor;
+      anchor.segment = segment;
+      anchor.frame = state_.q[segment];
+      anchor.inv_length = 2.0 / model_.segments[segment].rest_length;
+      anchor.stiffness = Vector3d(m.bend_stiffness, m.bend_stiffness, m.twist_stiffness);
+      anchor.damping = Vector3d(m.bend_damping, m.bend_damping, m.twist_damping);
+      model_.anchors.push_back(anchor);
     }
   };
   fix(spec.fix_start, info.first_node, info.first_segment);

@@ -411,7 +411,8 @@ BuiltScenario BuildScenario(const Scenario& s) {
   std::vector<std::unique_ptr<Force>> forces;
   forces.push_back(std::make_unique<StretchForce>());
   forces.push_back(std::make_unique<CouplingForce>());
-  if (!model.bend_pairs.empty()) forces.push_back(std::make_unique<BendTwistForce>(model));
+  if (!model.bend_pairs.empty() || !model.anchors.empty())
+    forces.push_back(std::make_unique<BendTwistForce>(model));
   if (s.gravity_series) {
     forces.push_back(std::make_unique<GravityForce>(*s.gravity_series));
   } else if (s.gravity && s.gravity->squaredNorm() > 0.0) {

@@ -7,6 +7,8 @@ namespace netlab::netsim {
 BendTwistForce::BendTwistForce(const Model& model) {
   for (const BendPair& p : model.bend_pairs)
     if (p.damping.squaredNorm() > 0.0) damped_ = true;
+  for (const AnchorJoint& a : model.anchors)
+    if (a.damping.squaredNorm() > 0.0) damped_ = true;
 }
 
 void BendTwistForce::Accumulate(const Model& model, const State& state, double /*dt*/,
@@ -26,6 +28,14 @@ void BendTwistForce::Accumulate(const Model& model, const State& state, double /
     tau[p.segment_a] += ApplyJrInv(log, g);
     tau[p.segment_b] -= ApplyJlInv(log, g);
   }
+  // Clamped ends: the same with a fixed first frame.
+  for (const AnchorJoint& a : model.anchors) {
+    const LogResult log = LogMap(a.frame.conjugate() * q[a.segment]);
+    Vector3d g = a.stiffness.cwiseProduct(log.phi);
+    if (damped_) g += a.damping.cwiseProduct(ApplyJrInv(log, w[a.segment]));
+    g *= a.inv_length;
+    tau[a.segment] -= ApplyJlInv(log, g);
+  }
 }
 
 double BendTwistForce::Energy(const Model& model, const State& state) const {
@@ -34,6 +44,10 @@ double BendTwistForce::Energy(const Model& model, const State& state) const {
     const LogResult log = LogMap(state.q[p.segment_a].conjugate() * state.q[p.segment_b]);
     const Vector3d d = log.phi - p.rest_phi;
     energy += 0.5 * p.inv_length * d.dot(p.stiffness.cwiseProduct(d));
+  }
+  for (const AnchorJoint& a : model.anchors) {
+    const Vector3d phi = LogMap(a.frame.conjugate() * state.q[a.segment]).phi;
+    energy += 0.5 * a.inv_length * phi.dot(a.stiffness.cwiseProduct(phi));
   }
   return energy;
 }
@@ -50,6 +64,10 @@ void BendTwistForce::AddStiffnessBounds(const Model& model, const State& /*state
     bounds.segment_stiffness[p.segment_b] += k * (1.0 + lb / la);
     bounds.segment_damping[p.segment_a] += c * (1.0 + la / lb);
     bounds.segment_damping[p.segment_b] += c * (1.0 + lb / la);
+  }
+  for (const AnchorJoint& a : model.anchors) {
+    bounds.segment_stiffness[a.segment] += a.stiffness.maxCoeff() * a.inv_length;
+    bounds.segment_damping[a.segment] += a.damping.maxCoeff() * a.inv_length;
   }
 }
 

@@ -10,7 +10,7 @@
 //   tau_a = Jr^-1^T ... = g + 1/2 phi x g + b phi x (phi x g),
 //   tau_b = -(g - 1/2 phi x g + b phi x (phi x g)),
 // (rotation.h: LogMap and its Jacobians). A rod under an end moment M therefore turns by exactly
-// M l / EI per joint.
+// M l / EI per joint. Clamped ends (Model::anchors) are joints to a fixed frame over half a segment.
 
 #include "libnetsim/forces/force.h"
 

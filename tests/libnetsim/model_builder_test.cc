@@ -131,8 +131,11 @@ TEST(ModelBuilder, RodEndsArePinnedOrClamped) {
   EXPECT_EQ(model.node_inv_mass[0], 0.0);
   EXPECT_EQ(model.node_inv_mass[11], 0.0);
   EXPECT_GT(model.node_inv_mass[5], 0.0);
-  EXPECT_EQ(model.segment_inv_inertia[0].norm(), 0.0);
-  EXPECT_GT(model.segment_inv_inertia[10].norm(), 0.0);  // pinned: the frame still turns
+  // The clamp is a bending joint over half the first segment to its fixed initial frame.
+  ASSERT_EQ(model.anchors.size(), 1u);
+  EXPECT_EQ(model.anchors[0].segment, 0);
+  EXPECT_NEAR(model.anchors[0].inv_length, 2.0 / (0.3 / 11), 1e-9);
+  EXPECT_LT(model.anchors[0].frame.angularDistance(state.q[0]), 1e-15);
 }
 
 TEST(ModelBuilder, BadSpecificationsNameTheProblem) {

@@ -1,0 +1,51 @@
+#pragma once
+// Shared fixtures of the libnetsim tests: materials and small models.
+
+#include <random>
+
+#include "libnetsim/model_builder.h"
+#include "libnetsim/rotation.h"
+
+namespace netlab::netsim::testing {
+
+// The polypropylene yarn of the paper's examples (values of issue #2's scenario example).
+inline Material PpYarn() {
+  Material m;
+  m.name = "pp_yarn";
+  m.diameter = 1.0e-3;
+  m.linear_density = 7.1e-4;
+  m.stretch_stiffness = 1178;
+  m.bend_stiffness = 7.36e-5;
+  m.twist_stiffness = 5.45e-5;
+  return m;
+}
+
+// A straight rod along +x from the origin.
+inline std::pair<Model, State> StraightRod(const Material& material, double length, int segments,
+                                           Fixity start = Fixity::kFree,
+                                           Fixity end = Fixity::kFree,
+                                           ModelBuilderOptions options = {}) {
+  ModelBuilder builder(options);
+  RodSpec rod;
+  rod.name = "rod";
+  rod.material = builder.AddMaterial(material);
+  rod.end = Vector3d(length, 0, 0);
+  rod.segments = segments;
+  rod.fix_start = start;
+  rod.fix_end = end;
+  builder.AddRod(rod);
+  return std::move(builder).Build();
+}
+
+// Moves every node and turns every frame by random amounts (m, rad).
+inline void Perturb(State& state, double dx, double dtheta, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (Vector3d& x : state.x) x += dx * Vector3d(u(rng), u(rng), u(rng));
+  for (Vector3d& v : state.v) v = Vector3d(u(rng), u(rng), u(rng));
+  for (Quaterniond& q : state.q)
+    q = (q * ExpMap(dtheta * Vector3d(u(rng), u(rng), u(rng)))).normalized();
+  for (Vector3d& w : state.w) w = Vector3d(u(rng), u(rng), u(rng));
+}
+
+}  // namespace netlab::netsim::testing
