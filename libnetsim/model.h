@@ -32,7 +32,7 @@ struct Segment {
   double rest_length = 0.0;         // m
   double stretch_stiffness = 0.0;   // EA, N
   double stretch_damping = 0.0;     // c_s, N s
-  double coupling_stiffness = 0.0;  // kappa, N: penalty tying d3 to the tangent (coupling_force.h)
+  double coupling_stiffness = 0.0;  // kappa, N: penalty tying d3 to the tangent (forces/segment_force.h)
   double diameter = 0.0;            // m
 };
 

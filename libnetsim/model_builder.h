@@ -58,7 +58,7 @@ struct NetSpec {
 };
 
 struct ModelBuilderOptions {
-  // Coupling penalty kappa = ratio * max(EI, GJ) / l^2 per segment (coupling_force.h). The shear
+  // Coupling penalty kappa = ratio * max(EI, GJ) / l^2 per segment (forces/segment_force.h). The shear
   // compliance it leaves is ~1/ratio of the bending compliance at the scale of one segment, and
   // far less at the scale of a link: 100 keeps the Kirchhoff constraint to ~1 %.
   double coupling_stiffness_ratio = 100.0;

@@ -29,19 +29,56 @@ inline Vector3d Director3(const Quaterniond& q) {
 }
 
 // Exp of a rotation vector phi (rad): the unit quaternion rotating by |phi| about phi / |phi|.
-// Uses a Taylor series for small angles, where sin(h)/h loses precision.
+// Small angles (every per-step rotation of a stable run) use a Taylor series that needs no sqrt
+// and no trigonometry; it is exact to rounding below |phi| = 0.02.
 inline Quaterniond ExpMap(const Vector3d& phi) {
-  const double half = 0.5 * phi.norm();
-  double sinc_half, cos_half;  // sin(half)/|phi| and cos(half)
-  if (half < 1e-2) {
-    const double h2 = half * half;
-    sinc_half = 0.5 * (1.0 - h2 / 6.0 + h2 * h2 / 120.0);
-    cos_half = 1.0 - h2 / 2.0 + h2 * h2 / 24.0;
+  const double h2 = 0.25 * phi.squaredNorm();  // (|phi| / 2)^2
+  double sinc_half, cos_half;                  // sin(|phi|/2) / |phi| and cos(|phi|/2)
+  if (h2 < 1e-4) {
+    // Multiplications by reciprocal constants: a division costs ~15 cycles even by a constant.
+    sinc_half = 0.5 * (1.0 + h2 * (-1.0 / 6.0 + h2 * (1.0 / 120.0)));
+    cos_half = 1.0 + h2 * (-0.5 + h2 * (1.0 / 24.0));
   } else {
+    const double half = std::sqrt(h2);
     sinc_half = std::sin(half) / (2.0 * half);
     cos_half = std::cos(half);
   }
   return Quaterniond(cos_half, sinc_half * phi.x(), sinc_half * phi.y(), sinc_half * phi.z());
+}
+
+// Brings a quaternion that is unit to within ~1e-8 back to unit length with one Newton step for
+// 1/sqrt(|q|^2) (error O(eps^2)), without a square root.
+inline void Renormalize(Quaterniond& q) {
+  q.coeffs() *= 0.5 * (3.0 - q.squaredNorm());
+}
+
+// q <- q * Exp(phi), renormalised: the rotation update of one time step. Written on scalars (the
+// same formulas as ExpMap and Eigen's product) because a temporary Quaterniond here costs a
+// store-forwarding stall per segment and step.
+inline void RotateBody(Quaterniond& q, const Vector3d& phi) {
+  const double h2 = 0.25 * phi.squaredNorm();
+  double sinc_half, cos_half;
+  if (h2 < 1e-4) {
+    sinc_half = 0.5 * (1.0 + h2 * (-1.0 / 6.0 + h2 * (1.0 / 120.0)));
+    cos_half = 1.0 + h2 * (-0.5 + h2 * (1.0 / 24.0));
+  } else {
+    const double half = std::sqrt(h2);
+    sinc_half = std::sin(half) / (2.0 * half);
+    cos_half = std::cos(half);
+  }
+  const double ew = cos_half, ex = sinc_half * phi.x(), ey = sinc_half * phi.y(),
+               ez = sinc_half * phi.z();
+  double* c = q.coeffs().data();  // x, y, z, w
+  const double qx = c[0], qy = c[1], qz = c[2], qw = c[3];
+  double w = qw * ew - qx * ex - qy * ey - qz * ez;
+  double x = qw * ex + qx * ew + qy * ez - qz * ey;
+  double y = qw * ey - qx * ez + qy * ew + qz * ex;
+  double z = qw * ez + qx * ey - qy * ex + qz * ew;
+  const double scale = 0.5 * (3.0 - (w * w + x * x + y * y + z * z));
+  c[0] = x * scale;
+  c[1] = y * scale;
+  c[2] = z * scale;
+  c[3] = w * scale;
 }
 
 // The logarithm map of a unit quaternion and the coefficient needed for its derivatives.
@@ -60,16 +97,33 @@ inline LogResult LogMap(const Quaterniond& r) {
     w = -w;
     v = -v;
   }
-  const double s = v.norm();
-  const double theta = 2.0 * std::atan2(s, w);
+  const double s2 = v.squaredNorm();  // sin^2(theta/2)
   LogResult out;
-  if (theta < 1e-2) {
-    const double t2 = theta * theta;
-    // theta / s = 2 atan(s/w)/s, series in s/w; at theta < 1e-2, w > 0.99999.
-    const double u = s / w;
-    out.phi = (2.0 / w) * (1.0 - u * u / 3.0 + u * u * u * u / 5.0) * v;
-    out.b = 1.0 / 12.0 + t2 / 720.0;
+  if (s2 < 2.5e-3) {
+    // theta < 0.1 rad, nearly every joint of a resolved net: theta / s = 2 asin(s) / s as a
+    // series in s^2 (error < 3e-15), which needs neither sqrt, division nor atan2. Relies on
+    // |r| = 1 to rounding, which Simulation keeps by renormalising every step.
+    const double scale =
+        2.0 + s2 * (1.0 / 3 + s2 * (3.0 / 20 + s2 * (5.0 / 56 + s2 * (35.0 / 576))));
+    out.phi = scale * v;
+    const double t2 = scale * scale * s2;  // theta^2
+    out.b = 1.0 / 12 + t2 * (1.0 / 720 + t2 * (1.0 / 30240 + t2 * (1.0 / 1209600)));
+  } else if (s2 < 0.04 * w * w) {
+    // theta < 0.4: theta / s = 2 atan(u) / (u w) with u = s / w < 0.2, the series of atan(u)/u
+    // to u^14 (error < u^16/17 = 4e-13), and b as its series in theta^2 (error < 1e-13).
+    const double inv_w = 1.0 / w;
+    const double u2 = s2 * inv_w * inv_w;
+    const double atan_ratio =
+        1.0 + u2 * (-1.0 / 3 + u2 * (1.0 / 5 + u2 * (-1.0 / 7 + u2 * (1.0 / 9 + u2 * (-1.0 / 11 +
+        u2 * (1.0 / 13 + u2 * (-1.0 / 15)))))));
+    const double scale = 2.0 * inv_w * atan_ratio;  // theta / s
+    out.phi = scale * v;
+    const double t2 = scale * scale * s2;  // theta^2
+    out.b = 1.0 / 12 + t2 * (1.0 / 720 + t2 * (1.0 / 30240 + t2 * (1.0 / 1209600 +
+            t2 * (1.0 / 47900160))));
   } else {
+    const double s = std::sqrt(s2);
+    const double theta = 2.0 * std::atan2(s, w);
     out.phi = (theta / s) * v;
     out.b = (1.0 - 0.5 * theta * (w / s)) / (theta * theta);
   }
@@ -84,6 +138,18 @@ inline Vector3d ApplyJrInv(const LogResult& log, const Vector3d& y) {
 inline Vector3d ApplyJlInv(const LogResult& log, const Vector3d& y) {
   const Vector3d c = log.phi.cross(y);
   return y - 0.5 * c + log.b * log.phi.cross(c);
+}
+// Both at once: *jr = Jr^-1 y, *jl = Jl^-1 y (they share the cross products).
+inline void ApplyJInv(const LogResult& log, const Vector3d& y, Vector3d* jr, Vector3d* jl) {
+  const Vector3d c = log.phi.cross(y);
+  const Vector3d even = y + log.b * log.phi.cross(c);
+  *jr = even + 0.5 * c;
+  *jl = even - 0.5 * c;
+}
+// Jr^-1 y_b - Jl^-1 y_a, the rate of phi for body angular velocities y_a, y_b.
+inline Vector3d RelativeRate(const LogResult& log, const Vector3d& y_a, const Vector3d& y_b) {
+  const Vector3d d = y_b - y_a;
+  return d + 0.5 * log.phi.cross(y_a + y_b) + log.b * log.phi.cross(log.phi.cross(d));
 }
 
 // The minimal rotation taking unit vector a to unit vector b (parallel transport of a frame).

@@ -6,10 +6,9 @@
 
 #include "common/yaml_util.h"
 #include "libnetsim/forces/bend_twist_force.h"
-#include "libnetsim/forces/coupling_force.h"
 #include "libnetsim/forces/gravity_force.h"
 #include "libnetsim/forces/rotating_frame_force.h"
-#include "libnetsim/forces/stretch_force.h"
+#include "libnetsim/forces/segment_force.h"
 
 namespace netlab::netsim {
 namespace {
@@ -409,8 +408,7 @@ BuiltScenario BuildScenario(const Scenario& s) {
 
   // The forces this scene uses, and only those.
   std::vector<std::unique_ptr<Force>> forces;
-  forces.push_back(std::make_unique<StretchForce>());
-  forces.push_back(std::make_unique<CouplingForce>());
+  forces.push_back(std::make_unique<SegmentForce>());
   if (!model.bend_pairs.empty() || !model.anchors.empty())
     forces.push_back(std::make_unique<BendTwistForce>(model));
   if (s.gravity_series) {

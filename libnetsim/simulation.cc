@@ -95,7 +95,7 @@ void Simulation::EvaluateForces() {
   forces_current_ = true;
 }
 
-bool Simulation::Kick(double h) {
+bool Simulation::Kick(double h, double drift) {
   const int n = model_.num_nodes();
   const double limit2 = options_.max_speed * options_.max_speed;
   int bad_node = -1;
@@ -104,6 +104,7 @@ bool Simulation::Kick(double h) {
     v += (h * model_.node_inv_mass[i]) * buffers_.force[i];
     // Written so that a NaN fails the comparison.
     if (!(v.squaredNorm() <= limit2) && bad_node < 0) bad_node = i;
+    state_.x[i] += drift * v;  // symplectic Euler moves the node with its new velocity
   }
   const int s = model_.num_segments();
   int bad_segment = -1;
@@ -151,14 +152,13 @@ bool Simulation::Kick(double h) {
   return false;
 }
 
-void Simulation::Drift(double h) {
+void Simulation::Drift(double h, bool nodes) {
   const int n = model_.num_nodes();
-  for (int i = 0; i < n; ++i) state_.x[i] += h * state_.v[i];
+  if (nodes)
+    for (int i = 0; i < n; ++i) state_.x[i] += h * state_.v[i];
   const int s = model_.num_segments();
   for (int j = 0; j < s; ++j) {
-    Quaterniond& q = state_.q[j];
-    q = q * ExpMap(h * state_.w[j]);
-    q.normalize();
+    RotateBody(state_.q[j], h * state_.w[j]);
   }
   state_.time += h;
 }
@@ -167,16 +167,17 @@ bool Simulation::Step() {
   if (failure_) return false;
   bool ok;
   if (options_.integrator == IntegratorType::kSymplecticEuler) {
+    // Nodes are kicked and drifted in one pass; a failed kick leaves a state that is discarded.
     EvaluateForces();
-    ok = Kick(dt_);
-    if (ok) Drift(dt_);
+    ok = Kick(dt_, dt_);
+    if (ok) Drift(dt_, /*nodes=*/false);
   } else {
     if (!forces_current_) EvaluateForces();
-    ok = Kick(0.5 * dt_);
+    ok = Kick(0.5 * dt_, 0.0);
     if (ok) {
-      Drift(dt_);
+      Drift(dt_, /*nodes=*/true);
       EvaluateForces();
-      ok = Kick(0.5 * dt_);
+      ok = Kick(0.5 * dt_, 0.0);
     }
   }
   forces_current_ = forces_current_ && options_.integrator == IntegratorType::kVelocityVerlet;

@@ -48,7 +48,7 @@ struct SimulationOptions {
   // (output frames land exactly on multiples of it).
   double align_interval = 0.0;
   bool scale_rotational_inertia = true;  // stability.h
-  double contact_frequency_ratio = 0.5;  // contact_force.h
+  double contact_frequency_ratio = 0.3;  // contact_force.h
   // Reset all velocities whenever the kinetic energy falls (dynamic relaxation to a static
   // equilibrium). Changes the dynamics: only for statics.
   bool kinetic_damping = false;
@@ -117,9 +117,11 @@ class Simulation {
   void EvaluateForces();
 
  private:
-  // v += h a; returns false (and records the failure) on a bad velocity.
-  bool Kick(double h);
-  void Drift(double h);
+  // v += h a, then x += drift v (drift 0: velocities only); returns false (and records the
+  // failure) on a bad velocity.
+  bool Kick(double h, double drift);
+  // q <- q Exp(h w) for every segment, and x += h v when `nodes`; advances the time by h.
+  void Drift(double h, bool nodes);
   double KineticEnergy() const;
 
   Model model_;

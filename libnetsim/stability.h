@@ -31,7 +31,7 @@ class ContactForce;
 
 struct StabilityOptions {
   bool scale_rotational_inertia = true;
-  double contact_frequency_ratio = 0.5;  // automatic contact stiffness at omega_c = ratio * omega_T
+  double contact_frequency_ratio = 0.3;  // automatic contact stiffness at omega_c = ratio * omega_T
   double fallback_dt = 0.0;              // s; sets omega_T when the model has no elastic stiffness
 };
 

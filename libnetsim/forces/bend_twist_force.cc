@@ -11,23 +11,62 @@ BendTwistForce::BendTwistForce(const Model& model) {
     if (a.damping.squaredNorm() > 0.0) damped_ = true;
 }
 
+namespace {
+
+// One joint on plain scalars (the hot loop of the simulator; Eigen temporaries here cost
+// store-forwarding stalls). Same formulas as the header: r = qa^-1 qb, phi = Log(r),
+// g = (K (phi - phi0) + C dphi/dt) / l, tau_a += Jr^-1 g, tau_b -= Jl^-1 g.
+inline void Joint(const Quaterniond& qa, const Quaterniond& qb, const Vector3d& wa,
+                  const Vector3d& wb, const BendPair& p, bool damped, Vector3d& tau_a,
+                  Vector3d& tau_b) {
+  const double* a = qa.coeffs().data();  // x, y, z, w
+  const double* b = qb.coeffs().data();
+  const double ax = -a[0], ay = -a[1], az = -a[2], aw = a[3];  // conjugate of qa
+  const double bx = b[0], by = b[1], bz = b[2], bw = b[3];
+  Quaterniond r(aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
+                aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw);
+  const LogResult log = LogMap(r);
+  const double px = log.phi.x(), py = log.phi.y(), pz = log.phi.z(), lb = log.b;
+  double gx = p.stiffness.x() * (px - p.rest_phi.x());
+  double gy = p.stiffness.y() * (py - p.rest_phi.y());
+  double gz = p.stiffness.z() * (pz - p.rest_phi.z());
+  if (damped) {
+    // dphi/dt = d + 1/2 phi x (wa + wb) + b phi x (phi x d), d = wb - wa.
+    const double dx = wb.x() - wa.x(), dy = wb.y() - wa.y(), dz = wb.z() - wa.z();
+    const double sx = wb.x() + wa.x(), sy = wb.y() + wa.y(), sz = wb.z() + wa.z();
+    const double cx = py * dz - pz * dy, cy = pz * dx - px * dz, cz = px * dy - py * dx;
+    const double ex = py * cz - pz * cy, ey = pz * cx - px * cz, ez = px * cy - py * cx;
+    gx += p.damping.x() * (dx + 0.5 * (py * sz - pz * sy) + lb * ex);
+    gy += p.damping.y() * (dy + 0.5 * (pz * sx - px * sz) + lb * ey);
+    gz += p.damping.z() * (dz + 0.5 * (px * sy - py * sx) + lb * ez);
+  }
+  gx *= p.inv_length;
+  gy *= p.inv_length;
+  gz *= p.inv_length;
+  // c = phi x g, e = phi x c; Jr^-1 g = g + c/2 + b e, Jl^-1 g = g - c/2 + b e.
+  const double cx = py * gz - pz * gy, cy = pz * gx - px * gz, cz = px * gy - py * gx;
+  const double ex = gx + lb * (py * cz - pz * cy), ey = gy + lb * (pz * cx - px * cz),
+               ez = gz + lb * (px * cy - py * cx);
+  double* ta = tau_a.data();
+  double* tb = tau_b.data();
+  ta[0] += ex + 0.5 * cx;
+  ta[1] += ey + 0.5 * cy;
+  ta[2] += ez + 0.5 * cz;
+  tb[0] -= ex - 0.5 * cx;
+  tb[1] -= ey - 0.5 * cy;
+  tb[2] -= ez - 0.5 * cz;
+}
+
+}  // namespace
+
 void BendTwistForce::Accumulate(const Model& model, const State& state, double /*dt*/,
                                 ForceBuffers& out) const {
   const Quaterniond* q = state.q.data();
   const Vector3d* w = state.w.data();
   Vector3d* tau = out.torque.data();
-  for (const BendPair& p : model.bend_pairs) {
-    const LogResult log = LogMap(q[p.segment_a].conjugate() * q[p.segment_b]);
-    Vector3d g = p.stiffness.cwiseProduct(log.phi - p.rest_phi);
-    if (damped_) {
-      const Vector3d rate = ApplyJrInv(log, w[p.segment_b]) - ApplyJlInv(log, w[p.segment_a]);
-      g += p.damping.cwiseProduct(rate);
-    }
-    g *= p.inv_length;
-    // tau_a = Jl^-1^T g = Jr^-1 g;  tau_b = -Jr^-1^T g = -Jl^-1 g.
-    tau[p.segment_a] += ApplyJrInv(log, g);
-    tau[p.segment_b] -= ApplyJlInv(log, g);
-  }
+  for (const BendPair& p : model.bend_pairs)
+    Joint(q[p.segment_a], q[p.segment_b], w[p.segment_a], w[p.segment_b], p, damped_,
+          tau[p.segment_a], tau[p.segment_b]);
   // Clamped ends: the same with a fixed first frame.
   for (const AnchorJoint& a : model.anchors) {
     const LogResult log = LogMap(a.frame.conjugate() * q[a.segment]);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace netlab::netsim {
 
@@ -40,6 +41,15 @@ double RigidBody::SignedDistance(const Vector3d& p, double t, Vector3d* normal_o
   return 0.0;
 }
 
+double RigidBody::BoundingRadius() const {
+  switch (shape) {
+    case Shape::kSphere: return radius;
+    case Shape::kBox: return half_extents.norm();
+    case Shape::kPlane: return std::numeric_limits<double>::infinity();
+  }
+  return std::numeric_limits<double>::infinity();
+}
+
 bool RigidBody::IsValid(std::string* error) const {
   auto fail = [&](const std::string& message) {
     if (error) *error = message;
@@ -56,12 +66,26 @@ bool RigidBody::IsValid(std::string* error) const {
   return true;
 }
 
+ContactForce::ContactForce(std::vector<RigidBody> bodies, double friction_velocity)
+    : bodies_(std::move(bodies)), friction_velocity_(friction_velocity) {
+  for (const RigidBody& body : bodies_) bounding_radius_.push_back(body.BoundingRadius());
+}
+
 void ContactForce::Accumulate(const Model& model, const State& state, double dt,
                               ForceBuffers& out) const {
   const int n = model.num_nodes();
-  for (const RigidBody& body : bodies_) {
+  for (size_t b = 0; b < bodies_.size(); ++b) {
+    const RigidBody& body = bodies_[b];
+    // Broad phase: a node farther from the centre than the bounding radius plus its own radius
+    // cannot touch; skipped without a square root.
+    const Vector3d center = body.center + state.time * body.velocity;
+    const bool bounded = std::isfinite(bounding_radius_[b]);
     for (int i = 0; i < n; ++i) {
       if (model.node_inv_mass[i] == 0.0) continue;  // pinned nodes do not take contact forces
+      if (bounded) {
+        const double reach = bounding_radius_[b] + model.node_radius[i];
+        if ((state.x[i] - center).squaredNorm() > reach * reach) continue;
+      }
       Vector3d normal;
       const double depth =
           model.node_radius[i] - body.SignedDistance(state.x[i], state.time, &normal);

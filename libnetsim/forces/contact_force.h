@@ -32,19 +32,20 @@ struct RigidBody {
   Vector3d normal = Vector3d::UnitZ();      // plane: outward unit normal
   double friction = 0.0;                    // Coulomb coefficient mu
   double stiffness = 0.0;                   // N/m; 0 = automatic (see above)
-  double damping_ratio = 0.5;               // zeta of the normal penalty spring
+  double damping_ratio = 0.3;               // zeta of the normal penalty spring (restitution ~0.37)
 
   // Signed distance (m, negative inside) from point p to the body's surface at time t, and the
   // outward unit normal at the closest surface point.
   double SignedDistance(const Vector3d& p, double t, Vector3d* normal_out) const;
+  // Radius of a sphere about `center` that holds the whole body (infinite for a plane).
+  double BoundingRadius() const;
   bool IsValid(std::string* error) const;
 };
 
 class ContactForce final : public Force {
  public:
   // `friction_velocity` (m/s) is the regularisation v_reg of Coulomb friction.
-  explicit ContactForce(std::vector<RigidBody> bodies, double friction_velocity = 1e-3)
-      : bodies_(std::move(bodies)), friction_velocity_(friction_velocity) {}
+  explicit ContactForce(std::vector<RigidBody> bodies, double friction_velocity = 1e-3);
 
   std::string name() const override { return "contact"; }
   void SetContactFrequency(double omega) { contact_omega_ = omega; }  // rad/s
@@ -64,6 +65,7 @@ class ContactForce final : public Force {
   }
 
   std::vector<RigidBody> bodies_;
+  std::vector<double> bounding_radius_;  // per body, m
   double friction_velocity_;
   double contact_omega_ = 0.0;
 };

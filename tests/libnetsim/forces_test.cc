@@ -8,12 +8,11 @@
 
 #include "libnetsim/forces/bend_twist_force.h"
 #include "libnetsim/forces/contact_force.h"
-#include "libnetsim/forces/coupling_force.h"
 #include "libnetsim/forces/drag_force.h"
 #include "libnetsim/forces/gravity_force.h"
 #include "libnetsim/forces/point_load_force.h"
 #include "libnetsim/forces/rotating_frame_force.h"
-#include "libnetsim/forces/stretch_force.h"
+#include "libnetsim/forces/segment_force.h"
 #include "tests/libnetsim/test_models.h"
 
 namespace netlab::netsim {
@@ -86,12 +85,17 @@ void ExpectForceIsMinusGradient(const Force& force, const Model& model, const St
 
 TEST(Forces, StretchIsMinusTheGradientOfItsEnergy) {
   auto [model, state] = TestScene();
-  ExpectForceIsMinusGradient(StretchForce(), model, state);
+  ExpectForceIsMinusGradient(SegmentForce(true, false), model, state);
 }
 
 TEST(Forces, CouplingIsMinusTheGradientOfItsEnergy) {
   auto [model, state] = TestScene();
-  ExpectForceIsMinusGradient(CouplingForce(), model, state);
+  ExpectForceIsMinusGradient(SegmentForce(false, true), model, state);
+}
+
+TEST(Forces, StretchAndCouplingTogetherAreMinusTheGradientOfTheirEnergy) {
+  auto [model, state] = TestScene();
+  ExpectForceIsMinusGradient(SegmentForce(), model, state);
 }
 
 TEST(Forces, BendTwistIsMinusTheGradientOfItsEnergy) {
@@ -151,7 +155,7 @@ TEST(Forces, DampingAndDragDissipate) {
   ForceBuffers elastic, damped;
   elastic.Resize(model.num_nodes(), model.num_segments());
   damped.Resize(model.num_nodes(), model.num_segments());
-  StretchForce().Accumulate(model, state, 0.0, damped);
+  SegmentForce(true, false).Accumulate(model, state, 0.0, damped);
   BendTwistForce(model).Accumulate(model, state, 0.0, damped);
   DragOptions drag;
   DragForce(drag).Accumulate(model, state, 0.0, damped);
@@ -159,7 +163,7 @@ TEST(Forces, DampingAndDragDissipate) {
   Model undamped = model;
   for (Segment& s : undamped.segments) s.stretch_damping = 0.0;
   for (BendPair& p : undamped.bend_pairs) p.damping.setZero();
-  StretchForce().Accumulate(undamped, state, 0.0, elastic);
+  SegmentForce(true, false).Accumulate(undamped, state, 0.0, elastic);
   BendTwistForce(undamped).Accumulate(undamped, state, 0.0, elastic);
   double power = 0.0;
   for (int i = 0; i < model.num_nodes(); ++i)
@@ -169,14 +173,13 @@ TEST(Forces, DampingAndDragDissipate) {
   EXPECT_LT(power, 0.0);
 }
 
-TEST(Forces, CouplingForcesAndTorqueBalance) {
+TEST(Forces, InternalForcesAndTorquesBalance) {
   // Internal forces exert no net force and no net moment about the origin (the clamp is external).
   auto [model, state] = TestScene();
   model.anchors.clear();
   ForceBuffers b;
   b.Resize(model.num_nodes(), model.num_segments());
-  CouplingForce().Accumulate(model, state, 0.0, b);
-  StretchForce().Accumulate(model, state, 0.0, b);
+  SegmentForce().Accumulate(model, state, 0.0, b);
   BendTwistForce(model).Accumulate(model, state, 0.0, b);
   Vector3d net_force = Vector3d::Zero(), net_moment = Vector3d::Zero();
   for (int i = 0; i < model.num_nodes(); ++i) {

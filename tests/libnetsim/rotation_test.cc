@@ -25,7 +25,9 @@ TEST(Rotation, Director3IsTheRotatedZAxis) {
 }
 
 TEST(Rotation, LogInvertsExpOverTheWholeRange) {
-  for (double angle : {0.0, 1e-9, 1e-5, 1e-3, 0.01, 0.5, 2.0, 3.1, std::numbers::pi - 1e-6}) {
+  // Either side of each series/closed-form switch: |phi| = 0.02 (Exp), theta = 2 atan(0.2) (Log).
+  for (double angle : {0.0, 1e-9, 1e-5, 1e-3, 0.01, 0.0199, 0.0201, 0.0999, 0.1001, 0.3947, 0.3948, 0.5, 2.0, 3.1,
+                       std::numbers::pi - 1e-6}) {
     const Vector3d phi = angle * Vector3d(1, -2, 0.5).normalized();
     const LogResult log = LogMap(ExpMap(phi));
     EXPECT_LT((log.phi - phi).norm(), 1e-12 * std::max(1.0, angle)) << "angle " << angle;
@@ -39,16 +41,44 @@ TEST(Rotation, LogPicksTheShorterOfQAndMinusQ) {
 }
 
 TEST(Rotation, ExpMatchesAngleAxis) {
-  const Vector3d phi(0.2, -0.4, 1.1);
-  const Quaterniond expected(Eigen::AngleAxisd(phi.norm(), phi.normalized()));
-  EXPECT_LT(ExpMap(phi).angularDistance(expected), 1e-14);
+  for (double scale : {1e-6, 0.01, 1.0}) {
+    const Vector3d phi = scale * Vector3d(0.2, -0.4, 1.1);
+    const Quaterniond expected(Eigen::AngleAxisd(phi.norm(), phi.normalized()));
+    EXPECT_LT((ExpMap(phi).coeffs() - expected.coeffs()).norm(), 1e-15) << scale;
+  }
+}
+
+// The series coefficient b of Jr^-1 agrees with its closed form on both sides of the switch.
+TEST(Rotation, LogCoefficientMatchesClosedForm) {
+  for (double theta : {0.05, 0.0999, 0.1001, 0.2, 0.39, 0.4, 1.0}) {
+    const LogResult log = LogMap(ExpMap(Vector3d(0, 0, theta)));
+    const double exact = (1.0 - 0.5 * theta / std::tan(0.5 * theta)) / (theta * theta);
+    EXPECT_NEAR(log.b, exact, 1e-12) << theta;
+  }
+}
+
+TEST(Rotation, RotateBodyIsProductWithExp) {
+  for (double scale : {1e-4, 0.05}) {
+    Quaterniond q(Eigen::AngleAxisd(0.7, Vector3d(1, 2, 3).normalized()));
+    const Vector3d phi = scale * Vector3d(0.3, -1.0, 0.4);
+    const Quaterniond expected = (q * ExpMap(phi)).normalized();
+    RotateBody(q, phi);
+    EXPECT_LT((q.coeffs() - expected.coeffs()).norm(), 1e-15) << scale;
+  }
+}
+
+TEST(Rotation, RenormalizeRestoresUnitLength) {
+  Quaterniond q(Eigen::AngleAxisd(0.7, Vector3d(1, 2, 3).normalized()));
+  q.coeffs() *= 1.0 + 1e-9;
+  Renormalize(q);
+  EXPECT_NEAR(q.norm(), 1.0, 1e-16);
 }
 
 // Log(r Exp(d)) = phi + Jr^-1 d and Log(Exp(-d) r) = phi - Jl^-1 d, checked by finite differences.
 TEST(Rotation, JacobianInversesMatchFiniteDifferences) {
   std::mt19937 rng(7);
   const double h = 1e-6;
-  for (double max_angle : {1e-4, 0.3, 2.5}) {
+  for (double max_angle : {1e-4, 0.09, 0.3, 0.45, 2.5}) {
     for (int trial = 0; trial < 10; ++trial) {
       const Quaterniond r = RandomRotation(rng, max_angle);
       const LogResult log = LogMap(r);
@@ -61,6 +91,16 @@ TEST(Rotation, JacobianInversesMatchFiniteDifferences) {
       }
     }
   }
+}
+
+TEST(Rotation, CombinedJacobianHelpersAgreeWithTheSingleOnes) {
+  const LogResult log = LogMap(ExpMap(Vector3d(0.3, -0.7, 0.2)));
+  const Vector3d a(0.1, 2.0, -1.0), b(-0.4, 0.3, 0.9);
+  Vector3d jr, jl;
+  ApplyJInv(log, a, &jr, &jl);
+  EXPECT_LT((jr - ApplyJrInv(log, a)).norm(), 1e-15);
+  EXPECT_LT((jl - ApplyJlInv(log, a)).norm(), 1e-15);
+  EXPECT_LT((RelativeRate(log, a, b) - (ApplyJrInv(log, b) - ApplyJlInv(log, a))).norm(), 1e-14);
 }
 
 TEST(Rotation, FrameFromTangentAlongXIsThePaperPendulumFrame) {

@@ -1,0 +1,42 @@
+#pragma once
+// The two energies that live on each segment (CoRdE [9] sections 4.1 and 4.3), evaluated in one
+// pass because they share the segment's geometry (t, |e|) and its node forces.
+//
+// Stretching, linear in the axial strain (paper section 2):
+//   epsilon = |x_b - x_a| / l - 1,          E_s = 1/2 EA l epsilon^2,
+//   depsilon/dt = t . (v_b - v_a) / l,      D_s = 1/2 c_s l (depsilon/dt)^2,
+// giving the axial force N = EA epsilon + c_s depsilon/dt along t = (x_b - x_a)/|x_b - x_a|.
+//
+// Coupling: the penalty that ties the segment's orientation to its centreline (paper section 2:
+// "chains loosely coupled by penalty forces"), with d3 = q e_z:
+//   E_c = 1/2 kappa l |t - d3|^2 = kappa l (1 - t . d3),
+//   force on x_b  F = kappa l (d3 - (t . d3) t) / |e|,   on x_a  -F,
+//   torque        kappa l d3 x t (world),   kappa l e_z x (q^-1 t) (body frame).
+// The pair F, -F has moment -kappa l d3 x t, so the coupling exerts no net moment. kappa acts as
+// a shear stiffness (N): a transverse force V leaves a shear angle V / kappa. It is chosen per
+// segment by ModelBuilderOptions::coupling_stiffness_ratio.
+
+#include "libnetsim/forces/force.h"
+
+namespace netlab::netsim {
+
+class SegmentForce final : public Force {
+ public:
+  // Which of the two energies to include (tests check each alone).
+  explicit SegmentForce(bool stretch = true, bool coupling = true)
+      : stretch_(stretch), coupling_(coupling) {}
+
+  std::string name() const override { return "stretch+coupling"; }
+  void Accumulate(const Model& model, const State& state, double dt,
+                  ForceBuffers& out) const override;
+  EnergyKind energy_kind() const override { return EnergyKind::kElastic; }
+  double Energy(const Model& model, const State& state) const override;
+  void AddStiffnessBounds(const Model& model, const State& state,
+                          StiffnessBounds& bounds) const override;
+
+ private:
+  bool stretch_;
+  bool coupling_;
+};
+
+}  // namespace netlab::netsim
