@@ -1,3 +1,4 @@
+
 #include "libnetsim/simulation.h"
 
 #include <cmath>
@@ -187,6 +188,20 @@ bool Simulation::Step() {
   if (options_.kinetic_damping) {
     const double kinetic = KineticEnergy();
     if (kinetic < last_kinetic_) {
+      // Kinetic damping (Barnes): the kinetic energy peaked about half a step ago, so return
+      // the configuration there, x -= 3/2 dt v - 1/2 dt^2 a (likewise the frames), before
+      // zeroing the velocities. Without this correction the resets pump the fastest modes: a
+      // cantilever of 40 segments blew up at 0.45 of the stable step; with it, relaxation runs
+      // at the full step.
+      if (options_.integrator == IntegratorType::kSymplecticEuler) {
+        for (int i = 0; i < model_.num_nodes(); ++i)
+          state_.x[i] -= 1.5 * dt_ * state_.v[i] -
+                         0.5 * dt_ * dt_ * model_.node_inv_mass[i] * buffers_.force[i];
+        for (int j = 0; j < model_.num_segments(); ++j)
+          RotateBody(state_.q[j],
+                     -1.5 * dt_ * state_.w[j] + 0.5 * dt_ * dt_ *
+                         model_.segment_inv_inertia[j].cwiseProduct(buffers_.torque[j]));
+      }
       for (Vector3d& v : state_.v) v.setZero();
       for (Vector3d& w : state_.w) w.setZero();
       last_kinetic_ = 0.0;

@@ -50,7 +50,8 @@ struct SimulationOptions {
   bool scale_rotational_inertia = true;  // stability.h
   double contact_frequency_ratio = 0.3;  // contact_force.h
   // Reset all velocities whenever the kinetic energy falls (dynamic relaxation to a static
-  // equilibrium). Changes the dynamics: only for statics.
+  // equilibrium, with Barnes' correction of the positions to the energy peak). Changes the
+  // dynamics: only for statics.
   bool kinetic_damping = false;
   double max_speed = 1e3;  // m/s: a node faster than this stops the run as a blow-up
 
@@ -101,7 +102,8 @@ class Simulation {
   bool Advance(long steps);
   // Runs with kinetic damping until every node force is below `force_tolerance` (N) and every
   // segment torque below `torque_tolerance` (N m), or until `max_time` (s) of pseudo-time has
-  // passed. True when converged. Velocities are zero afterwards.
+  // passed. True when converged. Velocities are zero afterwards. Kinetic damping needs
+  // conservative loads: a dead moment in 3D is not, and needs damped dynamics instead.
   bool Relax(double max_time, double force_tolerance, double torque_tolerance);
 
   const std::optional<Failure>& failure() const { return failure_; }

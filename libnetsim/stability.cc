@@ -52,9 +52,13 @@ StabilityReport PrepareStability(Model& model, const State& state,
 
   // Rotational inertia scaling.
   if (options.scale_rotational_inertia && omega2_max > 0.0) {
+    const double omega = std::sqrt(omega2_max);
     for (int j = 0; j < model.num_segments(); ++j) {
       const Vector3d physical = model.segment_inertia[j];
-      const double needed = bounds.segment_stiffness[j] / omega2_max;
+      // sqrt(S/I + a^2) + a <= omega_T with a = C/(2I)  <=>  I >= (S + C omega_T) / omega_T^2:
+      // neither the stiffness nor the damping of the rotation then limits the step.
+      const double needed =
+          (bounds.segment_stiffness[j] + bounds.segment_damping[j] * omega) / omega2_max;
       const Vector3d scaled = physical.cwiseMax(needed);
       report.max_inertia_scale =
           std::max(report.max_inertia_scale, scaled.cwiseQuotient(physical).maxCoeff());

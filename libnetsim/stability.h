@@ -13,9 +13,10 @@
 // swings against the tangent through the coupling penalty, are much stiffer than stretching: with
 // the physical inertia they would set dt 10-100 times smaller than the stretching wave does. The
 // treatment (rotational inertia scaling, a form of selective mass scaling): each segment's
-// rotational inertia is raised to I_j = max(I_phys, S_j / omega_T^2), S_j its rotational stiffness
-// bound and omega_T the highest translational frequency of the model, so no rotation is faster than
-// the fastest stretching mode and dt is set by the stretching wave alone. The added inertia is
+// rotational inertia is raised to I_j = max(I_phys, (S_j + C_j omega_T) / omega_T^2), S_j and C_j
+// its rotational stiffness and damping bounds and omega_T the highest translational frequency of
+// the model, so no rotation, damped or not, has a smaller stable step than the fastest stretching
+// mode and dt is set by the stretching wave alone. The added inertia is
 // rotary inertia of the cross-section, whose effect on bending waves of wavenumber k is of relative
 // order (k r_g)^2 with r_g the scaled radius of gyration (a few thread radii): far below the
 // discretisation error for every wave the mesh resolves. docs/simulator.md gives the measured
