@@ -26,34 +26,17 @@ class JsonWriter {
 
   JsonWriter& Key(const std::string& key) {
     Separate();
-    String(key);
+    Quote(key);
     out_ += ':';
     after_key_ = true;
     return *this;
   }
   JsonWriter& String(const std::string& value) {
     Separate();
-    out_ += '"';
-    for (const char c : value) {
-      switch (c) {
-        case '"': out_ += "\\\""; break;
-        case '\\': out_ += "\\\\"; break;
-        case '\n': out_ += "\\n"; break;
-        case '\r': out_ += "\\r"; break;
-        case '\t': out_ += "\\t"; break;
-        default:
-          if (static_cast<unsigned char>(c) < 0x20) {
-            char buffer[8];
-            std::snprintf(buffer, sizeof(buffer), "\\u%04x", c);
-            out_ += buffer;
-          } else {
-            out_ += c;
-          }
-      }
-    }
-    out_ += '"';
+    Quote(value);
     return *this;
   }
+
   JsonWriter& Number(double value) {
     Separate();
     if (!std::isfinite(value)) {
@@ -110,6 +93,29 @@ class JsonWriter {
     if (first_.empty()) return;
     if (!first_.back()) out_ += ',';
     first_.back() = false;
+  }
+
+  // Writes `value` as a JSON string literal.
+  void Quote(const std::string& value) {
+    out_ += '"';
+    for (const char c : value) {
+      switch (c) {
+        case '"': out_ += "\\\""; break;
+        case '\\': out_ += "\\\\"; break;
+        case '\n': out_ += "\\n"; break;
+        case '\r': out_ += "\\r"; break;
+        case '\t': out_ += "\\t"; break;
+        default:
+          if (static_cast<unsigned char>(c) < 0x20) {
+            char buffer[8];
+            std::snprintf(buffer, sizeof(buffer), "\\u%04x", c);
+            out_ += buffer;
+          } else {
+            out_ += c;
+          }
+      }
+    }
+    out_ += '"';
   }
 
   std::string out_;

@@ -1,5 +1,7 @@
 // netlab simulate SCENARIO.yaml --out result.h5 [--json] [--quiet]
 
+#include <unistd.h>
+
 #include <cstdio>
 #include <exception>
 #include <iostream>
@@ -77,14 +79,16 @@ int RunSimulate(const std::vector<std::string>& args) {
     netsim::RunOptions options;
     options.out_path = out;
     const bool quiet = cl.Flag("quiet");
-    if (!quiet) {
+    // A progress line redrawn in place: only where a person watches a terminal.
+    const bool show_progress = !quiet && isatty(fileno(stderr));
+    if (show_progress) {
       options.progress = [](double fraction) {
         std::fprintf(stderr, "\rsimulating %3.0f%%", 100.0 * fraction);
         std::fflush(stderr);
       };
     }
     const netsim::RunSummary summary = netsim::RunScenario(scenario, options);
-    if (!quiet) std::fprintf(stderr, "\r");
+    if (show_progress) std::fprintf(stderr, "\r");
     if (!quiet || !cl.Flag("json")) std::cerr << summary.BriefReport();
     if (!summary.stable) {
       NETLAB_LOG(kError) << summary.error;

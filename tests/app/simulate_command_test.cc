@@ -1,0 +1,158 @@
+// `netlab simulate` end to end, as a user runs it: exit status, stdout JSON, stderr messages and
+// the output file.
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "libnetsim/track_file.h"
+#include "tests/app/json_parse.h"
+
+namespace {
+
+using netlab::testing::Json;
+using netlab::testing::JsonParser;
+
+// The JSON summary: the last line of stdout, parsed strictly.
+Json LastJson(const std::string& out) {
+  std::string text = out;
+  while (!text.empty() && text.back() == '\n') text.pop_back();
+  return JsonParser::Parse(text.substr(text.rfind('\n') + 1));
+}
+
+struct Result {
+  int status;
+  std::string out;  // stdout
+  std::string err;  // stderr
+};
+
+Result Netlab(const std::string& args) {
+  const auto err_path = std::filesystem::temp_directory_path() / "netlab_cli_stderr.txt";
+  const std::string command = std::string(NETLAB_EXE) + " " + args + " 2>" + err_path.string();
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string out;
+  std::array<char, 4096> buffer;
+  size_t n;
+  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) out.append(buffer.data(), n);
+  const int status = WEXITSTATUS(pclose(pipe));
+  std::ifstream err_file(err_path);
+  std::stringstream err;
+  err << err_file.rdbuf();
+  return {status, out, err.str()};
+}
+
+class SimulateCommand : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() / "netlab_simulate_command_test";
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::string Write(const std::string& name, const std::string& text) {
+    std::ofstream((dir_ / name).string()) << text;
+    return (dir_ / name).string();
+  }
+  std::filesystem::path dir_;
+};
+
+const char* kNet = R"(name: small_net
+duration: 0.02
+output_interval: 0.005
+gravity: [0, 0, -9.81]
+materials:
+  pp: {diameter: 1.0e-3, linear_density: 7.1e-4, stretch_stiffness: 1178,
+       bend_stiffness: 7.36e-5, twist_stiffness: 5.45e-5}
+nets:
+  - {name: net, material: pp, knots: [3, 4], mesh: 0.1, segments_per_link: 2, center: [0, 0, 0.2],
+     corner_mass: 0.01}
+bodies:
+  - {name: ball, shape: sphere, center: [0, 0, 0], radius: 0.19}
+probes:
+  corner: {net: net, knot: [0, 0]}
+)";
+
+// The JSON summary is the last line of stdout; every field of the contract is there.
+TEST_F(SimulateCommand, JsonSummaryHasTheContractFields) {
+  const std::string scenario = Write("net.yaml", kNet);
+  const std::string out = (dir_ / "result.h5").string();
+  const Result r = Netlab("simulate " + scenario + " --out " + out + " --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  ASSERT_EQ(r.out.back(), '\n');
+  const Json json = LastJson(r.out);
+  for (const char* key : {"stable", "dt", "steps", "nodes", "segments", "knots", "sim_time",
+                          "wall_s", "segment_steps_per_s", "max_penetration", "probes", "energy"})
+    EXPECT_TRUE(json.has(key)) << key;
+  EXPECT_TRUE(json["stable"].boolean());
+  // 3 x 4 knots, 2 segments per link: 17 links, 34 segments, 12 + 17 nodes.
+  EXPECT_EQ(json["knots"].number(), 12);
+  EXPECT_EQ(json["segments"].number(), 34);
+  EXPECT_EQ(json["nodes"].number(), 29);
+  EXPECT_NEAR(json["sim_time"].number(), 0.02, 1e-12);
+  EXPECT_NEAR(json["steps"].number() * json["dt"].number(), 0.02, 1e-9);
+  EXPECT_GT(json["segment_steps_per_s"].number(), 0.0);
+  EXPECT_EQ(json["probes"]["corner"].array().size(), 3u);
+  for (const char* e : {"kinetic", "elastic", "potential"})
+    EXPECT_TRUE(json["energy"].has(e)) << e;
+  EXPECT_GT(json["energy"]["kinetic"].number(), 0.0);  // it is falling
+  // The knot tracks: 5 frames of 12 knots.
+  const auto tracks = netlab::netsim::ReadKnotTracks(out);
+  EXPECT_EQ(tracks.frames(), 5);
+  EXPECT_EQ(tracks.knots(), 12);
+  EXPECT_EQ(tracks.scenario, kNet);
+}
+
+TEST_F(SimulateCommand, BadScenarioFailsWithFileLineAndKey) {
+  std::string text = kNet;
+  text.replace(text.find("mesh: 0.1"), 9, "mesh: -0.1");
+  const Result r = Netlab("simulate " + Write("bad.yaml", text) + " --out " +
+                       (dir_ / "x.h5").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("bad.yaml:9: nets[0].mesh: must be > 0"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "x.h5"));
+}
+
+TEST_F(SimulateCommand, BlowUpExitsWithTheErrorAndKeepsThePartialFrames) {
+  // Folded links (spread 0.6) store bending energy, so a step 30x the limit blows up at once.
+  std::string text = kNet;
+  text.replace(text.find("gravity:"), 0, "integrator: {type: explicit, dt: 1.0e-3}\n");
+  text.replace(text.find("corner_mass: 0.01}"), 18, "corner_mass: 0.01, spread: 0.6}");
+  const std::string out = (dir_ / "blown.h5").string();
+  const Result r = Netlab("simulate " + Write("fast.yaml", text) + " --out " + out + " --json");
+  EXPECT_EQ(r.status, 1);
+  const Json json = LastJson(r.out);
+  EXPECT_FALSE(json["stable"].boolean());
+  EXPECT_NE(json["error"].string().find("blew up at t = "), std::string::npos);
+  EXPECT_NE(r.err.find("blew up at t = "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("net 'net'"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out));
+  EXPECT_TRUE(std::filesystem::exists(out + ".partial"));
+}
+
+TEST_F(SimulateCommand, UsageErrorsExitWithStatus2) {
+  EXPECT_EQ(Netlab("simulate").status, 2);
+  EXPECT_EQ(Netlab("simulate " + Write("net.yaml", kNet)).status, 2);  // no --out
+  EXPECT_EQ(Netlab("simulate x.yaml --out y.h5 --frobnicate").status, 2);
+  EXPECT_EQ(Netlab("frobnicate").status, 2);
+}
+
+TEST_F(SimulateCommand, HelpDescribesTheCommand) {
+  const Result r = Netlab("simulate --help");
+  EXPECT_EQ(r.status, 0);
+  EXPECT_NE(r.out.find("usage: netlab simulate SCENARIO.yaml --out RESULT.h5"), std::string::npos);
+  const Result top = Netlab("--help");
+  EXPECT_EQ(top.status, 0);
+  EXPECT_NE(top.out.find("simulate"), std::string::npos);
+}
+
+TEST_F(SimulateCommand, MissingScenarioFileIsNamed) {
+  const Result r = Netlab("simulate /nonexistent/scenario.yaml --out " + (dir_ / "x.h5").string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("/nonexistent/scenario.yaml: cannot open"), std::string::npos) << r.err;
+}
+
+}  // namespace

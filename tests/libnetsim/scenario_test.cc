@@ -1,0 +1,172 @@
+#include "libnetsim/scenario.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "common/yaml_util.h"
+#include "libnetsim/run_scenario.h"
+
+namespace netlab::netsim {
+namespace {
+
+const std::string kScenarios = std::string(NETLAB_SOURCE_DIR) + "/scenarios/";
+
+// A small valid scenario; tests break one thing at a time.
+const char* kPendulum = R"(name: pendulum
+duration: 0.01
+output_interval: 0.002
+integrator: {type: explicit, dt: auto}
+gravity: [0, -9.81, 0]
+materials:
+  pp_yarn: {diameter: 1.0e-3, linear_density: 7.1e-4, stretch_stiffness: 1178,
+            bend_stiffness: 7.36e-5, twist_stiffness: 5.45e-5}
+rods:
+  - {name: yarn, material: pp_yarn, start: [0, 0, 0], end: [0.3, 0, 0], segments: 11,
+     fixed: {start: pinned}}
+loads:
+  - {type: force, rod: yarn, node: end, vector: [0, -1.0e-4, 0]}
+probes:
+  tip: {rod: yarn, node: end}
+)";
+
+std::string Replace(std::string text, const std::string& from, const std::string& to) {
+  const size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return text.replace(at, from.size(), to);
+}
+
+// The error message of parsing `text`, or "" if it parsed.
+std::string ParseError(const std::string& text) {
+  try {
+    BuildScenario(ParseScenario(text, "test.yaml", ""));
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Scenario, ShippedScenariosParseAndBuild) {
+  for (const char* name : {"cantilever", "pendulum", "net_capture", "net_a_0.5", "net_a_0.8",
+                           "net_b_0.5", "net_b_0.8"}) {
+    const Scenario s = LoadScenario(kScenarios + name + ".yaml");
+    EXPECT_EQ(s.name, name);
+    const BuiltScenario built = BuildScenario(s);
+    EXPECT_GT(built.simulation->dt(), 0.0) << name;
+  }
+}
+
+TEST(Scenario, NetCaptureIsThePapersNet) {
+  const BuiltScenario built = BuildScenario(LoadScenario(kScenarios + "net_capture.yaml"));
+  EXPECT_EQ(built.simulation->model().num_nodes(), 276);
+  EXPECT_EQ(built.simulation->model().num_segments(), 300);
+  EXPECT_EQ(built.knot_nodes.size(), 36u);
+}
+
+TEST(Scenario, ParabolicFlightCasesHaveTheExperimentNets) {
+  const auto a = BuildScenario(LoadScenario(kScenarios + "net_a_0.5.yaml"));
+  const auto b = BuildScenario(LoadScenario(kScenarios + "net_b_0.8.yaml"));
+  EXPECT_EQ(a.knot_nodes.size(), 121u);  // 11 x 11 knots, 10 cm mesh
+  EXPECT_EQ(b.knot_nodes.size(), 289u);  // 17 x 17 knots, 6.25 cm mesh
+  // Measured gravity and gyro, drag and the target: all in use.
+  const auto active = a.simulation->active_forces();
+  for (const char* force : {"gravity(series)", "rotating_frame(series)", "drag", "contact"})
+    EXPECT_NE(std::find(active.begin(), active.end(), force), active.end()) << force;
+}
+
+TEST(Scenario, OnlyTheForcesASceneUsesAreBuilt) {
+  const BuiltScenario built = BuildScenario(ParseScenario(kPendulum, "test.yaml", ""));
+  EXPECT_EQ(built.simulation->active_forces(),
+            (std::vector<std::string>{"stretch+coupling", "bend_twist", "gravity", "point_loads"}));
+  const std::string no_gravity = Replace(kPendulum, "gravity: [0, -9.81, 0]\n", "");
+  const auto forces = BuildScenario(ParseScenario(no_gravity, "t.yaml", "")).simulation->active_forces();
+  EXPECT_EQ(std::count(forces.begin(), forces.end(), "gravity"), 0);
+}
+
+TEST(Scenario, UnknownKeyIsNamedWithItsLine) {
+  const std::string error = ParseError(Replace(kPendulum, "duration: 0.01", "duraton: 0.01"));
+  EXPECT_NE(error.find("test.yaml:2"), std::string::npos) << error;
+  EXPECT_NE(error.find("duraton"), std::string::npos) << error;
+  EXPECT_NE(error.find("unknown key"), std::string::npos) << error;
+}
+
+TEST(Scenario, UnknownKeyInsideAListEntryIsNamed) {
+  const std::string error = ParseError(Replace(kPendulum, "segments: 11", "segmnets: 11"));
+  EXPECT_NE(error.find("rods[0].segmnets"), std::string::npos) << error;
+  EXPECT_NE(error.find("test.yaml:10"), std::string::npos) << error;
+}
+
+TEST(Scenario, MissingRequiredFieldIsNamed) {
+  const std::string error = ParseError(Replace(kPendulum, "duration: 0.01\n", ""));
+  EXPECT_NE(error.find("duration: missing"), std::string::npos) << error;
+}
+
+TEST(Scenario, NegativeStiffnessIsNamedWithItsLine) {
+  const std::string error =
+      ParseError(Replace(kPendulum, "bend_stiffness: 7.36e-5", "bend_stiffness: -7.36e-5"));
+  EXPECT_NE(error.find("test.yaml:8"), std::string::npos) << error;
+  EXPECT_NE(error.find("materials.pp_yarn.bend_stiffness"), std::string::npos) << error;
+  EXPECT_NE(error.find("must be > 0"), std::string::npos) << error;
+}
+
+TEST(Scenario, UnknownMaterialIsNamed) {
+  const std::string error = ParseError(Replace(kPendulum, "material: pp_yarn", "material: nylon"));
+  EXPECT_NE(error.find("unknown material 'nylon'"), std::string::npos) << error;
+  EXPECT_NE(error.find("test.yaml:10"), std::string::npos) << error;
+}
+
+TEST(Scenario, UnknownRodInALoadIsNamed) {
+  const std::string error = ParseError(Replace(kPendulum, "{type: force, rod: yarn", "{type: force, rod: thread"));
+  EXPECT_NE(error.find("unknown rod 'thread'"), std::string::npos) << error;
+  EXPECT_NE(error.find("loads[0]"), std::string::npos) << error;
+}
+
+TEST(Scenario, NodeIndexOutsideTheRodIsNamed) {
+  const std::string error = ParseError(Replace(kPendulum, "tip: {rod: yarn, node: end}", "tip: {rod: yarn, node: 12}"));
+  EXPECT_NE(error.find("probes.tip.node"), std::string::npos) << error;
+  EXPECT_NE(error.find("outside 0..11"), std::string::npos) << error;
+}
+
+TEST(Scenario, TextWhereANumberBelongsIsNamed) {
+  const std::string error = ParseError(Replace(kPendulum, "segments: 11", "segments: eleven"));
+  EXPECT_NE(error.find("rods[0].segments: expected a number, got 'eleven'"), std::string::npos)
+      << error;
+}
+
+TEST(Scenario, UnknownIntegratorIsNamed) {
+  const std::string error = ParseError(Replace(kPendulum, "type: explicit", "type: implicit"));
+  EXPECT_NE(error.find("integrator.type"), std::string::npos) << error;
+}
+
+TEST(Scenario, MissingGravityFileIsNamed) {
+  const std::string error =
+      ParseError(Replace(kPendulum, "gravity: [0, -9.81, 0]", "gravity: {file: nowhere.csv}"));
+  EXPECT_NE(error.find("nowhere.csv"), std::string::npos) << error;
+  EXPECT_NE(error.find("gravity.file"), std::string::npos) << error;
+}
+
+TEST(Scenario, YamlSyntaxErrorGivesTheLine) {
+  const std::string error = ParseError(Replace(kPendulum, "probes:", "probes: [unclosed"));
+  EXPECT_NE(error.find("YAML syntax error"), std::string::npos) << error;
+}
+
+TEST(Scenario, RunWritesFramesAtTheOutputInterval) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "netlab_scenario_test";
+  std::filesystem::create_directories(dir);
+  RunOptions options;
+  options.out_path = (dir / "pendulum.h5").string();
+  const RunSummary summary = RunScenario(ParseScenario(kPendulum, "test.yaml", ""), options);
+  EXPECT_TRUE(summary.stable) << summary.error;
+  EXPECT_EQ(summary.frames, 6);  // t = 0, 0.002, ..., 0.01
+  EXPECT_NEAR(summary.sim_time, 0.01, 1e-12);
+  EXPECT_EQ(summary.nodes, 12);
+  ASSERT_EQ(summary.probes.size(), 1u);
+  EXPECT_EQ(summary.probes[0].first, "tip");
+  EXPECT_TRUE(std::filesystem::exists(options.out_path));
+  EXPECT_FALSE(std::filesystem::exists(options.out_path + ".partial"));
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace netlab::netsim

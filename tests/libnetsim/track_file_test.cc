@@ -1,0 +1,132 @@
+#include "libnetsim/track_file.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace netlab::netsim {
+namespace {
+
+class TrackFile : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("netlab_track_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+
+  std::filesystem::path dir_;
+};
+
+KnotTracks Example() {
+  KnotTracks t;
+  t.time = {0.0, 0.1, 0.2};
+  t.grid = {{0, 0}, {0, 1}};
+  t.net_names = {"net"};
+  t.net = {0, 0};
+  for (int f = 0; f < 3; ++f)
+    for (int k = 0; k < 2; ++k) {
+      t.position.emplace_back(f, k, 0.5 * f * k);
+      t.valid.push_back(f == 1 && k == 1 ? 0 : 1);
+      t.covariance.push_back(Eigen::Matrix3d::Identity() * (1e-6 * (f + 1)));
+      t.reprojection_error_px.push_back(0.1 * f + k);
+    }
+  t.source = "netlab triangulate";
+  return t;
+}
+
+TEST_F(TrackFile, RoundTripKeepsEverything) {
+  const KnotTracks in = Example();
+  WriteKnotTracks(Path("tracks.h5"), in);
+  const KnotTracks out = ReadKnotTracks(Path("tracks.h5"));
+  EXPECT_EQ(out.time, in.time);
+  EXPECT_EQ(out.grid, in.grid);
+  EXPECT_EQ(out.net, in.net);
+  EXPECT_EQ(out.net_names, in.net_names);
+  EXPECT_EQ(out.position, in.position);
+  EXPECT_EQ(out.valid, in.valid);
+  EXPECT_EQ(out.covariance.size(), 6u);
+  EXPECT_TRUE(out.covariance[5].isApprox(in.covariance[5]));
+  EXPECT_EQ(out.reprojection_error_px, in.reprojection_error_px);
+  EXPECT_EQ(out.source, "netlab triangulate");
+  EXPECT_FALSE(out.Valid(1, 1));
+  EXPECT_EQ(out.FindKnot(0, 1), 1);
+  EXPECT_FALSE(std::filesystem::exists(Path("tracks.h5.partial")));
+}
+
+TEST_F(TrackFile, StreamingWriterCommitsWhenDone) {
+  TrackFileWriter::Layout layout;
+  layout.nodes = 3;
+  layout.grid = {{0, 0}};
+  layout.probe_names = {"tip"};
+  layout.scenario = "name: x\n";
+  {
+    TrackFileWriter writer(Path("sim.h5"), layout);
+    for (int f = 0; f < 100; ++f) {
+      const std::vector<Eigen::Vector3d> nodes(3, Eigen::Vector3d(f, 0, 0));
+      writer.AppendFrame(0.01 * f, nodes, {nodes[0]}, {nodes[2]});
+    }
+    EXPECT_TRUE(std::filesystem::exists(Path("sim.h5.partial")));
+    EXPECT_FALSE(std::filesystem::exists(Path("sim.h5")));
+    writer.Commit();
+  }
+  const KnotTracks tracks = ReadKnotTracks(Path("sim.h5"));
+  EXPECT_EQ(tracks.frames(), 100);
+  EXPECT_EQ(tracks.Position(42, 0), Eigen::Vector3d(42, 0, 0));
+  EXPECT_EQ(tracks.scenario, "name: x\n");
+  EXPECT_EQ(tracks.source, "netlab simulate");
+  const auto nodes = ReadNodePositions(Path("sim.h5"));
+  ASSERT_EQ(nodes.size(), 100u);
+  EXPECT_EQ(nodes[99][2], Eigen::Vector3d(99, 0, 0));
+}
+
+TEST_F(TrackFile, InterruptedWriteLeavesThePreviousFileIntact) {
+  WriteKnotTracks(Path("tracks.h5"), Example());
+  TrackFileWriter::Layout layout;
+  layout.grid = {{0, 0}};
+  {
+    TrackFileWriter writer(Path("tracks.h5"), layout);
+    writer.AppendFrame(0.0, {}, {Eigen::Vector3d::Zero()}, {});
+    // destroyed without Commit: a crash or a blow-up mid-run
+  }
+  EXPECT_EQ(ReadKnotTracks(Path("tracks.h5")).frames(), 3);
+  EXPECT_TRUE(std::filesystem::exists(Path("tracks.h5.partial")));
+}
+
+TEST_F(TrackFile, MissingFileIsNamed) {
+  try {
+    ReadKnotTracks(Path("absent.h5"));
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("absent.h5"), std::string::npos);
+  }
+}
+
+TEST_F(TrackFile, TextFileIsNotHdf5) {
+  std::ofstream(Path("notes.h5")) << "not hdf5\n";
+  try {
+    ReadKnotTracks(Path("notes.h5"));
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("not an HDF5 file"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(TrackFile, TruncatedFileIsAnError) {
+  WriteKnotTracks(Path("tracks.h5"), Example());
+  std::filesystem::resize_file(Path("tracks.h5"), 600);
+  EXPECT_THROW(ReadKnotTracks(Path("tracks.h5")), std::runtime_error);
+}
+
+TEST_F(TrackFile, MismatchedShapesAreNamed) {
+  KnotTracks t = Example();
+  t.position.pop_back();
+  EXPECT_THROW(WriteKnotTracks(Path("bad.h5"), t), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace netlab::netsim
