@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -32,7 +34,8 @@ struct Result {
 };
 
 Result Netlab(const std::string& args) {
-  const auto err_path = std::filesystem::temp_directory_path() / "netlab_cli_stderr.txt";
+  const auto err_path = std::filesystem::temp_directory_path() /
+                        ("netlab_cli_stderr_" + std::to_string(getpid()) + ".txt");
   const std::string command = std::string(NETLAB_EXE) + " " + args + " 2>" + err_path.string();
   FILE* pipe = popen(command.c_str(), "r");
   std::string out;
@@ -43,13 +46,16 @@ Result Netlab(const std::string& args) {
   std::ifstream err_file(err_path);
   std::stringstream err;
   err << err_file.rdbuf();
+  std::filesystem::remove(err_path);
   return {status, out, err.str()};
 }
 
 class SimulateCommand : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() / "netlab_simulate_command_test";
+    // One folder per process: ctest runs the cases in parallel.
+    dir_ = std::filesystem::temp_directory_path() /
+           ("netlab_simulate_command_test_" + std::to_string(getpid()));
     std::filesystem::create_directories(dir_);
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }

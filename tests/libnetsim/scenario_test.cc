@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -152,7 +155,8 @@ TEST(Scenario, YamlSyntaxErrorGivesTheLine) {
 }
 
 TEST(Scenario, RunWritesFramesAtTheOutputInterval) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "netlab_scenario_test";
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("netlab_scenario_test_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
   RunOptions options;
   options.out_path = (dir / "pendulum.h5").string();
