@@ -408,7 +408,10 @@ BuiltScenario BuildScenario(const Scenario& s) {
 
   // The forces this scene uses, and only those.
   std::vector<std::unique_ptr<Force>> forces;
-  forces.push_back(std::make_unique<SegmentForce>());
+  const bool drag = s.drag && s.drag->air_density > 0.0 &&
+                    (s.drag->drag_coefficient > 0.0 || s.drag->tangential_coefficient > 0.0);
+  forces.push_back(std::make_unique<SegmentForce>(
+      true, true, drag ? std::optional<DragOptions>(*s.drag) : std::nullopt));
   if (!model.bend_pairs.empty() || !model.anchors.empty())
     forces.push_back(std::make_unique<BendTwistForce>(model));
   if (s.gravity_series) {
@@ -416,9 +419,6 @@ BuiltScenario BuildScenario(const Scenario& s) {
   } else if (s.gravity && s.gravity->squaredNorm() > 0.0) {
     forces.push_back(std::make_unique<GravityForce>(*s.gravity));
   }
-  if (s.drag && s.drag->air_density > 0.0 &&
-      (s.drag->drag_coefficient > 0.0 || s.drag->tangential_coefficient > 0.0))
-    forces.push_back(std::make_unique<DragForce>(*s.drag));
   if (s.frame_rotation_series) {
     forces.push_back(std::make_unique<RotatingFrameForce>(*s.frame_rotation_series));
   } else if (s.frame_rotation && s.frame_rotation->squaredNorm() > 0.0) {

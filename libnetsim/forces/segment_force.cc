@@ -57,6 +57,9 @@ void SegmentForce::Accumulate(const Model& model, const State& state, double /*d
     fa[0] -= fx;
     fa[1] -= fy;
     fa[2] -= fz;
+    if (drag_)
+      AddSegmentDrag(*drag_, s.diameter, length, tx, ty, tz, v[s.node_a].data(),
+                     v[s.node_b].data(), fa, fb);
 
     // Body torque kappa l e_z x t_body; t_body = R^T t needs only the frame's d1 and d2.
     const double d1x = 1.0 - 2.0 * (qy * qy + qz * qz), d1y = 2.0 * (qx * qy + qw * qz),

@@ -1,6 +1,7 @@
 #pragma once
-// The two energies that live on each segment (CoRdE [9] sections 4.1 and 4.3), evaluated in one
-// pass because they share the segment's geometry (t, |e|) and its node forces.
+// The forces that live on each segment, evaluated in one pass because they share the segment's
+// geometry (t, |e|), its velocities and its node forces: the two energies of CoRdE [9] (sections
+// 4.1 and 4.3) and, when the scene has air, the drag of drag_force.h.
 //
 // Stretching, linear in the axial strain (paper section 2):
 //   epsilon = |x_b - x_a| / l - 1,          E_s = 1/2 EA l epsilon^2,
@@ -16,17 +17,21 @@
 // a shear stiffness (N): a transverse force V leaves a shear angle V / kappa. It is chosen per
 // segment by ModelBuilderOptions::coupling_stiffness_ratio.
 
+#include <optional>
+
+#include "libnetsim/forces/drag_force.h"
 #include "libnetsim/forces/force.h"
 
 namespace netlab::netsim {
 
 class SegmentForce final : public Force {
  public:
-  // Which of the two energies to include (tests check each alone).
-  explicit SegmentForce(bool stretch = true, bool coupling = true)
-      : stretch_(stretch), coupling_(coupling) {}
+  // Which of the two energies to include (tests check each alone), and the air drag if any.
+  explicit SegmentForce(bool stretch = true, bool coupling = true,
+                        std::optional<DragOptions> drag = std::nullopt)
+      : stretch_(stretch), coupling_(coupling), drag_(drag) {}
 
-  std::string name() const override { return "stretch+coupling"; }
+  std::string name() const override { return drag_ ? "stretch+coupling+drag" : "stretch+coupling"; }
   void Accumulate(const Model& model, const State& state, double dt,
                   ForceBuffers& out) const override;
   EnergyKind energy_kind() const override { return EnergyKind::kElastic; }
@@ -37,6 +42,7 @@ class SegmentForce final : public Force {
  private:
   bool stretch_;
   bool coupling_;
+  std::optional<DragOptions> drag_;
 };
 
 }  // namespace netlab::netsim

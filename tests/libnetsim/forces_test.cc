@@ -147,6 +147,21 @@ TEST(Forces, ContactNormalForceIsMinusTheGradientOfItsEnergy) {
   ExpectForceIsMinusGradient(contact, model, state);
 }
 
+// The drag evaluated in the segment pass is the same as DragForce's.
+TEST(Forces, SegmentPassDragEqualsDragForce) {
+  auto [model, state] = TestScene();
+  DragOptions drag;
+  drag.tangential_coefficient = 0.1;
+  ForceBuffers fused, separate;
+  fused.Resize(model.num_nodes(), model.num_segments());
+  separate.Resize(model.num_nodes(), model.num_segments());
+  SegmentForce(true, true, drag).Accumulate(model, state, 0.0, fused);
+  SegmentForce().Accumulate(model, state, 0.0, separate);
+  DragForce(drag).Accumulate(model, state, 0.0, separate);
+  for (int i = 0; i < model.num_nodes(); ++i)
+    EXPECT_LT((fused.force[i] - separate.force[i]).norm(), 1e-12);
+}
+
 // Damping and drag only ever take energy out: the power F . v + tau . w is negative.
 TEST(Forces, DampingAndDragDissipate) {
   auto [model, state] = TestScene();

@@ -74,7 +74,8 @@ TEST(Scenario, ParabolicFlightCasesHaveTheExperimentNets) {
   EXPECT_EQ(b.knot_nodes.size(), 289u);  // 17 x 17 knots, 6.25 cm mesh
   // Measured gravity and gyro, drag and the target: all in use.
   const auto active = a.simulation->active_forces();
-  for (const char* force : {"gravity(series)", "rotating_frame(series)", "drag", "contact"})
+  for (const char* force :
+       {"stretch+coupling+drag", "gravity(series)", "rotating_frame(series)", "contact"})
     EXPECT_NE(std::find(active.begin(), active.end(), force), active.end()) << force;
 }
 
