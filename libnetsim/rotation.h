@@ -28,21 +28,25 @@ inline Vector3d Director3(const Quaterniond& q) {
   return {2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y)};
 }
 
-// Exp of a rotation vector phi (rad): the unit quaternion rotating by |phi| about phi / |phi|.
-// Small angles (every per-step rotation of a stable run) use a Taylor series that needs no sqrt
-// and no trigonometry; it is exact to rounding below |phi| = 0.02.
-inline Quaterniond ExpMap(const Vector3d& phi) {
-  const double h2 = 0.25 * phi.squaredNorm();  // (|phi| / 2)^2
-  double sinc_half, cos_half;                  // sin(|phi|/2) / |phi| and cos(|phi|/2)
+// sin(|phi|/2) / |phi| and cos(|phi|/2) from h2 = (|phi|/2)^2. Small angles (every per-step
+// rotation of a stable run) use a Taylor series that needs no sqrt and no trigonometry; it is exact
+// to rounding below |phi| = 0.02. Reciprocal constants: a division costs ~15 cycles even by a
+// constant.
+inline void ExpCoefficients(double h2, double* sinc_half, double* cos_half) {
   if (h2 < 1e-4) {
-    // Multiplications by reciprocal constants: a division costs ~15 cycles even by a constant.
-    sinc_half = 0.5 * (1.0 + h2 * (-1.0 / 6.0 + h2 * (1.0 / 120.0)));
-    cos_half = 1.0 + h2 * (-0.5 + h2 * (1.0 / 24.0));
+    *sinc_half = 0.5 * (1.0 + h2 * (-1.0 / 6.0 + h2 * (1.0 / 120.0)));
+    *cos_half = 1.0 + h2 * (-0.5 + h2 * (1.0 / 24.0));
   } else {
     const double half = std::sqrt(h2);
-    sinc_half = std::sin(half) / (2.0 * half);
-    cos_half = std::cos(half);
+    *sinc_half = std::sin(half) / (2.0 * half);
+    *cos_half = std::cos(half);
   }
+}
+
+// Exp of a rotation vector phi (rad): the unit quaternion rotating by |phi| about phi / |phi|.
+inline Quaterniond ExpMap(const Vector3d& phi) {
+  double sinc_half, cos_half;
+  ExpCoefficients(0.25 * phi.squaredNorm(), &sinc_half, &cos_half);
   return Quaterniond(cos_half, sinc_half * phi.x(), sinc_half * phi.y(), sinc_half * phi.z());
 }
 
@@ -56,16 +60,8 @@ inline void Renormalize(Quaterniond& q) {
 // same formulas as ExpMap and Eigen's product) because a temporary Quaterniond here costs a
 // store-forwarding stall per segment and step.
 inline void RotateBody(Quaterniond& q, const Vector3d& phi) {
-  const double h2 = 0.25 * phi.squaredNorm();
   double sinc_half, cos_half;
-  if (h2 < 1e-4) {
-    sinc_half = 0.5 * (1.0 + h2 * (-1.0 / 6.0 + h2 * (1.0 / 120.0)));
-    cos_half = 1.0 + h2 * (-0.5 + h2 * (1.0 / 24.0));
-  } else {
-    const double half = std::sqrt(h2);
-    sinc_half = std::sin(half) / (2.0 * half);
-    cos_half = std::cos(half);
-  }
+  ExpCoefficients(0.25 * phi.squaredNorm(), &sinc_half, &cos_half);
   const double ew = cos_half, ex = sinc_half * phi.x(), ey = sinc_half * phi.y(),
                ez = sinc_half * phi.z();
   double* c = q.coeffs().data();  // x, y, z, w
@@ -90,24 +86,27 @@ struct LogResult {
 // Log of a unit quaternion r. The derivatives follow from the SO(3) Jacobians:
 //   Log(r * Exp(d)) = phi + Jr^-1(phi) d,   Log(Exp(-d) * r) = phi - Jl^-1(phi) d,
 //   Jr^-1 = I + 1/2 [phi]x + b [phi]x^2,    Jl^-1 = Jr^-1^T = I - 1/2 [phi]x + b [phi]x^2.
-inline LogResult LogMap(const Quaterniond& r) {
-  double w = r.w();
-  Vector3d v = r.vec();
+// The same on scalars (w, x, y, z): phi and b, for the force loops.
+struct LogScalars {
+  double x, y, z;  // phi, rad
+  double b;
+};
+inline LogScalars LogMap(double w, double x, double y, double z) {
   if (w < 0.0) {
     w = -w;
-    v = -v;
+    x = -x;
+    y = -y;
+    z = -z;
   }
-  const double s2 = v.squaredNorm();  // sin^2(theta/2)
-  LogResult out;
+  const double s2 = x * x + y * y + z * z;  // sin^2(theta/2)
+  double scale, b;                          // theta / s, and b
   if (s2 < 2.5e-3) {
     // theta < 0.1 rad, nearly every joint of a resolved net: theta / s = 2 asin(s) / s as a
     // series in s^2 (error < 3e-15), which needs neither sqrt, division nor atan2. Relies on
     // |r| = 1 to rounding, which Simulation keeps by renormalising every step.
-    const double scale =
-        2.0 + s2 * (1.0 / 3 + s2 * (3.0 / 20 + s2 * (5.0 / 56 + s2 * (35.0 / 576))));
-    out.phi = scale * v;
+    scale = 2.0 + s2 * (1.0 / 3 + s2 * (3.0 / 20 + s2 * (5.0 / 56 + s2 * (35.0 / 576))));
     const double t2 = scale * scale * s2;  // theta^2
-    out.b = 1.0 / 12 + t2 * (1.0 / 720 + t2 * (1.0 / 30240 + t2 * (1.0 / 1209600)));
+    b = 1.0 / 12 + t2 * (1.0 / 720 + t2 * (1.0 / 30240 + t2 * (1.0 / 1209600)));
   } else if (s2 < 0.04 * w * w) {
     // theta < 0.4: theta / s = 2 atan(u) / (u w) with u = s / w < 0.2, the series of atan(u)/u
     // to u^14 (error < u^16/17 = 4e-13), and b as its series in theta^2 (error < 1e-13).
@@ -116,18 +115,22 @@ inline LogResult LogMap(const Quaterniond& r) {
     const double atan_ratio =
         1.0 + u2 * (-1.0 / 3 + u2 * (1.0 / 5 + u2 * (-1.0 / 7 + u2 * (1.0 / 9 + u2 * (-1.0 / 11 +
         u2 * (1.0 / 13 + u2 * (-1.0 / 15)))))));
-    const double scale = 2.0 * inv_w * atan_ratio;  // theta / s
-    out.phi = scale * v;
+    scale = 2.0 * inv_w * atan_ratio;
     const double t2 = scale * scale * s2;  // theta^2
-    out.b = 1.0 / 12 + t2 * (1.0 / 720 + t2 * (1.0 / 30240 + t2 * (1.0 / 1209600 +
-            t2 * (1.0 / 47900160))));
+    b = 1.0 / 12 + t2 * (1.0 / 720 + t2 * (1.0 / 30240 + t2 * (1.0 / 1209600 +
+        t2 * (1.0 / 47900160))));
   } else {
     const double s = std::sqrt(s2);
     const double theta = 2.0 * std::atan2(s, w);
-    out.phi = (theta / s) * v;
-    out.b = (1.0 - 0.5 * theta * (w / s)) / (theta * theta);
+    scale = theta / s;
+    b = (1.0 - 0.5 * theta * (w / s)) / (theta * theta);
   }
-  return out;
+  return {scale * x, scale * y, scale * z, b};
+}
+
+inline LogResult LogMap(const Quaterniond& r) {
+  const LogScalars l = LogMap(r.w(), r.x(), r.y(), r.z());
+  return {Vector3d(l.x, l.y, l.z), l.b};
 }
 
 // Jr^-1(phi) y and Jl^-1(phi) y, without forming matrices.

@@ -51,7 +51,7 @@ struct SimulationOptions {
   double contact_frequency_ratio = 0.3;  // contact_force.h
   // Reset all velocities whenever the kinetic energy falls (dynamic relaxation to a static
   // equilibrium, with Barnes' correction of the positions to the energy peak). Changes the
-  // dynamics: only for statics.
+  // dynamics: only for statics. Needs the explicit integrator.
   bool kinetic_damping = false;
   double max_speed = 1e3;  // m/s: a node faster than this stops the run as a blow-up
 
@@ -103,7 +103,8 @@ class Simulation {
   // Runs with kinetic damping until every node force is below `force_tolerance` (N) and every
   // segment torque below `torque_tolerance` (N m), or until `max_time` (s) of pseudo-time has
   // passed. True when converged. Velocities are zero afterwards. Kinetic damping needs
-  // conservative loads: a dead moment in 3D is not, and needs damped dynamics instead.
+  // conservative loads: a dead moment in 3D is not, and needs damped dynamics instead. Steps with
+  // symplectic Euler whatever the integrator option.
   bool Relax(double max_time, double force_tolerance, double torque_tolerance);
 
   const std::optional<Failure>& failure() const { return failure_; }

@@ -23,10 +23,10 @@ inline void Joint(const Quaterniond& qa, const Quaterniond& qb, const Vector3d& 
   const double* b = qb.coeffs().data();
   const double ax = -a[0], ay = -a[1], az = -a[2], aw = a[3];  // conjugate of qa
   const double bx = b[0], by = b[1], bz = b[2], bw = b[3];
-  Quaterniond r(aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
-                aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw);
-  const LogResult log = LogMap(r);
-  const double px = log.phi.x(), py = log.phi.y(), pz = log.phi.z(), lb = log.b;
+  const LogScalars log =
+      LogMap(aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
+             aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw);
+  const double px = log.x, py = log.y, pz = log.z, lb = log.b;
   double gx = p.stiffness.x() * (px - p.rest_phi.x());
   double gy = p.stiffness.y() * (py - p.rest_phi.y());
   double gz = p.stiffness.z() * (pz - p.rest_phi.z());

@@ -18,28 +18,10 @@
 namespace netlab::netsim {
 namespace {
 
+using testing::ElasticForces;
+using testing::Nylon;
 using testing::PpYarn;
 using testing::StraightRod;
-
-std::vector<std::unique_ptr<Force>> ElasticForces(const Model& model) {
-  std::vector<std::unique_ptr<Force>> forces;
-  forces.push_back(std::make_unique<SegmentForce>());
-  if (!model.bend_pairs.empty() || !model.anchors.empty())
-    forces.push_back(std::make_unique<BendTwistForce>(model));
-  return forces;
-}
-
-// 1 mm Nylon thread (scenarios/net_a_0.5.yaml), undamped.
-Material Nylon() {
-  Material m;
-  m.name = "nylon";
-  m.diameter = 1.0e-3;
-  m.linear_density = 8.95e-4;
-  m.stretch_stiffness = 1571;
-  m.bend_stiffness = 9.82e-5;
-  m.twist_stiffness = 7.07e-5;
-  return m;
-}
 
 class Dynamics : public ::testing::TestWithParam<IntegratorType> {
  protected:
@@ -113,7 +95,8 @@ TEST_P(Dynamics, StretchDampingDecaysAtTheClosedFormRate) {
   // which is the closed form only for sigma dt << 1.
   SimulationOptions o = Options();
   o.dt = 1e-5;
-  Simulation sim(std::move(model), std::move(state), ElasticForces(model), o);
+  auto forces = ElasticForces(model);
+  Simulation sim(std::move(model), std::move(state), std::move(forces), o);
   std::vector<double> t, y;
   // sigma = 10/s, omega = sqrt(EA / (L m)) = 108 rad/s: six decay times, ten periods.
   while (sim.state().time < 0.6) {
@@ -177,7 +160,8 @@ TEST_P(Dynamics, BendDampingDecaysTheFirstCantileverModeAtTheKelvinVoigtRate) {
     const Vector3d t = (state.x[seg.node_b] - state.x[seg.node_a]).normalized();
     state.q[j] = MinimalRotation(Director3(state.q[j]), t) * state.q[j];
   }
-  Simulation sim(std::move(model), std::move(state), ElasticForces(model), Options());
+  auto forces = ElasticForces(model);
+  Simulation sim(std::move(model), std::move(state), std::move(forces), Options());
   // Tip deflection averaged over 5 ms windows: the undamped axial ripple (periods < 1 ms) would
   // otherwise add spurious peaks to the 0.5 s oscillation.
   std::vector<double> t, y;
@@ -394,7 +378,8 @@ TEST_P(Dynamics, BlowUpStopsWithTimeNodeAndQuantity) {
 
 TEST_P(Dynamics, NaNIsReportedAtItsNode) {
   auto [model, state] = StraightRod(PpYarn(), 0.3, 11, Fixity::kPinned);
-  Simulation sim(std::move(model), std::move(state), ElasticForces(model), Options());
+  auto forces = ElasticForces(model);
+  Simulation sim(std::move(model), std::move(state), std::move(forces), Options());
   sim.mutable_state().x[5].y() = std::nan("");
   EXPECT_FALSE(sim.Advance(10));
   ASSERT_TRUE(sim.failure().has_value());

@@ -3,20 +3,12 @@
 #include <gtest/gtest.h>
 
 #include "libnetsim/rotation.h"
+#include "tests/libnetsim/test_models.h"
 
 namespace netlab::netsim {
 namespace {
 
-Material PpYarn() {
-  Material m;
-  m.name = "pp_yarn";
-  m.diameter = 1.0e-3;
-  m.linear_density = 7.1e-4;
-  m.stretch_stiffness = 1178;
-  m.bend_stiffness = 7.36e-5;
-  m.twist_stiffness = 5.45e-5;
-  return m;
-}
+using testing::PpYarn;
 
 NetSpec PaperNet(int material) {
   NetSpec n;

@@ -16,15 +16,9 @@
 namespace netlab::netsim {
 namespace {
 
+using testing::ElasticForces;
 using testing::PpYarn;
 using testing::StraightRod;
-
-std::vector<std::unique_ptr<Force>> ElasticForces(const Model& model) {
-  std::vector<std::unique_ptr<Force>> forces;
-  forces.push_back(std::make_unique<SegmentForce>());
-  forces.push_back(std::make_unique<BendTwistForce>(model));
-  return forces;
-}
 
 // A unit rod (L = 1 m, EI = 1 N m^2) nearly inextensible (EA = 1e5 N), for the elastica.
 Material UnitRod() {

@@ -1,8 +1,12 @@
 #pragma once
 // Shared fixtures of the libnetsim tests: materials and small models.
 
+#include <memory>
 #include <random>
+#include <vector>
 
+#include "libnetsim/forces/bend_twist_force.h"
+#include "libnetsim/forces/segment_force.h"
 #include "libnetsim/model_builder.h"
 #include "libnetsim/rotation.h"
 
@@ -18,6 +22,27 @@ inline Material PpYarn() {
   m.bend_stiffness = 7.36e-5;
   m.twist_stiffness = 5.45e-5;
   return m;
+}
+
+// 1 mm Nylon thread (scenarios/net_a_0.5.yaml), undamped.
+inline Material Nylon() {
+  Material m;
+  m.name = "nylon";
+  m.diameter = 1.0e-3;
+  m.linear_density = 8.95e-4;
+  m.stretch_stiffness = 1571;
+  m.bend_stiffness = 9.82e-5;
+  m.twist_stiffness = 7.07e-5;
+  return m;
+}
+
+// The internal forces of a model: stretching and coupling, and bending/torsion where it has joints.
+inline std::vector<std::unique_ptr<Force>> ElasticForces(const Model& model) {
+  std::vector<std::unique_ptr<Force>> forces;
+  forces.push_back(std::make_unique<SegmentForce>());
+  if (!model.bend_pairs.empty() || !model.anchors.empty())
+    forces.push_back(std::make_unique<BendTwistForce>(model));
+  return forces;
 }
 
 // A straight rod along +x from the origin.
