@@ -132,7 +132,10 @@ KnotTracks ReadKnotTracks(const std::string& path, bool /*read_nodes*/) {
   auto expect = [&](const char* name, std::vector<hsize_t> dims) {
     if (h5::DatasetDims(f, name) != dims) {
       std::string shape;
-      for (hsize_t d : dims) shape += (shape.empty() ? "" : ",") + std::to_string(d);
+      for (hsize_t d : dims) {
+        if (!shape.empty()) shape += ',';
+        shape += std::to_string(d);
+      }
       fail(std::string(name) + " must have shape [" + shape + "] to match /time and /knots/grid");
     }
   };

@@ -154,7 +154,7 @@ TEST_P(Contact, NetHittingASphereAt5MetresPerSecondStaysStable) {
 INSTANTIATE_TEST_SUITE_P(Integrators, Contact,
                          ::testing::Values(IntegratorType::kSymplecticEuler,
                                            IntegratorType::kVelocityVerlet),
-                         [](const auto& info) { return IntegratorName(info.param); });
+                         [](const auto& p) { return IntegratorName(p.param); });
 
 }  // namespace
 }  // namespace netlab::netsim

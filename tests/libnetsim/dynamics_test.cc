@@ -391,7 +391,7 @@ TEST_P(Dynamics, NaNIsReportedAtItsNode) {
 INSTANTIATE_TEST_SUITE_P(Integrators, Dynamics,
                          ::testing::Values(IntegratorType::kSymplecticEuler,
                                            IntegratorType::kVelocityVerlet),
-                         [](const auto& info) { return IntegratorName(info.param); });
+                         [](const auto& p) { return IntegratorName(p.param); });
 
 }  // namespace
 }  // namespace netlab::netsim
