@@ -30,6 +30,7 @@ struct Segment {
   int node_b = 0;                   // end node
   int material = 0;                 // index into Model::materials
   double rest_length = 0.0;         // m
+  double inv_rest_length = 0.0;     // 1/m
   double stretch_stiffness = 0.0;   // EA, N
   double stretch_damping = 0.0;     // c_s, N s
   double coupling_stiffness = 0.0;  // kappa, N: penalty tying d3 to the tangent (forces/segment_force.h)

@@ -89,6 +89,7 @@ void ModelBuilder::AddChain(const std::vector<int>& nodes, int material) {
     s.node_b = nodes[k + 1];
     s.material = material;
     s.rest_length = length;
+    s.inv_rest_length = 1.0 / length;
     s.stretch_stiffness = m.stretch_stiffness;
     s.stretch_damping = m.stretch_damping;
     s.coupling_stiffness = options_.coupling_stiffness_ratio * bend_max / (length * length);

@@ -28,7 +28,7 @@ void SegmentForce::Accumulate(const Model& model, const State& state, double /*d
     const double tx = ex * inv_length, ty = ey * inv_length, tz = ez * inv_length;
 
     // Stretching: axial force N along t, positive in tension.
-    const double inv_l = 1.0 / s.rest_length;
+    const double inv_l = s.inv_rest_length;
     double axial = s.stretch_stiffness * (length * inv_l - 1.0);
     if (s.stretch_damping != 0.0) {
       const double* va = v[s.node_a].data();
