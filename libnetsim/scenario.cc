@@ -307,6 +307,7 @@ class Parser {
       if (ref.rod < 0) m.Fail("rod", "unknown rod '" + name + "'");
       const int last = s.rods[ref.rod].segments;
       const YAML::Node node = m.Get("node");
+      if (!node.IsScalar()) m.Fail("node", "expected start, end or a node index");
       const std::string text = node.as<std::string>();
       if (text == "start") {
         ref.index = 0;

@@ -132,6 +132,12 @@ TEST(Scenario, NodeIndexOutsideTheRodIsNamed) {
   EXPECT_NE(error.find("outside 0..11"), std::string::npos) << error;
 }
 
+TEST(Scenario, NodeGivenAsAListIsNamed) {
+  const std::string error = ParseError(Replace(kPendulum, "tip: {rod: yarn, node: end}", "tip: {rod: yarn, node: [1, 2]}"));
+  EXPECT_NE(error.find("probes.tip.node: expected start, end or a node index"), std::string::npos)
+      << error;
+}
+
 TEST(Scenario, TextWhereANumberBelongsIsNamed) {
   const std::string error = ParseError(Replace(kPendulum, "segments: 11", "segments: eleven"));
   EXPECT_NE(error.find("rods[0].segments: expected a number, got 'eleven'"), std::string::npos)
