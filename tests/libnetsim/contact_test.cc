@@ -151,10 +151,8 @@ TEST_P(Contact, NetHittingASphereAt5MetresPerSecondStaysStable) {
   EXPECT_GT(closest, 0.0);  // node centres never inside the sphere
 }
 
-INSTANTIATE_TEST_SUITE_P(Integrators, Contact,
-                         ::testing::Values(IntegratorType::kSymplecticEuler,
-                                           IntegratorType::kVelocityVerlet),
-                         [](const auto& p) { return IntegratorName(p.param); });
+INSTANTIATE_TEST_SUITE_P(Integrators, Contact, testing::AllIntegrators(),
+                         testing::IntegratorTestName);
 
 }  // namespace
 }  // namespace netlab::netsim

@@ -388,10 +388,8 @@ TEST_P(Dynamics, NaNIsReportedAtItsNode) {
   EXPECT_NE(sim.failure()->message.find("NaN"), std::string::npos) << sim.failure()->message;
 }
 
-INSTANTIATE_TEST_SUITE_P(Integrators, Dynamics,
-                         ::testing::Values(IntegratorType::kSymplecticEuler,
-                                           IntegratorType::kVelocityVerlet),
-                         [](const auto& p) { return IntegratorName(p.param); });
+INSTANTIATE_TEST_SUITE_P(Integrators, Dynamics, testing::AllIntegrators(),
+                         testing::IntegratorTestName);
 
 }  // namespace
 }  // namespace netlab::netsim

@@ -1,16 +1,29 @@
 #pragma once
 // Shared fixtures of the libnetsim tests: materials and small models.
 
+#include <gtest/gtest.h>
+
 #include <memory>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "libnetsim/forces/bend_twist_force.h"
 #include "libnetsim/forces/segment_force.h"
 #include "libnetsim/model_builder.h"
 #include "libnetsim/rotation.h"
+#include "libnetsim/simulation.h"
 
 namespace netlab::netsim::testing {
+
+// Every integrator, for the parameterised suites: an integrator added here is tested by all of
+// them.
+inline auto AllIntegrators() {
+  return ::testing::Values(IntegratorType::kSymplecticEuler, IntegratorType::kVelocityVerlet);
+}
+inline std::string IntegratorTestName(const ::testing::TestParamInfo<IntegratorType>& info) {
+  return IntegratorName(info.param);
+}
 
 // The polypropylene yarn of the paper's examples (values of issue #2's scenario example).
 inline Material PpYarn() {
