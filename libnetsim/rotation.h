@@ -50,12 +50,6 @@ inline Quaterniond ExpMap(const Vector3d& phi) {
   return Quaterniond(cos_half, sinc_half * phi.x(), sinc_half * phi.y(), sinc_half * phi.z());
 }
 
-// Brings a quaternion that is unit to within ~1e-8 back to unit length with one Newton step for
-// 1/sqrt(|q|^2) (error O(eps^2)), without a square root.
-inline void Renormalize(Quaterniond& q) {
-  q.coeffs() *= 0.5 * (3.0 - q.squaredNorm());
-}
-
 // q <- q * Exp(phi), renormalised: the rotation update of one time step. Written on scalars (the
 // same formulas as ExpMap and Eigen's product) because a temporary Quaterniond here costs a
 // store-forwarding stall per segment and step.
@@ -142,19 +136,6 @@ inline Vector3d ApplyJlInv(const LogResult& log, const Vector3d& y) {
   const Vector3d c = log.phi.cross(y);
   return y - 0.5 * c + log.b * log.phi.cross(c);
 }
-// Both at once: *jr = Jr^-1 y, *jl = Jl^-1 y (they share the cross products).
-inline void ApplyJInv(const LogResult& log, const Vector3d& y, Vector3d* jr, Vector3d* jl) {
-  const Vector3d c = log.phi.cross(y);
-  const Vector3d even = y + log.b * log.phi.cross(c);
-  *jr = even + 0.5 * c;
-  *jl = even - 0.5 * c;
-}
-// Jr^-1 y_b - Jl^-1 y_a, the rate of phi for body angular velocities y_a, y_b.
-inline Vector3d RelativeRate(const LogResult& log, const Vector3d& y_a, const Vector3d& y_b) {
-  const Vector3d d = y_b - y_a;
-  return d + 0.5 * log.phi.cross(y_a + y_b) + log.b * log.phi.cross(log.phi.cross(d));
-}
-
 // The minimal rotation taking unit vector a to unit vector b (parallel transport of a frame).
 inline Quaterniond MinimalRotation(const Vector3d& a, const Vector3d& b) {
   return Quaterniond::FromTwoVectors(a, b);

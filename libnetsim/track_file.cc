@@ -111,7 +111,7 @@ void WriteKnotTracks(const std::string& path, const KnotTracks& tracks) {
   RenameInto(partial, path);
 }
 
-KnotTracks ReadKnotTracks(const std::string& path, bool /*read_nodes*/) {
+KnotTracks ReadKnotTracks(const std::string& path) {
   h5::Id file = h5::OpenFileReadOnly(path);
   const hid_t f = file.get();
   auto fail = [&](const std::string& what) { throw std::runtime_error(path + ": " + what); };

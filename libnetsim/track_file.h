@@ -60,7 +60,7 @@ void WriteKnotTracks(const std::string& path, const KnotTracks& tracks);
 
 // Reads a knot-track file. Throws std::runtime_error naming the file and the dataset when the file
 // is missing, not HDF5, not a knot-track file, or its datasets disagree in shape.
-KnotTracks ReadKnotTracks(const std::string& path, bool read_nodes = false);
+KnotTracks ReadKnotTracks(const std::string& path);
 
 // Node positions of a simulation file, [T][N] (empty if the file has none).
 std::vector<std::vector<Eigen::Vector3d>> ReadNodePositions(const std::string& path);
