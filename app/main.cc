@@ -11,6 +11,7 @@ namespace netlab::app {
 
 const std::vector<Command>& Commands() {
   static const std::vector<Command> commands = {
+      {"calibrate", "calibrate the cameras into one world frame from target images", RunCalibrate},
       {"simulate", "run a Cosserat-rod net simulation from a scenario file", RunSimulate},
   };
   return commands;

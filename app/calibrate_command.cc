@@ -1,0 +1,167 @@
+// netlab calibrate --board BOARD --images NAME=GLOB [--images NAME=GLOB ...] --out rig.yaml
+//                  [--json] [--fix-intrinsics rig.yaml] [--rational] [--quiet]
+
+#include <glob.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <exception>
+#include <iostream>
+
+#include "app/command_line.h"
+#include "app/commands.h"
+#include "app/json_writer.h"
+#include "calibration/calibrate.h"
+
+namespace netlab::app {
+namespace {
+
+constexpr char kHelp[] =
+    "usage: netlab calibrate --board BOARD --images NAME=GLOB [--images NAME=GLOB ...]\n"
+    "                        --out rig.yaml [--json] [--fix-intrinsics rig.yaml] [--rational]\n\n"
+    "Calibrates the cameras into one world frame from images of a target (docs/calibration.md).\n"
+    "Images are matched across cameras by their sorted order (the frame index).\n\n"
+    "BOARD:\n"
+    "  chessboard:COLSxROWS:SQUARE               inner corners (odd x even), square in m\n"
+    "  charuco:COLSxROWS:SQUARE:MARKER:DICT      squares, lengths in m, e.g. DICT_5X5_100\n"
+    "  FILE.yaml                                 a board, a double-sided foil or a marker map\n\n"
+    "options:\n"
+    "  --images NAME=GLOB     a camera and its images (repeat per camera; quote the glob)\n"
+    "  --out FILE             rig file, OpenCV FileStorage YAML (written via FILE.partial)\n"
+    "  --fix-intrinsics FILE  keep the intrinsics of the cameras in this rig file\n"
+    "  --rational             estimate the rational distortion terms k4..k6 too\n"
+    "  --json                 print one JSON summary object on stdout as the last output\n"
+    "  --quiet                no progress on stderr\n";
+
+std::vector<std::string> Glob(const std::string& pattern) {
+  glob_t g{};
+  const int status = glob(pattern.c_str(), GLOB_TILDE | GLOB_BRACE, nullptr, &g);
+  std::vector<std::string> files;
+  if (status == 0)
+    for (size_t i = 0; i < g.gl_pathc; ++i) files.push_back(g.gl_pathv[i]);
+  globfree(&g);
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+void PrintJson(const calib::CalibrationResult& result) {
+  const calib::CalibrationSummary& s = result.summary;
+  JsonWriter json;
+  json.BeginObject();
+  json.Key("rms_px").Number(s.rms_px);
+  json.Key("points").Int(s.observations);
+  json.Key("outliers").Int(s.outliers);
+  json.Key("cameras").BeginArray();
+  for (size_t c = 0; c < s.cameras.size(); ++c) {
+    const calib::CameraReport& r = s.cameras[c];
+    const calib::CameraIntrinsics& k = result.rig.cameras[c].intrinsics;
+    json.BeginObject();
+    json.Key("name").String(r.name);
+    json.Key("rms_px").Number(r.rms_px);
+    json.Key("views").Int(r.views);
+    json.Key("fx").Number(k.fx);
+    json.Key("fy").Number(k.fy);
+    json.Key("cx").Number(k.cx);
+    json.Key("cy").Number(k.cy);
+    json.Key("coverage").Number(r.coverage);
+    json.Key("centre_sigma_m").Number(r.position_sigma_m);
+    json.EndObject();
+  }
+  json.EndArray();
+  json.Key("baselines").BeginObject();
+  for (const calib::PairCheck& p : s.pairs) json.Key(p.a + "-" + p.b).Number(p.baseline_m);
+  json.EndObject();
+  json.Key("metric_check").BeginArray();
+  for (const calib::PairCheck& p : s.pairs) {
+    if (p.segments == 0) continue;
+    json.BeginObject();
+    json.Key("pair").String(p.a + "-" + p.b);
+    json.Key("segments").Int(p.segments);
+    json.Key("mean_length_mm").Number(p.mean_length_mm);
+    json.Key("nominal_length_mm").Number(p.nominal_length_mm);
+    json.Key("rms_error_mm").Number(p.rms_error_mm);
+    json.EndObject();
+  }
+  json.EndArray();
+  json.Key("warnings").BeginArray();
+  for (const std::string& w : s.warnings) json.String(w);
+  json.EndArray();
+  json.Key("wall_s").Number(s.wall_s);
+  json.EndObject();
+  std::cout << json.str() << std::endl;
+}
+
+}  // namespace
+
+int RunCalibrate(const std::vector<std::string>& args) {
+  try {
+    const CommandLine cl(args, {"json", "quiet", "help", "rational"},
+                         {"board", "images", "out", "fix-intrinsics"});
+    if (cl.Flag("help")) {
+      std::fputs(kHelp, stdout);
+      return 0;
+    }
+    if (!cl.positional().empty())
+      throw UsageError("unexpected argument '" + cl.positional()[0] + "'");
+    const std::string out = cl.Required("out");
+    const auto target = calib::CalibrationTarget::Parse(cl.Required("board"));
+    const auto start = std::chrono::steady_clock::now();
+
+    std::vector<std::string> names;
+    std::vector<std::vector<std::string>> files;
+    for (const std::string& spec : cl.Options("images")) {
+      const size_t eq = spec.find('=');
+      if (eq == std::string::npos || eq == 0)
+        throw UsageError("--images expects NAME=GLOB, got '" + spec + "'");
+      const std::string name = spec.substr(0, eq), pattern = spec.substr(eq + 1);
+      if (std::find(names.begin(), names.end(), name) != names.end())
+        throw UsageError("camera '" + name + "' given twice");
+      std::vector<std::string> matched = Glob(pattern);
+      if (matched.empty())
+        throw std::runtime_error("--images " + spec + ": the pattern matches no file");
+      names.push_back(name);
+      files.push_back(std::move(matched));
+    }
+    if (names.empty()) throw UsageError("--images NAME=GLOB is required (once per camera)");
+
+    calib::CalibrationOptions options;
+    options.rational = cl.Flag("rational");
+    if (const auto fixed = cl.Option("fix-intrinsics")) {
+      const calib::Rig known = calib::ReadRig(*fixed);
+      for (const std::string& name : names) {
+        const int i = known.Find(name);
+        if (i < 0) throw std::runtime_error(*fixed + ": no camera named '" + name + "'");
+        options.fixed_intrinsics[name] = known.cameras[i].intrinsics;
+      }
+    }
+
+    const bool progress = !cl.Flag("quiet") && isatty(fileno(stderr));
+    const calib::CalibrationInput input = calib::DetectInImages(
+        names, files, target,
+        progress ? std::function<void(int, int)>([](int done, int total) {
+          std::fprintf(stderr, "\rdetecting %d/%d", done, total);
+          std::fflush(stderr);
+        })
+                 : std::function<void(int, int)>(),
+        2);
+    if (progress) std::fprintf(stderr, "\n");
+    calib::CalibrationResult result = calib::CalibrateRig(target, input, options);
+    result.summary.wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    calib::WriteRig(out, result.rig);
+    if (!cl.Flag("quiet") || !cl.Flag("json")) std::cerr << result.summary.BriefReport();
+    if (!cl.Flag("quiet")) std::cerr << "rig written to " << out << "\n";
+    if (cl.Flag("json")) PrintJson(result);
+    return 0;
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "netlab calibrate: %s\n(see netlab calibrate --help)\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "netlab calibrate: error: %s\n", e.what());
+    return 1;
+  }
+}
+
+}  // namespace netlab::app
