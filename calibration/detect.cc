@@ -28,8 +28,10 @@ PatternDetection DetectChessboard(const cv::Mat& gray, const BoardPattern& patte
   cv::Mat small = gray;
   if (scale < 1.0) cv::resize(gray, small, cv::Size(), scale, scale, cv::INTER_AREA);
   std::vector<cv::Point2f> corners;
-  const int flags = cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE;
-  if (!cv::findChessboardCorners(small, size, corners, flags)) return {};
+  // The sector-based detector: OpenCV's classic findChessboardCorners searched for minutes on a
+  // plain noisy background and did not return at all (> 200 s) when asked for 7x6 corners in an
+  // image of a 9x6 board; this one answers both in ~0.2 s at 1024 px.
+  if (!cv::findChessboardCornersSB(small, size, corners, cv::CALIB_CB_NORMALIZE_IMAGE)) return {};
   for (cv::Point2f& c : corners) c /= static_cast<float>(scale);
 
   // Sub-pixel refinement at full resolution, window ~ a third of the smallest square.
