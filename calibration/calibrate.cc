@@ -181,9 +181,14 @@ CalibrationResult CalibrateRig(const CalibrationTarget& target, const Calibratio
     if (of_camera[c].size() < 3)
       Fail("camera " + name + ": only " + std::to_string(of_camera[c].size()) +
            " views; estimating intrinsics needs at least 3 (or give them with --fix-intrinsics)");
+    // An initial guess only (the bundle adjustment refines it with every view): at most 12
+    // evenly spaced views, as OpenCV's dense solver grows with the cube of the views (0.54 s per
+    // camera at 40 views).
     std::vector<std::vector<cv::Point3f>> object;
     std::vector<std::vector<cv::Point2f>> image;
-    for (int i : of_camera[c]) {
+    const size_t views = of_camera[c].size(), used = std::min<size_t>(views, 12);
+    for (size_t k = 0; k < used; ++k) {
+      const int i = of_camera[c][k * views / used];
       object.push_back(ObjectPoints(pattern, obs[i]));
       image.push_back(ImagePoints(obs[i]));
     }
@@ -518,9 +523,11 @@ CalibrationResult CalibrateRig(const CalibrationTarget& target, const Calibratio
   const double variance = sum_all / dof;
   std::vector<double> centre_sigma(num_cameras, 0.0);
   {
+    // The gauge is fixed, so the Jacobian has full rank and sparse QR applies (dense SVD took
+    // 4 of the 5 s of a 4-camera, 40-view calibration).
     ceres::Covariance::Options cov_options;
-    cov_options.algorithm_type = ceres::DENSE_SVD;
-    cov_options.null_space_rank = -1;
+    cov_options.algorithm_type = ceres::SPARSE_QR;
+    cov_options.num_threads = 2;
     ceres::Covariance covariance(cov_options);
     std::vector<std::pair<const double*, const double*>> blocks;
     for (int c = 0; c < num_cameras; ++c) {
