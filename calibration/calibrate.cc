@@ -125,6 +125,15 @@ std::string CalibrationSummary::BriefReport() const {
     os << "  " << c.name << ": RMS " << c.rms_px << " px, " << c.views << " views, "
        << c.points << " points, coverage " << Percent(c.coverage);
     if (c.position_sigma_m > 0.0) os << ", centre sigma " << c.position_sigma_m * 1e3 << " mm";
+    // The images that fit worst: where a bad detection would show.
+    std::vector<std::pair<int, double>> worst = c.image_rms_px;
+    std::sort(worst.begin(), worst.end(),
+              [](const auto& a, const auto& b) { return a.second > b.second; });
+    if (!worst.empty()) {
+      os << "; worst images:";
+      for (size_t i = 0; i < std::min<size_t>(3, worst.size()); ++i)
+        os << " frame " << worst[i].first << " (" << worst[i].second << " px)";
+    }
     os << "\n";
   }
   for (const PairCheck& p : pairs) {

@@ -77,6 +77,32 @@ TEST(Detect, CharucoCornersAreSubPixelAndUnbiased) {
                  2.0, 0.25, 0.05);
 }
 
+// A ChArUco board half out of the image still gives its visible corners, with the right ids.
+TEST(Detect, PartlyVisibleCharucoBoardsStillCount) {
+  const CalibrationTarget board =
+      CalibrationTarget::Board(BoardPattern::Charuco(10, 7, 0.06, 0.045, "DICT_5X5_100"));
+  const Rig rig = PaperRig(0.5);
+  // Centred on the image's right edge at 2.5 m: about half the board is outside.
+  const Camera& camera = rig.cameras[0];
+  const Rigid3d world_from_cam = camera.cam_from_world.Inverse();
+  const double half_width = camera.intrinsics.cx / camera.intrinsics.fx * 2.5;
+  // Face axes along the camera's (x right, y down), turned about x when the print's y is up.
+  Eigen::Matrix3d turn = Eigen::Matrix3d::Identity();
+  if (board.faces[0].pattern.viewer_z > 0) turn = Eigen::Vector3d(1, -1, -1).asDiagonal();
+  const Rigid3d face_pose(world_from_cam.rotation * Eigen::Quaterniond(turn),
+                          world_from_cam * Eigen::Vector3d(half_width - 0.3, -0.2, 2.5));
+  const cv::Mat image = RenderTarget(camera, CameraRays(camera.intrinsics), MakeTargetPrints(board),
+                                     face_pose, RenderOptions{});
+  const PatternDetection found = DetectPattern(image, board.faces[0].pattern);
+  const auto truth = ProjectTarget(camera, board, face_pose, 3.0);
+  ASSERT_EQ(truth.size(), 1u);
+  EXPECT_LT(truth[0].ids.size(), 54u);  // part of the board is outside
+  EXPECT_GE(found.ids.size(), 10u);
+  const Accuracy a = Measure(found, truth[0]);
+  EXPECT_EQ(a.matched, static_cast<int>(found.ids.size()));  // every id found is a true one
+  EXPECT_LT(a.rms, 0.25);
+}
+
 TEST(Detect, ArucoMarkerCornersAreFoundWithTheirIds) {
   std::vector<std::pair<int, std::array<Eigen::Vector3d, 4>>> markers;
   for (int i = 0; i < 6; ++i)
