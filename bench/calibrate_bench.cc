@@ -147,13 +147,7 @@ int main(int argc, char** argv) {
     input.camera_names.push_back(truth.cameras[c].name);
     input.image_sizes.emplace_back(2048, 2048);
     for (int f = 0; f < views; ++f) {
-      if (found[c][f].empty()) continue;
-      Observation o;
-      o.camera = c;
-      o.frame = f;
-      o.ids = found[c][f].ids;
-      o.pixels = found[c][f].pixels;
-      input.observations.push_back(o);
+      if (!found[c][f].empty()) input.observations.push_back(MakeObservation(c, f, found[c][f]));
     }
   }
   const double detect_s = Seconds(start);

@@ -723,12 +723,7 @@ CalibrationInput DetectInImages(const std::vector<std::string>& camera_names,
     for (int f = 0; f < num_frames; ++f) {
       if (found[c][f].empty()) continue;
       ++seen;
-      Observation o;
-      o.camera = c;
-      o.frame = f;
-      o.ids = found[c][f].ids;
-      o.pixels = found[c][f].pixels;
-      input.observations.push_back(o);
+      input.observations.push_back(MakeObservation(c, f, found[c][f]));
     }
     if (seen == 0) {
       std::string list;

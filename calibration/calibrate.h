@@ -25,6 +25,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "calibration/detect.h"
 #include "calibration/rig.h"
 #include "calibration/target.h"
 
@@ -38,6 +39,16 @@ struct Observation {
   std::vector<int> ids;
   std::vector<Eigen::Vector2d> pixels;
 };
+
+// The observation of `found` by `camera` in `frame` (face 0 until the pipeline assigns one).
+inline Observation MakeObservation(int camera, int frame, const PatternDetection& found) {
+  Observation o;
+  o.camera = camera;
+  o.frame = frame;
+  o.ids = found.ids;
+  o.pixels = found.pixels;
+  return o;
+}
 
 struct CalibrationInput {
   std::vector<std::string> camera_names;

@@ -46,13 +46,9 @@ inline Dataset Render(const Rig& rig, const CalibrationTarget& target,
       options.seed = seed + 1000 * c + f;
       const cv::Mat image = RenderTarget(camera, rays, prints, poses[f], options);
       const PatternDetection found = DetectPattern(image, target.faces[0].pattern);
-      if (found.empty()) continue;
-      Observation o;
-      o.camera = static_cast<int>(c);
-      o.frame = static_cast<int>(f);
-      o.ids = found.ids;
-      o.pixels = found.pixels;
-      d.input.observations.push_back(o);
+      if (!found.empty())
+        d.input.observations.push_back(
+            MakeObservation(static_cast<int>(c), static_cast<int>(f), found));
     }
   }
   return d;
