@@ -213,4 +213,24 @@ void SetUnits(hid_t loc, const std::string& name, const std::string& units) {
   WriteStringAttribute(dataset.get(), "units", units);
 }
 
+void ReadFrame(hid_t dataset, hid_t type, hsize_t frame, void* data) {
+  Id space(H5Dget_space(dataset));
+  const int rank = H5Sget_simple_extent_ndims(space.get());
+  std::vector<hsize_t> dims(rank);
+  H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+  if (rank < 1 || frame >= dims[0]) Fail(ObjectName(dataset) + ": frame " + std::to_string(frame) + " out of range");
+  std::vector<hsize_t> start(rank, 0), count(dims);
+  start[0] = frame;
+  count[0] = 1;
+  H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start.data(), nullptr, count.data(), nullptr);
+  Id memory(H5Screate_simple(rank, count.data(), nullptr));
+  if (H5Dread(dataset, type, memory.get(), space.get(), H5P_DEFAULT, data) < 0)
+    Fail(ObjectName(dataset) + ": cannot read frame " + std::to_string(frame) + " (corrupt file?)");
+}
+
+std::mutex& Mutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
 }  // namespace netlab::h5

@@ -5,6 +5,7 @@
 
 #include <hdf5.h>
 
+#include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -66,5 +67,16 @@ std::string ReadStringDataset(hid_t loc, const std::string& name);
 
 // Sets the "units" attribute of dataset `name` under `loc`.
 void SetUnits(hid_t loc, const std::string& name, const std::string& units);
+
+}  // namespace netlab::h5
+
+namespace netlab::h5 {
+
+// Reads frame `frame` (the first axis) of a dataset of rank >= 2 into `data`, converted to `type`.
+void ReadFrame(hid_t dataset, hid_t type, hsize_t frame, void* data);
+
+// The HDF5 library Debian ships is built without thread safety: every call from a thread that is
+// not the only one using HDF5 must hold this lock.
+std::mutex& Mutex();
 
 }  // namespace netlab::h5

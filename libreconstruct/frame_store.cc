@@ -1,0 +1,89 @@
+#include "libreconstruct/frame_store.h"
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <mutex>
+#include <stdexcept>
+
+#include "libnetsim/hdf5_util.h"
+
+namespace netlab::recon {
+
+Experiment ConvertToFrameStore(const SynchronizedSequence& sequence, const std::string& path,
+                               const FrameStoreOptions& options,
+                               const std::function<void(int, int)>& progress) {
+  const Experiment& in = sequence.experiment();
+  const int first = sequence.first_frame(), count = sequence.last_frame() - first + 1;
+  const std::string partial = path + ".partial";
+  Experiment out = in;
+  out.path = path.substr(0, path.size() - (path.size() > 3 && path.substr(path.size() - 3) == ".h5" ? 3 : 0)) + ".yaml";
+  out.base_dir = std::filesystem::path(path).parent_path().string();
+  const std::string file_name = std::filesystem::path(path).filename().string();
+  const int total = count * sequence.num_cameras();
+  int done = 0;
+  {
+    std::lock_guard<std::mutex> lock(h5::Mutex());
+    h5::Id file = h5::CreateFile(partial);
+    h5::WriteStringAttribute(file.get(), "format", "netlab-frame-store");
+    h5::WriteStringAttribute(file.get(), "experiment", in.name);
+    for (int c = 0; c < sequence.num_cameras(); ++c) {
+      const CameraSpec& spec = in.cameras[c];
+      const FrameSource& source = sequence.source(c);
+      // The camera's frame layout: its first readable header.
+      FrameInfo info;
+      std::string error;
+      bool found = false;
+      for (int i : source.indices())
+        if ((found = source.Header(i, &info, &error))) break;
+      if (!found) throw std::runtime_error(spec.name + ": no readable frame to convert");
+      std::vector<hsize_t> frame_dims = {static_cast<hsize_t>(info.height),
+                                         static_cast<hsize_t>(info.width)};
+      if (info.channels == 3) frame_dims.push_back(3);
+      const hid_t type = info.depth == CV_16U ? H5T_NATIVE_UINT16 : H5T_NATIVE_UINT8;
+      h5::Id data = h5::CreateFrameDataset(file.get(), spec.name, type, frame_dims, 1,
+                                           options.deflate_level);
+      h5::WriteStringAttribute(data.get(), "bayer", BayerPatternName(spec.bayer));
+      h5::WriteStringAttribute(data.get(), "bit_depth",
+                               std::to_string(sequence.Correction(c).bit_depth));
+      h5::WriteStringAttribute(data.get(), "first_index", std::to_string(first));
+      h5::WriteStringAttribute(data.get(), "fps", std::to_string(in.fps));
+      std::vector<uint8_t> valid(count, 0);
+      std::vector<double> times(count, std::numeric_limits<double>::quiet_NaN());
+      const std::map<int, double> timestamps =
+          spec.timestamps.empty() ? std::map<int, double>{} : ReadTimestamps(spec.timestamps);
+      const cv::Mat blank(info.height, info.width, CV_MAKETYPE(info.depth, info.channels),
+                          cv::Scalar::all(0));
+      for (int t = 0; t < count; ++t) {
+        const int index = first + t;
+        cv::Mat frame;
+        if (sequence.Has(c, index)) {
+          frame = source.Read(index, &error);
+          if (!frame.empty() && (frame.cols != info.width || frame.rows != info.height ||
+                                 frame.depth() != info.depth || frame.channels() != info.channels))
+            frame.release();  // a frame of another size or type: unreadable here
+        }
+        if (!frame.empty() && !frame.isContinuous()) frame = frame.clone();
+        valid[t] = !frame.empty();
+        h5::AppendFrame(data.get(), type, (frame.empty() ? blank : frame).data, t);
+        if (const auto it = timestamps.find(index); it != timestamps.end()) times[t] = it->second;
+        if (progress) progress(++done, total);
+      }
+      h5::WriteDataset(file.get(), spec.name + "_valid", H5T_NATIVE_UINT8,
+                       {static_cast<hsize_t>(count)}, valid.data());
+      h5::WriteDataset(file.get(), spec.name + "_timestamps", H5T_NATIVE_DOUBLE,
+                       {static_cast<hsize_t>(count)}, times.data());
+      h5::SetUnits(file.get(), spec.name + "_timestamps", "s");
+      out.cameras[c].frames = file_name + ":/" + spec.name;
+      out.cameras[c].timestamps.clear();
+      out.cameras[c].bit_depth = sequence.Correction(c).bit_depth;
+    }
+    H5Fflush(file.get(), H5F_SCOPE_GLOBAL);
+  }
+  std::error_code error;
+  std::filesystem::rename(partial, path, error);
+  if (error) throw std::runtime_error(path + ": cannot rename " + partial + ": " + error.message());
+  return out;
+}
+
+}  // namespace netlab::recon

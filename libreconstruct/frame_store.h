@@ -1,0 +1,30 @@
+#pragma once
+// The HDF5 frame store: a recording converted into one file, one chunked dataset per camera, for
+// fast random access (a frame is one chunk) and, optionally, compression.
+//
+// Layout of OUT.h5:
+//   /<camera>             [T, H, W] uint8 | uint16 (or [T, H, W, 3]), chunks [1, H, W];
+//                         attributes bayer, bit_depth, first_index, fps
+//   /<camera>_valid       [T] uint8: 1 where the source had a readable frame (else zeros stored)
+//   /<camera>_timestamps  [T] float64, s (NaN where unknown)
+// Frame index first_index + t is stored at t, for every camera the same range, so the cameras stay
+// synchronized through gaps.
+
+#include <functional>
+#include <string>
+
+#include "libreconstruct/sequence.h"
+
+namespace netlab::recon {
+
+struct FrameStoreOptions {
+  int deflate_level = 0;  // 0: none; 1..9: gzip (smaller, slower)
+};
+
+// Converts `sequence` into the store at `path` (via "<path>.partial" and a rename) and returns the
+// experiment that reads it (frames "<file name>:/<camera>"). progress(done, total) may be empty.
+Experiment ConvertToFrameStore(const SynchronizedSequence& sequence, const std::string& path,
+                               const FrameStoreOptions& options,
+                               const std::function<void(int, int)>& progress);
+
+}  // namespace netlab::recon
