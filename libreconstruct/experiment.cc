@@ -18,6 +18,25 @@ std::string Resolve(const std::string& base_dir, const std::string& path) {
   return (std::filesystem::path(base_dir) / p).string();
 }
 
+// A string as a YAML scalar, quoted where plain YAML would misread it ("%06d.tif", "a: b").
+std::string Scalar(const std::string& text) {
+  YAML::Emitter out;
+  out << text;
+  return out.c_str();
+}
+
+// A resolved path (absolute, or relative to the working folder) as an experiment file at `file`
+// must spell it so that LoadExperiment resolves it back: relative to the file's folder when inside
+// it, else absolute.
+std::string PathFrom(const std::string& file, const std::string& path) {
+  namespace fs = std::filesystem;
+  const fs::path target = fs::absolute(path).lexically_normal();
+  const fs::path folder = fs::absolute(file).parent_path().lexically_normal();
+  const fs::path relative = target.lexically_relative(folder);
+  if (relative.empty() || *relative.begin() == "..") return target.string();
+  return relative.string();
+}
+
 }  // namespace
 
 int Experiment::Find(const std::string& camera) const {
@@ -78,11 +97,12 @@ Experiment LoadExperiment(const std::string& path) {
 void WriteExperiment(const std::string& path, const Experiment& e) {
   std::ostringstream os;
   os << std::setprecision(10);
-  os << "experiment: " << e.name << "\nfps: " << e.fps << "\ncameras:\n";
+  os << "experiment: " << Scalar(e.name) << "\nfps: " << e.fps << "\ncameras:\n";
   for (const CameraSpec& c : e.cameras) {
-    os << "  - name: " << c.name << "\n    frames: " << c.frames
+    os << "  - name: " << Scalar(c.name) << "\n    frames: " << Scalar(c.frames)
        << "\n    bayer: " << BayerPatternName(c.bayer) << "\n";
-    if (!c.timestamps.empty()) os << "    timestamps: " << c.timestamps << "\n";
+    if (!c.timestamps.empty())
+      os << "    timestamps: " << Scalar(PathFrom(path, c.timestamps)) << "\n";
     if (c.bit_depth) os << "    bit_depth: " << *c.bit_depth << "\n";
     if (c.black_level != 0.0) os << "    black_level: " << c.black_level << "\n";
     if (c.white_balance_rgb != std::array<double, 3>{1.0, 1.0, 1.0})

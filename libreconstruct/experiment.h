@@ -47,7 +47,8 @@ struct Experiment {
 Experiment LoadExperiment(const std::string& path);
 Experiment ParseExperiment(const std::string& text, const std::string& origin,
                            const std::string& base_dir);
-// Writes an experiment file (via "<path>.partial" and a rename).
+// Writes an experiment file (via "<path>.partial" and a rename). Frame specs are written as they
+// are; timestamp paths (resolved) relative to the new file's folder when inside it, else absolute.
 void WriteExperiment(const std::string& path, const Experiment& experiment);
 
 // A timestamps file: frame_index,time_s per line (header and # comments allowed). InputError

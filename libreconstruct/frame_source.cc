@@ -87,7 +87,8 @@ class ImageSequenceSource final : public FrameSource {
     const size_t p = name.find('%');
     const std::regex spec_re("%(0?)([0-9]*)d");
     std::smatch m;
-    const std::string rest = name.substr(p);
+    // A '%' only in a folder name leaves no pattern in the file name (and nothing to substr).
+    const std::string rest = p == std::string::npos ? std::string() : name.substr(p);
     if (percent == std::string::npos || p == std::string::npos ||
         !std::regex_search(rest, m, spec_re) || m.position(0) != 0)
       throw InputError(spec_ + ": expected a printf pattern with %d (e.g. frame_%06d.pgm)");
@@ -241,8 +242,9 @@ class Hdf5FrameSource final : public FrameSource {
     return true;
   }
   cv::Mat Read(int index, std::string* error) const override {
+    // Not only the dataset's range: a gap (valid 0) holds zeros, not a frame.
     const int t = index - first_;
-    if (t < 0 || t >= static_cast<int>(dims_[0])) {
+    if (!std::binary_search(indices_.begin(), indices_.end(), index)) {
       *error = "no such frame";
       return {};
     }
