@@ -57,4 +57,20 @@ std::string CommandLine::Required(const std::string& name) const {
   return *value;
 }
 
+int CommandLine::IntOption(const std::string& name, int fallback, int min, int max) const {
+  const auto value = Option(name);
+  if (!value) return fallback;
+  size_t used = 0;
+  long parsed = 0;
+  try {
+    parsed = std::stol(*value, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != value->size() || parsed < min || parsed > max)
+    throw UsageError("--" + name + " expects an integer in " + std::to_string(min) + ".." +
+                     std::to_string(max) + ", got '" + *value + "'");
+  return static_cast<int>(parsed);
+}
+
 }  // namespace netlab::app

@@ -26,6 +26,8 @@ class CommandLine {
   std::optional<std::string> Option(const std::string& name) const;  // last given value
   std::vector<std::string> Options(const std::string& name) const;   // every value, in order
   std::string Required(const std::string& name) const;
+  // An integer option in [min, max], or `fallback` when absent; UsageError naming it otherwise.
+  int IntOption(const std::string& name, int fallback, int min, int max) const;
   const std::vector<std::string>& positional() const { return positional_; }
 
  private:

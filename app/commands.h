@@ -18,5 +18,6 @@ const std::vector<Command>& Commands();
 
 int RunSimulate(const std::vector<std::string>& args);
 int RunCalibrate(const std::vector<std::string>& args);
+int RunIngest(const std::vector<std::string>& args);
 
 }  // namespace netlab::app

@@ -12,6 +12,7 @@ namespace netlab::app {
 const std::vector<Command>& Commands() {
   static const std::vector<Command> commands = {
       {"calibrate", "calibrate the cameras into one world frame from target images", RunCalibrate},
+      {"ingest", "check the synchronized camera recordings or convert them to HDF5", RunIngest},
       {"simulate", "run a Cosserat-rod net simulation from a scenario file", RunSimulate},
   };
   return commands;

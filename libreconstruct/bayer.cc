@@ -30,31 +30,68 @@ std::vector<uint8_t> MakeLut(const ColorCorrection& k, int colour, int entries) 
   return lut;
 }
 
+// The three per-colour LUTs of a correction. Building a 16-bit one costs ~1 ms, so each thread
+// keeps the last one it built (a recording uses one correction per camera).
+const std::array<std::vector<uint8_t>, 3>& Luts(const ColorCorrection& k, int entries) {
+  struct Cached {
+    int entries = 0, bit_depth = 0;
+    double black_level = 0.0;
+    std::array<double, 3> gains{};
+    std::array<std::vector<uint8_t>, 3> luts;
+  };
+  thread_local std::array<Cached, 4> cache;  // a few cameras' corrections
+  thread_local int next = 0;
+  for (const Cached& c : cache)
+    if (c.entries == entries && c.bit_depth == k.bit_depth && c.black_level == k.black_level &&
+        c.gains == k.gains_bgr)
+      return c.luts;
+  Cached& c = cache[next++ % cache.size()];
+  c.entries = entries;
+  c.bit_depth = k.bit_depth;
+  c.black_level = k.black_level;
+  c.gains = k.gains_bgr;
+  for (int colour = 0; colour < 3; ++colour) c.luts[colour] = MakeLut(k, colour, entries);
+  return c.luts;
+}
+
 // Applies the per-site LUTs: an 8-bit mosaic ready for demosaicing.
 template <typename T>
 cv::Mat CorrectMosaic(const cv::Mat& raw, BayerPattern pattern, const ColorCorrection& k) {
-  const int entries = sizeof(T) == 1 ? 256 : 65536;
-  std::array<std::vector<uint8_t>, 3> luts;
-  for (int c = 0; c < 3; ++c) luts[c] = MakeLut(k, c, entries);
+  const auto& luts = Luts(k, sizeof(T) == 1 ? 256 : 65536);
   const std::array<int, 4> colors = BlockColors(pattern);
   cv::Mat out(raw.size(), CV_8U);
-  cv::parallel_for_(cv::Range(0, raw.rows), [&](const cv::Range& rows) {
-    for (int y = rows.start; y < rows.end; ++y) {
-      const T* in = raw.ptr<T>(y);
-      uint8_t* o = out.ptr<uint8_t>(y);
-      const int c0 = colors[(y & 1) * 2] < 0 ? 1 : colors[(y & 1) * 2];
-      const int c1 = colors[(y & 1) * 2 + 1] < 0 ? 1 : colors[(y & 1) * 2 + 1];
-      const uint8_t* l0 = luts[c0].data();
-      const uint8_t* l1 = luts[c1].data();
-      int x = 0;
-      for (; x + 1 < raw.cols; x += 2) {
-        o[x] = l0[in[x]];
-        o[x + 1] = l1[in[x + 1]];
-      }
-      if (x < raw.cols) o[x] = l0[in[x]];
+  for (int y = 0; y < raw.rows; ++y) {
+    const T* in = raw.ptr<T>(y);
+    uint8_t* o = out.ptr<uint8_t>(y);
+    const int c0 = colors[(y & 1) * 2] < 0 ? 1 : colors[(y & 1) * 2];
+    const int c1 = colors[(y & 1) * 2 + 1] < 0 ? 1 : colors[(y & 1) * 2 + 1];
+    const uint8_t* l0 = luts[c0].data();
+    const uint8_t* l1 = luts[c1].data();
+    int x = 0;
+    for (; x + 1 < raw.cols; x += 2) {
+      o[x] = l0[in[x]];
+      o[x + 1] = l1[in[x + 1]];
     }
-  });
+    if (x < raw.cols) o[x] = l0[in[x]];
+  }
   return out;
+}
+
+// Half resolution from 2 x 2 blocks whose red, blue and two greens sit at block positions R, B,
+// G1, G2 (row-major 0..3).
+template <int R, int B, int G1, int G2>
+void BinBlocks(const cv::Mat& mosaic, cv::Mat& out) {
+  for (int y = 0; y < out.rows; ++y) {
+    const uint8_t* rows[2] = {mosaic.ptr<uint8_t>(2 * y), mosaic.ptr<uint8_t>(2 * y + 1)};
+    uint8_t* o = out.ptr<uint8_t>(y);
+    for (int x = 0; x < out.cols; ++x) {
+      const int r = rows[R / 2][2 * x + R % 2], b = rows[B / 2][2 * x + B % 2];
+      const int g = (rows[G1 / 2][2 * x + G1 % 2] + rows[G2 / 2][2 * x + G2 % 2] + 1) >> 1;
+      o[3 * x] = static_cast<uint8_t>(b);
+      o[3 * x + 1] = static_cast<uint8_t>(g);
+      o[3 * x + 2] = static_cast<uint8_t>(r);
+    }
+  }
 }
 
 cv::Mat CorrectedMosaic(const cv::Mat& raw, BayerPattern pattern, const ColorCorrection& k) {
@@ -134,26 +171,14 @@ cv::Mat DemosaicHalf(const cv::Mat& raw, BayerPattern pattern, const ColorCorrec
   if (raw.channels() == 3 || pattern == BayerPattern::kNone)
     return Downscale(Demosaic(raw, pattern, correction), 2);
   const cv::Mat mosaic = CorrectedMosaic(raw, pattern, correction);
-  const std::array<int, 4> colors = BlockColors(pattern);
   cv::Mat out(mosaic.rows / 2, mosaic.cols / 2, CV_8UC3);
-  cv::parallel_for_(cv::Range(0, out.rows), [&](const cv::Range& rows) {
-    for (int y = rows.start; y < rows.end; ++y) {
-      const uint8_t* r0 = mosaic.ptr<uint8_t>(2 * y);
-      const uint8_t* r1 = mosaic.ptr<uint8_t>(2 * y + 1);
-      cv::Vec3b* o = out.ptr<cv::Vec3b>(y);
-      for (int x = 0; x < out.cols; ++x) {
-        const int v[4] = {r0[2 * x], r0[2 * x + 1], r1[2 * x], r1[2 * x + 1]};
-        int sum[3] = {0, 0, 0}, count[3] = {0, 0, 0};
-        for (int k = 0; k < 4; ++k) {
-          sum[colors[k]] += v[k];
-          ++count[colors[k]];
-        }
-        o[x] = cv::Vec3b(static_cast<uint8_t>(sum[0] / count[0]),
-                         static_cast<uint8_t>(sum[1] / count[1]),
-                         static_cast<uint8_t>(sum[2] / count[2]));
-      }
-    }
-  });
+  switch (pattern) {
+    case BayerPattern::kRGGB: BinBlocks<0, 3, 1, 2>(mosaic, out); break;
+    case BayerPattern::kBGGR: BinBlocks<3, 0, 1, 2>(mosaic, out); break;
+    case BayerPattern::kGRBG: BinBlocks<1, 2, 0, 3>(mosaic, out); break;
+    case BayerPattern::kGBRG: BinBlocks<2, 1, 0, 3>(mosaic, out); break;
+    case BayerPattern::kNone: break;
+  }
   return out;
 }
 

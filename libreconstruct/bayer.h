@@ -38,7 +38,8 @@ struct ColorCorrection {
 cv::Mat Demosaic(const cv::Mat& raw, BayerPattern pattern, const ColorCorrection& correction);
 
 // A half-resolution 8-bit BGR image straight from the mosaic: each 2 x 2 Bayer block becomes one
-// pixel (its red, blue and mean green), no interpolation: the fast display path.
+// pixel (its red, blue and the rounded mean of its greens), no interpolation: the fast display
+// path.
 cv::Mat DemosaicHalf(const cv::Mat& raw, BayerPattern pattern, const ColorCorrection& correction);
 
 // Area downscaling by an integer factor (1: the image itself).

@@ -103,7 +103,8 @@ void FrameCache::Worker() {
     std::string error;
     size_t frame_bytes = 0;  // one frame of every camera at this level, learnt from the first
     const int step = direction >= 0 ? 1 : -1;
-    for (int d = 0; d <= options_.prefetch_ahead; ++d) {
+    bool moved = false;
+    for (int d = 0; d <= options_.prefetch_ahead && !moved; ++d) {
       if (d > options_.prefetch_behind && direction == 0) break;
       const int frame = playhead + step * d;
       if (frame < sequence_.first_frame() || frame > sequence_.last_frame()) break;
@@ -116,16 +117,17 @@ void FrameCache::Worker() {
         if (image) bytes += image->total() * image->elemSize();
       }
       frame_bytes = std::max(frame_bytes, bytes);
-      {
-        std::lock_guard<std::mutex> check(mutex_);
-        if (stop_ || generation_ != seen) break;  // the viewer moved: start over from there
-      }
+      std::lock_guard<std::mutex> check(mutex_);
+      moved = stop_ || generation_ != seen;  // the viewer moved: start over from there
     }
-    for (int d = 1; d <= options_.prefetch_behind && direction != 0; ++d) {
+    // A few frames behind, once the ones ahead are ready (they may have been evicted).
+    for (int d = 1; d <= options_.prefetch_behind && direction != 0 && !moved; ++d) {
       const int frame = playhead - step * d;
       if (frame < sequence_.first_frame() || frame > sequence_.last_frame()) break;
       for (int c = 0; c < cameras; ++c)
         if (sequence_.Has(c, frame)) Load(Key{c, frame, level}, true, &error);
+      std::lock_guard<std::mutex> check(mutex_);
+      moved = stop_ || generation_ != seen;
     }
     lock.lock();
   }

@@ -1,6 +1,7 @@
 #include "libreconstruct/frame_source.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -213,7 +214,11 @@ class Hdf5FrameSource final : public FrameSource {
     info_.channels = dims_.size() == 4 ? 3 : 1;
     int first = 0;
     const std::string first_text = h5::ReadStringAttribute(dataset_.get(), "first_index");
-    if (!first_text.empty()) first = std::stoi(first_text);
+    try {
+      if (!first_text.empty()) first = std::stoi(first_text);
+    } catch (const std::exception&) {
+      throw InputError(spec_ + ": attribute first_index is not an integer: '" + first_text + "'");
+    }
     std::vector<uint8_t> valid(dims_[0], 1);
     if (h5::Exists(file_.get(), dataset_path_ + "_valid") &&
         h5::DatasetDims(file_.get(), dataset_path_ + "_valid") == std::vector<hsize_t>{dims_[0]})
@@ -222,7 +227,16 @@ class Hdf5FrameSource final : public FrameSource {
       if (valid[t]) indices_.push_back(first + static_cast<int>(t));
     first_ = first;
     if (indices_.empty()) throw InputError(spec_ + ": the dataset holds no frames");
+    const std::string times = dataset_path_ + "_timestamps";
+    if (h5::Exists(file_.get(), times) &&
+        h5::DatasetDims(file_.get(), times) == std::vector<hsize_t>{dims_[0]}) {
+      std::vector<double> t(dims_[0]);
+      h5::ReadDataset(file_.get(), times, H5T_NATIVE_DOUBLE, t.data());
+      for (int index : indices_)
+        if (std::isfinite(t[index - first])) timestamps_[index] = t[index - first];
+    }
   }
+  std::map<int, double> Timestamps() const override { return timestamps_; }
   ~Hdf5FrameSource() override {
     std::lock_guard<std::mutex> lock(h5::Mutex());
     dataset_.Reset();
@@ -266,6 +280,7 @@ class Hdf5FrameSource final : public FrameSource {
   std::vector<hsize_t> dims_;
   FrameInfo info_;
   std::vector<int> indices_;
+  std::map<int, double> timestamps_;
   int first_ = 0;
 };
 

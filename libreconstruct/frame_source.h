@@ -8,6 +8,7 @@
 //   cam0.avi                a video file (OpenCV VideoCapture; frame k is the k-th frame)
 //   store.h5:/cam0          an HDF5 dataset [T, H, W] (or [T, H, W, 3]) of the frame store
 
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -39,6 +40,8 @@ class FrameSource {
   virtual cv::Mat Read(int index, std::string* error) const = 0;
   // Where frame `index` lives (a file name, or "store.h5:/cam0[12]"), for reports.
   virtual std::string Where(int index) const = 0;
+  // Frame times (s) the source itself carries (the frame store does); empty when it has none.
+  virtual std::map<int, double> Timestamps() const { return {}; }
 };
 
 // Opens a source; throws InputError naming the spec when the file is missing, the pattern matches

@@ -22,8 +22,10 @@ Experiment ConvertToFrameStore(const SynchronizedSequence& sequence, const std::
   const std::string file_name = std::filesystem::path(path).filename().string();
   const int total = count * sequence.num_cameras();
   int done = 0;
-  {
-    std::lock_guard<std::mutex> lock(h5::Mutex());
+  try {
+    // HDF5 calls hold the library lock; reading a source does not (an HDF5 source takes the lock
+    // itself: converting one store into another must not deadlock).
+    std::unique_lock<std::mutex> lock(h5::Mutex());
     h5::Id file = h5::CreateFile(partial);
     h5::WriteStringAttribute(file.get(), "format", "netlab-frame-store");
     h5::WriteStringAttribute(file.get(), "experiment", in.name);
@@ -34,8 +36,12 @@ Experiment ConvertToFrameStore(const SynchronizedSequence& sequence, const std::
       FrameInfo info;
       std::string error;
       bool found = false;
+      lock.unlock();
       for (int i : source.indices())
         if ((found = source.Header(i, &info, &error))) break;
+      const std::map<int, double> timestamps =
+          spec.timestamps.empty() ? source.Timestamps() : ReadTimestamps(spec.timestamps);
+      lock.lock();
       if (!found) throw std::runtime_error(spec.name + ": no readable frame to convert");
       std::vector<hsize_t> frame_dims = {static_cast<hsize_t>(info.height),
                                          static_cast<hsize_t>(info.width)};
@@ -50,13 +56,12 @@ Experiment ConvertToFrameStore(const SynchronizedSequence& sequence, const std::
       h5::WriteStringAttribute(data.get(), "fps", std::to_string(in.fps));
       std::vector<uint8_t> valid(count, 0);
       std::vector<double> times(count, std::numeric_limits<double>::quiet_NaN());
-      const std::map<int, double> timestamps =
-          spec.timestamps.empty() ? std::map<int, double>{} : ReadTimestamps(spec.timestamps);
       const cv::Mat blank(info.height, info.width, CV_MAKETYPE(info.depth, info.channels),
                           cv::Scalar::all(0));
       for (int t = 0; t < count; ++t) {
         const int index = first + t;
         cv::Mat frame;
+        lock.unlock();
         if (sequence.Has(c, index)) {
           frame = source.Read(index, &error);
           if (!frame.empty() && (frame.cols != info.width || frame.rows != info.height ||
@@ -64,6 +69,7 @@ Experiment ConvertToFrameStore(const SynchronizedSequence& sequence, const std::
             frame.release();  // a frame of another size or type: unreadable here
         }
         if (!frame.empty() && !frame.isContinuous()) frame = frame.clone();
+        lock.lock();
         valid[t] = !frame.empty();
         h5::AppendFrame(data.get(), type, (frame.empty() ? blank : frame).data, t);
         if (const auto it = timestamps.find(index); it != timestamps.end()) times[t] = it->second;
@@ -79,6 +85,10 @@ Experiment ConvertToFrameStore(const SynchronizedSequence& sequence, const std::
       out.cameras[c].bit_depth = sequence.Correction(c).bit_depth;
     }
     H5Fflush(file.get(), H5F_SCOPE_GLOBAL);
+  } catch (...) {
+    std::error_code ignored;
+    std::filesystem::remove(partial, ignored);  // no half-written store is left behind
+    throw;
   }
   std::error_code error;
   std::filesystem::rename(partial, path, error);

@@ -51,7 +51,8 @@ SynchronizedSequence::SynchronizedSequence(Experiment experiment)
     } catch (const InputError& e) {
       throw InputError(experiment_.path + ": camera " + c.name + ": " + e.what());
     }
-    timestamps_.push_back(c.timestamps.empty() ? std::map<int, double>{}
+    // A timestamps file, else the times the source carries (the frame store keeps them).
+    timestamps_.push_back(c.timestamps.empty() ? sources_.back()->Timestamps()
                                                : ReadTimestamps(c.timestamps));
     const auto& idx = sources_.back()->indices();
     first_ = any ? std::min(first_, idx.front()) : idx.front();
@@ -166,6 +167,9 @@ CheckReport SynchronizedSequence::Check(bool decode,
     cam.width = reference.width;
     cam.height = reference.height;
     cam.depth_bits = reference.depth == CV_16U ? 16 : 8;
+    if (reference.channels == 3 && experiment_.cameras[c].bayer != BayerPattern::kNone)
+      report.warnings.push_back(cam.name + ": the frames are already colour; bayer: " +
+                                BayerPatternName(experiment_.cameras[c].bayer) + " is ignored");
     for (size_t k = 0; k < idx.size(); ++k) {
       Result& r = results[c][k];
       if (r.ok && !(r.info == reference)) {

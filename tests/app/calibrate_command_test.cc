@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "calibration/rig.h"
-#include "tests/app/json_parse.h"
+#include "tests/app/run_netlab.h"
 #include "tests/calibration/synthetic_dataset.h"
 
 namespace {
@@ -20,31 +20,9 @@ using netlab::testing::Json;
 using netlab::testing::JsonParser;
 namespace calib = netlab::calib;
 
-struct Result {
-  int status;
-  std::string out, err;
-};
-
-Result Netlab(const std::string& args) {
-  const auto err_path = std::filesystem::temp_directory_path() /
-                        ("netlab_calib_stderr_" + std::to_string(getpid()) + ".txt");
-  FILE* pipe = popen((std::string(NETLAB_EXE) + " " + args + " 2>" + err_path.string()).c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buffer;
-  size_t n;
-  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) out.append(buffer.data(), n);
-  const int status = WEXITSTATUS(pclose(pipe));
-  std::stringstream err;
-  err << std::ifstream(err_path).rdbuf();
-  std::filesystem::remove(err_path);
-  return {status, out, err.str()};
-}
-
-Json LastJson(const std::string& out) {
-  std::string text = out;
-  while (!text.empty() && text.back() == '\n') text.pop_back();
-  return JsonParser::Parse(text.substr(text.rfind('\n') + 1));
-}
+using Result = netlab::testing::NetlabResult;
+Result Netlab(const std::string& args) { return netlab::testing::RunNetlab(args); }
+using netlab::testing::LastJson;
 
 // Two cameras of the paper's rig at quarter resolution, 10 views of a chessboard, as PNG files.
 class CalibrateCommand : public ::testing::Test {

@@ -13,42 +13,16 @@
 #include <sstream>
 
 #include "libnetsim/track_file.h"
-#include "tests/app/json_parse.h"
+#include "tests/app/run_netlab.h"
 
 namespace {
 
 using netlab::testing::Json;
 using netlab::testing::JsonParser;
 
-// The JSON summary: the last line of stdout, parsed strictly.
-Json LastJson(const std::string& out) {
-  std::string text = out;
-  while (!text.empty() && text.back() == '\n') text.pop_back();
-  return JsonParser::Parse(text.substr(text.rfind('\n') + 1));
-}
-
-struct Result {
-  int status;
-  std::string out;  // stdout
-  std::string err;  // stderr
-};
-
-Result Netlab(const std::string& args) {
-  const auto err_path = std::filesystem::temp_directory_path() /
-                        ("netlab_cli_stderr_" + std::to_string(getpid()) + ".txt");
-  const std::string command = std::string(NETLAB_EXE) + " " + args + " 2>" + err_path.string();
-  FILE* pipe = popen(command.c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buffer;
-  size_t n;
-  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) out.append(buffer.data(), n);
-  const int status = WEXITSTATUS(pclose(pipe));
-  std::ifstream err_file(err_path);
-  std::stringstream err;
-  err << err_file.rdbuf();
-  std::filesystem::remove(err_path);
-  return {status, out, err.str()};
-}
+using Result = netlab::testing::NetlabResult;
+Result Netlab(const std::string& args) { return netlab::testing::RunNetlab(args); }
+using netlab::testing::LastJson;
 
 class SimulateCommand : public ::testing::Test {
  protected:
