@@ -214,17 +214,13 @@ TEST_F(FourCameras, DisplayImagesAtEveryLevel) {
   EXPECT_FALSE(error.empty());
 }
 
-TEST(SynchronizedSequence, DifferentSizesCountsAndRangesAreWarnedAbout) {
-  // left: 64x48, frames 0..5 with frame 3 at the wrong size; right: 32x24, frames 2..6.
-  ScratchDir dir("sequence");
-  for (int k = 0; k <= 5; ++k)
-    WritePgm(dir / ("a/" + FrameName(k)), Frame(0, k, k == 3 ? cv::Size(32, 24) : cv::Size(64, 48)));
-  for (int k = 2; k <= 6; ++k) WritePgm(dir / ("b/" + FrameName(k)), Frame(1, k, {32, 24}));
+// Two cameras, "left" reading a/frame_%04d.pgm and "right" b/frame_%04d.pgm, at 50 fps.
+Experiment LeftAndRight(const ScratchDir& dir) {
   Experiment e;
-  e.name = "mixed";
+  e.name = "left_right";
   e.fps = 50;
   e.base_dir = dir.path().string();
-  e.path = dir / "mixed.yaml";
+  e.path = dir / "left_right.yaml";
   CameraSpec a;
   a.name = "left";
   a.frames = "a/frame_%04d.pgm";
@@ -232,7 +228,16 @@ TEST(SynchronizedSequence, DifferentSizesCountsAndRangesAreWarnedAbout) {
   b.name = "right";
   b.frames = "b/frame_%04d.pgm";
   e.cameras = {a, b};
-  const SynchronizedSequence sequence(e);
+  return e;
+}
+
+TEST(SynchronizedSequence, DifferentSizesCountsAndRangesAreWarnedAbout) {
+  // left: 64x48, frames 0..5 with frame 3 at the wrong size; right: 32x24, frames 2..6.
+  ScratchDir dir("sequence");
+  for (int k = 0; k <= 5; ++k)
+    WritePgm(dir / ("a/" + FrameName(k)), Frame(0, k, k == 3 ? cv::Size(32, 24) : cv::Size(64, 48)));
+  for (int k = 2; k <= 6; ++k) WritePgm(dir / ("b/" + FrameName(k)), Frame(1, k, {32, 24}));
+  const SynchronizedSequence sequence(LeftAndRight(dir));
   EXPECT_EQ(sequence.first_frame(), 0);
   EXPECT_EQ(sequence.last_frame(), 6);
   for (bool decode : {false, true}) {
@@ -263,18 +268,7 @@ TEST(SynchronizedSequence, DifferentSizesCountsAndRangesAreWarnedAbout) {
 TEST(SynchronizedSequence, MissingFramesNameTheCamera) {
   ScratchDir dir("sequence");
   WritePgm(dir / ("a/" + FrameName(0)), Frame(0, 0));
-  Experiment e;
-  e.name = "x";
-  e.fps = 50;
-  e.base_dir = dir.path().string();
-  e.path = dir / "x.yaml";
-  CameraSpec a;
-  a.name = "left";
-  a.frames = "a/frame_%04d.pgm";
-  CameraSpec b = a;
-  b.name = "right";
-  b.frames = "b/frame_%04d.pgm";
-  e.cameras = {a, b};
+  const Experiment e = LeftAndRight(dir);
   try {
     SynchronizedSequence sequence(e);
     FAIL() << "no error";
