@@ -1,6 +1,7 @@
 #include "app/command_line.h"
 
 #include <algorithm>
+#include <cstdio>
 
 namespace netlab::app {
 
@@ -71,6 +72,25 @@ int CommandLine::IntOption(const std::string& name, int fallback, int min, int m
     throw UsageError("--" + name + " expects an integer in " + std::to_string(min) + ".." +
                      std::to_string(max) + ", got '" + *value + "'");
   return static_cast<int>(parsed);
+}
+
+double CommandLine::DoubleOption(const std::string& name, double fallback, double min,
+                                 double max) const {
+  const auto value = Option(name);
+  if (!value) return fallback;
+  size_t used = 0;
+  double parsed = 0.0;
+  try {
+    parsed = std::stod(*value, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != value->size() || !(parsed >= min && parsed <= max)) {
+    char range[96];
+    std::snprintf(range, sizeof(range), "[%g, %g]", min, max);
+    throw UsageError("--" + name + " expects a number in " + range + ", got '" + *value + "'");
+  }
+  return parsed;
 }
 
 }  // namespace netlab::app

@@ -28,6 +28,8 @@ class CommandLine {
   std::string Required(const std::string& name) const;
   // An integer option in [min, max], or `fallback` when absent; UsageError naming it otherwise.
   int IntOption(const std::string& name, int fallback, int min, int max) const;
+  // A number in [min, max], or `fallback` when absent.
+  double DoubleOption(const std::string& name, double fallback, double min, double max) const;
   const std::vector<std::string>& positional() const { return positional_; }
 
  private:

@@ -16,13 +16,14 @@ namespace netlab::app {
 namespace {
 
 constexpr char kHelp[] =
-    "usage: netlab simulate SCENARIO.yaml --out RESULT.h5 [--json] [--quiet]\n\n"
+    "usage: netlab simulate SCENARIO.yaml --out RESULT.h5 [--duration S] [--json] [--quiet]\n\n"
     "Runs the Cosserat-rod simulation described by SCENARIO.yaml (docs/scenarios.md) and writes\n"
     "the knot-track file RESULT.h5 (/time, /nodes/position, /knots/position, /knots/grid,\n"
     "/knots/valid, /probes/<name>, /scenario). Progress goes to stderr.\n\n"
     "options:\n"
     "  --out FILE   output HDF5 file (written to FILE.partial, renamed when complete)\n"
     "  --json       print one JSON summary object on stdout as the last output\n"
+    "  --duration S simulate S seconds instead of the scenario's duration\n"
     "  --quiet      no progress on stderr\n\n"
     "exit status: 0 stable run, 1 bad scenario or blow-up (the error names time, node and\n"
     "quantity), 2 usage error.\n";
@@ -67,7 +68,7 @@ void PrintJson(const netsim::RunSummary& s) {
 
 int RunSimulate(const std::vector<std::string>& args) {
   try {
-    const CommandLine cl(args, {"json", "quiet", "help"}, {"out"});
+    const CommandLine cl(args, {"json", "quiet", "help"}, {"out", "duration"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -75,7 +76,9 @@ int RunSimulate(const std::vector<std::string>& args) {
     if (cl.positional().size() != 1) throw UsageError("expected one SCENARIO.yaml");
     const std::string out = cl.Required("out");
 
-    const netsim::Scenario scenario = netsim::LoadScenario(cl.positional()[0]);
+    netsim::Scenario scenario = netsim::LoadScenario(cl.positional()[0]);
+    // A shorter (or longer) run of the same scene, e.g. the first second of a flight.
+    scenario.duration = cl.DoubleOption("duration", scenario.duration, 1e-9, 1e6);
     netsim::RunOptions options;
     options.out_path = out;
     const bool quiet = cl.Flag("quiet");

@@ -54,6 +54,14 @@ Id OpenFileReadOnly(const std::string& path) {
   return file;
 }
 
+Id OpenFileReadWrite(const std::string& path) {
+  SilenceErrors();
+  if (H5Fis_hdf5(path.c_str()) <= 0) Fail(path + ": missing, unreadable or not an HDF5 file");
+  Id file(H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT));
+  if (!file.valid()) Fail(path + ": cannot open for writing as HDF5");
+  return file;
+}
+
 Id CreateGroup(hid_t loc, const std::string& name) {
   Id group(H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
   if (!group.valid()) Fail(ObjectName(loc) + ": cannot create group " + name);

@@ -42,6 +42,7 @@ void SilenceErrors();
 
 Id CreateFile(const std::string& path);            // truncates
 Id OpenFileReadOnly(const std::string& path);      // throws "cannot open ... as HDF5"
+Id OpenFileReadWrite(const std::string& path);     // to add datasets to an existing file
 Id CreateGroup(hid_t loc, const std::string& name);
 bool Exists(hid_t loc, const std::string& path);   // a link at `path` (relative to loc)
 

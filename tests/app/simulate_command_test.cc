@@ -56,6 +56,17 @@ probes:
   corner: {net: net, knot: [0, 0]}
 )";
 
+// --duration runs the same scene for another length of time.
+TEST_F(SimulateCommand, DurationOverridesTheScenario) {
+  const std::string out = (dir_ / "short.h5").string();
+  const Result r = Netlab("simulate " + Write("net.yaml", kNet) + " --out " + out +
+                          " --duration 0.01 --json --quiet");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NEAR(LastJson(r.out)["sim_time"].number(), 0.01, 1e-12);
+  EXPECT_EQ(netlab::netsim::ReadKnotTracks(out).frames(), 3);  // t = 0, 0.005, 0.01
+  EXPECT_EQ(Netlab("simulate " + Write("net.yaml", kNet) + " --out " + out + " --duration -1").status, 2);
+}
+
 // The JSON summary is the last line of stdout; every field of the contract is there.
 TEST_F(SimulateCommand, JsonSummaryHasTheContractFields) {
   const std::string scenario = Write("net.yaml", kNet);
