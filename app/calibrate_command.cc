@@ -1,5 +1,5 @@
 // netlab calibrate --board BOARD --images NAME=GLOB [--images NAME=GLOB ...] --out rig.yaml
-//                  [--json] [--fix-intrinsics rig.yaml] [--rational] [--quiet]
+//                  [--json] [--fix-intrinsics rig.yaml] [--rational] [--truth rig.yaml] [--quiet]
 
 #include <glob.h>
 #include <unistd.h>
@@ -9,18 +9,21 @@
 #include <cstdio>
 #include <exception>
 #include <iostream>
+#include <optional>
 
 #include "app/command_line.h"
 #include "app/commands.h"
 #include "app/json_writer.h"
 #include "calibration/calibrate.h"
+#include "calibration/rig_compare.h"
 
 namespace netlab::app {
 namespace {
 
 constexpr char kHelp[] =
     "usage: netlab calibrate --board BOARD --images NAME=GLOB [--images NAME=GLOB ...]\n"
-    "                        --out rig.yaml [--json] [--fix-intrinsics rig.yaml] [--rational]\n\n"
+    "                        --out rig.yaml [--json] [--fix-intrinsics rig.yaml] [--rational]\n"
+    "                        [--truth rig.yaml]\n\n"
     "Calibrates the cameras into one world frame from images of a target (docs/calibration.md).\n"
     "Images are matched across cameras by their sorted order (the frame index).\n\n"
     "BOARD:\n"
@@ -32,6 +35,11 @@ constexpr char kHelp[] =
     "  --out FILE             rig file, OpenCV FileStorage YAML (written via FILE.partial)\n"
     "  --fix-intrinsics FILE  keep the intrinsics of the cameras in this rig file\n"
     "  --rational             estimate the rational distortion terms k4..k6 too\n"
+    "  --truth FILE           the true rig (synthetic experiments): compare the calibrated rig\n"
+    "                         with it after a rigid alignment of the world frames: per camera\n"
+    "                         centre (m), rotation (deg), fx, fy, cx, cy and image errors (px),\n"
+    "                         and the scale error; on stderr, and as \"truth\" with --json.\n"
+    "                         Cameras match by name; true ones not calibrated are ignored\n"
     "  --json                 print one JSON summary object on stdout as the last output\n"
     "  --quiet                no progress on stderr\n";
 
@@ -46,7 +54,32 @@ std::vector<std::string> Glob(const std::string& pattern) {
   return files;
 }
 
-void PrintJson(const calib::CalibrationResult& result) {
+// The "truth" object of the --json summary.
+void WriteTruthJson(JsonWriter& json, const calib::RigComparison& comparison) {
+  json.BeginObject();
+  json.Key("cameras").BeginArray();
+  for (const calib::CameraComparison& c : comparison.cameras) {
+    json.BeginObject();
+    json.Key("name").String(c.name);
+    json.Key("centre_error_m").Number(c.centre_error_m);
+    json.Key("rotation_error_deg").Number(c.rotation_error_deg);
+    json.Key("fx_error_px").Number(c.fx_error_px);
+    json.Key("fy_error_px").Number(c.fy_error_px);
+    json.Key("cx_error_px").Number(c.cx_error_px);
+    json.Key("cy_error_px").Number(c.cy_error_px);
+    json.Key("image_error_rms_px").Number(c.image_error_rms_px);
+    json.Key("image_error_max_px").Number(c.image_error_max_px);
+    json.EndObject();
+  }
+  json.EndArray();
+  json.Key("max_centre_error_m").Number(comparison.max_centre_error_m());
+  json.Key("max_rotation_error_deg").Number(comparison.max_rotation_error_deg());
+  json.Key("scale_error").Number(comparison.scale_error);
+  json.EndObject();
+}
+
+// `comparison`: with --truth, else null.
+void PrintJson(const calib::CalibrationResult& result, const calib::RigComparison* comparison) {
   const calib::CalibrationSummary& s = result.summary;
   JsonWriter json;
   json.BeginObject();
@@ -89,6 +122,10 @@ void PrintJson(const calib::CalibrationResult& result) {
   for (const std::string& w : s.warnings) json.String(w);
   json.EndArray();
   json.Key("wall_s").Number(s.wall_s);
+  if (comparison != nullptr) {
+    json.Key("truth");
+    WriteTruthJson(json, *comparison);
+  }
   json.EndObject();
   std::cout << json.str() << std::endl;
 }
@@ -98,7 +135,7 @@ void PrintJson(const calib::CalibrationResult& result) {
 int RunCalibrate(const std::vector<std::string>& args) {
   try {
     const CommandLine cl(args, {"json", "quiet", "help", "rational"},
-                         {"board", "images", "out", "fix-intrinsics"});
+                         {"board", "images", "out", "fix-intrinsics", "truth"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -137,6 +174,19 @@ int RunCalibrate(const std::vector<std::string>& args) {
       }
     }
 
+    // The true rig, restricted to the calibrated cameras in their order; read before the slow
+    // part so that a wrong file fails at once.
+    std::optional<calib::Rig> truth;
+    if (const auto path = cl.Option("truth")) {
+      const calib::Rig all = calib::ReadRig(*path);
+      truth.emplace();
+      for (const std::string& name : names) {
+        const int i = all.Find(name);
+        if (i < 0) throw std::runtime_error(*path + ": no camera named '" + name + "'");
+        truth->cameras.push_back(all.cameras[i]);
+      }
+    }
+
     const bool progress = !cl.Flag("quiet") && isatty(fileno(stderr));
     const calib::CalibrationInput input = calib::DetectInImages(
         names, files, target,
@@ -153,7 +203,12 @@ int RunCalibrate(const std::vector<std::string>& args) {
     calib::WriteRig(out, result.rig);
     if (!cl.Flag("quiet") || !cl.Flag("json")) std::cerr << result.summary.BriefReport();
     if (!cl.Flag("quiet")) std::cerr << "rig written to " << out << "\n";
-    if (cl.Flag("json")) PrintJson(result);
+    std::optional<calib::RigComparison> comparison;
+    if (truth) {
+      comparison = calib::CompareRigs(result.rig, *truth);
+      if (!cl.Flag("quiet")) std::cerr << comparison->Report();
+    }
+    if (cl.Flag("json")) PrintJson(result, comparison ? &*comparison : nullptr);
     return 0;
   } catch (const UsageError& e) {
     std::fprintf(stderr, "netlab calibrate: %s\n(see netlab calibrate --help)\n", e.what());
