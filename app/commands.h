@@ -19,5 +19,6 @@ const std::vector<Command>& Commands();
 int RunSimulate(const std::vector<std::string>& args);
 int RunCalibrate(const std::vector<std::string>& args);
 int RunIngest(const std::vector<std::string>& args);
+int RunRender(const std::vector<std::string>& args);
 
 }  // namespace netlab::app

@@ -13,6 +13,7 @@ const std::vector<Command>& Commands() {
   static const std::vector<Command> commands = {
       {"calibrate", "calibrate the cameras into one world frame from target images", RunCalibrate},
       {"ingest", "check the synchronized camera recordings or convert them to HDF5", RunIngest},
+      {"render", "film a simulated shot with a virtual camera rig, with ground truth", RunRender},
       {"simulate", "run a Cosserat-rod net simulation from a scenario file", RunSimulate},
   };
   return commands;

@@ -1,0 +1,515 @@
+#include "libreconstruct/synthetic_experiment.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <random>
+#include <sstream>
+#include <thread>
+
+#include <Eigen/Eigenvalues>
+#include <opencv2/imgcodecs.hpp>
+
+#include "calibration/synthetic.h"
+#include "calibration/target.h"
+#include "common/yaml_util.h"
+#include "libnetsim/hdf5_util.h"
+#include "libreconstruct/experiment.h"
+
+namespace netlab::recon {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Grid coordinates (row, col) of the two knots of link `link` of a rows x cols net, in the model's
+// link order: horizontal links row by row, then vertical links row by row.
+std::array<int, 4> LinkKnots(int rows, int cols, int link) {
+  const int horizontal = rows * (cols - 1);
+  if (link < horizontal) {
+    const int r = link / (cols - 1), c = link % (cols - 1);
+    return {r, c, r, c + 1};
+  }
+  const int v = link - horizontal;
+  return {v / cols, v % cols, v / cols + 1, v % cols};
+}
+
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+// Does the segment from `from` to `to` pass through the box (strictly before `to`)?
+bool SegmentHitsBox(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Box& box) {
+  const Eigen::Quaterniond inv = box.orientation.conjugate();
+  const Eigen::Vector3d a = inv * (from - box.center), d = inv * (to - from);
+  double t0 = 0.0, t1 = 1.0 - 1e-9;
+  for (int i = 0; i < 3; ++i) {
+    if (std::abs(d[i]) < 1e-15) {
+      if (std::abs(a[i]) > box.half_extents[i]) return false;
+      continue;
+    }
+    double ta = (-box.half_extents[i] - a[i]) / d[i], tb = (box.half_extents[i] - a[i]) / d[i];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+bool SegmentHitsBall(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Ball& ball) {
+  const Eigen::Vector3d d = to - from;
+  const double t = std::clamp((ball.center - from).dot(d) / d.squaredNorm(), 0.0, 1.0);
+  return (from + t * d - ball.center).norm() < ball.radius;
+}
+
+// The double-sided checker foil of the calibration images and its file.
+calib::CalibrationTarget Foil() {
+  return calib::CalibrationTarget::Foil(calib::BoardPattern::Chessboard(9, 6, 0.06), 0.0005);
+}
+constexpr char kFoilYaml[] =
+    "# The double-sided checker foil of the rendered calibration images (docs/calibration.md).\n"
+    "type: double_sided_foil\n"
+    "board: {type: chessboard, cols: 9, rows: 6, square: 0.06}\n"
+    "thickness: 0.0005\n"
+    "flip_axis: y\n";
+
+// world_from_foil orientation facing cameras that look along +x: foil x to their right (-y),
+// foil y down (-z), the front print seen from -x.
+Eigen::Quaterniond FacingPlusX(const calib::BoardPattern& pattern) {
+  Eigen::Matrix3d r;
+  r << Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(0, 0, -1), Eigen::Vector3d(1, 0, 0);
+  if (pattern.viewer_z > 0) {
+    r.col(1) *= -1;
+    r.col(2) *= -1;
+  }
+  return Eigen::Quaterniond(r);
+}
+
+// The point nearest to every camera's optical axis (least squares): where the rig looks.
+Eigen::Vector3d AimPoint(const calib::Rig& rig) {
+  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+  for (const calib::Camera& camera : rig.cameras) {
+    const Eigen::Vector3d d = camera.ViewDirection();
+    const Eigen::Matrix3d p = Eigen::Matrix3d::Identity() - d * d.transpose();
+    a += p;
+    b += p * camera.Center();
+  }
+  // One camera, or parallel axes: 2 m in front of the first camera.
+  if (Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(a).eigenvalues()(0) < 1e-3)
+    return rig.cameras[0].Center() + 2.0 * rig.cameras[0].ViewDirection();
+  return a.ldlt().solve(b);
+}
+
+void WriteTextFile(const fs::path& path, const std::string& text) {
+  const fs::path partial = path.string() + ".partial";
+  {
+    std::ofstream out(partial);
+    out << text;
+    if (!out) throw std::runtime_error(path.string() + ": cannot write");
+  }
+  fs::rename(partial, path);
+}
+
+}  // namespace
+
+YarnColoring DefaultColoring(int rows, int cols) {
+  // Six well-separated dye colours (linear BGR). Horizontal links use the first three, vertical
+  // ones the last three, each cycling along its row or column, so the links at a knot differ.
+  YarnColoring c;
+  c.names = {"red", "green", "blue", "yellow", "magenta", "cyan"};
+  c.palette = {Colour(0.05f, 0.05f, 0.90f), Colour(0.08f, 0.75f, 0.08f),
+               Colour(0.90f, 0.25f, 0.05f), Colour(0.05f, 0.80f, 0.85f),
+               Colour(0.80f, 0.10f, 0.80f), Colour(0.85f, 0.75f, 0.05f)};
+  const int links = rows * (cols - 1) + (rows - 1) * cols;
+  const int horizontal = rows * (cols - 1);
+  for (int link = 0; link < links; ++link) {
+    const auto k = LinkKnots(rows, cols, link);
+    c.link_colour.push_back((link < horizontal ? 0 : 3) + (k[0] + k[1]) % 3);
+  }
+  return c;
+}
+
+SimulatedShot::SimulatedShot(const std::string& path) {
+  tracks_ = netsim::ReadKnotTracks(path);
+  nodes_ = netsim::ReadNodePositions(path);
+  if (nodes_.empty())
+    throw InputError(path + ": no /nodes/position (the scenario needs store_nodes: true)");
+  if (tracks_.scenario.empty()) throw InputError(path + ": no /scenario (not a netlab simulate file)");
+  if (tracks_.frames() < 1) throw InputError(path + ": no frames");
+  // The scene needs the nets, rods and bodies; not the gravity, frame rotation or drag files, which
+  // are named relative to a scenario folder the result file does not know.
+  YAML::Node root;
+  try {
+    root = YAML::Load(tracks_.scenario);
+  } catch (const YAML::Exception& e) {
+    throw InputError(path + ":/scenario: " + e.what());
+  }
+  for (const char* key : {"gravity", "rotating_frame", "drag"}) root.remove(key);
+  YAML::Emitter emitter;
+  emitter << root;
+  scenario_ = netsim::ParseScenario(emitter.c_str(), path + ":/scenario", "");
+  netsim::BuiltScenario built = netsim::BuildScenario(scenario_);
+  model_ = std::make_unique<netsim::Model>(built.simulation->model());
+  if (static_cast<int>(nodes_.front().size()) != model_->num_nodes())
+    throw InputError(path + ": /nodes/position has " + std::to_string(nodes_.front().size()) +
+                     " nodes, its scenario builds " + std::to_string(model_->num_nodes()));
+  for (int k = 0; k < tracks_.knots(); ++k) {
+    const int net = tracks_.net.empty() ? 0 : tracks_.net[k];
+    const int node = model_->KnotNode(net, tracks_.grid[k][0], tracks_.grid[k][1]);
+    if (node < 0) throw InputError(path + ": knot " + std::to_string(k) + " is not in the net");
+    knot_nodes_.push_back(node);
+  }
+  for (size_t n = 0; n < model_->nets.size(); ++n) {
+    const netsim::NetInfo& net = model_->nets[n];
+    const netsim::NetSpec& spec = scenario_.nets[n];
+    const double diameter = model_->materials[net.material].diameter;
+    knot_radius_.push_back(spec.knot_mass > 0 ? 1.5 * diameter : 0.0);
+    if (spec.corner_mass > 0)
+      for (const auto& [r, c] : {std::pair{0, 0}, {0, net.cols - 1}, {net.rows - 1, 0},
+                                 {net.rows - 1, net.cols - 1}}) {
+        corner_nodes_.push_back(model_->KnotNode(static_cast<int>(n), r, c));
+        corner_radius_.push_back(spec.corner_radius > 0 ? spec.corner_radius : 0.01);
+      }
+  }
+}
+
+std::vector<Eigen::Vector3d> SimulatedShot::NodesAt(double t) const {
+  const std::vector<double>& time = tracks_.time;
+  if (t <= time.front()) return nodes_.front();
+  if (t >= time.back()) return nodes_.back();
+  const size_t i = std::upper_bound(time.begin(), time.end(), t) - time.begin() - 1;
+  const double s = (t - time[i]) / (time[i + 1] - time[i]);
+  std::vector<Eigen::Vector3d> x(nodes_[i].size());
+  for (size_t n = 0; n < x.size(); ++n) x[n] = (1.0 - s) * nodes_[i][n] + s * nodes_[i + 1][n];
+  return x;
+}
+
+std::vector<Eigen::Vector3d> SimulatedShot::KnotsAt(const std::vector<Eigen::Vector3d>& nodes) const {
+  std::vector<Eigen::Vector3d> knots;
+  knots.reserve(knot_nodes_.size());
+  for (int node : knot_nodes_) knots.push_back(nodes[node]);
+  return knots;
+}
+
+Scene SimulatedShot::SolidsAt(double t) const {
+  Scene scene;
+  const Colour body_colour(0.55f, 0.55f, 0.55f), corner_colour(0.7f, 0.7f, 0.7f);
+  for (const netsim::RigidBody& body : scenario_.bodies) {
+    const Eigen::Vector3d center = body.center + t * body.velocity;
+    if (body.shape == netsim::RigidBody::Shape::kBox)
+      scene.boxes.push_back({center, body.orientation, body.half_extents, body_colour});
+    else if (body.shape == netsim::RigidBody::Shape::kSphere)
+      scene.balls.push_back({center, body.radius, body_colour});
+    // Planes (a wall or a floor) are not drawn: they would fill the view.
+  }
+  if (!corner_nodes_.empty()) {
+    const std::vector<Eigen::Vector3d> nodes = NodesAt(t);
+    for (size_t i = 0; i < corner_nodes_.size(); ++i)
+      scene.balls.push_back({nodes[corner_nodes_[i]], corner_radius_[i], corner_colour});
+  }
+  return scene;
+}
+
+Scene SimulatedShot::SceneAt(double t, const std::vector<YarnColoring>& coloring,
+                             Colour background) const {
+  Scene scene = SolidsAt(t);
+  scene.background = background;
+  const std::vector<Eigen::Vector3d> x = NodesAt(t);
+  for (size_t n = 0; n < model_->nets.size(); ++n) {
+    const netsim::NetInfo& net = model_->nets[n];
+    const YarnColoring colours =
+        n < coloring.size() ? coloring[n] : DefaultColoring(net.rows, net.cols);
+    const double radius = 0.5 * model_->materials[net.material].diameter;
+    const int interior = net.segments_per_link - 1;
+    for (int link = 0; link < net.num_links(); ++link) {
+      const auto k = LinkKnots(net.rows, net.cols, link);
+      ThreadPolyline yarn;
+      yarn.radius = radius;
+      yarn.colour = colours.palette[colours.link_colour[link] % colours.palette.size()];
+      yarn.points.push_back(x[model_->KnotNode(static_cast<int>(n), k[0], k[1])]);
+      for (int j = 0; j < interior; ++j)
+        yarn.points.push_back(x[net.first_node + net.rows * net.cols + link * interior + j]);
+      yarn.points.push_back(x[model_->KnotNode(static_cast<int>(n), k[2], k[3])]);
+      scene.threads.push_back(std::move(yarn));
+    }
+    if (knot_radius_[n] > 0)
+      for (int r = 0; r < net.rows; ++r)
+        for (int c = 0; c < net.cols; ++c)
+          scene.balls.push_back({x[model_->KnotNode(static_cast<int>(n), r, c)], knot_radius_[n],
+                                 Colour(0.5f, 0.5f, 0.5f)});
+  }
+  for (const netsim::RodInfo& rod : model_->rods) {
+    ThreadPolyline yarn;
+    yarn.radius = 0.5 * model_->materials[rod.material].diameter;
+    yarn.colour = Colour(0.7f, 0.7f, 0.7f);
+    for (int i = 0; i < rod.num_nodes; ++i) yarn.points.push_back(x[rod.first_node + i]);
+    scene.threads.push_back(std::move(yarn));
+  }
+  return scene;
+}
+
+uint8_t KnotVisibility(const calib::Camera& camera, const Eigen::Vector3d& knot,
+                       const Scene& solids, double ignore_radius) {
+  const Eigen::Vector3d in_cam = camera.cam_from_world * knot;
+  if (!(in_cam.z() > 0)) return 2;
+  const Eigen::Vector2d px = calib::Project(camera.intrinsics, in_cam);
+  if (!(px.x() >= -0.5 && px.y() >= -0.5 && px.x() <= camera.intrinsics.width - 0.5 &&
+        px.y() <= camera.intrinsics.height - 0.5))
+    return 2;
+  const Eigen::Vector3d center = camera.Center();
+  for (const Box& box : solids.boxes)
+    if (SegmentHitsBox(center, knot, box)) return 1;
+  for (const Ball& ball : solids.balls) {
+    // A ball holding the knot is its own corner mass: the knot is where the mass is seen.
+    if ((ball.center - knot).norm() < ball.radius + ignore_radius) continue;
+    if (SegmentHitsBall(center, knot, ball)) return 1;
+  }
+  return 0;
+}
+
+calib::Rig ScaleRig(const calib::Rig& rig, double scale) {
+  calib::Rig scaled = rig;
+  for (calib::Camera& c : scaled.cameras) {
+    calib::CameraIntrinsics& k = c.intrinsics;
+    k.fx *= scale;
+    k.fy *= scale;
+    // Pixel centres at integers: the image's outer edge (-1/2) stays where it is.
+    k.cx = (k.cx + 0.5) * scale - 0.5;
+    k.cy = (k.cy + 0.5) * scale - 0.5;
+    k.width = static_cast<int>(std::lround(k.width * scale));
+    k.height = static_cast<int>(std::lround(k.height * scale));
+  }
+  return scaled;
+}
+
+RenderSummary RenderExperiment(const RenderJob& job,
+                               const std::function<void(int, int)>& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  const SimulatedShot shot(job.simulation);
+  const calib::Rig& rig = job.rig;
+  if (rig.cameras.empty()) throw InputError("the rig has no cameras");
+  if (!(job.fps > 0)) throw InputError("fps must be > 0");
+  const int available =
+      static_cast<int>(std::floor((shot.end_time() - shot.start_time()) * job.fps + 1e-6));
+  const int first = job.first_frame;
+  const int last = job.last_frame < 0 ? available : job.last_frame;
+  if (first < 0 || last < first || last > available)
+    throw InputError("frames " + std::to_string(first) + ":" + std::to_string(last) +
+                     " are outside the simulation's frames 0:" + std::to_string(available) +
+                     " at " + std::to_string(job.fps) + " fps");
+  const int frames = last - first + 1, cameras = static_cast<int>(rig.cameras.size());
+  auto frame_time = [&](int k) { return shot.start_time() + k / job.fps; };
+
+  const fs::path out(job.out_dir);
+  fs::create_directories(out);
+  calib::WriteRig((out / "rig_true.yaml").string(), rig);
+
+  // Frames: every (frame, camera) on job.threads threads.
+  Experiment experiment;
+  experiment.name = fs::path(job.simulation).stem().string() + "_rendered";
+  experiment.fps = job.fps;
+  experiment.path = (out / "experiment.yaml").string();
+  experiment.base_dir = out.string();
+  for (const calib::Camera& camera : rig.cameras) {
+    fs::create_directories(out / camera.name);
+    std::ostringstream times;
+    times << "frame_index,time_s\n";
+    times.precision(12);
+    for (int k = first; k <= last; ++k) times << k << "," << frame_time(k) << "\n";
+    WriteTextFile(out / camera.name / "timestamps.csv", times.str());
+    CameraSpec spec;
+    spec.name = camera.name;
+    spec.frames = camera.name + "/frame_%06d.pgm";
+    spec.bayer = job.sensor.bayer;
+    spec.timestamps = (out / camera.name / "timestamps.csv").string();
+    spec.bit_depth = job.sensor.bit_depth;
+    spec.black_level = job.sensor.black_level;
+    experiment.cameras.push_back(spec);
+  }
+
+  std::vector<YarnColoring> coloring = job.coloring;
+  const SceneRenderOptions render_options;
+  const int samples = std::max(1, job.blur_samples);
+  const int total = frames * cameras;
+  std::atomic<int> next{0}, done{0};
+  std::mutex mutex;
+  std::string failure;
+  const auto render_start = std::chrono::steady_clock::now();
+  auto worker = [&] {
+    for (int task; (task = next++) < total;) {
+      const int k = first + task / cameras, c = task % cameras;
+      try {
+        const calib::Camera& camera = rig.cameras[c];
+        cv::Mat accumulator;
+        for (int s = 0; s < samples; ++s) {
+          const double t =
+              frame_time(k) + ((s + 0.5) / samples - 0.5) * (samples > 1 ? job.exposure_s : 0.0);
+          Scene scene = shot.SceneAt(t, coloring, job.background);
+          for (ThreadPolyline& yarn : scene.threads) yarn.colour *= job.illumination;
+          for (Ball& ball : scene.balls) ball.colour *= job.illumination;
+          for (Box& box : scene.boxes) box.colour *= job.illumination;
+          RenderScene(camera, scene, render_options, 1.0f / samples, &accumulator);
+        }
+        SensorOptions sensor = job.sensor;
+        sensor.seed = job.sensor.seed * 1000003ull + static_cast<uint64_t>(k) * 16 + c;
+        const cv::Mat raw = Expose(accumulator, camera.intrinsics, sensor);
+        char name[32];
+        std::snprintf(name, sizeof(name), "frame_%06d.pgm", k);
+        const fs::path file = out / camera.name / name;
+        if (!cv::imwrite(file.string(), raw)) throw std::runtime_error(file.string() + ": cannot write");
+      } catch (const std::exception& e) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (failure.empty()) failure = e.what();
+        next = total;
+      }
+      const int d = ++done;
+      if (progress) {
+        std::lock_guard<std::mutex> lock(mutex);
+        progress(d, total);
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < std::max(1, job.threads); ++t) pool.emplace_back(worker);
+  worker();
+  for (std::thread& t : pool) t.join();
+  if (!failure.empty()) throw std::runtime_error(failure);
+  const double render_s = Seconds(render_start);
+  WriteExperiment(experiment.path, experiment);
+
+  // Truth: the knots at the frame times, their pixels and visibility per camera.
+  netsim::KnotTracks truth;
+  truth.grid = shot.tracks().grid;
+  truth.net = shot.tracks().net;
+  truth.net_names = shot.tracks().net_names;
+  truth.source = "netlab render";
+  truth.scenario = shot.tracks().scenario;
+  const int knots = truth.knots();
+  std::vector<std::vector<double>> pixels(cameras, std::vector<double>(size_t(frames) * knots * 2));
+  std::vector<std::vector<uint8_t>> visibility(cameras, std::vector<uint8_t>(size_t(frames) * knots));
+  std::vector<int> frame_index;
+  RenderSummary summary;
+  summary.knots_visible_mean.assign(cameras, 0.0);
+  summary.knots_visible_min.assign(cameras, knots);
+  for (int k = first; k <= last; ++k) {
+    const double t = frame_time(k);
+    const std::vector<Eigen::Vector3d> x = shot.KnotsAt(shot.NodesAt(t));
+    const Scene solids = shot.SolidsAt(t);
+    truth.time.push_back(t);
+    frame_index.push_back(k);
+    for (int j = 0; j < knots; ++j) {
+      truth.position.push_back(x[j]);
+      truth.valid.push_back(1);
+    }
+    const size_t row = k - first;
+    for (int c = 0; c < cameras; ++c) {
+      int visible = 0;
+      for (int j = 0; j < knots; ++j) {
+        const Eigen::Vector2d px = rig.cameras[c].ProjectWorld(x[j]);
+        pixels[c][(row * knots + j) * 2] = px.x();
+        pixels[c][(row * knots + j) * 2 + 1] = px.y();
+        const uint8_t v = KnotVisibility(rig.cameras[c], x[j], solids);
+        visibility[c][row * knots + j] = v;
+        visible += v == 0;
+      }
+      summary.knots_visible_mean[c] += visible / static_cast<double>(frames);
+      summary.knots_visible_min[c] = std::min(summary.knots_visible_min[c], visible);
+    }
+  }
+  const fs::path truth_path = out / "truth.h5";
+  const std::string writing = truth_path.string() + ".writing";
+  netsim::WriteKnotTracks(writing, truth);
+  {
+    std::lock_guard<std::mutex> lock(h5::Mutex());
+    h5::Id file = h5::OpenFileReadWrite(writing);
+    h5::WriteDataset(file.get(), "frame_index", H5T_NATIVE_INT32, {static_cast<hsize_t>(frames)},
+                     frame_index.data());
+    h5::Id group = h5::CreateGroup(file.get(), "cameras");
+    for (int c = 0; c < cameras; ++c) {
+      h5::Id camera = h5::CreateGroup(group.get(), rig.cameras[c].name);
+      h5::WriteDataset(camera.get(), "knots_px", H5T_NATIVE_DOUBLE,
+                       {static_cast<hsize_t>(frames), static_cast<hsize_t>(knots), 2},
+                       pixels[c].data());
+      h5::SetUnits(camera.get(), "knots_px", "px");
+      h5::WriteDataset(camera.get(), "visibility", H5T_NATIVE_UINT8,
+                       {static_cast<hsize_t>(frames), static_cast<hsize_t>(knots)},
+                       visibility[c].data());
+    }
+    std::ifstream rig_file(out / "rig_true.yaml");
+    std::stringstream rig_text;
+    rig_text << rig_file.rdbuf();
+    h5::WriteStringDataset(file.get(), "rig", rig_text.str());
+  }
+  fs::rename(writing, truth_path);
+
+  // Calibration images: the double-sided foil at poses every camera sees.
+  if (job.calibration_views > 0) {
+    const calib::CalibrationTarget foil = Foil();
+    fs::create_directories(out / "calibration");
+    WriteTextFile(out / "calibration" / "foil.yaml", kFoilYaml);
+    std::mt19937 rng(static_cast<unsigned>(job.sensor.seed));
+    std::vector<int> all(cameras);
+    for (int c = 0; c < cameras; ++c) all[c] = c;
+    // Half the views where every camera sees the foil (they tie the cameras into one frame), the
+    // others nearer to one camera each, so the foil also covers the edges of the wide views
+    // where distortion is largest.
+    const Eigen::Vector3d aim = AimPoint(rig);
+    const Eigen::Quaterniond facing = FacingPlusX(foil.faces[0].pattern);
+    const int shared = (job.calibration_views + 1) / 2;
+    std::vector<calib::Rigid3d> poses =
+        calib::RandomTargetPoses(rig, foil, all, shared, aim + Eigen::Vector3d(0.25, 0.0, 0.1),
+                                 Eigen::Vector3d(0.35, 0.35, 0.3), facing, 0.6, rng);
+    for (int i = 0; i < job.calibration_views - shared; ++i) {
+      const int c = i % cameras;
+      const Eigen::Vector3d near = aim + 0.45 * (rig.cameras[c].Center() - aim);
+      try {
+        const auto pose = calib::RandomTargetPoses(rig, foil, {c}, 1, near,
+                                                   Eigen::Vector3d(0.2, 0.2, 0.15), facing, 0.5, rng);
+        poses.push_back(pose.front());
+      } catch (const std::runtime_error&) {
+        // This camera cannot see the whole foil that close: the shared views cover it.
+      }
+    }
+    const auto prints = calib::MakeTargetPrints(foil);
+    calib::RenderOptions options;
+    options.noise_sigma = std::max(1.0, job.sensor.noise_sigma);
+    for (int c = 0; c < cameras; ++c) {
+      const calib::Camera& camera = rig.cameras[c];
+      fs::create_directories(out / "calibration" / camera.name);
+      const calib::CameraRays rays(camera.intrinsics);
+      std::atomic<int> view{0};
+      auto render_views = [&] {
+        calib::RenderOptions o = options;
+        for (int v; (v = view++) < static_cast<int>(poses.size());) {
+          o.seed = job.sensor.seed * 7919 + static_cast<uint64_t>(c) * 1000 + v;
+          char name[32];
+          std::snprintf(name, sizeof(name), "view_%03d.png", v);
+          cv::imwrite((out / "calibration" / camera.name / name).string(),
+                      calib::RenderTarget(camera, rays, prints, poses[v], o));
+        }
+      };
+      std::vector<std::thread> views;
+      for (int t = 1; t < std::max(1, job.threads); ++t) views.emplace_back(render_views);
+      render_views();
+      for (std::thread& t : views) t.join();
+      summary.calibration_images += static_cast<int>(poses.size());
+    }
+  }
+
+  summary.frames = frames;
+  summary.cameras = cameras;
+  summary.knots = knots;
+  for (const calib::Camera& camera : rig.cameras) summary.camera_names.push_back(camera.name);
+  summary.render_s = render_s;
+  summary.wall_s = Seconds(start);
+  return summary;
+}
+
+}  // namespace netlab::recon

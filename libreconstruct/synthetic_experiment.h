@@ -1,0 +1,124 @@
+#pragma once
+// The synthetic experiment: a simulated shot filmed by a virtual copy of the camera rig, with its
+// ground truth, so every later step (calibration, labeling, triangulation, scoring) can be tested
+// against known answers before flight data exists.
+//
+//   RenderJob job;
+//   job.simulation = "result.h5";      // `netlab simulate` output (with /nodes and /scenario)
+//   job.out_dir = "synthetic";
+//   job.rig = calib::PaperRig(0.5);
+//   RenderSummary s = RenderExperiment(job, progress);
+//
+// Output in out_dir:
+//   experiment.yaml                 read by `netlab ingest` (frames, Bayer pattern, timestamps)
+//   <camera>/frame_%06d.pgm         raw Bayer mosaics (8 bit, or 16-bit words for 10..16 bits)
+//   <camera>/timestamps.csv         frame_index,time_s
+//   rig_true.yaml                   the rig the frames were rendered with
+//   calibration/<camera>/view_%03d.png, calibration/foil.yaml   the checker foil at varied poses
+//   truth.h5                        the knot-track layout of the simulator at the frame times, plus
+//     /frame_index                  [T] int32, the camera frame of each row
+//     /cameras/<camera>/knots_px    [T,K,2] float64, true pixel of each knot (OpenCV convention)
+//     /cameras/<camera>/visibility  [T,K] uint8: 0 visible, 1 occluded by a solid (target body,
+//                                   corner mass), 2 out of view (outside the image or behind)
+//     /rig                          string, the rig file's text
+//
+// Frame k is the camera frame at time k / fps of the simulation; its exposure is centred there
+// (motion blur samples the interval), and its truth is the state at that time.
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "calibration/rig.h"
+#include "libnetsim/scenario.h"
+#include "libnetsim/track_file.h"
+#include "libreconstruct/render.h"
+
+namespace netlab::recon {
+
+// The colour of each yarn link of a net. Until the colouring tool lands (issue 6) a default
+// palette is cycled so that neighbouring links differ.
+struct YarnColoring {
+  std::vector<std::string> names;  // palette names
+  std::vector<Colour> palette;     // linear BGR in [0, 1]
+  std::vector<int> link_colour;    // per link, in the model's link order (see libnetsim/model.h)
+};
+YarnColoring DefaultColoring(int rows, int cols);
+
+// The scene content of a simulation: topology and bodies from its stored scenario, node motion
+// from its frames.
+class SimulatedShot {
+ public:
+  // Reads `path` (a `netlab simulate` file); InputError naming the file when it has no /nodes or
+  // no /scenario.
+  explicit SimulatedShot(const std::string& path);
+
+  double start_time() const { return tracks_.time.front(); }
+  double end_time() const { return tracks_.time.back(); }
+  const netsim::KnotTracks& tracks() const { return tracks_; }
+  const netsim::Model& model() const { return *model_; }
+
+  // Node positions at time t (linear between stored frames, clamped to the stored range).
+  std::vector<Eigen::Vector3d> NodesAt(double t) const;
+  // Knot positions at time t, in the track file's knot order.
+  std::vector<Eigen::Vector3d> KnotsAt(const std::vector<Eigen::Vector3d>& nodes) const;
+  // The scene at time t, threads coloured per link by `coloring` (one per net; missing: default).
+  Scene SceneAt(double t, const std::vector<YarnColoring>& coloring, Colour background) const;
+  // Solids (target bodies, corner masses) at time t: what can hide a knot.
+  Scene SolidsAt(double t) const;
+
+ private:
+  netsim::KnotTracks tracks_;
+  std::vector<std::vector<Eigen::Vector3d>> nodes_;  // [T][N]
+  netsim::Scenario scenario_;
+  std::unique_ptr<netsim::Model> model_;
+  std::vector<int> knot_nodes_;   // node of each track-file knot
+  std::vector<int> corner_nodes_;
+  std::vector<double> corner_radius_;
+  std::vector<double> knot_radius_;  // per net: 0 for knotless
+};
+
+struct RenderJob {
+  std::string simulation;  // `netlab simulate` HDF5
+  std::string out_dir;
+  calib::Rig rig;
+  int first_frame = 0;
+  int last_frame = -1;        // -1: the last frame the simulation covers
+  double fps = 179.0;
+  double exposure_s = 1e-3;   // motion blur interval, centred on the frame time
+  int blur_samples = 3;       // renders averaged over the exposure
+  SensorOptions sensor;       // Bayer pattern, bit depth, noise, vignetting
+  Colour background{0.f, 0.f, 0.f};
+  double illumination = 0.85; // scene white in sensor units (headroom below saturation)
+  std::vector<YarnColoring> coloring;  // per net; empty: DefaultColoring
+  int calibration_views = 20; // foil poses seen by all cameras (0: no calibration images)
+  int threads = 2;
+};
+
+struct RenderSummary {
+  int frames = 0;
+  int cameras = 0;
+  int knots = 0;
+  std::vector<std::string> camera_names;
+  std::vector<double> knots_visible_mean;  // per camera: visible knots per frame, mean
+  std::vector<int> knots_visible_min;
+  int calibration_images = 0;
+  double wall_s = 0.0;
+  double render_s = 0.0;  // of which rendering the frames
+};
+
+// Renders the experiment (frames, truth, calibration images) into job.out_dir.
+// progress(done, total) counts camera frames; it may be empty.
+RenderSummary RenderExperiment(const RenderJob& job,
+                               const std::function<void(int, int)>& progress);
+
+// A rig with every camera's image scaled by `scale` (focal lengths, principal point, size).
+calib::Rig ScaleRig(const calib::Rig& rig, double scale);
+
+// The visibility code of a knot for a camera: 0 visible, 1 hidden behind one of `solids`,
+// 2 outside the image or behind the camera. `ignore_radius`: solids whose centre lies this close
+// to the knot (its own corner mass) do not hide it.
+uint8_t KnotVisibility(const calib::Camera& camera, const Eigen::Vector3d& knot,
+                       const Scene& solids, double ignore_radius = 1e-6);
+
+}  // namespace netlab::recon

@@ -1,0 +1,174 @@
+// `netlab render` end to end: a short simulation filmed by the paper's rig at reduced scale; the
+// output reads with `netlab ingest`, its truth agrees with the rig and the 3D tracks, and the
+// rendered foil images calibrate back to the true rig.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "calibration/rig.h"
+#include "libnetsim/hdf5_util.h"
+#include "libnetsim/track_file.h"
+#include "tests/app/run_netlab.h"
+
+namespace {
+
+using netlab::testing::Json;
+using netlab::testing::LastJson;
+using netlab::testing::RunNetlab;
+namespace fs = std::filesystem;
+namespace h5 = netlab::h5;
+
+// A 6 x 6-knot net shot along +x past a box, as in the flight scenarios but small and short.
+constexpr char kScenario[] = R"(name: render_test
+duration: 0.06
+output_interval: 0.005586592178770949
+integrator: {type: explicit, dt: auto}
+gravity: [0, 0, 0]
+materials:
+  nylon: {diameter: 1.0e-3, linear_density: 8.95e-4, stretch_stiffness: 1571,
+          bend_stiffness: 9.82e-5, twist_stiffness: 7.07e-5}
+nets:
+  - {name: net, material: nylon, knots: [6, 6], mesh: 0.1, segments_per_link: 2,
+     center: [1.0, 0, 0], normal: [1, 0, 0], x_axis: [0, 1, 0], knot_mass: 3e-05,
+     corner_mass: 0.02, corner_radius: 0.01, velocity: [0.5, 0, 0]}
+bodies:
+  - {name: target, shape: box, center: [2.2, 0, 0], size: [0.4, 0.3, 0.3]}
+)";
+
+class RenderCommand : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = fs::temp_directory_path() / ("netlab_render_cli_" + std::to_string(getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    std::ofstream(dir_ / "scenario.yaml") << kScenario;
+    const auto sim = RunNetlab("simulate " + (dir_ / "scenario.yaml").string() + " --out " +
+                               (dir_ / "sim.h5").string() + " --quiet");
+    ASSERT_EQ(sim.status, 0) << sim.err;
+    render_ = RunNetlab("render --sim " + (dir_ / "sim.h5").string() + " --out " +
+                        (dir_ / "shot").string() +
+                        " --scale 0.25 --frames 2:9 --calibration-views 12 --json");
+  }
+  static void TearDownTestSuite() { fs::remove_all(dir_); }
+  static std::string Path(const std::string& name) { return (dir_ / name).string(); }
+
+  static inline fs::path dir_;
+  static inline netlab::testing::NetlabResult render_;
+};
+
+TEST_F(RenderCommand, ReportsFramesCamerasAndVisibleKnots) {
+  ASSERT_EQ(render_.status, 0) << render_.err;
+  const Json json = LastJson(render_.out);
+  EXPECT_EQ(json["frames"].number(), 8);
+  EXPECT_EQ(json["cameras"].number(), 4);
+  EXPECT_EQ(json["knots"].number(), 36);
+  EXPECT_EQ(json["calibration_images"].number(), 48);
+  EXPECT_GT(json["wall_s"].number(), 0.0);
+  for (const char* camera : {"cam0", "cam1", "cam2", "cam3"}) {
+    const Json& visible = json["knots_visible"][camera];
+    EXPECT_LE(visible["mean"].number(), 36.0) << camera;
+    EXPECT_GT(visible["min"].number(), 0.0) << camera;
+  }
+  // cam0 and cam1 look at the net from behind the ejector: nothing hides it.
+  EXPECT_EQ(json["knots_visible"]["cam0"]["min"].number(), 36);
+}
+
+TEST_F(RenderCommand, TheExperimentReadsWithIngest) {
+  ASSERT_EQ(render_.status, 0) << render_.err;
+  const auto r = RunNetlab("ingest " + Path("shot/experiment.yaml") + " --check --decode --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Json json = LastJson(r.out);
+  EXPECT_EQ(json["synchronized_frames"].number(), 8);
+  EXPECT_EQ(json["first_frame"].number(), 2);
+  for (const Json& camera : json["cameras"].array()) {
+    EXPECT_EQ(camera["width"].number(), 512);
+    EXPECT_EQ(camera["height"].number(), 512);
+    EXPECT_TRUE(camera["timestamp_gaps"].array().empty());
+    EXPECT_TRUE(camera["duplicated"].array().empty());
+  }
+}
+
+TEST_F(RenderCommand, TruePixelsAreTheProjectionsOfTheTrueKnots) {
+  ASSERT_EQ(render_.status, 0) << render_.err;
+  const netlab::calib::Rig rig = netlab::calib::ReadRig(Path("shot/rig_true.yaml"));
+  const netlab::netsim::KnotTracks truth = netlab::netsim::ReadKnotTracks(Path("shot/truth.h5"));
+  const netlab::netsim::KnotTracks sim = netlab::netsim::ReadKnotTracks(Path("sim.h5"));
+  ASSERT_EQ(truth.frames(), 8);
+  ASSERT_EQ(truth.knots(), 36);
+  // Frame k at time k / 179 s: frame 2 is simulation output 2 (same interval).
+  EXPECT_NEAR(truth.time[0], 2 / 179.0, 1e-12);
+  EXPECT_LT((truth.Position(0, 7) - sim.Position(2, 7)).norm(), 1e-12);
+  h5::Id file = h5::OpenFileReadOnly(Path("shot/truth.h5"));
+  std::vector<int> frame_index(8);
+  h5::ReadDataset(file.get(), "frame_index", H5T_NATIVE_INT32, frame_index.data());
+  EXPECT_EQ(frame_index.front(), 2);
+  EXPECT_EQ(frame_index.back(), 9);
+  for (const auto& camera : rig.cameras) {
+    std::vector<double> px(8 * 36 * 2);
+    std::vector<uint8_t> visibility(8 * 36);
+    h5::ReadDataset(file.get(), "cameras/" + camera.name + "/knots_px", H5T_NATIVE_DOUBLE,
+                    px.data());
+    h5::ReadDataset(file.get(), "cameras/" + camera.name + "/visibility", H5T_NATIVE_UINT8,
+                    visibility.data());
+    int hidden = 0;
+    for (int t = 0; t < 8; ++t)
+      for (int k = 0; k < 36; ++k) {
+        const Eigen::Vector2d expected = camera.ProjectWorld(truth.Position(t, k));
+        EXPECT_NEAR(px[(t * 36 + k) * 2], expected.x(), 1e-9);
+        EXPECT_NEAR(px[(t * 36 + k) * 2 + 1], expected.y(), 1e-9);
+        const uint8_t v = visibility[t * 36 + k];
+        EXPECT_LE(v, 2);
+        if (v == 2) {
+          EXPECT_FALSE(expected.x() >= -0.5 && expected.x() <= 511.5 && expected.y() >= -0.5 &&
+                       expected.y() <= 511.5)
+              << camera.name << " knot " << k << " out of view inside the image";
+        }
+        hidden += v == 1;
+      }
+    // The target box stands between cam2/cam3 and the net: it hides some knots from them.
+    if (camera.name == "cam2" || camera.name == "cam3") {
+      EXPECT_GT(hidden, 0) << camera.name;
+    } else {
+      EXPECT_EQ(hidden, 0) << camera.name;
+    }
+  }
+}
+
+TEST_F(RenderCommand, TheRenderedFoilCalibratesToTheTrueRig) {
+  ASSERT_EQ(render_.status, 0) << render_.err;
+  std::string images;
+  for (const char* camera : {"cam0", "cam1", "cam2", "cam3"})
+    images += std::string(" --images ") + camera + "='" + Path("shot/calibration/") + camera +
+              "/*.png'";
+  const auto r = RunNetlab("calibrate --board " + Path("shot/calibration/foil.yaml") + images +
+                           " --out " + Path("calibrated.yaml") + " --truth " +
+                           Path("shot/rig_true.yaml") + " --json --quiet");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Json json = LastJson(r.out);
+  EXPECT_LT(json["rms_px"].number(), 0.2);
+  // 512 x 512 images, 12 views: the calibration's own centre sigma is ~3 mm, and a principal
+  // point known to ~1.5 px at f = 727 px is ~0.12 deg of rotation; bounds at about twice those.
+  EXPECT_LT(json["truth"]["max_centre_error_m"].number(), 0.006);
+  EXPECT_LT(json["truth"]["max_rotation_error_deg"].number(), 0.3);
+  for (const Json& camera : json["truth"]["cameras"].array())
+    EXPECT_LT(std::abs(camera["fx_error_px"].number()), 3.0) << camera["name"].string();
+}
+
+TEST_F(RenderCommand, BadInputIsNamed) {
+  auto r = RunNetlab("render --sim " + Path("missing.h5") + " --out " + Path("x"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("missing.h5"), std::string::npos) << r.err;
+  r = RunNetlab("render --sim " + Path("sim.h5") + " --out " + Path("x") + " --frames 0:5000");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("outside the simulation"), std::string::npos) << r.err;
+  EXPECT_EQ(RunNetlab("render --sim " + Path("sim.h5")).status, 2);  // no --out
+  EXPECT_EQ(RunNetlab("render --sim a.h5 --out b --frames 5").status, 2);
+  EXPECT_EQ(RunNetlab("render --sim a.h5 --out b --scale 2").status, 2);
+  EXPECT_EQ(RunNetlab("render --sim a.h5 --out b --bit-depth 9").status, 2);
+  EXPECT_EQ(RunNetlab("render --help").status, 0);
+}
+
+}  // namespace
