@@ -205,7 +205,9 @@ int RunCalibrate(const std::vector<std::string>& args) {
     if (!cl.Flag("quiet")) std::cerr << "rig written to " << out << "\n";
     std::optional<calib::RigComparison> comparison;
     if (truth) {
-      comparison = calib::CompareRigs(result.rig, *truth);
+      // A marker map puts the rig in the map's frame, the true world: nothing to align.
+      comparison = calib::CompareRigs(result.rig, *truth,
+                                      target.kind == calib::CalibrationTarget::Kind::kMarkerMap);
       if (!cl.Flag("quiet")) std::cerr << comparison->Report();
     }
     if (cl.Flag("json")) PrintJson(result, comparison ? &*comparison : nullptr);

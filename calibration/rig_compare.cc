@@ -81,9 +81,10 @@ double RigComparison::max_rotation_error_deg() const {
 
 std::string RigComparison::Report() const {
   std::ostringstream os;
-  os << "rig vs truth: aligned on "
-     << (alignment == RigAlignment::kCentres ? "the camera centres"
-                                             : "the mean orientation and the centroid")
+  os << "rig vs truth: "
+     << (alignment == RigAlignment::kNone      ? "one world frame, not aligned"
+         : alignment == RigAlignment::kCentres ? "aligned on the camera centres"
+                                             : "aligned on the mean orientation and the centroid")
      << " (residual " << Fixed("%.3f", alignment_rms_m * 1e3) << " mm, "
      << Fixed("%.4f", alignment_rms_deg) << " deg RMS); scale error "
      << (std::isfinite(scale_error) ? Fixed("%+.4f", scale_error * 100.0) + " %" : "n/a") << "\n";
@@ -102,7 +103,7 @@ std::string RigComparison::Report() const {
   return os.str();
 }
 
-RigComparison CompareRigs(const Rig& estimated, const Rig& truth) {
+RigComparison CompareRigs(const Rig& estimated, const Rig& truth, bool same_world_frame) {
   // Match the cameras by name, both ways.
   if (estimated.cameras.empty()) throw std::runtime_error("rig comparison: no cameras");
   for (const Camera& c : truth.cameras)
@@ -139,7 +140,9 @@ RigComparison CompareRigs(const Rig& estimated, const Rig& truth) {
 
   // true_world_from_estimated_world (header comment).
   RigComparison result;
-  if (centres_fix_rotation) {
+  if (same_world_frame) {
+    result.alignment = RigAlignment::kNone;  // identity
+  } else if (centres_fix_rotation) {
     result.alignment = RigAlignment::kCentres;
     const Eigen::Matrix4d t = Eigen::umeyama(est_centres, true_centres, /*with_scaling=*/false);
     result.true_world_from_estimated_world = Rigid3d(Eigen::Matrix3d(t.topLeftCorner<3, 3>()),

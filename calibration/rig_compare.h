@@ -39,7 +39,9 @@
 
 namespace netlab::calib {
 
-enum class RigAlignment { kCentres, kMeanRotationAndCentroid };
+// kNone: the two rigs share their world frame (a marker-map calibration is expressed in the map's
+// frame, which is the true world): compared as they are.
+enum class RigAlignment { kCentres, kMeanRotationAndCentroid, kNone };
 
 struct CameraComparison {
   std::string name;
@@ -79,6 +81,6 @@ inline constexpr double kMinCentreSpread = 0.1;
 // Compares `estimated` with `truth`, cameras matched by name. Throws std::runtime_error naming the
 // camera when one is in only one of the rigs, or when a camera's image size differs between them;
 // and when `estimated` has no cameras.
-RigComparison CompareRigs(const Rig& estimated, const Rig& truth);
+RigComparison CompareRigs(const Rig& estimated, const Rig& truth, bool same_world_frame = false);
 
 }  // namespace netlab::calib

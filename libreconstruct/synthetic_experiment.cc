@@ -91,6 +91,57 @@ Eigen::Quaterniond FacingPlusX(const calib::BoardPattern& pattern) {
   return Eigen::Quaterniond(r);
 }
 
+// ArUco markers on the faces of the target boxes (2 x 2 per face), as the 3D markers on the
+// target are: the marker map that puts the rig into the scene's frame. Only faces some camera
+// sees within 50 degrees of face-on: markers seen at grazing angles detect with biased corners.
+// Empty without a box.
+std::vector<std::pair<int, std::array<Eigen::Vector3d, 4>>> TargetMarkers(const Scene& solids,
+                                                                          const calib::Rig& rig) {
+  std::vector<std::pair<int, std::array<Eigen::Vector3d, 4>>> markers;
+  int id = 0;
+  for (const Box& box : solids.boxes)
+    for (int axis = 0; axis < 3; ++axis)
+      for (int sign : {-1, 1}) {
+        const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+        const Eigen::Matrix3d r = box.orientation.toRotationMatrix();
+        const Eigen::Vector3d normal = sign * r.col(axis);
+        const Eigen::Vector3d face = box.center + normal * box.half_extents[axis];
+        bool seen = false;
+        for (const calib::Camera& camera : rig.cameras)
+          seen |= (camera.Center() - face).normalized().dot(normal) > std::cos(50.0 * M_PI / 180.0);
+        if (!seen) continue;
+        const double size = 0.35 * std::min(box.half_extents[u], box.half_extents[v]) * 2.0;
+        for (int i : {-1, 1})
+          for (int j : {-1, 1}) {
+            if (id >= 50) return markers;  // DICT_4X4_50
+            // Markers upright where possible: their x axis along a horizontal face direction.
+            const Eigen::Vector3d center = box.center + normal * box.half_extents[axis] +
+                                           r.col(u) * (0.5 * i * box.half_extents[u]) +
+                                           r.col(v) * (0.5 * j * box.half_extents[v]);
+            Eigen::Vector3d x_axis = Eigen::Vector3d::UnitZ().cross(normal);
+            if (x_axis.norm() < 1e-6) x_axis = r.col(u);
+            markers.emplace_back(id++, calib::MarkerCorners(center, x_axis.normalized(), normal, size));
+          }
+      }
+  return markers;
+}
+
+std::string MarkerMapYaml(const std::vector<std::pair<int, std::array<Eigen::Vector3d, 4>>>& markers) {
+  std::ostringstream os;
+  os.precision(10);
+  os << "# ArUco markers on the target body's faces (world frame, m), for netlab calibrate with\n"
+        "# --fix-intrinsics: corners top-left, top-right, bottom-right, bottom-left.\n"
+        "type: marker_map\ndictionary: DICT_4X4_50\nmarkers:\n";
+  for (const auto& [id, corners] : markers) {
+    os << "  - {id: " << id << ", corners: [";
+    for (int k = 0; k < 4; ++k)
+      os << (k ? ", " : "") << "[" << corners[k].x() << ", " << corners[k].y() << ", "
+         << corners[k].z() << "]";
+    os << "]}\n";
+  }
+  return os.str();
+}
+
 // The point nearest to every camera's optical axis (least squares): where the rig looks.
 Eigen::Vector3d AimPoint(const calib::Rig& rig) {
   Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
@@ -500,6 +551,23 @@ RenderSummary RenderExperiment(const RenderJob& job,
       render_views();
       for (std::thread& t : views) t.join();
       summary.calibration_images += static_cast<int>(poses.size());
+    }
+    // The marker map on the target, one image per camera (the markers do not move).
+    const auto markers = TargetMarkers(shot.SolidsAt(shot.start_time()), rig);
+    if (!markers.empty()) {
+      WriteTextFile(out / "calibration" / "markers.yaml", MarkerMapYaml(markers));
+      const calib::CalibrationTarget map = calib::CalibrationTarget::MarkerMap("DICT_4X4_50", markers);
+      const auto map_prints = calib::MakeTargetPrints(map);
+      for (int c = 0; c < cameras; ++c) {
+        const calib::Camera& camera = rig.cameras[c];
+        fs::create_directories(out / "calibration" / "markers" / camera.name);
+        calib::RenderOptions o = options;
+        o.seed = job.sensor.seed * 7919 + 999;
+        cv::imwrite((out / "calibration" / "markers" / camera.name / "view_000.png").string(),
+                    calib::RenderTarget(camera, calib::CameraRays(camera.intrinsics), map_prints,
+                                        calib::Rigid3d(), o));
+        ++summary.calibration_images;
+      }
     }
   }
 

@@ -65,7 +65,7 @@ TEST_F(RenderCommand, ReportsFramesCamerasAndVisibleKnots) {
   EXPECT_EQ(json["frames"].number(), 8);
   EXPECT_EQ(json["cameras"].number(), 4);
   EXPECT_EQ(json["knots"].number(), 36);
-  EXPECT_EQ(json["calibration_images"].number(), 48);
+  EXPECT_EQ(json["calibration_images"].number(), 48 + 4);  // foil views, one marker image each
   EXPECT_GT(json["wall_s"].number(), 0.0);
   for (const char* camera : {"cam0", "cam1", "cam2", "cam3"}) {
     const Json& visible = json["knots_visible"][camera];
@@ -155,6 +155,33 @@ TEST_F(RenderCommand, TheRenderedFoilCalibratesToTheTrueRig) {
   EXPECT_LT(json["truth"]["max_rotation_error_deg"].number(), 0.3);
   for (const Json& camera : json["truth"]["cameras"].array())
     EXPECT_LT(std::abs(camera["fx_error_px"].number()), 3.0) << camera["name"].string();
+}
+
+// The marker map on the target's faces puts the rig into the scene's frame (intrinsics given):
+// every centre within 3 sigma of the calibration's own uncertainty; the far pair, which sees
+// the markers large, within a centimetre.
+TEST_F(RenderCommand, TheRenderedMarkerMapPlacesTheRigInTheWorld) {
+  ASSERT_EQ(render_.status, 0) << render_.err;
+  std::string images;
+  for (const char* camera : {"cam0", "cam1", "cam2", "cam3"})
+    images += std::string(" --images ") + camera + "='" + Path("shot/calibration/markers/") +
+              camera + "/*.png'";
+  const auto r = RunNetlab("calibrate --board " + Path("shot/calibration/markers.yaml") + images +
+                           " --fix-intrinsics " + Path("shot/rig_true.yaml") + " --out " +
+                           Path("markers.yaml") + " --truth " + Path("shot/rig_true.yaml") +
+                           " --json --quiet");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Json json = LastJson(r.out);
+  const auto& cameras = json["cameras"].array();
+  const auto& truth = json["truth"]["cameras"].array();
+  ASSERT_EQ(truth.size(), 4u);
+  for (size_t c = 0; c < 4; ++c) {
+    const double error = truth[c]["centre_error_m"].number();
+    EXPECT_LT(error, 3.0 * cameras[c]["centre_sigma_m"].number()) << truth[c]["name"].string();
+    if (c >= 2) {
+      EXPECT_LT(error, 0.01) << truth[c]["name"].string();
+    }
+  }
 }
 
 TEST_F(RenderCommand, BadInputIsNamed) {

@@ -103,6 +103,22 @@ TEST(CompareRigs, AMovedWorldFrameIsAlignedAway) {
   }
 }
 
+// In one world frame (a marker-map calibration) nothing is aligned: a camera 2 mm off shows 2 mm,
+// and a moved world frame shows the whole motion.
+TEST(CompareRigs, OneWorldFrameComparesAsGiven) {
+  const Rig truth = PaperRig();
+  Rig moved = truth;
+  Rigid3d world_from_cam = moved.cameras[2].cam_from_world.Inverse();
+  world_from_cam.translation += Eigen::Vector3d(0.002, 0.0, 0.0);
+  moved.cameras[2].cam_from_world = world_from_cam.Inverse();
+  const RigComparison r = CompareRigs(moved, truth, /*same_world_frame=*/true);
+  EXPECT_EQ(r.alignment, RigAlignment::kNone);
+  EXPECT_NEAR(r.cameras[2].centre_error_m, 0.002, 1e-12);
+  for (int c : {0, 1, 3}) EXPECT_LT(r.cameras[c].centre_error_m, 1e-12) << c;
+  const RigComparison shifted = CompareRigs(MoveWorld(truth, SomeMotion()), truth, true);
+  for (const auto& c : shifted.cameras) EXPECT_GT(c.centre_error_m, 0.1) << c.name;
+}
+
 // With four cameras the centre fit absorbs part of one camera's 2 mm displacement: the residual
 // is (I - H) delta to first order, H the hat matrix of the linearised rigid fit (rotation w and
 // translation t: c_i -> c_i + w x c_i + t). So the translation alone takes 1/4 of it, the rotation
