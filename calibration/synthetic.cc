@@ -352,4 +352,14 @@ std::vector<Rigid3d> RandomTargetPoses(const Rig& rig, const CalibrationTarget& 
   return poses;
 }
 
+Eigen::Quaterniond FacingPlusX(const BoardPattern& pattern) {
+  Eigen::Matrix3d r;
+  r << Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(0, 0, -1), Eigen::Vector3d(1, 0, 0);
+  if (pattern.viewer_z > 0) {
+    r.col(1) *= -1;
+    r.col(2) *= -1;
+  }
+  return Eigen::Quaterniond(r);
+}
+
 }  // namespace netlab::calib

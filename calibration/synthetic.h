@@ -92,6 +92,10 @@ std::vector<FaceProjection> ProjectTarget(const Camera& camera, const Calibratio
                                           const Rigid3d& world_from_target,
                                           double margin_px = 0.0);
 
+// A world_from_face orientation facing cameras that look along +x (the paper rig's cam0/cam1):
+// face x to their right (-y), face y down (-z), the print seen from -x.
+Eigen::Quaterniond FacingPlusX(const BoardPattern& pattern);
+
 // Random poses of `target` that every camera in `must_see` sees entirely (every point of some
 // face, at least `margin_px` inside the image, from the printed side). The target is placed
 // around `center` (world) within `spread` (m) per axis, turned by up to `max_tilt_rad` from

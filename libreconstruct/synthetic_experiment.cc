@@ -79,18 +79,6 @@ constexpr char kFoilYaml[] =
     "thickness: 0.0005\n"
     "flip_axis: y\n";
 
-// world_from_foil orientation facing cameras that look along +x: foil x to their right (-y),
-// foil y down (-z), the front print seen from -x.
-Eigen::Quaterniond FacingPlusX(const calib::BoardPattern& pattern) {
-  Eigen::Matrix3d r;
-  r << Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(0, 0, -1), Eigen::Vector3d(1, 0, 0);
-  if (pattern.viewer_z > 0) {
-    r.col(1) *= -1;
-    r.col(2) *= -1;
-  }
-  return Eigen::Quaterniond(r);
-}
-
 // ArUco markers on the faces of the target boxes (2 x 2 per face), as the 3D markers on the
 // target are: the marker map that puts the rig into the scene's frame. Only faces some camera
 // sees within 50 degrees of face-on: markers seen at grazing angles detect with biased corners.
@@ -512,7 +500,7 @@ RenderSummary RenderExperiment(const RenderJob& job,
     // others nearer to one camera each, so the foil also covers the edges of the wide views
     // where distortion is largest.
     const Eigen::Vector3d aim = AimPoint(rig);
-    const Eigen::Quaterniond facing = FacingPlusX(foil.faces[0].pattern);
+    const Eigen::Quaterniond facing = calib::FacingPlusX(foil.faces[0].pattern);
     const int shared = (job.calibration_views + 1) / 2;
     std::vector<calib::Rigid3d> poses =
         calib::RandomTargetPoses(rig, foil, all, shared, aim + Eigen::Vector3d(0.25, 0.0, 0.1),

@@ -11,17 +11,7 @@
 
 namespace netlab::calib::testing {
 
-// A world_from_face orientation facing cameras that look along +x (the rig's cam0/cam1): face x
-// to their right (-y), face y down (-z), the print seen from -x.
-inline Eigen::Quaterniond FacingPlusX(const BoardPattern& pattern) {
-  Eigen::Matrix3d r;
-  r << Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(0, 0, -1), Eigen::Vector3d(1, 0, 0);
-  if (pattern.viewer_z > 0) {
-    r.col(1) *= -1;
-    r.col(2) *= -1;
-  }
-  return Eigen::Quaterniond(r);
-}
+using calib::FacingPlusX;
 
 struct Dataset {
   CalibrationInput input;
