@@ -1,0 +1,868 @@
+#include "libreconstruct/net_coloring.h"
+
+#include <algorithm>
+#include <chrono>
+#include <deque>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <unordered_map>
+
+#include "common/yaml_util.h"
+
+namespace netlab::recon {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// Link colours of one knot in geometric order; unused slots are -1.
+struct Cfg {
+  int d = 0;
+  std::array<int, 4> c{-1, -1, -1, -1};
+};
+
+// The dihedral images of a cyclic sequence of length d (2d of them, d = 1: one).
+int DihedralImages(const Cfg& x, std::array<Cfg, 8>* out) {
+  if (x.d <= 1) {
+    (*out)[0] = x;
+    return 1;
+  }
+  int n = 0;
+  for (int mirror = 0; mirror < 2; ++mirror)
+    for (int rot = 0; rot < x.d; ++rot) {
+      Cfg y;
+      y.d = x.d;
+      for (int i = 0; i < x.d; ++i) {
+        const int j = mirror ? (rot - i + 2 * x.d) % x.d : (rot + i) % x.d;
+        y.c[i] = x.c[j];
+      }
+      (*out)[n++] = y;
+    }
+  return n;
+}
+
+Cfg Canonical(CodeRule rule, const Cfg& x) {
+  Cfg y = x;
+  switch (rule) {
+    case CodeRule::kSet: {
+      std::sort(y.c.begin(), y.c.begin() + y.d);
+      y.d = static_cast<int>(std::unique(y.c.begin(), y.c.begin() + y.d) - y.c.begin());
+      for (int i = y.d; i < 4; ++i) y.c[i] = -1;
+      return y;
+    }
+    case CodeRule::kMultiset:
+      std::sort(y.c.begin(), y.c.begin() + y.d);
+      return y;
+    case CodeRule::kCyclic: {
+      std::array<Cfg, 8> images;
+      const int n = DihedralImages(x, &images);
+      for (int i = 1; i < n; ++i)
+        if (images[i].c < y.c) y = images[i];
+      return y;
+    }
+  }
+  return y;
+}
+
+// Packs degree and canonical code into one key (colours < 255).
+uint64_t CodeKey(CodeRule rule, const Cfg& x) {
+  const Cfg y = Canonical(rule, x);
+  uint64_t key = static_cast<uint64_t>(x.d);
+  for (int i = 0; i < 4; ++i) key = (key << 8) | static_cast<uint64_t>(y.c[i] + 1);
+  return key;
+}
+
+// Change(x -> S) for the set rule: links of x not in S must change; colours of S missing from x
+// must be created; both fit in the same changes while |S| <= d.
+int SetChange(const Cfg& x, const Cfg& s /* canonical set */) {
+  if (s.d > x.d) return kFarDistance;
+  int out = 0;
+  uint64_t present = 0;
+  for (int i = 0; i < x.d; ++i) {
+    bool in = false;
+    for (int j = 0; j < s.d; ++j) in = in || s.c[j] == x.c[i];
+    if (in) present |= uint64_t{1} << x.c[i];
+    else ++out;
+  }
+  const int missing = s.d - __builtin_popcountll(present);
+  return std::max(out, missing);
+}
+
+int Distance(CodeRule rule, const Cfg& a, const Cfg& b) {
+  if (a.d != b.d) return kFarDistance;
+  switch (rule) {
+    case CodeRule::kSet:
+      return std::min(SetChange(a, Canonical(rule, b)), SetChange(b, Canonical(rule, a)));
+    case CodeRule::kMultiset: {
+      std::array<int, 4> x = a.c, y = b.c;
+      std::sort(x.begin(), x.begin() + a.d);
+      std::sort(y.begin(), y.begin() + b.d);
+      int i = 0, j = 0, common = 0;
+      while (i < a.d && j < b.d) {
+        if (x[i] == y[j]) ++common, ++i, ++j;
+        else if (x[i] < y[j]) ++i;
+        else ++j;
+      }
+      return a.d - common;
+    }
+    case CodeRule::kCyclic: {
+      std::array<Cfg, 8> images;
+      const int n = DihedralImages(b, &images);
+      int best = kFarDistance;
+      for (int k = 0; k < n; ++k) {
+        int h = 0;
+        for (int i = 0; i < a.d; ++i) h += a.c[i] != images[k].c[i];
+        best = std::min(best, h);
+      }
+      return best;
+    }
+  }
+  return kFarDistance;
+}
+
+Cfg ToCfg(const std::vector<int>& v) {
+  if (v.size() > 4) throw std::invalid_argument("a knot has at most 4 links");
+  Cfg x;
+  x.d = static_cast<int>(v.size());
+  for (int i = 0; i < x.d; ++i) x.c[i] = v[i];
+  return x;
+}
+
+int64_t Binomial(int64_t n, int64_t k) {
+  if (k < 0 || n < k) return 0;
+  int64_t r = 1;
+  for (int64_t i = 1; i <= k; ++i) r = r * (n - k + i) / i;
+  return r;
+}
+
+// The fixed structure of the net under the options: links per knot, constrained partners.
+struct Net {
+  int rows = 0, cols = 0, n = 0, links = 0;
+  std::vector<std::array<int, 4>> knot_links;  // geometric order, -1 padded
+  std::vector<int> degree;
+  std::vector<std::array<int, 2>> link_knots;
+  std::vector<std::vector<int>> partners;  // same degree, within radius (all when radius 0)
+};
+
+Net BuildNet(int rows, int cols, const ColoringOptions& o) {
+  Net net;
+  net.rows = rows;
+  net.cols = cols;
+  net.n = rows * cols;
+  net.links = NumLinks(rows, cols);
+  net.knot_links.resize(net.n);
+  net.degree.resize(net.n);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) {
+      const std::vector<int> l = KnotLinks(rows, cols, r, c);
+      std::array<int, 4> a{-1, -1, -1, -1};
+      std::copy(l.begin(), l.end(), a.begin());
+      net.knot_links[r * cols + c] = a;
+      net.degree[r * cols + c] = static_cast<int>(l.size());
+    }
+  for (int l = 0; l < net.links; ++l) {
+    const auto k = LinkKnots(rows, cols, l);
+    net.link_knots.push_back({k[0] * cols + k[1], k[2] * cols + k[3]});
+  }
+  net.partners.resize(net.n);
+  for (int x = 0; x < net.n; ++x)
+    for (int w = 0; w < net.n; ++w) {
+      if (w == x || net.degree[w] != net.degree[x]) continue;
+      const int g = std::abs(x / cols - w / cols) + std::abs(x % cols - w % cols);
+      if (o.radius == 0 || g <= o.radius) net.partners[x].push_back(w);
+    }
+  return net;
+}
+
+Cfg KnotCfg(const Net& net, const std::vector<int>& colour, int x) {
+  Cfg y;
+  y.d = net.degree[x];
+  for (int i = 0; i < y.d; ++i) y.c[i] = colour[net.knot_links[x][i]];
+  return y;
+}
+
+int AdjacentPairs(const Cfg& x) {
+  int p = 0;
+  for (int i = 0; i < x.d; ++i)
+    for (int j = i + 1; j < x.d; ++j) p += x.c[i] == x.c[j];
+  return p;
+}
+
+// Tabu min-conflicts search with k colours. Cost = violated knot pairs + equal-colour link
+// pairs at a knot (when adjacent_distinct). The fast path for D = 1 and radius 0 counts knots
+// per code in a hash map; otherwise partner lists are scanned.
+class LocalSearch {
+ public:
+  LocalSearch(const Net& net, const ColoringOptions& o, int k, uint64_t seed)
+      : net_(net), o_(o), k_(k), rng_(seed), hashed_(o.min_distance == 1 && o.radius == 0) {}
+
+  bool Run(Clock::time_point deadline, std::vector<int>* out) {
+    std::uniform_int_distribution<int> colour_dist(0, k_ - 1);
+    colour_.assign(net_.links, 0);
+    for (int& c : colour_) c = colour_dist(rng_);
+    cfg_.resize(net_.n);
+    for (int x = 0; x < net_.n; ++x) cfg_[x] = KnotCfg(net_, colour_, x);
+    // Initial cost and per-knot conflict counts.
+    pair_conf_.assign(net_.n, 0);
+    cost_ = 0;
+    count_.clear();
+    if (hashed_) {
+      for (int x = 0; x < net_.n; ++x) cost_ += count_[CodeKey(o_.rule, cfg_[x])]++;
+    } else {
+      for (int x = 0; x < net_.n; ++x)
+        for (int w : net_.partners[x])
+          if (Violates(cfg_[x], cfg_[w])) {
+            ++pair_conf_[x];
+            if (w > x) ++cost_;
+          }
+    }
+    if (o_.adjacent_distinct)
+      for (int x = 0; x < net_.n; ++x) cost_ += AdjacentPairs(cfg_[x]);
+    std::vector<int64_t> tabu(static_cast<size_t>(net_.links) * k_, -1);
+    std::vector<int> conflicted;
+    int64_t best_cost = cost_;
+    for (int64_t iter = 0; cost_ > 0; ++iter) {
+      if ((iter & 63) == 0 && Clock::now() > deadline) return false;
+      conflicted.clear();
+      for (int x = 0; x < net_.n; ++x)
+        if (Conflicted(x)) conflicted.push_back(x);
+      if (conflicted.empty()) break;  // cannot happen while cost > 0; defensive
+      const int x = conflicted[rng_() % conflicted.size()];
+      int best_link = -1, best_c = -1, ties = 0;
+      int64_t best_delta = 0;
+      const bool random_walk = (rng_() % 100) < 3;
+      for (int i = 0; i < net_.degree[x]; ++i) {
+        const int e = net_.knot_links[x][i];
+        for (int c = 0; c < k_; ++c) {
+          if (c == colour_[e]) continue;
+          const int64_t delta = random_walk ? 0 : Delta(e, c);
+          const bool is_tabu = tabu[static_cast<size_t>(e) * k_ + c] > iter;
+          if (is_tabu && cost_ + delta >= best_cost) continue;
+          if (best_link < 0 || delta < best_delta) {
+            best_link = e, best_c = c, best_delta = delta, ties = 1;
+          } else if (delta == best_delta && rng_() % ++ties == 0) {
+            best_link = e, best_c = c;
+          }
+        }
+      }
+      if (best_link < 0) continue;
+      tabu[static_cast<size_t>(best_link) * k_ + colour_[best_link]] =
+          iter + 5 + static_cast<int64_t>(rng_() % 10) + static_cast<int64_t>(conflicted.size() / 4);
+      Apply(best_link, best_c);
+      best_cost = std::min(best_cost, cost_);
+    }
+    *out = colour_;
+    return true;
+  }
+
+ private:
+  bool Violates(const Cfg& a, const Cfg& b) const {
+    return Distance(o_.rule, a, b) < o_.min_distance;
+  }
+  bool Conflicted(int x) const {
+    if (o_.adjacent_distinct && AdjacentPairs(cfg_[x]) > 0) return true;
+    if (hashed_) return count_.at(CodeKey(o_.rule, cfg_[x])) > 1;
+    return pair_conf_[x] > 0;
+  }
+  // Cost of the pairs touching u or v when their configurations are cu, cv.
+  int64_t Contribution(int u, int v, const Cfg& cu, const Cfg& cv) const {
+    int64_t s = 0;
+    for (int w : net_.partners[u]) s += Violates(cu, w == v ? cv : cfg_[w]);
+    for (int w : net_.partners[v])
+      if (w != u) s += Violates(cv, cfg_[w]);
+    if (o_.adjacent_distinct) s += AdjacentPairs(cu) + AdjacentPairs(cv);
+    return s;
+  }
+  // Change of sum_codes C(count, 2) when one knot moves from code a to code b.
+  int64_t MoveCount(uint64_t a, uint64_t b) {
+    if (a == b) return 0;
+    int64_t d = -(--count_[a]);
+    d += count_[b]++;
+    return d;
+  }
+  int64_t Delta(int e, int c) {
+    const int u = net_.link_knots[e][0], v = net_.link_knots[e][1];
+    Cfg cu = cfg_[u], cv = cfg_[v];
+    for (int i = 0; i < cu.d; ++i)
+      if (net_.knot_links[u][i] == e) cu.c[i] = c;
+    for (int i = 0; i < cv.d; ++i)
+      if (net_.knot_links[v][i] == e) cv.c[i] = c;
+    if (hashed_) {
+      const uint64_t ou = CodeKey(o_.rule, cfg_[u]), ov = CodeKey(o_.rule, cfg_[v]);
+      const uint64_t nu = CodeKey(o_.rule, cu), nv = CodeKey(o_.rule, cv);
+      int64_t d = MoveCount(ou, nu) + MoveCount(ov, nv);
+      MoveCount(nv, ov);
+      MoveCount(nu, ou);
+      if (o_.adjacent_distinct)
+        d += AdjacentPairs(cu) + AdjacentPairs(cv) - AdjacentPairs(cfg_[u]) - AdjacentPairs(cfg_[v]);
+      return d;
+    }
+    return Contribution(u, v, cu, cv) - Contribution(u, v, cfg_[u], cfg_[v]);
+  }
+  void Apply(int e, int c) {
+    const int u = net_.link_knots[e][0], v = net_.link_knots[e][1];
+    cost_ += Delta(e, c);
+    const Cfg old_u = cfg_[u], old_v = cfg_[v];
+    colour_[e] = c;
+    cfg_[u] = KnotCfg(net_, colour_, u);
+    cfg_[v] = KnotCfg(net_, colour_, v);
+    if (hashed_) {
+      MoveCount(CodeKey(o_.rule, old_u), CodeKey(o_.rule, cfg_[u]));
+      MoveCount(CodeKey(o_.rule, old_v), CodeKey(o_.rule, cfg_[v]));
+      return;
+    }
+    // Update the per-knot pair conflict counts of every pair touching u or v.
+    auto update = [&](int x, int w, bool before, bool after) {
+      if (before == after) return;
+      const int s = after ? 1 : -1;
+      pair_conf_[x] += s;
+      pair_conf_[w] += s;
+    };
+    for (int w : net_.partners[u])
+      update(u, w, Violates(old_u, w == v ? old_v : cfg_[w]), Violates(cfg_[u], cfg_[w]));
+    for (int w : net_.partners[v])
+      if (w != u) update(v, w, Violates(old_v, cfg_[w]), Violates(cfg_[v], cfg_[w]));
+  }
+
+  const Net& net_;
+  const ColoringOptions& o_;
+  int k_;
+  std::mt19937_64 rng_;
+  bool hashed_;
+  std::vector<int> colour_;
+  std::vector<Cfg> cfg_;
+  std::vector<int> pair_conf_;
+  std::unordered_map<uint64_t, int> count_;
+  int64_t cost_ = 0;
+};
+
+// Backtracking over links in knot order (each knot's right then down link, row-major), so a
+// knot is complete as soon as its own right and down links are set. Colours are introduced in
+// increasing order (colour permutations preserve every rule). Checks: adjacency as each link is
+// set, distance to every earlier-completed partner as each knot completes.
+class ExactSearch {
+ public:
+  ExactSearch(const Net& net, const ColoringOptions& o, int k, Clock::time_point deadline)
+      : net_(net), o_(o), k_(k), deadline_(deadline) {
+    for (int x = 0; x < net.n; ++x)
+      for (int i = 0; i < net.degree[x]; ++i) {
+        const int e = net.knot_links[x][i];
+        if (net.link_knots[e][0] == x) order_.push_back(e);  // x's right / down links
+      }
+    std::vector<int> pos(net.links);
+    for (int i = 0; i < net.links; ++i) pos[order_[i]] = i;
+    completes_.resize(net.links);
+    complete_step_.assign(net.n, -1);
+    for (int x = 0; x < net.n; ++x) {
+      int last = -1;
+      for (int i = 0; i < net.degree[x]; ++i) last = std::max(last, pos[net.knot_links[x][i]]);
+      complete_step_[x] = last;
+      if (last >= 0) completes_[last].push_back(x);
+    }
+    colour_.assign(net.links, -1);
+  }
+
+  // 1 found, 0 infeasible, -1 time up.
+  int Run(std::vector<int>* out) {
+    const int r = Dfs(0, -1);
+    if (r == 1) *out = colour_;
+    return r;
+  }
+
+ private:
+  int Dfs(int step, int max_used) {
+    if (step == net_.links) return 1;
+    if ((++nodes_ & 4095) == 0 && Clock::now() > deadline_) return -1;
+    const int e = order_[step];
+    const int top = std::min(k_ - 1, max_used + 1);
+    for (int c = 0; c <= top; ++c) {
+      colour_[e] = c;
+      if (!Consistent(e, step)) continue;
+      const int r = Dfs(step + 1, std::max(max_used, c));
+      if (r != 0) return r;
+    }
+    colour_[e] = -1;
+    return 0;
+  }
+  bool Consistent(int e, int step) const {
+    if (o_.adjacent_distinct)
+      for (int x : net_.link_knots[e])
+        for (int i = 0; i < net_.degree[x]; ++i) {
+          const int f = net_.knot_links[x][i];
+          if (f != e && colour_[f] == colour_[e]) return false;
+        }
+    for (int x : completes_[step]) {
+      const Cfg cx = KnotCfg(net_, colour_, x);
+      for (int w : net_.partners[x]) {
+        const int sw = complete_step_[w];
+        if (sw > step || (sw == step && w > x)) continue;
+        if (Distance(o_.rule, cx, KnotCfg(net_, colour_, w)) < o_.min_distance) return false;
+      }
+    }
+    return true;
+  }
+
+  const Net& net_;
+  const ColoringOptions& o_;
+  int k_;
+  Clock::time_point deadline_;
+  std::vector<int> order_;
+  std::vector<std::vector<int>> completes_;
+  std::vector<int> complete_step_;
+  std::vector<int> colour_;
+  int64_t nodes_ = 0;
+};
+
+}  // namespace
+
+bool ParseCodeRule(const std::string& name, CodeRule* rule) {
+  if (name == "set") *rule = CodeRule::kSet;
+  else if (name == "multiset") *rule = CodeRule::kMultiset;
+  else if (name == "cyclic") *rule = CodeRule::kCyclic;
+  else return false;
+  return true;
+}
+
+std::string CodeRuleName(CodeRule rule) {
+  switch (rule) {
+    case CodeRule::kSet: return "set";
+    case CodeRule::kMultiset: return "multiset";
+    case CodeRule::kCyclic: return "cyclic";
+  }
+  return "?";
+}
+
+bool ColoringOptions::IsValid(std::string* error) const {
+  std::string e;
+  if (min_distance < 1) e = "min_distance must be >= 1";
+  else if (radius < 0) e = "radius must be >= 0 (0: whole net)";
+  else if (max_colors < 1 || max_colors > 64) e = "max_colors must be in 1..64";
+  else if (!(time_limit_s >= 0.0)) e = "time_limit_s must be >= 0";
+  if (error) *error = e;
+  return e.empty();
+}
+
+int NumLinks(int rows, int cols) {
+  if (rows <= 0 || cols <= 0) return 0;
+  return rows * (cols - 1) + (rows - 1) * cols;
+}
+
+std::array<int, 4> LinkKnots(int rows, int cols, int link) {
+  const int horizontal = rows * (cols - 1);
+  if (link < horizontal) {
+    const int r = link / (cols - 1), c = link % (cols - 1);
+    return {r, c, r, c + 1};
+  }
+  const int l = link - horizontal;
+  const int r = l / cols, c = l % cols;
+  return {r, c, r + 1, c};
+}
+
+std::vector<int> KnotLinks(int rows, int cols, int r, int c) {
+  const int horizontal = rows * (cols - 1);
+  std::vector<int> l;
+  if (c + 1 < cols) l.push_back(r * (cols - 1) + c);             // right
+  if (r + 1 < rows) l.push_back(horizontal + r * cols + c);       // down
+  if (c > 0) l.push_back(r * (cols - 1) + c - 1);                 // left
+  if (r > 0) l.push_back(horizontal + (r - 1) * cols + c);        // up
+  return l;
+}
+
+std::vector<int> KnotLinkColours(const NetColoring& coloring, int r, int c) {
+  std::vector<int> out;
+  for (int l : KnotLinks(coloring.rows, coloring.cols, r, c)) out.push_back(coloring.link_colour.at(l));
+  return out;
+}
+
+std::vector<int> KnotCode(CodeRule rule, const std::vector<int>& colours) {
+  const Cfg y = Canonical(rule, ToCfg(colours));
+  return std::vector<int>(y.c.begin(), y.c.begin() + y.d);
+}
+
+std::string CodeString(CodeRule rule, const std::vector<int>& code) {
+  std::string s = rule == CodeRule::kCyclic ? "(" : "{";
+  for (size_t i = 0; i < code.size(); ++i) {
+    if (i > 0) s += ',';
+    s += std::to_string(code[i]);
+  }
+  return s + (rule == CodeRule::kCyclic ? ")" : "}");
+}
+
+int KnotDistance(CodeRule rule, const std::vector<int>& a, const std::vector<int>& b) {
+  return Distance(rule, ToCfg(a), ToCfg(b));
+}
+
+int64_t CountCodes(CodeRule rule, int degree, int k, bool adjacent_distinct) {
+  if (degree == 0) return 1;
+  if (adjacent_distinct) {
+    const int64_t subsets = Binomial(k, degree);
+    return (rule == CodeRule::kCyclic && degree == 4) ? 3 * subsets : subsets;  // 4!/8 = 3
+  }
+  switch (rule) {
+    case CodeRule::kSet: {
+      int64_t s = 0;
+      for (int j = 1; j <= std::min(degree, k); ++j) s += Binomial(k, j);
+      return s;
+    }
+    case CodeRule::kMultiset:
+      return Binomial(k + degree - 1, degree);
+    case CodeRule::kCyclic:
+      if (degree <= 3) return Binomial(k + degree - 1, degree);
+      {
+        const int64_t kk = k;  // bracelets of length 4
+        return (kk * kk * kk * kk + 2 * kk * kk * kk + 3 * kk * kk + 2 * kk) / 8;
+      }
+  }
+  return 0;
+}
+
+int64_t MaxCodePacking(CodeRule rule, int degree, int k, bool adjacent_distinct,
+                       int min_distance) {
+  const int64_t all = CountCodes(rule, degree, k, adjacent_distinct);
+  if (min_distance <= 1) return all;
+  if (min_distance > degree) return std::min<int64_t>(all, 1);  // any two are within degree
+  const int t = degree - min_distance + 1;  // size of the sub-configurations that must differ
+  int64_t bound = all;
+  if (rule == CodeRule::kMultiset || (rule == CodeRule::kCyclic && degree <= 3)) {
+    bound = adjacent_distinct ? Binomial(k, t) : Binomial(k + t - 1, t);
+  } else if (rule == CodeRule::kCyclic) {
+    int64_t p = 1;
+    for (int i = 0; i < t; ++i) p *= adjacent_distinct ? (k - i) : k;
+    bound = std::max<int64_t>(p, 0);
+  }
+  return std::min(all, bound);
+}
+
+int ColoringLowerBound(int rows, int cols, const ColoringOptions& options) {
+  if (NumLinks(rows, cols) == 0) return 0;
+  // Largest group per degree that must pairwise differ.
+  std::array<int, 5> need{};
+  auto degree_of = [&](int r, int c) {
+    return (r > 0) + (r + 1 < rows) + (c > 0) + (c + 1 < cols);
+  };
+  const int R = options.radius;
+  if (R == 0 || R >= rows + cols) {
+    for (int r = 0; r < rows; ++r)
+      for (int c = 0; c < cols; ++c) ++need[degree_of(r, c)];
+  } else {
+    // Graph distance is |dr| + |dc| = max(|du|, |dv|) with u = r + c, v = r - c, so a group of
+    // pairwise distance <= R fits in a box [u0, u0 + R] x [v0, v0 + R].
+    for (int u0 = -R; u0 <= rows + cols; ++u0)
+      for (int v0 = -(cols - 1) - R; v0 <= rows - 1; ++v0) {
+        std::array<int, 5> n{};
+        for (int u = u0; u <= u0 + R; ++u)
+          for (int v = v0; v <= v0 + R; ++v) {
+            if (((u + v) & 1) != 0) continue;
+            const int r = (u + v) / 2, c = (u - v) / 2;
+            if (r < 0 || r >= rows || c < 0 || c >= cols) continue;
+            ++n[degree_of(r, c)];
+          }
+        for (int d = 0; d < 5; ++d) need[d] = std::max(need[d], n[d]);
+      }
+  }
+  // Two knots of equal degree d joined by a link share its colour, so they are at most d - 1
+  // apart under every rule: min_distance >= d makes such a pair impossible to separate.
+  for (int r = 0; r < rows; ++r)
+      for (int c = 0; c < cols; ++c) {
+        const int d = degree_of(r, c);
+        if (options.min_distance < d) continue;
+        if ((c + 1 < cols && degree_of(r, c + 1) == d) || (r + 1 < rows && degree_of(r + 1, c) == d))
+          return 65;
+      }
+  int max_degree = 0;
+  for (int d = 0; d < 5; ++d)
+    if (need[d] > 0) max_degree = d;
+  for (int k = options.adjacent_distinct ? max_degree : 1; k <= 64; ++k) {
+    bool ok = true;
+    for (int d = 1; d < 5 && ok; ++d)
+      if (need[d] > 1)
+        ok = MaxCodePacking(options.rule, d, k, options.adjacent_distinct, options.min_distance) >=
+             need[d];
+    if (ok) return k;
+  }
+  return 65;  // no palette of <= 64 colours can work
+}
+
+int ExactColoring(int rows, int cols, const ColoringOptions& options, int k, double time_limit_s,
+                  std::vector<int>* link_colour) {
+  const Net net = BuildNet(rows, cols, options);
+  if (net.links == 0) {
+    link_colour->clear();
+    return 1;
+  }
+  if (k <= 0) return 0;
+  ExactSearch search(net, options, k,
+                     Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                        std::chrono::duration<double>(time_limit_s)));
+  return search.Run(link_colour);
+}
+
+NetColoring SolveColoring(int rows, int cols, const ColoringOptions& options) {
+  const auto t0 = Clock::now();
+  std::string error;
+  if (!options.IsValid(&error)) throw std::invalid_argument("ColoringOptions: " + error);
+  if (rows < 1 || cols < 1) throw std::invalid_argument("SolveColoring: rows and cols must be >= 1");
+  NetColoring result;
+  result.rows = rows;
+  result.cols = cols;
+  result.options = options;
+  result.lower_bound = ColoringLowerBound(rows, cols, options);
+  const auto deadline = t0 + std::chrono::duration_cast<Clock::duration>(
+                                 std::chrono::duration<double>(options.time_limit_s));
+  const Net net = BuildNet(rows, cols, options);
+  if (net.links == 0) {
+    result.method = "exact";
+    result.optimal = true;
+    result.wall_s = Since(t0);
+    return result;
+  }
+  if (result.lower_bound > options.max_colors) {
+    result.method = "infeasible";  // no palette of max_colors colours can work (see the bound)
+    result.wall_s = Since(t0);
+    return result;
+  }
+  // Heuristic: upwards from the lower bound with small budgets until a palette works, then
+  // downwards with the time left while it keeps working.
+  result.method = "none";
+  auto try_heuristic = [&](int k, double budget_s) {
+    const auto budget = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                           std::chrono::duration<double>(budget_s));
+    LocalSearch search(net, options, k, options.seed + static_cast<uint64_t>(k));
+    std::vector<int> colour;
+    if (!search.Run(std::min(budget, deadline), &colour)) return false;
+    result.colors = k;
+    result.link_colour = colour;
+    result.method = "heuristic";
+    return true;
+  };
+  for (int k = result.lower_bound; k <= options.max_colors; ++k) {
+    if (Since(t0) >= options.time_limit_s) break;
+    if (try_heuristic(k, 0.05 * options.time_limit_s)) break;
+  }
+  for (int k = result.colors - 1; result.colors > 0 && k >= result.lower_bound; --k) {
+    const double left = options.time_limit_s - Since(t0);
+    if (left <= 0 || !try_heuristic(k, 0.5 * left)) break;
+  }
+  if (result.method == "none") {
+    result.wall_s = Since(t0);
+    return result;
+  }
+  // Prove (or improve) with the exact search on colors - 1.
+  result.optimal = result.colors <= result.lower_bound;
+  while (!result.optimal) {
+    const double left = options.time_limit_s - Since(t0);
+    if (left <= 0) break;
+    std::vector<int> colour;
+    const int r = ExactColoring(rows, cols, options, result.colors - 1, left, &colour);
+    if (r < 0) break;
+    result.method = "heuristic+exact";
+    if (r == 0) {
+      result.optimal = true;
+    } else {
+      result.colors -= 1;
+      result.link_colour = colour;
+      result.optimal = result.colors <= result.lower_bound;
+    }
+  }
+  result.wall_s = Since(t0);
+  return result;
+}
+
+bool VerifyColoring(const NetColoring& col, std::string* why) {
+  auto fail = [&](const std::string& m) {
+    if (why) *why = m;
+    return false;
+  };
+  const ColoringOptions& o = col.options;
+  std::string error;
+  if (!o.IsValid(&error)) return fail(error);
+  if (col.rows < 1 || col.cols < 1) return fail("rows and cols must be >= 1");
+  const int links = NumLinks(col.rows, col.cols);
+  if (static_cast<int>(col.link_colour.size()) != links)
+    return fail("expected " + std::to_string(links) + " link colours, got " +
+                std::to_string(col.link_colour.size()));
+  for (int l = 0; l < links; ++l)
+    if (col.link_colour[l] < 0 || col.link_colour[l] >= col.colors)
+      return fail("link " + std::to_string(l) + ": colour " + std::to_string(col.link_colour[l]) +
+                  " outside 0.." + std::to_string(col.colors - 1));
+  // Each knot's colours gathered by direction from the link list (not via KnotLinks).
+  const int n = col.rows * col.cols;
+  std::vector<std::array<int, 4>> dir(n, {-1, -1, -1, -1});  // right, down, left, up
+  for (int l = 0; l < links; ++l) {
+    const auto k = LinkKnots(col.rows, col.cols, l);
+    const int a = k[0] * col.cols + k[1], b = k[2] * col.cols + k[3];
+    const bool horizontal = k[0] == k[2];
+    dir[a][horizontal ? 0 : 1] = col.link_colour[l];
+    dir[b][horizontal ? 2 : 3] = col.link_colour[l];
+  }
+  std::vector<std::vector<int>> colours(n), codes(n);
+  auto name = [&](int x) {
+    return "knot (" + std::to_string(x / col.cols) + ", " + std::to_string(x % col.cols) + ")";
+  };
+  for (int x = 0; x < n; ++x) {
+    for (int c : dir[x])
+      if (c >= 0) colours[x].push_back(c);
+    codes[x] = KnotCode(o.rule, colours[x]);
+    if (o.adjacent_distinct)
+      for (size_t i = 0; i < colours[x].size(); ++i)
+        for (size_t j = i + 1; j < colours[x].size(); ++j)
+          if (colours[x][i] == colours[x][j])
+            return fail(name(x) + ": two links share colour " + std::to_string(colours[x][i]) +
+                        " (adjacent_distinct)");
+  }
+  // All pairs, graph distance by breadth-first search from each knot.
+  std::vector<int> hops(n);
+  for (int x = 0; x < n; ++x) {
+    std::fill(hops.begin(), hops.end(), -1);
+    std::deque<int> queue{x};
+    hops[x] = 0;
+    while (!queue.empty()) {
+      const int y = queue.front();
+      queue.pop_front();
+      const int r = y / col.cols, c = y % col.cols;
+      const int nb[4][2] = {{r, c + 1}, {r + 1, c}, {r, c - 1}, {r - 1, c}};
+      for (const auto& p : nb) {
+        if (p[0] < 0 || p[0] >= col.rows || p[1] < 0 || p[1] >= col.cols) continue;
+        const int z = p[0] * col.cols + p[1];
+        if (hops[z] < 0) hops[z] = hops[y] + 1, queue.push_back(z);
+      }
+    }
+    for (int w = x + 1; w < n; ++w) {
+      if (colours[w].size() != colours[x].size()) continue;
+      if (o.radius > 0 && hops[w] > o.radius) continue;
+      const int d = KnotDistance(o.rule, colours[x], colours[w]);
+      if (d < o.min_distance)
+        return fail(name(x) + " and " + name(w) + " (degree " + std::to_string(colours[x].size()) +
+                    ", " + std::to_string(hops[w]) + " links apart): codes " +
+                    CodeString(o.rule, codes[x]) + " and " + CodeString(o.rule, codes[w]) +
+                    " at distance " + std::to_string(d) + " < min_distance " +
+                    std::to_string(o.min_distance));
+    }
+  }
+  return true;
+}
+
+void WriteColoring(const std::string& path, const NetColoring& col,
+                   const std::vector<std::array<int, 3>>& palette_srgb) {
+  std::ostringstream os;
+  const ColoringOptions& o = col.options;
+  os << "rows: " << col.rows << "\ncols: " << col.cols << "\nrule: " << CodeRuleName(o.rule)
+     << "\nmin_distance: " << o.min_distance << "\nradius: " << o.radius
+     << "\nadjacent_distinct: " << (o.adjacent_distinct ? "true" : "false")
+     << "\ncolors: " << col.colors << "\nlower_bound: " << col.lower_bound
+     << "\noptimal: " << (col.optimal ? "true" : "false") << "\nmethod: \"" << col.method << "\"\n";
+  if (!col.palette_names.empty() || !palette_srgb.empty()) {
+    os << "palette:\n";
+    for (int i = 0; i < col.colors; ++i) {
+      const std::string name =
+          i < static_cast<int>(col.palette_names.size()) ? col.palette_names[i] : "c" + std::to_string(i);
+      os << "  - {name: \"" << name << "\"";
+      if (i < static_cast<int>(palette_srgb.size()))
+        os << ", srgb: [" << palette_srgb[i][0] << ", " << palette_srgb[i][1] << ", "
+           << palette_srgb[i][2] << "]";
+      os << "}\n";
+    }
+  }
+  os << "links:\n";
+  for (int l = 0; l < static_cast<int>(col.link_colour.size()); ++l) {
+    const auto k = LinkKnots(col.rows, col.cols, l);
+    os << "  - {a: [" << k[0] << ", " << k[1] << "], b: [" << k[2] << ", " << k[3]
+       << "], colour: " << col.link_colour[l] << "}\n";
+  }
+  const std::string partial = path + ".partial";
+  {
+    std::ofstream out(partial);
+    out << os.str();
+    if (!out) throw std::runtime_error(path + ": cannot write colouring file");
+  }
+  std::filesystem::rename(partial, path);
+}
+
+NetColoring ReadColoring(const std::string& path, std::vector<std::array<int, 3>>* palette_srgb) {
+  YamlMap root(LoadYamlFile(path), path, "");
+  root.AllowOnly({"rows", "cols", "rule", "min_distance", "radius", "adjacent_distinct", "colors",
+                  "lower_bound", "optimal", "method", "palette", "links"});
+  NetColoring col;
+  col.rows = root.Int("rows");
+  if (col.rows < 1) root.Fail("rows", "must be >= 1");
+  col.cols = root.Int("cols");
+  if (col.cols < 1) root.Fail("cols", "must be >= 1");
+  if (!ParseCodeRule(root.String("rule"), &col.options.rule))
+    root.Fail("rule", "expected set, multiset or cyclic");
+  col.options.min_distance = root.Int("min_distance", 1);
+  if (col.options.min_distance < 1) root.Fail("min_distance", "must be >= 1");
+  col.options.radius = root.Int("radius", 0);
+  if (col.options.radius < 0) root.Fail("radius", "must be >= 0");
+  col.options.adjacent_distinct = root.Bool("adjacent_distinct", false);
+  col.colors = root.Int("colors");
+  if (col.colors < 0 || col.colors > 64) root.Fail("colors", "must be in 0..64");
+  col.lower_bound = root.Int("lower_bound", 0);
+  col.optimal = root.Bool("optimal", false);
+  col.method = root.String("method", "");
+  std::vector<std::array<int, 3>> srgb;
+  if (root.Has("palette")) {
+    const YAML::Node list = root.Get("palette");
+    if (!list.IsSequence()) root.Fail("palette", "expected a list of {name, srgb}");
+    if (static_cast<int>(list.size()) != col.colors)
+      root.Fail("palette", "expected " + std::to_string(col.colors) + " entries (colors), got " +
+                               std::to_string(list.size()));
+    for (size_t i = 0; i < list.size(); ++i) {
+      YamlMap entry(list[i], path, "palette[" + std::to_string(i) + "]");
+      entry.AllowOnly({"name", "srgb"});
+      col.palette_names.push_back(entry.String("name"));
+      if (entry.Has("srgb")) {
+        const std::vector<int> v = entry.Ints("srgb");
+        if (v.size() != 3) entry.Fail("srgb", "expected [r, g, b]");
+        for (int x : v)
+          if (x < 0 || x > 255) entry.Fail("srgb", "components must be in 0..255");
+        srgb.push_back({v[0], v[1], v[2]});
+      }
+    }
+    if (!srgb.empty() && srgb.size() != list.size())
+      root.Fail("palette", "srgb given for some entries but not all");
+  }
+  const int links = NumLinks(col.rows, col.cols);
+  const YAML::Node list = root.Get("links");
+  if (!list.IsSequence()) root.Fail("links", "expected a list of {a, b, colour}");
+  if (static_cast<int>(list.size()) != links)
+    root.Fail("links", "expected " + std::to_string(links) + " links for a " +
+                           std::to_string(col.rows) + " x " + std::to_string(col.cols) +
+                           " net, got " + std::to_string(list.size()));
+  col.link_colour.assign(links, -1);
+  for (size_t i = 0; i < list.size(); ++i) {
+    YamlMap entry(list[i], path, "links[" + std::to_string(i) + "]");
+    entry.AllowOnly({"a", "b", "colour"});
+    const std::vector<int> a = entry.Ints("a"), b = entry.Ints("b");
+    if (a.size() != 2) entry.Fail("a", "expected [row, col]");
+    if (b.size() != 2) entry.Fail("b", "expected [row, col]");
+    // Which link joins a and b (either order).
+    int id = -1;
+    for (const auto& [p, q] : {std::pair(a, b), std::pair(b, a)}) {
+      if (p[0] < 0 || p[0] >= col.rows || p[1] < 0 || p[1] >= col.cols) continue;
+      for (int l : KnotLinks(col.rows, col.cols, p[0], p[1])) {
+        const auto k = LinkKnots(col.rows, col.cols, l);
+        if (k[0] == p[0] && k[1] == p[1] && k[2] == q[0] && k[3] == q[1]) id = l;
+      }
+    }
+    if (id < 0) entry.Fail("b", "knots a and b are not neighbours in the net");
+    if (col.link_colour[id] >= 0) entry.Fail("a", "this link is listed twice");
+    const int c = entry.Int("colour");
+    if (c < 0 || c >= col.colors)
+      entry.Fail("colour", "must be in 0.." + std::to_string(col.colors - 1) + " (got " +
+                               std::to_string(c) + ")");
+    col.link_colour[id] = c;
+  }
+  std::string why;
+  if (!VerifyColoring(col, &why))
+    throw InputError(path + ": the colouring breaks its own rule: " + why);
+  if (palette_srgb) *palette_srgb = srgb;
+  return col;
+}
+
+}  // namespace netlab::recon

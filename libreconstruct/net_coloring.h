@@ -1,0 +1,133 @@
+#pragma once
+// Yarn colouring of a net so that every knot is identified by the colours of its links.
+//
+// The net is a grid of rows x cols knots; links join horizontal and vertical neighbours. Link
+// order (the contract shared with the simulator, libnetsim/model.h): first the horizontal links
+// (r,c)-(r,c+1) row by row, then the vertical links (r,c)-(r+1,c) row by row.
+//
+// A knot's links in GEOMETRIC ORDER are the present ones among right, down, left, up (in that
+// order, absent links skipped). A knot's CODE under a rule:
+//   kSet       the set of distinct colours;
+//   kMultiset  the multiset of colours;
+//   kCyclic    the cyclic sequence in geometric order, equal up to rotation and mirror image
+//              (the dihedral group of the present links). For degree <= 3 every permutation is a
+//              rotation or mirror, so there it equals the multiset; it differs only at 4-link knots.
+// Degree is visible in the image, so only knots of equal degree are compared.
+//
+// DISTANCE between two knots A and B of equal degree d, with link colours a and b in geometric
+// order: the fewest link-colour changes that turn one knot's links into a configuration having
+// the other's code, the smaller of the two directions:
+//   dist(A, B) = min(Change(a -> Code(b)), Change(b -> Code(a))),
+//   Change(x -> code) = min { Hamming(x, y) : Code(y) == code }.
+// Closed forms: kMultiset d - |a ∩ b| (multiset intersection); kCyclic the least Hamming distance
+// between a and a rotation/mirror image of b; kSet max(#links of x whose colour is not in S,
+// #colours of S missing from x) for S = Code(target) (no configuration when |S| > d: "infinite").
+// dist == 0 exactly when the codes are equal; min_distance D means every constrained pair has
+// dist >= D, so D - 1 misread link colours never turn one knot into another.
+//
+// Constrained pairs: knots of equal degree at graph distance <= radius (radius 0: all of them).
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace netlab::recon {
+
+enum class CodeRule { kSet, kMultiset, kCyclic };
+
+// "set", "multiset", "cyclic"; false (and *rule untouched) for anything else.
+bool ParseCodeRule(const std::string& name, CodeRule* rule);
+std::string CodeRuleName(CodeRule rule);
+
+struct ColoringOptions {
+  CodeRule rule = CodeRule::kSet;
+  // Least distance (see above) between constrained knots; 1 = plain uniqueness.
+  int min_distance = 1;
+  // Constrain only knots within this many links (graph distance); 0 = the whole net.
+  int radius = 0;
+  // The links of one knot must all have different colours.
+  bool adjacent_distinct = false;
+  // The largest palette tried.
+  int max_colors = 64;
+  // Wall-clock budget of SolveColoring, seconds.
+  double time_limit_s = 30.0;
+  // Seed of the heuristic's random choices (results are reproducible for a seed and time budget
+  // large enough that the search is not cut short).
+  uint64_t seed = 1;
+
+  // False with a reason for options out of range.
+  bool IsValid(std::string* error) const;
+};
+
+struct NetColoring {
+  int rows = 0, cols = 0, colors = 0;
+  std::vector<int> link_colour;  // per link, the contract order above; each in [0, colors)
+  ColoringOptions options;
+  int lower_bound = 0;   // ColoringLowerBound for these options
+  bool optimal = false;  // proven: lower bound reached, or the exact search exhausted colors - 1
+  std::string method;    // "heuristic", "exact", "heuristic+exact"; "none" when nothing found
+  double wall_s = 0.0;   // time SolveColoring took, seconds
+  std::vector<std::string> palette_names;  // optional, from a physical palette
+};
+
+int NumLinks(int rows, int cols);
+// The knots (r0, c0, r1, c1) of `link` (contract order).
+std::array<int, 4> LinkKnots(int rows, int cols, int link);
+// The link ids at knot (r, c) in geometric order (right, down, left, up; absent ones skipped).
+std::vector<int> KnotLinks(int rows, int cols, int r, int c);
+// The colours of those links.
+std::vector<int> KnotLinkColours(const NetColoring& coloring, int r, int c);
+
+// Canonical code of a knot from its link colours in geometric order: sorted distinct colours
+// (kSet), sorted colours (kMultiset), the lexicographically least rotation / mirror image
+// (kCyclic). Two knots have the same code exactly when these vectors are equal.
+std::vector<int> KnotCode(CodeRule rule, const std::vector<int>& colours);
+// "{0,2}" for sets and multisets, "(0,1,0,2)" for cyclic codes.
+std::string CodeString(CodeRule rule, const std::vector<int>& code);
+// The distance above between knots with link colours a and b (geometric order); a large value
+// (kFarDistance) when the degrees differ or no configuration reaches the other code.
+constexpr int kFarDistance = 1000;
+int KnotDistance(CodeRule rule, const std::vector<int>& a, const std::vector<int>& b);
+
+// Codes available to a knot of `degree` with k colours (all of them, or with all-different
+// link colours when adjacent_distinct), and an upper bound on how many of them can be pairwise
+// at distance >= min_distance (for D >= 2: multiset / cyclic-of-degree-<=3 by the Singleton-type
+// argument that every sub-multiset of size d - D + 1 lies in at most one code; cyclic degree 4 by
+// projecting a representative onto its first d - D + 1 links; set: no packing argument beyond
+// D > d allowing a single code). Saturates at 2^62.
+int64_t CountCodes(CodeRule rule, int degree, int k, bool adjacent_distinct);
+int64_t MaxCodePacking(CodeRule rule, int degree, int k, bool adjacent_distinct, int min_distance);
+
+// The lower bound: the fewest colours k for which, for every degree, MaxCodePacking is at least
+// the largest set of knots of that degree that pairwise must differ (all of them for radius 0,
+// otherwise the most that fit in one diamond of graph diameter <= radius); at least the maximum
+// degree with adjacent_distinct. 0 for a net without links.
+int ColoringLowerBound(int rows, int cols, const ColoringOptions& options);
+
+// The fewest colours found: the heuristic (random start + tabu min-conflicts search) from the
+// lower bound upwards, then the exact search (backtracking, links in knot order, colours
+// introduced in increasing order, code conflicts checked as each knot completes) to prove
+// colors - 1 infeasible within the time limit. method "none" and colors 0 when nothing was found
+// up to max_colors in time.
+NetColoring SolveColoring(int rows, int cols, const ColoringOptions& options);
+
+// Exact search alone with k colours: 1 found (*link_colour set), 0 proven infeasible, -1 time up.
+int ExactColoring(int rows, int cols, const ColoringOptions& options, int k, double time_limit_s,
+                  std::vector<int>* link_colour);
+
+// Independent check (codes recomputed from scratch, graph distance by BFS, all pairs compared):
+// false with the first violation named (which knots, which codes) in *why.
+bool VerifyColoring(const NetColoring& coloring, std::string* why);
+
+// coloring.yaml: rows, cols, rule, min_distance, radius, adjacent_distinct, colors, lower_bound,
+// optimal, method, palette (list of {name, srgb: [r, g, b] 0..255 optional}) and links as
+// {a: [r, c], b: [r, c], colour: i} in contract order. Written to path.partial, then renamed.
+void WriteColoring(const std::string& path, const NetColoring& coloring,
+                   const std::vector<std::array<int, 3>>& palette_srgb = {});
+// Reads and checks everything (keys, ranges, each link once, the colouring valid under its own
+// rule); throws netlab::InputError naming file, line and key.
+NetColoring ReadColoring(const std::string& path,
+                         std::vector<std::array<int, 3>>* palette_srgb = nullptr);
+
+}  // namespace netlab::recon
