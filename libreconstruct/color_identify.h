@@ -1,0 +1,267 @@
+#pragma once
+// Knot identity from yarn colours: colour science (sRGB, CIE XYZ, CIELAB, CIEDE2000), the choice
+// of a physical yarn palette that stays distinguishable under the experiment's lighting, and the
+// identification of one knot in a demosaiced frame from the colours of its 2-4 yarns.
+//
+// Colour conventions. Images and `Colour` values are linear light in BGR order, 1 = sensor white
+// (render.h). The 8-bit frames of Demosaic are linear too (value * 255, no sRGB curve). Yarn dye
+// colours are given as sRGB 0..255 in R, G, B order (what a colour picker shows). Lab is CIE 1976
+// L*a*b* relative to a reference white given in XYZ; the default white is that of linear (1, 1, 1)
+// through the sRGB primaries, i.e. D65 (IEC 61966-2-1), so a neutral camera white is Lab (100, 0,
+// 0).
+//
+// A wrong identity is the worst outcome. IdentifyKnot therefore reports kIdentified only when
+// every plausible reading of every yarn colour leads to the same single knot of the codebook;
+// otherwise kAmbiguous (all knots that fit some plausible reading) or kUnknown (none fits).
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "libreconstruct/render.h"
+
+namespace netlab::recon {
+
+// ---------------------------------------------------------------------------------------------
+// Colour science.
+
+struct Lab {
+  double l = 0.0, a = 0.0, b = 0.0;
+};
+
+// sRGB transfer function (IEC 61966-2-1) on one channel in [0, 1], and its inverse.
+double SrgbToLinear(double encoded);
+double LinearToSrgb(double linear);
+
+// sRGB 0..255 (R, G, B) -> linear BGR in [0, 1] and back (rounded, clamped).
+Colour SrgbToLinearBgr(const std::array<double, 3>& srgb_rgb);
+std::array<double, 3> LinearBgrToSrgb(const Colour& bgr);
+
+// Linear BGR -> CIE XYZ (Y = 1 for white) with the sRGB primaries and D65 white (IEC 61966-2-1).
+Eigen::Vector3d LinearBgrToXyz(const Colour& bgr);
+// The XYZ of linear white (1, 1, 1): D65, (0.9505, 1, 1.089).
+Eigen::Vector3d D65White();
+// CIE 1976 L*a*b* of `xyz` relative to the white `white_xyz` (CIE 15:2004, eq. 8.1-8.4).
+Lab XyzToLab(const Eigen::Vector3d& xyz, const Eigen::Vector3d& white_xyz = D65White());
+Eigen::Vector3d LabToXyz(const Lab& lab, const Eigen::Vector3d& white_xyz = D65White());
+// Shorthand: linear BGR -> Lab relative to D65.
+Lab LinearBgrToLab(const Colour& bgr);
+
+// CIEDE2000 colour difference, exactly as in G. Sharma, W. Wu, E. N. Dalal, "The CIEDE2000
+// color-difference formula: implementation notes, supplementary test data, and mathematical
+// observations", Color Res. Appl. 30(1), 2005, eq. 1-22 (hue angles in degrees, the mean hue
+// and hue difference rules of eq. 10 and 14 for the 180 degree discontinuity, h = 0 when
+// a' = b = 0). Parametric factors kL = kC = kH = 1 by default.
+double CieDe2000(const Lab& x, const Lab& y, double k_l = 1.0, double k_c = 1.0,
+                 double k_h = 1.0);
+
+// ---------------------------------------------------------------------------------------------
+// The physical palette.
+
+// A yarn dye one can buy: its colour as sRGB 0..255 (R, G, B) under daylight.
+struct Candidate {
+  std::string name;
+  std::array<double, 3> srgb{0, 0, 0};
+};
+
+// How the cameras see a dye. seen_linear_bgr = clamp(exposure * gains_bgr * linear(srgb), 0, 1)
+// per channel (the sensor clips at white), then Lab relative to `white_xyz` (the camera's white;
+// D65 for a white-balanced camera).
+struct Lighting {
+  std::array<double, 3> gains_bgr{1.0, 1.0, 1.0};  // illuminant colour / white balance error, > 0
+  double exposure = 1.0;                            // brightness scale (> 0)
+  Eigen::Vector3d white_xyz = D65White();          // Lab reference white (Y > 0)
+  // The background the yarns are seen against, linear BGR as seen (after gains and exposure).
+  // When set, every chosen colour must also differ from it by the reported minimum ΔE00.
+  std::optional<Colour> background;
+
+  // The linear BGR colour and the Lab the cameras see of an sRGB dye.
+  Colour Seen(const std::array<double, 3>& srgb_rgb) const;
+  Lab SeenLab(const std::array<double, 3>& srgb_rgb) const;
+  bool IsValid(std::string* error) const;
+};
+
+// The indices of `k` candidates that maximise the smallest CIEDE2000 difference among them as
+// seen under `lighting` (and from its background, when set). Exact (branch and bound over the
+// subsets) for up to kExactPaletteCandidates candidates; otherwise greedy farthest-point
+// selection improved by single swaps until no swap raises the minimum (a local optimum). Indices
+// ascending. *min_delta_e (if not null) receives the achieved minimum (the pairwise and
+// background differences; +inf when k == 1 without background). Throws std::invalid_argument
+// when k < 1, k > candidates.size() or the lighting is invalid.
+inline constexpr int kExactPaletteCandidates = 24;
+std::vector<int> ChoosePalette(const std::vector<Candidate>& candidates, int k,
+                               const Lighting& lighting, double* min_delta_e);
+// The objective of ChoosePalette for one choice of indices.
+double PaletteMinDeltaE(const std::vector<Candidate>& candidates, const std::vector<int>& chosen,
+                        const Lighting& lighting);
+
+// Reads candidates from a small text file, one per line, '#' starts a comment:
+//   CSV:   red, 200, 30, 40          (an optional header line "name,r,g,b")
+//   YAML:  - [red, 200, 30, 40]   or   - {name: red, r: 200, g: 30, b: 40}
+// Throws std::runtime_error naming the file and line on a malformed line, a value outside
+// 0..255, a duplicate name, or an unreadable / empty file.
+std::vector<Candidate> LoadCandidates(const std::string& path);
+// Sixteen common yarn dye colours (approximate sRGB of commercial acrylic yarns).
+std::vector<Candidate> DefaultYarnCandidates();
+
+// ---------------------------------------------------------------------------------------------
+// Identification.
+
+// How the colours of a knot's links identify it.
+enum class CodeRule {
+  kSet,       // the set of distinct colours (degree must match too)
+  kMultiset,  // the colours with their counts
+  kCyclic,    // the colours in cyclic order around the knot, up to rotation and mirror
+};
+
+struct PaletteColour {
+  std::string name;
+  Colour linear_bgr{0, 0, 0};  // as the cameras see the yarn (fully covered pixel)
+};
+
+struct CodebookKnot {
+  int row = 0, col = 0;           // grid position in the net
+  std::vector<int> link_colours;  // palette indices, in cyclic order around the knot (2-4)
+  int degree() const { return static_cast<int>(link_colours.size()); }
+};
+
+struct KnotCodebook {
+  std::vector<PaletteColour> palette;
+  std::vector<CodebookKnot> knots;
+  CodeRule rule = CodeRule::kSet;
+
+  // True when `observed` (palette indices in the cyclic order of the yarns) is the code of
+  // knot `knot` under `rule` (same degree).
+  bool Matches(int knot, const std::vector<int>& observed) const;
+  // The pairs of knots (i < j) whose codes are equal under the rule: not unique globally.
+  std::vector<std::pair<int, int>> Collisions() const;
+  // A codebook with only the given knots (e.g. those tracking predicts near a detection), so
+  // uniqueness is local. Indices outside the range throw std::out_of_range.
+  KnotCodebook Restrict(const std::vector<int>& knot_indices) const;
+  // Palette indices in range, degrees 2..4, a non-empty palette; else false with the reason.
+  bool IsValid(std::string* error) const;
+};
+
+struct IdentifyOptions {
+  // The yarn is sampled along [inner_radius_px, outer_radius_px] from the knot centre (px): the
+  // knot itself (a blob of overlapping thread ends) is skipped.
+  double inner_radius_px = 3.0;
+  double outer_radius_px = 12.0;
+  // At each step along the yarn the pixel of most contrast against the background is taken
+  // within +-search_half_width_px across it (the given direction may be off by a few degrees and
+  // a 1 px thread may fall between pixel centres).
+  double search_half_width_px = 1.5;
+  double step_px = 1.0;
+  // A sample counts as thread when its linear contrast |pixel - background| (0..1 units, RMS
+  // over channels) reaches this; a yarn needs min_samples of them.
+  double min_contrast = 0.04;
+  int min_samples = 3;
+  // The yarn colour is the mean of the best covered half of its samples (the thread covers
+  // those pixels most; averaging removes the demosaicing zipper of a 1 px line).
+  double keep_fraction = 0.5;
+  // Classification: the palette colour c is fitted as background + alpha (c - background),
+  // alpha in [alpha_min, alpha_max] the thread's coverage (or width in px), and scored by CIEDE2000 to the measured
+  // colour. Colour reading d_best <= max_delta_e, else "unknown colour" (all palette colours
+  // remain plausible). A palette colour is plausible when its score is within
+  // max(ambiguity_margin, ambiguity_ratio * d_best) of the best.
+  double max_delta_e = 12.0;
+  double ambiguity_margin = 8.0;
+  double ambiguity_ratio = 1.0;
+  double alpha_min = 0.15;
+  // Up to this: the cross-section integral of a thread wider than 1 px exceeds its colour.
+  double alpha_max = 2.0;
+  // The colour filter array the frame was demosaiced from (kNone: a full-colour sensor). A thin
+  // thread that runs along a row or column of the mosaic may cover no site of red (or blue) at
+  // all: that channel is then interpolated from pixels beside the thread and says nothing about
+  // its colour. A red or blue channel whose sites the thread's centreline crosses fewer than
+  // min_channel_sites times along the segment is treated as unobserved (any value fits), so
+  // colours that differ mainly there become ambiguous instead of misread.
+  BayerPattern bayer = BayerPattern::kRGGB;
+  int min_channel_sites = 2;
+  // The 8-bit image is linear light (Demosaic's output); false: sRGB-encoded.
+  bool image_is_linear = true;
+  // When not empty: only these codebook knots are considered (e.g. those tracking predicts
+  // nearby), so uniqueness is judged among them.
+  std::vector<int> candidate_knots;
+  bool IsValid(std::string* error) const;
+};
+
+enum class IdentifyStatus { kIdentified, kAmbiguous, kUnknown };
+std::string IdentifyStatusName(IdentifyStatus status);
+
+struct YarnReading {
+  int best = -1;                   // palette index of the best fit, -1 without enough samples
+  double best_delta_e = 0.0;       // its CIEDE2000 score
+  double second_delta_e = 0.0;     // the runner-up's (inf with a one-colour palette)
+  double confidence = 0.0;         // in [0, 1]: 0 unknown/ambiguous .. 1 clear
+  std::vector<int> plausible;      // palette indices that this yarn may be (all when unknown)
+  int samples = 0;                 // thread samples found along the yarn
+  std::array<bool, 3> observed{true, true, true};  // B, G, R seen on their own mosaic sites
+  Colour measured{0, 0, 0};        // mean linear BGR of the kept samples
+};
+
+struct KnotIdentification {
+  IdentifyStatus status = IdentifyStatus::kUnknown;
+  // kIdentified: the one knot (codebook index). kAmbiguous: every knot that fits some
+  // plausible reading. kUnknown: empty.
+  std::vector<int> knots;
+  double confidence = 0.0;          // the smallest yarn confidence when identified, else 0
+  std::vector<YarnReading> yarns;   // in the order of the given directions
+  std::vector<std::string> reasons; // human-readable, one per decision
+  Colour background{0, 0, 0};       // the local background estimate, linear BGR
+};
+
+// Identifies the knot at `knot_px` of a demosaiced 8-bit BGR frame whose yarns leave it along
+// `yarn_directions` (image, unit, in cyclic order around the knot, 2-4 of them). Throws
+// std::invalid_argument on a frame that is not CV_8UC3, invalid options or codebook, or a
+// direction count outside 2..4. A knot too near the border gives kUnknown with the reason.
+KnotIdentification IdentifyKnot(const cv::Mat& bgr8, const Eigen::Vector2d& knot_px,
+                                const std::vector<Eigen::Vector2d>& yarn_directions,
+                                const IdentifyOptions& options, const KnotCodebook& codebook);
+
+// Classifies one measured colour (linear BGR) seen against `background` to the palette; channels
+// not `observed` are ignored (taken equal to each palette colour's).
+YarnReading ClassifyYarnColour(const Colour& measured, const Colour& background,
+                               const std::vector<PaletteColour>& palette,
+                               const IdentifyOptions& options,
+                               const std::array<bool, 3>& observed = {true, true, true});
+
+// ---------------------------------------------------------------------------------------------
+// Synthetic ground truth for tests and benchmarks.
+
+// A flat square net of coloured links facing a camera, with its codebook.
+struct ColouredNet {
+  Scene scene;                              // straight threads, no knot balls (bare crossings)
+  KnotCodebook codebook;                    // knot k = row * knots_per_side + col
+  std::vector<Eigen::Vector3d> knot_points; // world, m
+  // Neighbouring knots of each knot in cyclic order around it (+col, +row, -col, -row).
+  std::vector<std::vector<int>> neighbours;
+};
+
+// knots_per_side^2 knots `mesh_m` apart in a plane perpendicular to the camera's optical axis,
+// centred `distance_m` in front of it, turned by `roll_rad` about the optical axis (threads along
+// the image axes run along the rows of a Bayer mosaic: see IdentifyOptions::bayer); threads of
+// `thread_radius_m`; each link one colour of
+// `palette`, drawn at random (seed) until every knot's code is unique under CodeRule::kSet.
+// Throws std::runtime_error when no such colouring is found in 10000 draws.
+ColouredNet MakeColouredNet(const calib::Camera& camera, int knots_per_side, double mesh_m,
+                            double distance_m, double roll_rad, double thread_radius_m,
+                            const std::vector<PaletteColour>& palette, const Colour& background,
+                            uint64_t seed);
+
+// A knot as one camera sees it: its true pixel and the image directions of its yarns (unit, in
+// the cyclic order of ColouredNet::neighbours), from projecting points 1 cm along each link.
+struct KnotView {
+  int knot = -1;
+  Eigen::Vector2d pixel = Eigen::Vector2d::Zero();
+  std::vector<Eigen::Vector2d> directions;
+};
+// The knots of `net` whose pixel lies at least `border_px` inside the image.
+std::vector<KnotView> VisibleKnots(const calib::Camera& camera, const ColouredNet& net,
+                                   double border_px);
+
+}  // namespace netlab::recon
