@@ -641,9 +641,13 @@ NetColoring SolveColoring(int rows, int cols, const ColoringOptions& options) {
     result.method = "heuristic";
     return true;
   };
-  for (int k = result.lower_bound; k <= options.max_colors; ++k) {
+  // Steps of 1, 1, 2, 4, ... so that a weak bound (D >= 2) is left behind quickly.
+  for (int k = result.lower_bound, step = 1; k <= options.max_colors + step - 1;
+       k += step, step *= (k > result.lower_bound + 1 ? 2 : 1)) {
+    const int kk = std::min(k, options.max_colors);
     if (Since(t0) >= options.time_limit_s) break;
-    if (try_heuristic(k, 0.05 * options.time_limit_s)) break;
+    if (try_heuristic(kk, 0.05 * options.time_limit_s)) break;
+    if (kk == options.max_colors) break;
   }
   for (int k = result.colors - 1; result.colors > 0 && k >= result.lower_bound; --k) {
     const double left = options.time_limit_s - Since(t0);
