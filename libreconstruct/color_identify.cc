@@ -488,6 +488,9 @@ bool IdentifyOptions::IsValid(std::string* error) const {
   if (!(ambiguity_margin >= 0) || !(ambiguity_ratio >= 0)) {
     return fail("ambiguity_margin and ambiguity_ratio must be >= 0");
   }
+  if (!(noise_sigmas >= 0)) {
+    return fail("noise_sigmas must be >= 0");
+  }
   if (!(alpha_min > 0 && alpha_max >= alpha_min)) return fail("need 0 < alpha_min <= alpha_max");
   return true;
 }
@@ -617,8 +620,21 @@ bool FitsSomeReading(const KnotCodebook& codebook, int knot,
 YarnReading ClassifyYarnColour(const Colour& measured, const Colour& background,
                                const std::vector<PaletteColour>& palette,
                                const IdentifyOptions& options,
-                               const std::array<bool, 3>& observed) {
+                               const std::array<bool, 3>& observed,
+                               const Colour& measured_sigma) {
   YarnReading r;
+  // The ΔE00 that noise_sigmas standard deviations of the measurement make, per channel.
+  {
+    const Lab lab = LinearBgrToLab(measured);
+    for (int c = 0; c < 3; ++c) {
+      for (float sign : {-1.0f, 1.0f}) {
+        Colour moved = measured;
+        moved[c] = std::max(0.0f, moved[c] + sign * static_cast<float>(options.noise_sigmas) *
+                                                 measured_sigma[c]);
+        r.noise_delta_e = std::max(r.noise_delta_e, CieDe2000(lab, LinearBgrToLab(moved)));
+      }
+    }
+  }
   r.measured = measured;
   r.observed = observed;
   std::vector<double> score(palette.size());
@@ -639,7 +655,8 @@ YarnReading ClassifyYarnColour(const Colour& measured, const Colour& background,
     r.confidence = 0.0;
     return r;
   }
-  const double gap = std::max(options.ambiguity_margin, options.ambiguity_ratio * r.best_delta_e);
+  const double gap = std::max({options.ambiguity_margin, options.ambiguity_ratio * r.best_delta_e,
+                               r.noise_delta_e});
   for (size_t c = 0; c < palette.size(); ++c) {
     if (score[c] <= r.best_delta_e + gap) r.plausible.push_back(static_cast<int>(c));
   }
@@ -688,6 +705,7 @@ KnotIdentification IdentifyKnot(const cv::Mat& bgr8, const Eigen::Vector2d& knot
     return result;
   }
 
+  Colour pixel_sigma(0, 0, 0);
   // Local background: the median of a ring around the knot away from every yarn (>= 25 deg).
   {
     std::vector<float> channel[3];
@@ -711,6 +729,12 @@ KnotIdentification IdentifyKnot(const cv::Mat& bgr8, const Eigen::Vector2d& knot
       auto mid = channel[k].begin() + channel[k].size() / 2;
       std::nth_element(channel[k].begin(), mid, channel[k].end());
       result.background[k] = *mid;
+      // Pixel noise: 1.4826 x the median absolute deviation (a Gaussian's sigma).
+      std::vector<float> deviation;
+      for (float v : channel[k]) deviation.push_back(std::abs(v - result.background[k]));
+      auto dmid = deviation.begin() + deviation.size() / 2;
+      std::nth_element(deviation.begin(), dmid, deviation.end());
+      pixel_sigma[k] = 1.4826f * *dmid;
     }
   }
 
@@ -785,12 +809,16 @@ KnotIdentification IdentifyKnot(const cv::Mat& bgr8, const Eigen::Vector2d& knot
       Colour mean(0, 0, 0);
       for (size_t i = 0; i < keep; ++i) mean += samples[i].second;
       mean *= 1.0f / static_cast<float>(keep);
+      // Neighbouring samples share pixels (bilinear sampling, demosaicing): count half of them
+      // as independent.
+      Colour mean_sigma = pixel_sigma * (1.0f / std::sqrt(0.5f * static_cast<float>(keep)));
       std::array<bool, 3> observed{true, true, true};
       std::string unseen;
       if (phase_averaged && static_cast<int>(integrals.size()) >= options.min_samples) {
         Colour sum(0, 0, 0);
         for (const Colour& c : integrals) sum += c;
         mean = result.background + sum * (1.0f / static_cast<float>(integrals.size()));
+        mean_sigma = pixel_sigma * std::sqrt(5.0f / (0.5f * static_cast<float>(integrals.size())));
       } else if (options.bayer != BayerPattern::kNone) {
         for (int c : {0, 2}) {
           if (sites[c] < options.min_channel_sites) {
@@ -799,7 +827,8 @@ KnotIdentification IdentifyKnot(const cv::Mat& bgr8, const Eigen::Vector2d& knot
           }
         }
       }
-      reading = ClassifyYarnColour(mean, result.background, codebook.palette, options, observed);
+      reading = ClassifyYarnColour(mean, result.background, codebook.palette, options, observed,
+                                   mean_sigma);
       if (!unseen.empty()) {
         result.reasons.push_back("yarn " + std::to_string(y) + ": runs along the mosaic, no" +
                                  unseen + " sites under it: channel ignored");

@@ -171,6 +171,9 @@ struct IdentifyOptions {
   double max_delta_e = 12.0;
   double ambiguity_margin = 8.0;
   double ambiguity_ratio = 1.0;
+  // The gap is at least the ΔE00 that this many standard deviations of the measured colour make
+  // (the pixel noise is estimated from the background ring, 1.4826 MAD).
+  double noise_sigmas = 3.0;
   double alpha_min = 0.15;
   // Up to this: the cross-section integral of a thread wider than 1 px exceeds its colour.
   double alpha_max = 2.0;
@@ -200,6 +203,7 @@ struct YarnReading {
   double confidence = 0.0;         // in [0, 1]: 0 unknown/ambiguous .. 1 clear
   std::vector<int> plausible;      // palette indices that this yarn may be (all when unknown)
   int samples = 0;                 // thread samples found along the yarn
+  double noise_delta_e = 0.0;      // ΔE00 of noise_sigmas standard deviations of the measurement
   std::array<bool, 3> observed{true, true, true};  // B, G, R seen on their own mosaic sites
   Colour measured{0, 0, 0};        // mean linear BGR of the kept samples
 };
@@ -224,11 +228,14 @@ KnotIdentification IdentifyKnot(const cv::Mat& bgr8, const Eigen::Vector2d& knot
                                 const IdentifyOptions& options, const KnotCodebook& codebook);
 
 // Classifies one measured colour (linear BGR) seen against `background` to the palette; channels
-// not `observed` are ignored (taken equal to each palette colour's).
+// not `observed` are ignored (taken equal to each palette colour's). `measured_sigma`: the
+// standard deviation of the measurement per channel (linear units); options.noise_sigmas of it
+// widen the ambiguity gap.
 YarnReading ClassifyYarnColour(const Colour& measured, const Colour& background,
                                const std::vector<PaletteColour>& palette,
                                const IdentifyOptions& options,
-                               const std::array<bool, 3>& observed = {true, true, true});
+                               const std::array<bool, 3>& observed = {true, true, true},
+                               const Colour& measured_sigma = Colour(0, 0, 0));
 
 // ---------------------------------------------------------------------------------------------
 // Synthetic ground truth for tests and benchmarks.
