@@ -509,7 +509,8 @@ namespace {
 // The best CIEDE2000 between `measured_lab` and background + alpha (colour - background) over
 // alpha in [alpha_min, 1]: a coarse grid, then golden-section refinement around its best.
 double MixtureDeltaE(const Colour& measured, const Colour& colour, const Colour& background,
-                     double alpha_min, double alpha_max, const std::array<bool, 3>& observed) {
+                     double alpha_min, double alpha_max, const std::array<bool, 3>& observed,
+                     double* best_alpha) {
   const bool all = observed[0] && observed[1] && observed[2];
   const Lab measured_lab = LinearBgrToLab(measured);
   auto at = [&](double alpha) {
@@ -541,7 +542,13 @@ double MixtureDeltaE(const Colour& measured, const Colour& colour, const Colour&
       lo = x1, x1 = x2, f1 = f2, x2 = lo + kPhi * (hi - lo), f2 = at(x2);
     }
   }
-  return std::min({best, f1, f2});
+  const double grid_alpha = alpha_min + best_i * step;
+  if (best <= f1 && best <= f2) {
+    *best_alpha = grid_alpha;
+    return best;
+  }
+  *best_alpha = f1 < f2 ? x1 : x2;
+  return std::min(f1, f2);
 }
 
 // Linear colour of the frame at sub-pixel `p` (bilinear over linear values), false outside.
@@ -637,14 +644,14 @@ YarnReading ClassifyYarnColour(const Colour& measured, const Colour& background,
   }
   r.measured = measured;
   r.observed = observed;
-  std::vector<double> score(palette.size());
+  std::vector<double> score(palette.size()), alpha(palette.size());
   for (size_t c = 0; c < palette.size(); ++c) {
-    score[c] =
-        MixtureDeltaE(measured, palette[c].linear_bgr, background, options.alpha_min,
-                      options.alpha_max, observed);
+    score[c] = MixtureDeltaE(measured, palette[c].linear_bgr, background, options.alpha_min,
+                             options.alpha_max, observed, &alpha[c]);
   }
   r.best = static_cast<int>(std::min_element(score.begin(), score.end()) - score.begin());
   r.best_delta_e = score[r.best];
+  r.alpha = alpha[r.best];
   r.second_delta_e = kInf;
   for (size_t c = 0; c < palette.size(); ++c) {
     if (static_cast<int>(c) != r.best) r.second_delta_e = std::min(r.second_delta_e, score[c]);
@@ -717,7 +724,9 @@ KnotIdentification IdentifyKnot(const cv::Mat& bgr8, const Eigen::Vector2d& knot
         bool clear = true;
         for (const Eigen::Vector2d& d : dirs) clear = clear && u.dot(d) < cos_limit;
         Colour c;
-        if (!clear || !sampler.At(knot_px + radius * u, &c)) continue;
+        // At pixel centres: bilinear interpolation would smooth the noise measured here.
+        const Eigen::Vector2d at = (knot_px + radius * u).array().round().matrix();
+        if (!clear || !sampler.At(at, &c)) continue;
         for (int k = 0; k < 3; ++k) channel[k].push_back(c[k]);
       }
     }
@@ -741,6 +750,14 @@ KnotIdentification IdentifyKnot(const cv::Mat& bgr8, const Eigen::Vector2d& knot
   // Each yarn: the most contrasted point of each cross-section, the best covered of them
   // averaged, classified against the palette.
   std::vector<std::vector<int>> plausible(n);
+  struct PendingYarn {
+    int y;
+    Colour mean, sigma;
+    std::array<bool, 3> observed;
+    int samples;
+    bool phase_averaged;
+  };
+  std::vector<PendingYarn> pending;
   bool all_clear = true;
   for (int y = 0; y < n; ++y) {
     const Eigen::Vector2d d = dirs[y], across(-d.y(), d.x());
@@ -753,7 +770,8 @@ KnotIdentification IdentifyKnot(const cv::Mat& bgr8, const Eigen::Vector2d& knot
     // whose sites it never crosses ignored.
     const double travel = (options.outer_radius_px - options.inner_radius_px) *
                           std::min(std::abs(d.x()), std::abs(d.y()));
-    const bool phase_averaged = options.bayer == BayerPattern::kNone || travel >= 2.0;
+    const bool phase_averaged =
+        options.bayer == BayerPattern::kNone || travel >= options.min_phase_travel_px;
     for (double r = options.inner_radius_px; r <= options.outer_radius_px + 1e-9;
          r += options.step_px) {
       double best_contrast = -1;
@@ -792,7 +810,18 @@ KnotIdentification IdentifyKnot(const cv::Mat& bgr8, const Eigen::Vector2d& knot
       }
     }
     YarnReading reading;
-    if (static_cast<int>(samples.size()) < options.min_samples) {
+    if (!phase_averaged && !options.read_along_mosaic) {
+      reading.samples = static_cast<int>(samples.size());
+      for (size_t c = 0; c < codebook.palette.size(); ++c) {
+        reading.plausible.push_back(static_cast<int>(c));
+      }
+      char text[200];
+      std::snprintf(text, sizeof(text),
+                    "yarn %d: runs along the pixel rows or columns (%.1f px across them over the "
+                    "segment < %.1f): the mosaic does not see all its colours, colour unknown",
+                    y, travel, options.min_phase_travel_px);
+      result.reasons.push_back(text);
+    } else if (static_cast<int>(samples.size()) < options.min_samples) {
       reading.samples = static_cast<int>(samples.size());
       for (size_t c = 0; c < codebook.palette.size(); ++c) {
         reading.plausible.push_back(static_cast<int>(c));
@@ -827,33 +856,76 @@ KnotIdentification IdentifyKnot(const cv::Mat& bgr8, const Eigen::Vector2d& knot
           }
         }
       }
-      reading = ClassifyYarnColour(mean, result.background, codebook.palette, options, observed,
-                                   mean_sigma);
+      pending.push_back({y, mean, mean_sigma, observed, static_cast<int>(samples.size()),
+                         phase_averaged});
       if (!unseen.empty()) {
         result.reasons.push_back("yarn " + std::to_string(y) + ": runs along the mosaic, no" +
                                  unseen + " sites under it: channel ignored");
       }
-      reading.samples = static_cast<int>(samples.size());
-      const std::string name = codebook.palette[reading.best].name;
-      char text[200];
-      if (reading.best_delta_e > options.max_delta_e) {
-        std::snprintf(text, sizeof(text),
-                      "yarn %d: unknown colour (nearest %s at dE00 %.1f > %.1f)", y,
-                      name.c_str(), reading.best_delta_e, options.max_delta_e);
-      } else if (reading.plausible.size() > 1) {
-        std::string others;
-        for (int c : reading.plausible) others += (others.empty() ? "" : "/") + codebook.palette[c].name;
-        std::snprintf(text, sizeof(text), "yarn %d: uncertain colour %s (dE00 %.1f vs %.1f)", y,
-                      others.c_str(), reading.best_delta_e, reading.second_delta_e);
-      } else {
-        std::snprintf(text, sizeof(text), "yarn %d: %s (dE00 %.1f, next %.1f)", y, name.c_str(),
-                      reading.best_delta_e, reading.second_delta_e);
-      }
-      result.reasons.push_back(text);
     }
-    all_clear = all_clear && reading.plausible.size() == 1;
-    plausible[y] = reading.plausible;
     result.yarns.push_back(reading);
+  }
+
+  // Classification. The threads of one net have one diameter and meet at one depth, so their
+  // image widths agree: the coverage (width) fitted to each phase-averaged yarn must lie within
+  // width_tolerance of the median width of the yarns read with certainty. A colour that fits
+  // only as a much thinner or wider thread (a dim yellow for an orange under a colour cast) is
+  // thereby rejected.
+  auto classify = [&](const PendingYarn& p, double alpha_lo, double alpha_hi) {
+    IdentifyOptions o = options;
+    o.alpha_min = alpha_lo;
+    o.alpha_max = alpha_hi;
+    YarnReading r =
+        ClassifyYarnColour(p.mean, result.background, codebook.palette, o, p.observed, p.sigma);
+    r.samples = p.samples;
+    return r;
+  };
+  for (const PendingYarn& p : pending) {
+    result.yarns[p.y] = classify(p, options.alpha_min, options.alpha_max);
+  }
+  std::vector<double> widths;
+  for (const PendingYarn& p : pending) {
+    const YarnReading& r = result.yarns[p.y];
+    if (p.phase_averaged && r.plausible.size() == 1 && r.best_delta_e <= options.max_delta_e) {
+      widths.push_back(r.alpha);
+    }
+  }
+  if (widths.size() >= 2 && options.width_tolerance > 0) {
+    std::sort(widths.begin(), widths.end());
+    const double width = widths[widths.size() / 2];
+    for (const PendingYarn& p : pending) {
+      if (!p.phase_averaged) continue;
+      result.yarns[p.y] = classify(p, std::max(options.alpha_min, width / options.width_tolerance),
+                                   std::min(options.alpha_max, width * options.width_tolerance));
+    }
+    char text[120];
+    std::snprintf(text, sizeof(text), "thread width %.2f px (x/ %.2f allowed)", width,
+                  options.width_tolerance);
+    result.reasons.push_back(text);
+  }
+  for (const PendingYarn& p : pending) {
+    const YarnReading& reading = result.yarns[p.y];
+    const std::string name = codebook.palette[reading.best].name;
+    char text[200];
+    if (reading.best_delta_e > options.max_delta_e) {
+      std::snprintf(text, sizeof(text), "yarn %d: unknown colour (nearest %s at dE00 %.1f > %.1f)",
+                    p.y, name.c_str(), reading.best_delta_e, options.max_delta_e);
+    } else if (reading.plausible.size() > 1) {
+      std::string others;
+      for (int c : reading.plausible) {
+        others += (others.empty() ? "" : "/") + codebook.palette[c].name;
+      }
+      std::snprintf(text, sizeof(text), "yarn %d: uncertain colour %s (dE00 %.1f vs %.1f)", p.y,
+                    others.c_str(), reading.best_delta_e, reading.second_delta_e);
+    } else {
+      std::snprintf(text, sizeof(text), "yarn %d: %s (dE00 %.1f, next %.1f, width %.2f)", p.y,
+                    name.c_str(), reading.best_delta_e, reading.second_delta_e, reading.alpha);
+    }
+    result.reasons.push_back(text);
+  }
+  for (int y = 0; y < n; ++y) {
+    all_clear = all_clear && result.yarns[y].plausible.size() == 1;
+    plausible[y] = result.yarns[y].plausible;
   }
 
   // Knots that fit some plausible reading, among the candidates.
@@ -876,14 +948,24 @@ KnotIdentification IdentifyKnot(const cv::Mat& bgr8, const Eigen::Vector2d& knot
     result.reasons.push_back(std::to_string(result.knots.size()) + " knots fit: " + list);
     return result;
   }
-  // One knot fits. Identified only when the best reading itself is its code.
+  // One knot fits. Identified only when some yarn was read with certainty and the best reading
+  // of every read yarn (the unread ones free) is its code.
   const int knot = result.knots.front();
-  std::vector<int> best_reading;
-  for (const YarnReading& r : result.yarns) best_reading.push_back(r.best);
-  const bool best_fits =
-      std::find(best_reading.begin(), best_reading.end(), -1) == best_reading.end() &&
-      codebook.Matches(knot, best_reading);
-  if (!best_fits) {
+  std::vector<std::vector<int>> best_reading(n);
+  int certain = 0;
+  for (int y = 0; y < n; ++y) {
+    const YarnReading& r = result.yarns[y];
+    const bool read = r.best >= 0 && r.best_delta_e <= options.max_delta_e;
+    best_reading[y] = read ? std::vector<int>{r.best} : r.plausible;
+    if (read && r.plausible.size() == 1) ++certain;
+  }
+  if (certain == 0) {
+    result.status = IdentifyStatus::kUnknown;
+    result.knots.clear();
+    result.reasons.push_back("no yarn colour read with certainty");
+    return result;
+  }
+  if (!FitsSomeReading(codebook, knot, best_reading)) {
     result.status = IdentifyStatus::kUnknown;
     result.knots.clear();
     result.reasons.push_back("only a second-choice reading fits knot " +

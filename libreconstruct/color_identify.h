@@ -150,7 +150,7 @@ struct IdentifyOptions {
   // The yarn is sampled along [inner_radius_px, outer_radius_px] from the knot centre (px): the
   // knot itself (a blob of overlapping thread ends) is skipped.
   double inner_radius_px = 3.0;
-  double outer_radius_px = 12.0;
+  double outer_radius_px = 16.0;
   // At each step along the yarn the pixel of most contrast against the background is taken
   // within +-search_half_width_px across it (the given direction may be off by a few degrees and
   // a 1 px thread may fall between pixel centres).
@@ -177,6 +177,10 @@ struct IdentifyOptions {
   double alpha_min = 0.15;
   // Up to this: the cross-section integral of a thread wider than 1 px exceeds its colour.
   double alpha_max = 2.0;
+  // The yarns of one knot have one image width: once two yarns are read with certainty, every
+  // phase-averaged yarn is re-classified with its width within this factor of their median
+  // (<= 0: off).
+  double width_tolerance = 1.4;
   // The colour filter array the frame was demosaiced from (kNone: a full-colour sensor). A thin
   // thread that runs along a row or column of the mosaic may cover no site of red (or blue) at
   // all: that channel is then interpolated from pixels beside the thread and says nothing about
@@ -185,6 +189,14 @@ struct IdentifyOptions {
   // colours that differ mainly there become ambiguous instead of misread.
   BayerPattern bayer = BayerPattern::kRGGB;
   int min_channel_sites = 2;
+  // A thread must cross this many px of rows and of columns along the segment (one mosaic
+  // period: 2) for its colour to be the phase-averaged mean of its cross-section integrals.
+  // Nearer an image axis its colour is unknown, unless read_along_mosaic: then it is read from
+  // its best covered pixels with the unseen channels ignored (min_channel_sites). That reading
+  // can be biased when the thread drifts across rows by about one pixel (it misread pink as
+  // orange in bench_identify), hence off by default.
+  double min_phase_travel_px = 2.0;
+  bool read_along_mosaic = false;
   // The 8-bit image is linear light (Demosaic's output); false: sRGB-encoded.
   bool image_is_linear = true;
   // When not empty: only these codebook knots are considered (e.g. those tracking predicts
@@ -203,6 +215,7 @@ struct YarnReading {
   double confidence = 0.0;         // in [0, 1]: 0 unknown/ambiguous .. 1 clear
   std::vector<int> plausible;      // palette indices that this yarn may be (all when unknown)
   int samples = 0;                 // thread samples found along the yarn
+  double alpha = 0.0;              // fitted coverage (px of thread width) of the best colour
   double noise_delta_e = 0.0;      // ΔE00 of noise_sigmas standard deviations of the measurement
   std::array<bool, 3> observed{true, true, true};  // B, G, R seen on their own mosaic sites
   Colour measured{0, 0, 0};        // mean linear BGR of the kept samples
