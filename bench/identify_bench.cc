@@ -1,7 +1,7 @@
 // Knot identification benchmark: how often IdentifyKnot names the right knot, flags it, or
 // (never acceptable) names a wrong one, against image noise and a colour shift.
 //
-//   bench_identify [--nets N]
+//   bench_identify [--nets N]        (IDENT_DEBUG=1: print the reasons of any wrong identity)
 //
 // The scene: N (default 12) flat 4 x 4-knot nets (25 cm mesh, 1 mm thread, bare crossings, each
 // link one of 6 colours chosen by ChoosePalette from DefaultYarnCandidates against a dark

@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/imgproc.hpp>
+
 #include "calibration/rig.h"
 #include "libreconstruct/bayer.h"
 #include "libreconstruct/render.h"
@@ -398,6 +400,79 @@ TEST(IdentifyKnot, AnEmptyImageIsUnknownNotAGuess) {
   EXPECT_NE(id.status, IdentifyStatus::kIdentified);
   EXPECT_THROW(IdentifyKnot(black, {50, 50}, {{1, 0}}, IdentifyOptions{}, book),
                std::invalid_argument);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Identification on drawn (full-colour, not mosaiced) knots.
+
+const std::vector<PaletteColour> kRgbyPalette = {{"red", {0.05f, 0.05f, 0.7f}},
+                                                 {"green", {0.05f, 0.6f, 0.05f}},
+                                                 {"blue", {0.7f, 0.1f, 0.02f}},
+                                                 {"yellow", {0.05f, 0.6f, 0.7f}}};
+
+TEST(ClassifyYarnColour, ClearMidwayAndForeignColours) {
+  const Colour bg(0.02f, 0.02f, 0.02f);
+  IdentifyOptions options;
+  // A thin green thread (70 % coverage): green, with certainty.
+  const YarnReading green =
+      ClassifyYarnColour(bg + 0.7f * (kRgbyPalette[1].linear_bgr - bg), bg, kRgbyPalette, options);
+  EXPECT_EQ(green.best, 1);
+  EXPECT_EQ(green.plausible, (std::vector<int>{1}));
+  EXPECT_GT(green.confidence, 0.5);
+  EXPECT_NEAR(green.alpha, 0.7, 0.05);
+  // Halfway between green and yellow: both plausible.
+  const Colour midway = 0.5f * (kRgbyPalette[1].linear_bgr + kRgbyPalette[3].linear_bgr);
+  const YarnReading mid = ClassifyYarnColour(midway, bg, kRgbyPalette, options);
+  EXPECT_EQ(mid.plausible, (std::vector<int>{1, 3}));
+  EXPECT_EQ(mid.confidence, 0.0);
+  // Grey is none of them: unknown colour, every palette colour stays plausible.
+  const YarnReading grey = ClassifyYarnColour(Colour(0.4f, 0.4f, 0.4f), bg, kRgbyPalette, options);
+  EXPECT_GT(grey.best_delta_e, options.max_delta_e);
+  EXPECT_EQ(grey.plausible.size(), kRgbyPalette.size());
+}
+
+// A 3-yarn knot at (100, 100) drawn with 2 px anti-aliased lines at 20, 140 and 260 degrees.
+cv::Mat DrawnKnot(const std::vector<Colour>& yarn_colours, std::vector<Eigen::Vector2d>* dirs) {
+  cv::Mat image(200, 200, CV_8UC3, cv::Scalar(5, 5, 5));
+  dirs->clear();
+  for (size_t i = 0; i < yarn_colours.size(); ++i) {
+    const double a = (20.0 + 120.0 * i) * M_PI / 180.0;
+    const Eigen::Vector2d d(std::cos(a), std::sin(a));
+    dirs->push_back(d);
+    const Colour c = yarn_colours[i] * 255.0f;
+    cv::line(image, cv::Point(100, 100), cv::Point(100 + 80 * d.x(), 100 + 80 * d.y()),
+             cv::Scalar(c[0], c[1], c[2]), 2, cv::LINE_AA);
+  }
+  return image;
+}
+
+TEST(IdentifyKnot, AnUnreadableYarnStillIdentifiesWhenEveryReadingGivesOneKnot) {
+  KnotCodebook book;
+  book.palette = kRgbyPalette;
+  book.knots = {{0, 0, {0, 1, 2}}, {0, 1, {0, 2, 3}}};
+  IdentifyOptions options;
+  options.bayer = BayerPattern::kNone;
+  std::vector<Eigen::Vector2d> dirs;
+  // All three read: knot (0, 0) with full confidence.
+  const cv::Mat clear = DrawnKnot({kRgbyPalette[0].linear_bgr, kRgbyPalette[1].linear_bgr,
+                                   kRgbyPalette[2].linear_bgr}, &dirs);
+  const KnotIdentification a = IdentifyKnot(clear, {100, 100}, dirs, options, book);
+  ASSERT_EQ(a.status, IdentifyStatus::kIdentified);
+  EXPECT_EQ(a.knots, (std::vector<int>{0}));
+  // The third yarn grey (no palette colour): red + green fit only knot (0, 0): identified, less
+  // sure.
+  const cv::Mat grey = DrawnKnot({kRgbyPalette[0].linear_bgr, kRgbyPalette[1].linear_bgr,
+                                  Colour(0.4f, 0.4f, 0.4f)}, &dirs);
+  const KnotIdentification b = IdentifyKnot(grey, {100, 100}, dirs, options, book);
+  ASSERT_EQ(b.status, IdentifyStatus::kIdentified);
+  EXPECT_EQ(b.knots, (std::vector<int>{0}));
+  EXPECT_LT(b.confidence, a.confidence);
+  // Red + blue + grey fit both knots: ambiguous, both listed.
+  const cv::Mat both = DrawnKnot({kRgbyPalette[0].linear_bgr, kRgbyPalette[2].linear_bgr,
+                                  Colour(0.4f, 0.4f, 0.4f)}, &dirs);
+  const KnotIdentification c = IdentifyKnot(both, {100, 100}, dirs, options, book);
+  EXPECT_EQ(c.status, IdentifyStatus::kAmbiguous);
+  EXPECT_EQ(c.knots, (std::vector<int>{0, 1}));
 }
 
 }  // namespace
