@@ -15,7 +15,7 @@
 // otherwise kAmbiguous (all knots that fit some plausible reading) or kUnknown (none fits). In
 // addition at least one yarn must be read with certainty, and the best readings of the read yarns
 // must themselves be that knot's code. Thin threads on a Bayer sensor: a yarn whose image runs
-// within ~7 degrees of the pixel rows or columns is not read at all (the mosaic may never sample
+// within ~9 degrees of the pixel rows or columns is not read at all (the mosaic may never sample
 // one of its colours; see IdentifyOptions::bayer).
 
 #include <array>
