@@ -12,6 +12,7 @@ namespace netlab::app {
 const std::vector<Command>& Commands() {
   static const std::vector<Command> commands = {
       {"calibrate", "calibrate the cameras into one world frame from target images", RunCalibrate},
+      {"color-net", "colour a net's yarns so every knot is known by its links' colours", RunColorNet},
       {"ingest", "check the synchronized camera recordings or convert them to HDF5", RunIngest},
       {"render", "film a simulated shot with a virtual camera rig, with ground truth", RunRender},
       {"simulate", "run a Cosserat-rod net simulation from a scenario file", RunSimulate},

@@ -1,6 +1,7 @@
 #include "libreconstruct/color_identify.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -594,7 +595,9 @@ double RayDistance(const Eigen::Vector2d& p, const Eigen::Vector2d& knot,
 }
 
 std::string KnotName(const CodebookKnot& k) {
-  return "(" + std::to_string(k.row) + ", " + std::to_string(k.col) + ")";
+  char name[32];  // (snprintf: GCC 12 warns falsely on "(" + std::to_string(...))
+  std::snprintf(name, sizeof(name), "(%d, %d)", k.row, k.col);
+  return name;
 }
 
 // True when some assignment of plausible colours to the yarns is the knot's code.

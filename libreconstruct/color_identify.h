@@ -26,6 +26,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
+#include "libreconstruct/net_coloring.h"
 #include "libreconstruct/render.h"
 
 namespace netlab::recon {
@@ -115,12 +116,8 @@ std::vector<Candidate> DefaultYarnCandidates();
 // ---------------------------------------------------------------------------------------------
 // Identification.
 
-// How the colours of a knot's links identify it.
-enum class CodeRule {
-  kSet,       // the set of distinct colours (degree must match too)
-  kMultiset,  // the colours with their counts
-  kCyclic,    // the colours in cyclic order around the knot, up to rotation and mirror
-};
+// How the colours of a knot's links identify it: CodeRule of net_coloring.h (set, multiset,
+// cyclic up to rotation and mirror; the degree must match too).
 
 struct PaletteColour {
   std::string name;

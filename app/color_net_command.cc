@@ -1,0 +1,141 @@
+// netlab color-net --knots ROWSxCOLS [--rule set|multiset|cyclic] [--distance D] [--radius R]
+//                  [--palette FILE] --out coloring.yaml [--json]
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <iostream>
+
+#include "app/command_line.h"
+#include "app/commands.h"
+#include "app/json_writer.h"
+#include "libreconstruct/color_identify.h"
+#include "libreconstruct/net_coloring.h"
+
+namespace netlab::app {
+namespace {
+
+constexpr char kHelp[] =
+    "usage: netlab color-net --knots ROWSxCOLS [--rule set|multiset|cyclic] [--distance D]\n"
+    "                        [--radius R] [--adjacent-distinct] [--palette FILE]\n"
+    "                        --out coloring.yaml [--json]\n\n"
+    "Colours the links of a square net so that every knot is identified by the colours of its\n"
+    "2-4 links, with the fewest colours (docs/coloring.md).\n\n"
+    "options:\n"
+    "  --knots ROWSxCOLS    the net's knots, e.g. 11x11\n"
+    "  --rule R             a knot's code: set (distinct colours), multiset (with repeats) or\n"
+    "                       cyclic (the order around the knot, up to rotation and mirror);\n"
+    "                       default set\n"
+    "  --distance D         codes of knots of one degree differ in at least D link colours\n"
+    "                       (2: one misread colour is detected, never taken for another knot)\n"
+    "  --radius R           uniqueness only among knots within R links (0: the whole net)\n"
+    "  --adjacent-distinct  the links of one knot all differ (visual separation)\n"
+    "  --palette FILE       candidate yarn colours (name,r,g,b per line, sRGB): the colours\n"
+    "                       used are chosen from them to differ most (CIEDE2000)\n"
+    "  --time-limit S       seconds for proving optimality (default 30)\n"
+    "  --out FILE           coloring.yaml: the palette and every link's colour\n"
+    "  --json               print one JSON summary object on stdout as the last output\n\n"
+    "exit status: 0 coloured, 1 bad input or no colouring within the limits, 2 usage error.\n";
+
+void ParseKnots(const std::string& text, int* rows, int* cols) {
+  const size_t x = text.find('x');
+  try {
+    if (x == std::string::npos) throw std::invalid_argument("no x");
+    size_t used_r = 0, used_c = 0;
+    *rows = std::stoi(text.substr(0, x), &used_r);
+    *cols = std::stoi(text.substr(x + 1), &used_c);
+    if (used_r != x || used_c != text.size() - x - 1) throw std::invalid_argument("junk");
+  } catch (const std::exception&) {
+    throw UsageError("--knots expects ROWSxCOLS, e.g. 11x11, got '" + text + "'");
+  }
+  if (*rows < 2 || *cols < 2 || *rows > 1000 || *cols > 1000)
+    throw UsageError("--knots " + text + ": need 2..1000 knots per side");
+}
+
+}  // namespace
+
+int RunColorNet(const std::vector<std::string>& args) {
+  try {
+    const CommandLine cl(args, {"json", "quiet", "help", "adjacent-distinct"},
+                         {"knots", "rule", "distance", "radius", "palette", "out", "time-limit"});
+    if (cl.Flag("help")) {
+      std::fputs(kHelp, stdout);
+      return 0;
+    }
+    if (!cl.positional().empty())
+      throw UsageError("unexpected argument '" + cl.positional()[0] + "'");
+    int rows = 0, cols = 0;
+    ParseKnots(cl.Required("knots"), &rows, &cols);
+    const std::string out = cl.Required("out");
+    recon::ColoringOptions options;
+    const std::string rule = cl.Option("rule").value_or("set");
+    if (!recon::ParseCodeRule(rule, &options.rule))
+      throw UsageError("--rule expects set, multiset or cyclic, got '" + rule + "'");
+    options.min_distance = cl.IntOption("distance", 1, 1, 4);
+    options.radius = cl.IntOption("radius", 0, 0, 10000);
+    options.adjacent_distinct = cl.Flag("adjacent-distinct");
+    options.time_limit_s = cl.DoubleOption("time-limit", 30.0, 0.0, 86400.0);
+
+    const auto start = std::chrono::steady_clock::now();
+    recon::NetColoring coloring = recon::SolveColoring(rows, cols, options);
+    std::vector<std::array<int, 3>> srgb;
+    double min_delta_e = 0.0;
+    if (const auto palette = cl.Option("palette")) {
+      const std::vector<recon::Candidate> candidates = recon::LoadCandidates(*palette);
+      if (static_cast<int>(candidates.size()) < coloring.colors)
+        throw std::runtime_error(*palette + ": " + std::to_string(candidates.size()) +
+                                 " candidate colours, the colouring needs " +
+                                 std::to_string(coloring.colors));
+      const std::vector<int> chosen =
+          recon::ChoosePalette(candidates, coloring.colors, recon::Lighting{}, &min_delta_e);
+      coloring.palette_names.clear();
+      for (int i : chosen) {
+        coloring.palette_names.push_back(candidates[i].name);
+        srgb.push_back({static_cast<int>(std::lround(candidates[i].srgb[0])),
+                        static_cast<int>(std::lround(candidates[i].srgb[1])),
+                        static_cast<int>(std::lround(candidates[i].srgb[2]))});
+      }
+    }
+    coloring.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::string why;
+    if (!recon::VerifyColoring(coloring, &why))
+      throw std::runtime_error("internal error: the colouring fails verification: " + why);
+    recon::WriteColoring(out, coloring, srgb);
+    if (!cl.Flag("quiet"))
+      std::fprintf(stderr,
+                   "%dx%d knots, rule %s, distance %d, radius %d%s: %d colours (lower bound %d, "
+                   "%s, %s) in %.2f s; written to %s\n",
+                   rows, cols, recon::CodeRuleName(options.rule).c_str(), options.min_distance,
+                   options.radius, options.adjacent_distinct ? ", adjacent distinct" : "",
+                   coloring.colors, coloring.lower_bound,
+                   coloring.optimal ? "optimal" : "not proven optimal", coloring.method.c_str(),
+                   coloring.wall_s, out.c_str());
+    if (cl.Flag("json")) {
+      JsonWriter json;
+      json.BeginObject();
+      json.Key("knots").String(std::to_string(rows) + "x" + std::to_string(cols));
+      json.Key("colors").Int(coloring.colors);
+      json.Key("lower_bound").Int(coloring.lower_bound);
+      json.Key("optimal").Bool(coloring.optimal);
+      json.Key("method").String(coloring.method);
+      json.Key("rule").String(recon::CodeRuleName(options.rule));
+      json.Key("min_distance").Int(options.min_distance);
+      json.Key("radius").Int(options.radius);
+      json.Key("adjacent_distinct").Bool(options.adjacent_distinct);
+      if (!srgb.empty()) json.Key("min_delta_e").Number(min_delta_e);
+      json.Key("wall_s").Number(coloring.wall_s);
+      json.EndObject();
+      std::cout << json.str() << std::endl;
+    }
+    return 0;
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "netlab color-net: %s\n(see netlab color-net --help)\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "netlab color-net: error: %s\n", e.what());
+    return 1;
+  }
+}
+
+}  // namespace netlab::app
