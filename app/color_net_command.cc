@@ -33,6 +33,9 @@ constexpr char kHelp[] =
     "  --adjacent-distinct  the links of one knot all differ (visual separation)\n"
     "  --palette FILE       candidate yarn colours (name,r,g,b per line, sRGB): the colours\n"
     "                       used are chosen from them to differ most (CIEDE2000)\n"
+    "                       (default: 16 common yarn dyes, when the colouring needs no more)\n"
+    "  --background B       black, white or none: the scene behind the net, which the dyes must\n"
+    "                       also differ from (default black)\n"
     "  --time-limit S       seconds for proving optimality (default 30)\n"
     "  --out FILE           coloring.yaml: the palette and every link's colour\n"
     "  --json               print one JSON summary object on stdout as the last output\n\n"
@@ -58,7 +61,8 @@ void ParseKnots(const std::string& text, int* rows, int* cols) {
 int RunColorNet(const std::vector<std::string>& args) {
   try {
     const CommandLine cl(args, {"json", "quiet", "help", "adjacent-distinct"},
-                         {"knots", "rule", "distance", "radius", "palette", "out", "time-limit"});
+                         {"knots", "rule", "distance", "radius", "palette", "out", "time-limit",
+                          "background"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -81,14 +85,32 @@ int RunColorNet(const std::vector<std::string>& args) {
     recon::NetColoring coloring = recon::SolveColoring(rows, cols, options);
     std::vector<std::array<int, 3>> srgb;
     double min_delta_e = 0.0;
+    // The physical palette: from the given candidates, else from common yarn dyes when there
+    // are enough of them.
+    std::vector<recon::Candidate> candidates;
+    std::string source = "the default yarn dyes";
     if (const auto palette = cl.Option("palette")) {
-      const std::vector<recon::Candidate> candidates = recon::LoadCandidates(*palette);
+      candidates = recon::LoadCandidates(*palette);
+      source = *palette;
       if (static_cast<int>(candidates.size()) < coloring.colors)
         throw std::runtime_error(*palette + ": " + std::to_string(candidates.size()) +
                                  " candidate colours, the colouring needs " +
                                  std::to_string(coloring.colors));
+    } else {
+      candidates = recon::DefaultYarnCandidates();
+      if (static_cast<int>(candidates.size()) < coloring.colors) candidates.clear();
+    }
+    recon::Lighting lighting;  // white-balanced daylight
+    const std::string background = cl.Option("background").value_or("black");
+    if (background == "black")
+      lighting.background = recon::Colour(0.f, 0.f, 0.f);
+    else if (background == "white")
+      lighting.background = recon::Colour(1.f, 1.f, 1.f);
+    else if (background != "none")
+      throw UsageError("--background expects black, white or none, got '" + background + "'");
+    if (coloring.colors > 0 && !candidates.empty()) {
       const std::vector<int> chosen =
-          recon::ChoosePalette(candidates, coloring.colors, recon::Lighting{}, &min_delta_e);
+          recon::ChoosePalette(candidates, coloring.colors, lighting, &min_delta_e);
       coloring.palette_names.clear();
       for (int i : chosen) {
         coloring.palette_names.push_back(candidates[i].name);
@@ -97,6 +119,9 @@ int RunColorNet(const std::vector<std::string>& args) {
                         static_cast<int>(std::lround(candidates[i].srgb[2]))});
       }
     }
+    if (coloring.colors == 0)
+      throw std::runtime_error("no colouring found within the limits (" + coloring.method +
+                               "; try a larger --time-limit or a smaller --distance)");
     coloring.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::string why;
     if (!recon::VerifyColoring(coloring, &why))
@@ -105,12 +130,13 @@ int RunColorNet(const std::vector<std::string>& args) {
     if (!cl.Flag("quiet"))
       std::fprintf(stderr,
                    "%dx%d knots, rule %s, distance %d, radius %d%s: %d colours (lower bound %d, "
-                   "%s, %s) in %.2f s; written to %s\n",
+                   "%s, %s) in %.2f s; dyes from %s (least CIEDE2000 difference %.1f); "
+                   "written to %s\n",
                    rows, cols, recon::CodeRuleName(options.rule).c_str(), options.min_distance,
                    options.radius, options.adjacent_distinct ? ", adjacent distinct" : "",
                    coloring.colors, coloring.lower_bound,
                    coloring.optimal ? "optimal" : "not proven optimal", coloring.method.c_str(),
-                   coloring.wall_s, out.c_str());
+                   coloring.wall_s, source.c_str(), min_delta_e, out.c_str());
     if (cl.Flag("json")) {
       JsonWriter json;
       json.BeginObject();

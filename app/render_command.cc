@@ -39,6 +39,7 @@ constexpr char kHelp[] =
     "  --blur-samples N       renders averaged over the exposure (default 3; 1: no blur)\n"
     "  --vignetting V         0..1 of the lens's cos^4 fall-off (default 0.5)\n"
     "  --calibration-views N  foil poses for calibration images (default 20; 0: none)\n"
+    "  --coloring FILE        yarn colours per link (`netlab color-net`; default: six dyes cycled)\n"
     "  --seed N               noise and pose seed (default 1)\n"
     "  --threads N            rendering threads (default 2)\n"
     "  --json                 print one JSON summary object on stdout as the last output\n"
@@ -89,7 +90,7 @@ int RunRender(const std::vector<std::string>& args) {
     const CommandLine cl(args, {"json", "quiet", "help"},
                          {"sim", "out", "rig", "frames", "scale", "noise", "fps", "bit-depth",
                           "bayer", "background", "exposure", "blur-samples", "vignetting",
-                          "calibration-views", "seed", "threads"});
+                          "calibration-views", "seed", "threads", "coloring"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -126,6 +127,8 @@ int RunRender(const std::vector<std::string>& args) {
     else if (background != "black")
       throw UsageError("--background expects black or white, got '" + background + "'");
 
+    if (const auto coloring = cl.Option("coloring"))
+      job.coloring = {recon::LoadYarnColoring(*coloring)};
     ProgressBar bar("rendering", !cl.Flag("quiet"));
     const recon::RenderSummary summary =
         recon::RenderExperiment(job, [&](int done, int total) { bar.Update(done, total); });

@@ -20,24 +20,14 @@
 #include "calibration/target.h"
 #include "common/yaml_util.h"
 #include "libnetsim/hdf5_util.h"
+#include "libreconstruct/color_identify.h"
 #include "libreconstruct/experiment.h"
+#include "libreconstruct/net_coloring.h"
 
 namespace netlab::recon {
 namespace {
 
 namespace fs = std::filesystem;
-
-// Grid coordinates (row, col) of the two knots of link `link` of a rows x cols net, in the model's
-// link order: horizontal links row by row, then vertical links row by row.
-std::array<int, 4> LinkKnots(int rows, int cols, int link) {
-  const int horizontal = rows * (cols - 1);
-  if (link < horizontal) {
-    const int r = link / (cols - 1), c = link % (cols - 1);
-    return {r, c, r, c + 1};
-  }
-  const int v = link - horizontal;
-  return {v / cols, v % cols, v / cols + 1, v % cols};
-}
 
 double Seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
@@ -173,6 +163,24 @@ YarnColoring DefaultColoring(int rows, int cols) {
     c.link_colour.push_back((link < horizontal ? 0 : 3) + (k[0] + k[1]) % 3);
   }
   return c;
+}
+
+YarnColoring LoadYarnColoring(const std::string& path) {
+  std::vector<std::array<int, 3>> srgb;
+  const NetColoring coloring = ReadColoring(path, &srgb);
+  YarnColoring yarns;
+  yarns.link_colour = coloring.link_colour;
+  const YarnColoring fallback = DefaultColoring(2, 2);
+  for (int i = 0; i < coloring.colors; ++i) {
+    yarns.names.push_back(i < static_cast<int>(coloring.palette_names.size())
+                              ? coloring.palette_names[i]
+                              : "colour " + std::to_string(i));
+    yarns.palette.push_back(i < static_cast<int>(srgb.size())
+                                ? SrgbToLinearBgr({double(srgb[i][0]), double(srgb[i][1]),
+                                                   double(srgb[i][2])})
+                                : fallback.palette[i % fallback.palette.size()]);
+  }
+  return yarns;
 }
 
 SimulatedShot::SimulatedShot(const std::string& path) {
@@ -332,6 +340,14 @@ RenderSummary RenderExperiment(const RenderJob& job,
                                const std::function<void(int, int)>& progress) {
   const auto start = std::chrono::steady_clock::now();
   const SimulatedShot shot(job.simulation);
+  const std::vector<YarnColoring>& coloring = job.coloring;
+  for (size_t n = 0; n < coloring.size() && n < shot.model().nets.size(); ++n) {
+    const netsim::NetInfo& net = shot.model().nets[n];
+    if (static_cast<int>(coloring[n].link_colour.size()) != net.num_links())
+      throw InputError("the colouring has " + std::to_string(coloring[n].link_colour.size()) +
+                       " links, net '" + net.name + "' (" + std::to_string(net.rows) + "x" +
+                       std::to_string(net.cols) + " knots) has " + std::to_string(net.num_links()));
+  }
   const calib::Rig& rig = job.rig;
   if (rig.cameras.empty()) throw InputError("the rig has no cameras");
   if (!(job.fps > 0)) throw InputError("fps must be > 0");
@@ -373,7 +389,6 @@ RenderSummary RenderExperiment(const RenderJob& job,
     experiment.cameras.push_back(spec);
   }
 
-  std::vector<YarnColoring> coloring = job.coloring;
   const SceneRenderOptions render_options;
   const int samples = std::max(1, job.blur_samples);
   const int total = frames * cameras;

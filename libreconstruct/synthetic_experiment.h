@@ -44,6 +44,9 @@ struct YarnColoring {
   std::vector<int> link_colour;    // per link, in the model's link order (see libnetsim/model.h)
 };
 YarnColoring DefaultColoring(int rows, int cols);
+// The colouring of a coloring.yaml (`netlab color-net`): its dyes' sRGB as linear colours
+// (without them, the default palette's colours in order). InputError on a bad file.
+YarnColoring LoadYarnColoring(const std::string& path);
 
 // The scene content of a simulation: topology and bodies from its stored scenario, node motion
 // from its frames.

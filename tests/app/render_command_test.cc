@@ -184,6 +184,22 @@ TEST_F(RenderCommand, TheRenderedMarkerMapPlacesTheRigInTheWorld) {
   }
 }
 
+// A colouring from `netlab color-net` colours the yarns; one for another net size is refused.
+TEST_F(RenderCommand, RendersTheYarnColouringOfColorNet) {
+  ASSERT_EQ(RunNetlab("color-net --knots 6x6 --out " + Path("c6.yaml") + " --quiet").status, 0);
+  ASSERT_EQ(RunNetlab("color-net --knots 5x5 --out " + Path("c5.yaml") + " --quiet").status, 0);
+  auto r = RunNetlab("render --sim " + Path("sim.h5") + " --out " + Path("coloured") +
+                     " --scale 0.125 --frames 0:1 --calibration-views 0 --coloring " +
+                     Path("c6.yaml") + " --json --quiet");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(LastJson(r.out)["frames"].number(), 2);
+  r = RunNetlab("render --sim " + Path("sim.h5") + " --out " + Path("wrong") +
+                " --scale 0.125 --frames 0:1 --calibration-views 0 --coloring " + Path("c5.yaml"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("the colouring has 40 links"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(Path("wrong")));  // refused before anything is written
+}
+
 TEST_F(RenderCommand, BadInputIsNamed) {
   auto r = RunNetlab("render --sim " + Path("missing.h5") + " --out " + Path("x"));
   EXPECT_EQ(r.status, 1);
