@@ -342,6 +342,220 @@ class LocalSearch {
   int64_t cost_ = 0;
 };
 
+// Tabu search for min_distance 2 over the whole net (radius 0), with hashed bookkeeping. By the
+// distance definition, dist(A, B) <= 1 exactly when Code(B) lies in Reach(A) = the codes of all
+// configurations within one link change of A, or Code(A) lies in Reach(B). With own[S] = knots
+// whose code is S and reach[S] = knots with S in their Reach, the cost
+//   sum_S own[S] * reach[S] - n
+// counts every violating pair once or twice and nothing else, so it is 0 exactly for a valid
+// colouring; a move touches two knots and costs O(degree * k) hash operations.
+class LocalSearchD2 {
+ public:
+  LocalSearchD2(const Net& net, const ColoringOptions& o, int k, uint64_t seed)
+      : net_(net), o_(o), k_(k), rng_(seed), wild_(o.rule != CodeRule::kSet) {}
+
+  bool Run(Clock::time_point deadline, std::vector<int>* out) {
+    std::uniform_int_distribution<int> colour_dist(0, k_ - 1);
+    colour_.assign(net_.links, 0);
+    for (int& c : colour_) c = colour_dist(rng_);
+    cfg_.resize(net_.n);
+    own_.clear();
+    reach_.clear();
+    own_.reserve(static_cast<size_t>(net_.n) * 2);
+    reach_.reserve(static_cast<size_t>(net_.n) * 4 * static_cast<size_t>(k_));
+    cost_ = wild_ ? 0 : -net_.n;
+    for (int x = 0; x < net_.n; ++x) {
+      cfg_[x] = KnotCfg(net_, colour_, x);
+      Add(cfg_[x], 1);
+    }
+    if (o_.adjacent_distinct)
+      for (int x = 0; x < net_.n; ++x) cost_ += AdjacentPairs(cfg_[x]);
+    std::vector<int64_t> tabu(static_cast<size_t>(net_.links) * k_, -1);
+    std::vector<int> conflicted;
+    int64_t best_cost = cost_;
+    for (int64_t iter = 0; cost_ > 0; ++iter) {
+      if ((iter & 15) == 0 && Clock::now() > deadline) return false;
+      if ((iter & 63) == 0 || conflicted.empty()) {
+        conflicted.clear();
+        for (int x = 0; x < net_.n; ++x)
+          if (Conflicted(x)) conflicted.push_back(x);
+        if (conflicted.empty()) break;  // cannot happen while cost > 0; defensive
+      }
+      const size_t pick = rng_() % conflicted.size();
+      const int x = conflicted[pick];
+      if (!Conflicted(x)) {
+        conflicted[pick] = conflicted.back();
+        conflicted.pop_back();
+        continue;
+      }
+      int best_link = -1, best_c = -1, ties = 0;
+      int64_t best_delta = 0;
+      const bool random_walk = (rng_() % 100) < 3;
+      for (int i = 0; i < net_.degree[x]; ++i) {
+        const int e = net_.knot_links[x][i];
+        for (int c = 0; c < k_; ++c) {
+          if (c == colour_[e]) continue;
+          const bool is_tabu = tabu[static_cast<size_t>(e) * k_ + c] > iter;
+          if (is_tabu && random_walk) continue;
+          const int64_t delta = random_walk ? 0 : Delta(e, c);
+          if (is_tabu && cost_ + delta >= best_cost) continue;
+          if (best_link < 0 || delta < best_delta) {
+            best_link = e, best_c = c, best_delta = delta, ties = 1;
+          } else if (delta == best_delta && rng_() % ++ties == 0) {
+            best_link = e, best_c = c;
+          }
+        }
+      }
+      if (best_link < 0) continue;
+      tabu[static_cast<size_t>(best_link) * k_ + colour_[best_link]] =
+          iter + 5 + static_cast<int64_t>(rng_() % 10) + static_cast<int64_t>(conflicted.size() / 4);
+      Apply(best_link, best_c);
+      best_cost = std::min(best_cost, cost_);
+      for (int y : net_.link_knots[best_link])
+        if (Conflicted(y)) conflicted.push_back(y);
+    }
+    *out = colour_;
+    return true;
+  }
+
+ private:
+  // The distinct code keys within one link change of x (x's own code included).
+  void ReachKeys(const Cfg& x, std::vector<uint64_t>* keys) const {
+    keys->clear();
+    keys->push_back(CodeKey(o_.rule, x));
+    for (int i = 0; i < x.d; ++i) {
+      Cfg y = x;
+      for (int c = 0; c < k_; ++c) {
+        if (c == x.c[i]) continue;
+        y.c[i] = c;
+        keys->push_back(CodeKey(o_.rule, y));
+      }
+    }
+    std::sort(keys->begin(), keys->end());
+    keys->erase(std::unique(keys->begin(), keys->end()), keys->end());
+  }
+  static int Get(const std::unordered_map<uint64_t, int>& m, uint64_t key) {
+    const auto it = m.find(key);
+    return it == m.end() ? 0 : it->second;
+  }
+  // Multiset and cyclic: the keys of x with one link colour wildcarded, canonical under the
+  // rule. Two knots of equal degree are within one change of each other exactly when they share
+  // such a key (put the wildcard on the link where they differ, or on any link when equal).
+  void WildKeys(const Cfg& x, std::vector<uint64_t>* keys) const {
+    keys->clear();
+    for (int i = 0; i < x.d; ++i) {
+      Cfg y = x;
+      y.c[i] = kWild;
+      keys->push_back(CodeKey(o_.rule, y));
+    }
+    std::sort(keys->begin(), keys->end());
+    keys->erase(std::unique(keys->begin(), keys->end()), keys->end());
+  }
+  // Adds (s = 1) or removes (s = -1) a knot with configuration x, keeping cost_ exact.
+  void Add(const Cfg& x, int s) {
+    if (wild_) {
+      WildKeys(x, &scratch_);
+      for (uint64_t key : scratch_) {
+        if (s > 0) {
+          cost_ += own_[key]++;
+        } else {
+          const auto it = own_.find(key);
+          cost_ -= --it->second;
+          if (it->second == 0) own_.erase(it);
+        }
+      }
+      return;
+    }
+    ReachKeys(x, &scratch_);
+    const uint64_t own_key = CodeKey(o_.rule, x);
+    if (s > 0) {
+      for (uint64_t key : scratch_) {
+        cost_ += Get(own_, key);
+        ++reach_[key];
+      }
+      cost_ += reach_[own_key];
+      ++own_[own_key];
+    } else {
+      for (uint64_t key : scratch_) {
+        cost_ -= Get(own_, key);
+        const auto it = reach_.find(key);
+        if (--it->second == 0) reach_.erase(it);
+      }
+      const auto it = own_.find(own_key);
+      if (--it->second == 0) own_.erase(it);
+      cost_ -= Get(reach_, own_key);
+    }
+  }
+  bool Conflicted(int x) {
+    const Cfg& cx = cfg_[x];
+    if (o_.adjacent_distinct && AdjacentPairs(cx) > 0) return true;
+    if (wild_) {
+      WildKeys(cx, &scratch_);
+      for (uint64_t key : scratch_)
+        if (Get(own_, key) > 1) return true;
+      return false;
+    }
+    if (Get(reach_, CodeKey(o_.rule, cx)) > 1) return true;
+    ReachKeys(cx, &scratch_);
+    int64_t s = 0;
+    for (uint64_t key : scratch_) s += Get(own_, key);
+    return s > 1;
+  }
+  std::pair<Cfg, Cfg> Moved(int e, int c) const {
+    const int u = net_.link_knots[e][0], v = net_.link_knots[e][1];
+    Cfg cu = cfg_[u], cv = cfg_[v];
+    for (int i = 0; i < cu.d; ++i)
+      if (net_.knot_links[u][i] == e) cu.c[i] = c;
+    for (int i = 0; i < cv.d; ++i)
+      if (net_.knot_links[v][i] == e) cv.c[i] = c;
+    return {cu, cv};
+  }
+  int64_t Delta(int e, int c) {
+    const int u = net_.link_knots[e][0], v = net_.link_knots[e][1];
+    const auto [cu, cv] = Moved(e, c);
+    const int64_t before = cost_;
+    Add(cfg_[u], -1);
+    Add(cfg_[v], -1);
+    Add(cu, 1);
+    Add(cv, 1);
+    int64_t d = cost_ - before;
+    Add(cv, -1);
+    Add(cu, -1);
+    Add(cfg_[v], 1);
+    Add(cfg_[u], 1);
+    cost_ = before;
+    if (o_.adjacent_distinct)
+      d += AdjacentPairs(cu) + AdjacentPairs(cv) - AdjacentPairs(cfg_[u]) - AdjacentPairs(cfg_[v]);
+    return d;
+  }
+  void Apply(int e, int c) {
+    const int u = net_.link_knots[e][0], v = net_.link_knots[e][1];
+    const int64_t d = Delta(e, c);
+    const auto [cu, cv] = Moved(e, c);
+    const int64_t before = cost_;
+    Add(cfg_[u], -1);
+    Add(cfg_[v], -1);
+    Add(cu, 1);
+    Add(cv, 1);
+    cost_ = before + d;
+    colour_[e] = c;
+    cfg_[u] = cu;
+    cfg_[v] = cv;
+  }
+
+  const Net& net_;
+  const ColoringOptions& o_;
+  int k_;
+  std::mt19937_64 rng_;
+  bool wild_;  // wildcard keys (multiset, cyclic); otherwise own / reach codes (set)
+  static constexpr int kWild = 254;
+  std::vector<int> colour_;
+  std::vector<Cfg> cfg_;
+  std::unordered_map<uint64_t, int> own_, reach_;
+  std::vector<uint64_t> scratch_;
+  int64_t cost_ = 0;
+};
+
 // Backtracking over links in knot order (each knot's right then down link, row-major), so a
 // knot is complete as soon as its own right and down links are set. Colours are introduced in
 // increasing order (colour permutations preserve every rule). Checks: adjacency as each link is
@@ -633,21 +847,41 @@ NetColoring SolveColoring(int rows, int cols, const ColoringOptions& options) {
   auto try_heuristic = [&](int k, double budget_s) {
     const auto budget = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                            std::chrono::duration<double>(budget_s));
-    LocalSearch search(net, options, k, options.seed + static_cast<uint64_t>(k));
     std::vector<int> colour;
-    if (!search.Run(std::min(budget, deadline), &colour)) return false;
+    const uint64_t seed = options.seed + static_cast<uint64_t>(k);
+    if (options.min_distance == 2 && options.radius == 0 && options.rule != CodeRule::kSet) {
+      LocalSearchD2 search(net, options, k, seed);
+      if (!search.Run(std::min(budget, deadline), &colour)) return false;
+    } else {
+      LocalSearch search(net, options, k, seed);
+      if (!search.Run(std::min(budget, deadline), &colour)) return false;
+    }
     result.colors = k;
     result.link_colour = colour;
     result.method = "heuristic";
     return true;
   };
   // Steps of 1, 1, 2, 4, ... so that a weak bound (D >= 2) is left behind quickly.
+  int failed_below = result.lower_bound - 1;  // the largest palette that failed so far
   for (int k = result.lower_bound, step = 1; k <= options.max_colors + step - 1;
        k += step, step *= (k > result.lower_bound + 1 ? 2 : 1)) {
     const int kk = std::min(k, options.max_colors);
     if (Since(t0) >= options.time_limit_s) break;
-    if (try_heuristic(kk, 0.05 * options.time_limit_s)) break;
+    // The largest palette gets all the time left: a large net needs long runs even there.
+    const double budget_s = kk == options.max_colors ? options.time_limit_s - Since(t0)
+                                                     : 0.05 * options.time_limit_s;
+    if (try_heuristic(kk, budget_s)) break;
+    failed_below = kk;
     if (kk == options.max_colors) break;
+  }
+  // Bisect between the last failure and the palette found, sharing the time left.
+  while (result.colors > 0 && result.colors - failed_below > 1) {
+    const double left = options.time_limit_s - Since(t0);
+    if (left <= 0) break;
+    int rounds = 1;
+    for (int gap = result.colors - failed_below; gap > 1; gap = (gap + 1) / 2) ++rounds;
+    const int mid = failed_below + (result.colors - failed_below) / 2;
+    if (!try_heuristic(mid, left / rounds)) failed_below = mid;
   }
   for (int k = result.colors - 1; result.colors > 0 && k >= result.lower_bound; --k) {
     const double left = options.time_limit_s - Since(t0);
