@@ -342,17 +342,17 @@ class LocalSearch {
   int64_t cost_ = 0;
 };
 
-// Tabu search for min_distance 2 over the whole net (radius 0), with hashed bookkeeping. By the
-// distance definition, dist(A, B) <= 1 exactly when Code(B) lies in Reach(A) = the codes of all
-// configurations within one link change of A, or Code(A) lies in Reach(B). With own[S] = knots
-// whose code is S and reach[S] = knots with S in their Reach, the cost
-//   sum_S own[S] * reach[S] - n
-// counts every violating pair once or twice and nothing else, so it is 0 exactly for a valid
-// colouring; a move touches two knots and costs O(degree * k) hash operations.
+// Tabu search for min_distance 2 over the whole net (radius 0) under the multiset and cyclic
+// rules, with hashed bookkeeping. Each knot has up to d keys: its code with one link colour
+// replaced by a wildcard, canonical under the rule. Two knots of one degree are within one link
+// change of each other exactly when they share a key, so the cost sum over keys of
+// C(count, 2) is 0 exactly for a valid colouring, and a move (two knots change) costs O(d) hash
+// operations instead of a comparison with every knot. (The set rule has no such key: whether
+// one change suffices depends on how many links share each colour; it keeps the general search.)
 class LocalSearchD2 {
  public:
   LocalSearchD2(const Net& net, const ColoringOptions& o, int k, uint64_t seed)
-      : net_(net), o_(o), k_(k), rng_(seed), wild_(o.rule != CodeRule::kSet) {}
+      : net_(net), o_(o), k_(k), rng_(seed) {}
 
   bool Run(Clock::time_point deadline, std::vector<int>* out) {
     std::uniform_int_distribution<int> colour_dist(0, k_ - 1);
@@ -360,10 +360,8 @@ class LocalSearchD2 {
     for (int& c : colour_) c = colour_dist(rng_);
     cfg_.resize(net_.n);
     own_.clear();
-    reach_.clear();
-    own_.reserve(static_cast<size_t>(net_.n) * 2);
-    reach_.reserve(static_cast<size_t>(net_.n) * 4 * static_cast<size_t>(k_));
-    cost_ = wild_ ? 0 : -net_.n;
+    own_.reserve(static_cast<size_t>(net_.n) * 4);
+    cost_ = 0;
     for (int x = 0; x < net_.n; ++x) {
       cfg_[x] = KnotCfg(net_, colour_, x);
       Add(cfg_[x], 1);
@@ -419,25 +417,6 @@ class LocalSearchD2 {
   }
 
  private:
-  // The distinct code keys within one link change of x (x's own code included).
-  void ReachKeys(const Cfg& x, std::vector<uint64_t>* keys) const {
-    keys->clear();
-    keys->push_back(CodeKey(o_.rule, x));
-    for (int i = 0; i < x.d; ++i) {
-      Cfg y = x;
-      for (int c = 0; c < k_; ++c) {
-        if (c == x.c[i]) continue;
-        y.c[i] = c;
-        keys->push_back(CodeKey(o_.rule, y));
-      }
-    }
-    std::sort(keys->begin(), keys->end());
-    keys->erase(std::unique(keys->begin(), keys->end()), keys->end());
-  }
-  static int Get(const std::unordered_map<uint64_t, int>& m, uint64_t key) {
-    const auto it = m.find(key);
-    return it == m.end() ? 0 : it->second;
-  }
   // Multiset and cyclic: the keys of x with one link colour wildcarded, canonical under the
   // rule. Two knots of equal degree are within one change of each other exactly when they share
   // such a key (put the wildcard on the link where they differ, or on any link when equal).
@@ -453,53 +432,26 @@ class LocalSearchD2 {
   }
   // Adds (s = 1) or removes (s = -1) a knot with configuration x, keeping cost_ exact.
   void Add(const Cfg& x, int s) {
-    if (wild_) {
-      WildKeys(x, &scratch_);
-      for (uint64_t key : scratch_) {
-        if (s > 0) {
-          cost_ += own_[key]++;
-        } else {
-          const auto it = own_.find(key);
-          cost_ -= --it->second;
-          if (it->second == 0) own_.erase(it);
-        }
+    WildKeys(x, &scratch_);
+    for (uint64_t key : scratch_) {
+      if (s > 0) {
+        cost_ += own_[key]++;
+      } else {
+        const auto it = own_.find(key);
+        cost_ -= --it->second;
+        if (it->second == 0) own_.erase(it);
       }
-      return;
-    }
-    ReachKeys(x, &scratch_);
-    const uint64_t own_key = CodeKey(o_.rule, x);
-    if (s > 0) {
-      for (uint64_t key : scratch_) {
-        cost_ += Get(own_, key);
-        ++reach_[key];
-      }
-      cost_ += reach_[own_key];
-      ++own_[own_key];
-    } else {
-      for (uint64_t key : scratch_) {
-        cost_ -= Get(own_, key);
-        const auto it = reach_.find(key);
-        if (--it->second == 0) reach_.erase(it);
-      }
-      const auto it = own_.find(own_key);
-      if (--it->second == 0) own_.erase(it);
-      cost_ -= Get(reach_, own_key);
     }
   }
   bool Conflicted(int x) {
     const Cfg& cx = cfg_[x];
     if (o_.adjacent_distinct && AdjacentPairs(cx) > 0) return true;
-    if (wild_) {
-      WildKeys(cx, &scratch_);
-      for (uint64_t key : scratch_)
-        if (Get(own_, key) > 1) return true;
-      return false;
+    WildKeys(cx, &scratch_);
+    for (uint64_t key : scratch_) {
+      const auto it = own_.find(key);
+      if (it != own_.end() && it->second > 1) return true;
     }
-    if (Get(reach_, CodeKey(o_.rule, cx)) > 1) return true;
-    ReachKeys(cx, &scratch_);
-    int64_t s = 0;
-    for (uint64_t key : scratch_) s += Get(own_, key);
-    return s > 1;
+    return false;
   }
   std::pair<Cfg, Cfg> Moved(int e, int c) const {
     const int u = net_.link_knots[e][0], v = net_.link_knots[e][1];
@@ -547,11 +499,10 @@ class LocalSearchD2 {
   const ColoringOptions& o_;
   int k_;
   std::mt19937_64 rng_;
-  bool wild_;  // wildcard keys (multiset, cyclic); otherwise own / reach codes (set)
   static constexpr int kWild = 254;
   std::vector<int> colour_;
   std::vector<Cfg> cfg_;
-  std::unordered_map<uint64_t, int> own_, reach_;
+  std::unordered_map<uint64_t, int> own_;  // wildcard key -> knots having it
   std::vector<uint64_t> scratch_;
   int64_t cost_ = 0;
 };
