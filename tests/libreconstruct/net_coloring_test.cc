@@ -280,6 +280,20 @@ class Exhaustive {
   std::vector<int> colour_;
 };
 
+// Above 150 knots the set rule at distance 2 is searched as multiset with distinct colours at
+// every knot (where the two distances agree): the result must hold under the set rule itself.
+TEST(SolveColoring, LargeSetNetsAtDistanceTwoPassTheVerifier) {
+  ColoringOptions o;
+  o.rule = CodeRule::kSet;
+  o.min_distance = 2;
+  o.time_limit_s = 1.0;
+  const NetColoring c = SolveColoring(13, 13, o);
+  ASSERT_GT(c.colors, 0) << c.method;
+  std::string why;
+  EXPECT_TRUE(VerifyColoring(c, &why)) << why;
+  EXPECT_GE(c.colors, c.lower_bound);
+}
+
 TEST(SolveColoring, OptimalityClaimsHoldUnderExhaustiveSearch) {
   int checked = 0;
   for (CodeRule rule : kRules)
