@@ -194,6 +194,63 @@ int AdjacentPairs(const Cfg& x) {
   return p;
 }
 
+// The tabu min-conflicts loop shared by the cost models below: pick a knot in conflict, move
+// one of its links to the colour that lowers the cost most (ties at random; a move back is tabu
+// for a while unless it beats the best cost seen; 3 % random walk), until the cost is 0 or the
+// deadline passes. Model: int64_t cost() const, bool Conflicted(int knot),
+// int64_t Delta(int link, int colour), void Apply(int link, int colour), int Colour(int link).
+// The list of knots in conflict is rebuilt every `refresh_every` moves (every move where that is
+// cheap next to a move) and extended after each move.
+template <typename Model>
+bool TabuSearch(const Net& net, int k, Model& model, std::mt19937_64& rng,
+                Clock::time_point deadline, int refresh_every) {
+  std::vector<int64_t> tabu(static_cast<size_t>(net.links) * k, -1);
+  std::vector<int> conflicted;
+  int64_t best_cost = model.cost();
+  for (int64_t iter = 0; model.cost() > 0; ++iter) {
+    if ((iter & 15) == 0 && Clock::now() > deadline) return false;
+    if (iter % refresh_every == 0 || conflicted.empty()) {
+      conflicted.clear();
+      for (int x = 0; x < net.n; ++x)
+        if (model.Conflicted(x)) conflicted.push_back(x);
+      if (conflicted.empty()) return false;  // cannot happen while cost > 0; defensive
+    }
+    const size_t pick = rng() % conflicted.size();
+    const int x = conflicted[pick];
+    if (!model.Conflicted(x)) {
+      conflicted[pick] = conflicted.back();
+      conflicted.pop_back();
+      continue;
+    }
+    int best_link = -1, best_c = -1, ties = 0;
+    int64_t best_delta = 0;
+    const bool random_walk = (rng() % 100) < 3;
+    for (int i = 0; i < net.degree[x]; ++i) {
+      const int e = net.knot_links[x][i];
+      for (int c = 0; c < k; ++c) {
+        if (c == model.Colour(e)) continue;
+        const bool is_tabu = tabu[static_cast<size_t>(e) * k + c] > iter;
+        if (is_tabu && random_walk) continue;
+        const int64_t delta = random_walk ? 0 : model.Delta(e, c);
+        if (is_tabu && model.cost() + delta >= best_cost) continue;
+        if (best_link < 0 || delta < best_delta) {
+          best_link = e, best_c = c, best_delta = delta, ties = 1;
+        } else if (delta == best_delta && rng() % ++ties == 0) {
+          best_link = e, best_c = c;
+        }
+      }
+    }
+    if (best_link < 0) continue;
+    tabu[static_cast<size_t>(best_link) * k + model.Colour(best_link)] =
+        iter + 5 + static_cast<int64_t>(rng() % 10) + static_cast<int64_t>(conflicted.size() / 4);
+    model.Apply(best_link, best_c);
+    best_cost = std::min(best_cost, model.cost());
+    for (int y : net.link_knots[best_link])
+      if (model.Conflicted(y)) conflicted.push_back(y);
+  }
+  return true;
+}
+
 // Tabu min-conflicts search with k colours. Cost = violated knot pairs + equal-colour link
 // pairs at a knot (when adjacent_distinct). The fast path for D = 1 and radius 0 counts knots
 // per code in a hash map; otherwise partner lists are scanned.
@@ -224,44 +281,16 @@ class LocalSearch {
     }
     if (o_.adjacent_distinct)
       for (int x = 0; x < net_.n; ++x) cost_ += AdjacentPairs(cfg_[x]);
-    std::vector<int64_t> tabu(static_cast<size_t>(net_.links) * k_, -1);
-    std::vector<int> conflicted;
-    int64_t best_cost = cost_;
-    for (int64_t iter = 0; cost_ > 0; ++iter) {
-      if ((iter & 63) == 0 && Clock::now() > deadline) return false;
-      conflicted.clear();
-      for (int x = 0; x < net_.n; ++x)
-        if (Conflicted(x)) conflicted.push_back(x);
-      if (conflicted.empty()) break;  // cannot happen while cost > 0; defensive
-      const int x = conflicted[rng_() % conflicted.size()];
-      int best_link = -1, best_c = -1, ties = 0;
-      int64_t best_delta = 0;
-      const bool random_walk = (rng_() % 100) < 3;
-      for (int i = 0; i < net_.degree[x]; ++i) {
-        const int e = net_.knot_links[x][i];
-        for (int c = 0; c < k_; ++c) {
-          if (c == colour_[e]) continue;
-          const int64_t delta = random_walk ? 0 : Delta(e, c);
-          const bool is_tabu = tabu[static_cast<size_t>(e) * k_ + c] > iter;
-          if (is_tabu && cost_ + delta >= best_cost) continue;
-          if (best_link < 0 || delta < best_delta) {
-            best_link = e, best_c = c, best_delta = delta, ties = 1;
-          } else if (delta == best_delta && rng_() % ++ties == 0) {
-            best_link = e, best_c = c;
-          }
-        }
-      }
-      if (best_link < 0) continue;
-      tabu[static_cast<size_t>(best_link) * k_ + colour_[best_link]] =
-          iter + 5 + static_cast<int64_t>(rng_() % 10) + static_cast<int64_t>(conflicted.size() / 4);
-      Apply(best_link, best_c);
-      best_cost = std::min(best_cost, cost_);
-    }
+    if (!TabuSearch(net_, k_, *this, rng_, deadline, 1)) return false;
     *out = colour_;
     return true;
   }
 
  private:
+  template <typename Model>
+  friend bool TabuSearch(const Net&, int, Model&, std::mt19937_64&, Clock::time_point, int);
+  int64_t cost() const { return cost_; }
+  int Colour(int link) const { return colour_[link]; }
   bool Violates(const Cfg& a, const Cfg& b) const {
     return Distance(o_.rule, a, b) < o_.min_distance;
   }
@@ -371,55 +400,16 @@ class LocalSearchD2 {
     }
     if (o_.adjacent_distinct)
       for (int x = 0; x < net_.n; ++x) cost_ += AdjacentPairs(cfg_[x]);
-    std::vector<int64_t> tabu(static_cast<size_t>(net_.links) * k_, -1);
-    std::vector<int> conflicted;
-    int64_t best_cost = cost_;
-    for (int64_t iter = 0; cost_ > 0; ++iter) {
-      if ((iter & 15) == 0 && Clock::now() > deadline) return false;
-      if ((iter & 63) == 0 || conflicted.empty()) {
-        conflicted.clear();
-        for (int x = 0; x < net_.n; ++x)
-          if (Conflicted(x)) conflicted.push_back(x);
-        if (conflicted.empty()) break;  // cannot happen while cost > 0; defensive
-      }
-      const size_t pick = rng_() % conflicted.size();
-      const int x = conflicted[pick];
-      if (!Conflicted(x)) {
-        conflicted[pick] = conflicted.back();
-        conflicted.pop_back();
-        continue;
-      }
-      int best_link = -1, best_c = -1, ties = 0;
-      int64_t best_delta = 0;
-      const bool random_walk = (rng_() % 100) < 3;
-      for (int i = 0; i < net_.degree[x]; ++i) {
-        const int e = net_.knot_links[x][i];
-        for (int c = 0; c < k_; ++c) {
-          if (c == colour_[e]) continue;
-          const bool is_tabu = tabu[static_cast<size_t>(e) * k_ + c] > iter;
-          if (is_tabu && random_walk) continue;
-          const int64_t delta = random_walk ? 0 : Delta(e, c);
-          if (is_tabu && cost_ + delta >= best_cost) continue;
-          if (best_link < 0 || delta < best_delta) {
-            best_link = e, best_c = c, best_delta = delta, ties = 1;
-          } else if (delta == best_delta && rng_() % ++ties == 0) {
-            best_link = e, best_c = c;
-          }
-        }
-      }
-      if (best_link < 0) continue;
-      tabu[static_cast<size_t>(best_link) * k_ + colour_[best_link]] =
-          iter + 5 + static_cast<int64_t>(rng_() % 10) + static_cast<int64_t>(conflicted.size() / 4);
-      Apply(best_link, best_c);
-      best_cost = std::min(best_cost, cost_);
-      for (int y : net_.link_knots[best_link])
-        if (Conflicted(y)) conflicted.push_back(y);
-    }
+    if (!TabuSearch(net_, k_, *this, rng_, deadline, 64)) return false;
     *out = colour_;
     return true;
   }
 
  private:
+  template <typename Model>
+  friend bool TabuSearch(const Net&, int, Model&, std::mt19937_64&, Clock::time_point, int);
+  int64_t cost() const { return cost_; }
+  int Colour(int link) const { return colour_[link]; }
   // Multiset and cyclic: the keys of x with one link colour wildcarded, canonical under the
   // rule. Two knots of equal degree are within one change of each other exactly when they share
   // such a key (put the wildcard on the link where they differ, or on any link when equal).
