@@ -194,6 +194,25 @@ int AdjacentPairs(const Cfg& x) {
   return p;
 }
 
+// The configurations of link e's two knots (cfg[u], cfg[v]) after e takes colour c.
+std::pair<Cfg, Cfg> MovedCfgs(const Net& net, const std::vector<Cfg>& cfg, int e, int c) {
+  const int u = net.link_knots[e][0], v = net.link_knots[e][1];
+  Cfg cu = cfg[u], cv = cfg[v];
+  for (int i = 0; i < cu.d; ++i)
+    if (net.knot_links[u][i] == e) cu.c[i] = c;
+  for (int i = 0; i < cv.d; ++i)
+    if (net.knot_links[v][i] == e) cv.c[i] = c;
+  return {cu, cv};
+}
+
+// A uniformly random start: every link one of k colours.
+std::vector<int> RandomColouring(const Net& net, int k, std::mt19937_64& rng) {
+  std::uniform_int_distribution<int> colour_dist(0, k - 1);
+  std::vector<int> colour(net.links);
+  for (int& c : colour) c = colour_dist(rng);
+  return colour;
+}
+
 // The tabu min-conflicts loop shared by the cost models below: pick a knot in conflict, move
 // one of its links to the colour that lowers the cost most (ties at random; a move back is tabu
 // for a while unless it beats the best cost seen; 3 % random walk), until the cost is 0 or the
@@ -260,9 +279,7 @@ class LocalSearch {
       : net_(net), o_(o), k_(k), rng_(seed), hashed_(o.min_distance == 1 && o.radius == 0) {}
 
   bool Run(Clock::time_point deadline, std::vector<int>* out) {
-    std::uniform_int_distribution<int> colour_dist(0, k_ - 1);
-    colour_.assign(net_.links, 0);
-    for (int& c : colour_) c = colour_dist(rng_);
+    colour_ = RandomColouring(net_, k_, rng_);
     cfg_.resize(net_.n);
     for (int x = 0; x < net_.n; ++x) cfg_[x] = KnotCfg(net_, colour_, x);
     // Initial cost and per-knot conflict counts.
@@ -317,11 +334,7 @@ class LocalSearch {
   }
   int64_t Delta(int e, int c) {
     const int u = net_.link_knots[e][0], v = net_.link_knots[e][1];
-    Cfg cu = cfg_[u], cv = cfg_[v];
-    for (int i = 0; i < cu.d; ++i)
-      if (net_.knot_links[u][i] == e) cu.c[i] = c;
-    for (int i = 0; i < cv.d; ++i)
-      if (net_.knot_links[v][i] == e) cv.c[i] = c;
+    const auto [cu, cv] = MovedCfgs(net_, cfg_, e, c);
     if (hashed_) {
       const uint64_t ou = CodeKey(o_.rule, cfg_[u]), ov = CodeKey(o_.rule, cfg_[v]);
       const uint64_t nu = CodeKey(o_.rule, cu), nv = CodeKey(o_.rule, cv);
@@ -387,9 +400,7 @@ class LocalSearchD2 {
       : net_(net), o_(o), k_(k), rng_(seed) {}
 
   bool Run(Clock::time_point deadline, std::vector<int>* out) {
-    std::uniform_int_distribution<int> colour_dist(0, k_ - 1);
-    colour_.assign(net_.links, 0);
-    for (int& c : colour_) c = colour_dist(rng_);
+    colour_ = RandomColouring(net_, k_, rng_);
     cfg_.resize(net_.n);
     own_.clear();
     own_.reserve(static_cast<size_t>(net_.n) * 4);
@@ -446,18 +457,9 @@ class LocalSearchD2 {
     }
     return false;
   }
-  std::pair<Cfg, Cfg> Moved(int e, int c) const {
-    const int u = net_.link_knots[e][0], v = net_.link_knots[e][1];
-    Cfg cu = cfg_[u], cv = cfg_[v];
-    for (int i = 0; i < cu.d; ++i)
-      if (net_.knot_links[u][i] == e) cu.c[i] = c;
-    for (int i = 0; i < cv.d; ++i)
-      if (net_.knot_links[v][i] == e) cv.c[i] = c;
-    return {cu, cv};
-  }
   int64_t Delta(int e, int c) {
     const int u = net_.link_knots[e][0], v = net_.link_knots[e][1];
-    const auto [cu, cv] = Moved(e, c);
+    const auto [cu, cv] = MovedCfgs(net_, cfg_, e, c);
     const int64_t before = cost_;
     Add(cfg_[u], -1);
     Add(cfg_[v], -1);
@@ -476,7 +478,7 @@ class LocalSearchD2 {
   void Apply(int e, int c) {
     const int u = net_.link_knots[e][0], v = net_.link_knots[e][1];
     const int64_t d = Delta(e, c);
-    const auto [cu, cv] = Moved(e, c);
+    const auto [cu, cv] = MovedCfgs(net_, cfg_, e, c);
     const int64_t before = cost_;
     Add(cfg_[u], -1);
     Add(cfg_[v], -1);
