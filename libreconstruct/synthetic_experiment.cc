@@ -98,13 +98,15 @@ std::vector<std::pair<int, std::array<Eigen::Vector3d, 4>>> TargetMarkers(const 
                                            r.col(v) * (0.5 * j * box.half_extents[v]);
             Eigen::Vector3d x_axis = Eigen::Vector3d::UnitZ().cross(normal);
             if (x_axis.norm() < 1e-6) x_axis = r.col(u);
-            markers.emplace_back(id++, calib::MarkerCorners(center, x_axis.normalized(), normal, size));
+            markers.emplace_back(id++,
+                                 calib::MarkerCorners(center, x_axis.normalized(), normal, size));
           }
       }
   return markers;
 }
 
-std::string MarkerMapYaml(const std::vector<std::pair<int, std::array<Eigen::Vector3d, 4>>>& markers) {
+std::string MarkerMapYaml(
+    const std::vector<std::pair<int, std::array<Eigen::Vector3d, 4>>>& markers) {
   std::ostringstream os;
   os.precision(10);
   os << "# ArUco markers on the target body's faces (world frame, m), for netlab calibrate with\n"
@@ -175,10 +177,10 @@ YarnColoring LoadYarnColoring(const std::string& path) {
     yarns.names.push_back(i < static_cast<int>(coloring.palette_names.size())
                               ? coloring.palette_names[i]
                               : "colour " + std::to_string(i));
-    yarns.palette.push_back(i < static_cast<int>(srgb.size())
-                                ? SrgbToLinearBgr({double(srgb[i][0]), double(srgb[i][1]),
-                                                   double(srgb[i][2])})
-                                : fallback.palette[i % fallback.palette.size()]);
+    yarns.palette.push_back(
+        i < static_cast<int>(srgb.size())
+            ? SrgbToLinearBgr({double(srgb[i][0]), double(srgb[i][1]), double(srgb[i][2])})
+            : fallback.palette[i % fallback.palette.size()]);
   }
   return yarns;
 }
@@ -188,7 +190,8 @@ SimulatedShot::SimulatedShot(const std::string& path) {
   nodes_ = netsim::ReadNodePositions(path);
   if (nodes_.empty())
     throw InputError(path + ": no /nodes/position (the scenario needs store_nodes: true)");
-  if (tracks_.scenario.empty()) throw InputError(path + ": no /scenario (not a netlab simulate file)");
+  if (tracks_.scenario.empty())
+    throw InputError(path + ": no /scenario (not a netlab simulate file)");
   if (tracks_.frames() < 1) throw InputError(path + ": no frames");
   // The scene needs the nets, rods and bodies; not the gravity, frame rotation or drag files, which
   // are named relative to a scenario folder the result file does not know.
@@ -219,8 +222,8 @@ SimulatedShot::SimulatedShot(const std::string& path) {
     const double diameter = model_->materials[net.material].diameter;
     knot_radius_.push_back(spec.knot_mass > 0 ? 1.5 * diameter : 0.0);
     if (spec.corner_mass > 0)
-      for (const auto& [r, c] : {std::pair{0, 0}, {0, net.cols - 1}, {net.rows - 1, 0},
-                                 {net.rows - 1, net.cols - 1}}) {
+      for (const auto& [r, c] :
+           {std::pair{0, 0}, {0, net.cols - 1}, {net.rows - 1, 0}, {net.rows - 1, net.cols - 1}}) {
         corner_nodes_.push_back(model_->KnotNode(static_cast<int>(n), r, c));
         corner_radius_.push_back(spec.corner_radius > 0 ? spec.corner_radius : 0.01);
       }
@@ -238,14 +241,15 @@ std::vector<Eigen::Vector3d> SimulatedShot::NodesAt(double t) const {
   return x;
 }
 
-std::vector<Eigen::Vector3d> SimulatedShot::KnotsAt(const std::vector<Eigen::Vector3d>& nodes) const {
+std::vector<Eigen::Vector3d> SimulatedShot::KnotsAt(
+    const std::vector<Eigen::Vector3d>& nodes) const {
   std::vector<Eigen::Vector3d> knots;
   knots.reserve(knot_nodes_.size());
   for (int node : knot_nodes_) knots.push_back(nodes[node]);
   return knots;
 }
 
-Scene SimulatedShot::SolidsAt(double t) const {
+Scene SimulatedShot::SolidsAt(double t, const std::vector<Eigen::Vector3d>& nodes) const {
   Scene scene;
   const Colour body_colour(0.55f, 0.55f, 0.55f), corner_colour(0.7f, 0.7f, 0.7f);
   for (const netsim::RigidBody& body : scenario_.bodies) {
@@ -256,23 +260,21 @@ Scene SimulatedShot::SolidsAt(double t) const {
       scene.balls.push_back({center, body.radius, body_colour});
     // Planes (a wall or a floor) are not drawn: they would fill the view.
   }
-  if (!corner_nodes_.empty()) {
-    const std::vector<Eigen::Vector3d> nodes = NodesAt(t);
-    for (size_t i = 0; i < corner_nodes_.size(); ++i)
-      scene.balls.push_back({nodes[corner_nodes_[i]], corner_radius_[i], corner_colour});
-  }
+  for (size_t i = 0; i < corner_nodes_.size(); ++i)
+    scene.balls.push_back({nodes[corner_nodes_[i]], corner_radius_[i], corner_colour});
   return scene;
 }
 
 Scene SimulatedShot::SceneAt(double t, const std::vector<YarnColoring>& coloring,
                              Colour background) const {
-  Scene scene = SolidsAt(t);
-  scene.background = background;
   const std::vector<Eigen::Vector3d> x = NodesAt(t);
+  Scene scene = SolidsAt(t, x);
+  scene.background = background;
   for (size_t n = 0; n < model_->nets.size(); ++n) {
     const netsim::NetInfo& net = model_->nets[n];
-    const YarnColoring colours =
-        n < coloring.size() ? coloring[n] : DefaultColoring(net.rows, net.cols);
+    const YarnColoring fallback =
+        n < coloring.size() ? YarnColoring{} : DefaultColoring(net.rows, net.cols);
+    const YarnColoring& colours = n < coloring.size() ? coloring[n] : fallback;
     const double radius = 0.5 * model_->materials[net.material].diameter;
     const int interior = net.segments_per_link - 1;
     for (int link = 0; link < net.num_links(); ++link) {
@@ -417,7 +419,8 @@ RenderSummary RenderExperiment(const RenderJob& job,
         char name[32];
         std::snprintf(name, sizeof(name), "frame_%06d.pgm", k);
         const fs::path file = out / camera.name / name;
-        if (!cv::imwrite(file.string(), raw)) throw std::runtime_error(file.string() + ": cannot write");
+        if (!cv::imwrite(file.string(), raw))
+          throw std::runtime_error(file.string() + ": cannot write");
       } catch (const std::exception& e) {
         std::lock_guard<std::mutex> lock(mutex);
         if (failure.empty()) failure = e.what();
@@ -447,15 +450,17 @@ RenderSummary RenderExperiment(const RenderJob& job,
   truth.scenario = shot.tracks().scenario;
   const int knots = truth.knots();
   std::vector<std::vector<double>> pixels(cameras, std::vector<double>(size_t(frames) * knots * 2));
-  std::vector<std::vector<uint8_t>> visibility(cameras, std::vector<uint8_t>(size_t(frames) * knots));
+  std::vector<std::vector<uint8_t>> visibility(cameras,
+                                               std::vector<uint8_t>(size_t(frames) * knots));
   std::vector<int> frame_index;
   RenderSummary summary;
   summary.knots_visible_mean.assign(cameras, 0.0);
   summary.knots_visible_min.assign(cameras, knots);
   for (int k = first; k <= last; ++k) {
     const double t = frame_time(k);
-    const std::vector<Eigen::Vector3d> x = shot.KnotsAt(shot.NodesAt(t));
-    const Scene solids = shot.SolidsAt(t);
+    const std::vector<Eigen::Vector3d> nodes = shot.NodesAt(t);
+    const std::vector<Eigen::Vector3d> x = shot.KnotsAt(nodes);
+    const Scene solids = shot.SolidsAt(t, nodes);
     truth.time.push_back(t);
     frame_index.push_back(k);
     for (int j = 0; j < knots; ++j) {
@@ -524,8 +529,8 @@ RenderSummary RenderExperiment(const RenderJob& job,
       const int c = i % cameras;
       const Eigen::Vector3d near = aim + 0.45 * (rig.cameras[c].Center() - aim);
       try {
-        const auto pose = calib::RandomTargetPoses(rig, foil, {c}, 1, near,
-                                                   Eigen::Vector3d(0.2, 0.2, 0.15), facing, 0.5, rng);
+        const auto pose = calib::RandomTargetPoses(
+            rig, foil, {c}, 1, near, Eigen::Vector3d(0.2, 0.2, 0.15), facing, 0.5, rng);
         poses.push_back(pose.front());
       } catch (const std::runtime_error&) {
         // This camera cannot see the whole foil that close: the shared views cover it.
@@ -556,10 +561,12 @@ RenderSummary RenderExperiment(const RenderJob& job,
       summary.calibration_images += static_cast<int>(poses.size());
     }
     // The marker map on the target, one image per camera (the markers do not move).
-    const auto markers = TargetMarkers(shot.SolidsAt(shot.start_time()), rig);
+    const auto markers =
+        TargetMarkers(shot.SolidsAt(shot.start_time(), shot.NodesAt(shot.start_time())), rig);
     if (!markers.empty()) {
       WriteTextFile(out / "calibration" / "markers.yaml", MarkerMapYaml(markers));
-      const calib::CalibrationTarget map = calib::CalibrationTarget::MarkerMap("DICT_4X4_50", markers);
+      const calib::CalibrationTarget map =
+          calib::CalibrationTarget::MarkerMap("DICT_4X4_50", markers);
       const auto map_prints = calib::MakeTargetPrints(map);
       for (int c = 0; c < cameras; ++c) {
         const calib::Camera& camera = rig.cameras[c];

@@ -67,8 +67,8 @@ class SimulatedShot {
   std::vector<Eigen::Vector3d> KnotsAt(const std::vector<Eigen::Vector3d>& nodes) const;
   // The scene at time t, threads coloured per link by `coloring` (one per net; missing: default).
   Scene SceneAt(double t, const std::vector<YarnColoring>& coloring, Colour background) const;
-  // Solids (target bodies, corner masses) at time t: what can hide a knot.
-  Scene SolidsAt(double t) const;
+  // Solids (target bodies, corner masses) at time t, with the nodes at t: what can hide a knot.
+  Scene SolidsAt(double t, const std::vector<Eigen::Vector3d>& nodes) const;
 
  private:
   netsim::KnotTracks tracks_;
