@@ -4,9 +4,9 @@
 //   bench_color [--time S]   (per-case time limit, default 4 s)
 //
 // Cases: 6, 11, 17, 26 and 51 knots square; rules set, multiset, cyclic; min_distance 1 and 2;
-// radius 0 (whole net); adjacency off, plus set / D = 1 with adjacency on, and set / D = 1 and 2
-// with uniqueness only within 3 links (tracking supplies the rest). Every result is checked by
-// VerifyColoring (a failure is printed in the table, never hidden).
+// radius 0 (whole net); adjacency off, plus set / D = 1 and multiset / D = 2 with adjacency on,
+// and set / D = 1 and 2 with uniqueness only within 3 links (tracking supplies the rest). Every
+// result is checked by VerifyColoring (a failure is printed in the table, never hidden).
 
 #include <cstdio>
 #include <cstring>
@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
   for (CodeRule rule : {CodeRule::kSet, CodeRule::kMultiset, CodeRule::kCyclic})
     for (int d : {1, 2}) cases.push_back({rule, d, false});
   cases.push_back({CodeRule::kSet, 1, true});
+  cases.push_back({CodeRule::kMultiset, 2, true});
   cases.push_back({CodeRule::kSet, 1, false, 3});
   cases.push_back({CodeRule::kSet, 2, false, 3});
   for (int n : {6, 11, 17, 26, 51})

@@ -2,10 +2,15 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <deque>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <limits>
+#include <map>
 #include <random>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
@@ -26,6 +31,9 @@ struct Cfg {
   int d = 0;
   std::array<int, 4> c{-1, -1, -1, -1};
 };
+
+// A link whose colour is left open (keys of the distance-2 search and of the packing bound).
+constexpr int kWildColour = 254;
 
 // The dihedral images of a cyclic sequence of length d (2d of them, d = 1: one).
 int DihedralImages(const Cfg& x, std::array<Cfg, 8>* out) {
@@ -141,6 +149,200 @@ int64_t Binomial(int64_t n, int64_t k) {
   return r;
 }
 
+// The packing bound for D >= 2 (see MaxCodePacking): a linear programme over code patterns.
+//
+// Give every code its KEYS: the code with D - 1 of its links wildcarded (canonical under the
+// rule). Two codes within D - 1 changes of each other share a key (wildcard the links where the
+// best alignment differs), so codes pairwise >= D apart own disjoint key sets. Count codes and
+// keys per PATTERN (a code or key up to renaming of the colours: aabc, abab, ab*c, ...): colour
+// renaming maps valid packings to valid packings, so the LP "as many codes as possible, every
+// key class used at most as often as it has keys" may be averaged over renamings and has one
+// variable per code pattern and one constraint per key pattern. Its optimum bounds the packing.
+
+// Positions-group images of a configuration: the dihedral group (cyclic), every permutation
+// (multiset; 24 at most).
+std::vector<Cfg> PositionImages(CodeRule rule, const Cfg& x) {
+  std::vector<Cfg> out;
+  if (rule == CodeRule::kCyclic) {
+    std::array<Cfg, 8> images;
+    const int n = DihedralImages(x, &images);
+    out.assign(images.begin(), images.begin() + n);
+    return out;
+  }
+  std::array<int, 4> p{0, 1, 2, 3};
+  do {
+    Cfg y = x;
+    for (int i = 0; i < x.d; ++i) y.c[i] = x.c[p[i]];
+    out.push_back(y);
+  } while (std::next_permutation(p.begin(), p.begin() + x.d));
+  return out;
+}
+
+// Colours renamed in order of first appearance (the wildcard kept).
+Cfg Renamed(const Cfg& x) {
+  std::array<int, 256> name;
+  name.fill(-1);
+  int next = 0;
+  Cfg y = x;
+  for (int i = 0; i < x.d; ++i) {
+    if (x.c[i] == kWildColour) continue;
+    if (name[x.c[i]] < 0) name[x.c[i]] = next++;
+    y.c[i] = name[x.c[i]];
+  }
+  return y;
+}
+
+// The pattern of a configuration: least renamed image under the position group.
+std::array<int, 4> Pattern(CodeRule rule, const Cfg& x) {
+  std::array<int, 4> best{};
+  bool first = true;
+  for (const Cfg& y : PositionImages(rule, x)) {
+    const std::array<int, 4> r = Renamed(y).c;
+    if (first || r < best) best = r, first = false;
+  }
+  return best;
+}
+
+// How many distinct sequences the position group makes of x (colours as given).
+int OrbitSize(CodeRule rule, const Cfg& x) {
+  std::vector<std::array<int, 4>> seen;
+  for (const Cfg& y : PositionImages(rule, x)) seen.push_back(y.c);
+  std::sort(seen.begin(), seen.end());
+  return static_cast<int>(std::unique(seen.begin(), seen.end()) - seen.begin());
+}
+
+double Falling(int k, int j) {
+  double r = 1;
+  for (int i = 0; i < j; ++i) r *= k - i;
+  return std::max(r, 0.0);
+}
+
+// Every assignment of the positions in `free` (others -1) to colours 0.. in order of first
+// appearance (restricted growth strings); all distinct only when `distinct`.
+void ForEachRenamedFilling(const Cfg& base, const std::vector<int>& free, bool distinct,
+                           const std::function<void(const Cfg&, int)>& visit) {
+  Cfg x = base;
+  std::function<void(size_t, int)> rec = [&](size_t i, int used) {
+    if (i == free.size()) {
+      visit(x, used);
+      return;
+    }
+    for (int c = distinct ? used : 0; c <= used; ++c) {
+      x.c[free[i]] = c;
+      rec(i + 1, std::max(used, c + 1));
+    }
+  };
+  rec(0, 0);
+}
+
+// max sum(y) subject to A y <= b, y >= 0, with b >= 0 (the origin is feasible): dense simplex,
+// Bland's rule. Small problems only (a few dozen rows).
+double MaximiseSum(const std::vector<std::vector<double>>& a, const std::vector<double>& b) {
+  const int m = static_cast<int>(a.size());
+  const int n = m > 0 ? static_cast<int>(a[0].size()) : 0;
+  // Tableau rows 0..m-1: [A | I | b]; row m: objective (reduced costs, negated).
+  std::vector<std::vector<double>> t(m + 1, std::vector<double>(n + m + 1, 0.0));
+  std::vector<int> basis(m);
+  for (int i = 0; i < m; ++i) {
+    for (int j = 0; j < n; ++j) t[i][j] = a[i][j];
+    t[i][n + i] = 1;
+    t[i][n + m] = b[i];
+    basis[i] = n + i;
+  }
+  for (int j = 0; j < n; ++j) t[m][j] = -1;
+  constexpr double kEps = 1e-9;
+  while (true) {
+    int enter = -1;
+    for (int j = 0; j < n + m && enter < 0; ++j)
+      if (t[m][j] < -kEps) enter = j;
+    if (enter < 0) break;
+    int leave = -1;
+    double best = 0;
+    for (int i = 0; i < m; ++i) {
+      if (t[i][enter] <= kEps) continue;
+      const double r = t[i][n + m] / t[i][enter];
+      if (leave < 0 || r < best - kEps || (r < best + kEps && basis[i] < basis[leave]))
+        leave = i, best = r;
+    }
+    if (leave < 0) return std::numeric_limits<double>::infinity();  // unbounded
+    const double p = t[leave][enter];
+    for (double& v : t[leave]) v /= p;
+    for (int i = 0; i <= m; ++i) {
+      if (i == leave || std::abs(t[i][enter]) <= 0) continue;
+      const double f = t[i][enter];
+      for (int j = 0; j <= n + m; ++j) t[i][j] -= f * t[leave][j];
+    }
+    basis[leave] = enter;
+  }
+  return t[m][n + m];
+}
+
+int64_t PatternPackingBound(CodeRule rule, int degree, int k, bool distinct, int min_distance) {
+  const int w = min_distance - 1;  // wildcards per key
+  std::vector<int> all(degree);
+  for (int i = 0; i < degree; ++i) all[i] = i;
+  Cfg empty;
+  empty.d = degree;
+  // Code patterns: how many codes, and a representative.
+  std::map<std::array<int, 4>, std::pair<double, Cfg>> codes;
+  ForEachRenamedFilling(empty, all, distinct, [&](const Cfg& x, int used) {
+    auto& entry = codes[Pattern(rule, x)];
+    entry.first += Falling(k, used) / OrbitSize(rule, x);
+    entry.second = x;
+  });
+  // Key patterns: how many keys.
+  std::map<std::array<int, 4>, double> keys;
+  for (int mask = 0; mask < (1 << degree); ++mask) {
+    if (__builtin_popcount(mask) != w) continue;
+    Cfg base = empty;
+    std::vector<int> free;
+    for (int i = 0; i < degree; ++i) {
+      if (mask & (1 << i)) base.c[i] = kWildColour;
+      else free.push_back(i);
+    }
+    ForEachRenamedFilling(base, free, distinct, [&](const Cfg& x, int used) {
+      keys[Pattern(rule, x)] += Falling(k, used) / OrbitSize(rule, x);
+    });
+  }
+  // Per code pattern, its distinct keys by key pattern.
+  std::vector<std::array<int, 4>> key_index;
+  for (const auto& [p, n] : keys) key_index.push_back(p);
+  std::vector<std::vector<double>> a;
+  std::vector<double> b;
+  for (const auto& [p, n] : keys) {
+    a.emplace_back(codes.size(), 0.0);
+    b.push_back(n);
+  }
+  int t = 0;
+  for (const auto& [p, entry] : codes) {
+    const Cfg& x = entry.second;
+    std::set<std::array<int, 4>> own;
+    for (int mask = 0; mask < (1 << degree); ++mask) {
+      if (__builtin_popcount(mask) != w) continue;
+      Cfg y = x;
+      for (int i = 0; i < degree; ++i)
+        if (mask & (1 << i)) y.c[i] = kWildColour;
+      own.insert(Canonical(rule, y).c);
+    }
+    for (const auto& key : own) {
+      Cfg y;
+      y.d = degree;
+      y.c = key;
+      const size_t s = std::lower_bound(key_index.begin(), key_index.end(), Pattern(rule, y)) -
+                       key_index.begin();
+      a[s][t] += 1;
+    }
+    // y_t <= number of codes of this pattern.
+    std::vector<double> row(codes.size(), 0.0);
+    row[t] = 1;
+    a.push_back(row);
+    b.push_back(entry.first);
+    ++t;
+  }
+  const double opt = MaximiseSum(a, b);
+  return static_cast<int64_t>(std::floor(opt + 1e-6));
+}
+
 // The fixed structure of the net under the options: links per knot, constrained partners.
 struct Net {
   int rows = 0, cols = 0, n = 0, links = 0;
@@ -217,7 +419,8 @@ std::vector<int> RandomColouring(const Net& net, int k, std::mt19937_64& rng) {
 // one of its links to the colour that lowers the cost most (ties at random; a move back is tabu
 // for a while unless it beats the best cost seen; 3 % random walk), until the cost is 0 or the
 // deadline passes. Model: int64_t cost() const, bool Conflicted(int knot),
-// int64_t Delta(int link, int colour), void Apply(int link, int colour), int Colour(int link).
+// int64_t Delta(int link, int colour), void Apply(int link, int colour), int Colour(int link),
+// bool Movable(int link).
 // The list of knots in conflict is rebuilt every `refresh_every` moves (every move where that is
 // cheap next to a move) and extended after each move.
 template <typename Model>
@@ -246,6 +449,7 @@ bool TabuSearch(const Net& net, int k, Model& model, std::mt19937_64& rng,
     const bool random_walk = (rng() % 100) < 3;
     for (int i = 0; i < net.degree[x]; ++i) {
       const int e = net.knot_links[x][i];
+      if (!model.Movable(e)) continue;
       for (int c = 0; c < k; ++c) {
         if (c == model.Colour(e)) continue;
         const bool is_tabu = tabu[static_cast<size_t>(e) * k + c] > iter;
@@ -270,48 +474,116 @@ bool TabuSearch(const Net& net, int k, Model& model, std::mt19937_64& rng,
   return true;
 }
 
+// Runs a cost model (TabuSearch's, plus Start(colour, active knots, movable links) and
+// colours()) from random colourings until the deadline. With `border_first` on a net with both
+// border knots (2 or 3 links) and inner ones, in two phases: the border knots alone first (the
+// tight part of the experiment nets at D = 2: 60 three-link knots of 17 x 17 need 17 colours,
+// the 225 inner ones 15), then the inner links with every link at the border frozen (the inner
+// knots have room to spare wherever the border is the tight part).
+template <typename Model>
+bool SearchBorderFirst(const Net& net, int k, Model& model, std::mt19937_64& rng,
+                       Clock::time_point deadline, int refresh_every, bool border_first,
+                       std::vector<int>* out) {
+  const std::vector<char> all_knots(net.n, 1), all_links(net.links, 1);
+  std::vector<char> border(net.n), inner_links(net.links);
+  bool any_border = false, any_inner = false;
+  for (int x = 0; x < net.n; ++x) {
+    border[x] = net.degree[x] < 4;
+    (border[x] ? any_border : any_inner) = true;
+  }
+  for (int e = 0; e < net.links; ++e)
+    inner_links[e] = !border[net.link_knots[e][0]] && !border[net.link_knots[e][1]];
+  if (!border_first || !any_border || !any_inner) {
+    model.Start(RandomColouring(net, k, rng), all_knots, all_links);
+    if (!TabuSearch(net, k, model, rng, deadline, refresh_every)) return false;
+    *out = model.colours();
+    return true;
+  }
+  model.Start(RandomColouring(net, k, rng), border, all_links);
+  if (!TabuSearch(net, k, model, rng, deadline, refresh_every)) return false;
+  std::vector<int> colour = RandomColouring(net, k, rng);
+  for (int e = 0; e < net.links; ++e)
+    if (!inner_links[e]) colour[e] = model.colours()[e];
+  model.Start(colour, all_knots, inner_links);
+  if (!TabuSearch(net, k, model, rng, deadline, refresh_every)) return false;
+  *out = model.colours();
+  return true;
+}
+
+// What both cost models keep, and the part of TabuSearch's interface that is the same for both:
+// the colouring, its knots' configurations, the cost, which knots count (active) and which links
+// the search may change (movable).
+class CostModel {
+ public:
+  int64_t cost() const { return cost_; }
+  int Colour(int link) const { return colour_[link]; }
+  bool Movable(int link) const { return movable_[link] != 0; }
+  const std::vector<int>& colours() const { return colour_; }
+
+ protected:
+  CostModel(const Net& net, const ColoringOptions& o, int k, uint64_t seed)
+      : net_(net), o_(o), k_(k), rng_(seed) {}
+  // Takes the colouring and the masks; the configurations are recomputed.
+  void Reset(std::vector<int> colour, std::vector<char> active, std::vector<char> movable) {
+    colour_ = std::move(colour);
+    active_ = std::move(active);
+    movable_ = std::move(movable);
+    cfg_.resize(net_.n);
+    for (int x = 0; x < net_.n; ++x) cfg_[x] = KnotCfg(net_, colour_, x);
+    cost_ = 0;
+  }
+
+  const Net& net_;
+  const ColoringOptions& o_;
+  int k_;
+  std::mt19937_64 rng_;
+  std::vector<int> colour_;
+  std::vector<char> active_;   // per knot: its code counts
+  std::vector<char> movable_;  // per link: the search may change it
+  std::vector<Cfg> cfg_;
+  int64_t cost_ = 0;
+};
+
 // Tabu min-conflicts search with k colours. Cost = violated knot pairs + equal-colour link
 // pairs at a knot (when adjacent_distinct). The fast path for D = 1 and radius 0 counts knots
 // per code in a hash map; otherwise partner lists are scanned.
-class LocalSearch {
+class LocalSearch : public CostModel {
  public:
   LocalSearch(const Net& net, const ColoringOptions& o, int k, uint64_t seed)
-      : net_(net), o_(o), k_(k), rng_(seed), hashed_(o.min_distance == 1 && o.radius == 0) {}
+      : CostModel(net, o, k, seed), hashed_(o.min_distance == 1 && o.radius == 0) {}
 
   bool Run(Clock::time_point deadline, std::vector<int>* out) {
-    colour_ = RandomColouring(net_, k_, rng_);
-    cfg_.resize(net_.n);
-    for (int x = 0; x < net_.n; ++x) cfg_[x] = KnotCfg(net_, colour_, x);
-    // Initial cost and per-knot conflict counts.
+    // The border first pays where a distance is asked of the whole net (see SearchBorderFirst).
+    const bool border_first = !hashed_ && o_.min_distance >= 2 && o_.radius == 0;
+    return SearchBorderFirst(net_, k_, *this, rng_, deadline, 1, border_first, out);
+  }
+
+  // Sets the colouring, which knots count and which links may change; recounts the cost.
+  void Start(std::vector<int> colour, std::vector<char> active, std::vector<char> movable) {
+    Reset(std::move(colour), std::move(active), std::move(movable));
     pair_conf_.assign(net_.n, 0);
-    cost_ = 0;
     count_.clear();
     if (hashed_) {
-      for (int x = 0; x < net_.n; ++x) cost_ += count_[CodeKey(o_.rule, cfg_[x])]++;
+      for (int x = 0; x < net_.n; ++x)
+        if (active_[x]) cost_ += count_[CodeKey(o_.rule, cfg_[x])]++;
     } else {
       for (int x = 0; x < net_.n; ++x)
         for (int w : net_.partners[x])
-          if (Violates(cfg_[x], cfg_[w])) {
+          if (Counted(x, w) && Violates(cfg_[x], cfg_[w])) {
             ++pair_conf_[x];
             if (w > x) ++cost_;
           }
     }
     if (o_.adjacent_distinct)
-      for (int x = 0; x < net_.n; ++x) cost_ += AdjacentPairs(cfg_[x]);
-    if (!TabuSearch(net_, k_, *this, rng_, deadline, 1)) return false;
-    *out = colour_;
-    return true;
+      for (int x = 0; x < net_.n; ++x)
+        if (active_[x]) cost_ += AdjacentPairs(cfg_[x]);
   }
-
- private:
-  template <typename Model>
-  friend bool TabuSearch(const Net&, int, Model&, std::mt19937_64&, Clock::time_point, int);
-  int64_t cost() const { return cost_; }
-  int Colour(int link) const { return colour_[link]; }
+  bool Counted(int x, int w) const { return active_[x] && active_[w]; }
   bool Violates(const Cfg& a, const Cfg& b) const {
     return Distance(o_.rule, a, b) < o_.min_distance;
   }
   bool Conflicted(int x) const {
+    if (!active_[x]) return false;
     if (o_.adjacent_distinct && AdjacentPairs(cfg_[x]) > 0) return true;
     if (hashed_) return count_.at(CodeKey(o_.rule, cfg_[x])) > 1;
     return pair_conf_[x] > 0;
@@ -319,10 +591,11 @@ class LocalSearch {
   // Cost of the pairs touching u or v when their configurations are cu, cv.
   int64_t Contribution(int u, int v, const Cfg& cu, const Cfg& cv) const {
     int64_t s = 0;
-    for (int w : net_.partners[u]) s += Violates(cu, w == v ? cv : cfg_[w]);
+    for (int w : net_.partners[u])
+      if (Counted(u, w)) s += Violates(cu, w == v ? cv : cfg_[w]);
     for (int w : net_.partners[v])
-      if (w != u) s += Violates(cv, cfg_[w]);
-    if (o_.adjacent_distinct) s += AdjacentPairs(cu) + AdjacentPairs(cv);
+      if (w != u && Counted(v, w)) s += Violates(cv, cfg_[w]);
+    if (o_.adjacent_distinct) s += active_[u] * AdjacentPairs(cu) + active_[v] * AdjacentPairs(cv);
     return s;
   }
   // Change of sum_codes C(count, 2) when one knot moves from code a to code b.
@@ -338,6 +611,7 @@ class LocalSearch {
     if (hashed_) {
       const uint64_t ou = CodeKey(o_.rule, cfg_[u]), ov = CodeKey(o_.rule, cfg_[v]);
       const uint64_t nu = CodeKey(o_.rule, cu), nv = CodeKey(o_.rule, cv);
+      // (The hashed path runs with every knot active.)
       int64_t d = MoveCount(ou, nu) + MoveCount(ov, nv);
       MoveCount(nv, ov);
       MoveCount(nu, ou);
@@ -367,139 +641,187 @@ class LocalSearch {
       pair_conf_[w] += s;
     };
     for (int w : net_.partners[u])
-      update(u, w, Violates(old_u, w == v ? old_v : cfg_[w]), Violates(cfg_[u], cfg_[w]));
+      if (Counted(u, w))
+        update(u, w, Violates(old_u, w == v ? old_v : cfg_[w]), Violates(cfg_[u], cfg_[w]));
     for (int w : net_.partners[v])
-      if (w != u) update(v, w, Violates(old_v, cfg_[w]), Violates(cfg_[v], cfg_[w]));
+      if (w != u && Counted(v, w)) update(v, w, Violates(old_v, cfg_[w]), Violates(cfg_[v], cfg_[w]));
   }
 
-  const Net& net_;
-  const ColoringOptions& o_;
-  int k_;
-  std::mt19937_64 rng_;
   bool hashed_;
-  std::vector<int> colour_;
-  std::vector<Cfg> cfg_;
   std::vector<int> pair_conf_;
   std::unordered_map<uint64_t, int> count_;
-  int64_t cost_ = 0;
 };
 
-// Nets up to this many knots use the general search for the set rule at D = 2 (see SolveColoring).
-constexpr int kSmallSetNet = 150;
-
-// Tabu search for min_distance 2 over the whole net (radius 0) under the multiset and cyclic
-// rules, with hashed bookkeeping. Each knot has up to d keys: its code with one link colour
-// replaced by a wildcard, canonical under the rule. Two knots of one degree are within one link
-// change of each other exactly when they share a key, so the cost sum over keys of
-// C(count, 2) is 0 exactly for a valid colouring, and a move (two knots change) costs O(d) hash
-// operations instead of a comparison with every knot. (The set rule has no such key: whether
-// one change suffices depends on how many links share each colour; it keeps the general search.)
-class LocalSearchD2 {
- public:
-  LocalSearchD2(const Net& net, const ColoringOptions& o, int k, uint64_t seed)
-      : net_(net), o_(o), k_(k), rng_(seed) {}
-
-  bool Run(Clock::time_point deadline, std::vector<int>* out) {
-    colour_ = RandomColouring(net_, k_, rng_);
-    cfg_.resize(net_.n);
-    own_.clear();
-    own_.reserve(static_cast<size_t>(net_.n) * 4);
-    cost_ = 0;
-    for (int x = 0; x < net_.n; ++x) {
-      cfg_[x] = KnotCfg(net_, colour_, x);
-      Add(cfg_[x], 1);
-    }
-    if (o_.adjacent_distinct)
-      for (int x = 0; x < net_.n; ++x) cost_ += AdjacentPairs(cfg_[x]);
-    if (!TabuSearch(net_, k_, *this, rng_, deadline, 64)) return false;
-    *out = colour_;
-    return true;
+// Keys for distance 2 (LocalSearchD2). A key is a family tag (top byte) over a code-like body (degree and colours,
+// CodeKey's layout); two knots conflict when a key of one meets a key of a MATCHING family
+// with the same body in the other.
+//   Multiset and cyclic, one family kWild matching itself: the code with one link colour
+//   wildcarded. Two knots of equal degree are within one change of each other exactly when
+//   they share such a key (wildcard the link where they differ, or any link when equal).
+//   Set: with S = set(a), T = set(b), one change turns a into a configuration with set T
+//   exactly when T = S (kOwn meets kOwn), or T = S - x for a colour x on one link of a only
+//   (kOwn of b meets kDown of a), or T - y is such an S - x, or T - y = S where a repeats a
+//   colour (kSub of b, every T - y, meets kStep of a, the S - x and S-if-repeated). The
+//   pair conflicts when this holds in either direction.
+enum Family : uint64_t { kWild = 0, kOwn = 1, kDown = 2, kStep = 3, kSub = 4 };
+uint64_t Tagged(Family f, uint64_t body) { return (uint64_t{f} << 56) | body; }
+Family FamilyOf(uint64_t key) { return static_cast<Family>(key >> 56); }
+uint64_t Body(uint64_t key) { return key & ((uint64_t{1} << 56) - 1); }
+// The families a key of family f meets.
+int Partners(Family f, std::array<Family, 2>* out) {
+  switch (f) {
+    case kWild: (*out)[0] = kWild; return 1;
+    case kOwn: (*out)[0] = kOwn, (*out)[1] = kDown; return 2;
+    case kDown: (*out)[0] = kOwn; return 1;
+    case kStep: (*out)[0] = kSub; return 1;
+    case kSub: (*out)[0] = kStep; return 1;
   }
-
- private:
-  template <typename Model>
-  friend bool TabuSearch(const Net&, int, Model&, std::mt19937_64&, Clock::time_point, int);
-  int64_t cost() const { return cost_; }
-  int Colour(int link) const { return colour_[link]; }
-  // Multiset and cyclic: the keys of x with one link colour wildcarded, canonical under the
-  // rule. Two knots of equal degree are within one change of each other exactly when they share
-  // such a key (put the wildcard on the link where they differ, or on any link when equal).
-  void WildKeys(const Cfg& x, std::vector<uint64_t>* keys) const {
-    keys->clear();
+  return 0;
+}
+// Body of a set of colours for a knot of degree d.
+uint64_t SetBody(int d, const std::vector<int>& colours) {
+  Cfg y;
+  y.d = static_cast<int>(colours.size());
+  for (int i = 0; i < y.d; ++i) y.c[i] = colours[i];
+  uint64_t key = static_cast<uint64_t>(d);
+  for (int i = 0; i < 4; ++i) key = (key << 8) | static_cast<uint64_t>(y.c[i] + 1);
+  return key;
+}
+void DistanceTwoKeys(CodeRule rule, const Cfg& x, std::vector<uint64_t>* keys) {
+  keys->clear();
+  if (rule != CodeRule::kSet) {
     for (int i = 0; i < x.d; ++i) {
       Cfg y = x;
-      y.c[i] = kWild;
-      keys->push_back(CodeKey(o_.rule, y));
+      y.c[i] = kWildColour;
+      keys->push_back(Tagged(kWild, CodeKey(rule, y)));
     }
-    std::sort(keys->begin(), keys->end());
-    keys->erase(std::unique(keys->begin(), keys->end()), keys->end());
-  }
-  // Adds (s = 1) or removes (s = -1) a knot with configuration x, keeping cost_ exact.
-  void Add(const Cfg& x, int s) {
-    WildKeys(x, &scratch_);
-    for (uint64_t key : scratch_) {
-      if (s > 0) {
-        cost_ += own_[key]++;
-      } else {
-        const auto it = own_.find(key);
-        cost_ -= --it->second;
-        if (it->second == 0) own_.erase(it);
+  } else {
+    std::array<int, 4> c = x.c;
+    std::sort(c.begin(), c.begin() + x.d);
+    std::vector<int> set, single;
+    for (int i = 0; i < x.d; ++i) {
+      if (i > 0 && c[i] == c[i - 1]) continue;
+      set.push_back(c[i]);
+      const bool once = (i + 1 == x.d || c[i + 1] != c[i]);
+      if (once) single.push_back(c[i]);
+    }
+    keys->push_back(Tagged(kOwn, SetBody(x.d, set)));
+    if (set.size() < static_cast<size_t>(x.d)) keys->push_back(Tagged(kStep, SetBody(x.d, set)));
+    for (size_t j = 0; j < set.size(); ++j) {  // (S - x empty only on one-link knots)
+      std::vector<int> less = set;
+      less.erase(less.begin() + static_cast<long>(j));
+      const uint64_t body = SetBody(x.d, less);
+      keys->push_back(Tagged(kSub, body));
+      if (std::find(single.begin(), single.end(), set[j]) != single.end()) {
+        keys->push_back(Tagged(kDown, body));
+        keys->push_back(Tagged(kStep, body));
       }
     }
   }
+  std::sort(keys->begin(), keys->end());
+  keys->erase(std::unique(keys->begin(), keys->end()), keys->end());
+}
+
+// Tabu search for min_distance 2 over the whole net (radius 0), every rule, with hashed
+// bookkeeping: each knot has a few keys (see Keys), two knots of one degree are within one link
+// change of each other exactly when keys of matching families meet, so the cost (meetings of
+// keys) is 0 exactly for a valid colouring, and a move (two knots change) costs O(d) hash
+// operations instead of a comparison with every knot.
+class LocalSearchD2 : public CostModel {
+ public:
+  LocalSearchD2(const Net& net, const ColoringOptions& o, int k, uint64_t seed)
+      : CostModel(net, o, k, seed) {}
+
+  bool Run(Clock::time_point deadline, std::vector<int>* out) {
+    return SearchBorderFirst(net_, k_, *this, rng_, deadline, 64, true, out);
+  }
+
+  // Sets the colouring, which knots count and which links may change; recounts the keys.
+  void Start(std::vector<int> colour, std::vector<char> active, std::vector<char> movable) {
+    Reset(std::move(colour), std::move(active), std::move(movable));
+    own_.clear();
+    own_.reserve(static_cast<size_t>(net_.n) * 4);
+    for (int x = 0; x < net_.n; ++x) {
+      if (!active_[x]) continue;
+      Add(cfg_[x], 1);
+      if (o_.adjacent_distinct) cost_ += AdjacentPairs(cfg_[x]);
+    }
+  }
+  // Meetings of `keys` with the keys present (not counting `keys` themselves).
+  int64_t Meetings(const std::vector<uint64_t>& keys) const {
+    int64_t m = 0;
+    std::array<Family, 2> partners;
+    for (uint64_t key : keys) {
+      const int n = Partners(FamilyOf(key), &partners);
+      for (int i = 0; i < n; ++i) {
+        const auto it = own_.find(Tagged(partners[i], Body(key)));
+        if (it != own_.end()) m += it->second;
+      }
+    }
+    return m;
+  }
+  // Adds (s = 1) or removes (s = -1) a knot with configuration x, keeping cost_ exact: the
+  // cost counts every meeting of two knots' keys once.
+  void Add(const Cfg& x, int s) {
+    DistanceTwoKeys(o_.rule, x, &scratch_);
+    if (s > 0) {
+      cost_ += Meetings(scratch_);
+      for (uint64_t key : scratch_) ++own_[key];
+    } else {
+      for (uint64_t key : scratch_) {
+        const auto it = own_.find(key);
+        if (--it->second == 0) own_.erase(it);
+      }
+      cost_ -= Meetings(scratch_);
+    }
+  }
   bool Conflicted(int x) {
+    if (!active_[x]) return false;
     const Cfg& cx = cfg_[x];
     if (o_.adjacent_distinct && AdjacentPairs(cx) > 0) return true;
-    WildKeys(cx, &scratch_);
+    // Meetings with other knots: x's own keys taken out of the counts.
+    DistanceTwoKeys(o_.rule, cx, &scratch_);
+    int64_t self = 0;
+    std::array<Family, 2> partners;
     for (uint64_t key : scratch_) {
-      const auto it = own_.find(key);
-      if (it != own_.end() && it->second > 1) return true;
+      const int n = Partners(FamilyOf(key), &partners);
+      for (int i = 0; i < n; ++i)
+        self += std::binary_search(scratch_.begin(), scratch_.end(), Tagged(partners[i], Body(key)));
     }
-    return false;
+    return Meetings(scratch_) > self;
+  }
+  // Knots u, v (the ends of one link) from configurations fu, fv to tu, tv: key counts and
+  // cost_ updated; returns the cost change.
+  int64_t Shift(int u, int v, const Cfg& fu, const Cfg& fv, const Cfg& tu, const Cfg& tv) {
+    const int64_t before = cost_;
+    if (active_[u]) Add(fu, -1);
+    if (active_[v]) Add(fv, -1);
+    if (active_[u]) Add(tu, 1);
+    if (active_[v]) Add(tv, 1);
+    if (o_.adjacent_distinct) {
+      if (active_[u]) cost_ += AdjacentPairs(tu) - AdjacentPairs(fu);
+      if (active_[v]) cost_ += AdjacentPairs(tv) - AdjacentPairs(fv);
+    }
+    return cost_ - before;
   }
   int64_t Delta(int e, int c) {
     const int u = net_.link_knots[e][0], v = net_.link_knots[e][1];
     const auto [cu, cv] = MovedCfgs(net_, cfg_, e, c);
-    const int64_t before = cost_;
-    Add(cfg_[u], -1);
-    Add(cfg_[v], -1);
-    Add(cu, 1);
-    Add(cv, 1);
-    int64_t d = cost_ - before;
-    Add(cv, -1);
-    Add(cu, -1);
-    Add(cfg_[v], 1);
-    Add(cfg_[u], 1);
-    cost_ = before;
-    if (o_.adjacent_distinct)
-      d += AdjacentPairs(cu) + AdjacentPairs(cv) - AdjacentPairs(cfg_[u]) - AdjacentPairs(cfg_[v]);
+    const int64_t d = Shift(u, v, cfg_[u], cfg_[v], cu, cv);
+    Shift(u, v, cu, cv, cfg_[u], cfg_[v]);
     return d;
   }
   void Apply(int e, int c) {
     const int u = net_.link_knots[e][0], v = net_.link_knots[e][1];
-    const int64_t d = Delta(e, c);
     const auto [cu, cv] = MovedCfgs(net_, cfg_, e, c);
-    const int64_t before = cost_;
-    Add(cfg_[u], -1);
-    Add(cfg_[v], -1);
-    Add(cu, 1);
-    Add(cv, 1);
-    cost_ = before + d;
+    Shift(u, v, cfg_[u], cfg_[v], cu, cv);
     colour_[e] = c;
     cfg_[u] = cu;
     cfg_[v] = cv;
   }
 
-  const Net& net_;
-  const ColoringOptions& o_;
-  int k_;
-  std::mt19937_64 rng_;
-  static constexpr int kWild = 254;
-  std::vector<int> colour_;
-  std::vector<Cfg> cfg_;
-  std::unordered_map<uint64_t, int> own_;  // wildcard key -> knots having it
+  std::unordered_map<uint64_t, int> own_;  // key -> active knots having it
   std::vector<uint64_t> scratch_;
-  int64_t cost_ = 0;
 };
 
 // Backtracking over links in knot order (each knot's right then down link, row-major), so a
@@ -580,6 +902,19 @@ class ExactSearch {
 };
 
 }  // namespace
+
+bool DistanceTwoKeysMeet(CodeRule rule, const std::vector<int>& a, const std::vector<int>& b) {
+  std::vector<uint64_t> ka, kb;
+  DistanceTwoKeys(rule, ToCfg(a), &ka);
+  DistanceTwoKeys(rule, ToCfg(b), &kb);
+  std::array<Family, 2> partners;
+  for (uint64_t key : ka) {
+    const int n = Partners(FamilyOf(key), &partners);
+    for (int i = 0; i < n; ++i)
+      if (std::binary_search(kb.begin(), kb.end(), Tagged(partners[i], Body(key)))) return true;
+  }
+  return false;
+}
 
 bool ParseCodeRule(const std::string& name, CodeRule* rule) {
   if (name == "set") *rule = CodeRule::kSet;
@@ -685,18 +1020,12 @@ int64_t CountCodes(CodeRule rule, int degree, int k, bool adjacent_distinct) {
 int64_t MaxCodePacking(CodeRule rule, int degree, int k, bool adjacent_distinct,
                        int min_distance) {
   const int64_t all = CountCodes(rule, degree, k, adjacent_distinct);
-  if (min_distance <= 1) return all;
+  if (min_distance <= 1 || k <= 0) return all;
   if (min_distance > degree) return std::min<int64_t>(all, 1);  // any two are within degree
-  const int t = degree - min_distance + 1;  // size of the sub-configurations that must differ
-  int64_t bound = all;
-  if (rule == CodeRule::kMultiset || (rule == CodeRule::kCyclic && degree <= 3)) {
-    bound = adjacent_distinct ? Binomial(k, t) : Binomial(k + t - 1, t);
-  } else if (rule == CodeRule::kCyclic) {
-    int64_t p = 1;
-    for (int i = 0; i < t; ++i) p *= adjacent_distinct ? (k - i) : k;
-    bound = std::max<int64_t>(p, 0);
-  }
-  return std::min(all, bound);
+  // The set distance is never larger than the multiset distance (a configuration of the other
+  // knot's multiset has its set), so knots pairwise D apart as sets are so as multisets too.
+  const CodeRule keyed = rule == CodeRule::kSet ? CodeRule::kMultiset : rule;
+  return std::min(all, PatternPackingBound(keyed, degree, k, adjacent_distinct, min_distance));
 }
 
 int ColoringLowerBound(int rows, int cols, const ColoringOptions& options) {
@@ -795,22 +1124,9 @@ NetColoring SolveColoring(int rows, int cols, const ColoringOptions& options) {
                                            std::chrono::duration<double>(budget_s));
     std::vector<int> colour;
     const uint64_t seed = options.seed + static_cast<uint64_t>(k);
-    if (options.min_distance == 2 && options.radius == 0 && options.rule != CodeRule::kSet) {
+    if (options.min_distance == 2 && options.radius == 0) {
       LocalSearchD2 search(net, options, k, seed);
-      if (!search.Run(std::min(budget, deadline), &colour)) return false;
-    } else if (options.min_distance == 2 && options.radius == 0 && net.n > kSmallSetNet) {
-      // The set rule has no wildcard keys, but among knots whose links all differ in colour the
-      // set and multiset distances agree (m links of A outside B's colours, m of B's colours
-      // missing from A: m changes either way). So on large nets the set rule is searched as
-      // multiset with distinct colours at every knot: a valid set colouring, not always the
-      // fewest colours (measured, 3 s: 17x17 22 instead of 33, 26x26 29 and 51x51 49 instead of
-      // none; but 6x6 10 instead of 9 and 11x11 17 instead of 15, hence kSmallSetNet).
-      ColoringOptions keyed = options;
-      keyed.rule = CodeRule::kMultiset;
-      keyed.adjacent_distinct = true;
-      LocalSearchD2 search(net, keyed, k, seed);
-      if (!search.Run(std::min(budget, deadline), &colour)) return false;
-    } else {
+      if (!search.Run(std::min(budget, deadline), &colour)) return false;    } else {
       LocalSearch search(net, options, k, seed);
       if (!search.Run(std::min(budget, deadline), &colour)) return false;
     }

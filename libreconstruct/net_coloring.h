@@ -92,12 +92,19 @@ int KnotDistance(CodeRule rule, const std::vector<int>& a, const std::vector<int
 
 // Codes available to a knot of `degree` with k colours (all of them, or with all-different
 // link colours when adjacent_distinct), and an upper bound on how many of them can be pairwise
-// at distance >= min_distance (for D >= 2: multiset / cyclic-of-degree-<=3 by the Singleton-type
-// argument that every sub-multiset of size d - D + 1 lies in at most one code; cyclic degree 4 by
-// projecting a representative onto its first d - D + 1 links; set: no packing argument beyond
-// D > d allowing a single code). Saturates at 2^62.
+// at distance >= min_distance. For D >= 2 the bound is a packing argument: a code with D - 1
+// links wildcarded (a KEY) is shared by any two codes fewer than D apart, so codes pairwise D
+// apart own disjoint sets of keys; the optimum of the linear programme "most codes, each key
+// pattern used at most as often as it has keys", with one variable per code pattern (aabc, abab,
+// ... up to renaming of colours), bounds the packing. Multiset and cyclic directly; set by the
+// multiset bound (a set distance never exceeds the multiset distance) and its own code count.
+// Saturates at 2^62.
 int64_t CountCodes(CodeRule rule, int degree, int k, bool adjacent_distinct);
 int64_t MaxCodePacking(CodeRule rule, int degree, int k, bool adjacent_distinct, int min_distance);
+
+// Whether the distance-2 search's keys of two knots (link colours in geometric order) meet: by
+// construction exactly when KnotDistance(rule, a, b) <= 1 (exposed for the tests).
+bool DistanceTwoKeysMeet(CodeRule rule, const std::vector<int>& a, const std::vector<int>& b);
 
 // The lower bound: the fewest colours k for which, for every degree, MaxCodePacking is at least
 // the largest set of knots of that degree that pairwise must differ (all of them for radius 0,

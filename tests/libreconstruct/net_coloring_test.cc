@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <bitset>
+#include <cmath>
+#include <functional>
 #include <fstream>
 #include <map>
 #include <set>
@@ -204,6 +207,121 @@ TEST(SolveColoring, EveryResultPassesTheVerifier) {
           }
 }
 
+// Distances by their definition between all configurations of d links with k colours (in
+// AllConfigs order): the fewest link changes that give one knot the other's code, the smaller
+// of the two directions.
+std::vector<std::vector<int>> DefinitionDistances(CodeRule rule, int d, int k) {
+  const auto configs = AllConfigs(d, k);
+  std::map<std::vector<int>, int> code_id;
+  for (const auto& x : configs) code_id.emplace(TestCode(rule, x), code_id.size());
+  // change[x][code] = fewest changes of x reaching a configuration with that code.
+  std::vector<std::vector<int>> change(configs.size(), std::vector<int>(code_id.size(), 99));
+  for (size_t a = 0; a < configs.size(); ++a)
+    for (const auto& y : configs) {
+      int h = 0;
+      for (int i = 0; i < d; ++i) h += configs[a][i] != y[i];
+      int& slot = change[a][code_id[TestCode(rule, y)]];
+      slot = std::min(slot, h);
+    }
+  std::vector<std::vector<int>> dist(configs.size(), std::vector<int>(configs.size()));
+  for (size_t a = 0; a < configs.size(); ++a)
+    for (size_t b = 0; b < configs.size(); ++b)
+      dist[a][b] = std::min(change[a][code_id[TestCode(rule, configs[b])]],
+                            change[b][code_id[TestCode(rule, configs[a])]]);
+  return dist;
+}
+
+// The distance-2 search's keys meet exactly when two knots are at most one change apart.
+TEST(DistanceTwoKeys, MeetExactlyWithinOneChange) {
+  for (CodeRule rule : kRules)
+    for (int d = 1; d <= 4; ++d) {
+      const int k = d <= 3 ? 5 : 4;
+      const auto configs = AllConfigs(d, k);
+      const auto dist = DefinitionDistances(rule, d, k);
+      int meeting = 0;
+      for (size_t a = 0; a < configs.size(); ++a)
+        for (size_t b = 0; b < configs.size(); ++b) {
+          const bool meet = DistanceTwoKeysMeet(rule, configs[a], configs[b]);
+          ASSERT_EQ(meet, dist[a][b] <= 1)
+              << CodeRuleName(rule) << " " << ::testing::PrintToString(configs[a]) << " vs "
+              << ::testing::PrintToString(configs[b]) << ": distance " << dist[a][b];
+          meeting += meet;
+        }
+      EXPECT_GT(meeting, static_cast<int>(configs.size()));  // not only the equal pairs
+    }
+  // Knots of different degree never meet.
+  EXPECT_FALSE(DistanceTwoKeysMeet(CodeRule::kSet, {0, 1}, {0, 1, 1}));
+}
+
+// Largest set of codes pairwise >= D apart (by definition), by branch and bound over a bitset
+// clique complement; nodes are codes (multisets for the set rule, whose distance depends on the
+// multiplicities), restricted to all-distinct colours with `distinct`.
+int ExhaustivePacking(CodeRule rule, int d, int k, bool distinct, int min_distance) {
+  const auto configs = AllConfigs(d, k);
+  const auto dist = DefinitionDistances(rule, d, k);
+  const CodeRule node_rule = rule == CodeRule::kSet ? CodeRule::kMultiset : rule;
+  std::map<std::vector<int>, size_t> node_of;  // code -> one configuration index
+  for (size_t a = 0; a < configs.size(); ++a) {
+    if (distinct && std::set<int>(configs[a].begin(), configs[a].end()).size() != configs[a].size())
+      continue;
+    node_of.emplace(TestCode(node_rule, configs[a]), a);
+  }
+  std::vector<size_t> nodes;
+  for (const auto& [code, a] : node_of) nodes.push_back(a);
+  const size_t n = nodes.size();
+  EXPECT_LE(n, 128u);
+  using Bits = std::bitset<128>;
+  std::vector<Bits> conflict(n);
+  for (size_t i = 0; i < n; ++i)
+    for (size_t j = 0; j < n; ++j)
+      if (i != j && dist[nodes[i]][nodes[j]] < min_distance) conflict[i].set(j);
+  int best = 0;
+  std::function<void(Bits, int)> grow = [&](Bits candidates, int size) {
+    if (size + static_cast<int>(candidates.count()) <= best) return;
+    if (candidates.none()) {
+      best = size;
+      return;
+    }
+    const size_t v = candidates._Find_first();
+    Bits without_v = candidates;
+    without_v.reset(v);
+    grow(without_v & ~conflict[v], size + 1);
+    grow(without_v, size);
+  };
+  Bits all;
+  for (size_t i = 0; i < n; ++i) all.set(i);
+  grow(all, 0);
+  return best;
+}
+
+TEST(MaxCodePacking, NeverBelowTheExhaustiveMaximum) {
+  int tight = 0;
+  for (CodeRule rule : kRules)
+    for (bool distinct : {false, true})
+      for (int d = 2; d <= 4; ++d)
+        for (int k = d <= 3 ? 3 : 3; k <= (d == 2 ? 6 : d == 3 ? 6 : 4); ++k)
+          for (int min_distance = 2; min_distance <= d; ++min_distance) {
+            const int exact = ExhaustivePacking(rule, d, k, distinct, min_distance);
+            const int64_t bound = MaxCodePacking(rule, d, k, distinct, min_distance);
+            EXPECT_GE(bound, exact) << CodeRuleName(rule) << " d=" << d << " k=" << k
+                                    << " distinct=" << distinct << " D=" << min_distance;
+            tight += bound == exact;
+          }
+  // The bound is an LP relaxation; it is exact on most of these small cases.
+  EXPECT_GE(tight, 40);
+}
+
+// Multiset, 4 links, D = 2: the linear programme's optimum in closed form, k + C(k,2) + C(k,3)/4
+// (every 3-sub-multiset in at most one code; abcd codes use four, aabb / aabc two of the aab).
+TEST(MaxCodePacking, MatchesTheClosedFormForFourLinkMultisets) {
+  for (int k = 2; k <= 30; ++k) {
+    const double closed = k + k * (k - 1) / 2.0 + k * (k - 1) * (k - 2) / 24.0;
+    EXPECT_EQ(MaxCodePacking(CodeRule::kMultiset, 4, k, false, 2),
+              static_cast<int64_t>(std::floor(closed + 1e-9)))
+        << k;
+  }
+}
+
 // Exhaustive, independent of the solver: does any colouring with k colours satisfy the options?
 // Colourings in restricted-growth form (colour i appears only after 0..i-1), which loses nothing
 // since renaming colours keeps every rule. Distances by their definition over all configurations.
@@ -211,26 +329,7 @@ class Exhaustive {
  public:
   Exhaustive(int rows, int cols, const ColoringOptions& o, int k)
       : rows_(rows), cols_(cols), o_(o), k_(k) {
-    for (int d = 1; d <= 4; ++d) {
-      const auto configs = AllConfigs(d, k);
-      std::map<std::vector<int>, int> code_id;
-      for (const auto& x : configs) code_id.emplace(TestCode(o.rule, x), code_id.size());
-      // change[x][code] = fewest changes of x reaching a configuration with that code.
-      std::vector<std::vector<int>> change(configs.size(), std::vector<int>(code_id.size(), 99));
-      for (size_t a = 0; a < configs.size(); ++a)
-        for (const auto& y : configs) {
-          int h = 0;
-          for (int i = 0; i < d; ++i) h += configs[a][i] != y[i];
-          int& slot = change[a][code_id[TestCode(o.rule, y)]];
-          slot = std::min(slot, h);
-        }
-      auto& dist = dist_[d];
-      dist.assign(configs.size(), std::vector<int>(configs.size()));
-      for (size_t a = 0; a < configs.size(); ++a)
-        for (size_t b = 0; b < configs.size(); ++b)
-          dist[a][b] = std::min(change[a][code_id[TestCode(o.rule, configs[b])]],
-                                change[b][code_id[TestCode(o.rule, configs[a])]]);
-    }
+    for (int d = 1; d <= 4; ++d) dist_[d] = DefinitionDistances(o.rule, d, k);
     for (int r = 0; r < rows; ++r)
       for (int c = 0; c < cols; ++c) knots_.push_back(KnotLinks(rows, cols, r, c));
   }
@@ -280,8 +379,8 @@ class Exhaustive {
   std::vector<int> colour_;
 };
 
-// Above 150 knots the set rule at distance 2 is searched as multiset with distinct colours at
-// every knot (where the two distances agree): the result must hold under the set rule itself.
+// The set rule at distance 2 on a larger net (the keyed search's four key families): the result
+// must hold under the set rule's own distance.
 TEST(SolveColoring, LargeSetNetsAtDistanceTwoPassTheVerifier) {
   ColoringOptions o;
   o.rule = CodeRule::kSet;
