@@ -41,21 +41,6 @@ constexpr char kHelp[] =
     "  --json               print one JSON summary object on stdout as the last output\n\n"
     "exit status: 0 coloured, 1 bad input or no colouring within the limits, 2 usage error.\n";
 
-void ParseKnots(const std::string& text, int* rows, int* cols) {
-  const size_t x = text.find('x');
-  try {
-    if (x == std::string::npos) throw std::invalid_argument("no x");
-    size_t used_r = 0, used_c = 0;
-    *rows = std::stoi(text.substr(0, x), &used_r);
-    *cols = std::stoi(text.substr(x + 1), &used_c);
-    if (used_r != x || used_c != text.size() - x - 1) throw std::invalid_argument("junk");
-  } catch (const std::exception&) {
-    throw UsageError("--knots expects ROWSxCOLS, e.g. 11x11, got '" + text + "'");
-  }
-  if (*rows < 2 || *cols < 2 || *rows > 1000 || *cols > 1000)
-    throw UsageError("--knots " + text + ": need 2..1000 knots per side");
-}
-
 }  // namespace
 
 int RunColorNet(const std::vector<std::string>& args) {
@@ -70,7 +55,7 @@ int RunColorNet(const std::vector<std::string>& args) {
     if (!cl.positional().empty())
       throw UsageError("unexpected argument '" + cl.positional()[0] + "'");
     int rows = 0, cols = 0;
-    ParseKnots(cl.Required("knots"), &rows, &cols);
+    cl.Knots("knots", &rows, &cols);
     const std::string out = cl.Required("out");
     recon::ColoringOptions options;
     const std::string rule = cl.Option("rule").value_or("set");

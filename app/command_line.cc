@@ -93,4 +93,20 @@ double CommandLine::DoubleOption(const std::string& name, double fallback, doubl
   return parsed;
 }
 
+void CommandLine::Knots(const std::string& name, int* rows, int* cols) const {
+  const std::string text = Required(name);
+  const size_t x = text.find('x');
+  try {
+    if (x == std::string::npos) throw std::invalid_argument("no x");
+    size_t used_r = 0, used_c = 0;
+    *rows = std::stoi(text.substr(0, x), &used_r);
+    *cols = std::stoi(text.substr(x + 1), &used_c);
+    if (used_r != x || used_c != text.size() - x - 1) throw std::invalid_argument("junk");
+  } catch (const std::exception&) {
+    throw UsageError("--" + name + " expects ROWSxCOLS, e.g. 11x11, got '" + text + "'");
+  }
+  if (*rows < 2 || *cols < 2 || *rows > 1000 || *cols > 1000)
+    throw UsageError("--" + name + " " + text + ": need 2..1000 knots per side");
+}
+
 }  // namespace netlab::app

@@ -31,6 +31,8 @@ class CommandLine {
   // A number in [min, max], or `fallback` when absent.
   double DoubleOption(const std::string& name, double fallback, double min, double max) const;
   const std::vector<std::string>& positional() const { return positional_; }
+  // A net's shape given as ROWSxCOLS (e.g. 11x11) in option `name`, required; 2..1000 knots a side.
+  void Knots(const std::string& name, int* rows, int* cols) const;
 
  private:
   std::map<std::string, std::vector<std::string>> values_;

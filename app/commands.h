@@ -21,5 +21,6 @@ int RunCalibrate(const std::vector<std::string>& args);
 int RunColorNet(const std::vector<std::string>& args);
 int RunIngest(const std::vector<std::string>& args);
 int RunRender(const std::vector<std::string>& args);
+int RunTriangulate(const std::vector<std::string>& args);
 
 }  // namespace netlab::app

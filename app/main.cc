@@ -16,6 +16,7 @@ const std::vector<Command>& Commands() {
       {"ingest", "check the synchronized camera recordings or convert them to HDF5", RunIngest},
       {"render", "film a simulated shot with a virtual camera rig, with ground truth", RunRender},
       {"simulate", "run a Cosserat-rod net simulation from a scenario file", RunSimulate},
+      {"triangulate", "3D knot tracks from 2D labels of calibrated cameras", RunTriangulate},
   };
   return commands;
 }

@@ -77,6 +77,11 @@ void KnotTracks::CheckConsistent() const {
   if (!covariance.empty() && covariance.size() != cells) fail("covariance size");
   if (!reprojection_error_px.empty() && reprojection_error_px.size() != cells)
     fail("reprojection_error_px size");
+  if (!frame_index.empty() && frame_index.size() != time.size()) fail("frame_index size");
+  for (const Outlier& o : outliers)
+    if (o.camera < 0 || o.camera >= static_cast<int>(camera_names.size()) || o.knot < 0 ||
+        o.knot >= static_cast<int>(grid.size()))
+      fail("an outlier names a camera or knot that does not exist");
 }
 
 void WriteKnotTracks(const std::string& path, const KnotTracks& tracks) {
@@ -104,6 +109,28 @@ void WriteKnotTracks(const std::string& path, const KnotTracks& tracks) {
       h5::WriteDataset(knots.get(), "reprojection_error_px", H5T_NATIVE_DOUBLE, {t, k},
                        tracks.reprojection_error_px.data(), 4);
       h5::SetUnits(knots.get(), "reprojection_error_px", "px");
+    }
+    if (!tracks.frame_index.empty()) {
+      std::vector<int32_t> frames(tracks.frame_index.begin(), tracks.frame_index.end());
+      h5::WriteDataset(file.get(), "frame_index", H5T_NATIVE_INT32, {t}, frames.data());
+      h5::SetUnits(file.get(), "frame_index", "index");
+    }
+    if (!tracks.camera_names.empty()) {
+      h5::Id outliers = h5::CreateGroup(file.get(), "outliers");
+      h5::WriteStringAttribute(outliers.get(), "cameras", JoinNames(tracks.camera_names));
+      if (!tracks.outliers.empty()) {
+        const hsize_t n = tracks.outliers.size();
+        std::vector<int32_t> obs;
+        std::vector<double> residual;
+        for (const auto& o : tracks.outliers) {
+          obs.insert(obs.end(), {o.frame, o.knot, o.camera});
+          residual.push_back(o.residual_px);
+        }
+        h5::WriteDataset(outliers.get(), "observation", H5T_NATIVE_INT32, {n, 3}, obs.data());
+        h5::SetUnits(outliers.get(), "observation", "(frame, knot, camera)");
+        h5::WriteDataset(outliers.get(), "residual_px", H5T_NATIVE_DOUBLE, {n}, residual.data());
+        h5::SetUnits(outliers.get(), "residual_px", "px");
+      }
     }
     if (!tracks.scenario.empty()) h5::WriteStringDataset(file.get(), "scenario", tracks.scenario);
     H5Fflush(file.get(), H5F_SCOPE_GLOBAL);
@@ -168,6 +195,27 @@ KnotTracks ReadKnotTracks(const std::string& path) {
     tracks.reprojection_error_px.resize(t * k);
     h5::ReadDataset(f, "/knots/reprojection_error_px", H5T_NATIVE_DOUBLE,
                     tracks.reprojection_error_px.data());
+  }
+  if (h5::Exists(f, "/frame_index")) {
+    expect("/frame_index", {t});
+    std::vector<int32_t> frames(t);
+    h5::ReadDataset(f, "/frame_index", H5T_NATIVE_INT32, frames.data());
+    tracks.frame_index.assign(frames.begin(), frames.end());
+  }
+  if (h5::Exists(f, "/outliers")) {
+    h5::Id group(H5Gopen2(f, "/outliers", H5P_DEFAULT));
+    tracks.camera_names = SplitNames(h5::ReadStringAttribute(group.get(), "cameras"));
+    if (h5::Exists(f, "/outliers/observation")) {
+      const auto dims = h5::DatasetDims(f, "/outliers/observation");
+      if (dims.size() != 2 || dims[1] != 3) fail("/outliers/observation must be [N,3]");
+      expect("/outliers/residual_px", {dims[0]});
+      std::vector<int32_t> obs(3 * dims[0]);
+      std::vector<double> residual(dims[0]);
+      h5::ReadDataset(f, "/outliers/observation", H5T_NATIVE_INT32, obs.data());
+      h5::ReadDataset(f, "/outliers/residual_px", H5T_NATIVE_DOUBLE, residual.data());
+      for (hsize_t i = 0; i < dims[0]; ++i)
+        tracks.outliers.push_back({obs[3 * i], obs[3 * i + 1], obs[3 * i + 2], residual[i]});
+    }
   }
   if (h5::Exists(f, "/scenario")) tracks.scenario = h5::ReadStringDataset(f, "/scenario");
   return tracks;

@@ -10,6 +10,11 @@
 //   /knots/valid                  [T,K]      uint8    1 where the position is known
 //   /knots/covariance             [T,K,3,3]  float64  m^2       (optional: measured tracks)
 //   /knots/reprojection_error_px  [T,K]      float64  px        (optional: measured tracks)
+//   /frame_index                  [T]        int32    frame number of each row (optional)
+//   /outliers/observation         [N,3]      int32    (frame number, knot index, camera index)
+//   /outliers/residual_px         [N]        float64  px, NaN where no point was triangulated
+//                                 (optional, measured tracks: observations left out; the group's
+//                                 attribute "cameras" names the camera indices, one per line)
 //   /nodes/position               [T,N,3]    float64  m         (optional: simulations)
 //   /probes/<name>                [T,3]      float64  m         (optional: simulations)
 //   /scenario                     string     the scenario YAML  (optional: simulations)
@@ -38,6 +43,13 @@ struct KnotTracks {
   std::vector<uint8_t> valid;                 // [T*K]
   std::vector<Eigen::Matrix3d> covariance;    // [T*K] m^2, or empty
   std::vector<double> reprojection_error_px;  // [T*K], or empty
+  std::vector<int> frame_index;               // [T] frame numbers, or empty
+  struct Outlier {
+    int frame = 0, knot = 0, camera = 0;  // frame number, knot index, index into camera_names
+    double residual_px = 0.0;
+  };
+  std::vector<Outlier> outliers;              // observations left out (measured tracks)
+  std::vector<std::string> camera_names;      // non-empty: /outliers is written
   std::string source;                         // e.g. "netlab simulate"
   std::string scenario;                       // scenario YAML, or empty
 

@@ -22,6 +22,7 @@
 #include "libnetsim/hdf5_util.h"
 #include "libreconstruct/color_identify.h"
 #include "libreconstruct/experiment.h"
+#include "libreconstruct/labels.h"
 #include "libreconstruct/net_coloring.h"
 
 namespace netlab::recon {
@@ -146,6 +147,33 @@ void WriteTextFile(const fs::path& path, const std::string& text) {
     if (!out) throw std::runtime_error(path.string() + ": cannot write");
   }
   fs::rename(partial, path);
+}
+
+
+// labels_true.h5: the true pixel of every knot where a camera sees it (visibility 0), as the
+// labeling tools would have labeled it perfectly: what `netlab triangulate` takes to turn the
+// rendering back into tracks.
+void WriteTrueLabels(const fs::path& path, const calib::Rig& rig,
+                     const std::vector<std::array<int, 2>>& grid, const std::vector<int>& frames,
+                     const std::vector<std::vector<double>>& pixels,
+                     const std::vector<std::vector<uint8_t>>& visibility) {
+  int rows = 0, cols = 0;
+  for (const auto& g : grid) rows = std::max(rows, g[0] + 1), cols = std::max(cols, g[1] + 1);
+  std::vector<std::string> names;
+  for (const auto& c : rig.cameras) names.push_back(c.name);
+  LabelSet labels = LabelSet::Empty(rows, cols, names, frames);
+  const size_t knots = grid.size();
+  for (size_t c = 0; c < names.size(); ++c)
+    for (size_t t = 0; t < frames.size(); ++t)
+      for (size_t j = 0; j < knots; ++j) {
+        if (visibility[c][t * knots + j] != 0) continue;
+        Label& l = labels.at(static_cast<int>(c), static_cast<int>(t), grid[j][0] * cols + grid[j][1]);
+        l.px = {pixels[c][(t * knots + j) * 2], pixels[c][(t * knots + j) * 2 + 1]};
+        l.source = LabelSource::kImported;
+        l.confidence = 1.0f;
+        l.state = LabelState::kAccepted;
+      }
+  WriteLabels(path.string(), labels);
 }
 
 }  // namespace
@@ -507,6 +535,7 @@ RenderSummary RenderExperiment(const RenderJob& job,
     h5::WriteStringDataset(file.get(), "rig", rig_text.str());
   }
   fs::rename(writing, truth_path);
+  WriteTrueLabels(out / "labels_true.h5", rig, truth.grid, frame_index, pixels, visibility);
 
   // Calibration images: the double-sided foil at poses every camera sees.
   if (job.calibration_views > 0) {

@@ -11,6 +11,7 @@
 #include "calibration/rig.h"
 #include "libnetsim/hdf5_util.h"
 #include "libnetsim/track_file.h"
+#include "libreconstruct/labels.h"
 #include "tests/app/run_netlab.h"
 
 namespace {
@@ -101,6 +102,9 @@ TEST_F(RenderCommand, TruePixelsAreTheProjectionsOfTheTrueKnots) {
   // Frame k at time k / 179 s: frame 2 is simulation output 2 (same interval).
   EXPECT_NEAR(truth.time[0], 2 / 179.0, 1e-12);
   EXPECT_LT((truth.Position(0, 7) - sim.Position(2, 7)).norm(), 1e-12);
+  const netlab::recon::LabelSet labels = netlab::recon::ReadLabels(Path("shot/labels_true.h5"));
+  ASSERT_EQ(labels.rows * labels.cols, 36);
+  EXPECT_EQ(labels.frame_index.front(), 2);
   h5::Id file = h5::OpenFileReadOnly(Path("shot/truth.h5"));
   std::vector<int> frame_index(8);
   h5::ReadDataset(file.get(), "frame_index", H5T_NATIVE_INT32, frame_index.data());
@@ -127,6 +131,18 @@ TEST_F(RenderCommand, TruePixelsAreTheProjectionsOfTheTrueKnots) {
               << camera.name << " knot " << k << " out of view inside the image";
         }
         hidden += v == 1;
+      }
+    // labels_true.h5 holds exactly the knots this camera sees, at their true pixels.
+    const int c = labels.FindCamera(camera.name);
+    ASSERT_GE(c, 0) << camera.name;
+    for (int t = 0; t < 8; ++t)
+      for (int k = 0; k < 36; ++k) {
+        const netlab::recon::Label& l = labels.at(c, t, k);
+        ASSERT_EQ(l.present(), visibility[t * 36 + k] == 0) << camera.name << " " << t << " " << k;
+        if (l.present()) {
+          EXPECT_EQ(l.px.x(), px[(t * 36 + k) * 2]);
+          EXPECT_EQ(l.state, netlab::recon::LabelState::kAccepted);
+        }
       }
     // The target box stands between cam2/cam3 and the net: it hides some knots from them.
     if (camera.name == "cam2" || camera.name == "cam3") {

@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -38,6 +39,9 @@ KnotTracks Example() {
       t.reprojection_error_px.push_back(0.1 * f + k);
     }
   t.source = "netlab triangulate";
+  t.frame_index = {10, 11, 12};
+  t.camera_names = {"cam0", "cam1"};
+  t.outliers = {{11, 1, 0, 23.5}, {12, 0, 1, std::nan("")}};
   return t;
 }
 
@@ -55,6 +59,15 @@ TEST_F(TrackFile, RoundTripKeepsEverything) {
   EXPECT_TRUE(out.covariance[5].isApprox(in.covariance[5]));
   EXPECT_EQ(out.reprojection_error_px, in.reprojection_error_px);
   EXPECT_EQ(out.source, "netlab triangulate");
+  EXPECT_EQ(out.frame_index, in.frame_index);
+  EXPECT_EQ(out.camera_names, in.camera_names);
+  ASSERT_EQ(out.outliers.size(), 2u);
+  EXPECT_EQ(out.outliers[0].frame, 11);
+  EXPECT_EQ(out.outliers[0].knot, 1);
+  EXPECT_EQ(out.outliers[0].camera, 0);
+  EXPECT_EQ(out.outliers[0].residual_px, 23.5);
+  EXPECT_EQ(out.outliers[1].camera, 1);
+  EXPECT_TRUE(std::isnan(out.outliers[1].residual_px));
   EXPECT_FALSE(out.Valid(1, 1));
   EXPECT_EQ(out.FindKnot(0, 1), 1);
   EXPECT_FALSE(std::filesystem::exists(Path("tracks.h5.partial")));

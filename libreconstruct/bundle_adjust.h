@@ -1,0 +1,114 @@
+#pragma once
+// 3D knot tracks from 2D labels over a whole sequence: triangulation of every knot in every
+// frame (triangulation.h), then optionally a bundle adjustment with Ceres.
+//
+// Adjustment modes:
+//   kNone    per-point triangulation only (linear + nonlinear refinement, outliers).
+//   kPoints  the points, with the switchable priors below, the cameras as calibrated.
+//   kRig     first the cameras' extrinsics over the sequence (intrinsics fixed): the cameras are
+//            bolted to one frame, so each keeps one pose for the whole sequence; the gauge is
+//            fixed explicitly by holding the reference camera (the rig's first) and the distance
+//            from it to the second camera (the scale); refined on up to `rig_frames` frames
+//            spread over the sequence, then every point is triangulated again with the new rig.
+//            The new rig is adopted only if the sequence determines it (camera centres and
+//            rotations to the given standard deviations): a small or flat net at one place
+//            trades a camera's position against its turn, and such a rig would spoil every point.
+//
+// Priors (kPoints / kRig; each switchable, each reported by how far it moved the points):
+//   link length   |p_a - p_b| = link_length_m, sigma link_sigma_m, for adjacent knots in a frame
+//                 (the thread barely stretches);
+//   smoothness    p[t-1] - 2 p[t] + p[t+1] = 0, sigma smoothness_sigma_m, for each knot in
+//                 consecutive frames (bounded acceleration: sigma ~ a dt^2).
+// The link prior couples the knots of a frame only and is solved frame by frame; smoothness
+// couples one knot's frames only and is solved knot by knot; with both, the two are alternated
+// (block coordinate descent, until a sweep moves the points less than prior_tolerance_m RMS or
+// after prior_sweeps), each holding the other's neighbours at their current values.
+//
+// Uncertainty: sigma^2 (J^T J)^-1 per point, J the inlier reprojection Jacobian, sigma the given
+// pixel noise or the one estimated from all residuals (sum r^2 / (2 n_obs - 3 n_points)). With
+// priors, their terms at the point are added with its neighbours held fixed: the conditional
+// covariance, a slight underestimate of the marginal one.
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "calibration/rig.h"
+#include "libreconstruct/labels.h"
+#include "libreconstruct/triangulation.h"
+
+namespace netlab::recon {
+
+enum class Adjustment { kNone, kPoints, kRig };
+
+// "none", "points", "rig"; false (and *mode untouched) otherwise.
+bool ParseAdjustment(const std::string& name, Adjustment* mode);
+
+struct SequenceOptions {
+  TriangulationOptions triangulation;
+  Adjustment adjustment = Adjustment::kPoints;
+  double sigma_px = 0.0;           // labelling noise for the covariances; 0: estimated
+  double link_length_m = 0.0;      // > 0: link-length prior on
+  double link_sigma_m = 0.002;
+  double smoothness_sigma_m = 0.0;  // > 0: smoothness prior on
+  int prior_sweeps = 4;              // at most; with both priors on
+  double prior_tolerance_m = 2e-5;   // a sweep moving the points less than this (RMS) ends them
+  int rig_frames = 200;
+  // kRig: the adjusted rig is adopted only when the sequence determines every camera this well
+  // (standard deviations); otherwise the calibrated rig is kept (rig_adjusted false).
+  double rig_max_center_sigma_mm = 2.0;
+  double rig_max_rotation_sigma_deg = 0.02;
+  int threads = 2;
+  // Labels in state "needs review" are left out unless this is set.
+  bool use_unreviewed = false;
+  std::function<void(const std::string& stage, double fraction)> progress;
+};
+
+struct ObservationOutlier {
+  int frame = 0;   // frame number (labels' frame_index)
+  int knot = 0;    // row * cols + col
+  int camera = 0;  // index into the rig
+  double residual_px = 0.0;  // NaN where the point was not triangulated at all
+};
+
+struct SequenceResult {
+  int rows = 0, cols = 0;
+  std::vector<int> frame_index;         // [T]
+  std::vector<Eigen::Vector3d> position;  // [T*K] m, world frame
+  std::vector<uint8_t> valid;             // [T*K]
+  std::vector<Eigen::Matrix3d> covariance;  // [T*K] m^2
+  std::vector<double> rms_px;             // [T*K] RMS inlier reprojection residual, NaN if invalid
+  std::vector<ObservationOutlier> outliers;
+  calib::Rig rig;                         // as given, or refined (kRig)
+
+  int64_t candidates = 0;     // knot-frames with two or more views
+  int64_t triangulated = 0;   // of those, valid
+  int64_t single_view = 0;    // knot-frames with exactly one view (left out)
+  int64_t unreviewed_skipped = 0;
+  double reprojection_rms_px = 0.0;  // over every inlier observation
+  double sigma_px = 0.0;             // used for the covariances
+  bool sigma_estimated = false;
+  // How far each prior moved the points (RMS and max over valid points, m); 0 when off.
+  double link_shift_rms_m = 0.0, link_shift_max_m = 0.0;
+  double smoothness_shift_rms_m = 0.0, smoothness_shift_max_m = 0.0;
+  // Both priors: sweeps of the block coordinate descent and the RMS change of the last one.
+  int prior_sweeps_done = 0;
+  double prior_sweep_change_rms_m = 0.0;
+  // kRig: the cameras' change (per camera: rotation deg, centre mm) and the RMS before / after
+  // on the frames used.
+  std::vector<double> rig_rotation_change_deg, rig_center_change_mm;
+  std::vector<double> rig_rotation_sigma_deg, rig_center_sigma_mm;  // their uncertainty
+  bool rig_adjusted = false;  // the adjusted rig was adopted (well determined)
+  double rig_rms_before_px = 0.0, rig_rms_after_px = 0.0;
+  int rig_frames_used = 0;
+  double triangulate_s = 0.0, adjust_s = 0.0;
+};
+
+// Throws netlab::InputError when the labels use a camera the rig lacks (naming it).
+SequenceResult ReconstructSequence(const calib::Rig& rig, const LabelSet& labels,
+                                   const SequenceOptions& options);
+
+}  // namespace netlab::recon

@@ -1,0 +1,99 @@
+#pragma once
+// 2D knot labels per camera and frame, and their files: the project's labels file (labels.h5,
+// written by the labeling tools, read by `netlab triangulate`) and DLTdv8-style xypts.csv.
+//
+// labels.h5 (HDF5; every dataset has a "units" attribute):
+//   root attributes: "format" = "netlab-labels", "version" = "1", "rows", "cols" (int), and
+//                    "cameras" (the camera names, one per line, in the order of /cameras)
+//   /frame_index                      [T]      int32    frame number of each row
+//   /knots/grid                       [K,2]    int32    (row, col), K = rows * cols, row-major
+//   /cameras/<name>/position_px       [T,K,2]  float64  px; NaN where unlabeled
+//   /cameras/<name>/source            [T,K]    uint8    LabelSource
+//   /cameras/<name>/confidence        [T,K]    float32  0..1
+//   /cameras/<name>/state             [T,K]    uint8    LabelState
+// Written to "<path>.partial" and renamed into place.
+//
+// xypts.csv (DLTdv8 style): a header row, then one row per frame (row i is frame i, from 0);
+// columns pt{P}_cam{C}_X, pt{P}_cam{C}_Y for P = 1..K and C = 1..N (P outer, C inner, X before Y),
+// "NaN" where unlabeled. Point P is knot (row, col) with P = row * cols + col + 1; camera C is the
+// C-th camera of the label set (the rig's order). Pixel convention: OpenCV's (origin at the
+// centre of the top-left pixel, y down). Columns may come in any order on reading; every pair must
+// be complete.
+//
+// Pixels and the knot order are the same in both files; a label exists where the position is
+// finite. Bad input throws netlab::InputError naming the file, the line or dataset and the field.
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace netlab::recon {
+
+enum class LabelSource : uint8_t {
+  kNone = 0,
+  kManual = 1,
+  kFindNode = 2,
+  kFindPath = 3,
+  kFillGrid = 4,
+  kTracked = 5,
+  kColour = 6,    // identified by yarn colours
+  kImported = 7,  // read from xypts.csv or another tool
+};
+
+enum class LabelState : uint8_t { kNone = 0, kAccepted = 1, kNeedsReview = 2 };
+
+struct Label {
+  Eigen::Vector2d px{std::numeric_limits<double>::quiet_NaN(),
+                     std::numeric_limits<double>::quiet_NaN()};
+  LabelSource source = LabelSource::kNone;
+  float confidence = 0.0f;
+  LabelState state = LabelState::kNone;
+
+  bool present() const { return std::isfinite(px.x()) && std::isfinite(px.y()); }
+};
+
+struct LabelSet {
+  int rows = 0, cols = 0;
+  std::vector<std::string> cameras;  // names, in the rig's order for xypts.csv
+  std::vector<int> frame_index;      // [T] frame numbers
+  // labels[c][t * knots() + k] for camera c, row t of frame_index, knot k (row-major).
+  std::vector<std::vector<Label>> labels;
+
+  int knots() const { return rows * cols; }
+  int frames() const { return static_cast<int>(frame_index.size()); }
+  // Empty label set of the given shape (every label absent).
+  static LabelSet Empty(int rows, int cols, const std::vector<std::string>& cameras,
+                        const std::vector<int>& frame_index);
+  Label& at(int camera, int t, int knot) {
+    return labels[camera][static_cast<size_t>(t) * knots() + knot];
+  }
+  const Label& at(int camera, int t, int knot) const {
+    return labels[camera][static_cast<size_t>(t) * knots() + knot];
+  }
+  int FindCamera(const std::string& name) const;  // index, or -1
+  // Number of present labels (all cameras and frames).
+  int64_t CountPresent() const;
+};
+
+// labels.h5. Write throws std::runtime_error when the file cannot be written.
+void WriteLabels(const std::string& path, const LabelSet& labels);
+LabelSet ReadLabels(const std::string& path);
+
+// xypts.csv. Reading needs the net's shape and the camera names (camera C = camera_names[C - 1]);
+// a column naming a point beyond rows * cols or a camera beyond camera_names is an error naming
+// the column. Every label read is LabelSource::kImported, confidence 1, accepted.
+void WriteXyPts(const std::string& path, const LabelSet& labels);
+LabelSet ReadXyPts(const std::string& path, int rows, int cols,
+                   const std::vector<std::string>& camera_names);
+
+// Either file by its extension (".csv": xypts; otherwise labels.h5). For labels.h5 the net's
+// shape must match rows x cols (error naming both otherwise); for xypts.csv the cameras are
+// camera_names.
+LabelSet ReadLabelsAny(const std::string& path, int rows, int cols,
+                       const std::vector<std::string>& camera_names);
+
+}  // namespace netlab::recon

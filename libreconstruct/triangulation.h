@@ -1,0 +1,79 @@
+#pragma once
+// Triangulation of one point from two or more calibrated views, with outlier rejection and
+// uncertainty.
+//
+//   1. Linear: DLT on undistorted normalised coordinates (the full lens model inverted first),
+//      each equation scaled to unit norm, solved by SVD.
+//   2. Nonlinear: Gauss-Newton with Levenberg damping on the pixel reprojection error through the
+//      full camera model (calibration/camera.h), observations weighted by Huber's function.
+//   3. Outliers: with three or more views, when an observation's residual exceeds the threshold,
+//      every pair of views is triangulated and refined, the pair explaining the most observations
+//      within the threshold (then the smallest RMS) wins, and the observations it does not explain
+//      are outliers: reported and left out. Two views that disagree cannot say which is wrong:
+//      the point is left untriangulated and both observations are reported.
+//
+// Covariance: sigma^2 (J^T J)^-1 with J the Jacobian of the inlier residuals in px at the
+// solution: first order, exact for Gaussian pixel noise of standard deviation sigma in the limit
+// of small noise, and what the Cramer-Rao bound is at the true point.
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "calibration/rig.h"
+
+namespace netlab::recon {
+
+struct Observation {
+  int camera = 0;          // index into the rig
+  Eigen::Vector2d px;      // OpenCV pixel convention
+};
+
+struct TriangulationOptions {
+  // An observation whose reprojection residual exceeds this is an outlier (px). Keep it above
+  // ~4 sigma of the labelling noise.
+  double outlier_threshold_px = 4.0;
+  // Huber's threshold of the refinement (px): quadratic below, linear above.
+  double huber_px = 2.0;
+  int max_iterations = 20;
+};
+
+struct PointEstimate {
+  bool valid = false;
+  std::string why;                  // when not valid
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // world, m
+  // (J^T J)^-1 of the inlier residuals in px: the covariance for sigma = 1 px (m^2 / px^2).
+  Eigen::Matrix3d unit_covariance = Eigen::Matrix3d::Zero();
+  double rms_px = 0.0;              // RMS inlier residual (over the 2n residual components / 2)
+  double sum_squares_px2 = 0.0;     // sum of squared inlier residual components
+  std::vector<int> inliers;         // indices into the observations
+  std::vector<int> outliers;        // indices into the observations
+  std::vector<double> residual_px;  // per observation (all of them), px; NaN behind a camera
+};
+
+// Linear triangulation. False when fewer than two observations can be undistorted or the
+// solution is at infinity.
+bool TriangulateLinear(const calib::Rig& rig, const std::vector<Observation>& observations,
+                       Eigen::Vector3d* position);
+
+// Nonlinear refinement of `position` from the given observations (all used, Huber-weighted).
+// False when it leaves the front of a camera or diverges.
+bool RefinePoint(const calib::Rig& rig, const std::vector<Observation>& observations,
+                 const TriangulationOptions& options, Eigen::Vector3d* position);
+
+// The whole: linear start, refinement, outliers, covariance.
+PointEstimate TriangulatePoint(const calib::Rig& rig, const std::vector<Observation>& observations,
+                               const TriangulationOptions& options = {});
+
+// sum_i J_i^T J_i at a world point for the given cameras (J_i: d pixel / d point, px / m): the
+// Fisher information for sigma = 1 px. Its inverse times sigma^2 is the Cramer-Rao bound of any
+// unbiased estimate of the point from those views.
+Eigen::Matrix3d PointInformation(const calib::Rig& rig, const std::vector<int>& cameras,
+                                 const Eigen::Vector3d& position);
+
+// Residual (px) of one observation at `position` (NaN behind the camera).
+double ReprojectionResidual(const calib::Rig& rig, const Observation& observation,
+                            const Eigen::Vector3d& position);
+
+}  // namespace netlab::recon

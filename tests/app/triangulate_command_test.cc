@@ -1,0 +1,196 @@
+// `netlab triangulate` end to end: labels (labels.h5 and xypts.csv) of a small net seen by the
+// paper's rig in, the knot-track file and the DLTdv8 CSVs out, the JSON contract, and bad input.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+
+#include "calibration/rig.h"
+#include "libnetsim/track_file.h"
+#include "libreconstruct/labels.h"
+#include "libreconstruct/track_export.h"
+#include "tests/app/run_netlab.h"
+
+namespace {
+
+using netlab::testing::Json;
+using netlab::testing::LastJson;
+using netlab::testing::RunNetlab;
+namespace fs = std::filesystem;
+namespace recon = netlab::recon;
+namespace calib = netlab::calib;
+
+constexpr int kRows = 4, kCols = 4, kFrames = 12;
+constexpr double kFps = 179.0;
+
+Eigen::Vector3d KnotAt(int t, int k) {
+  return {1.0 + 0.5 * t / kFps, (k % kCols - 1.5) * 0.1, (k / kCols - 1.5) * 0.1};
+}
+
+class TriangulateCommand : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("netlab_triangulate_cli_" + std::to_string(getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    rig_ = calib::PaperRig();
+    calib::WriteRig(Path("rig.yaml"), rig_);
+    std::vector<std::string> names;
+    for (const auto& c : rig_.cameras) names.push_back(c.name);
+    std::vector<int> frames(kFrames);
+    for (int t = 0; t < kFrames; ++t) frames[t] = t;
+    labels_ = recon::LabelSet::Empty(kRows, kCols, names, frames);
+    std::mt19937_64 rng(9);
+    std::normal_distribution<double> noise(0.0, 0.2);
+    for (int c = 0; c < 4; ++c)
+      for (int t = 0; t < kFrames; ++t)
+        for (int k = 0; k < kRows * kCols; ++k) {
+          recon::Label& l = labels_.at(c, t, k);
+          l.px = rig_.cameras[c].ProjectWorld(KnotAt(t, k)) + Eigen::Vector2d(noise(rng), noise(rng));
+          l.source = recon::LabelSource::kManual;
+          l.confidence = 1.0f;
+          l.state = recon::LabelState::kAccepted;
+        }
+    // One mislabel (camera 2, frame 5, knot 6) and one knot seen by a single camera.
+    labels_.at(2, 5, 6).px += Eigen::Vector2d(35.0, -20.0);
+    for (int c = 1; c < 4; ++c) labels_.at(c, 8, 15) = recon::Label{};
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string Base() const {
+    return "triangulate --rig " + Path("rig.yaml") + " --knots 4x4 --fps 179 ";
+  }
+
+  fs::path dir_;
+  calib::Rig rig_;
+  recon::LabelSet labels_;
+};
+
+TEST_F(TriangulateCommand, WritesTracksCsvAndTheContractFields) {
+  recon::WriteLabels(Path("labels.h5"), labels_);
+  const auto r = RunNetlab(Base() + "--labels " + Path("labels.h5") + " --out " +
+                           Path("tracks.h5") + " --csv " + Path("run_") + " --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Json json = LastJson(r.out);
+  for (const char* key :
+       {"frames", "points", "triangulated", "reprojection_rms_px", "outliers", "wall_s"})
+    EXPECT_TRUE(json.has(key)) << key;
+  EXPECT_EQ(json["frames"].number(), kFrames);
+  EXPECT_EQ(json["points"].number(), kRows * kCols);
+  EXPECT_EQ(json["triangulated"].number(), kFrames * kRows * kCols - 1);
+  EXPECT_EQ(json["outliers"].number(), 1);
+  EXPECT_LT(json["reprojection_rms_px"].number(), 0.4);
+
+  const netlab::netsim::KnotTracks tracks = netlab::netsim::ReadKnotTracks(Path("tracks.h5"));
+  ASSERT_EQ(tracks.frames(), kFrames);
+  ASSERT_EQ(tracks.knots(), kRows * kCols);
+  EXPECT_NEAR(tracks.time[3], 3 / kFps, 1e-12);
+  ASSERT_EQ(tracks.covariance.size(), tracks.position.size());
+  ASSERT_EQ(tracks.reprojection_error_px.size(), tracks.position.size());
+  EXPECT_FALSE(tracks.Valid(8, 15));
+  for (int t = 0; t < kFrames; ++t)
+    for (int k = 0; k < kRows * kCols; ++k)
+      if (tracks.Valid(t, k)) {
+        EXPECT_LT((tracks.Position(t, k) - KnotAt(t, k)).norm(), 2e-3);
+      }
+  ASSERT_EQ(tracks.outliers.size(), 1u);
+  EXPECT_EQ(tracks.outliers[0].frame, 5);
+  EXPECT_EQ(tracks.outliers[0].knot, 6);
+  EXPECT_EQ(tracks.camera_names[tracks.outliers[0].camera], rig_.cameras[2].name);
+
+  const auto xyz = recon::ReadXyzPts(Path("run_xyzpts.csv"));
+  ASSERT_EQ(static_cast<int>(xyz.size()), kFrames);
+  EXPECT_EQ(xyz[2][5], tracks.Position(2, 5));
+  EXPECT_TRUE(std::isnan(xyz[8][15].x()));
+  const auto res = recon::ReadXyzRes(Path("run_xyzres.csv"));
+  EXPECT_EQ(res[2][5], tracks.reprojection_error_px[2 * kRows * kCols + 5]);
+}
+
+TEST_F(TriangulateCommand, XyPtsInputGivesTheSameTracks) {
+  recon::WriteLabels(Path("labels.h5"), labels_);
+  recon::WriteXyPts(Path("xypts.csv"), labels_);
+  const std::string common = " --ba none --json --quiet";
+  ASSERT_EQ(RunNetlab(Base() + "--labels " + Path("labels.h5") + " --out " + Path("a.h5") + common)
+                .status,
+            0);
+  ASSERT_EQ(RunNetlab(Base() + "--labels " + Path("xypts.csv") + " --out " + Path("b.h5") + common)
+                .status,
+            0);
+  const auto a = netlab::netsim::ReadKnotTracks(Path("a.h5"));
+  const auto b = netlab::netsim::ReadKnotTracks(Path("b.h5"));
+  EXPECT_EQ(a.position.size(), b.position.size());
+  EXPECT_EQ(a.valid, b.valid);
+  for (size_t i = 0; i < a.position.size(); ++i)
+    if (a.valid[i]) {
+      EXPECT_EQ(a.position[i], b.position[i]);
+    }
+}
+
+TEST_F(TriangulateCommand, ComparesWithTheTruthAndReportsPriorsAndTheRig) {
+  recon::WriteLabels(Path("labels.h5"), labels_);
+  netlab::netsim::KnotTracks truth;
+  for (int t = 0; t < kFrames; ++t) truth.time.push_back(t / kFps);
+  for (int k = 0; k < kRows * kCols; ++k) truth.grid.push_back({k / kCols, k % kCols});
+  for (int t = 0; t < kFrames; ++t)
+    for (int k = 0; k < kRows * kCols; ++k) {
+      truth.position.push_back(KnotAt(t, k));
+      truth.valid.push_back(1);
+    }
+  netlab::netsim::WriteKnotTracks(Path("truth.h5"), truth);
+  const auto r = RunNetlab(Base() + "--labels " + Path("labels.h5") + " --out " +
+                           Path("tracks.h5") + " --truth " + Path("truth.h5") +
+                           " --ba rig --link-length 0.1 --smooth-sigma 1e-4 --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Json json = LastJson(r.out);
+  EXPECT_LT(json["truth_rms_m"].number(), 1e-3);
+  EXPECT_EQ(json["truth_points"].number(), kFrames * kRows * kCols - 1);
+  EXPECT_GT(json["link_prior_shift_rms_m"].number(), 0.0);
+  EXPECT_GT(json["smoothness_prior_shift_rms_m"].number(), 0.0);
+  EXPECT_EQ(json["ba"].string(), "rig");
+  // 16 knots over 12 frames do not determine the rig: kept, and said so.
+  EXPECT_FALSE(json["rig_adjusted"].boolean());
+  EXPECT_NE(r.err.find("NOT adjusted"), std::string::npos) << r.err;
+}
+
+TEST_F(TriangulateCommand, BadInputIsNamed) {
+  // Labels naming a camera the rig lacks.
+  recon::LabelSet other = labels_;
+  other.cameras[3] = "camX";
+  recon::WriteLabels(Path("other.h5"), other);
+  auto r = RunNetlab(Base() + "--labels " + Path("other.h5") + " --out " + Path("t.h5"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("camX"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(Path("t.h5")));
+  // An xypts.csv naming a point beyond the net.
+  std::ofstream(Path("bad.csv")) << "pt1_cam1_X,pt1_cam1_Y,pt99_cam1_X,pt99_cam1_Y\n1,2,3,4\n";
+  r = RunNetlab(Base() + "--labels " + Path("bad.csv") + " --out " + Path("t.h5"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("pt99"), std::string::npos) << r.err;
+  // A labels file of another net's shape.
+  recon::WriteLabels(Path("labels.h5"), labels_);
+  r = RunNetlab("triangulate --rig " + Path("rig.yaml") + " --knots 5x5 --fps 179 --labels " +
+                Path("labels.h5") + " --out " + Path("t.h5"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("4 x 4"), std::string::npos) << r.err;
+  // Usage errors.
+  r = RunNetlab(Base() + "--labels " + Path("labels.h5") + " --out " + Path("t.h5") + " --ba all");
+  EXPECT_EQ(r.status, 2);
+  r = RunNetlab(Base() + "--labels " + Path("labels.h5") + " --out " + Path("t.h5") +
+                " --ba none --link-length 0.1");
+  EXPECT_EQ(r.status, 2);
+  r = RunNetlab("triangulate --rig " + Path("rig.yaml") + " --knots 4x4 --labels " +
+                Path("labels.h5") + " --out " + Path("t.h5"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--fps"), std::string::npos) << r.err;
+  r = RunNetlab(Base() + "--labels " + Path("missing.h5") + " --out " + Path("t.h5"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("missing.h5"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(Path("t.h5")));
+}
+
+}  // namespace

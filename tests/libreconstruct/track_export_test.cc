@@ -1,0 +1,202 @@
+#include "libreconstruct/track_export.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <initializer_list>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "common/yaml_util.h"
+#include "tests/libreconstruct/test_files.h"
+
+namespace netlab::recon {
+namespace {
+
+using testing::ScratchDir;
+using testing::WriteBytes;
+namespace fs = std::filesystem;
+
+constexpr int kRows = 2, kCols = 3, kFrames = 4;
+
+// Point number P of knot (row, col) in the export.
+int Point(int row, int col) { return row * kCols + col + 1; }
+
+// Tracks of a 2 x 3 net over four frames: the knots stored in an order unlike the points', knot
+// (1, 2) missing, some knots not valid in some frames, values with all 17 digits.
+netsim::KnotTracks Example() {
+  netsim::KnotTracks tracks;
+  tracks.time = {0.0, 0.01, 0.02, 0.03};
+  tracks.grid = {{1, 1}, {0, 2}, {0, 0}, {1, 0}, {0, 1}};
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> metres(-3.0, 3.0), px(0.0, 2.0);
+  for (int t = 0; t < kFrames; ++t)
+    for (int k = 0; k < tracks.knots(); ++k) {
+      tracks.position.emplace_back(metres(rng), metres(rng), metres(rng));
+      tracks.valid.push_back((t + k) % 3 != 0);
+      tracks.reprojection_error_px.push_back(px(rng));
+    }
+  return tracks;
+}
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// The message of the InputError that `read` throws ("" when it throws none).
+std::string ErrorOf(const std::function<void()>& read) {
+  try {
+    read();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+::testing::AssertionResult Mentions(const std::string& message,
+                                    std::initializer_list<std::string> parts) {
+  if (message.empty()) return ::testing::AssertionFailure() << "no error";
+  for (const std::string& part : parts)
+    if (message.find(part) == std::string::npos)
+      return ::testing::AssertionFailure() << "'" << message << "' does not mention '" << part
+                                           << "'";
+  return ::testing::AssertionSuccess();
+}
+
+TEST(XyzPts, RoundTripIsExactWithNanWhereNotValid) {
+  ScratchDir dir("track_export");
+  const netsim::KnotTracks tracks = Example();
+  WriteXyzPts(dir / "xyzpts.csv", tracks, kRows, kCols);
+  EXPECT_FALSE(fs::exists(dir / "xyzpts.csv.partial"));
+  const std::vector<std::vector<Eigen::Vector3d>> read = ReadXyzPts(dir / "xyzpts.csv");
+  ASSERT_EQ(read.size(), static_cast<size_t>(kFrames));
+  int valid = 0;
+  for (int t = 0; t < kFrames; ++t) {
+    ASSERT_EQ(read[t].size(), static_cast<size_t>(kRows * kCols));
+    for (int k = 0; k < tracks.knots(); ++k) {
+      const Eigen::Vector3d& x = read[t][Point(tracks.grid[k][0], tracks.grid[k][1]) - 1];
+      if (tracks.Valid(t, k)) {
+        EXPECT_EQ(x, tracks.Position(t, k)) << "frame " << t << " knot " << k;
+        ++valid;
+      } else {
+        EXPECT_TRUE(x.array().isNaN().all()) << "frame " << t << " knot " << k;
+      }
+    }
+    EXPECT_TRUE(read[t][Point(1, 2) - 1].array().isNaN().all()) << "missing knot, frame " << t;
+  }
+  EXPECT_EQ(valid, 13);
+}
+
+TEST(XyzRes, RoundTripIsExactWithNanWhereNotValid) {
+  ScratchDir dir("track_export");
+  const netsim::KnotTracks tracks = Example();
+  WriteXyzRes(dir / "xyzres.csv", tracks, kRows, kCols);
+  EXPECT_FALSE(fs::exists(dir / "xyzres.csv.partial"));
+  const std::vector<std::vector<double>> read = ReadXyzRes(dir / "xyzres.csv");
+  ASSERT_EQ(read.size(), static_cast<size_t>(kFrames));
+  for (int t = 0; t < kFrames; ++t) {
+    ASSERT_EQ(read[t].size(), static_cast<size_t>(kRows * kCols));
+    for (int k = 0; k < tracks.knots(); ++k) {
+      const double residual = read[t][Point(tracks.grid[k][0], tracks.grid[k][1]) - 1];
+      if (tracks.Valid(t, k))
+        EXPECT_EQ(residual, tracks.reprojection_error_px[t * tracks.knots() + k]);
+      else
+        EXPECT_TRUE(std::isnan(residual)) << "frame " << t << " knot " << k;
+    }
+    EXPECT_TRUE(std::isnan(read[t][Point(1, 2) - 1]));
+  }
+}
+
+TEST(XyzRes, UnknownResidualsAreNan) {
+  ScratchDir dir("track_export");
+  netsim::KnotTracks tracks = Example();
+  tracks.reprojection_error_px.clear();
+  WriteXyzRes(dir / "xyzres.csv", tracks, kRows, kCols);
+  for (const std::vector<double>& row : ReadXyzRes(dir / "xyzres.csv"))
+    for (double residual : row) EXPECT_TRUE(std::isnan(residual));
+}
+
+TEST(TrackExport, FilesHaveTheDltdv8Layout) {
+  ScratchDir dir("track_export");
+  netsim::KnotTracks tracks;
+  tracks.time = {0.0, 1.0};
+  tracks.grid = {{0, 0}, {0, 1}};
+  tracks.position = {{0.1, -2.0, 3.5}, {1.0, 2.0, 3.0}, {4.0, 5.0, 6.0}, {1e-7, 0.0, -1.25}};
+  tracks.valid = {1, 0, 0, 1};
+  tracks.reprojection_error_px = {0.5, 9.0, 9.0, 0.1};
+  WriteXyzPts(dir / "xyzpts.csv", tracks, 1, 2);
+  WriteXyzRes(dir / "xyzres.csv", tracks, 1, 2);
+  EXPECT_EQ(ReadText(dir / "xyzpts.csv"),
+            "pt1_X,pt1_Y,pt1_Z,pt2_X,pt2_Y,pt2_Z\n"
+            "0.10000000000000001,-2,3.5,NaN,NaN,NaN\n"
+            "NaN,NaN,NaN,9.9999999999999995e-08,0,-1.25\n");
+  EXPECT_EQ(ReadText(dir / "xyzres.csv"),
+            "pt1_dltres,pt2_dltres\n"
+            "0.5,NaN\n"
+            "NaN,0.10000000000000001\n");
+}
+
+TEST(TrackExport, RefusesTracksThatDoNotFitTheNet) {
+  ScratchDir dir("track_export");
+  netsim::KnotTracks outside = Example();
+  outside.grid[3] = {2, 0};  // row 2 of a 2-row net
+  EXPECT_THROW(WriteXyzPts(dir / "xyzpts.csv", outside, kRows, kCols), std::invalid_argument);
+  netsim::KnotTracks twice = Example();
+  twice.grid[3] = twice.grid[0];  // two knots at (1, 1): the tracks hold two nets
+  EXPECT_THROW(WriteXyzRes(dir / "xyzres.csv", twice, kRows, kCols), std::invalid_argument);
+  netsim::KnotTracks short_valid = Example();
+  short_valid.valid.pop_back();
+  EXPECT_THROW(WriteXyzPts(dir / "xyzpts.csv", short_valid, kRows, kCols),
+               std::invalid_argument);
+  EXPECT_TRUE(fs::is_empty(dir.path()));
+}
+
+TEST(TrackExport, WriteIntoAMissingFolderFails) {
+  ScratchDir dir("track_export");
+  EXPECT_THROW(WriteXyzPts(dir / "absent/xyzpts.csv", Example(), kRows, kCols),
+               std::runtime_error);
+  EXPECT_FALSE(fs::exists(dir / "absent"));
+}
+
+// Reads `text` as an xyzpts (or, with `residuals`, an xyzres) file.
+std::string ReadError(const std::string& text, bool residuals = false) {
+  ScratchDir dir("track_export_bad");
+  WriteBytes(dir / "bad.csv", text);
+  return ErrorOf([&] {
+    if (residuals)
+      ReadXyzRes(dir / "bad.csv");
+    else
+      ReadXyzPts(dir / "bad.csv");
+  });
+}
+
+TEST(XyzPts, MalformedFilesAreNamedByLineAndColumn) {
+  const std::string header = "pt1_X,pt1_Y,pt1_Z\n";
+  EXPECT_TRUE(Mentions(ReadError(header + "1,2,3\n4,five,6\n"),
+                       {"bad.csv:3:", "'pt1_Y'", "'five'"}));
+  EXPECT_TRUE(Mentions(ReadError(header + "1,2,3\n4,5\n"), {"bad.csv:3:", "expected 3 cells"}));
+  EXPECT_TRUE(Mentions(ReadError("pt1_X,pt1_Y\n1,2\n"), {"bad.csv:1:", "pt1_Z"}));
+  EXPECT_TRUE(Mentions(ReadError("pt1_X,pt1_Y,pt1_W\n1,2,3\n"), {"bad.csv:1:", "'pt1_W'"}));
+  EXPECT_TRUE(Mentions(ReadError("pt1_X,pt1_Y,pt1_Z,pt1_Y\n1,2,3,4\n"), {"'pt1_Y'", "twice"}));
+  EXPECT_TRUE(Mentions(ReadError("pt0_X,pt0_Y,pt0_Z\n1,2,3\n"), {"'pt0_X'"}));
+  EXPECT_TRUE(Mentions(ErrorOf([] { ReadXyzPts("/nonexistent/xyzpts.csv"); }),
+                       {"/nonexistent/xyzpts.csv"}));
+}
+
+TEST(XyzRes, MalformedFilesAreNamedByLineAndColumn) {
+  EXPECT_TRUE(Mentions(ReadError("pt1_dltres,pt2_dltres\n0.5,1e999\n", true),
+                       {"bad.csv:2:", "'pt2_dltres'", "'1e999'"}));
+  EXPECT_TRUE(Mentions(ReadError("pt1_dltres,pt2_X\n0.5,1\n", true), {"bad.csv:1:", "'pt2_X'"}));
+  EXPECT_TRUE(Mentions(ReadError("pt1_dltres\n0.5,1\n", true), {"bad.csv:2:", "got 2"}));
+}
+
+}  // namespace
+}  // namespace netlab::recon

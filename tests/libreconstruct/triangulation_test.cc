@@ -1,0 +1,156 @@
+#include "libreconstruct/triangulation.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
+
+namespace netlab::recon {
+namespace {
+
+// A knot in the middle of the net's flight (world: x along the flight, z up; the paper's rig).
+const Eigen::Vector3d kPoint(1.2, 0.15, -0.1);
+
+std::vector<Observation> Project(const calib::Rig& rig, const Eigen::Vector3d& p,
+                                 const std::vector<int>& cameras, double sigma,
+                                 std::mt19937_64* rng) {
+  std::normal_distribution<double> noise(0.0, sigma);
+  std::vector<Observation> obs;
+  for (int c : cameras) {
+    Eigen::Vector2d px = rig.cameras[c].ProjectWorld(p);
+    if (rng) px += Eigen::Vector2d(noise(*rng), noise(*rng));
+    obs.push_back({c, px});
+  }
+  return obs;
+}
+
+TEST(Triangulation, ExactProjectionsGiveThePointBack) {
+  const calib::Rig rig = calib::PaperRig();
+  for (const std::vector<int>& cams : {std::vector<int>{0, 1}, {0, 2}, {1, 2, 3}, {0, 1, 2, 3}}) {
+    Eigen::Vector3d linear;
+    const auto obs = Project(rig, kPoint, cams, 0.0, nullptr);
+    ASSERT_TRUE(TriangulateLinear(rig, obs, &linear));
+    EXPECT_LT((linear - kPoint).norm(), 1e-9);
+    const PointEstimate est = TriangulatePoint(rig, obs);
+    ASSERT_TRUE(est.valid) << est.why;
+    EXPECT_LT((est.position - kPoint).norm(), 1e-10);
+    EXPECT_LT(est.rms_px, 1e-6);
+    EXPECT_TRUE(est.outliers.empty());
+  }
+}
+
+// Mean squared 3D error over noise draws against the trace of the Cramer-Rao bound, and the
+// reported covariance against the scatter.
+struct Scatter {
+  double mse = 0.0, crb_trace = 0.0, mean_mahalanobis2 = 0.0;
+  Eigen::Matrix3d empirical = Eigen::Matrix3d::Zero(), predicted = Eigen::Matrix3d::Zero();
+};
+
+Scatter Draw(const calib::Rig& rig, const Eigen::Vector3d& p, const std::vector<int>& cams,
+             double sigma, int draws, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  Scatter s;
+  std::vector<Eigen::Vector3d> errors;
+  for (int i = 0; i < draws; ++i) {
+    const PointEstimate est = TriangulatePoint(rig, Project(rig, p, cams, sigma, &rng));
+    EXPECT_TRUE(est.valid) << est.why;
+    if (!est.valid) continue;
+    const Eigen::Vector3d e = est.position - p;
+    errors.push_back(e);
+    const Eigen::Matrix3d cov = sigma * sigma * est.unit_covariance;
+    s.predicted += cov;
+    s.mean_mahalanobis2 += e.dot(cov.ldlt().solve(e));
+  }
+  const double n = static_cast<double>(errors.size());
+  for (const auto& e : errors) {
+    s.mse += e.squaredNorm();
+    s.empirical += e * e.transpose();
+  }
+  s.mse /= n;
+  s.empirical /= n;
+  s.predicted /= n;
+  s.mean_mahalanobis2 /= n;
+  s.crb_trace = sigma * sigma * PointInformation(rig, cams, p).inverse().trace();
+  return s;
+}
+
+TEST(Triangulation, ErrorIsAtTheCramerRaoBoundFor2To4Views) {
+  const calib::Rig rig = calib::PaperRig();
+  for (const std::vector<int>& cams : {std::vector<int>{0, 1}, {0, 1, 2}, {0, 1, 2, 3}})
+    for (double sigma : {0.2, 1.0}) {
+      const Scatter s = Draw(rig, kPoint, cams, sigma, 4000, 7);
+      const std::string what = std::to_string(cams.size()) + " views, sigma " + std::to_string(sigma);
+      EXPECT_NEAR(s.mse / s.crb_trace, 1.0, 0.05) << what;
+      // Reported covariance vs the scatter: per-axis variances within 6 %, and the Mahalanobis
+      // norm of the error has the chi-square mean 3.
+      for (int i = 0; i < 3; ++i)
+        EXPECT_NEAR(s.empirical(i, i) / s.predicted(i, i), 1.0, 0.06) << what << " axis " << i;
+      EXPECT_NEAR(s.mean_mahalanobis2, 3.0, 0.15) << what;
+    }
+}
+
+TEST(Triangulation, NearParallelViewsStayConsistentWithTheirLargeUncertainty) {
+  // Two cameras 2 cm apart looking at a point 3 m away: rays 0.4 degrees apart.
+  calib::Rig rig;
+  rig.cameras.push_back(calib::LookAtCamera("a", {-1.8, -0.01, 0.0}, {1.2, 0.0, 0.0}, 16, 5.5, 2048));
+  rig.cameras.push_back(calib::LookAtCamera("b", {-1.8, 0.01, 0.0}, {1.2, 0.0, 0.0}, 16, 5.5, 2048));
+  const Eigen::Vector3d p(1.2, 0.05, 0.02);
+  const Scatter s = Draw(rig, p, {0, 1}, 0.1, 2000, 11);
+  // Depth (x) is ~100x less certain than the lateral position; errors follow the covariance.
+  const Eigen::Matrix3d& c = s.predicted;
+  EXPECT_GT(c(0, 0), 1e3 * c(1, 1));
+  EXPECT_NEAR(s.mean_mahalanobis2, 3.0, 0.3);
+  EXPECT_NEAR(s.mse / s.crb_trace, 1.0, 0.1);
+  // Exactly parallel rays (one centre seen twice) are reported, not a NaN point.
+  rig.cameras[1] = rig.cameras[0];
+  const PointEstimate est = TriangulatePoint(rig, Project(rig, p, {0, 1}, 0.0, nullptr));
+  EXPECT_FALSE(est.valid);
+  EXPECT_FALSE(est.why.empty());
+}
+
+TEST(Triangulation, AGrossOutlierInOneViewIsFlaggedAndLeftOut) {
+  const calib::Rig rig = calib::PaperRig();
+  std::mt19937_64 rng(3);
+  for (int bad = 0; bad < 4; ++bad)
+    for (int views : {3, 4}) {
+      std::vector<int> cams;
+      for (int c = 0; c < views; ++c) cams.push_back((bad + c) % 4);  // `bad` is always in
+      auto obs = Project(rig, kPoint, cams, 0.3, &rng);
+      obs[0].px += Eigen::Vector2d(25.0, -18.0);  // a label on the wrong knot, ~30 px away
+      const PointEstimate est = TriangulatePoint(rig, obs);
+      const std::string what = "camera " + std::to_string(bad) + ", " + std::to_string(views);
+      ASSERT_TRUE(est.valid) << what << ": " << est.why;
+      EXPECT_EQ(est.outliers, std::vector<int>{0}) << what;
+      EXPECT_EQ(static_cast<int>(est.inliers.size()), views - 1) << what;
+      EXPECT_GT(est.residual_px[0], 20.0) << what;
+      // As accurate as the views left: within 4 sigma of their bound.
+      std::vector<int> good(cams.begin() + 1, cams.end());
+      const double bound = 0.3 * std::sqrt(PointInformation(rig, good, kPoint).inverse().trace());
+      EXPECT_LT((est.position - kPoint).norm(), 4 * bound) << what;
+    }
+}
+
+TEST(Triangulation, TwoViewsThatDisagreeAreReportedNotGuessed) {
+  const calib::Rig rig = calib::PaperRig();
+  // cam0 and cam1 are a horizontal stereo pair: a vertical shift leaves the epipolar line. (A
+  // shift along it is consistent with some point: two views cannot detect that.)
+  auto obs = Project(rig, kPoint, {0, 1}, 0.0, nullptr);
+  obs[1].px += Eigen::Vector2d(0.0, 30.0);
+  const PointEstimate est = TriangulatePoint(rig, obs);
+  EXPECT_FALSE(est.valid);
+  EXPECT_EQ(est.outliers, (std::vector<int>{0, 1}));
+  EXPECT_NE(est.why.find("disagree"), std::string::npos) << est.why;
+}
+
+TEST(Triangulation, OneViewIsNotAPoint) {
+  const calib::Rig rig = calib::PaperRig();
+  const PointEstimate est = TriangulatePoint(rig, Project(rig, kPoint, {1}, 0.0, nullptr));
+  EXPECT_FALSE(est.valid);
+  EXPECT_EQ(est.why, "fewer than two views");
+}
+
+}  // namespace
+}  // namespace netlab::recon
