@@ -195,6 +195,14 @@ int RunTriangulate(const std::vector<std::string>& args) {
     const double wall_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const int64_t untriangulated = r.candidates - r.triangulated;
+    std::vector<std::string> warnings;
+    if (r.sigma_estimated && 4.0 * r.sigma_px > options.triangulation.outlier_threshold_px)
+      warnings.push_back("the labelling noise (" + std::to_string(r.sigma_px) +
+                         " px) is more than a quarter of --outlier-px: good labels are being "
+                         "rejected; raise --outlier-px to ~5x the noise");
+    if (r.candidates > 0 && r.triangulated < 0.9 * r.candidates)
+      warnings.push_back(std::to_string(untriangulated) + " of " + std::to_string(r.candidates) +
+                         " knot-frames seen twice or more were not triangulated (see /outliers)");
     if (!quiet) {
       std::fprintf(stderr,
                    "%d frames x %d knots: %lld knot-frames triangulated of %lld seen twice or "
@@ -228,6 +236,7 @@ int RunTriangulate(const std::vector<std::string>& args) {
                      "RMS after the best rigid motion (for a rig in its own world frame)\n",
                      truth_rms * 1e3, truth_max * 1e3, static_cast<long long>(truth_n),
                      aligned_rms * 1e3);
+      for (const std::string& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
       std::fprintf(stderr, "written %s%s%s\n", out.c_str(),
                    csv_pts.empty() ? "" : (", " + csv_pts + ", " + csv_res).c_str(), "");
     }
@@ -279,6 +288,9 @@ int RunTriangulate(const std::vector<std::string>& args) {
         json.Key("truth_aligned_rms_m").Number(aligned_rms);
         json.Key("truth_mean_mahalanobis2").Number(truth_n > 0 ? mahalanobis / truth_n : 0.0);
       }
+      json.Key("warnings").BeginArray();
+      for (const std::string& w : warnings) json.String(w);
+      json.EndArray();
       json.Key("triangulate_s").Number(r.triangulate_s);
       json.Key("adjust_s").Number(r.adjust_s);
       json.Key("wall_s").Number(wall_s);

@@ -18,18 +18,9 @@ using netlab::testing::RunNetlab;
 namespace fs = std::filesystem;
 namespace recon = netlab::recon;
 
-class ColorNetCommand : public ::testing::Test {
+class ColorNetCommand : public netlab::testing::CommandTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("netlab_color_cli_" + std::to_string(getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
-  fs::path dir_;
+  ColorNetCommand() : CommandTest("color_cli") {}
 };
 
 TEST_F(ColorNetCommand, ColoursANetAndReportsTheContractFields) {

@@ -11,6 +11,8 @@
 #include <sstream>
 #include <string>
 
+#include <gtest/gtest.h>
+
 #include "tests/app/json_parse.h"
 
 namespace netlab::testing {
@@ -45,5 +47,24 @@ inline Json LastJson(const std::string& out) {
   while (!text.empty() && text.back() == '\n') text.pop_back();
   return JsonParser::Parse(text.substr(text.rfind('\n') + 1));
 }
+
+// A fixture with a scratch folder of its own per process and test (ctest runs tests in
+// parallel), removed afterwards; Path(name) is a file in it.
+class CommandTest : public ::testing::Test {
+ protected:
+  explicit CommandTest(const std::string& tag) : tag_(tag) {}
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("netlab_" + tag_ + "_" + std::to_string(getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+
+  std::string tag_;
+  std::filesystem::path dir_;
+};
 
 }  // namespace netlab::testing

@@ -30,14 +30,11 @@ Eigen::Vector3d KnotAt(int t, int k) {
   return {1.0 + 0.5 * t / kFps, (k % kCols - 1.5) * 0.1, (k / kCols - 1.5) * 0.1};
 }
 
-class TriangulateCommand : public ::testing::Test {
+class TriangulateCommand : public netlab::testing::CommandTest {
  protected:
+  TriangulateCommand() : CommandTest("triangulate_cli") {}
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("netlab_triangulate_cli_" + std::to_string(getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    CommandTest::SetUp();
     rig_ = calib::PaperRig();
     calib::WriteRig(Path("rig.yaml"), rig_);
     std::vector<std::string> names;
@@ -60,13 +57,10 @@ class TriangulateCommand : public ::testing::Test {
     labels_.at(2, 5, 6).px += Eigen::Vector2d(35.0, -20.0);
     for (int c = 1; c < 4; ++c) labels_.at(c, 8, 15) = recon::Label{};
   }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
   std::string Base() const {
     return "triangulate --rig " + Path("rig.yaml") + " --knots 4x4 --fps 179 ";
   }
 
-  fs::path dir_;
   calib::Rig rig_;
   recon::LabelSet labels_;
 };
@@ -155,6 +149,27 @@ TEST_F(TriangulateCommand, ComparesWithTheTruthAndReportsPriorsAndTheRig) {
   // 16 knots over 12 frames do not determine the rig: kept, and said so.
   EXPECT_FALSE(json["rig_adjusted"].boolean());
   EXPECT_NE(r.err.find("NOT adjusted"), std::string::npos) << r.err;
+}
+
+TEST_F(TriangulateCommand, NoisyLabelsWarnThatTheOutlierThresholdIsTooTight) {
+  std::mt19937_64 rng(4);
+  std::normal_distribution<double> noise(0.0, 2.0);
+  for (auto& camera : labels_.labels)
+    for (recon::Label& l : camera)
+      if (l.present()) l.px += Eigen::Vector2d(noise(rng), noise(rng));
+  recon::WriteLabels(Path("noisy.h5"), labels_);
+  auto r = RunNetlab(Base() + "--labels " + Path("noisy.h5") + " --out " + Path("t.h5") + " --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  Json json = LastJson(r.out);
+  ASSERT_FALSE(json["warnings"].array().empty());
+  EXPECT_NE(json["warnings"].array()[0].string().find("--outlier-px"), std::string::npos);
+  // With the threshold at 5x the noise the warning goes and fewer labels are rejected.
+  r = RunNetlab(Base() + "--labels " + Path("noisy.h5") + " --out " + Path("t.h5") +
+                " --outlier-px 10 --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Json relaxed = LastJson(r.out);
+  EXPECT_TRUE(relaxed["warnings"].array().empty());
+  EXPECT_LT(relaxed["outliers"].number(), json["outliers"].number());
 }
 
 TEST_F(TriangulateCommand, BadInputIsNamed) {

@@ -25,6 +25,8 @@ namespace {
 
 using testing::ScratchDir;
 using testing::WriteBytes;
+using testing::ErrorOf;
+using testing::Mentions;
 namespace fs = std::filesystem;
 
 constexpr int kRows = 3, kCols = 4, kFrames = 5;
@@ -73,26 +75,6 @@ bool SameDouble(double a, double b) { return (std::isnan(a) && std::isnan(b)) ||
                << y.px.transpose() << ")";
     }
   }
-  return ::testing::AssertionSuccess();
-}
-
-// The message of the InputError that `read` throws ("" when it throws none).
-std::string ErrorOf(const std::function<void()>& read) {
-  try {
-    read();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
-
-::testing::AssertionResult Mentions(const std::string& message,
-                                    std::initializer_list<std::string> parts) {
-  if (message.empty()) return ::testing::AssertionFailure() << "no error";
-  for (const std::string& part : parts)
-    if (message.find(part) == std::string::npos)
-      return ::testing::AssertionFailure() << "'" << message << "' does not mention '" << part
-                                           << "'";
   return ::testing::AssertionSuccess();
 }
 

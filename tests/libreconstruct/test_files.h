@@ -4,6 +4,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <functional>
+#include <initializer_list>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -11,6 +13,8 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
+
+#include "common/yaml_util.h"
 
 namespace netlab::recon::testing {
 
@@ -79,6 +83,27 @@ inline ::testing::AssertionResult SameImage(const cv::Mat& a, const cv::Mat& b) 
   if (a.empty()) return ::testing::AssertionSuccess();
   const double diff = cv::norm(a, b, cv::NORM_INF);
   if (diff != 0.0) return ::testing::AssertionFailure() << "pixels differ by up to " << diff;
+  return ::testing::AssertionSuccess();
+}
+
+// The message of the InputError that `read` throws ("" when it throws none).
+inline std::string ErrorOf(const std::function<void()>& read) {
+  try {
+    read();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Success when `message` is an error that mentions every one of `parts`.
+inline ::testing::AssertionResult Mentions(const std::string& message,
+                                           std::initializer_list<std::string> parts) {
+  if (message.empty()) return ::testing::AssertionFailure() << "no error";
+  for (const std::string& part : parts)
+    if (message.find(part) == std::string::npos)
+      return ::testing::AssertionFailure() << "'" << message << "' does not mention '" << part
+                                           << "'";
   return ::testing::AssertionSuccess();
 }
 

@@ -20,6 +20,8 @@ namespace {
 
 using testing::ScratchDir;
 using testing::WriteBytes;
+using testing::ErrorOf;
+using testing::Mentions;
 namespace fs = std::filesystem;
 
 constexpr int kRows = 2, kCols = 3, kFrames = 4;
@@ -49,26 +51,6 @@ std::string ReadText(const std::string& path) {
   std::stringstream text;
   text << in.rdbuf();
   return text.str();
-}
-
-// The message of the InputError that `read` throws ("" when it throws none).
-std::string ErrorOf(const std::function<void()>& read) {
-  try {
-    read();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
-
-::testing::AssertionResult Mentions(const std::string& message,
-                                    std::initializer_list<std::string> parts) {
-  if (message.empty()) return ::testing::AssertionFailure() << "no error";
-  for (const std::string& part : parts)
-    if (message.find(part) == std::string::npos)
-      return ::testing::AssertionFailure() << "'" << message << "' does not mention '" << part
-                                           << "'";
-  return ::testing::AssertionSuccess();
 }
 
 TEST(XyzPts, RoundTripIsExactWithNanWhereNotValid) {
