@@ -43,7 +43,8 @@ constexpr char kHelp[] =
     "                      with the priors below; rig: first the cameras' extrinsics (one pose\n"
     "                      each for the sequence; camera 1 and its distance to camera 2 held)\n"
     "  --outlier-px P      an observation this far from its point's projection is an outlier\n"
-    "                      (default 4; keep it above ~4x the labelling noise)\n"
+    "                      (default: 5x the labelling noise, --sigma-px or estimated from a\n"
+    "                      first pass at 4 px; keep a fixed one above ~4x the noise)\n"
     "  --sigma-px S        labelling noise for the covariances (default: from the residuals)\n"
     "  --link-length M     link-length prior: adjacent knots M apart (off unless given)\n"
     "  --link-sigma M      its standard deviation (default 0.002)\n"
@@ -104,6 +105,7 @@ int RunTriangulate(const std::vector<std::string>& args) {
     if (!recon::ParseAdjustment(ba, &options.adjustment))
       throw UsageError("--ba expects none, points or rig, got '" + ba + "'");
     options.triangulation.outlier_threshold_px = cl.DoubleOption("outlier-px", 4.0, 0.01, 1e4);
+    options.auto_threshold = !cl.Option("outlier-px");
     options.sigma_px = cl.DoubleOption("sigma-px", 0.0, 0.0, 1e3);
     options.link_length_m = cl.DoubleOption("link-length", 0.0, 0.0, 100.0);
     options.link_sigma_m = cl.DoubleOption("link-sigma", 0.002, 1e-9, 100.0);
@@ -196,7 +198,7 @@ int RunTriangulate(const std::vector<std::string>& args) {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const int64_t untriangulated = r.candidates - r.triangulated;
     std::vector<std::string> warnings;
-    if (r.sigma_estimated && 4.0 * r.sigma_px > options.triangulation.outlier_threshold_px)
+    if (r.sigma_estimated && 4.0 * r.sigma_px > r.outlier_threshold_px)
       warnings.push_back("the labelling noise (" + std::to_string(r.sigma_px) +
                          " px) is more than a quarter of --outlier-px: good labels are being "
                          "rejected; raise --outlier-px to ~5x the noise");
@@ -207,11 +209,12 @@ int RunTriangulate(const std::vector<std::string>& args) {
       std::fprintf(stderr,
                    "%d frames x %d knots: %lld knot-frames triangulated of %lld seen twice or "
                    "more (%lld not: see /outliers), %lld seen once; reprojection RMS %.3f px; "
-                   "%zu outlier observations; sigma %.3f px%s; --ba %s; %.1f s\n",
+                   "%zu outlier observations (threshold %.2f px); sigma %.3f px%s; --ba %s; "
+                   "%.1f s\n",
                    labels.frames(), rows * cols, static_cast<long long>(r.triangulated),
                    static_cast<long long>(r.candidates), static_cast<long long>(untriangulated),
                    static_cast<long long>(r.single_view), r.reprojection_rms_px, r.outliers.size(),
-                   r.sigma_px, r.sigma_estimated ? " (estimated)" : "", ba.c_str(), wall_s);
+                   r.outlier_threshold_px, r.sigma_px, r.sigma_estimated ? " (estimated)" : "", ba.c_str(), wall_s);
       if (options.link_length_m > 0)
         std::fprintf(stderr, "link-length prior moved the points %.3f mm RMS (max %.3f mm)\n",
                      r.link_shift_rms_m * 1e3, r.link_shift_max_m * 1e3);
@@ -247,6 +250,7 @@ int RunTriangulate(const std::vector<std::string>& args) {
       json.Key("points").Int(rows * cols);
       json.Key("triangulated").Int(r.triangulated);
       json.Key("candidates").Int(r.candidates);
+      json.Key("two_view").Int(r.two_view);
       json.Key("untriangulated").Int(untriangulated);
       json.Key("single_view").Int(r.single_view);
       json.Key("unreviewed_skipped").Int(r.unreviewed_skipped);
@@ -254,6 +258,7 @@ int RunTriangulate(const std::vector<std::string>& args) {
       json.Key("outliers").Int(static_cast<int64_t>(r.outliers.size()));
       json.Key("sigma_px").Number(r.sigma_px);
       json.Key("sigma_estimated").Bool(r.sigma_estimated);
+      json.Key("outlier_threshold_px").Number(r.outlier_threshold_px);
       json.Key("ba").String(ba);
       if (options.link_length_m > 0) {
         json.Key("link_prior_shift_rms_m").Number(r.link_shift_rms_m);

@@ -123,9 +123,9 @@ void ParabolaTable(int frames) {
               kRows * kCols, frames, names.size(), static_cast<long long>(present), Since(g0),
               static_cast<long long>(planted));
   std::printf("| mode | priors | wall (s) | triangulate (s) | adjust (s) | triangulated | RMS error "
-              "(mm) | mislabels found | other outliers | reprojection RMS (px) | prior shift "
-              "RMS (mm) |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+              "(mm) | mean Mahalanobis^2 (3: covariance right) | wrong points (> 6 sigma) | mislabels found | other outliers | threshold (px) | "
+              "reprojection RMS (px) | prior shift RMS (mm) |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   struct Case {
     recon::Adjustment mode;
     bool link, smooth;
@@ -144,13 +144,19 @@ void ParabolaTable(int frames) {
     const auto t0 = Clock::now();
     const recon::SequenceResult r = recon::ReconstructSequence(rig, labels, o);
     const double wall = Since(t0);
-    double ss = 0.0;
-    int64_t n = 0;
+    double ss = 0.0, m2 = 0.0;
+    int64_t n = 0, wrong = 0;
     for (int t = 0; t < frames; ++t)
       for (int k = 0; k < kRows * kCols; ++k) {
         const size_t i = static_cast<size_t>(t) * kRows * kCols + k;
         if (!r.valid[i]) continue;
-        ss += (r.position[i] - Knot(kRows, kCols, t, k, kFps)).squaredNorm();
+        const Eigen::Vector3d e = r.position[i] - Knot(kRows, kCols, t, k, kFps);
+        ss += e.squaredNorm();
+        // Wrong: off by more than 6 of its own standard deviations (chi-square with 3 degrees
+        // of freedom beyond 36: 6e-8 of honest points, 0.02 expected here).
+        const double d2 = e.dot(r.covariance[i].ldlt().solve(e));
+        m2 += d2;
+        wrong += d2 > 36.0;
         ++n;
       }
     int64_t found = 0;
@@ -173,11 +179,13 @@ void ParabolaTable(int frames) {
     else if (c.link || c.smooth)
       std::snprintf(shift, sizeof shift, "%.4f",
                     1e3 * (c.link ? r.link_shift_rms_m : r.smoothness_shift_rms_m));
-    std::printf("| %s | %s | %.1f | %.1f | %.1f | %lld | %.4f | %lld / %lld | %lld | %.3f | %s |\n",
+    std::printf("| %s | %s | %.1f | %.1f | %.1f | %lld | %.4f | %.2f | %lld | %lld / %lld | %lld | %.2f | "
+                "%.3f | %s |\n",
                 mode, priors.c_str(), wall, r.triangulate_s, r.adjust_s,
-                static_cast<long long>(r.triangulated), 1e3 * std::sqrt(ss / n),
-                static_cast<long long>(found), static_cast<long long>(planted),
-                static_cast<long long>(r.outliers.size()) - found, r.reprojection_rms_px, shift);
+                static_cast<long long>(r.triangulated), 1e3 * std::sqrt(ss / n), m2 / n,
+                static_cast<long long>(wrong), static_cast<long long>(found),
+                static_cast<long long>(planted), static_cast<long long>(r.outliers.size()) - found,
+                r.outlier_threshold_px, r.reprojection_rms_px, shift);
     std::fflush(stdout);
   }
 }

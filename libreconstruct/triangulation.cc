@@ -203,9 +203,10 @@ PointEstimate TriangulatePoint(const calib::Rig& rig, const std::vector<Observat
       est.residual_px = fits_all ? residual : std::vector<double>(n, kNaN);
       return est;
     }
-    // Consensus of pairs: the pair explaining the most views, then the smallest RMS of those.
-    int best_count = -1;
-    double best_rms = std::numeric_limits<double>::infinity();
+    // Consensus of pairs: the set of views that the most pairs' points explain. It must be the
+    // only largest one: a mislabel that happens to lie on the epipolar line of one good view
+    // forms a consistent pair too, and then nothing says which pair is right.
+    std::vector<std::vector<int>> largest;
     for (int a = 0; a < n; ++a)
       for (int b = a + 1; b < n; ++b) {
         Eigen::Vector3d q;
@@ -213,22 +214,31 @@ PointEstimate TriangulatePoint(const calib::Rig& rig, const std::vector<Observat
         if (!FitSubset(rig, observations, {a, b}, options, &q, &r)) continue;
         const std::vector<int> in = within(r);
         if (in.size() < 2) continue;
-        double s = 0.0;
-        for (int i : in) s += r[i] * r[i];
-        const double rms = std::sqrt(s / static_cast<double>(in.size()));
-        if (static_cast<int>(in.size()) > best_count ||
-            (static_cast<int>(in.size()) == best_count && rms < best_rms)) {
-          best_count = static_cast<int>(in.size());
-          best_rms = rms;
-          inliers = in;
-        }
+        if (!largest.empty() && in.size() < largest[0].size()) continue;
+        if (!largest.empty() && in.size() > largest[0].size()) largest.clear();
+        if (std::find(largest.begin(), largest.end(), in) == largest.end()) largest.push_back(in);
       }
-    if (best_count < 2) {
+    if (largest.empty()) {
       est.why = "no two views agree within the outlier threshold";
       est.outliers = all;
       est.residual_px.assign(n, kNaN);
       return est;
     }
+    if (largest.size() > 1) {
+      // Report every view that some largest set leaves out: one of them is wrong.
+      est.why = "ambiguous: " + std::to_string(largest.size()) + " sets of " +
+                std::to_string(largest[0].size()) + " views agree with each other but not "
+                "together (cannot tell which view is wrong)";
+      for (int i = 0; i < n; ++i)
+        for (const auto& set : largest)
+          if (std::find(set.begin(), set.end(), i) == set.end()) {
+            est.outliers.push_back(i);
+            break;
+          }
+      est.residual_px.assign(n, kNaN);
+      return est;
+    }
+    inliers = largest[0];
     // Refit on the consensus, then take every view the refit explains.
     if (!FitSubset(rig, observations, inliers, options, &p, &residual)) {
       est.why = "the agreeing views do not triangulate";

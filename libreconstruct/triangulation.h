@@ -7,10 +7,11 @@
 //   2. Nonlinear: Gauss-Newton with Levenberg damping on the pixel reprojection error through the
 //      full camera model (calibration/camera.h), observations weighted by Huber's function.
 //   3. Outliers: with three or more views, when an observation's residual exceeds the threshold,
-//      every pair of views is triangulated and refined, the pair explaining the most observations
-//      within the threshold (then the smallest RMS) wins, and the observations it does not explain
-//      are outliers: reported and left out. Two views that disagree cannot say which is wrong:
-//      the point is left untriangulated and both observations are reported.
+//      every pair of views is triangulated and refined; the largest set of views that a pair's
+//      point explains within the threshold wins, and the observations it leaves out are outliers:
+//      reported and left out. When two different sets tie for largest (a mislabel on the
+//      epipolar line of a good view agrees with it), or two views disagree, nothing says which
+//      view is wrong: the point is left untriangulated and the suspects are reported.
 //
 // Covariance: sigma^2 (J^T J)^-1 with J the Jacobian of the inlier residuals in px at the
 // solution: first order, exact for Gaussian pixel noise of standard deviation sigma in the limit

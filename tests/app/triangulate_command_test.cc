@@ -151,25 +151,30 @@ TEST_F(TriangulateCommand, ComparesWithTheTruthAndReportsPriorsAndTheRig) {
   EXPECT_NE(r.err.find("NOT adjusted"), std::string::npos) << r.err;
 }
 
-TEST_F(TriangulateCommand, NoisyLabelsWarnThatTheOutlierThresholdIsTooTight) {
+TEST_F(TriangulateCommand, TheOutlierThresholdFollowsTheNoiseOrAFixedOneWarns) {
   std::mt19937_64 rng(4);
   std::normal_distribution<double> noise(0.0, 2.0);
   for (auto& camera : labels_.labels)
     for (recon::Label& l : camera)
       if (l.present()) l.px += Eigen::Vector2d(noise(rng), noise(rng));
   recon::WriteLabels(Path("noisy.h5"), labels_);
-  auto r = RunNetlab(Base() + "--labels " + Path("noisy.h5") + " --out " + Path("t.h5") + " --json");
+  // A fixed 4 px threshold at 2 px of noise rejects good labels: said so.
+  auto r = RunNetlab(Base() + "--labels " + Path("noisy.h5") + " --out " + Path("t.h5") +
+                     " --outlier-px 4 --json");
   ASSERT_EQ(r.status, 0) << r.err;
-  Json json = LastJson(r.out);
-  ASSERT_FALSE(json["warnings"].array().empty());
-  EXPECT_NE(json["warnings"].array()[0].string().find("--outlier-px"), std::string::npos);
-  // With the threshold at 5x the noise the warning goes and fewer labels are rejected.
-  r = RunNetlab(Base() + "--labels " + Path("noisy.h5") + " --out " + Path("t.h5") +
-                " --outlier-px 10 --json");
+  const Json fixed = LastJson(r.out);
+  ASSERT_FALSE(fixed["warnings"].array().empty());
+  EXPECT_NE(fixed["warnings"].array()[0].string().find("--outlier-px"), std::string::npos);
+  EXPECT_EQ(fixed["outlier_threshold_px"].number(), 4.0);
+  // By default the threshold is 5x the estimated noise: no warning, fewer labels rejected, and
+  // the planted mislabel (35 px) still found.
+  r = RunNetlab(Base() + "--labels " + Path("noisy.h5") + " --out " + Path("t.h5") + " --json");
   ASSERT_EQ(r.status, 0) << r.err;
-  const Json relaxed = LastJson(r.out);
-  EXPECT_TRUE(relaxed["warnings"].array().empty());
-  EXPECT_LT(relaxed["outliers"].number(), json["outliers"].number());
+  const Json automatic = LastJson(r.out);
+  EXPECT_TRUE(automatic["warnings"].array().empty());
+  EXPECT_NEAR(automatic["outlier_threshold_px"].number(), 10.0, 1.5);
+  EXPECT_LT(automatic["outliers"].number(), fixed["outliers"].number());
+  EXPECT_GE(automatic["outliers"].number(), 1);
 }
 
 TEST_F(TriangulateCommand, BadInputIsNamed) {

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -111,9 +112,10 @@ TEST(Triangulation, NearParallelViewsStayConsistentWithTheirLargeUncertainty) {
   EXPECT_FALSE(est.why.empty());
 }
 
-TEST(Triangulation, AGrossOutlierInOneViewIsFlaggedAndLeftOut) {
+TEST(Triangulation, AGrossOutlierInOneViewIsFlaggedAndLeftOutOrTheAmbiguityReported) {
   const calib::Rig rig = calib::PaperRig();
   std::mt19937_64 rng(3);
+  int resolved = 0;
   for (int bad = 0; bad < 4; ++bad)
     for (int views : {3, 4}) {
       std::vector<int> cams;
@@ -122,7 +124,15 @@ TEST(Triangulation, AGrossOutlierInOneViewIsFlaggedAndLeftOut) {
       obs[0].px += Eigen::Vector2d(25.0, -18.0);  // a label on the wrong knot, ~30 px away
       const PointEstimate est = TriangulatePoint(rig, obs);
       const std::string what = "camera " + std::to_string(bad) + ", " + std::to_string(views);
-      ASSERT_TRUE(est.valid) << what << ": " << est.why;
+      if (!est.valid) {
+        // The mislabel agrees with one good view (it lies near their epipolar line): two pairs
+        // tie and nothing says which is right. Reported, with the mislabel among the suspects.
+        EXPECT_NE(est.why.find("ambiguous"), std::string::npos) << what << ": " << est.why;
+        EXPECT_NE(std::find(est.outliers.begin(), est.outliers.end(), 0), est.outliers.end())
+            << what;
+        continue;
+      }
+      ++resolved;
       EXPECT_EQ(est.outliers, std::vector<int>{0}) << what;
       EXPECT_EQ(static_cast<int>(est.inliers.size()), views - 1) << what;
       EXPECT_GT(est.residual_px[0], 20.0) << what;
@@ -131,6 +141,24 @@ TEST(Triangulation, AGrossOutlierInOneViewIsFlaggedAndLeftOut) {
       const double bound = 0.3 * std::sqrt(PointInformation(rig, good, kPoint).inverse().trace());
       EXPECT_LT((est.position - kPoint).norm(), 4 * bound) << what;
     }
+  EXPECT_GE(resolved, 6);  // every four-view case and most three-view ones
+}
+
+// A mislabel on the epipolar line of one good view, in three views: both pairs agree, so the
+// point must not be accepted (the old rule took the pair with the smaller RMS: the wrong one).
+TEST(Triangulation, AMislabelOnAnEpipolarLineMakesThePointAmbiguousNotWrong) {
+  const calib::Rig rig = calib::PaperRig();
+  auto obs = Project(rig, kPoint, {0, 1, 2}, 0.0, nullptr);
+  // Move cam1's label along its epipolar line with cam0: the projection into cam1 of another
+  // point on cam0's ray.
+  const Eigen::Vector3d c0 = rig.cameras[0].Center();
+  const Eigen::Vector3d elsewhere = c0 + 0.9 * (kPoint - c0);
+  obs[1].px = rig.cameras[1].ProjectWorld(elsewhere);
+  ASSERT_GT((obs[1].px - rig.cameras[1].ProjectWorld(kPoint)).norm(), 20.0);
+  const PointEstimate est = TriangulatePoint(rig, obs);
+  EXPECT_FALSE(est.valid);
+  EXPECT_NE(est.why.find("ambiguous"), std::string::npos) << est.why;
+  EXPECT_NE(std::find(est.outliers.begin(), est.outliers.end(), 1), est.outliers.end());
 }
 
 TEST(Triangulation, TwoViewsThatDisagreeAreReportedNotGuessed) {
