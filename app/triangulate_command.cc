@@ -202,6 +202,11 @@ int RunTriangulate(const std::vector<std::string>& args) {
       warnings.push_back("the labelling noise (" + std::to_string(r.sigma_px) +
                          " px) is more than a quarter of --outlier-px: good labels are being "
                          "rejected; raise --outlier-px to ~5x the noise");
+    if (r.prior_disagreements > 0)
+      warnings.push_back(std::to_string(r.prior_disagreements) +
+                         " points seen by three or more cameras are pulled beyond the outlier "
+                         "threshold by the smoothness prior: --smooth-sigma may be too small for "
+                         "this motion");
     if (r.candidates > 0 && r.triangulated < 0.9 * r.candidates)
       warnings.push_back(std::to_string(untriangulated) + " of " + std::to_string(r.candidates) +
                          " knot-frames seen twice or more were not triangulated (see /outliers)");
@@ -219,8 +224,11 @@ int RunTriangulate(const std::vector<std::string>& args) {
         std::fprintf(stderr, "link-length prior moved the points %.3f mm RMS (max %.3f mm)\n",
                      r.link_shift_rms_m * 1e3, r.link_shift_max_m * 1e3);
       if (options.smoothness_sigma_m > 0)
-        std::fprintf(stderr, "smoothness prior moved the points %.3f mm RMS (max %.3f mm)\n",
-                     r.smoothness_shift_rms_m * 1e3, r.smoothness_shift_max_m * 1e3);
+        std::fprintf(stderr,
+                     "smoothness prior moved the points %.3f mm RMS (max %.3f mm); %lld two-view "
+                     "points at odds with their tracks left out\n",
+                     r.smoothness_shift_rms_m * 1e3, r.smoothness_shift_max_m * 1e3,
+                     static_cast<long long>(r.track_outliers));
       if (options.adjustment == recon::Adjustment::kRig) {
         std::fprintf(stderr, "rig %s on %d frames (RMS %.3f -> %.3f px)\n",
                      r.rig_adjusted ? "adjusted"
@@ -265,6 +273,8 @@ int RunTriangulate(const std::vector<std::string>& args) {
         json.Key("link_prior_shift_max_m").Number(r.link_shift_max_m);
       }
       if (options.smoothness_sigma_m > 0) {
+        json.Key("track_outliers").Int(r.track_outliers);
+        json.Key("prior_disagreements").Int(r.prior_disagreements);
         json.Key("smoothness_prior_shift_rms_m").Number(r.smoothness_shift_rms_m);
         json.Key("smoothness_prior_shift_max_m").Number(r.smoothness_shift_max_m);
       }

@@ -675,16 +675,25 @@ class SequenceSolver {
     if (!link && !smooth) return;
     const std::vector<Eigen::Vector3d> start = positions_;
     std::vector<Eigen::Vector3d> link_only, smooth_only;
+    if (smooth) {
+      Progress("smoothness prior", 0.0);
+      smooth_only = SweepKnots(start, true, false);
+      // A wrong point drags its neighbours in time along: drop only the worst of each knot's
+      // track per round, and solve that knot again.
+      for (int round = 0; round < 5; ++round) {
+        positions_ = smooth_only;
+        const std::vector<int> knots = CheckAgainstTracks(result);
+        if (knots.empty()) break;
+        ParallelFor(static_cast<int>(knots.size()), o_.threads,
+                    [&](int i) { SolveKnot(knots[i], true, false, start, &smooth_only); });
+      }
+      Shift(start, smooth_only, &result->smoothness_shift_rms_m,
+            &result->smoothness_shift_max_m);
+    }
     if (link) {
       Progress("link prior", 0.0);
       link_only = SweepFrames(start, true, false);
       Shift(start, link_only, &result->link_shift_rms_m, &result->link_shift_max_m);
-    }
-    if (smooth) {
-      Progress("smoothness prior", 0.0);
-      smooth_only = SweepKnots(start, true, false);
-      Shift(start, smooth_only, &result->smoothness_shift_rms_m,
-            &result->smoothness_shift_max_m);
     }
     if (link && smooth) {
       // From the smoothness solution (the prior that moves the points most), alternating.
@@ -702,6 +711,57 @@ class SequenceSolver {
     } else {
       positions_ = link ? link_only : smooth_only;
     }
+  }
+
+  // A two-view point that the smoothness prior pulls away from its own labels (a residual
+  // beyond the outlier threshold) is at odds with its track: most likely two views agreeing on a
+  // mislabel along their epipolar line, which geometry alone cannot see. The worst such point of
+  // each knot is left out and its views reported. Points seen three or more times were checked
+  // geometrically: they stay, and are counted as disagreeing with the prior (its sigma may be
+  // too small for the motion). Returns the knots that lost a point.
+  std::vector<int> CheckAgainstTracks(SequenceResult* result) {
+    std::vector<int64_t> dropped(k_, 0), disagreeing(k_, 0);
+    ParallelFor(k_, o_.threads, [&](int k) {
+      int worst_t = -1;
+      double worst_ratio = 1.0;
+      for (int t = 0; t < t_; ++t) {
+        const size_t cell = Cell(t, k);
+        if (!valid_[cell]) continue;
+        const PointEstimate& est = cells_[cell].estimate;
+        double worst = 0.0;
+        for (int i : est.inliers)
+          worst = std::max(worst, ReprojectionResidual(rig_, cells_[cell].observations[i],
+                                                       positions_[cell]));
+        const double ratio = worst / tri_.outlier_threshold_px;
+        if (ratio <= 1.0) continue;
+        if (est.inliers.size() > 2) {
+          ++disagreeing[k];
+        } else if (ratio > worst_ratio) {
+          worst_ratio = ratio;
+          worst_t = t;
+        }
+      }
+      if (worst_t < 0) return;
+      const size_t cell = Cell(worst_t, k);
+      PointEstimate& est = cells_[cell].estimate;
+      for (int i : est.inliers)
+        est.residual_px[i] =
+            ReprojectionResidual(rig_, cells_[cell].observations[i], positions_[cell]);
+      est.outliers = est.inliers;
+      est.inliers.clear();
+      est.valid = false;
+      est.why = "two views at odds with the knot's track (smoothness prior)";
+      valid_[cell] = 0;
+      dropped[k] = 1;
+    });
+    std::vector<int> knots;
+    result->prior_disagreements = 0;
+    for (int k = 0; k < k_; ++k) {
+      if (dropped[k]) knots.push_back(k);
+      result->prior_disagreements += disagreeing[k];
+    }
+    result->track_outliers += static_cast<int64_t>(knots.size());
+    return knots;
   }
 
   // Per point: residuals and covariance at the final position (priors' terms with the

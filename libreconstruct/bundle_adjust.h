@@ -106,6 +106,10 @@ struct SequenceResult {
   // How far each prior moved the points (RMS and max over valid points, m); 0 when off.
   double link_shift_rms_m = 0.0, link_shift_max_m = 0.0;
   double smoothness_shift_rms_m = 0.0, smoothness_shift_max_m = 0.0;
+  // Smoothness prior: two-view points at odds with their track, left out (their views are in
+  // `outliers`), and points seen three or more times that the prior pulls beyond the outlier
+  // threshold from their labels (kept; the prior may be too stiff for the motion).
+  int64_t track_outliers = 0, prior_disagreements = 0;
   // Both priors: sweeps of the block coordinate descent and the RMS change of the last one.
   int prior_sweeps_done = 0;
   double prior_sweep_change_rms_m = 0.0;

@@ -281,5 +281,35 @@ TEST(ReconstructSequence, PriorsPullTowardsTheTruthAndSayHowFar) {
   EXPECT_LT(both.covariance[mid].trace(), plain.covariance[mid].trace());
 }
 
+// Two views cannot see a mislabel along their epipolar line; the knot's track can: the
+// smoothness prior pulls the point back and leaves its labels far off, so it is left out and
+// its views reported.
+TEST(ReconstructSequence, TheSmoothnessPriorCatchesATwoViewMislabelGeometryCannotSee) {
+  calib::Rig rig = calib::PaperRig();
+  rig.cameras.resize(2);
+  LabelSet labels = LabelAll(rig, 0.2, 6);
+  const int t = 14, k = 7;
+  const Eigen::Vector3d c0 = rig.cameras[0].Center();
+  const Eigen::Vector3d on_ray = c0 + 0.97 * (KnotAt(t, k) - c0);  // 8 cm nearer cam0
+  labels.at(1, t, k).px = rig.cameras[1].ProjectWorld(on_ray);
+  ASSERT_GT((labels.at(1, t, k).px - rig.cameras[1].ProjectWorld(KnotAt(t, k))).norm(), 15.0);
+  SequenceOptions o;
+  o.adjustment = Adjustment::kPoints;
+  const SequenceResult plain = ReconstructSequence(rig, labels, o);
+  const size_t i = static_cast<size_t>(t) * kRows * kCols + k;
+  ASSERT_TRUE(plain.valid[i]);  // geometry alone accepts it, 8 cm off
+  EXPECT_GT((plain.position[i] - KnotAt(t, k)).norm(), 0.05);
+
+  o.smoothness_sigma_m = 1e-5;
+  const SequenceResult smooth = ReconstructSequence(rig, labels, o);
+  EXPECT_FALSE(smooth.valid[i]);
+  EXPECT_EQ(smooth.track_outliers, 1);
+  EXPECT_EQ(smooth.prior_disagreements, 0);
+  int reported = 0;
+  for (const auto& outlier : smooth.outliers) reported += outlier.frame == 100 + t && outlier.knot == k;
+  EXPECT_EQ(reported, 2);  // both views: either may be the wrong one
+  EXPECT_LT(RmsError(smooth), 0.5 * RmsError(plain));
+}
+
 }  // namespace
 }  // namespace netlab::recon
