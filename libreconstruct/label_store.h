@@ -1,0 +1,67 @@
+#pragma once
+// The label store behind the labeling tools and the GUI: every knot's 2D label per camera and
+// frame (libreconstruct/labels.h: position, source, confidence, state), changed only through
+// operations that undo and redo as one step each, saved without loss.
+//
+//   LabelStore store(LabelSet::Empty(11, 11, cameras, frames));
+//   store.Apply("Find Node", {{camera, t, knot, label}});   // one undoable step
+//   store.Undo();  store.Redo();
+//   store.Save("labels.h5");                               // .partial + rename: a crash
+//                                                          // mid-save keeps the old file
+//
+// A step that changes nothing is not recorded. A new step after Undo drops the steps that could
+// have been redone (as every editor does).
+
+#include <string>
+#include <vector>
+
+#include "libreconstruct/labels.h"
+
+namespace netlab::recon {
+
+struct LabelEdit {
+  int camera = 0, t = 0, knot = 0;  // index into the label set's cameras, frame row, knot
+  Label label;                      // the new label (Label{} removes it)
+};
+
+class LabelStore {
+ public:
+  explicit LabelStore(LabelSet labels);
+
+  const LabelSet& labels() const { return labels_; }
+  const Label& at(int camera, int t, int knot) const { return labels_.at(camera, t, knot); }
+
+  // Applies the edits as one step named `name`. Throws std::out_of_range (naming the edit) for
+  // an index outside the set, before changing anything. Returns the number of labels changed.
+  int Apply(const std::string& name, const std::vector<LabelEdit>& edits);
+
+  bool CanUndo() const { return done_ > 0; }
+  bool CanRedo() const { return done_ < steps_.size(); }
+  // The name of the step Undo / Redo would take back / do again ("" if none).
+  std::string UndoName() const;
+  std::string RedoName() const;
+  bool Undo();
+  bool Redo();
+
+  // Whether anything changed since the last Save or Load.
+  bool modified() const { return modified_; }
+  // labels.h5 through "<path>.partial" and a rename (labels.h: WriteLabels).
+  void Save(const std::string& path);
+  static LabelStore Load(const std::string& path);
+
+ private:
+  struct Change {
+    int camera, t, knot;
+    Label before, after;
+  };
+  struct Step {
+    std::string name;
+    std::vector<Change> changes;
+  };
+  LabelSet labels_;
+  std::vector<Step> steps_;
+  size_t done_ = 0;  // steps_[0, done_) are applied
+  bool modified_ = false;
+};
+
+}  // namespace netlab::recon
