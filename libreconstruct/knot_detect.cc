@@ -1,0 +1,256 @@
+#include "libreconstruct/knot_detect.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
+#include <opencv2/imgproc.hpp>
+
+namespace netlab::recon {
+namespace {
+
+constexpr int kRingSamples = 180;
+
+double AngleBetween(double a, double b) {
+  const double d = std::fmod(std::abs(a - b), 2 * M_PI);
+  return std::min(d, 2 * M_PI - d);
+}
+
+// A quantile of the values of a CV_32F image (q in [0, 1]).
+double Quantile(const cv::Mat& m, double q) {
+  std::vector<float> v(m.begin<float>(), m.end<float>());
+  if (v.empty()) return 0.0;
+  auto it = v.begin() + static_cast<long>(std::min<double>(v.size() - 1, q * v.size()));
+  std::nth_element(v.begin(), it, v.end());
+  return *it;
+}
+
+}  // namespace
+
+KnotDetector::KnotDetector(const cv::Mat& image, cv::Rect roi, KnotDetectorOptions options)
+    : o_(options) {
+  const cv::Rect full(0, 0, image.cols, image.rows);
+  roi_ = roi.empty() ? full : (roi & full);
+  if (roi_.empty()) return;
+  cv::Mat f;
+  const double scale = image.depth() == CV_8U ? 1.0 / 255 : image.depth() == CV_16U ? 1.0 / 65535 : 1.0;
+  image(roi_).convertTo(f, CV_32F, scale);
+  // Foreground: distance from the background colour (per-channel median of the region).
+  std::vector<cv::Mat> channels;
+  cv::split(f, channels);
+  cv::Mat fg = cv::Mat::zeros(f.size(), CV_32F);
+  for (cv::Mat& c : channels) {
+    const double bg = Quantile(c, 0.5);
+    cv::Mat d = c - bg;
+    fg += d.mul(d);
+  }
+  cv::sqrt(fg, fg);
+  // Ridges of the foreground at the thread's scale.
+  cv::Mat smooth, dxx, dyy, dxy;
+  cv::GaussianBlur(fg, smooth, cv::Size(), o_.ridge_sigma_px);
+  cv::Sobel(smooth, dxx, CV_32F, 2, 0, 3);
+  cv::Sobel(smooth, dyy, CV_32F, 0, 2, 3);
+  cv::Sobel(smooth, dxy, CV_32F, 1, 1, 3);
+  ridge_.create(f.size(), CV_32F);
+  for (int y = 0; y < f.rows; ++y)
+    for (int x = 0; x < f.cols; ++x) {
+      const float a = dxx.at<float>(y, x), b = dyy.at<float>(y, x), c = dxy.at<float>(y, x);
+      const float lambda_min = 0.5f * (a + b) - std::sqrt(0.25f * (a - b) * (a - b) + c * c);
+      ridge_.at<float>(y, x) = std::max(0.0f, -lambda_min);
+    }
+  // A branch peak must stand out from the strong ridges (threads) and from the background's
+  // noise alike.
+  threshold_ = std::max(o_.peak_fraction * Quantile(ridge_, 0.99),
+                        8.0 * Quantile(ridge_, 0.5) + 1e-6);
+}
+
+double KnotDetector::Sample(double x, double y) const {
+  const double u = x - roi_.x, v = y - roi_.y;
+  if (!(u >= 0 && v >= 0 && u <= ridge_.cols - 1 && v <= ridge_.rows - 1)) return 0.0;
+  const int x0 = std::min(static_cast<int>(u), ridge_.cols - 2);
+  const int y0 = std::min(static_cast<int>(v), ridge_.rows - 2);
+  const double fx = u - x0, fy = v - y0;
+  const float* r0 = ridge_.ptr<float>(y0);
+  const float* r1 = ridge_.ptr<float>(y0 + 1);
+  return (1 - fy) * ((1 - fx) * r0[x0] + fx * r0[x0 + 1]) +
+         fy * ((1 - fx) * r1[x0] + fx * r1[x0 + 1]);
+}
+
+std::vector<double> KnotDetector::Ring(const Eigen::Vector2d& centre, double radius, int n) const {
+  std::vector<double> out(n);
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * M_PI * i / n;
+    out[i] = Sample(centre.x() + radius * std::cos(a), centre.y() + radius * std::sin(a));
+  }
+  return out;
+}
+
+std::vector<double> KnotDetector::Peaks(const std::vector<double>& profile,
+                                        double* weakest) const {
+  const int n = static_cast<int>(profile.size());
+  std::vector<double> p(n);
+  for (int i = 0; i < n; ++i)
+    p[i] = 0.25 * profile[(i + n - 1) % n] + 0.5 * profile[i] + 0.25 * profile[(i + 1) % n];
+  struct Peak {
+    double angle, value;
+  };
+  std::vector<Peak> peaks;
+  for (int i = 0; i < n; ++i) {
+    const double a = p[(i + n - 1) % n], b = p[i], c = p[(i + 1) % n];
+    if (!(b > threshold_ && b >= a && b > c)) continue;
+    // Sub-sample position: the centroid of the raw profile above half the peak's height (a
+    // parabola through the smoothed samples was biased by up to 0.4 px at the knot).
+    double sw = 0.0, swx = 0.0;
+    const double half = 0.5 * profile[i];
+    for (int d = -6; d <= 6; ++d) {
+      const double v = profile[(i + d + n) % n] - half;
+      if (v <= 0) continue;
+      sw += v;
+      swx += v * d;
+    }
+    const double delta = sw > 0 ? swx / sw : 0.0;
+    peaks.push_back({2 * M_PI * (i + delta) / n, b});
+  }
+  // Peaks closer than the least branch separation are one (the stronger).
+  const double separation = o_.min_branch_separation_deg * M_PI / 180;
+  std::sort(peaks.begin(), peaks.end(), [](const Peak& x, const Peak& y) { return x.value > y.value; });
+  std::vector<Peak> kept;
+  for (const Peak& pk : peaks) {
+    bool near = false;
+    for (const Peak& k : kept) near = near || AngleBetween(pk.angle, k.angle) < separation;
+    if (!near) kept.push_back(pk);
+  }
+  std::sort(kept.begin(), kept.end(), [](const Peak& x, const Peak& y) { return x.angle < y.angle; });
+  std::vector<double> angles;
+  double weak = std::numeric_limits<double>::infinity();
+  for (const Peak& k : kept) {
+    angles.push_back(k.angle);
+    weak = std::min(weak, k.value / threshold_);
+  }
+  if (weakest) *weakest = angles.empty() ? 0.0 : weak;
+  return angles;
+}
+
+std::optional<Junction> KnotDetector::Examine(const Eigen::Vector2d& px) const {
+  if (ridge_.empty()) return std::nullopt;
+  auto is_junction = [&](const std::vector<double>& angles) {
+    const size_t b = angles.size();
+    if (b == 2) return AngleBetween(angles[0], angles[1]) < o_.straight_angle_deg * M_PI / 180;
+    return b == 3 || b == 4;
+  };
+  // Branches are followed on three circles; each branch line is fitted through its peaks.
+  const double radii[3] = {o_.ring_radius_px, 1.5 * o_.ring_radius_px, 2.0 * o_.ring_radius_px};
+  double weakest = 0.0;
+  const std::vector<double> first = Peaks(Ring(px, radii[0], kRingSamples), &weakest);
+  if (!is_junction(first)) return std::nullopt;
+  Eigen::Vector2d p = px;
+  Junction j;
+  for (int iteration = 0; iteration < 4; ++iteration) {
+    std::vector<double> rings[3];
+    double weak = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < 3; ++i) {
+      double w = 0.0;
+      rings[i] = Peaks(Ring(p, radii[i], kRingSamples), &w);
+      if (rings[i].size() != first.size()) return std::nullopt;
+      weak = std::min(weak, w);
+    }
+    if (!is_junction(rings[0])) return std::nullopt;
+    Eigen::Matrix2d a = Eigen::Matrix2d::Zero();
+    Eigen::Vector2d b = Eigen::Vector2d::Zero();
+    std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> lines;
+    for (double t0 : rings[0]) {
+      // The branch's points on the three circles (nearest peak in angle on the outer ones).
+      Eigen::Vector2d pts[3];
+      double t_prev = t0;
+      for (int i = 0; i < 3; ++i) {
+        double best = 1e9, t = t_prev;
+        for (double c : rings[i])
+          if (AngleBetween(c, t_prev) < best) best = AngleBetween(c, t_prev), t = c;
+        if (best > 20 * M_PI / 180) return std::nullopt;
+        pts[i] = p + radii[i] * Eigen::Vector2d(std::cos(t), std::sin(t));
+        t_prev = t;
+      }
+      // Least-squares line through the three points: centroid and principal direction.
+      const Eigen::Vector2d mean = (pts[0] + pts[1] + pts[2]) / 3.0;
+      Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+      for (const auto& q : pts) cov += (q - mean) * (q - mean).transpose();
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+      const Eigen::Vector2d d = eig.eigenvectors().col(1);
+      const Eigen::Matrix2d m = Eigen::Matrix2d::Identity() - d * d.transpose();
+      a += m;
+      b += m * mean;
+      lines.emplace_back(mean, d);
+    }
+    const Eigen::JacobiSVD<Eigen::Matrix2d> svd(a);
+    if (!(svd.singularValues()[1] > 0.05 * svd.singularValues()[0])) return std::nullopt;
+    const Eigen::Vector2d next = a.ldlt().solve(b);
+    if (!next.allFinite() || (next - px).norm() > radii[0]) return std::nullopt;
+    double ss = 0.0;
+    for (const auto& [q, d] : lines) {
+      const Eigen::Vector2d off = next - q;
+      ss += (off - off.dot(d) * d).squaredNorm();
+    }
+    j.px = next;
+    j.branches = static_cast<int>(rings[0].size());
+    j.branch_angles_rad = rings[0];
+    j.fit_rms_px = std::sqrt(ss / lines.size());
+    j.contrast = weak;
+    const bool settled = (next - p).norm() < 1e-3;
+    p = next;
+    if (settled) break;
+  }
+  j.confidence = std::clamp((j.contrast - 1.0) / 2.0, 0.0, 1.0) *
+                 std::exp(-0.5 * (j.fit_rms_px / 0.5) * (j.fit_rms_px / 0.5));
+  return j;
+}
+
+std::vector<Junction> KnotDetector::FindInCircle(const Eigen::Vector2d& centre,
+                                                 double radius) const {
+  std::vector<Junction> found;
+  const double step = 1.5;
+  for (double dy = -radius; dy <= radius; dy += step)
+    for (double dx = -radius; dx <= radius; dx += step) {
+      if (dx * dx + dy * dy > radius * radius) continue;
+      const Eigen::Vector2d seed = centre + Eigen::Vector2d(dx, dy);
+      bool near = false;
+      for (const Junction& j : found) near = near || (j.px - seed).norm() < 0.5 * o_.ring_radius_px;
+      if (near) continue;
+      const std::optional<Junction> j = Examine(seed);
+      if (!j || (j->px - centre).norm() > radius) continue;
+      bool merged = false;
+      for (Junction& k : found)
+        if ((k.px - j->px).norm() < o_.merge_px) {
+          if (j->confidence > k.confidence) k = *j;
+          merged = true;
+        }
+      if (!merged) found.push_back(*j);
+    }
+  return found;
+}
+
+FindNodeResult FindNode(const cv::Mat& image, const Eigen::Vector2d& centre, double radius,
+                        const KnotDetectorOptions& options) {
+  const int margin =
+      static_cast<int>(std::ceil(2.0 * options.ring_radius_px + 4 * options.ridge_sigma_px + 4));
+  const cv::Rect roi(static_cast<int>(std::floor(centre.x() - radius)) - margin,
+                     static_cast<int>(std::floor(centre.y() - radius)) - margin,
+                     static_cast<int>(2 * radius) + 2 * margin + 2,
+                     static_cast<int>(2 * radius) + 2 * margin + 2);
+  const KnotDetector detector(image, roi, options);
+  FindNodeResult result;
+  result.candidates = detector.FindInCircle(centre, radius);
+  if (result.candidates.empty()) {
+    result.status = FindNodeStatus::kNone;
+    result.why = "no junction of 2-4 yarns inside the brush";
+  } else if (result.candidates.size() > 1) {
+    result.status = FindNodeStatus::kSeveral;
+    result.why = std::to_string(result.candidates.size()) + " junctions inside the brush";
+  } else {
+    result.status = FindNodeStatus::kFound;
+    result.knot = result.candidates[0];
+  }
+  return result;
+}
+
+}  // namespace netlab::recon

@@ -1,0 +1,113 @@
+#include "libreconstruct/knot_detect.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "libreconstruct/render.h"
+
+namespace netlab::recon {
+namespace {
+
+constexpr int kRows = 4, kCols = 4;
+constexpr double kMesh = 0.1;
+
+// A 4 x 4 net of 1 mm yarns 1.5 m in front of a 16 mm camera (2909 px focal length): links
+// ~190 px long and ~2 px wide, in six dye colours on black, turned and tilted so that yarns
+// meet at other angles than 90 degrees.
+struct NetImage {
+  calib::Camera camera;
+  std::vector<Eigen::Vector3d> knots;
+  cv::Mat image;  // CV_8UC3
+
+  Eigen::Vector2d Pixel(int r, int c) const { return camera.ProjectWorld(knots[r * kCols + c]); }
+};
+
+NetImage Render(double tilt_deg, double noise_grey, uint64_t seed) {
+  NetImage net;
+  net.camera = calib::LookAtCamera("cam", {-1.5, 0.0, 0.0}, {0.0, 0.0, 0.0}, 16.0, 5.5, 1024);
+  const Eigen::Matrix3d turn =
+      (Eigen::AngleAxisd(0.35, Eigen::Vector3d::UnitX()) *
+       Eigen::AngleAxisd(tilt_deg * M_PI / 180, Eigen::Vector3d::UnitZ()))
+          .toRotationMatrix();
+  for (int r = 0; r < kRows; ++r)
+    for (int c = 0; c < kCols; ++c)
+      net.knots.push_back(turn * Eigen::Vector3d(0.0, (c - 1.5) * kMesh, (r - 1.5) * kMesh));
+  const Colour dyes[] = {{0.1f, 0.2f, 0.9f}, {0.1f, 0.8f, 0.2f}, {0.9f, 0.2f, 0.1f},
+                         {0.1f, 0.8f, 0.8f}, {0.8f, 0.1f, 0.8f}, {0.9f, 0.9f, 0.9f}};
+  Scene scene;
+  int n = 0;
+  auto link = [&](int a, int b) {
+    ThreadPolyline t;
+    t.points = {net.knots[a], net.knots[b]};
+    t.radius = 0.0005;
+    t.colour = dyes[n++ % 6];
+    scene.threads.push_back(t);
+  };
+  for (int r = 0; r < kRows; ++r)
+    for (int c = 0; c < kCols; ++c) {
+      if (c + 1 < kCols) link(r * kCols + c, r * kCols + c + 1);
+      if (r + 1 < kRows) link(r * kCols + c, (r + 1) * kCols + c);
+    }
+  const cv::Mat linear = RenderScene(net.camera, scene, SceneRenderOptions{});
+  cv::Mat noisy = linear * 255.0;
+  if (noise_grey > 0) {
+    cv::Mat noise(noisy.size(), noisy.type());
+    cv::RNG rng(seed);
+    rng.fill(noise, cv::RNG::NORMAL, 0.0, noise_grey);
+    noisy += noise;
+  }
+  noisy.convertTo(net.image, CV_8UC3);
+  return net;
+}
+
+// Measured: worst 0.043 px (no tilt) and 0.060 px (25 degrees), most below 0.01 px.
+TEST(FindNode, FindsEveryKnotToATenthOfAPixel) {
+  for (double tilt : {0.0, 25.0}) {
+    const NetImage net = Render(tilt, 0.0, 1);
+    double worst = 0.0;
+    for (int r = 0; r < kRows; ++r)
+      for (int c = 0; c < kCols; ++c) {
+        const Eigen::Vector2d truth = net.Pixel(r, c);
+        // The brush a little off the knot, as a hand puts it.
+        const FindNodeResult found = FindNode(net.image, truth + Eigen::Vector2d(4, -3), 15);
+        ASSERT_EQ(found.status, FindNodeStatus::kFound)
+            << "knot " << r << "," << c << " tilt " << tilt << ": " << found.why;
+        const int degree = (r > 0) + (r + 1 < kRows) + (c > 0) + (c + 1 < kCols);
+        EXPECT_EQ(found.knot.branches, degree) << r << "," << c;
+        worst = std::max(worst, (found.knot.px - truth).norm());
+        EXPECT_GT(found.knot.confidence, 0.5) << r << "," << c;
+      }
+    EXPECT_LT(worst, 0.1) << "tilt " << tilt;
+  }
+}
+
+TEST(FindNode, SaysNoneOnAPlainYarnAndSeveralWhenTwoKnotsAreInside) {
+  const NetImage net = Render(10.0, 0.0, 2);
+  const Eigen::Vector2d mid = 0.5 * (net.Pixel(1, 1) + net.Pixel(1, 2));
+  const FindNodeResult yarn = FindNode(net.image, mid, 20);
+  EXPECT_EQ(yarn.status, FindNodeStatus::kNone) << yarn.candidates.size();
+  const FindNodeResult empty = FindNode(net.image, {20, 20}, 15);
+  EXPECT_EQ(empty.status, FindNodeStatus::kNone);
+  const double spacing = (net.Pixel(1, 1) - net.Pixel(1, 2)).norm();
+  const FindNodeResult two = FindNode(net.image, mid, 0.5 * spacing + 10);
+  EXPECT_EQ(two.status, FindNodeStatus::kSeveral);
+  EXPECT_EQ(two.candidates.size(), 2u);
+}
+
+TEST(FindNode, StaysAccurateWithSensorNoise) {
+  const NetImage net = Render(15.0, 4.0, 3);
+  double ss = 0.0;
+  int n = 0;
+  for (int r = 0; r < kRows; ++r)
+    for (int c = 0; c < kCols; ++c) {
+      const FindNodeResult found = FindNode(net.image, net.Pixel(r, c), 15);
+      ASSERT_EQ(found.status, FindNodeStatus::kFound) << r << "," << c << ": " << found.why;
+      ss += (found.knot.px - net.Pixel(r, c)).squaredNorm();
+      ++n;
+    }
+  EXPECT_LT(std::sqrt(ss / n), 0.1);  // measured 0.037 px at 4 grey levels of noise
+}
+
+}  // namespace
+}  // namespace netlab::recon
