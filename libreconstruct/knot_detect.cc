@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <queue>
 
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
@@ -250,6 +252,111 @@ FindNodeResult FindNode(const cv::Mat& image, const Eigen::Vector2d& centre, dou
     result.status = FindNodeStatus::kFound;
     result.knot = result.candidates[0];
   }
+  return result;
+}
+
+FindPathResult FindPath(const cv::Mat& image, int cols, int knot_a, const Eigen::Vector2d& px_a,
+                        int knot_b, const Eigen::Vector2d& px_b,
+                        const KnotDetectorOptions& options) {
+  FindPathResult result;
+  const int ra = knot_a / cols, ca = knot_a % cols, rb = knot_b / cols, cb = knot_b % cols;
+  if (ra != rb && ca != cb) {
+    result.why = "the two knots are not in one row or column";
+    return result;
+  }
+  const int between = std::max(std::abs(ra - rb), std::abs(ca - cb)) - 1;
+  if (between < 0) {
+    result.why = "the two knots are the same";
+    return result;
+  }
+  // The region: the segment's bounding box with room for a sagging yarn and the rings.
+  const double length = (px_b - px_a).norm();
+  const int margin = static_cast<int>(std::ceil(0.15 * length + 2.0 * options.ring_radius_px +
+                                                4 * options.ridge_sigma_px + 4));
+  const cv::Rect roi(static_cast<int>(std::floor(std::min(px_a.x(), px_b.x()))) - margin,
+                     static_cast<int>(std::floor(std::min(px_a.y(), px_b.y()))) - margin,
+                     static_cast<int>(std::abs(px_b.x() - px_a.x())) + 2 * margin + 2,
+                     static_cast<int>(std::abs(px_b.y() - px_a.y())) + 2 * margin + 2);
+  const KnotDetector detector(image, roi, options);
+  const cv::Rect box = roi & cv::Rect(0, 0, image.cols, image.rows);
+  const cv::Mat& ridge = detector.ridge();
+  // Dijkstra, 8-connected, step cost length / (ridge + small): the yarn is the cheap way.
+  const float eps = static_cast<float>(0.05 * detector.peak_threshold());
+  const int w = ridge.cols, h = ridge.rows;
+  auto index = [&](const Eigen::Vector2d& p) {
+    const int x = std::clamp(static_cast<int>(std::lround(p.x())) - box.x, 0, w - 1);
+    const int y = std::clamp(static_cast<int>(std::lround(p.y())) - box.y, 0, h - 1);
+    return y * w + x;
+  };
+  const int from = index(px_a), to = index(px_b);
+  std::vector<float> dist(static_cast<size_t>(w) * h, std::numeric_limits<float>::infinity());
+  std::vector<int> prev(dist.size(), -1);
+  using Item = std::pair<float, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
+  dist[from] = 0.0f;
+  queue.push({0.0f, from});
+  while (!queue.empty()) {
+    const auto [d, i] = queue.top();
+    queue.pop();
+    if (d > dist[i]) continue;
+    if (i == to) break;
+    const int x = i % w, y = i / w;
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        if ((dx == 0 && dy == 0) || x + dx < 0 || x + dx >= w || y + dy < 0 || y + dy >= h)
+          continue;
+        const int j = (y + dy) * w + x + dx;
+        const float step = (dx && dy) ? 1.41421356f : 1.0f;
+        const float nd = d + step / (ridge.at<float>(y + dy, x + dx) + eps);
+        if (nd < dist[j]) {
+          dist[j] = nd;
+          prev[j] = i;
+          queue.push({nd, j});
+        }
+      }
+  }
+  if (prev[to] < 0 && to != from) {
+    result.why = "no path between the two knots";
+    return result;
+  }
+  for (int i = to; i >= 0; i = prev[i]) result.path.emplace_back(box.x + i % w, box.y + i / w);
+  std::reverse(result.path.begin(), result.path.end());
+  // Junctions along the path, away from the two end knots, in order of arc length.
+  struct Found {
+    double arc;
+    Junction j;
+  };
+  std::vector<Found> found;
+  double arc = 0.0;
+  for (size_t i = 0; i < result.path.size(); ++i) {
+    if (i > 0) arc += (result.path[i] - result.path[i - 1]).norm();
+    const Eigen::Vector2d& p = result.path[i];
+    if ((p - px_a).norm() < 1.5 * options.ring_radius_px ||
+        (p - px_b).norm() < 1.5 * options.ring_radius_px)
+      continue;
+    bool near = false;
+    for (const Found& f : found) near = near || (f.j.px - p).norm() < options.ring_radius_px;
+    if (near) continue;
+    const std::optional<Junction> j = detector.Examine(p);
+    if (!j || (j->px - px_a).norm() < options.ring_radius_px ||
+        (j->px - px_b).norm() < options.ring_radius_px)
+      continue;
+    bool merged = false;
+    for (const Found& f : found) merged = merged || (f.j.px - j->px).norm() < options.merge_px;
+    if (!merged) found.push_back({arc, *j});
+  }
+  std::sort(found.begin(), found.end(), [](const Found& x, const Found& y) { return x.arc < y.arc; });
+  if (static_cast<int>(found.size()) != between) {
+    result.why = "found " + std::to_string(found.size()) + " junctions along the yarn, but " +
+                 std::to_string(between) + " knots lie between";
+    return result;
+  }
+  const int dr = (rb > ra) - (rb < ra), dc = (cb > ca) - (cb < ca);
+  for (int i = 0; i < between; ++i) {
+    result.knots.push_back((ra + (i + 1) * dr) * cols + ca + (i + 1) * dc);
+    result.junctions.push_back(found[i].j);
+  }
+  result.ok = true;
   return result;
 }
 

@@ -81,4 +81,20 @@ struct FindNodeResult {
 FindNodeResult FindNode(const cv::Mat& image, const Eigen::Vector2d& centre, double radius,
                         const KnotDetectorOptions& options = {});
 
+// Find Path: the knots strictly between two labeled knots of one row or column, found by
+// following the yarn (the cheapest path on 1 / ridge strength from one knot to the other) and
+// taking the junctions on it in order. Refused (ok false, with the reason) when the knots are not
+// in one row or column, or when the number of junctions found differs from the knots between.
+struct FindPathResult {
+  bool ok = false;
+  std::string why;
+  std::vector<int> knots;           // row * cols + col of each knot between, from a towards b
+  std::vector<Junction> junctions;  // their junctions, in the same order
+  std::vector<Eigen::Vector2d> path;  // the followed yarn, pixel by pixel
+};
+
+FindPathResult FindPath(const cv::Mat& image, int cols, int knot_a, const Eigen::Vector2d& px_a,
+                        int knot_b, const Eigen::Vector2d& px_b,
+                        const KnotDetectorOptions& options = {});
+
 }  // namespace netlab::recon

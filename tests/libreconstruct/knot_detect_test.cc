@@ -23,7 +23,9 @@ struct NetImage {
   Eigen::Vector2d Pixel(int r, int c) const { return camera.ProjectWorld(knots[r * kCols + c]); }
 };
 
-NetImage Render(double tilt_deg, double noise_grey, uint64_t seed) {
+// `missing`: links (knot a, knot b) left out of the picture.
+NetImage Render(double tilt_deg, double noise_grey, uint64_t seed,
+                const std::vector<std::pair<int, int>>& missing = {}) {
   NetImage net;
   net.camera = calib::LookAtCamera("cam", {-1.5, 0.0, 0.0}, {0.0, 0.0, 0.0}, 16.0, 5.5, 1024);
   const Eigen::Matrix3d turn =
@@ -38,6 +40,8 @@ NetImage Render(double tilt_deg, double noise_grey, uint64_t seed) {
   Scene scene;
   int n = 0;
   auto link = [&](int a, int b) {
+    for (const auto& m : missing)
+      if (m == std::pair(a, b)) return;
     ThreadPolyline t;
     t.points = {net.knots[a], net.knots[b]};
     t.radius = 0.0005;
@@ -107,6 +111,37 @@ TEST(FindNode, StaysAccurateWithSensorNoise) {
       ++n;
     }
   EXPECT_LT(std::sqrt(ss / n), 0.1);  // measured 0.037 px at 4 grey levels of noise
+}
+
+TEST(FindPath, LabelsTheKnotsBetweenTwoKnotsOfARowOrColumn) {
+  const NetImage net = Render(20.0, 2.0, 4);
+  // Row 1, from (1,0) to (1,3): knots (1,1) and (1,2) in that order.
+  FindPathResult row = FindPath(net.image, kCols, 4, net.Pixel(1, 0), 7, net.Pixel(1, 3));
+  ASSERT_TRUE(row.ok) << row.why;
+  ASSERT_EQ(row.knots, (std::vector<int>{5, 6}));
+  EXPECT_LT((row.junctions[0].px - net.Pixel(1, 1)).norm(), 0.1);
+  EXPECT_LT((row.junctions[1].px - net.Pixel(1, 2)).norm(), 0.1);
+  // Column 2, from the bottom up: (2,2), (1,2).
+  FindPathResult column = FindPath(net.image, kCols, 14, net.Pixel(3, 2), 2, net.Pixel(0, 2));
+  ASSERT_TRUE(column.ok) << column.why;
+  EXPECT_EQ(column.knots, (std::vector<int>{10, 6}));
+  EXPECT_LT((column.junctions[0].px - net.Pixel(2, 2)).norm(), 0.1);
+  // Neighbours: nothing between, nothing to find.
+  FindPathResult next = FindPath(net.image, kCols, 5, net.Pixel(1, 1), 6, net.Pixel(1, 2));
+  EXPECT_TRUE(next.ok) << next.why;
+  EXPECT_TRUE(next.knots.empty());
+}
+
+TEST(FindPath, RefusesWhenTheJunctionsDoNotMatchTheGrid) {
+  // Knot (1,1) lost its vertical yarns: the row passes straight through it.
+  const NetImage net = Render(20.0, 0.0, 5, {{1, 5}, {5, 9}});
+  FindPathResult row = FindPath(net.image, kCols, 4, net.Pixel(1, 0), 7, net.Pixel(1, 3));
+  EXPECT_FALSE(row.ok);
+  EXPECT_NE(row.why.find("found 1 junctions"), std::string::npos) << row.why;
+  EXPECT_TRUE(row.knots.empty());
+  FindPathResult diagonal = FindPath(net.image, kCols, 0, net.Pixel(0, 0), 5, net.Pixel(1, 1));
+  EXPECT_FALSE(diagonal.ok);
+  EXPECT_NE(diagonal.why.find("not in one row or column"), std::string::npos);
 }
 
 }  // namespace
