@@ -4,71 +4,20 @@
 
 #include <random>
 
-#include "libreconstruct/render.h"
+#include "tests/libreconstruct/rendered_net.h"
 
 namespace netlab::recon {
 namespace {
 
-constexpr int kRows = 4, kCols = 4;
-constexpr double kMesh = 0.1;
-
-// A 4 x 4 net of 1 mm yarns 1.5 m in front of a 16 mm camera (2909 px focal length): links
-// ~190 px long and ~2 px wide, in six dye colours on black, turned and tilted so that yarns
-// meet at other angles than 90 degrees.
-struct NetImage {
-  calib::Camera camera;
-  std::vector<Eigen::Vector3d> knots;
-  cv::Mat image;  // CV_8UC3
-
-  Eigen::Vector2d Pixel(int r, int c) const { return camera.ProjectWorld(knots[r * kCols + c]); }
-};
-
-// `missing`: links (knot a, knot b) left out of the picture.
-NetImage Render(double tilt_deg, double noise_grey, uint64_t seed,
-                const std::vector<std::pair<int, int>>& missing = {}) {
-  NetImage net;
-  net.camera = calib::LookAtCamera("cam", {-1.5, 0.0, 0.0}, {0.0, 0.0, 0.0}, 16.0, 5.5, 1024);
-  const Eigen::Matrix3d turn =
-      (Eigen::AngleAxisd(0.35, Eigen::Vector3d::UnitX()) *
-       Eigen::AngleAxisd(tilt_deg * M_PI / 180, Eigen::Vector3d::UnitZ()))
-          .toRotationMatrix();
-  for (int r = 0; r < kRows; ++r)
-    for (int c = 0; c < kCols; ++c)
-      net.knots.push_back(turn * Eigen::Vector3d(0.0, (c - 1.5) * kMesh, (r - 1.5) * kMesh));
-  const Colour dyes[] = {{0.1f, 0.2f, 0.9f}, {0.1f, 0.8f, 0.2f}, {0.9f, 0.2f, 0.1f},
-                         {0.1f, 0.8f, 0.8f}, {0.8f, 0.1f, 0.8f}, {0.9f, 0.9f, 0.9f}};
-  Scene scene;
-  int n = 0;
-  auto link = [&](int a, int b) {
-    for (const auto& m : missing)
-      if (m == std::pair(a, b)) return;
-    ThreadPolyline t;
-    t.points = {net.knots[a], net.knots[b]};
-    t.radius = 0.0005;
-    t.colour = dyes[n++ % 6];
-    scene.threads.push_back(t);
-  };
-  for (int r = 0; r < kRows; ++r)
-    for (int c = 0; c < kCols; ++c) {
-      if (c + 1 < kCols) link(r * kCols + c, r * kCols + c + 1);
-      if (r + 1 < kRows) link(r * kCols + c, (r + 1) * kCols + c);
-    }
-  const cv::Mat linear = RenderScene(net.camera, scene, SceneRenderOptions{});
-  cv::Mat noisy = linear * 255.0;
-  if (noise_grey > 0) {
-    cv::Mat noise(noisy.size(), noisy.type());
-    cv::RNG rng(seed);
-    rng.fill(noise, cv::RNG::NORMAL, 0.0, noise_grey);
-    noisy += noise;
-  }
-  noisy.convertTo(net.image, CV_8UC3);
-  return net;
-}
+using testing::NetImage;
+using testing::RenderNet;
+using testing::kCols;
+using testing::kRows;
 
 // Measured: worst 0.043 px (no tilt) and 0.060 px (25 degrees), most below 0.01 px.
 TEST(FindNode, FindsEveryKnotToATenthOfAPixel) {
   for (double tilt : {0.0, 25.0}) {
-    const NetImage net = Render(tilt, 0.0, 1);
+    const NetImage net = RenderNet(tilt, 0.0, 1);
     double worst = 0.0;
     for (int r = 0; r < kRows; ++r)
       for (int c = 0; c < kCols; ++c) {
@@ -87,7 +36,7 @@ TEST(FindNode, FindsEveryKnotToATenthOfAPixel) {
 }
 
 TEST(FindNode, SaysNoneOnAPlainYarnAndSeveralWhenTwoKnotsAreInside) {
-  const NetImage net = Render(10.0, 0.0, 2);
+  const NetImage net = RenderNet(10.0, 0.0, 2);
   const Eigen::Vector2d mid = 0.5 * (net.Pixel(1, 1) + net.Pixel(1, 2));
   const FindNodeResult yarn = FindNode(net.image, mid, 20);
   EXPECT_EQ(yarn.status, FindNodeStatus::kNone) << yarn.candidates.size();
@@ -100,7 +49,7 @@ TEST(FindNode, SaysNoneOnAPlainYarnAndSeveralWhenTwoKnotsAreInside) {
 }
 
 TEST(FindNode, StaysAccurateWithSensorNoise) {
-  const NetImage net = Render(15.0, 4.0, 3);
+  const NetImage net = RenderNet(15.0, 4.0, 3);
   double ss = 0.0;
   int n = 0;
   for (int r = 0; r < kRows; ++r)
@@ -114,7 +63,7 @@ TEST(FindNode, StaysAccurateWithSensorNoise) {
 }
 
 TEST(FindPath, LabelsTheKnotsBetweenTwoKnotsOfARowOrColumn) {
-  const NetImage net = Render(20.0, 2.0, 4);
+  const NetImage net = RenderNet(20.0, 2.0, 4);
   // Row 1, from (1,0) to (1,3): knots (1,1) and (1,2) in that order.
   FindPathResult row = FindPath(net.image, kCols, 4, net.Pixel(1, 0), 7, net.Pixel(1, 3));
   ASSERT_TRUE(row.ok) << row.why;
@@ -134,7 +83,7 @@ TEST(FindPath, LabelsTheKnotsBetweenTwoKnotsOfARowOrColumn) {
 
 TEST(FindPath, RefusesWhenTheJunctionsDoNotMatchTheGrid) {
   // Knot (1,1) lost its vertical yarns: the row passes straight through it.
-  const NetImage net = Render(20.0, 0.0, 5, {{1, 5}, {5, 9}});
+  const NetImage net = RenderNet(20.0, 0.0, 5, {{1, 5}, {5, 9}});
   FindPathResult row = FindPath(net.image, kCols, 4, net.Pixel(1, 0), 7, net.Pixel(1, 3));
   EXPECT_FALSE(row.ok);
   EXPECT_NE(row.why.find("found 1 junctions"), std::string::npos) << row.why;
