@@ -20,6 +20,7 @@ int RunSimulate(const std::vector<std::string>& args);
 int RunCalibrate(const std::vector<std::string>& args);
 int RunColorNet(const std::vector<std::string>& args);
 int RunIngest(const std::vector<std::string>& args);
+int RunLabel(const std::vector<std::string>& args);
 int RunRender(const std::vector<std::string>& args);
 int RunTriangulate(const std::vector<std::string>& args);
 

@@ -14,6 +14,7 @@ const std::vector<Command>& Commands() {
       {"calibrate", "calibrate the cameras into one world frame from target images", RunCalibrate},
       {"color-net", "colour a net's yarns so every knot is known by its links' colours", RunColorNet},
       {"ingest", "check the synchronized camera recordings or convert them to HDF5", RunIngest},
+      {"label", "label the knots automatically from seed labels (Find Path, tracking)", RunLabel},
       {"render", "film a simulated shot with a virtual camera rig, with ground truth", RunRender},
       {"simulate", "run a Cosserat-rod net simulation from a scenario file", RunSimulate},
       {"triangulate", "3D knot tracks from 2D labels of calibrated cameras", RunTriangulate},

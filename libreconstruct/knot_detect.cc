@@ -35,19 +35,53 @@ KnotDetector::KnotDetector(const cv::Mat& image, cv::Rect roi, KnotDetectorOptio
   const cv::Rect full(0, 0, image.cols, image.rows);
   roi_ = roi.empty() ? full : (roi & full);
   if (roi_.empty()) return;
-  cv::Mat f;
-  const double scale = image.depth() == CV_8U ? 1.0 / 255 : image.depth() == CV_16U ? 1.0 / 65535 : 1.0;
-  image(roi_).convertTo(f, CV_32F, scale);
-  // Foreground: distance from the background colour (per-channel median of the region).
-  std::vector<cv::Mat> channels;
+  // Foreground: the distance from the local background, a median over a window much wider than
+  // a yarn (the target mock-up or the aircraft behind the net are not one colour).
+  cv::Mat region = image(roi_), eight;
+  if (region.depth() == CV_8U) {
+    eight = region;
+  } else {
+    double max = 0.0;
+    cv::minMaxLoc(region.reshape(1), nullptr, &max);
+    region.convertTo(eight, CV_8U, max > 0 ? 255.0 / max : 1.0);
+  }
+  cv::Mat background;
+  cv::medianBlur(eight, background, o_.background_window_px | 1);
+  cv::Mat f, bg;
+  eight.convertTo(f, CV_32F, 1.0 / 255);
+  background.convertTo(bg, CV_32F, 1.0 / 255);
+  std::vector<cv::Mat> channels, bg_channels;
   cv::split(f, channels);
+  cv::split(bg, bg_channels);
   cv::Mat fg = cv::Mat::zeros(f.size(), CV_32F);
-  for (cv::Mat& c : channels) {
-    const double bg = Quantile(c, 0.5);
-    cv::Mat d = c - bg;
+  for (size_t i = 0; i < channels.size(); ++i) {
+    cv::Mat d = channels[i] - bg_channels[i];
     fg += d.mul(d);
   }
   cv::sqrt(fg, fg);
+  // Small solids (corner masses) are not yarns: their rims look like ridges and meet the yarns
+  // like junctions. A solid is what survives an opening with a disc several yarn widths across
+  // (yarns and their crossings, however many, are thinner) of the region that stands out from
+  // the region's median colour; only compact blobs count (a target face behind the net is
+  // background, handled by the local median).
+  cv::Mat global = cv::Mat::zeros(f.size(), CV_32F);
+  for (size_t i = 0; i < channels.size(); ++i) {
+    cv::Mat d = channels[i] - Quantile(channels[i], 0.5);
+    global += d.mul(d);
+  }
+  cv::sqrt(global, global);
+  cv::Mat bright = global > o_.solid_fraction * Quantile(global, 0.995), opened, labels, stats,
+          centroids;
+  const int disc = 2 * static_cast<int>(std::ceil(2.5 * o_.ridge_sigma_px)) + 1;
+  cv::morphologyEx(bright, opened, cv::MORPH_OPEN,
+                   cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(disc, disc)));
+  const int n = cv::connectedComponentsWithStats(opened, labels, stats, centroids, 8, CV_32S);
+  cv::Mat solid = cv::Mat::zeros(f.size(), CV_8U);
+  const double largest = std::min(o_.max_solid_area_px, 0.25 * f.rows * f.cols);
+  for (int i = 1; i < n; ++i)
+    if (stats.at<int>(i, cv::CC_STAT_AREA) <= largest) solid.setTo(255, labels == i);
+  cv::dilate(solid, solid, cv::Mat(), cv::Point(-1, -1),
+             static_cast<int>(std::ceil(2 * o_.ridge_sigma_px)));
   // Ridges of the foreground at the thread's scale.
   cv::Mat smooth, dxx, dyy, dxy;
   cv::GaussianBlur(fg, smooth, cv::Size(), o_.ridge_sigma_px);
@@ -59,7 +93,7 @@ KnotDetector::KnotDetector(const cv::Mat& image, cv::Rect roi, KnotDetectorOptio
     for (int x = 0; x < f.cols; ++x) {
       const float a = dxx.at<float>(y, x), b = dyy.at<float>(y, x), c = dxy.at<float>(y, x);
       const float lambda_min = 0.5f * (a + b) - std::sqrt(0.25f * (a - b) * (a - b) + c * c);
-      ridge_.at<float>(y, x) = std::max(0.0f, -lambda_min);
+      ridge_.at<float>(y, x) = solid.at<uchar>(y, x) ? 0.0f : std::max(0.0f, -lambda_min);
     }
   // A branch peak must stand out from the strong ridges (threads) and from the background's
   // noise alike.
@@ -350,6 +384,26 @@ FindPathResult FindPath(const cv::Mat& image, int cols, int knot_a, const Eigen:
     result.why = "found " + std::to_string(found.size()) + " junctions along the yarn, but " +
                  std::to_string(between) + " knots lie between";
     return result;
+  }
+  // The links between are of one length: along the yarn the junctions are spread about evenly
+  // (perspective and sag change that slowly). A gap far from the mean means a junction missed
+  // and a spurious one taken instead (the edge of a corner mass looks like one), which a count
+  // alone does not see.
+  if (between > 0) {
+    const double total = arc, mean = total / (between + 1);
+    double previous = 0.0;
+    for (int i = 0; i <= between; ++i) {
+      const double next = i < between ? found[i].arc : total;
+      const double gap = next - previous;
+      if (gap < 0.5 * mean || gap > 1.6 * mean) {
+        result.why = "the junctions along the yarn are unevenly spaced (a gap of " +
+                     std::to_string(static_cast<int>(gap)) + " px where " +
+                     std::to_string(static_cast<int>(mean)) +
+                     " px is the mean): a knot missed or a false junction";
+        return result;
+      }
+      previous = next;
+    }
   }
   const int dr = (rb > ra) - (rb < ra), dc = (cb > ca) - (cb < ca);
   for (int i = 0; i < between; ++i) {

@@ -1,8 +1,9 @@
 #pragma once
 // Knots in an image of thin coloured threads on a uniform background, and Find Node.
 //
-// Foreground: F = |I - background| (Euclidean over the colour channels; the background is the
-// per-channel median of the region). Ridges: the Hessian of F smoothed at the thread's scale;
+// Foreground: F = |I - background| (Euclidean over the colour channels; the background is a
+// local median, background_window_px wide, so a target or cabin behind the net does not hide
+// the yarns in front of it; solids are masked out, see solid_fraction). Ridges: the Hessian of F smoothed at the thread's scale;
 // ridge strength R = max(0, -smallest eigenvalue) (bright lines in F, whatever their colour).
 // A knot is where yarns meet: sampled on a circle around a point, R shows one peak per yarn
 // leaving it. 3 or 4 peaks (edge, inner knot), or 2 peaks less than straight_angle_deg apart
@@ -29,6 +30,10 @@ struct KnotDetectorOptions {
   double min_branch_separation_deg = 25.0;
   double straight_angle_deg = 150.0;  // two branches this far apart are one yarn passing through
   double merge_px = 2.5;          // refined junctions closer than this are one
+  int background_window_px = 11;  // median window of the local background (odd, >> a yarn)
+  double solid_fraction = 0.3;    // foreground above this fraction of the brightest that stays
+  double max_solid_area_px = 3000;  // under an opening, in a blob up to this area: a solid
+                                    // (corner mass), where no ridge is taken
 };
 
 struct Junction {
@@ -84,7 +89,9 @@ FindNodeResult FindNode(const cv::Mat& image, const Eigen::Vector2d& centre, dou
 // Find Path: the knots strictly between two labeled knots of one row or column, found by
 // following the yarn (the cheapest path on 1 / ridge strength from one knot to the other) and
 // taking the junctions on it in order. Refused (ok false, with the reason) when the knots are not
-// in one row or column, or when the number of junctions found differs from the knots between.
+// in one row or column, when the number of junctions found differs from the knots between, or
+// when they are unevenly spaced along the yarn (a gap under half or over 1.6 times the mean: a
+// knot missed and a false junction taken instead).
 struct FindPathResult {
   bool ok = false;
   std::string why;
