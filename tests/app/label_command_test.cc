@@ -9,6 +9,7 @@
 
 #include "libreconstruct/labels.h"
 #include "tests/app/run_netlab.h"
+#include "tests/app/small_shot.h"
 
 namespace {
 
@@ -17,29 +18,13 @@ using netlab::testing::LastJson;
 using netlab::testing::RunNetlab;
 namespace recon = netlab::recon;
 
-// A 6 x 6 net flying past a box, as in the render test, filmed at full resolution.
-constexpr char kScenario[] = R"(name: label_test
-duration: 0.04
-output_interval: 0.005586592178770949
-integrator: {type: explicit, dt: auto}
-gravity: [0, 0, 0]
-materials:
-  nylon: {diameter: 1.0e-3, linear_density: 8.95e-4, stretch_stiffness: 1571,
-          bend_stiffness: 9.82e-5, twist_stiffness: 7.07e-5}
-nets:
-  - {name: net, material: nylon, knots: [6, 6], mesh: 0.1, segments_per_link: 2,
-     center: [1.0, 0, 0], normal: [1, 0, 0], x_axis: [0, 1, 0], knot_mass: 3e-05,
-     corner_mass: 0.02, corner_radius: 0.01, velocity: [0.5, 0, 0]}
-bodies:
-  - {name: target, shape: box, center: [2.2, 0, 0], size: [0.4, 0.3, 0.3]}
-)";
 
 class LabelCommand : public netlab::testing::CommandTest {
  protected:
   LabelCommand() : CommandTest("label_cli") {}
   void SetUp() override {
     CommandTest::SetUp();
-    std::ofstream(Path("scenario.yaml")) << kScenario;
+    std::ofstream(Path("scenario.yaml")) << netlab::testing::kSmallShotScenario;
     ASSERT_EQ(RunNetlab("simulate " + Path("scenario.yaml") + " --out " + Path("sim.h5") +
                         " --quiet")
                   .status,

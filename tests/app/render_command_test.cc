@@ -13,6 +13,7 @@
 #include "libnetsim/track_file.h"
 #include "libreconstruct/labels.h"
 #include "tests/app/run_netlab.h"
+#include "tests/app/small_shot.h"
 
 namespace {
 
@@ -22,22 +23,6 @@ using netlab::testing::RunNetlab;
 namespace fs = std::filesystem;
 namespace h5 = netlab::h5;
 
-// A 6 x 6-knot net shot along +x past a box, as in the flight scenarios but small and short.
-constexpr char kScenario[] = R"(name: render_test
-duration: 0.06
-output_interval: 0.005586592178770949
-integrator: {type: explicit, dt: auto}
-gravity: [0, 0, 0]
-materials:
-  nylon: {diameter: 1.0e-3, linear_density: 8.95e-4, stretch_stiffness: 1571,
-          bend_stiffness: 9.82e-5, twist_stiffness: 7.07e-5}
-nets:
-  - {name: net, material: nylon, knots: [6, 6], mesh: 0.1, segments_per_link: 2,
-     center: [1.0, 0, 0], normal: [1, 0, 0], x_axis: [0, 1, 0], knot_mass: 3e-05,
-     corner_mass: 0.02, corner_radius: 0.01, velocity: [0.5, 0, 0]}
-bodies:
-  - {name: target, shape: box, center: [2.2, 0, 0], size: [0.4, 0.3, 0.3]}
-)";
 
 class RenderCommand : public ::testing::Test {
  protected:
@@ -45,7 +30,7 @@ class RenderCommand : public ::testing::Test {
     dir_ = fs::temp_directory_path() / ("netlab_render_cli_" + std::to_string(getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    std::ofstream(dir_ / "scenario.yaml") << kScenario;
+    std::ofstream(dir_ / "scenario.yaml") << netlab::testing::kSmallShotScenario;
     const auto sim = RunNetlab("simulate " + (dir_ / "scenario.yaml").string() + " --out " +
                                (dir_ / "sim.h5").string() + " --quiet");
     ASSERT_EQ(sim.status, 0) << sim.err;
