@@ -109,4 +109,25 @@ void CommandLine::Knots(const std::string& name, int* rows, int* cols) const {
     throw UsageError("--" + name + " " + text + ": need 2..1000 knots per side");
 }
 
+bool CommandLine::FrameRange(const std::string& name, int* first, int* last) const {
+  const auto value = Option(name);
+  if (!value) return false;
+  const std::string& text = *value;
+  const size_t colon = text.find(':');
+  int a = 0, b = 0;
+  try {
+    if (colon == std::string::npos) throw std::invalid_argument("no colon");
+    size_t used_a = 0, used_b = 0;
+    a = std::stoi(text.substr(0, colon), &used_a);
+    b = std::stoi(text.substr(colon + 1), &used_b);
+    if (used_a != colon || used_b != text.size() - colon - 1) throw std::invalid_argument("junk");
+  } catch (const std::exception&) {
+    throw UsageError("--" + name + " expects A:B (first and last frame), got '" + text + "'");
+  }
+  if (a < 0 || b < a) throw UsageError("--" + name + " " + text + ": need 0 <= A <= B");
+  *first = a;
+  *last = b;
+  return true;
+}
+
 }  // namespace netlab::app

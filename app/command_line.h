@@ -33,6 +33,9 @@ class CommandLine {
   const std::vector<std::string>& positional() const { return positional_; }
   // A net's shape given as ROWSxCOLS (e.g. 11x11) in option `name`, required; 2..1000 knots a side.
   void Knots(const std::string& name, int* rows, int* cols) const;
+  // A frame range A:B (inclusive, 0 <= A <= B) in option `name`: false (first, last untouched)
+  // when the option is absent, UsageError naming it when malformed.
+  bool FrameRange(const std::string& name, int* first, int* last) const;
 
  private:
   std::map<std::string, std::vector<std::string>> values_;

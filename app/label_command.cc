@@ -44,21 +44,6 @@ constexpr char kHelp[] =
     "                      needs_review, frames, wall_s, and per camera\n\n"
     "exit status: 0 done, 1 bad input, 2 usage error.\n";
 
-std::pair<int, int> ParseFrames(const std::string& text) {
-  const size_t colon = text.find(':');
-  try {
-    if (colon == std::string::npos) throw std::invalid_argument("no colon");
-    size_t used_a = 0, used_b = 0;
-    const int a = std::stoi(text.substr(0, colon), &used_a);
-    const int b = std::stoi(text.substr(colon + 1), &used_b);
-    if (used_a != colon || used_b != text.size() - colon - 1 || a > b || a < 0)
-      throw std::invalid_argument("bad");
-    return {a, b};
-  } catch (const std::exception&) {
-    throw UsageError("--frames expects A:B with 0 <= A <= B, got '" + text + "'");
-  }
-}
-
 recon::Label Made(const Eigen::Vector2d& px, recon::LabelSource source, double confidence,
                   bool accepted) {
   recon::Label l;
@@ -168,11 +153,11 @@ int RunLabel(const std::vector<std::string>& args) {
       cameras.push_back(c.name);
     }
     int first = sequence.first_frame(), last = sequence.last_frame();
-    if (const auto frames = cl.Option("frames")) {
-      const auto [a, b] = ParseFrames(*frames);
+    int a = first, b = last;
+    if (cl.FrameRange("frames", &a, &b)) {
       if (a < first || b > last)
-        throw UsageError("--frames " + *frames + " lies outside the recording's frames " +
-                         std::to_string(first) + ":" + std::to_string(last));
+        throw UsageError("--frames " + *cl.Option("frames") + " lies outside the recording's " +
+                         "frames " + std::to_string(first) + ":" + std::to_string(last));
       first = a, last = b;
     }
     std::vector<int> frame_index;

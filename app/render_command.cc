@@ -46,21 +46,6 @@ constexpr char kHelp[] =
     "  --quiet                no progress on stderr\n\n"
     "exit status: 0 rendered, 1 bad input (named), 2 usage error.\n";
 
-void ParseFrames(const std::string& text, int* first, int* last) {
-  const size_t colon = text.find(':');
-  try {
-    if (colon == std::string::npos) throw std::invalid_argument("no colon");
-    size_t used_a = 0, used_b = 0;
-    *first = std::stoi(text.substr(0, colon), &used_a);
-    *last = std::stoi(text.substr(colon + 1), &used_b);
-    if (used_a != colon || used_b != text.size() - colon - 1) throw std::invalid_argument("junk");
-  } catch (const std::exception&) {
-    throw UsageError("--frames expects A:B (first and last frame), got '" + text + "'");
-  }
-  if (*first < 0 || *last < *first)
-    throw UsageError("--frames " + text + ": need 0 <= A <= B");
-}
-
 void PrintJson(const recon::RenderSummary& s, const std::string& out) {
   JsonWriter json;
   json.BeginObject();
@@ -105,7 +90,7 @@ int RunRender(const std::vector<std::string>& args) {
       job.rig = recon::ScaleRig(calib::ReadRig(*rig), scale);
     else
       job.rig = calib::PaperRig(scale);
-    if (const auto frames = cl.Option("frames")) ParseFrames(*frames, &job.first_frame, &job.last_frame);
+    cl.FrameRange("frames", &job.first_frame, &job.last_frame);
     job.fps = cl.DoubleOption("fps", 179.0, 1e-3, 1e6);
     job.exposure_s = cl.DoubleOption("exposure", 1e-3, 0.0, 1.0);
     job.blur_samples = cl.IntOption("blur-samples", 3, 1, 64);
