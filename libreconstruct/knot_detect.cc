@@ -14,6 +14,11 @@ namespace {
 
 constexpr int kRingSamples = 180;
 
+// Pixels around a point that Examine reads: the outer ring and the ridge filter's support.
+double Reach(const KnotDetectorOptions& o) {
+  return 2.0 * o.ring_radius_px + 4 * o.ridge_sigma_px + 4;
+}
+
 double AngleBetween(double a, double b) {
   const double d = std::fmod(std::abs(a - b), 2 * M_PI);
   return std::min(d, 2 * M_PI - d);
@@ -267,8 +272,7 @@ std::vector<Junction> KnotDetector::FindInCircle(const Eigen::Vector2d& centre,
 
 FindNodeResult FindNode(const cv::Mat& image, const Eigen::Vector2d& centre, double radius,
                         const KnotDetectorOptions& options) {
-  const int margin =
-      static_cast<int>(std::ceil(2.0 * options.ring_radius_px + 4 * options.ridge_sigma_px + 4));
+  const int margin = static_cast<int>(std::ceil(Reach(options)));
   const cv::Rect roi(static_cast<int>(std::floor(centre.x() - radius)) - margin,
                      static_cast<int>(std::floor(centre.y() - radius)) - margin,
                      static_cast<int>(2 * radius) + 2 * margin + 2,
@@ -305,8 +309,7 @@ FindPathResult FindPath(const cv::Mat& image, int cols, int knot_a, const Eigen:
   }
   // The region: the segment's bounding box with room for a sagging yarn and the rings.
   const double length = (px_b - px_a).norm();
-  const int margin = static_cast<int>(std::ceil(0.15 * length + 2.0 * options.ring_radius_px +
-                                                4 * options.ridge_sigma_px + 4));
+  const int margin = static_cast<int>(std::ceil(0.15 * length + Reach(options)));
   const cv::Rect roi(static_cast<int>(std::floor(std::min(px_a.x(), px_b.x()))) - margin,
                      static_cast<int>(std::floor(std::min(px_a.y(), px_b.y()))) - margin,
                      static_cast<int>(std::abs(px_b.x() - px_a.x())) + 2 * margin + 2,

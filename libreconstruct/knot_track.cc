@@ -80,12 +80,9 @@ std::vector<TrackedKnot> TrackKnots(const cv::Mat& from, const cv::Mat& to,
       predicted = px + Eigen::Vector2d(Median(dx), Median(dy));
       t.why = "flow lost (forward-backward check); predicted from the neighbours' motion";
     }
-    const double reach = options.snap_radius_px + 2.0 * options.detector.ring_radius_px +
-                         4 * options.detector.ridge_sigma_px + 4;
-    const cv::Rect roi(static_cast<int>(predicted.x() - reach), static_cast<int>(predicted.y() - reach),
-                       static_cast<int>(2 * reach) + 2, static_cast<int>(2 * reach) + 2);
-    const KnotDetector detector(to, roi, options.detector);
-    const std::vector<Junction> near = detector.FindInCircle(predicted, options.snap_radius_px);
+    // The knot detector's brush at the prediction, snap radius wide.
+    const std::vector<Junction> near =
+        FindNode(to, predicted, options.snap_radius_px, options.detector).candidates;
     t.px = predicted;
     if (near.empty()) {
       if (t.why.empty()) t.why = "no junction within " + std::to_string(options.snap_radius_px) + " px of the flow";
