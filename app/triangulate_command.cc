@@ -165,7 +165,7 @@ int RunTriangulate(const std::vector<std::string>& args) {
     // Against the truth: 3D error and whether it agrees with the reported covariance.
     double truth_ss = 0.0, truth_max = 0.0, mahalanobis = 0.0, aligned_rms = 0.0;
     int64_t truth_n = 0;
-    Eigen::Matrix3Xd measured_points(3, 0), true_points(3, 0);
+    std::vector<Eigen::Vector3d> measured_points, true_points;
     if (truth) {
       for (int t = 0; t < tracks.frames(); ++t)
         for (int k = 0; k < tracks.knots(); ++k) {
@@ -174,10 +174,8 @@ int RunTriangulate(const std::vector<std::string>& args) {
           Eigen::Vector3d p;
           if (tk < 0 || !TruthAt(*truth, tk, tracks.time[t], &p)) continue;
           const Eigen::Vector3d e = tracks.Position(t, k) - p;
-          measured_points.conservativeResize(3, measured_points.cols() + 1);
-          true_points.conservativeResize(3, true_points.cols() + 1);
-          measured_points.col(measured_points.cols() - 1) = tracks.Position(t, k);
-          true_points.col(true_points.cols() - 1) = p;
+          measured_points.push_back(tracks.Position(t, k));
+          true_points.push_back(p);
           truth_ss += e.squaredNorm();
           truth_max = std::max(truth_max, e.norm());
           const Eigen::Matrix3d& cov = tracks.covariance[static_cast<size_t>(t) * tracks.knots() + k];
@@ -189,10 +187,12 @@ int RunTriangulate(const std::vector<std::string>& args) {
     // A rig calibrated from a foil or markers has its own world frame; the shape of the tracks
     // is compared after the best rigid motion onto the truth (Umeyama, no scale).
     if (truth_n >= 3) {
-      const Eigen::Matrix4d m = Eigen::umeyama(measured_points, true_points, false);
+      const Eigen::Map<const Eigen::Matrix3Xd> measured(measured_points[0].data(), 3, truth_n);
+      const Eigen::Map<const Eigen::Matrix3Xd> truth_xyz(true_points[0].data(), 3, truth_n);
+      const Eigen::Matrix4d m = Eigen::umeyama(measured, truth_xyz, false);
       const Eigen::Matrix3Xd moved =
-          (m.topLeftCorner<3, 3>() * measured_points).colwise() + m.topRightCorner<3, 1>();
-      aligned_rms = std::sqrt((moved - true_points).colwise().squaredNorm().mean());
+          (m.topLeftCorner<3, 3>() * measured).colwise() + m.topRightCorner<3, 1>();
+      aligned_rms = std::sqrt((moved - truth_xyz).colwise().squaredNorm().mean());
     }
     const double wall_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -723,7 +723,7 @@ void DistanceTwoKeys(CodeRule rule, const Cfg& x, std::vector<uint64_t>* keys) {
 }
 
 // Tabu search for min_distance 2 over the whole net (radius 0), every rule, with hashed
-// bookkeeping: each knot has a few keys (see Keys), two knots of one degree are within one link
+// bookkeeping: each knot has a few keys (DistanceTwoKeys), two knots of one degree are within one link
 // change of each other exactly when keys of matching families meet, so the cost (meetings of
 // keys) is 0 exactly for a valid colouring, and a move (two knots change) costs O(d) hash
 // operations instead of a comparison with every knot.
