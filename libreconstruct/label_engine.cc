@@ -1,0 +1,604 @@
+#include "libreconstruct/label_engine.h"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <stdexcept>
+
+#include <opencv2/imgproc.hpp>
+
+#include "libreconstruct/triangulation.h"
+
+namespace netlab::recon {
+namespace {
+
+Label Made(const Eigen::Vector2d& px, LabelSource source, double confidence, bool accepted) {
+  Label l;
+  l.px = px;
+  l.source = source;
+  l.confidence = static_cast<float>(std::clamp(confidence, 0.0, 1.0));
+  l.state = accepted ? LabelState::kAccepted : LabelState::kNeedsReview;
+  return l;
+}
+
+bool Accepted(const Label& l) { return l.present() && l.state == LabelState::kAccepted; }
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// Whether a junction's yarns leave it towards its grid neighbours: every branch within
+// `tolerance_deg` of the direction to one of the neighbours whose image position is known, and
+// every such neighbour reached by a branch; `degree` branches in all. A junction that fails is not
+// this knot, or not only this knot (a yarn vanishing at the edge of the target also makes one).
+bool BranchesMatchLinks(const Junction& j, int degree,
+                        const std::vector<Eigen::Vector2d>& neighbour_px, double tolerance_deg) {
+  if (j.branches != degree || neighbour_px.size() < 2) return false;
+  const double tol = tolerance_deg * M_PI / 180.0;
+  auto gap = [](double a, double b) {
+    return std::abs(std::remainder(a - b, 2.0 * M_PI));
+  };
+  std::vector<double> link;
+  for (const auto& n : neighbour_px) link.push_back(std::atan2(n.y() - j.px.y(), n.x() - j.px.x()));
+  for (double b : j.branch_angles_rad) {
+    double best = M_PI;
+    for (double l : link) best = std::min(best, gap(b, l));
+    if (best > tol && neighbour_px.size() == static_cast<size_t>(degree)) return false;
+  }
+  for (double l : link) {
+    double best = M_PI;
+    for (double b : j.branch_angles_rad) best = std::min(best, gap(b, l));
+    if (best > tol) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+LabelEngine::LabelEngine(LabelStore* store, const calib::Rig* rig, ImageSource images,
+                         LabelEngineOptions options)
+    : store_(store), rig_(rig), images_(std::move(images)), o_(std::move(options)) {
+  const LabelSet& set = store_->labels();
+  rig_index_.assign(set.cameras.size(), -1);
+  if (rig_)
+    for (size_t c = 0; c < set.cameras.size(); ++c) {
+      rig_index_[c] = rig_->Find(set.cameras[c]);
+      if (rig_index_[c] < 0)
+        throw std::invalid_argument("the rig has no camera '" + set.cameras[c] + "'");
+    }
+  link_length_m_ = o_.link_length_m;
+}
+
+const cv::Mat& LabelEngine::Image(int camera, int t) {
+  const auto key = std::make_pair(camera, t);
+  auto it = cache_.find(key);
+  if (it != cache_.end()) return it->second;
+  // Keep two frames per camera: the pair being tracked.
+  for (auto i = cache_.begin(); i != cache_.end();)
+    i = i->first.first == camera && std::abs(i->first.second - t) > 1 ? cache_.erase(i) : ++i;
+  return cache_.emplace(key, images_(camera, t)).first->second;
+}
+
+void LabelEngine::Note(int camera, int t, int knot, const std::string& why) {
+  if (why.empty())
+    reasons_.erase({camera, t, knot});
+  else
+    reasons_[{camera, t, knot}] = why;
+}
+
+EngineCounts LabelEngine::Commit(const std::string& name, const std::vector<LabelEdit>& edits) {
+  EngineCounts n;
+  for (const auto& e : edits) {
+    if (e.label.state == LabelState::kAccepted) {
+      ++n.accepted;
+      Note(e.camera, e.t, e.knot, "");
+    } else if (e.label.state == LabelState::kNeedsReview) {
+      ++n.review;
+    }
+  }
+  store_->Apply(name, edits);
+  return n;
+}
+
+int LabelEngine::Degree(int knot) const { return static_cast<int>(Neighbours(knot).size()); }
+
+std::vector<Eigen::Vector2d> LabelEngine::NeighbourPixels(
+    int camera, int t, int knot, const std::vector<std::optional<Eigen::Vector3d>>& point) const {
+  std::vector<Eigen::Vector2d> px;
+  for (int n : Neighbours(knot)) {
+    const Label& l = store_->at(camera, t, n);
+    if (Accepted(l)) {
+      px.push_back(l.px);
+    } else if (rig_ && n < static_cast<int>(point.size()) && point[n]) {
+      const Eigen::Vector2d q = rig_->cameras[RigIndex(camera)].ProjectWorld(*point[n]);
+      if (q.allFinite()) px.push_back(q);
+    }
+  }
+  return px;
+}
+
+std::vector<int> LabelEngine::Neighbours(int knot) const {
+  const int rows = store_->labels().rows, cols = store_->labels().cols;
+  const int r = knot / cols, c = knot % cols;
+  std::vector<int> n;  // right, down, left, up
+  if (c + 1 < cols) n.push_back(knot + 1);
+  if (r + 1 < rows) n.push_back(knot + cols);
+  if (c > 0) n.push_back(knot - 1);
+  if (r > 0) n.push_back(knot - cols);
+  return n;
+}
+
+EngineCounts LabelEngine::LabelFirstFrame(int t) {
+  const LabelSet& set = store_->labels();
+  const int rows = set.rows, cols = set.cols;
+  const int corners[4] = {0, cols - 1, (rows - 1) * cols, rows * cols - 1};
+  std::vector<LabelEdit> edits;
+  for (int camera = 0; camera < static_cast<int>(set.cameras.size()); ++camera) {
+    bool seeded = true;
+    for (int k : corners) seeded = seeded && set.at(camera, t, k).present();
+    if (!seeded) continue;
+    const cv::Mat& image = Image(camera, t);
+    if (image.empty()) continue;
+    const size_t first_edit = edits.size();
+    auto px = [&](int k) -> std::optional<Eigen::Vector2d> {
+      for (size_t i = first_edit; i < edits.size(); ++i)
+        if (edits[i].knot == k) return edits[i].label.px;
+      const Label& l = set.at(camera, t, k);
+      if (l.present()) return l.px;
+      return std::nullopt;
+    };
+    auto path = [&](int a, int b) {
+      const auto pa = px(a), pb = px(b);
+      if (!pa || !pb) return FindPathResult{};
+      return FindPath(image, cols, a, *pa, b, *pb, o_.detector);
+    };
+    // The four sides: each knot from one path (its junction count checked against the grid).
+    for (const auto& [a, b] : {std::pair(corners[0], corners[1]), std::pair(corners[2], corners[3]),
+                               std::pair(corners[0], corners[2]),
+                               std::pair(corners[1], corners[3])}) {
+      const FindPathResult r = path(a, b);
+      for (size_t i = 0; i < r.knots.size(); ++i)
+        if (!set.at(camera, t, r.knots[i]).present())
+          edits.push_back({camera, t, r.knots[i],
+                           Made(r.junctions[i].px, LabelSource::kFindPath,
+                                r.junctions[i].confidence, true)});
+    }
+    // Inner knots: along their row and along their column; both must agree.
+    std::map<int, Eigen::Vector2d> by_row, by_column;
+    std::map<int, double> confidence;
+    for (int row = 1; row + 1 < rows; ++row) {
+      const FindPathResult r = path(row * cols, row * cols + cols - 1);
+      for (size_t i = 0; i < r.knots.size(); ++i) {
+        by_row[r.knots[i]] = r.junctions[i].px;
+        confidence[r.knots[i]] = r.junctions[i].confidence;
+      }
+    }
+    for (int col = 1; col + 1 < cols; ++col) {
+      const FindPathResult r = path(col, (rows - 1) * cols + col);
+      for (size_t i = 0; i < r.knots.size(); ++i) {
+        by_column[r.knots[i]] = r.junctions[i].px;
+        const auto c = confidence.find(r.knots[i]);
+        confidence[r.knots[i]] =
+            std::min(c == confidence.end() ? 1.0 : c->second, r.junctions[i].confidence);
+      }
+    }
+    for (int row = 1; row + 1 < rows; ++row)
+      for (int col = 1; col + 1 < cols; ++col) {
+        const int k = row * cols + col;
+        if (set.at(camera, t, k).present()) continue;
+        const auto a = by_row.find(k), b = by_column.find(k);
+        if (a == by_row.end() && b == by_column.end()) continue;
+        const bool both = a != by_row.end() && b != by_column.end();
+        const bool agree = both && (a->second - b->second).norm() < o_.row_column_agreement_px;
+        const Eigen::Vector2d where = a != by_row.end() ? a->second : b->second;
+        edits.push_back({camera, t, k, Made(where, LabelSource::kFindPath, confidence[k], agree)});
+        if (!agree)
+          Note(camera, t, k,
+               both ? "Find Path: its row and its column put it " +
+                          std::to_string((a->second - b->second).norm()) + " px apart"
+                    : "Find Path: found along its row or its column only");
+      }
+  }
+  return Commit("Find Path (frame row " + std::to_string(t) + ")", edits);
+}
+
+EngineCounts LabelEngine::Track(int from, int to) {
+  const LabelSet& set = store_->labels();
+  std::vector<LabelEdit> edits;
+  for (int camera = 0; camera < static_cast<int>(set.cameras.size()); ++camera) {
+    std::vector<std::pair<int, Eigen::Vector2d>> knots;
+    std::vector<bool> was_accepted;
+    for (int k = 0; k < set.knots(); ++k) {
+      const Label& l = set.at(camera, from, k);
+      if (!l.present() || set.at(camera, to, k).present()) continue;
+      knots.emplace_back(k, l.px);
+      was_accepted.push_back(l.state == LabelState::kAccepted);
+    }
+    if (knots.empty()) continue;
+    const cv::Mat& a = Image(camera, from);
+    const cv::Mat& b = Image(camera, to);
+    if (a.empty() || b.empty()) continue;
+    const std::vector<TrackedKnot> tracked =
+        TrackKnots(a, b, knots, set.rows, set.cols, o_.track);
+    for (size_t i = 0; i < tracked.size(); ++i) {
+      const bool accepted = tracked[i].accepted && was_accepted[i];
+      edits.push_back({camera, to, tracked[i].knot,
+                       Made(tracked[i].px, LabelSource::kTracked, tracked[i].confidence,
+                            accepted)});
+      if (!accepted)
+        Note(camera, to, tracked[i].knot,
+             tracked[i].accepted ? "tracked from a label under review" : tracked[i].why);
+    }
+  }
+  return Commit("track frame row " + std::to_string(from) + " to " + std::to_string(to), edits);
+}
+
+FindNodeResult LabelEngine::FindNodeAt(int camera, int t, int knot, const Eigen::Vector2d& centre,
+                                       double radius_px) {
+  const cv::Mat& image = Image(camera, t);
+  if (image.empty()) {
+    FindNodeResult r;
+    r.why = "the frame cannot be read";
+    return r;
+  }
+  FindNodeResult r = FindNode(image, centre, radius_px, o_.detector);
+  if (r.status == FindNodeStatus::kFound)
+    Commit("Find Node", {{camera, t, knot, Made(r.knot.px, LabelSource::kFindNode,
+                                                 r.knot.confidence, true)}});
+  return r;
+}
+
+void LabelEngine::EstimateLinkLength(int t) {
+  if (link_length_m_ > 0.0 || !rig_) return;
+  const LabelSet& set = store_->labels();
+  std::vector<std::optional<Eigen::Vector3d>> p(set.knots());
+  for (int k = 0; k < set.knots(); ++k) {
+    std::vector<Observation> obs;
+    for (int c = 0; c < static_cast<int>(set.cameras.size()); ++c)
+      if (Accepted(set.at(c, t, k))) obs.push_back({RigIndex(c), set.at(c, t, k).px});
+    if (obs.size() < 2) continue;
+    TriangulationOptions to;
+    to.outlier_threshold_px = o_.epipolar_tolerance_px;
+    const PointEstimate e = TriangulatePoint(*rig_, obs, to);
+    if (e.valid && e.outliers.empty()) p[k] = e.position;
+  }
+  std::vector<double> d;
+  for (int k = 0; k < set.knots(); ++k)
+    for (int n : Neighbours(k))
+      if (n > k && p[k] && p[n]) d.push_back((*p[k] - *p[n]).norm());
+  if (d.size() >= 4) link_length_m_ = Median(d);
+}
+
+EngineCounts LabelEngine::CrossCheck(int t) {
+  const LabelSet& set = store_->labels();
+  const int cameras = static_cast<int>(set.cameras.size());
+  const int knots = set.knots();
+  const bool geometry = rig_ && cameras >= 2;
+  TriangulationOptions topt;
+  topt.outlier_threshold_px = o_.epipolar_tolerance_px;
+  EngineCounts total;
+
+  // 1. Epipolar consistency of the accepted labels.
+  std::vector<std::optional<Eigen::Vector3d>> point(knots);
+  auto triangulate_accepted = [&](std::vector<LabelEdit>* flags) {
+    for (int k = 0; k < knots; ++k) {
+      point[k].reset();
+      std::vector<Observation> obs;
+      std::vector<int> from;
+      for (int c = 0; c < cameras; ++c)
+        if (Accepted(set.at(c, t, k))) {
+          obs.push_back({RigIndex(c), set.at(c, t, k).px});
+          from.push_back(c);
+        }
+      if (obs.size() < 2) continue;
+      const PointEstimate e = TriangulatePoint(*rig_, obs, topt);
+      if (e.valid) point[k] = e.position;
+      if (!flags) continue;
+      auto flag = [&](int i, const std::string& why) {
+        Label l = set.at(from[i], t, k);
+        l.state = LabelState::kNeedsReview;
+        flags->push_back({from[i], t, k, l});
+        Note(from[i], t, k, why);
+      };
+      if (!e.valid) {
+        for (size_t i = 0; i < from.size(); ++i)
+          flag(static_cast<int>(i), "epipolar check: the cameras disagree (" + e.why + ")");
+      } else {
+        for (int i : e.outliers)
+          flag(i, "epipolar check: " + std::to_string(e.residual_px[i]) +
+                      " px off the point the other cameras see");
+      }
+    }
+  };
+  if (geometry) {
+    std::vector<LabelEdit> flags;
+    triangulate_accepted(&flags);
+    if (!flags.empty()) {
+      const EngineCounts n = Commit("epipolar check (frame row " + std::to_string(t) + ")", flags);
+      total.review += n.review;
+      triangulate_accepted(nullptr);
+    }
+    EstimateLinkLength(t);
+  }
+  const double link = link_length_m_;
+
+  // 2. Fill Grid.
+  struct Candidate {
+    int camera;
+    Eigen::Vector2d px;
+    double confidence;
+    std::string how;
+  };
+  // What each search looked at, so a later pass does not repeat a search that found nothing.
+  std::map<std::pair<int, int>, Eigen::Vector2d> searched;
+  auto repeat = [&](int c, int k, const Eigen::Vector2d& centre) {
+    const auto key = std::make_pair(c, k);
+    const auto it = searched.find(key);
+    if (it != searched.end() && (it->second - centre).norm() < 0.5) return true;
+    searched[key] = centre;
+    return false;
+  };
+  for (int pass = 0; pass < o_.fill_passes; ++pass) {
+    std::vector<LabelEdit> edits;
+    std::map<int, std::vector<Candidate>> candidates;
+    // Positions already taken in each camera (accepted labels and the knots' projections), so a
+    // junction is never given to a second knot.
+    auto taken_near = [&](int c, int k, const Eigen::Vector2d& px) {
+      for (int j = 0; j < knots; ++j) {
+        if (j == k) continue;
+        const Label& l = set.at(c, t, j);
+        if (Accepted(l) && (l.px - px).norm() < o_.exclusion_px) return true;
+        if (geometry && point[j]) {
+          const Eigen::Vector2d q = rig_->cameras[RigIndex(c)].ProjectWorld(*point[j]);
+          if (q.allFinite() && (q - px).norm() < o_.exclusion_px) return true;
+        }
+      }
+      return false;
+    };
+    for (int c = 0; c < cameras; ++c) {
+      const cv::Mat& image = Image(c, t);
+      if (image.empty()) continue;
+      const cv::Size size = image.size();
+      auto inside = [&](const Eigen::Vector2d& q, double margin) {
+        return q.allFinite() && q.x() >= margin && q.y() >= margin &&
+               q.x() <= size.width - 1 - margin && q.y() <= size.height - 1 - margin;
+      };
+      for (int k = 0; k < knots; ++k) {
+        if (Accepted(set.at(c, t, k))) continue;
+        // (a) The knot's own triangulated point.
+        if (geometry && point[k]) {
+          const Eigen::Vector2d q = rig_->cameras[RigIndex(c)].ProjectWorld(*point[k]);
+          if (!inside(q, 16) || repeat(c, k, q)) continue;
+          const FindNodeResult r = FindNode(image, q, o_.projection_tolerance_px, o_.detector);
+          if (getenv("DBG") && r.status == FindNodeStatus::kFound) {
+            auto np = NeighbourPixels(c, t, k, point);
+            fprintf(stderr, "DBG c%d t%d k%d deg %d br %d nb %zu:", c, t, k, Degree(k), r.knot.branches, np.size());
+            for (double b : r.knot.branch_angles_rad) fprintf(stderr, " b%.0f", b * 180 / M_PI);
+            for (auto& n : np) fprintf(stderr, " n%.0f", std::atan2(n.y() - r.knot.px.y(), n.x() - r.knot.px.x()) * 180 / M_PI);
+            fprintf(stderr, " ok=%d\n", (int)BranchesMatchLinks(r.knot, Degree(k), np, o_.branch_tolerance_deg));
+          }
+          if (r.status == FindNodeStatus::kFound &&
+              (r.knot.px - q).norm() <= o_.projection_tolerance_px && !taken_near(c, k, r.knot.px) &&
+              BranchesMatchLinks(r.knot, Degree(k), NeighbourPixels(c, t, k, point), o_.branch_tolerance_deg)) {
+            edits.push_back({c, t, k, Made(r.knot.px, LabelSource::kFillGrid, r.knot.confidence,
+                                           true)});
+          }
+          continue;
+        }
+        // (b) Spheres of link length around triangulated neighbours.
+        std::vector<Eigen::Vector3d> around;
+        std::vector<int> around_knots;
+        for (int n : Neighbours(k))
+          if (geometry && point[n]) {
+            around.push_back(*point[n]);
+            around_knots.push_back(n);
+          }
+        bool opposite = false;
+        for (size_t i = 0; i < around_knots.size(); ++i)
+          for (size_t j = i + 1; j < around_knots.size(); ++j)
+            opposite = opposite || std::abs(around_knots[i] - around_knots[j]) == 2 ||
+                       std::abs(around_knots[i] - around_knots[j]) == 2 * set.cols;
+        std::vector<Eigen::Vector2d> region;  // projected candidate points
+        std::string how;
+        if (link > 0.0 && around.size() >= 2 && (opposite || around.size() >= 3)) {
+          // The pair farthest apart spans the circle; the rest filter it.
+          size_t ia = 0, ib = 1;
+          for (size_t i = 0; i < around.size(); ++i)
+            for (size_t j = i + 1; j < around.size(); ++j)
+              if ((around[i] - around[j]).norm() > (around[ia] - around[ib]).norm()) ia = i, ib = j;
+          const Eigen::Vector3d mid = 0.5 * (around[ia] + around[ib]);
+          const Eigen::Vector3d axis = (around[ib] - around[ia]).normalized();
+          const double half = 0.5 * (around[ib] - around[ia]).norm();
+          const double reach = link * (1.0 + o_.link_tolerance);
+          if (half <= reach) {
+            const double rho = std::sqrt(std::max(0.0, reach * reach - half * half));
+            const Eigen::Vector3d u = axis.unitOrthogonal(), v = axis.cross(u);
+            // The lens where the balls of link length meet (links may be slack), sampled.
+            for (double f : {1.0, 0.8, 0.6, 0.4, 0.2, 0.0})
+              for (int s = 0; s < (f > 0 ? 48 : 1); ++s) {
+                const double a = 2 * M_PI * s / 48;
+                const Eigen::Vector3d p = mid + f * rho * (std::cos(a) * u + std::sin(a) * v);
+                bool ok = true;
+                for (const auto& n : around) ok = ok && (p - n).norm() <= reach;
+                if (!ok) continue;
+                const Eigen::Vector2d q = rig_->cameras[RigIndex(c)].ProjectWorld(p);
+                if (inside(q, 16)) region.push_back(q);
+              }
+            how = "spheres of link length around " + std::to_string(around.size()) +
+                  " triangulated neighbours";
+          }
+        }
+        if (region.empty()) {
+          // (c) The image-space grid in this camera.
+          const int cols = set.cols;
+          auto at = [&](int j) -> std::optional<Eigen::Vector2d> {
+            if (j < 0 || j >= knots || !Accepted(set.at(c, t, j))) return std::nullopt;
+            return set.at(c, t, j).px;
+          };
+          const int r = k / cols, col = k % cols;
+          std::vector<Eigen::Vector2d> guesses;
+          double spacing = 0.0;
+          auto pair = [&](int a, int b) {
+            const auto pa = at(a), pb = at(b);
+            if (!pa || !pb) return;
+            guesses.push_back(0.5 * (*pa + *pb));
+            spacing = std::max(spacing, 0.5 * (*pa - *pb).norm());
+          };
+          if (col > 0 && col + 1 < cols) pair(k - 1, k + 1);
+          if (r > 0 && r + 1 < set.rows) pair(k - cols, k + cols);
+          for (int dr : {-1, 1})
+            for (int dc : {-1, 1}) {
+              if (r + dr < 0 || r + dr >= set.rows || col + dc < 0 || col + dc >= cols) continue;
+              const auto a = at(k + dc), b = at(k + dr * cols), d = at(k + dr * cols + dc);
+              if (!a || !b || !d) continue;
+              guesses.push_back(*a + *b - *d);
+              spacing = std::max(spacing, std::max((*a - *d).norm(), (*b - *d).norm()));
+            }
+          if (guesses.empty() || spacing <= 0.0) continue;
+          Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+          for (const auto& g : guesses) mean += g;
+          mean /= static_cast<double>(guesses.size());
+          bool agree = true;
+          for (const auto& g : guesses) agree = agree && (g - mean).norm() < 0.25 * spacing;
+          if (!agree || !inside(mean, 16) || repeat(c, k, mean)) continue;
+          region.push_back(mean);
+          how = "the image grid of its labeled neighbours";
+          const FindNodeResult f = FindNode(image, mean, 0.3 * spacing, o_.detector);
+          if (f.status == FindNodeStatus::kFound && !taken_near(c, k, f.knot.px) &&
+              BranchesMatchLinks(f.knot, Degree(k), NeighbourPixels(c, t, k, point),
+                                 o_.branch_tolerance_deg))
+            candidates[k].push_back({c, f.knot.px, f.knot.confidence, how});
+          continue;
+        }
+        // One unlabeled junction near the projected lens.
+        Eigen::AlignedBox2d box;
+        for (const auto& q : region) box.extend(q);
+        const Eigen::Vector2d centre = box.center();
+        const double radius = 0.5 * box.diagonal().norm() + 4.0;
+        if (radius > 150.0 || repeat(c, k, centre)) continue;  // too vague to search, or done
+        if (region.size() > 1) {  // thin the samples to about 3 px apart
+          std::vector<Eigen::Vector2d> thin = {region.front()};
+          for (const auto& q : region) {
+            bool close = false;
+            for (const auto& p : thin) close = close || (p - q).norm() < 3.0;
+            if (!close) thin.push_back(q);
+          }
+          region.swap(thin);
+        }
+        const int x0 = std::max(0, static_cast<int>(centre.x() - radius - 16));
+        const int y0 = std::max(0, static_cast<int>(centre.y() - radius - 16));
+        const int x1 = std::min(size.width, static_cast<int>(centre.x() + radius + 17));
+        const int y1 = std::min(size.height, static_cast<int>(centre.y() + radius + 17));
+        const KnotDetector detector(image, cv::Rect(x0, y0, x1 - x0, y1 - y0), o_.detector);
+        double step = 4.0;  // the largest gap from a projected sample to its nearest one
+        for (size_t i = 0; i < region.size(); ++i) {
+          double nearest = 30.0;
+          for (size_t j = 0; j < region.size(); ++j)
+            if (j != i) nearest = std::min(nearest, (region[i] - region[j]).norm());
+          step = std::max(step, nearest);
+        }
+        // Searched only near the projected samples, and only from pixels on a yarn (a knot is
+        // where yarns meet): far fewer than the pixels of the region.
+        std::vector<Junction> near;
+        const double reach = 0.5 * step + 2.0;
+        const cv::Mat& ridge = detector.ridge();
+        const double on_yarn = 0.5 * detector.peak_threshold();
+        std::vector<Eigen::Vector2d> examined;
+        for (int y = 0; y < ridge.rows; ++y)
+          for (int x = 0; x < ridge.cols; ++x) {
+            if (ridge.at<float>(y, x) < on_yarn) continue;
+            const Eigen::Vector2d p(x0 + x, y0 + y);
+            bool in_region = false;
+            for (const auto& q : region) in_region = in_region || (q - p).norm() <= reach;
+            if (!in_region) continue;
+            bool done = false;
+            for (const auto& e : examined) done = done || (e - p).norm() < 1.5;
+            for (const Junction& n : near) done = done || (n.px - p).norm() < 3.0;
+            if (done) continue;
+            examined.push_back(p);
+            const std::optional<Junction> j = detector.Examine(p);
+            if (!j) continue;
+            bool merged = false;
+            for (const Junction& n : near) merged = merged || (n.px - j->px).norm() < o_.detector.merge_px;
+            if (!merged && !taken_near(c, k, j->px) &&
+                BranchesMatchLinks(*j, Degree(k), NeighbourPixels(c, t, k, point),
+                                   o_.branch_tolerance_deg))
+              near.push_back(*j);
+          }
+        if (near.size() == 1) candidates[k].push_back({c, near[0].px, near[0].confidence, how});
+      }
+    }
+    // Candidates become labels only when the cameras agree in 3D.
+    for (auto& [k, list] : candidates) {
+      bool confirmed = false;
+      std::string why = "Fill Grid: seen by one camera only (" + list.front().how + ")";
+      if (geometry) {
+        std::vector<Observation> obs;
+        for (int c = 0; c < cameras; ++c)
+          if (Accepted(set.at(c, t, k))) obs.push_back({RigIndex(c), set.at(c, t, k).px});
+        const size_t first = obs.size();
+        for (const auto& cand : list) obs.push_back({RigIndex(cand.camera), cand.px});
+        if (obs.size() >= 2) {
+          const PointEstimate e = TriangulatePoint(*rig_, obs, topt);
+          bool near_links = e.valid;
+          for (int n : Neighbours(k))
+            if (e.valid && point[n] && link > 0.0)
+              near_links = near_links &&
+                           (e.position - *point[n]).norm() <= link * (1.0 + o_.link_tolerance);
+          if (!e.valid)
+            why = "Fill Grid: the cameras' candidates disagree (" + e.why + ")";
+          else if (!near_links)
+            why = "Fill Grid: the cameras agree on a point farther than a link from its neighbours";
+          if (e.valid && near_links) {
+            for (size_t i = first; i < obs.size(); ++i) {
+              const bool inlier =
+                  std::find(e.inliers.begin(), e.inliers.end(), static_cast<int>(i)) !=
+                  e.inliers.end();
+              const Candidate& cand = list[i - first];
+              if (inlier) {
+                confirmed = true;
+                edits.push_back({cand.camera, t, k, Made(cand.px, LabelSource::kFillGrid,
+                                                         cand.confidence, true)});
+              }
+            }
+            if (!confirmed) why = "Fill Grid: off the epipolar geometry of the other cameras";
+          }
+        }
+      }
+      if (confirmed) continue;
+      for (const auto& cand : list)
+        if (!set.at(cand.camera, t, k).present()) {
+          edits.push_back({cand.camera, t, k,
+                           Made(cand.px, LabelSource::kFillGrid, cand.confidence, false)});
+          Note(cand.camera, t, k, why);
+        }
+    }
+    // One label per (camera, knot): the first edit wins (accepted ones come first per knot).
+    std::vector<LabelEdit> unique;
+    for (const auto& e : edits) {
+      bool seen = false;
+      for (const auto& u : unique) seen = seen || (u.camera == e.camera && u.knot == e.knot);
+      if (!seen) unique.push_back(e);
+    }
+    // Two knots given junctions this close in one camera: neither is trusted.
+    for (auto& a : unique)
+      for (auto& b : unique)
+        if (&a != &b && a.camera == b.camera && a.label.state == LabelState::kAccepted &&
+            (a.label.px - b.label.px).norm() < o_.exclusion_px) {
+          a.label.state = LabelState::kNeedsReview;
+          Note(a.camera, t, a.knot, "Fill Grid: another knot was found at the same place");
+        }
+    const EngineCounts n = Commit("Fill Grid (frame row " + std::to_string(t) + ", pass " +
+                                      std::to_string(pass + 1) + ")",
+                                  unique);
+    total.accepted += n.accepted;
+    total.review += n.review;
+    if (n.accepted == 0) break;
+    if (geometry) triangulate_accepted(nullptr);
+  }
+  return total;
+}
+
+}  // namespace netlab::recon

@@ -1,0 +1,129 @@
+#pragma once
+// The labeling engine: the automatic tools of netlab label and of the GUI, over a label store.
+//
+//   LabelEngine engine(&store, rig, images, options);   // images(camera, t): that frame, BGR
+//   engine.LabelFirstFrame(0);     // per camera: Find Path from the four corners
+//   engine.CrossCheck(0);          // epipolar consistency, then Fill Grid
+//   for t = 1 ...: engine.Track(t - 1, t); engine.CrossCheck(t);
+//   engine.FindNodeAt(camera, t, knot, centre, radius);  // the person's brush
+//
+// Every tool applies its labels as one undoable step of the store. A label is accepted only when
+// its checks agree; otherwise it is kept for review with the reason (reasons(), per camera,
+// frame and knot) — never guessed silently.
+//
+// Cross-camera checks (CrossCheck) need the rig, with the store's cameras in it:
+//   * Epipolar consistency: every knot with accepted labels in two or more cameras is
+//     triangulated (triangulation.h, consensus over pairs of views); a view it leaves out as an
+//     outlier, or a point it cannot resolve, turns those labels to review.
+//   * Fill Grid, repeated until nothing changes: a knot without an accepted label in a camera is
+//     searched for there —
+//       - where its triangulated point (from the cameras that have it) projects; found within
+//         projection_tolerance_px and no other knot's projection near: accepted (two other
+//         cameras vouch for it);
+//       - else where spheres of link-length radius around its triangulated grid neighbours meet
+//         (2 neighbours: a circle; 3 or more: the points on it at link length from the rest),
+//         projected into the camera; the one unlabeled junction near that curve is a candidate;
+//       - else (no neighbour seen by two cameras) at the image-space grid prediction from its
+//         labeled neighbours in that camera (the midpoint of two opposite neighbours, or the
+//         fourth corner of a parallelogram).
+//     Candidates are accepted only when two or more cameras' candidates (or accepted labels)
+//     triangulate consistently to a point at link length (within link_tolerance) from its
+//     triangulated neighbours; otherwise they stay for review.
+// Without a rig (or with one camera) CrossCheck does the image-space part only, for review.
+
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "calibration/rig.h"
+#include "libreconstruct/knot_detect.h"
+#include "libreconstruct/knot_track.h"
+#include "libreconstruct/label_store.h"
+
+namespace netlab::recon {
+
+struct LabelEngineOptions {
+  KnotDetectorOptions detector;
+  TrackOptions track;
+  // Find Path in the first frame: an inner knot is accepted when its row and its column put it
+  // within this distance.
+  double row_column_agreement_px = 0.5;
+  // Link length of the net (m, knot to knot); <= 0: estimated from the first frame's
+  // triangulated neighbours (median).
+  double link_length_m = 0.0;
+  // A triangulated knot is consistent with its neighbours when its distance to each is at most
+  // (1 + link_tolerance) link lengths and, for a taut pair, not much less (see .cc).
+  double link_tolerance = 0.15;
+  // Epipolar consistency: a view whose reprojection residual exceeds this is an outlier (px).
+  double epipolar_tolerance_px = 2.0;
+  // Fill Grid: a junction this close to a knot's projected point is that knot (px).
+  double projection_tolerance_px = 2.5;
+  // ... and no other knot's label or projection may be within this (px).
+  double exclusion_px = 6.0;
+  // Fill Grid: a junction is the knot only when its yarns leave towards the knot's neighbours
+  // (each within this angle, deg) and their number is the knot's degree.
+  double branch_tolerance_deg = 20.0;
+  int fill_passes = 4;
+};
+
+// Per camera, frame and knot: why a label needs review (absent: it does not, or there is none).
+using ReviewReasons = std::map<std::tuple<int, int, int>, std::string>;
+
+struct EngineCounts {
+  int accepted = 0, review = 0;
+};
+
+class LabelEngine {
+ public:
+  // `images(camera, t)`: camera index of the store, frame row t; an empty Mat when unreadable.
+  // The engine keeps the last few frames it asked for. `rig` may be null; otherwise it must
+  // contain every camera of the store (by name).
+  using ImageSource = std::function<cv::Mat(int camera, int t)>;
+  LabelEngine(LabelStore* store, const calib::Rig* rig, ImageSource images,
+              LabelEngineOptions options = {});
+
+  // Find Path from the four seeded corners of frame t in every camera that has them (sides,
+  // then rows and columns; inner knots where row and column agree). Returns the labels set.
+  EngineCounts LabelFirstFrame(int t);
+  // Tracks every label of frame `from` into frame `to` (an adjacent frame) where `to` has none.
+  EngineCounts Track(int from, int to);
+  // Epipolar consistency and Fill Grid in frame t (see above).
+  EngineCounts CrossCheck(int t);
+  // The person's brush: Find Node in (camera, t) at `centre`; a knot found is labeled `knot`,
+  // accepted (the person chose the knot). Returns the result.
+  FindNodeResult FindNodeAt(int camera, int t, int knot, const Eigen::Vector2d& centre,
+                            double radius_px);
+
+  const ReviewReasons& reasons() const { return reasons_; }
+  double link_length_m() const { return link_length_m_; }
+
+ private:
+  const cv::Mat& Image(int camera, int t);
+  int RigIndex(int camera) const { return rig_index_[camera]; }
+  void Note(int camera, int t, int knot, const std::string& why);
+  EngineCounts Commit(const std::string& name, const std::vector<LabelEdit>& edits);
+  void EstimateLinkLength(int t);
+  std::vector<int> Neighbours(int knot) const;  // right, down, left, up (those there are)
+  int Degree(int knot) const;
+  // The image positions of a knot's neighbours in (camera, t): accepted labels, else the
+  // projections of their triangulated points.
+  std::vector<Eigen::Vector2d> NeighbourPixels(
+      int camera, int t, int knot, const std::vector<std::optional<Eigen::Vector3d>>& point) const;
+
+  LabelStore* store_;
+  const calib::Rig* rig_;
+  ImageSource images_;
+  LabelEngineOptions o_;
+  std::vector<int> rig_index_;  // per store camera, its rig index (-1 without a rig)
+  std::map<std::pair<int, int>, cv::Mat> cache_;
+  ReviewReasons reasons_;
+  double link_length_m_ = 0.0;
+};
+
+}  // namespace netlab::recon
