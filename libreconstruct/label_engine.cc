@@ -361,7 +361,9 @@ EngineCounts LabelEngine::CrossCheck(int t) {
       const cv::Mat& image = Image(c, t);
       if (image.empty()) continue;
       const cv::Size size = image.size();
-      auto inside = [&](const Eigen::Vector2d& q, double margin) {
+      // The detector reads two ring radii around a point (and its filter's support).
+      const double margin = 2.0 * o_.detector.ring_radius_px + 2.0;
+      auto inside = [&](const Eigen::Vector2d& q) {
         return q.allFinite() && q.x() >= margin && q.y() >= margin &&
                q.x() <= size.width - 1 - margin && q.y() <= size.height - 1 - margin;
       };
@@ -370,15 +372,10 @@ EngineCounts LabelEngine::CrossCheck(int t) {
         // (a) The knot's own triangulated point.
         if (geometry && point[k]) {
           const Eigen::Vector2d q = rig_->cameras[RigIndex(c)].ProjectWorld(*point[k]);
-          if (!inside(q, 16) || repeat(c, k, q)) continue;
-          const FindNodeResult r = FindNode(image, q, o_.projection_tolerance_px, o_.detector);
-          if (getenv("DBG") && r.status == FindNodeStatus::kFound) {
-            auto np = NeighbourPixels(c, t, k, point);
-            fprintf(stderr, "DBG c%d t%d k%d deg %d br %d nb %zu:", c, t, k, Degree(k), r.knot.branches, np.size());
-            for (double b : r.knot.branch_angles_rad) fprintf(stderr, " b%.0f", b * 180 / M_PI);
-            for (auto& n : np) fprintf(stderr, " n%.0f", std::atan2(n.y() - r.knot.px.y(), n.x() - r.knot.px.x()) * 180 / M_PI);
-            fprintf(stderr, " ok=%d\n", (int)BranchesMatchLinks(r.knot, Degree(k), np, o_.branch_tolerance_deg));
-          }
+          if (!inside(q) || repeat(c, k, q)) continue;
+          // The brush a little wider than the tolerance: the detector's seeds are 1.5 px apart.
+          const FindNodeResult r =
+              FindNode(image, q, o_.projection_tolerance_px + 1.5, o_.detector);
           if (r.status == FindNodeStatus::kFound &&
               (r.knot.px - q).norm() <= o_.projection_tolerance_px && !taken_near(c, k, r.knot.px) &&
               BranchesMatchLinks(r.knot, Degree(k), NeighbourPixels(c, t, k, point), o_.branch_tolerance_deg)) {
@@ -424,7 +421,7 @@ EngineCounts LabelEngine::CrossCheck(int t) {
                 for (const auto& n : around) ok = ok && (p - n).norm() <= reach;
                 if (!ok) continue;
                 const Eigen::Vector2d q = rig_->cameras[RigIndex(c)].ProjectWorld(p);
-                if (inside(q, 16)) region.push_back(q);
+                if (inside(q)) region.push_back(q);
               }
             how = "spheres of link length around " + std::to_string(around.size()) +
                   " triangulated neighbours";
@@ -462,7 +459,7 @@ EngineCounts LabelEngine::CrossCheck(int t) {
           mean /= static_cast<double>(guesses.size());
           bool agree = true;
           for (const auto& g : guesses) agree = agree && (g - mean).norm() < 0.25 * spacing;
-          if (!agree || !inside(mean, 16) || repeat(c, k, mean)) continue;
+          if (!agree || !inside(mean) || repeat(c, k, mean)) continue;
           region.push_back(mean);
           how = "the image grid of its labeled neighbours";
           const FindNodeResult f = FindNode(image, mean, 0.3 * spacing, o_.detector);

@@ -1,0 +1,250 @@
+// The labeling engine on a net rendered through three calibrated cameras: Fill Grid from the
+// border through the rig, the epipolar check, tracking, and that no knot is accepted with another
+// knot's identity.
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+
+#include "calibration/rig.h"
+#include "libreconstruct/label_engine.h"
+#include "libreconstruct/render.h"
+
+namespace netlab::recon {
+namespace {
+
+constexpr int kRows = 5, kCols = 5, kKnots = kRows * kCols;
+constexpr double kMesh = 0.1;
+
+// A 5 x 5 net of 1 mm yarns, bent and turned, 1.5 m in front of three 16 mm cameras; each frame
+// moves it by (6, -4, 2) mm.
+struct Shot {
+  calib::Rig rig;
+  std::vector<std::vector<Eigen::Vector3d>> knots;  // [t][k]
+  std::vector<std::vector<cv::Mat>> images;         // [camera][t]
+
+  Eigen::Vector2d Truth(int c, int t, int k) const {
+    return rig.cameras[c].ProjectWorld(knots[t][k]);
+  }
+};
+
+Shot Render(int frames, const std::vector<std::pair<int, int>>& hidden_links = {}) {
+  Shot shot;
+  shot.rig.cameras = {
+      calib::LookAtCamera("a", {-1.5, 0.0, 0.0}, {0, 0, 0}, 16.0, 5.5, 1024),
+      calib::LookAtCamera("b", {-1.4, 0.55, 0.1}, {0, 0, 0}, 16.0, 5.5, 1024),
+      calib::LookAtCamera("c", {-1.35, -0.45, -0.3}, {0, 0, 0}, 16.0, 5.5, 1024)};
+  const Eigen::Matrix3d turn = (Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()) *
+                                Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()))
+                                   .toRotationMatrix();
+  const Colour dyes[] = {{0.1f, 0.2f, 0.9f}, {0.1f, 0.8f, 0.2f}, {0.9f, 0.2f, 0.1f},
+                         {0.1f, 0.8f, 0.8f}, {0.8f, 0.1f, 0.8f}, {0.9f, 0.9f, 0.9f}};
+  for (int t = 0; t < frames; ++t) {
+    std::vector<Eigen::Vector3d> x;
+    for (int r = 0; r < kRows; ++r)
+      for (int c = 0; c < kCols; ++c) {
+        const double y = (c - 2) * kMesh, z = (r - 2) * kMesh;
+        // Bent: a shallow bowl (every link stays within 1 % of the mesh).
+        const Eigen::Vector3d p(0.08 * (y * y + z * z), y, z);
+        x.push_back(turn * p + Eigen::Vector3d(0.006 * t, -0.004 * t, 0.002 * t));
+      }
+    shot.knots.push_back(x);
+  }
+  shot.images.resize(shot.rig.cameras.size());
+  for (int t = 0; t < frames; ++t) {
+    Scene scene;
+    int n = 0;
+    auto link = [&](int a, int b) {
+      for (const auto& h : hidden_links)
+        if (h == std::pair(a, b)) return;
+      ThreadPolyline thread;
+      thread.points = {shot.knots[t][a], shot.knots[t][b]};
+      thread.radius = 0.0005;
+      thread.colour = dyes[n++ % 6];
+      scene.threads.push_back(thread);
+    };
+    for (int k = 0; k < kKnots; ++k) {
+      if (k % kCols + 1 < kCols) link(k, k + 1);
+      if (k / kCols + 1 < kRows) link(k, k + kCols);
+    }
+    for (size_t c = 0; c < shot.rig.cameras.size(); ++c) {
+      const cv::Mat linear = RenderScene(shot.rig.cameras[c], scene, SceneRenderOptions{});
+      cv::Mat image;
+      linear.convertTo(image, CV_8UC3, 255.0);
+      shot.images[c].push_back(image);
+    }
+  }
+  return shot;
+}
+
+LabelSet Empty(const Shot& shot) {
+  std::vector<std::string> names;
+  for (const auto& c : shot.rig.cameras) names.push_back(c.name);
+  std::vector<int> frames;
+  for (size_t t = 0; t < shot.knots.size(); ++t) frames.push_back(static_cast<int>(t));
+  return LabelSet::Empty(kRows, kCols, names, frames);
+}
+
+Label Accepted(const Eigen::Vector2d& px) {
+  Label l;
+  l.px = px;
+  l.source = LabelSource::kManual;
+  l.confidence = 1.0f;
+  l.state = LabelState::kAccepted;
+  return l;
+}
+
+bool IsBorder(int k) {
+  const int r = k / kCols, c = k % kCols;
+  return r == 0 || c == 0 || r == kRows - 1 || c == kCols - 1;
+}
+
+LabelEngine::ImageSource Images(const Shot& shot) {
+  return [&shot](int c, int t) { return shot.images[c][t]; };
+}
+
+// Every accepted label is its own knot's (within 1 px); returns how many there are.
+int CheckAccepted(const Shot& shot, const LabelStore& store, int t) {
+  int accepted = 0;
+  for (int c = 0; c < static_cast<int>(shot.rig.cameras.size()); ++c)
+    for (int k = 0; k < kKnots; ++k) {
+      const Label& l = store.at(c, t, k);
+      if (!l.present() || l.state != LabelState::kAccepted) continue;
+      ++accepted;
+      EXPECT_LT((l.px - shot.Truth(c, t, k)).norm(), 1.0) << "camera " << c << " knot " << k;
+    }
+  return accepted;
+}
+
+// Knots whose image is at least 14 px inside the frame (the detector reads two rings of 6 px).
+int InView(const Shot& shot, int t) {
+  int n = 0;
+  for (int c = 0; c < static_cast<int>(shot.rig.cameras.size()); ++c)
+    for (int k = 0; k < kKnots; ++k) {
+      const Eigen::Vector2d p = shot.Truth(c, t, k);
+      n += p.minCoeff() >= 14.0 && p.maxCoeff() <= 1024 - 15.0;
+    }
+  return n;
+}
+
+TEST(LabelEngine, FillGridLabelsTheInnerKnotsFromTheBorderThroughTheRig) {
+  const Shot shot = Render(1);
+  LabelSet labels = Empty(shot);
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < kKnots; ++k)
+      if (IsBorder(k)) labels.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
+  LabelStore store(std::move(labels));
+  LabelEngine engine(&store, &shot.rig, Images(shot));
+  const EngineCounts n = engine.CrossCheck(0);
+  EXPECT_EQ(n.accepted, 9 * 3);  // every inner knot in every camera
+  EXPECT_EQ(CheckAccepted(shot, store, 0), kKnots * 3);
+  EXPECT_NEAR(engine.link_length_m(), kMesh, 0.002);  // estimated from the border
+  double worst = 0.0;
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < kKnots; ++k)
+      if (!IsBorder(k)) {
+        EXPECT_EQ(store.at(c, 0, k).source, LabelSource::kFillGrid);
+        worst = std::max(worst, (store.at(c, 0, k).px - shot.Truth(c, 0, k)).norm());
+      }
+  EXPECT_LT(worst, 0.3);
+  // One undoable step per pass.
+  while (store.CanUndo()) store.Undo();
+  EXPECT_EQ(store.labels().CountPresent(), 16 * 3);
+}
+
+TEST(LabelEngine, FillGridProjectsAKnotTheOtherCamerasSee) {
+  const Shot shot = Render(1);
+  LabelSet labels = Empty(shot);
+  for (int c = 0; c < 2; ++c)
+    for (int k = 0; k < kKnots; ++k) labels.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
+  // Camera c: only two knots.
+  labels.at(2, 0, 0) = Accepted(shot.Truth(2, 0, 0));
+  labels.at(2, 0, kKnots - 1) = Accepted(shot.Truth(2, 0, kKnots - 1));
+  LabelStore store(std::move(labels));
+  LabelEngineOptions options;
+  options.link_length_m = kMesh;
+  LabelEngine engine(&store, &shot.rig, Images(shot), options);
+  engine.CrossCheck(0);
+  EXPECT_EQ(CheckAccepted(shot, store, 0), kKnots * 3);
+}
+
+TEST(LabelEngine, EpipolarCheckFlagsALabelOnAnotherKnotAndFillGridFindsTheRightOne) {
+  const Shot shot = Render(1);
+  LabelSet labels = Empty(shot);
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < kKnots; ++k) labels.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
+  // Camera c calls knot 12 what is knot 13 there.
+  labels.at(2, 0, 12) = Accepted(shot.Truth(2, 0, 13));
+  {
+    LabelStore store(labels);
+    LabelEngineOptions options;
+    options.fill_passes = 0;  // the check alone
+    LabelEngine engine(&store, &shot.rig, Images(shot), options);
+    engine.CrossCheck(0);
+    const Label& l = store.at(2, 0, 12);
+    EXPECT_EQ(l.state, LabelState::kNeedsReview);
+    EXPECT_EQ(l.px, shot.Truth(2, 0, 13));  // flagged, not moved
+    ASSERT_TRUE(engine.reasons().count({2, 0, 12}));
+    EXPECT_NE(engine.reasons().at({2, 0, 12}).find("epipolar"), std::string::npos);
+    EXPECT_EQ(CheckAccepted(shot, store, 0), kKnots * 3 - 1);  // the others stay accepted
+  }
+  // With Fill Grid, knot 12 is searched for where the other cameras put it: found there, as a
+  // step of its own after the check's.
+  LabelStore store(labels);
+  LabelEngine engine(&store, &shot.rig, Images(shot));
+  engine.CrossCheck(0);
+  EXPECT_EQ(store.at(2, 0, 12).source, LabelSource::kFillGrid);
+  EXPECT_EQ(CheckAccepted(shot, store, 0), kKnots * 3);
+  EXPECT_NE(store.UndoName().find("Fill Grid"), std::string::npos);
+  store.Undo();
+  EXPECT_NE(store.UndoName().find("epipolar"), std::string::npos);
+}
+
+TEST(LabelEngine, AKnotWhoseYarnsAreMissingIsNotFilled) {
+  // Knot 12 (the centre) lost two of its yarns in every picture: a plain crossing would be a
+  // junction of the wrong degree; Fill Grid must leave it for a person.
+  const Shot shot = Render(1, {{11, 12}, {12, 17}});
+  LabelSet labels = Empty(shot);
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < kKnots; ++k)
+      if (IsBorder(k)) labels.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
+  LabelStore store(std::move(labels));
+  LabelEngineOptions options;
+  options.link_length_m = kMesh;
+  LabelEngine engine(&store, &shot.rig, Images(shot), options);
+  engine.CrossCheck(0);
+  CheckAccepted(shot, store, 0);
+  for (int c = 0; c < 3; ++c) {
+    const Label& l = store.at(c, 0, 12);
+    EXPECT_FALSE(l.present() && l.state == LabelState::kAccepted) << "camera " << c;
+  }
+}
+
+TEST(LabelEngine, TracksAndCrossChecksASequence) {
+  const Shot shot = Render(4);
+  LabelSet labels = Empty(shot);
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < kKnots; ++k) labels.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
+  LabelStore store(std::move(labels));
+  LabelEngine engine(&store, &shot.rig, Images(shot));
+  ASSERT_LT(InView(shot, 3), kKnots * 3);  // knots leave the pictures
+  for (int t = 1; t < 4; ++t) {
+    engine.Track(t - 1, t);
+    engine.CrossCheck(t);
+    EXPECT_GE(CheckAccepted(shot, store, t), InView(shot, t)) << "frame " << t;
+  }
+}
+
+TEST(LabelEngine, RejectsARigWithoutTheCameras) {
+  const Shot shot = Render(1);
+  LabelSet labels = Empty(shot);
+  labels.cameras[1] = "elsewhere";
+  LabelStore store(std::move(labels));
+  EXPECT_THROW(LabelEngine(&store, &shot.rig, Images(shot)), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace netlab::recon
