@@ -51,7 +51,7 @@ class LabelCommand : public netlab::testing::CommandTest {
 
 TEST_F(LabelCommand, LabelsFromSeedsAndNeverAcceptsAWrongLabel) {
   const auto r = RunNetlab(Base() + "--seed " + Path("seeds.h5") + " --out " +
-                           Path("labels.h5") + " --json");
+                           Path("labels.h5") + " --xypts " + Path("xypts.csv") + " --json");
   ASSERT_EQ(r.status, 0) << r.err;
   const Json json = LastJson(r.out);
   for (const char* key : {"labeled", "needs_review", "frames", "wall_s"})
@@ -75,6 +75,9 @@ TEST_F(LabelCommand, LabelsFromSeedsAndNeverAcceptsAWrongLabel) {
   EXPECT_EQ(json["labeled"].number(), present);
   EXPECT_EQ(json["needs_review"].number(), review);
   EXPECT_GE(accepted, 4);  // at least the seeds
+  // The DLTdv8 export holds the same labels.
+  const recon::LabelSet xy = recon::ReadXyPts(Path("xypts.csv"), 6, 6, labels.cameras);
+  EXPECT_EQ(xy.CountPresent(), present);
 }
 
 TEST_F(LabelCommand, BadInputIsNamed) {
