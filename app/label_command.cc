@@ -2,6 +2,7 @@
 //              [--frames A:B] [--json]
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <exception>
@@ -26,14 +27,15 @@ namespace {
 constexpr char kHelp[] =
     "usage: netlab label EXPERIMENT.yaml --rig rig.yaml --coloring coloring.yaml --seed SEEDS\n"
     "                    --out labels.h5 [--xypts xypts.csv] [--frames A:B] [--mesh M]\n"
-    "                    [--json]\n\n"
+    "                    [--illumination F] [--no-colour-check] [--json]\n\n"
     "Runs the automatic part of the labeling from seed labels (docs/labeling.md):\n"
     "  1. first frame, each camera whose four corner knots are seeded: Find Path along the four\n"
     "     sides, then along every row and every column (an inner knot is accepted when its row\n"
     "     and its column agree);\n"
     "  2. every frame: labels tracked from the previous frame; the cameras cross-checked with\n"
     "     epipolar geometry; Fill Grid labels the knots still missing where their triangulated\n"
-    "     point, or the spheres of link length around their triangulated neighbours, project.\n"
+    "     point, or the spheres of link length around their triangulated neighbours, project;\n"
+    "     every label a tool made is checked against its knot's yarn colours (coloring.yaml).\n"
     "Labels whose checks disagree are kept for review, never accepted silently.\n\n"
     "options:\n"
     "  --rig FILE          the calibrated rig (its camera names must match the experiment's)\n"
@@ -46,6 +48,9 @@ constexpr char kHelp[] =
     "  --frames A:B        frames A to B inclusive (default: the whole recording)\n"
     "  --mesh M            link length in m, knot to knot (default: estimated from the first\n"
     "                      frame's triangulated knots)\n"
+    "  --illumination F    how brightly the yarns are lit, for the colour check: a white dye\n"
+    "                      reads F of sensor white (default 0.85, netlab render's)\n"
+    "  --no-colour-check   skip the colour check (frames of another colouring, or none)\n"
     "  --quiet             no progress or summary on stderr\n"
     "  --json              print one JSON summary object on stdout as the last output: labeled,\n"
     "                      needs_review, frames, wall_s, and per camera\n\n"
@@ -60,8 +65,8 @@ struct CameraCounts {
 
 int RunLabel(const std::vector<std::string>& args) {
   try {
-    const CommandLine cl(args, {"json", "quiet", "help"},
-                         {"rig", "coloring", "seed", "out", "frames", "mesh", "xypts"});
+    const CommandLine cl(args, {"json", "quiet", "help", "no-colour-check"},
+                         {"rig", "coloring", "seed", "out", "frames", "mesh", "xypts", "illumination"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -73,7 +78,8 @@ int RunLabel(const std::vector<std::string>& args) {
     const bool quiet = cl.Flag("quiet");
     const std::string out = cl.Required("out");
     const calib::Rig rig = calib::ReadRig(cl.Required("rig"));
-    const recon::NetColoring coloring = recon::ReadColoring(cl.Required("coloring"));
+    std::vector<std::array<int, 3>> dyes;
+    const recon::NetColoring coloring = recon::ReadColoring(cl.Required("coloring"), &dyes);
     const int rows = coloring.rows, cols = coloring.cols;
     recon::SynchronizedSequence sequence(recon::LoadExperiment(cl.positional()[0]));
     std::vector<std::string> cameras;
@@ -130,6 +136,13 @@ int RunLabel(const std::vector<std::string>& args) {
           return image;
         },
         options);
+    if (!cl.Flag("no-colour-check")) {
+      recon::Lighting lighting;
+      lighting.exposure = cl.DoubleOption("illumination", 0.85, 1e-3, 100.0);
+      recon::IdentityCheckOptions identity;
+      identity.identify.bayer = sequence.experiment().cameras.front().bayer;
+      engine.SetCodebook(recon::CodebookFromColoring(coloring, dyes, lighting), identity);
+    }
     const int rows_t = static_cast<int>(frame_index.size());
     engine.LabelFirstFrame(0);
     engine.CrossCheck(0);

@@ -1,6 +1,7 @@
 // The labeling engine against a scripted user, on a rendered shot with its truth.
 //
-//   bench_label --shot DIR [--frames A:B] [--cameras cam0,cam1] [--radius PX] [--seed N]
+//   bench_label --shot DIR [--coloring FILE] [--frames A:B] [--cameras cam0,cam1] [--radius PX]
+//               [--seed N]
 //
 // DIR is the output of `netlab render` (experiment.yaml, rig_true.yaml, labels_true.h5). The
 // script plays the person: it seeds the four corners of the first frame in every camera that
@@ -15,9 +16,12 @@
 // Printed per camera and in all: knot-frames (visible knots x frames), actions (per kind),
 // actions per knot-frame, wrong accepted labels (hidden knot, or > 2 px from the truth: the
 // knots are >= 20 px apart), labels the engine left for review, the error of the accepted
-// labels (median, 99th percentile, by source), and the engine's throughput.
+// labels (median, 99th percentile, by source), and the engine's throughput. With --coloring (the
+// colouring the shot was rendered with) the engine also checks every label against the yarn
+// colours.
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -31,6 +35,7 @@
 #include "libreconstruct/experiment.h"
 #include "libreconstruct/label_engine.h"
 #include "libreconstruct/labels.h"
+#include "libreconstruct/net_coloring.h"
 #include "libreconstruct/sequence.h"
 
 namespace {
@@ -72,8 +77,8 @@ const char* SourceName(recon::LabelSource s) {
 
 void Usage() {
   std::fprintf(stderr,
-               "usage: bench_label --shot DIR [--frames A:B] [--cameras cam0,cam1,...] "
-               "[--radius PX] [--seed N]\n"
+               "usage: bench_label --shot DIR [--coloring FILE] [--frames A:B] "
+               "[--cameras cam0,cam1,...] [--radius PX] [--seed N]\n"
                "DIR: `netlab render` output, e.g.\n"
                "  netlab simulate scenarios/net_a_0.5.yaml --duration 1.15 --out sim.h5\n"
                "  netlab color-net --knots 11x11 --out coloring.yaml\n"
@@ -83,7 +88,7 @@ void Usage() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string shot;
+  std::string shot, coloring_path;
   int first = -1, last = -1;
   double radius = 6.0;
   uint64_t seed = 1;
@@ -93,6 +98,8 @@ int main(int argc, char** argv) {
     const bool more = i + 1 < argc;
     if (a == "--shot" && more) {
       shot = argv[++i];
+    } else if (a == "--coloring" && more) {
+      coloring_path = argv[++i];
     } else if (a == "--frames" && more) {
       if (std::sscanf(argv[++i], "%d:%d", &first, &last) != 2) return Usage(), 2;
     } else if (a == "--radius" && more) {
@@ -160,6 +167,13 @@ int main(int argc, char** argv) {
       read_s += Since(t0);
       return image;
     });
+    if (!coloring_path.empty()) {
+      std::vector<std::array<int, 3>> dyes;
+      const recon::NetColoring coloring = recon::ReadColoring(coloring_path, &dyes);
+      recon::Lighting lighting;
+      lighting.exposure = 0.85;  // netlab render's illumination
+      engine.SetCodebook(recon::CodebookFromColoring(coloring, dyes, lighting));
+    }
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> click(-0.5, 0.5);
     double engine_s = 0.0, user_s = 0.0;

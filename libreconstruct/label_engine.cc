@@ -1,6 +1,7 @@
 #include "libreconstruct/label_engine.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <optional>
 #include <stdexcept>
@@ -29,30 +30,43 @@ double Median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-// Whether a junction's yarns leave it towards its grid neighbours: every branch within
-// `tolerance_deg` of the direction to one of the neighbours whose image position is known, and
-// every such neighbour reached by a branch; `degree` branches in all. A junction that fails is not
-// this knot, or not only this knot (a yarn vanishing at the edge of the target also makes one).
-bool BranchesMatchLinks(const Junction& j, int degree,
-                        const std::vector<Eigen::Vector2d>& neighbour_px, double tolerance_deg) {
-  if (j.branches != degree || neighbour_px.size() < 2) return false;
-  const double tol = tolerance_deg * M_PI / 180.0;
-  auto gap = [](double a, double b) {
-    return std::abs(std::remainder(a - b, 2.0 * M_PI));
-  };
-  std::vector<double> link;
-  for (const auto& n : neighbour_px) link.push_back(std::atan2(n.y() - j.px.y(), n.x() - j.px.x()));
-  for (double b : j.branch_angles_rad) {
-    double best = M_PI;
-    for (double l : link) best = std::min(best, gap(b, l));
-    if (best > tol && neighbour_px.size() == static_cast<size_t>(degree)) return false;
+// Whether a junction is the knot, judged by its yarns: as many branches as the knot has links,
+// each link's direction (towards its known neighbour, or away from the known opposite one)
+// reached by a branch within `tolerance_deg`, and no branch left over where every link's
+// direction is known. A junction that fails is not this knot, or not only this knot: a yarn
+// passing the corner of the target box makes a junction of yarn and box edges there.
+bool BranchesMatchLinks(const Junction& j, const NeighbourSlots& slots, double tolerance_deg) {
+  int degree = 0, known = 0;
+  std::vector<double> expected;
+  for (int s = 0; s < 4; ++s) {
+    if (!slots.present[s]) continue;
+    ++degree;
+    if (slots.px[s]) {
+      const Eigen::Vector2d d = *slots.px[s] - j.px;
+      expected.push_back(std::atan2(d.y(), d.x()));
+    } else if (slots.present[(s + 2) % 4] && slots.px[(s + 2) % 4]) {
+      const Eigen::Vector2d d = j.px - *slots.px[(s + 2) % 4];
+      expected.push_back(std::atan2(d.y(), d.x()));
+    } else {
+      continue;
+    }
+    ++known;
   }
-  for (double l : link) {
+  if (j.branches != degree || known < 2) return false;
+  const double tol = tolerance_deg * M_PI / 180.0;
+  auto gap = [](double a, double b) { return std::abs(std::remainder(a - b, 2.0 * M_PI)); };
+  for (double e : expected) {
     double best = M_PI;
-    for (double b : j.branch_angles_rad) best = std::min(best, gap(b, l));
+    for (double b : j.branch_angles_rad) best = std::min(best, gap(b, e));
     if (best > tol) return false;
   }
-  return true;
+  int unmatched = 0;
+  for (double b : j.branch_angles_rad) {
+    double best = M_PI;
+    for (double e : expected) best = std::min(best, gap(b, e));
+    unmatched += best > tol;
+  }
+  return unmatched <= degree - known;
 }
 
 }  // namespace
@@ -104,19 +118,26 @@ EngineCounts LabelEngine::Commit(const std::string& name, const std::vector<Labe
 
 int LabelEngine::Degree(int knot) const { return static_cast<int>(Neighbours(knot).size()); }
 
-std::vector<Eigen::Vector2d> LabelEngine::NeighbourPixels(
+NeighbourSlots LabelEngine::Slots(
     int camera, int t, int knot, const std::vector<std::optional<Eigen::Vector3d>>& point) const {
-  std::vector<Eigen::Vector2d> px;
-  for (int n : Neighbours(knot)) {
-    const Label& l = store_->at(camera, t, n);
+  const LabelSet& set = store_->labels();
+  const int cols = set.cols, r = knot / cols, c = knot % cols;
+  const int slot_knot[4] = {c + 1 < cols ? knot + 1 : -1, r + 1 < set.rows ? knot + cols : -1,
+                            c > 0 ? knot - 1 : -1, r > 0 ? knot - cols : -1};
+  NeighbourSlots slots;
+  for (int s = 0; s < 4; ++s) {
+    const int n = slot_knot[s];
+    if (n < 0) continue;
+    slots.present[s] = true;
+    const Label& l = set.at(camera, t, n);
     if (Accepted(l)) {
-      px.push_back(l.px);
+      slots.px[s] = l.px;
     } else if (rig_ && n < static_cast<int>(point.size()) && point[n]) {
       const Eigen::Vector2d q = rig_->cameras[RigIndex(camera)].ProjectWorld(*point[n]);
-      if (q.allFinite()) px.push_back(q);
+      if (q.allFinite()) slots.px[s] = q;
     }
   }
-  return px;
+  return slots;
 }
 
 std::vector<int> LabelEngine::Neighbours(int knot) const {
@@ -142,6 +163,7 @@ EngineCounts LabelEngine::LabelFirstFrame(int t) {
     const cv::Mat& image = Image(camera, t);
     if (image.empty()) continue;
     const size_t first_edit = edits.size();
+    std::map<int, Junction> junction_of;  // the junction Find Path took for each knot
     auto px = [&](int k) -> std::optional<Eigen::Vector2d> {
       for (size_t i = first_edit; i < edits.size(); ++i)
         if (edits[i].knot == k) return edits[i].label.px;
@@ -160,10 +182,12 @@ EngineCounts LabelEngine::LabelFirstFrame(int t) {
                                std::pair(corners[1], corners[3])}) {
       const FindPathResult r = path(a, b);
       for (size_t i = 0; i < r.knots.size(); ++i)
-        if (!set.at(camera, t, r.knots[i]).present())
+        if (!set.at(camera, t, r.knots[i]).present()) {
           edits.push_back({camera, t, r.knots[i],
                            Made(r.junctions[i].px, LabelSource::kFindPath,
                                 r.junctions[i].confidence, true)});
+          junction_of[r.knots[i]] = r.junctions[i];
+        }
     }
     // Inner knots: along their row and along their column; both must agree.
     std::map<int, Eigen::Vector2d> by_row, by_column;
@@ -172,6 +196,7 @@ EngineCounts LabelEngine::LabelFirstFrame(int t) {
       const FindPathResult r = path(row * cols, row * cols + cols - 1);
       for (size_t i = 0; i < r.knots.size(); ++i) {
         by_row[r.knots[i]] = r.junctions[i].px;
+        junction_of[r.knots[i]] = r.junctions[i];
         confidence[r.knots[i]] = r.junctions[i].confidence;
       }
     }
@@ -200,6 +225,28 @@ EngineCounts LabelEngine::LabelFirstFrame(int t) {
                           std::to_string((a->second - b->second).norm()) + " px apart"
                     : "Find Path: found along its row or its column only");
       }
+    // Every accepted knot's yarns must leave it towards its neighbours found along the paths
+    // (the count, spacing and row-column checks do not see a junction of a yarn and the target
+    // box's edges taken for a knot missed beside it).
+    for (size_t i = first_edit; i < edits.size(); ++i) {
+      LabelEdit& e = edits[i];
+      if (e.label.state != LabelState::kAccepted) continue;
+      NeighbourSlots slots;
+      const int r = e.knot / cols, col = e.knot % cols;
+      const int slot_knot[4] = {col + 1 < cols ? e.knot + 1 : -1,
+                                r + 1 < rows ? e.knot + cols : -1, col > 0 ? e.knot - 1 : -1,
+                                r > 0 ? e.knot - cols : -1};
+      for (int s = 0; s < 4; ++s) {
+        slots.present[s] = slot_knot[s] >= 0;
+        if (slots.present[s]) slots.px[s] = px(slot_knot[s]);
+      }
+      const auto j = junction_of.find(e.knot);
+      if (j != junction_of.end() && BranchesMatchLinks(j->second, slots, o_.branch_tolerance_deg))
+        continue;
+      e.label.state = LabelState::kNeedsReview;
+      Note(camera, t, e.knot,
+           "Find Path: the junction's yarns do not leave it towards its neighbours");
+    }
   }
   return Commit("Find Path (frame row " + std::to_string(t) + ")", edits);
 }
@@ -378,7 +425,7 @@ EngineCounts LabelEngine::CrossCheck(int t) {
               FindNode(image, q, o_.projection_tolerance_px + 1.5, o_.detector);
           if (r.status == FindNodeStatus::kFound &&
               (r.knot.px - q).norm() <= o_.projection_tolerance_px && !taken_near(c, k, r.knot.px) &&
-              BranchesMatchLinks(r.knot, Degree(k), NeighbourPixels(c, t, k, point), o_.branch_tolerance_deg)) {
+              BranchesMatchLinks(r.knot, Slots(c, t, k, point), o_.branch_tolerance_deg)) {
             edits.push_back({c, t, k, Made(r.knot.px, LabelSource::kFillGrid, r.knot.confidence,
                                            true)});
           }
@@ -464,8 +511,7 @@ EngineCounts LabelEngine::CrossCheck(int t) {
           how = "the image grid of its labeled neighbours";
           const FindNodeResult f = FindNode(image, mean, 0.3 * spacing, o_.detector);
           if (f.status == FindNodeStatus::kFound && !taken_near(c, k, f.knot.px) &&
-              BranchesMatchLinks(f.knot, Degree(k), NeighbourPixels(c, t, k, point),
-                                 o_.branch_tolerance_deg))
+              BranchesMatchLinks(f.knot, Slots(c, t, k, point), o_.branch_tolerance_deg))
             candidates[k].push_back({c, f.knot.px, f.knot.confidence, how});
           continue;
         }
@@ -520,8 +566,7 @@ EngineCounts LabelEngine::CrossCheck(int t) {
             bool merged = false;
             for (const Junction& n : near) merged = merged || (n.px - j->px).norm() < o_.detector.merge_px;
             if (!merged && !taken_near(c, k, j->px) &&
-                BranchesMatchLinks(*j, Degree(k), NeighbourPixels(c, t, k, point),
-                                   o_.branch_tolerance_deg))
+                BranchesMatchLinks(*j, Slots(c, t, k, point), o_.branch_tolerance_deg))
               near.push_back(*j);
           }
         if (near.size() == 1) candidates[k].push_back({c, near[0].px, near[0].confidence, how});
@@ -595,7 +640,51 @@ EngineCounts LabelEngine::CrossCheck(int t) {
     if (n.accepted == 0) break;
     if (geometry) triangulate_accepted(nullptr);
   }
+  if (codebook_) total.review += CheckColours(t);
   return total;
+}
+
+void LabelEngine::SetCodebook(KnotCodebook codebook, IdentityCheckOptions options) {
+  std::string why;
+  if (!codebook.IsValid(&why)) throw std::invalid_argument("colour codebook: " + why);
+  if (static_cast<int>(codebook.knots.size()) != store_->labels().knots())
+    throw std::invalid_argument("colour codebook: " + std::to_string(codebook.knots.size()) +
+                                " knots, the labels have " +
+                                std::to_string(store_->labels().knots()));
+  if (!options.IsValid(&why)) throw std::invalid_argument("colour check: " + why);
+  codebook_ = std::move(codebook);
+  identity_ = std::move(options);
+}
+
+int LabelEngine::CheckColours(int t) {
+  if (!codebook_) return 0;
+  const LabelSet& set = store_->labels();
+  const int cols = set.cols;
+  std::vector<LabelEdit> flags;
+  for (int c = 0; c < static_cast<int>(set.cameras.size()); ++c) {
+    const cv::Mat& image = Image(c, t);
+    if (image.empty() || image.type() != CV_8UC3) continue;
+    for (int k = 0; k < set.knots(); ++k) {
+      const Label& l = set.at(c, t, k);
+      if (!Accepted(l) || l.source == LabelSource::kManual || l.source == LabelSource::kImported)
+        continue;
+      YarnDirections yarns;
+      const int r = k / cols, col = k % cols;
+      const int slot_knot[4] = {col + 1 < cols ? k + 1 : -1, r + 1 < set.rows ? k + cols : -1,
+                                col > 0 ? k - 1 : -1, r > 0 ? k - cols : -1};
+      for (int s = 0; s < 4; ++s)
+        if (slot_knot[s] >= 0 && Accepted(set.at(c, t, slot_knot[s])))
+          yarns.neighbour_px[s] = set.at(c, t, slot_knot[s]).px;
+      const IdentityCheck check = CheckIdentity(image, *codebook_, k, l.px, yarns, identity_);
+      if (check.verdict != IdentityVerdict::kMismatch) continue;
+      Label flagged = l;
+      flagged.state = LabelState::kNeedsReview;
+      flags.push_back({c, t, k, flagged});
+      Note(c, t, k, "colour check: " + check.why);
+    }
+  }
+  if (flags.empty()) return 0;
+  return Commit("colour check (frame row " + std::to_string(t) + ")", flags).review;
 }
 
 }  // namespace netlab::recon

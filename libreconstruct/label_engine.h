@@ -28,9 +28,12 @@
 //         fourth corner of a parallelogram).
 //     Candidates are accepted only when two or more cameras' candidates (or accepted labels)
 //     triangulate consistently to a point at link length (within link_tolerance) from its
-//     triangulated neighbours; otherwise they stay for review.
+//     triangulated neighbours, and their yarns leave towards the knot's neighbours (as many as
+//     its degree); otherwise they stay for review.
+// Colour check (SetCodebook): a label whose yarn colours contradict its knot's is flagged.
 // Without a rig (or with one camera) CrossCheck does the image-space part only, for review.
 
+#include <array>
 #include <functional>
 #include <map>
 #include <optional>
@@ -44,6 +47,7 @@
 #include "calibration/rig.h"
 #include "libreconstruct/knot_detect.h"
 #include "libreconstruct/knot_track.h"
+#include "libreconstruct/label_identity.h"
 #include "libreconstruct/label_store.h"
 
 namespace netlab::recon {
@@ -68,12 +72,19 @@ struct LabelEngineOptions {
   double exclusion_px = 6.0;
   // Fill Grid: a junction is the knot only when its yarns leave towards the knot's neighbours
   // (each within this angle, deg) and their number is the knot's degree.
-  double branch_tolerance_deg = 20.0;
+  double branch_tolerance_deg = 10.0;
   int fill_passes = 4;
 };
 
 // Per camera, frame and knot: why a label needs review (absent: it does not, or there is none).
 using ReviewReasons = std::map<std::tuple<int, int, int>, std::string>;
+
+// The image positions of a knot's grid neighbours, slots right, down, left, up: `present` says
+// which the net has, `px` which are known.
+struct NeighbourSlots {
+  std::array<bool, 4> present{false, false, false, false};
+  std::array<std::optional<Eigen::Vector2d>, 4> px;
+};
 
 struct EngineCounts {
   int accepted = 0, review = 0;
@@ -93,8 +104,15 @@ class LabelEngine {
   EngineCounts LabelFirstFrame(int t);
   // Tracks every label of frame `from` into frame `to` (an adjacent frame) where `to` has none.
   EngineCounts Track(int from, int to);
-  // Epipolar consistency and Fill Grid in frame t (see above).
+  // Epipolar consistency and Fill Grid in frame t (see above); then the colour check, when set.
   EngineCounts CrossCheck(int t);
+  // Checks every accepted label of frame t that a tool made (Find Path, Fill Grid, tracking,
+  // Find Node; not the person's own clicks or imported seeds) against the yarn colours of its
+  // knot (label_identity.h): a confident contradiction turns it to review with the colours read;
+  // the label is never moved or renamed. Returns the labels flagged.
+  int CheckColours(int t);
+  // The net's colouring as the cameras see it; CrossCheck then ends with CheckColours.
+  void SetCodebook(KnotCodebook codebook, IdentityCheckOptions options = {});
   // The person's brush: Find Node in (camera, t) at `centre`; a knot found is labeled `knot`,
   // accepted (the person chose the knot). Returns the result.
   FindNodeResult FindNodeAt(int camera, int t, int knot, const Eigen::Vector2d& centre,
@@ -111,9 +129,9 @@ class LabelEngine {
   void EstimateLinkLength(int t);
   std::vector<int> Neighbours(int knot) const;  // right, down, left, up (those there are)
   int Degree(int knot) const;
-  // The image positions of a knot's neighbours in (camera, t): accepted labels, else the
-  // projections of their triangulated points.
-  std::vector<Eigen::Vector2d> NeighbourPixels(
+  // The image positions of a knot's neighbours in (camera, t), right, down, left, up: accepted
+  // labels, else the projections of their triangulated points.
+  NeighbourSlots Slots(
       int camera, int t, int knot, const std::vector<std::optional<Eigen::Vector3d>>& point) const;
 
   LabelStore* store_;
@@ -124,6 +142,8 @@ class LabelEngine {
   std::map<std::pair<int, int>, cv::Mat> cache_;
   ReviewReasons reasons_;
   double link_length_m_ = 0.0;
+  std::optional<KnotCodebook> codebook_;
+  IdentityCheckOptions identity_;
 };
 
 }  // namespace netlab::recon

@@ -29,11 +29,12 @@ class LabelCommand : public netlab::testing::CommandTest {
                         " --quiet")
                   .status,
               0);
-    const auto render = RunNetlab("render --sim " + Path("sim.h5") + " --out " + Path("shot") +
-                                  " --frames 0:4 --calibration-views 0 --quiet");
-    ASSERT_EQ(render.status, 0) << render.err;
     ASSERT_EQ(RunNetlab("color-net --knots 6x6 --out " + Path("coloring.yaml") + " --quiet").status,
               0);
+    const auto render = RunNetlab("render --sim " + Path("sim.h5") + " --out " + Path("shot") +
+                                  " --frames 0:4 --calibration-views 0 --coloring " +
+                                  Path("coloring.yaml") + " --quiet");
+    ASSERT_EQ(render.status, 0) << render.err;
     truth_ = recon::ReadLabels(Path("shot/labels_true.h5"));
     // Seeds: the four corners of the first frame, wherever a camera sees them.
     recon::LabelSet seeds =
