@@ -431,6 +431,29 @@ bool KnotCodebook::Matches(int knot, const std::vector<int>& observed) const {
   return false;
 }
 
+bool KnotCodebook::FitsSomeReading(int knot, const std::vector<std::vector<int>>& plausible) const {
+  const std::vector<int>& code = knots[knot].link_colours;
+  const size_t n = plausible.size();
+  if (code.size() != n) return false;
+  // Each yarn can only take colours the knot has; enumerate those (at most 4^4 readings).
+  std::vector<std::vector<int>> options(n);
+  for (size_t i = 0; i < n; ++i) {
+    for (int c : plausible[i]) {
+      if (std::find(code.begin(), code.end(), c) != code.end()) options[i].push_back(c);
+    }
+    if (options[i].empty()) return false;
+  }
+  std::vector<size_t> index(n, 0);
+  std::vector<int> reading(n);
+  while (true) {
+    for (size_t i = 0; i < n; ++i) reading[i] = options[i][index[i]];
+    if (Matches(knot, reading)) return true;
+    size_t i = 0;
+    while (i < n && ++index[i] == options[i].size()) index[i++] = 0;
+    if (i == n) return false;
+  }
+}
+
 std::vector<std::pair<int, int>> KnotCodebook::Collisions() const {
   std::vector<std::pair<int, int>> out;
   for (size_t i = 0; i < knots.size(); ++i) {
@@ -600,30 +623,6 @@ std::string KnotName(const CodebookKnot& k) {
   return name;
 }
 
-// True when some assignment of plausible colours to the yarns is the knot's code.
-bool FitsSomeReading(const KnotCodebook& codebook, int knot,
-                     const std::vector<std::vector<int>>& plausible) {
-  const std::vector<int>& code = codebook.knots[knot].link_colours;
-  const size_t n = plausible.size();
-  if (code.size() != n) return false;
-  // Each yarn can only take colours the knot has; enumerate those (at most 4^4 readings).
-  std::vector<std::vector<int>> options(n);
-  for (size_t i = 0; i < n; ++i) {
-    for (int c : plausible[i]) {
-      if (std::find(code.begin(), code.end(), c) != code.end()) options[i].push_back(c);
-    }
-    if (options[i].empty()) return false;
-  }
-  std::vector<size_t> index(n, 0);
-  std::vector<int> reading(n);
-  while (true) {
-    for (size_t i = 0; i < n; ++i) reading[i] = options[i][index[i]];
-    if (codebook.Matches(knot, reading)) return true;
-    size_t i = 0;
-    while (i < n && ++index[i] == options[i].size()) index[i++] = 0;
-    if (i == n) return false;
-  }
-}
 
 }  // namespace
 
@@ -937,7 +936,7 @@ KnotIdentification IdentifyKnot(const cv::Mat& bgr8, const Eigen::Vector2d& knot
     for (size_t k = 0; k < codebook.knots.size(); ++k) considered.push_back(static_cast<int>(k));
   }
   for (int k : considered) {
-    if (FitsSomeReading(codebook, k, plausible)) result.knots.push_back(k);
+    if (codebook.FitsSomeReading(k, plausible)) result.knots.push_back(k);
   }
   if (result.knots.empty()) {
     result.status = IdentifyStatus::kUnknown;
@@ -968,7 +967,7 @@ KnotIdentification IdentifyKnot(const cv::Mat& bgr8, const Eigen::Vector2d& knot
     result.reasons.push_back("no yarn colour read with certainty");
     return result;
   }
-  if (!FitsSomeReading(codebook, knot, best_reading)) {
+  if (!codebook.FitsSomeReading(knot, best_reading)) {
     result.status = IdentifyStatus::kUnknown;
     result.knots.clear();
     result.reasons.push_back("only a second-choice reading fits knot " +

@@ -138,6 +138,9 @@ struct KnotCodebook {
   // True when `observed` (palette indices in the cyclic order of the yarns) is the code of
   // knot `knot` under `rule` (same degree).
   bool Matches(int knot, const std::vector<int>& observed) const;
+  // True when some choice of one plausible palette index per yarn (`plausible[i]`: yarn i's, in
+  // cyclic order, as many yarns as the knot has links) is the code of `knot`.
+  bool FitsSomeReading(int knot, const std::vector<std::vector<int>>& plausible) const;
   // The pairs of knots (i < j) whose codes are equal under the rule: not unique globally.
   std::vector<std::pair<int, int>> Collisions() const;
   // A codebook with only the given knots (e.g. those tracking predicts near a detection), so

@@ -23,29 +23,6 @@ bool Contains(const std::vector<int>& v, int x) {
   return std::find(v.begin(), v.end(), x) != v.end();
 }
 
-// True when some choice of one plausible dye per yarn is the knot's code under the codebook's rule
-// (as many yarns as links, in cyclic order around the knot).
-bool FitsCode(const KnotCodebook& codebook, int knot,
-              const std::vector<std::vector<int>>& plausible) {
-  const std::vector<int>& links = codebook.knots[knot].link_colours;
-  const size_t n = plausible.size();
-  // Only the knot's own dyes can make its code: at most 4^4 readings.
-  std::vector<std::vector<int>> options(n);
-  for (size_t i = 0; i < n; ++i) {
-    for (int c : plausible[i])
-      if (Contains(links, c)) options[i].push_back(c);
-    if (options[i].empty()) return false;
-  }
-  std::vector<size_t> index(n, 0);
-  std::vector<int> reading(n);
-  while (true) {
-    for (size_t i = 0; i < n; ++i) reading[i] = options[i][index[i]];
-    if (codebook.Matches(knot, reading)) return true;
-    size_t i = 0;
-    while (i < n && ++index[i] == options[i].size()) index[i++] = 0;
-    if (i == n) return false;
-  }
-}
 
 // True when the yarns and the knot's links can be paired one to one, each pair's link dye
 // plausible for its yarn: every yarn a distinct link when there are at most as many yarns as
@@ -351,7 +328,7 @@ IdentityCheck CheckIdentity(const cv::Mat& bgr8, const KnotCodebook& codebook, i
     // Distinct branches are distinct links whatever the rule (the set rule only means that
     // the codes differ as sets); the cyclic rule adds their order.
     const bool cyclic = n == degree && codebook.rule == CodeRule::kCyclic;
-    fits = cyclic ? FitsCode(codebook, knot, plausible) : FitsDistinctLinks(links, plausible);
+    fits = cyclic ? codebook.FitsSomeReading(knot, plausible) : FitsDistinctLinks(links, plausible);
     if (!fits) {
       std::string code;
       for (int c : links) code += (code.empty() ? "" : " ") + codebook.palette[c].name;
