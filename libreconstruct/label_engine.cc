@@ -116,14 +116,10 @@ EngineCounts LabelEngine::Commit(const std::string& name, const std::vector<Labe
   return n;
 }
 
-int LabelEngine::Degree(int knot) const { return static_cast<int>(Neighbours(knot).size()); }
-
 NeighbourSlots LabelEngine::Slots(
     int camera, int t, int knot, const std::vector<std::optional<Eigen::Vector3d>>& point) const {
   const LabelSet& set = store_->labels();
-  const int cols = set.cols, r = knot / cols, c = knot % cols;
-  const int slot_knot[4] = {c + 1 < cols ? knot + 1 : -1, r + 1 < set.rows ? knot + cols : -1,
-                            c > 0 ? knot - 1 : -1, r > 0 ? knot - cols : -1};
+  const std::array<int, 4> slot_knot = SlotKnots(knot);
   NeighbourSlots slots;
   for (int s = 0; s < 4; ++s) {
     const int n = slot_knot[s];
@@ -140,14 +136,17 @@ NeighbourSlots LabelEngine::Slots(
   return slots;
 }
 
-std::vector<int> LabelEngine::Neighbours(int knot) const {
+std::array<int, 4> LabelEngine::SlotKnots(int knot) const {
   const int rows = store_->labels().rows, cols = store_->labels().cols;
   const int r = knot / cols, c = knot % cols;
+  return {c + 1 < cols ? knot + 1 : -1, r + 1 < rows ? knot + cols : -1, c > 0 ? knot - 1 : -1,
+          r > 0 ? knot - cols : -1};
+}
+
+std::vector<int> LabelEngine::Neighbours(int knot) const {
   std::vector<int> n;  // right, down, left, up
-  if (c + 1 < cols) n.push_back(knot + 1);
-  if (r + 1 < rows) n.push_back(knot + cols);
-  if (c > 0) n.push_back(knot - 1);
-  if (r > 0) n.push_back(knot - cols);
+  for (int k : SlotKnots(knot))
+    if (k >= 0) n.push_back(k);
   return n;
 }
 
@@ -232,10 +231,7 @@ EngineCounts LabelEngine::LabelFirstFrame(int t) {
       LabelEdit& e = edits[i];
       if (e.label.state != LabelState::kAccepted) continue;
       NeighbourSlots slots;
-      const int r = e.knot / cols, col = e.knot % cols;
-      const int slot_knot[4] = {col + 1 < cols ? e.knot + 1 : -1,
-                                r + 1 < rows ? e.knot + cols : -1, col > 0 ? e.knot - 1 : -1,
-                                r > 0 ? e.knot - cols : -1};
+      const std::array<int, 4> slot_knot = SlotKnots(e.knot);
       for (int s = 0; s < 4; ++s) {
         slots.present[s] = slot_knot[s] >= 0;
         if (slots.present[s]) slots.px[s] = px(slot_knot[s]);
@@ -372,7 +368,7 @@ EngineCounts LabelEngine::CrossCheck(int t) {
   const double link = link_length_m_;
 
   // 2. Fill Grid.
-  struct Candidate {
+  struct FillCandidate {
     int camera;
     Eigen::Vector2d px;
     double confidence;
@@ -389,7 +385,7 @@ EngineCounts LabelEngine::CrossCheck(int t) {
   };
   for (int pass = 0; pass < o_.fill_passes; ++pass) {
     std::vector<LabelEdit> edits;
-    std::map<int, std::vector<Candidate>> candidates;
+    std::map<int, std::vector<FillCandidate>> candidates;
     // Positions already taken in each camera (accepted labels and the knots' projections), so a
     // junction is never given to a second knot.
     auto taken_near = [&](int c, int k, const Eigen::Vector2d& px) {
@@ -598,7 +594,7 @@ EngineCounts LabelEngine::CrossCheck(int t) {
               const bool inlier =
                   std::find(e.inliers.begin(), e.inliers.end(), static_cast<int>(i)) !=
                   e.inliers.end();
-              const Candidate& cand = list[i - first];
+              const FillCandidate& cand = list[i - first];
               if (inlier) {
                 confirmed = true;
                 edits.push_back({cand.camera, t, k, Made(cand.px, LabelSource::kFillGrid,
@@ -659,7 +655,6 @@ void LabelEngine::SetCodebook(KnotCodebook codebook, IdentityCheckOptions option
 int LabelEngine::CheckColours(int t) {
   if (!codebook_) return 0;
   const LabelSet& set = store_->labels();
-  const int cols = set.cols;
   std::vector<LabelEdit> flags;
   for (int c = 0; c < static_cast<int>(set.cameras.size()); ++c) {
     const cv::Mat& image = Image(c, t);
@@ -669,9 +664,7 @@ int LabelEngine::CheckColours(int t) {
       if (!Accepted(l) || l.source == LabelSource::kManual || l.source == LabelSource::kImported)
         continue;
       YarnDirections yarns;
-      const int r = k / cols, col = k % cols;
-      const int slot_knot[4] = {col + 1 < cols ? k + 1 : -1, r + 1 < set.rows ? k + cols : -1,
-                                col > 0 ? k - 1 : -1, r > 0 ? k - cols : -1};
+      const std::array<int, 4> slot_knot = SlotKnots(k);
       for (int s = 0; s < 4; ++s)
         if (slot_knot[s] >= 0 && Accepted(set.at(c, t, slot_knot[s])))
           yarns.neighbour_px[s] = set.at(c, t, slot_knot[s]).px;

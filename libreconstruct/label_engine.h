@@ -127,8 +127,9 @@ class LabelEngine {
   void Note(int camera, int t, int knot, const std::string& why);
   EngineCounts Commit(const std::string& name, const std::vector<LabelEdit>& edits);
   void EstimateLinkLength(int t);
-  std::vector<int> Neighbours(int knot) const;  // right, down, left, up (those there are)
-  int Degree(int knot) const;
+  // A knot's grid neighbours right, down, left, up; -1 where the net has none.
+  std::array<int, 4> SlotKnots(int knot) const;
+  std::vector<int> Neighbours(int knot) const;  // those there are, in that order
   // The image positions of a knot's neighbours in (camera, t), right, down, left, up: accepted
   // labels, else the projections of their triangulated points.
   NeighbourSlots Slots(
