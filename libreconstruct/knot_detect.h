@@ -3,13 +3,34 @@
 //
 // Foreground: F = |I - background| (Euclidean over the colour channels; the background is a
 // local median, background_window_px wide, so a target or cabin behind the net does not hide
-// the yarns in front of it; solids are masked out, see solid_fraction). Ridges: the Hessian of F smoothed at the thread's scale;
-// ridge strength R = max(0, -smallest eigenvalue) (bright lines in F, whatever their colour).
-// A knot is where yarns meet: sampled on a circle around a point, R shows one peak per yarn
-// leaving it. 3 or 4 peaks (edge, inner knot), or 2 peaks less than straight_angle_deg apart
-// (a corner), make a junction; 2 opposite peaks are a yarn passing by. Its sub-pixel position is
-// the least-squares intersection of the branch lines, each fitted through its peaks on three
-// circles.
+// the yarns in front of it; solids are masked out, see solid_fraction). Ridges: the Hessian of F
+// smoothed at the thread's scale; ridge strength R = max(0, -smallest eigenvalue) (bright lines
+// in F, whatever their colour) and the ridge's direction. Where the background itself has an
+// edge (the target's), a ridge along that edge is weakened: the median leaves a thin line of
+// foreground there.
+//
+// A knot is where yarns meet: sampled on a circle around a point, the ridge strength along the
+// radius (R cos^2 of the angle between ridge and radius: a yarn leaving the point counts fully,
+// the rim of the knot's own bump not at all) peaks once per yarn leaving it. 3 or 4 peaks (edge,
+// inner knot), or 2 peaks less than straight_angle_deg apart (a corner), make a junction; 2
+// opposite peaks are a yarn passing by. Branches are followed on rings_count circles, all of
+// which but one must agree. A peak must stand out from the background's noise, not from the
+// strongest yarn: a knot's yarns differ up to 25-fold in contrast (dyes).
+//
+// Sub-pixel position: each branch is fitted with a model of a straight yarn (a blurred strip of
+// constant colour) to the image's samples along it, fit_from_px to 2 ring_radius_px from the
+// knot, and the knot is the least-squares intersection of the fitted lines (each weighted by its
+// standard error; three or more lines, which must meet). When the image is a bilinearly
+// demosaiced Bayer frame (detected: re-mosaiced and demosaiced it gives itself back), the
+// samples are the mosaic's: each pixel's own colour only. A thin yarn of one dye is seen every
+// second row and column in its red or blue channel, and any peak or centroid of the demosaiced
+// image is pulled towards those rows by up to half a pixel (measured on a rendered shot: median
+// 0.3-0.45 px off); the model, fitted where each sample was taken, is not (0.06-0.08 px).
+//
+// Solids: a compact blob several yarn widths across, a corner mass, is no yarn: its rim is
+// masked from the ridges and its centre is a circle fitted to its sub-pixel outline. A corner
+// knot sits inside its corner mass: Find Node returns the solid's centre (Junction::solid) when
+// the brush holds no yarn junction.
 //
 // Find Node (the circular brush): every junction inside the brush, refined and merged; exactly
 // one is returned as found, none or several (with the candidates) are said so — never a guess.
@@ -25,15 +46,34 @@ namespace netlab::recon {
 
 struct KnotDetectorOptions {
   double ridge_sigma_px = 1.2;    // Gaussian scale of the Hessian (about the thread's half width)
-  double ring_radius_px = 6.0;    // inner circle for the branch count; then 1.5 x and 2 x
-  double peak_fraction = 0.25;    // a branch peak exceeds this fraction of the strong ridges
+  // Branches are counted on rings_count circles from ring_radius_px to twice that (all but one
+  // must agree). The inner ring must clear the knot's own bump (a knot ball is three yarn
+  // widths across, its rim a ridge too: at 6 px it gave false peaks as strong as dim yarns).
+  double ring_radius_px = 9.0;
+  int rings_count = 3;
+  // A branch peak (of the ridge strength along the radius) exceeds the largest of:
+  double noise_factor = 15.0;     // this many times the median ridge strength (the noise),
+  double peak_fraction = 0.03;    // this fraction of the strong ridges (99th percentile),
+  double min_peak = 1e-4;         // and this (ridge units: foreground (0..1) / px^2).
   double min_branch_separation_deg = 25.0;
   double straight_angle_deg = 150.0;  // two branches this far apart are one yarn passing through
   double merge_px = 2.5;          // refined junctions closer than this are one
+  // Sub-pixel fit of each branch (false: the lines through the branch's ring peaks, biased by
+  // demosaicing, see above).
+  bool fit_yarns = true;
+  double fit_from_px = 5.0;       // along each branch from here (clear of the knot's bump) to
+                                  // 2 ring_radius_px
+  double fit_half_width_px = 3.0; // samples this far either side of the branch line, px
+  double yarn_blur_px = 0.5;      // Gaussian blur of the yarn's edges in the model (pixel
+                                  // footprint, lens, motion), px
   int background_window_px = 11;  // median window of the local background (odd, >> a yarn)
   double solid_fraction = 0.3;    // foreground above this fraction of the brightest that stays
   double max_solid_area_px = 3000;  // under an opening, in a blob up to this area: a solid
                                     // (corner mass), where no ridge is taken
+  // Where the local background changes this fast (per px, 0..1 colour units), at an edge of a
+  // target behind the net, ridges along the edge are weakened (fully at this rate) and the
+  // yarn model takes no samples (from half of it); 0: off.
+  double background_edge = 0.05;
 };
 
 struct Junction {
@@ -43,6 +83,9 @@ struct Junction {
   double fit_rms_px = 0.0;   // RMS distance of px from the branch lines
   double contrast = 0.0;     // weakest branch peak / the peak threshold (> 1)
   double confidence = 0.0;   // 0..1 from contrast and fit
+  bool solid = false;        // the centre of a solid (corner mass), not a yarn junction;
+                             // branches: the yarns leaving it, fit_rms_px: its outline's RMS
+                             // distance from the fitted circle
 };
 
 class KnotDetector {
@@ -56,20 +99,46 @@ class KnotDetector {
   std::optional<Junction> Examine(const Eigen::Vector2d& px) const;
   // Every junction inside the circle, refined and merged.
   std::vector<Junction> FindInCircle(const Eigen::Vector2d& centre, double radius) const;
+  // Every solid whose centre is inside the circle: its centre, the yarns leaving it as
+  // branches (counted on a ring just outside it), solid = true.
+  std::vector<Junction> SolidsInCircle(const Eigen::Vector2d& centre, double radius) const;
 
   const cv::Mat& ridge() const { return ridge_; }  // CV_32F, the ROI
   double peak_threshold() const { return threshold_; }
+  // The Bayer pattern (BayerPattern, bayer.h; at the ROI's top-left pixel) the image was
+  // demosaiced from; kNone (0) when it was not a bilinearly demosaiced mosaic.
+  int bayer_pattern() const { return pattern_; }
 
  private:
-  // Ridge strength on a circle (bilinear), n samples from angle 0.
-  std::vector<double> Ring(const Eigen::Vector2d& centre, double radius, int n) const;
-  // Peak angles (rad, sub-sample) of a circular profile above the threshold.
+  struct Solid {
+    Eigen::Vector2d centre;  // image px
+    double radius = 0.0;     // px
+    double rms_px = 0.0;     // of the outline about the fitted circle
+  };
+  // The ridge strength along the radius, R cos^2 of the angle between the ridge and the radius,
+  // on a circle (bilinear samples from angle 0).
+  std::vector<double> SampleRing(const Eigen::Vector2d& centre, double radius) const;
+  // Peak angles (rad, sub-sample) of a ring's profile above the threshold; the weakest peak
+  // over the threshold in *weakest.
   std::vector<double> Peaks(const std::vector<double>& profile, double* weakest) const;
-  double Sample(double x, double y) const;  // R at image coordinates (bilinear), 0 outside
+  // The junction at a point from the rings alone: position from the lines through the branch
+  // peaks.
+  std::optional<Junction> ExamineRings(const Eigen::Vector2d& px) const;
+  // A junction's position refined by fitting the yarn model to each branch; nullopt when too
+  // few branches fit, or the fitted lines do not meet in one point near the rings' junction.
+  std::optional<Junction> Refine(const Junction& j) const;
+  // The solids among the blobs (CV_8U), their centres from the outline in `level` (CV_32F, the
+  // distance of each pixel's colour from the region's median colour); sets masked_ and solids_.
+  void FindSolids(const cv::Mat& blobs, const cv::Mat& level);
 
   KnotDetectorOptions o_;
   cv::Rect roi_;
   cv::Mat ridge_;
+  cv::Mat field_;  // CV_32FC3: R, R cos 2 theta, R sin 2 theta (theta: the ridge's direction)
+  cv::Mat diff_;   // CV_32FC(n): the image minus its local background, 0..1
+  cv::Mat masked_;  // CV_8U: 255 on (dilated) solids, 128 on the background's edges, else 0
+  std::vector<Solid> solids_;
+  int pattern_ = 0;  // BayerPattern
   double threshold_ = 0.0;
 };
 
@@ -82,7 +151,9 @@ struct FindNodeResult {
   std::string why;                   // when not found
 };
 
-// The knot inside the brush (centre, radius in px) of `image`.
+// The knot inside the brush (centre, radius in px) of `image`: the one yarn junction there, or
+// when there is none, the one solid (corner mass) whose centre is there (Junction::solid).
+// About 2 ms for a 6 px brush (a 68 x 68 px region; 4.7 ms at most on a rendered shot).
 FindNodeResult FindNode(const cv::Mat& image, const Eigen::Vector2d& centre, double radius,
                         const KnotDetectorOptions& options = {});
 

@@ -43,63 +43,103 @@ std::vector<TrackedKnot> TrackKnots(const cv::Mat& from, const cv::Mat& to,
   std::vector<float> err;
   const cv::Size window(options.window_px, options.window_px);
   const cv::TermCriteria stop(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 30, 0.001);
-  cv::calcOpticalFlowPyrLK(a, b, p0, p1, ok_forward, err, window, options.pyramid_levels, stop);
-  cv::calcOpticalFlowPyrLK(b, a, p1, back, ok_back, err, window, options.pyramid_levels, stop);
+  cv::calcOpticalFlowPyrLK(a, b, p0, p1, ok_forward, err, window, options.pyramid_levels, stop, 0,
+                           options.min_eigenvalue);
+  cv::calcOpticalFlowPyrLK(b, a, p1, back, ok_back, err, window, options.pyramid_levels, stop, 0,
+                           options.min_eigenvalue);
   // Flow per knot, where trusted.
-  std::map<int, Eigen::Vector2d> motion;
+  std::map<int, size_t> index;
   std::vector<bool> trusted(knots.size(), false);
   for (size_t i = 0; i < knots.size(); ++i) {
+    index[knots[i].first] = i;
     const double fb = std::hypot(back[i].x - p0[i].x, back[i].y - p0[i].y);
     trusted[i] = ok_forward[i] && ok_back[i] && fb <= options.max_fb_error_px;
-    if (trusted[i])
-      motion[knots[i].first] = Eigen::Vector2d(p1[i].x, p1[i].y) - knots[i].second;
   }
-  for (size_t i = 0; i < knots.size(); ++i) {
-    const auto& [k, px] = knots[i];
-    TrackedKnot& t = out[i];
-    t.knot = k;
-    const int r = k / cols, c = k % cols;
+  // The knot detector's brush at a prediction, snap radius wide: true when exactly one junction
+  // of the knot's degree (2 corner, 3 edge, 4 inner) is there (t->px set to it), else false with
+  // the reason (t->px the best position there is).
+  auto snap = [&](size_t i, const Eigen::Vector2d& predicted, TrackedKnot* t) {
+    const int k = knots[i].first, r = k / cols, c = k % cols;
     const int degree = (r > 0) + (r + 1 < rows) + (c > 0) + (c + 1 < cols);
-    Eigen::Vector2d predicted;
-    if (trusted[i]) {
-      predicted = Eigen::Vector2d(p1[i].x, p1[i].y);
-    } else {
-      std::vector<double> dx, dy;
-      for (int n : {k - 1, k + 1, k - cols, k + cols}) {
-        if (n < 0 || n >= rows * cols || (std::abs(n - k) == 1 && n / cols != r)) continue;
-        const auto it = motion.find(n);
-        if (it == motion.end()) continue;
-        dx.push_back(it->second.x());
-        dy.push_back(it->second.y());
-      }
-      if (dx.empty()) {
-        t.px = px;
-        t.why = "no trusted flow for the knot or its neighbours";
-        continue;
-      }
-      predicted = px + Eigen::Vector2d(Median(dx), Median(dy));
-      t.why = "flow lost (forward-backward check); predicted from the neighbours' motion";
-    }
-    // The knot detector's brush at the prediction, snap radius wide.
     const std::vector<Junction> near =
         FindNode(to, predicted, options.snap_radius_px, options.detector).candidates;
-    t.px = predicted;
+    t->px = predicted;
     if (near.empty()) {
-      if (t.why.empty()) t.why = "no junction within " + std::to_string(options.snap_radius_px) + " px of the flow";
-      continue;
+      if (t->why.empty())
+        t->why = "no junction within " + std::to_string(options.snap_radius_px) + " px of the flow";
+      return false;
     }
     if (near.size() > 1) {
-      t.why = std::to_string(near.size()) + " junctions within the snap radius";
-      continue;
+      t->why = std::to_string(near.size()) + " junctions within the snap radius";
+      return false;
     }
-    t.px = near[0].px;
-    t.confidence = near[0].confidence;
+    t->px = near[0].px;
+    t->confidence = near[0].confidence;
     if (near[0].branches != degree) {
-      t.why = "the junction there has " + std::to_string(near[0].branches) + " yarns, the knot " +
-              std::to_string(degree);
-      continue;
+      t->why = "the junction there has " + std::to_string(near[0].branches) + " yarns, the knot " +
+               std::to_string(degree);
+      return false;
     }
-    if (trusted[i]) t.accepted = true;
+    return true;
+  };
+  // Knots with trusted flow: snapped at the flow's end.
+  for (size_t i = 0; i < knots.size(); ++i) {
+    out[i].knot = knots[i].first;
+    if (trusted[i]) out[i].accepted = snap(i, Eigen::Vector2d(p1[i].x, p1[i].y), &out[i]);
+  }
+  // Knots without: predicted from their grid neighbours' motion (an occluded knot moves with
+  // the net): an accepted neighbour's motion is its junction's, else its trusted flow's. In
+  // rounds, as knots accepted in one round give the next their motion. Accepted when at least
+  // two accepted neighbours move as one (within max_neighbour_spread_px of their median).
+  std::vector<bool> done(knots.size(), false);
+  std::vector<int> last_confirmed(knots.size(), -1);
+  for (size_t i = 0; i < knots.size(); ++i) done[i] = trusted[i];
+  for (bool progress = true; progress;) {
+    progress = false;
+    for (size_t i = 0; i < knots.size(); ++i) {
+      if (done[i]) continue;
+      const auto& [k, px] = knots[i];
+      const int r = k / cols;
+      std::vector<Eigen::Vector2d> moves, confirmed;
+      for (int n : {k - 1, k + 1, k - cols, k + cols}) {
+        if (n < 0 || n >= rows * cols || (std::abs(n - k) == 1 && n / cols != r)) continue;
+        const auto it = index.find(n);
+        if (it == index.end()) continue;
+        const size_t j = it->second;
+        if (out[j].accepted) {
+          moves.push_back(out[j].px - knots[j].second);
+          confirmed.push_back(moves.back());
+        } else if (trusted[j]) {
+          moves.emplace_back(p1[j].x - knots[j].second.x(), p1[j].y - knots[j].second.y());
+        }
+      }
+      if (moves.empty()) {
+        out[i].px = px;
+        out[i].why = "no trusted flow for the knot or its neighbours";
+        continue;
+      }
+      // Two confirmed motions or more predict alone.
+      const std::vector<Eigen::Vector2d>& used = confirmed.size() >= 2 ? confirmed : moves;
+      std::vector<double> dx, dy;
+      for (const auto& m : used) dx.push_back(m.x()), dy.push_back(m.y());
+      const Eigen::Vector2d median(Median(dx), Median(dy));
+      double spread = 0.0;
+      for (const auto& m : used) spread = std::max(spread, (m - median).norm());
+      // Snapped again only when more neighbours are confirmed than the last time.
+      if (static_cast<int>(confirmed.size()) == last_confirmed[i]) continue;
+      last_confirmed[i] = static_cast<int>(confirmed.size());
+      TrackedKnot& t = out[i];
+      t = TrackedKnot{};
+      t.knot = k;
+      t.why = "flow lost (forward-backward check); predicted from the neighbours' motion";
+      if (!snap(i, px + median, &t)) continue;
+      if (confirmed.size() >= 2 && options.max_neighbour_spread_px > 0 &&
+          spread <= options.max_neighbour_spread_px) {
+        t.accepted = true;
+        t.why.clear();
+        done[i] = progress = true;
+      }
+    }
   }
   // Two knots on one junction: neither is trusted.
   for (size_t i = 0; i < out.size(); ++i)

@@ -2,12 +2,15 @@
 // Tracking labeled knots from one frame to the next (or the previous) of one camera.
 //
 // Pyramidal Lucas-Kanade optical flow on the blurred grey image, forwards and back: a knot whose
-// forward-backward error exceeds max_fb_error_px has no trusted flow. Every knot is then re-snapped
-// with the knot detector at its predicted position (the flow's, or for a knot without one the
-// median motion of its grid neighbours that have one: an occluded knot moves with the net). A
-// knot is accepted only when the flow is trusted, a junction of the knot's degree (2 corner,
-// 3 edge, 4 inner) is within snap_radius_px of the flow, and no other knot's result lies within
-// that radius; otherwise it needs review, with the reason, at the best position there is.
+// forward-backward error exceeds max_fb_error_px has no trusted flow. A knot with trusted flow
+// is snapped with the knot detector at the flow's end; it is accepted when a junction of the
+// knot's degree (2 corner, 3 edge, 4 inner; a corner's junction is its corner mass, see
+// FindNode) is the only one within snap_radius_px there. A knot without trusted flow is
+// predicted from its grid neighbours' motion (an occluded knot moves with the net: accepted
+// neighbours' junctions, else their flow) and snapped there alike, in rounds as neighbours get
+// accepted; it is accepted when, besides, at least two accepted neighbours move as one (within
+// max_neighbour_spread_px). No knot whose result lies within the snap radius of another's is
+// accepted. A knot not accepted needs review, with the reason, at the best position there is.
 
 #include <string>
 #include <utility>
@@ -26,6 +29,15 @@ struct TrackOptions {
   int window_px = 31;
   int pyramid_levels = 4;
   double flow_blur_px = 2.5;  // Gaussian blur of the images for the flow (thin yarns)
+  // Lucas-Kanade's least eigenvalue of the window's gradient matrix (per pixel, OpenCV's
+  // minEigThreshold). OpenCV's 1e-4 lost a knot in twenty of the far cameras, whose dim dyes
+  // give little gradient in grey; the forward-backward check guards the flow.
+  double min_eigenvalue = 1e-5;
+  // A knot without trusted flow is accepted on its neighbours' motion when at least two grid
+  // neighbours are accepted and their motions (their junctions', from the previous frame) lie
+  // within this many px of their median (the net there moves as one), and the checks on the
+  // junction pass as for flow; 0: never.
+  double max_neighbour_spread_px = 1.0;
   KnotDetectorOptions detector;
 };
 

@@ -404,8 +404,8 @@ EngineCounts LabelEngine::CrossCheck(int t) {
       const cv::Mat& image = Image(c, t);
       if (image.empty()) continue;
       const cv::Size size = image.size();
-      // The detector reads two ring radii around a point (and its filter's support).
-      const double margin = 2.0 * o_.detector.ring_radius_px + 2.0;
+      // The detector needs its inner ring (and its filter's support) inside the frame.
+      const double margin = o_.detector.ring_radius_px + 2.0;
       auto inside = [&](const Eigen::Vector2d& q) {
         return q.allFinite() && q.x() >= margin && q.y() >= margin &&
                q.x() <= size.width - 1 - margin && q.y() <= size.height - 1 - margin;

@@ -4,6 +4,7 @@
 
 #include <random>
 
+#include "libreconstruct/bayer.h"
 #include "tests/libreconstruct/rendered_net.h"
 
 namespace netlab::recon {
@@ -11,8 +12,28 @@ namespace {
 
 using testing::NetImage;
 using testing::RenderNet;
+using testing::RenderNetOptions;
 using testing::kCols;
 using testing::kRows;
+
+bool IsCorner(int r, int c) { return (r == 0 || r == kRows - 1) && (c == 0 || c == kCols - 1); }
+int Degree(int r, int c) { return (r > 0) + (r + 1 < kRows) + (c > 0) + (c + 1 < kCols); }
+
+// A frame as netlab render writes it and SynchronizedSequence::ReadDisplay reads it: Net A's
+// dyes (royal blue and brown a twentieth of white in some channels), grey knot balls, corner
+// masses, an RGGB mosaic with sensor noise, demosaiced bilinearly.
+RenderNetOptions ShotLike(double distance_m, double tilt_deg, uint64_t seed) {
+  RenderNetOptions o;
+  o.distance_m = distance_m;
+  o.tilt_deg = tilt_deg;
+  o.seed = seed;
+  o.noise_grey = 1.0;
+  o.dyes = testing::NetADyes();
+  o.knot_radius_m = 0.0015;
+  o.corner_radius_m = 0.01;
+  o.bayer = true;
+  return o;
+}
 
 // Measured: worst 0.043 px (no tilt) and 0.060 px (25 degrees), most below 0.01 px.
 TEST(FindNode, FindsEveryKnotToATenthOfAPixel) {
@@ -62,6 +83,93 @@ TEST(FindNode, StaysAccurateWithSensorNoise) {
   EXPECT_LT(std::sqrt(ss / n), 0.1);  // measured 0.037 px at 4 grey levels of noise
 }
 
+// Yarns ~2 px (1.5 m) and ~1 px (3 m) wide. Measured: worst 0.11 px (median 0.02-0.04); the
+// lines through the branches' ridge peaks were up to 0.67 px off (median 0.13-0.21): the red
+// and blue samples of a thin one-dye yarn are every second row and column.
+TEST(FindNode, FindsEveryKnotOfADemosaicedFrameToATenthOfAPixel) {
+  for (double distance : {1.5, 3.0})
+    for (double tilt : {0.0, 20.0}) {
+      const NetImage net = RenderNet(ShotLike(distance, tilt, 7));
+      for (int r = 0; r < kRows; ++r)
+        for (int c = 0; c < kCols; ++c) {
+          if (IsCorner(r, c)) continue;
+          const Eigen::Vector2d truth = net.Pixel(r, c);
+          const FindNodeResult found = FindNode(net.image, truth + Eigen::Vector2d(2, -1.5), 6);
+          ASSERT_EQ(found.status, FindNodeStatus::kFound)
+              << r << "," << c << " at " << distance << " m, tilt " << tilt << ": " << found.why;
+          EXPECT_FALSE(found.knot.solid);
+          EXPECT_EQ(found.knot.branches, Degree(r, c)) << r << "," << c;
+          EXPECT_LT((found.knot.px - truth).norm(), 0.2)
+              << r << "," << c << " at " << distance << " m, tilt " << tilt;
+        }
+    }
+}
+
+// The knot sits inside its corner mass: the mass's centre, with the two yarns leaving it.
+// Measured: worst 0.09 px.
+TEST(FindNode, ReturnsTheCentreOfACornerMassWithItsTwoYarns) {
+  for (double distance : {1.5, 3.0}) {
+    const NetImage net = RenderNet(ShotLike(distance, 10.0, 8));
+    for (int r : {0, kRows - 1})
+      for (int c : {0, kCols - 1}) {
+        const Eigen::Vector2d truth = net.Pixel(r, c);
+        const FindNodeResult found = FindNode(net.image, truth + Eigen::Vector2d(-3, 2), 6);
+        ASSERT_EQ(found.status, FindNodeStatus::kFound) << r << "," << c << ": " << found.why;
+        EXPECT_TRUE(found.knot.solid);
+        EXPECT_EQ(found.knot.branches, 2);
+        EXPECT_LT((found.knot.px - truth).norm(), 0.15) << r << "," << c << " at " << distance;
+      }
+    // Beside the mass, on its yarn, there is nothing.
+    const Eigen::Vector2d beside = net.Pixel(0, 0) + 0.4 * (net.Pixel(0, 1) - net.Pixel(0, 0));
+    EXPECT_EQ(FindNode(net.image, beside, 6).status, FindNodeStatus::kNone);
+  }
+}
+
+// Where a yarn a twentieth as bright as the others meets them, the knot is still a junction of
+// four: a peak need stand out from the noise, not from the strongest yarn.
+TEST(FindNode, CountsADimYarnAtAKnot) {
+  RenderNetOptions o = ShotLike(1.5, 15.0, 9);
+  o.dyes = {Colour(0.9f, 0.9f, 0.9f), Colour(0.045f, 0.045f, 0.045f), Colour(0.1f, 0.8f, 0.8f)};
+  const NetImage net = RenderNet(o);
+  for (int r = 1; r + 1 < kRows; ++r)
+    for (int c = 1; c + 1 < kCols; ++c) {
+      const FindNodeResult found = FindNode(net.image, net.Pixel(r, c), 6);
+      ASSERT_EQ(found.status, FindNodeStatus::kFound) << r << "," << c << ": " << found.why;
+      EXPECT_EQ(found.knot.branches, 4) << r << "," << c;
+      EXPECT_LT((found.knot.px - net.Pixel(r, c)).norm(), 0.2) << r << "," << c;
+    }
+}
+
+TEST(FindNode, FindsNoJunctionOnThePlainYarnsOfADemosaicedFrame) {
+  const NetImage net = RenderNet(ShotLike(2.0, 25.0, 10));
+  int brushes = 0;
+  for (int k = 0; k < kRows * kCols; ++k)
+    for (int n : {k + 1, k + kCols}) {
+      if (n >= kRows * kCols || (n == k + 1 && n / kCols != k / kCols)) continue;
+      const Eigen::Vector2d a = net.Pixel(k / kCols, k % kCols), b = net.Pixel(n / kCols, n % kCols);
+      for (double t : {0.3, 0.5, 0.7}) {
+        const FindNodeResult found = FindNode(net.image, a + t * (b - a), 6);
+        EXPECT_EQ(found.status, FindNodeStatus::kNone) << "link " << k << "-" << n << " at " << t;
+        ++brushes;
+      }
+    }
+  EXPECT_EQ(brushes, 72);
+}
+
+TEST(KnotDetector, TellsTheBayerPhaseOfADemosaicedImageAndNoneOfAPlainOne) {
+  const NetImage shot = RenderNet(ShotLike(1.5, 0.0, 11));
+  const Eigen::Vector2d knot = shot.Pixel(1, 1);
+  const cv::Rect even(static_cast<int>(knot.x()) / 2 * 2 - 30, static_cast<int>(knot.y()) / 2 * 2 - 30, 60, 60);
+  EXPECT_EQ(KnotDetector(shot.image, even).bayer_pattern(), static_cast<int>(BayerPattern::kRGGB));
+  // One column further: the block there starts green, red.
+  EXPECT_EQ(KnotDetector(shot.image, even + cv::Point(1, 0)).bayer_pattern(),
+            static_cast<int>(BayerPattern::kGRBG));
+  EXPECT_EQ(KnotDetector(shot.image, even + cv::Point(1, 1)).bayer_pattern(),
+            static_cast<int>(BayerPattern::kBGGR));
+  const NetImage plain = RenderNet(0.0, 1.0, 12);
+  EXPECT_EQ(KnotDetector(plain.image, even).bayer_pattern(), static_cast<int>(BayerPattern::kNone));
+}
+
 TEST(FindPath, LabelsTheKnotsBetweenTwoKnotsOfARowOrColumn) {
   const NetImage net = RenderNet(20.0, 2.0, 4);
   // Row 1, from (1,0) to (1,3): knots (1,1) and (1,2) in that order.
@@ -79,6 +187,20 @@ TEST(FindPath, LabelsTheKnotsBetweenTwoKnotsOfARowOrColumn) {
   FindPathResult next = FindPath(net.image, kCols, 5, net.Pixel(1, 1), 6, net.Pixel(1, 2));
   EXPECT_TRUE(next.ok) << next.why;
   EXPECT_TRUE(next.knots.empty());
+}
+
+// Column 0 is dyed a tenth as bright as column 1 beside it: on 1 / ridge strength alone the
+// path went across to the bright column and back, and found that column's knots, evenly spaced.
+TEST(FindPath, FollowsItsOwnDimColumnPastABrightOne) {
+  RenderNetOptions o = ShotLike(1.5, 10.0, 13);
+  o.dyes.assign(1, Colour(0.9f, 0.9f, 0.9f));  // white
+  o.dim = {{0, 4}, {4, 8}, {8, 12}};
+  const NetImage net = RenderNet(o);
+  const FindPathResult column = FindPath(net.image, kCols, 0, net.Pixel(0, 0), 12, net.Pixel(3, 0));
+  ASSERT_TRUE(column.ok) << column.why;
+  ASSERT_EQ(column.knots, (std::vector<int>{4, 8}));
+  EXPECT_LT((column.junctions[0].px - net.Pixel(1, 0)).norm(), 0.2);
+  EXPECT_LT((column.junctions[1].px - net.Pixel(2, 0)).norm(), 0.2);
 }
 
 TEST(FindPath, RefusesWhenTheJunctionsDoNotMatchTheGrid) {

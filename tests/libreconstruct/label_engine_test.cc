@@ -119,7 +119,7 @@ int CheckAccepted(const Shot& shot, const LabelStore& store, int t) {
   return accepted;
 }
 
-// Knots whose image is at least 14 px inside the frame (the detector reads two rings of 6 px).
+// Knots whose image is at least 14 px inside the frame (the detector's inner ring is 9 px).
 int InView(const Shot& shot, int t) {
   int n = 0;
   for (int c = 0; c < static_cast<int>(shot.rig.cameras.size()); ++c)
