@@ -35,9 +35,6 @@ const RingTable& Table() {
 }
 
 // Pixels around a point that Examine reads: the outer ring and the ridge filter's support.
-double Reach(const KnotDetectorOptions& o) {
-  return 2.0 * o.ring_radius_px + 4 * o.ridge_sigma_px + 4;
-}
 
 double AngleBetween(double a, double b) {
   const double d = std::fmod(std::abs(a - b), 2 * M_PI);
@@ -281,6 +278,10 @@ YarnFit FitYarn(const std::vector<YarnSample>& samples, int channels, double blu
 }
 
 }  // namespace
+
+double DetectorReach(const KnotDetectorOptions& o) {
+  return 2.0 * o.ring_radius_px + 4 * o.ridge_sigma_px + 4;
+}
 
 KnotDetector::KnotDetector(const cv::Mat& image, cv::Rect roi, KnotDetectorOptions options)
     : o_(options) {
@@ -866,7 +867,7 @@ std::vector<Junction> KnotDetector::SolidsInCircle(const Eigen::Vector2d& centre
 
 FindNodeResult FindNode(const cv::Mat& image, const Eigen::Vector2d& centre, double radius,
                         const KnotDetectorOptions& options) {
-  const int margin = static_cast<int>(std::ceil(Reach(options)));
+  const int margin = static_cast<int>(std::ceil(DetectorReach(options)));
   const cv::Rect roi(static_cast<int>(std::floor(centre.x() - radius)) - margin,
                      static_cast<int>(std::floor(centre.y() - radius)) - margin,
                      static_cast<int>(2 * radius) + 2 * margin + 2,
@@ -905,7 +906,7 @@ FindPathResult FindPath(const cv::Mat& image, int cols, int knot_a, const Eigen:
   }
   // The region: the segment's bounding box with room for a sagging yarn and the rings.
   const double length = (px_b - px_a).norm();
-  const int margin = static_cast<int>(std::ceil(0.15 * length + Reach(options)));
+  const int margin = static_cast<int>(std::ceil(0.15 * length + DetectorReach(options)));
   const cv::Rect roi(static_cast<int>(std::floor(std::min(px_a.x(), px_b.x()))) - margin,
                      static_cast<int>(std::floor(std::min(px_a.y(), px_b.y()))) - margin,
                      static_cast<int>(std::abs(px_b.x() - px_a.x())) + 2 * margin + 2,

@@ -142,6 +142,10 @@ class KnotDetector {
   double threshold_ = 0.0;
 };
 
+// How far from a point the detector reads (px): its outer ring and the ridge filter's support.
+// A KnotDetector's ROI needs this margin around the points it examines.
+double DetectorReach(const KnotDetectorOptions& options);
+
 enum class FindNodeStatus { kFound, kNone, kSeveral };
 
 struct FindNodeResult {

@@ -526,10 +526,11 @@ EngineCounts LabelEngine::CrossCheck(int t) {
           }
           region.swap(thin);
         }
-        const int x0 = std::max(0, static_cast<int>(centre.x() - radius - 16));
-        const int y0 = std::max(0, static_cast<int>(centre.y() - radius - 16));
-        const int x1 = std::min(size.width, static_cast<int>(centre.x() + radius + 17));
-        const int y1 = std::min(size.height, static_cast<int>(centre.y() + radius + 17));
+        const double roi_margin = std::ceil(DetectorReach(o_.detector)) + 1.0;
+        const int x0 = std::max(0, static_cast<int>(centre.x() - radius - roi_margin));
+        const int y0 = std::max(0, static_cast<int>(centre.y() - radius - roi_margin));
+        const int x1 = std::min(size.width, static_cast<int>(centre.x() + radius + roi_margin + 1));
+        const int y1 = std::min(size.height, static_cast<int>(centre.y() + radius + roi_margin + 1));
         const KnotDetector detector(image, cv::Rect(x0, y0, x1 - x0, y1 - y0), o_.detector);
         double step = 4.0;  // the largest gap from a projected sample to its nearest one
         for (size_t i = 0; i < region.size(); ++i) {
