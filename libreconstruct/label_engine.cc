@@ -293,20 +293,9 @@ FindNodeResult LabelEngine::FindNodeAt(int camera, int t, int knot, const Eigen:
   return r;
 }
 
-void LabelEngine::EstimateLinkLength(int t) {
-  if (link_length_m_ > 0.0 || !rig_) return;
+void LabelEngine::EstimateLinkLength(const std::vector<std::optional<Eigen::Vector3d>>& p) {
+  if (link_length_m_ > 0.0) return;
   const LabelSet& set = store_->labels();
-  std::vector<std::optional<Eigen::Vector3d>> p(set.knots());
-  for (int k = 0; k < set.knots(); ++k) {
-    std::vector<Observation> obs;
-    for (int c = 0; c < static_cast<int>(set.cameras.size()); ++c)
-      if (Accepted(set.at(c, t, k))) obs.push_back({RigIndex(c), set.at(c, t, k).px});
-    if (obs.size() < 2) continue;
-    TriangulationOptions to;
-    to.outlier_threshold_px = o_.epipolar_tolerance_px;
-    const PointEstimate e = TriangulatePoint(*rig_, obs, to);
-    if (e.valid && e.outliers.empty()) p[k] = e.position;
-  }
   std::vector<double> d;
   for (int k = 0; k < set.knots(); ++k)
     for (int n : Neighbours(k))
@@ -325,9 +314,11 @@ EngineCounts LabelEngine::CrossCheck(int t) {
 
   // 1. Epipolar consistency of the accepted labels.
   std::vector<std::optional<Eigen::Vector3d>> point(knots);
+  std::vector<std::optional<Eigen::Vector3d>> clean(knots);  // points with every view an inlier
   auto triangulate_accepted = [&](std::vector<LabelEdit>* flags) {
     for (int k = 0; k < knots; ++k) {
       point[k].reset();
+      clean[k].reset();
       std::vector<Observation> obs;
       std::vector<int> from;
       for (int c = 0; c < cameras; ++c)
@@ -338,6 +329,7 @@ EngineCounts LabelEngine::CrossCheck(int t) {
       if (obs.size() < 2) continue;
       const PointEstimate e = TriangulatePoint(*rig_, obs, topt);
       if (e.valid) point[k] = e.position;
+      if (e.valid && e.outliers.empty()) clean[k] = e.position;
       if (!flags) continue;
       auto flag = [&](int i, const std::string& why) {
         Label l = set.at(from[i], t, k);
@@ -363,7 +355,7 @@ EngineCounts LabelEngine::CrossCheck(int t) {
       total.review += n.review;
       triangulate_accepted(nullptr);
     }
-    EstimateLinkLength(t);
+    EstimateLinkLength(clean);
   }
   const double link = link_length_m_;
 
@@ -388,15 +380,20 @@ EngineCounts LabelEngine::CrossCheck(int t) {
     std::map<int, std::vector<FillCandidate>> candidates;
     // Positions already taken in each camera (accepted labels and the knots' projections), so a
     // junction is never given to a second knot.
+    // The triangulated points as each camera sees them (NaN where there is none).
+    std::vector<std::vector<Eigen::Vector2d>> projected(
+        cameras, std::vector<Eigen::Vector2d>(knots, Eigen::Vector2d::Constant(NAN)));
+    if (geometry)
+      for (int c = 0; c < cameras; ++c)
+        for (int j = 0; j < knots; ++j)
+          if (point[j]) projected[c][j] = rig_->cameras[RigIndex(c)].ProjectWorld(*point[j]);
     auto taken_near = [&](int c, int k, const Eigen::Vector2d& px) {
       for (int j = 0; j < knots; ++j) {
         if (j == k) continue;
         const Label& l = set.at(c, t, j);
         if (Accepted(l) && (l.px - px).norm() < o_.exclusion_px) return true;
-        if (geometry && point[j]) {
-          const Eigen::Vector2d q = rig_->cameras[RigIndex(c)].ProjectWorld(*point[j]);
-          if (q.allFinite() && (q - px).norm() < o_.exclusion_px) return true;
-        }
+        const Eigen::Vector2d& q = projected[c][j];
+        if (q.allFinite() && (q - px).norm() < o_.exclusion_px) return true;
       }
       return false;
     };
@@ -414,7 +411,7 @@ EngineCounts LabelEngine::CrossCheck(int t) {
         if (Accepted(set.at(c, t, k))) continue;
         // (a) The knot's own triangulated point.
         if (geometry && point[k]) {
-          const Eigen::Vector2d q = rig_->cameras[RigIndex(c)].ProjectWorld(*point[k]);
+          const Eigen::Vector2d q = projected[c][k];
           if (!inside(q) || repeat(c, k, q)) continue;
           // The brush a little wider than the tolerance: the detector's seeds are 1.5 px apart.
           const FindNodeResult r =

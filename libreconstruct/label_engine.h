@@ -126,7 +126,9 @@ class LabelEngine {
   int RigIndex(int camera) const { return rig_index_[camera]; }
   void Note(int camera, int t, int knot, const std::string& why);
   EngineCounts Commit(const std::string& name, const std::vector<LabelEdit>& edits);
-  void EstimateLinkLength(int t);
+  // The median distance between neighbouring triangulated knots (every view an inlier), unless
+  // the link length is set.
+  void EstimateLinkLength(const std::vector<std::optional<Eigen::Vector3d>>& points);
   // A knot's grid neighbours right, down, left, up; -1 where the net has none.
   std::array<int, 4> SlotKnots(int knot) const;
   std::vector<int> Neighbours(int knot) const;  // those there are, in that order
