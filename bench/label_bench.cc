@@ -206,7 +206,15 @@ int main(int argc, char** argv) {
           if (l.present() && l.state == recon::LabelState::kAccepted) continue;
           ++y.find_node;
           const recon::FindNodeResult r = engine.FindNodeAt(c, t, k, truth_l.px, radius);
-          if (r.status == recon::FindNodeStatus::kFound) continue;
+          // Found and accepted: done. Found but in doubt (its yarns or the other cameras
+          // disagree), or not found: the person clicks the knot.
+          if (r.status == recon::FindNodeStatus::kFound &&
+              store.at(c, t, k).state == recon::LabelState::kAccepted)
+            continue;
+          if (r.status == recon::FindNodeStatus::kFound)  // DEBUG
+            std::fprintf(stderr, "doubt %s t%d k%d branches %d err %.2f: %s\n", cameras[c].c_str(), t, k,
+                         r.knot.branches, (r.knot.px - truth_l.px).norm(),
+                         engine.reasons().count({c, t, k}) ? engine.reasons().at({c, t, k}).c_str() : "");
           ++y.manual;
           recon::Label m;
           m.px = truth_l.px + Eigen::Vector2d(click(rng), click(rng));

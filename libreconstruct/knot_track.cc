@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <map>
+#include <optional>
 
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
@@ -139,6 +142,51 @@ std::vector<TrackedKnot> TrackKnots(const cv::Mat& from, const cv::Mat& to,
         t.why.clear();
         done[i] = progress = true;
       }
+    }
+  }
+  // Every accepted knot moved as its accepted neighbours did (their motions as they were before
+  // this check: a knot that fails it does not take its neighbours with it). A knot's
+  // neighbours make it expect the mean motion of each pair of opposite ones (left and right, up
+  // and down), of each parallelogram with a diagonal one (right + down - down-right; both exact
+  // for a net that moves, turns and stretches evenly) and of its side neighbours together
+  // (where the net only moves). It fails when it is far from all of them: one neighbour off
+  // leaves another expectation right.
+  if (options.max_relative_motion_px > 0.0) {
+    std::vector<bool> accepted(out.size());
+    for (size_t i = 0; i < out.size(); ++i) accepted[i] = out[i].accepted;
+    auto motion = [&](int r, int c) -> std::optional<Eigen::Vector2d> {
+      if (r < 0 || c < 0 || r >= rows || c >= cols) return std::nullopt;
+      const auto it = index.find(r * cols + c);
+      if (it == index.end() || !accepted[it->second]) return std::nullopt;
+      return out[it->second].px - knots[it->second].second;
+    };
+    for (size_t i = 0; i < out.size(); ++i) {
+      if (!accepted[i]) continue;
+      const int k = knots[i].first, r = k / cols, c = k % cols;
+      std::vector<Eigen::Vector2d> expected;
+      for (const auto& [one, other] : {std::pair(motion(r, c - 1), motion(r, c + 1)),
+                                       std::pair(motion(r - 1, c), motion(r + 1, c))})
+        if (one && other) expected.push_back(0.5 * (*one + *other));
+      for (int dr : {-1, 1})
+        for (int dc : {-1, 1}) {
+          const auto up = motion(r + dr, c), side = motion(r, c + dc),
+                     diagonal = motion(r + dr, c + dc);
+          if (up && side && diagonal) expected.push_back(*up + *side - *diagonal);
+        }
+      Eigen::Vector2d sides = Eigen::Vector2d::Zero();
+      int n = 0;
+      for (const auto& m : {motion(r, c - 1), motion(r, c + 1), motion(r - 1, c), motion(r + 1, c)})
+        if (m) sides += *m, ++n;
+      if (n >= 2) expected.push_back(sides / n);
+      if (expected.empty()) continue;
+      const Eigen::Vector2d own = out[i].px - knots[i].second;
+      double off = std::numeric_limits<double>::infinity();
+      for (const auto& e : expected) off = std::min(off, (own - e).norm());
+      if (off <= options.max_relative_motion_px) continue;
+      char why[96];
+      std::snprintf(why, sizeof why, "moved %.1f px otherwise than its accepted neighbours", off);
+      out[i].accepted = false;
+      out[i].why = why;
     }
   }
   // Two knots on one junction: neither is trusted.

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <optional>
 #include <stdexcept>
 
@@ -30,12 +31,25 @@ double Median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// How many of a knot's links have a known direction: towards a known neighbour, or away from
+// the known opposite one.
+int KnownLinks(const NeighbourSlots& slots) {
+  int known = 0;
+  for (int s = 0; s < 4; ++s)
+    known += slots.present[s] &&
+             (slots.px[s] || (slots.present[(s + 2) % 4] && slots.px[(s + 2) % 4]));
+  return known;
+}
+
 // Whether a junction is the knot, judged by its yarns: as many branches as the knot has links,
 // each link's direction (towards its known neighbour, or away from the known opposite one)
 // reached by a branch within `tolerance_deg`, and no branch left over where every link's
 // direction is known. A junction that fails is not this knot, or not only this knot: a yarn
-// passing the corner of the target box makes a junction of yarn and box edges there.
-bool BranchesMatchLinks(const Junction& j, const NeighbourSlots& slots, double tolerance_deg) {
+// passing the corner of the target box makes a junction of yarn and box edges there. With
+// `hidden_yarns` (a person pointed at the knot) fewer branches may be seen: a link's yarn may be
+// hidden, but two branches at least must run along known links, and no branch elsewhere.
+bool BranchesMatchLinks(const Junction& j, const NeighbourSlots& slots, double tolerance_deg,
+                        bool hidden_yarns = false) {
   int degree = 0, known = 0;
   std::vector<double> expected;
   for (int s = 0; s < 4; ++s) {
@@ -52,20 +66,23 @@ bool BranchesMatchLinks(const Junction& j, const NeighbourSlots& slots, double t
     }
     ++known;
   }
-  if (j.branches != degree || known < 2) return false;
+  const bool count_ok = hidden_yarns ? j.branches >= 2 && j.branches <= degree : j.branches == degree;
+  if (!count_ok || known < 2) return false;
   const double tol = tolerance_deg * M_PI / 180.0;
   auto gap = [](double a, double b) { return std::abs(std::remainder(a - b, 2.0 * M_PI)); };
-  for (double e : expected) {
-    double best = M_PI;
-    for (double b : j.branch_angles_rad) best = std::min(best, gap(b, e));
-    if (best > tol) return false;
-  }
+  if (!hidden_yarns)
+    for (double e : expected) {
+      double best = M_PI;
+      for (double b : j.branch_angles_rad) best = std::min(best, gap(b, e));
+      if (best > tol) return false;
+    }
   int unmatched = 0;
   for (double b : j.branch_angles_rad) {
     double best = M_PI;
     for (double e : expected) best = std::min(best, gap(b, e));
     unmatched += best > tol;
   }
+  if (hidden_yarns && j.branches - unmatched < 2) return false;
   return unmatched <= degree - known;
 }
 
@@ -287,10 +304,36 @@ FindNodeResult LabelEngine::FindNodeAt(int camera, int t, int knot, const Eigen:
     return r;
   }
   FindNodeResult r = FindNode(image, centre, radius_px, o_.detector);
-  if (r.status == FindNodeStatus::kFound)
-    Commit("Find Node", {{camera, t, knot, Made(r.knot.px, LabelSource::kFindNode,
-                                                 r.knot.confidence, true)}});
+  if (r.status != FindNodeStatus::kFound) return r;
+  const std::string doubt = FoundNodeDoubt(camera, t, knot, r.knot);
+  Commit("Find Node", {{camera, t, knot, Made(r.knot.px, LabelSource::kFindNode,
+                                              r.knot.confidence, doubt.empty())}});
+  if (!doubt.empty()) Note(camera, t, knot, "Find Node: " + doubt);
   return r;
+}
+
+std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junction& j) const {
+  const LabelSet& set = store_->labels();
+  // Its yarns against its accepted neighbours in this view.
+  const NeighbourSlots slots = Slots(camera, t, knot, {});
+  if (KnownLinks(slots) >= 2 && !BranchesMatchLinks(j, slots, o_.branch_tolerance_deg, true))
+    return "the junction's yarns do not run towards its labeled neighbours";
+  // Its place against the point two or more other cameras agree on.
+  if (!rig_) return "";
+  std::vector<Observation> others;
+  for (int c = 0; c < static_cast<int>(set.cameras.size()); ++c)
+    if (c != camera && Accepted(set.at(c, t, knot))) others.push_back({RigIndex(c), set.at(c, t, knot).px});
+  if (others.size() < 2) return "";
+  TriangulationOptions topt;
+  topt.outlier_threshold_px = o_.epipolar_tolerance_px;
+  const PointEstimate e = TriangulatePoint(*rig_, others, topt);
+  if (!e.valid || !e.outliers.empty()) return "";  // the others do not agree: nothing to go by
+  const Eigen::Vector2d q = rig_->cameras[RigIndex(camera)].ProjectWorld(e.position);
+  const double off = (q - j.px).norm();
+  if (!q.allFinite() || off <= o_.projection_tolerance_px) return "";
+  char why[112];
+  std::snprintf(why, sizeof why, "%.1f px from where the other cameras' labels put the knot", off);
+  return why;
 }
 
 void LabelEngine::EstimateLinkLength(const std::vector<std::optional<Eigen::Vector3d>>& p) {

@@ -67,7 +67,7 @@ struct LabelEngineOptions {
   // Epipolar consistency: a view whose reprojection residual exceeds this is an outlier (px).
   double epipolar_tolerance_px = 2.0;
   // Fill Grid: a junction this close to a knot's projected point is that knot (px).
-  double projection_tolerance_px = 2.5;
+  double projection_tolerance_px = 1.5;
   // ... and no other knot's label or projection may be within this (px).
   double exclusion_px = 6.0;
   // Fill Grid: a junction is the knot only when its yarns leave towards the knot's neighbours
@@ -114,7 +114,13 @@ class LabelEngine {
   // The net's colouring as the cameras see it; CrossCheck then ends with CheckColours.
   void SetCodebook(KnotCodebook codebook, IdentityCheckOptions options = {});
   // The person's brush: Find Node in (camera, t) at `centre`; a knot found is labeled `knot`,
-  // accepted (the person chose the knot). Returns the result.
+  // accepted unless it contradicts what is known of that knot (then kept for review with the
+  // reason): its yarns must run towards its accepted neighbours in that view, as in Fill Grid
+  // but some may be hidden (two at least seen), when two or more links' directions are known;
+  // and it must lie within
+  // projection_tolerance_px of where two or more other cameras' accepted labels of the knot,
+  // consistent among themselves, put it (as Fill Grid's own projection). Returns the
+  // detector's result.
   FindNodeResult FindNodeAt(int camera, int t, int knot, const Eigen::Vector2d& centre,
                             double radius_px);
 
@@ -132,6 +138,8 @@ class LabelEngine {
   // A knot's grid neighbours right, down, left, up; -1 where the net has none.
   std::array<int, 4> SlotKnots(int knot) const;
   std::vector<int> Neighbours(int knot) const;  // those there are, in that order
+  // Why a junction Find Node found for `knot` in (camera, t) is doubtful; empty when it is not.
+  std::string FoundNodeDoubt(int camera, int t, int knot, const Junction& j) const;
   // The image positions of a knot's neighbours in (camera, t), right, down, left, up: accepted
   // labels, else the projections of their triangulated points.
   NeighbourSlots Slots(

@@ -238,6 +238,64 @@ TEST(LabelEngine, TracksAndCrossChecksASequence) {
   }
 }
 
+// The person's brush near knot 12 in camera a, whose neighbours there and whose views in b and
+// c are labeled: Find Node labels it, accepted, as one undoable step.
+TEST(LabelEngine, FindNodeLabelsTheKnotUnderTheBrush) {
+  const Shot shot = Render(1);
+  LabelSet labels = Empty(shot);
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < kKnots; ++k) labels.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
+  labels.at(0, 0, 12) = Label{};
+  LabelStore store(std::move(labels));
+  LabelEngine engine(&store, &shot.rig, Images(shot));
+  const FindNodeResult r =
+      engine.FindNodeAt(0, 0, 12, shot.Truth(0, 0, 12) + Eigen::Vector2d(2.0, -1.5), 6.0);
+  ASSERT_EQ(r.status, FindNodeStatus::kFound) << r.why;
+  const Label& l = store.at(0, 0, 12);
+  EXPECT_EQ(l.state, LabelState::kAccepted) << engine.reasons().at({0, 0, 12});
+  EXPECT_EQ(l.source, LabelSource::kFindNode);
+  EXPECT_LT((l.px - shot.Truth(0, 0, 12)).norm(), 0.3);
+  EXPECT_EQ(store.UndoName(), "Find Node");
+  store.Undo();
+  EXPECT_FALSE(store.at(0, 0, 12).present());
+}
+
+// The brush on knot 13 while the person means knot 12: Find Node finds a knot, but not one whose
+// yarns leave towards knot 12's labeled neighbours (camera a alone: nothing else to go by), nor
+// where cameras b and c put knot 12 (camera a without neighbours labeled). Labeled, kept for
+// review with the reason, never accepted.
+TEST(LabelEngine, FindNodeOnAnotherKnotIsKeptForReview) {
+  const Shot shot = Render(1);
+  const Eigen::Vector2d brush = shot.Truth(0, 0, 13) + Eigen::Vector2d(1.0, 1.0);
+  {
+    LabelSet labels = Empty(shot);
+    for (int k = 0; k < kKnots; ++k)
+      if (k != 12) labels.at(0, 0, k) = Accepted(shot.Truth(0, 0, k));
+    LabelStore store(std::move(labels));
+    LabelEngine engine(&store, &shot.rig, Images(shot));
+    ASSERT_EQ(engine.FindNodeAt(0, 0, 12, brush, 6.0).status, FindNodeStatus::kFound);
+    EXPECT_EQ(store.at(0, 0, 12).state, LabelState::kNeedsReview);
+    ASSERT_TRUE(engine.reasons().count({0, 0, 12}));
+    EXPECT_NE(engine.reasons().at({0, 0, 12}).find("yarns"), std::string::npos)
+        << engine.reasons().at({0, 0, 12});
+  }
+  LabelSet labels = Empty(shot);
+  for (int c = 1; c < 3; ++c)
+    for (int k = 0; k < kKnots; ++k) labels.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
+  LabelStore store(std::move(labels));
+  LabelEngine engine(&store, &shot.rig, Images(shot));
+  ASSERT_EQ(engine.FindNodeAt(0, 0, 12, brush, 6.0).status, FindNodeStatus::kFound);
+  EXPECT_EQ(store.at(0, 0, 12).state, LabelState::kNeedsReview);
+  ASSERT_TRUE(engine.reasons().count({0, 0, 12}));
+  EXPECT_NE(engine.reasons().at({0, 0, 12}).find("other cameras"), std::string::npos)
+      << engine.reasons().at({0, 0, 12});
+  // The right knot there is accepted: the other cameras agree with it.
+  ASSERT_EQ(engine.FindNodeAt(0, 0, 12, shot.Truth(0, 0, 12), 6.0).status,
+            FindNodeStatus::kFound);
+  EXPECT_EQ(store.at(0, 0, 12).state, LabelState::kAccepted);
+  EXPECT_FALSE(engine.reasons().count({0, 0, 12}));
+}
+
 TEST(LabelEngine, RejectsARigWithoutTheCameras) {
   const Shot shot = Render(1);
   LabelSet labels = Empty(shot);

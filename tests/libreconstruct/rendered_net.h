@@ -49,6 +49,7 @@ struct RenderNetOptions {
   std::vector<std::pair<int, int>> missing;  // links (knot a, knot b) left out of the picture
   Eigen::Vector3d offset = Eigen::Vector3d::Zero();  // moves the net (a later frame), m
   double spin_deg = 0.0;                             // turns it about the optical axis
+  std::vector<std::pair<int, Eigen::Vector3d>> moved;  // single knots moved besides, m
   double distance_m = 1.5;      // camera to net centre: 1.5 m, yarns ~2 px; 3 m, ~1 px
   std::vector<Colour> dyes = SixDyes();  // cycled over the links
   std::vector<std::pair<int, int>> dim;  // links (knot a, knot b) dyed dim_factor as bright
@@ -81,6 +82,7 @@ inline NetImage RenderNet(const RenderNetOptions& o) {
       net.knots.push_back(o.offset +
                           Eigen::AngleAxisd(o.spin_deg * M_PI / 180, Eigen::Vector3d::UnitX()) *
                               (turn * Eigen::Vector3d(0.0, (c - 1.5) * kMesh, (r - 1.5) * kMesh)));
+  for (const auto& [k, by] : o.moved) net.knots[k] += by;
   Scene scene;
   int n = 0;
   auto link = [&](int a, int b) {
