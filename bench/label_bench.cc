@@ -177,6 +177,8 @@ int main(int argc, char** argv) {
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> click(-0.5, 0.5);
     double engine_s = 0.0, user_s = 0.0;
+    // Find Node results kept for review, by the check that doubted them: (count, > 1 px off).
+    std::map<std::string, std::pair<int, int>> doubts;
     for (int t = 0; t < n_t; ++t) {
       auto t0 = Clock::now();
       if (t == 0) {
@@ -211,10 +213,15 @@ int main(int argc, char** argv) {
           if (r.status == recon::FindNodeStatus::kFound &&
               store.at(c, t, k).state == recon::LabelState::kAccepted)
             continue;
-          if (r.status == recon::FindNodeStatus::kFound)  // DEBUG
-            std::fprintf(stderr, "doubt %s t%d k%d branches %d err %.2f: %s\n", cameras[c].c_str(), t, k,
-                         r.knot.branches, (r.knot.px - truth_l.px).norm(),
-                         engine.reasons().count({c, t, k}) ? engine.reasons().at({c, t, k}).c_str() : "");
+          if (r.status == recon::FindNodeStatus::kFound) {
+            const auto why = engine.reasons().find({c, t, k});
+            const std::string reason = why == engine.reasons().end() ? "" : why->second;
+            const bool off = (r.knot.px - truth_l.px).norm() > 1.0;
+            auto& [count, count_off] = doubts[reason.find("cameras") != std::string::npos
+                                                  ? "the other cameras"
+                                                  : "its yarns"];
+            ++count, count_off += off;
+          }
           ++y.manual;
           recon::Label m;
           m.px = truth_l.px + Eigen::Vector2d(click(rng), click(rng));
@@ -290,6 +297,9 @@ int main(int argc, char** argv) {
                 "script's Find Node calls %.1f s; link length %.4f m\n",
                 engine_s, read_s, engine_s > 0 ? all.knot_frames / engine_s : 0.0, user_s,
                 engine.link_length_m());
+    for (const auto& [check, n] : doubts)
+      std::printf("Find Node kept for review by %s: %d (%d of them > 1 px off)\n", check.c_str(),
+                  n.first, n.second);
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_label: %s\n", e.what());
