@@ -13,8 +13,9 @@
 // neighbours did (within max_relative_motion_px of one of the motions they make it expect: the
 // mean of two opposite neighbours', a parallelogram's with a diagonal one, the mean of all its
 // side neighbours'): between frames a net moves, turns and stretches nearly evenly over a mesh,
-// and a junction that did not is something beside the knot (a yarn's end at the knot ball). No knot whose result lies within the snap
-// radius of another's is accepted. A knot not accepted needs review, with the reason, at the best position there is.
+// and a junction that did not is something beside the knot (a yarn's end at the knot ball). No
+// knot whose result lies within the snap radius of another's is accepted. A knot not accepted
+// needs review, with the reason, at the best position there is.
 
 #include <string>
 #include <utility>

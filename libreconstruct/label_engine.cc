@@ -66,7 +66,8 @@ bool BranchesMatchLinks(const Junction& j, const NeighbourSlots& slots, double t
     }
     ++known;
   }
-  const bool count_ok = hidden_yarns ? j.branches >= 2 && j.branches <= degree : j.branches == degree;
+  const bool count_ok =
+      hidden_yarns ? j.branches >= 2 && j.branches <= degree : j.branches == degree;
   if (!count_ok || known < 2) return false;
   const double tol = tolerance_deg * M_PI / 180.0;
   auto gap = [](double a, double b) { return std::abs(std::remainder(a - b, 2.0 * M_PI)); };
@@ -322,7 +323,8 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
   if (!rig_) return "";
   std::vector<Observation> others;
   for (int c = 0; c < static_cast<int>(set.cameras.size()); ++c)
-    if (c != camera && Accepted(set.at(c, t, knot))) others.push_back({RigIndex(c), set.at(c, t, knot).px});
+    if (c != camera && Accepted(set.at(c, t, knot)))
+      others.push_back({RigIndex(c), set.at(c, t, knot).px});
   if (others.size() < 2) return "";
   TriangulationOptions topt;
   topt.outlier_threshold_px = o_.epipolar_tolerance_px;

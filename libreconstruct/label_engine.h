@@ -117,10 +117,9 @@ class LabelEngine {
   // accepted unless it contradicts what is known of that knot (then kept for review with the
   // reason): its yarns must run towards its accepted neighbours in that view, as in Fill Grid
   // but some may be hidden (two at least seen), when two or more links' directions are known;
-  // and it must lie within
-  // projection_tolerance_px of where two or more other cameras' accepted labels of the knot,
-  // consistent among themselves, put it (as Fill Grid's own projection). Returns the
-  // detector's result.
+  // and it must lie within projection_tolerance_px of where two or more other cameras' accepted
+  // labels of the knot, consistent among themselves, put it (as Fill Grid's own projection).
+  // Returns the detector's result.
   FindNodeResult FindNodeAt(int camera, int t, int knot, const Eigen::Vector2d& centre,
                             double radius_px);
 
