@@ -31,41 +31,37 @@ double Median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-// How many of a knot's links have a known direction: towards a known neighbour, or away from
-// the known opposite one.
-int KnownLinks(const NeighbourSlots& slots) {
-  int known = 0;
-  for (int s = 0; s < 4; ++s)
-    known += slots.present[s] &&
-             (slots.px[s] || (slots.present[(s + 2) % 4] && slots.px[(s + 2) % 4]));
-  return known;
+// The image directions of a knot's links whose direction is known, seen from `at`: towards a
+// known neighbour, or away from the known opposite one.
+std::vector<double> KnownLinkAngles(const Eigen::Vector2d& at, const NeighbourSlots& slots) {
+  std::vector<double> angles;
+  for (int s = 0; s < 4; ++s) {
+    if (!slots.present[s]) continue;
+    const int o = (s + 2) % 4;
+    Eigen::Vector2d d;
+    if (slots.px[s])
+      d = *slots.px[s] - at;
+    else if (slots.present[o] && slots.px[o])
+      d = at - *slots.px[o];
+    else
+      continue;
+    angles.push_back(std::atan2(d.y(), d.x()));
+  }
+  return angles;
 }
 
 // Whether a junction is the knot, judged by its yarns: as many branches as the knot has links,
-// each link's direction (towards its known neighbour, or away from the known opposite one)
-// reached by a branch within `tolerance_deg`, and no branch left over where every link's
-// direction is known. A junction that fails is not this knot, or not only this knot: a yarn
-// passing the corner of the target box makes a junction of yarn and box edges there. With
-// `hidden_yarns` (a person pointed at the knot) fewer branches may be seen: a link's yarn may be
-// hidden, but two branches at least must run along known links, and no branch elsewhere.
+// each link's direction (KnownLinkAngles) reached by a branch within `tolerance_deg`, and no
+// branch left over where every link's direction is known. A junction that fails is not this
+// knot, or not only this knot: a yarn passing the corner of the target box makes a junction of
+// yarn and box edges there. With `hidden_yarns` (a person pointed at the knot) fewer branches
+// may be seen: a link's yarn may be hidden, but two branches at least must run along known
+// links, and no branch elsewhere.
 bool BranchesMatchLinks(const Junction& j, const NeighbourSlots& slots, double tolerance_deg,
                         bool hidden_yarns = false) {
-  int degree = 0, known = 0;
-  std::vector<double> expected;
-  for (int s = 0; s < 4; ++s) {
-    if (!slots.present[s]) continue;
-    ++degree;
-    if (slots.px[s]) {
-      const Eigen::Vector2d d = *slots.px[s] - j.px;
-      expected.push_back(std::atan2(d.y(), d.x()));
-    } else if (slots.present[(s + 2) % 4] && slots.px[(s + 2) % 4]) {
-      const Eigen::Vector2d d = j.px - *slots.px[(s + 2) % 4];
-      expected.push_back(std::atan2(d.y(), d.x()));
-    } else {
-      continue;
-    }
-    ++known;
-  }
+  const int degree = static_cast<int>(std::count(slots.present.begin(), slots.present.end(), true));
+  const std::vector<double> expected = KnownLinkAngles(j.px, slots);
+  const int known = static_cast<int>(expected.size());
   const bool count_ok =
       hidden_yarns ? j.branches >= 2 && j.branches <= degree : j.branches == degree;
   if (!count_ok || known < 2) return false;
@@ -317,7 +313,8 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
   const LabelSet& set = store_->labels();
   // Its yarns against its accepted neighbours in this view.
   const NeighbourSlots slots = Slots(camera, t, knot, {});
-  if (KnownLinks(slots) >= 2 && !BranchesMatchLinks(j, slots, o_.branch_tolerance_deg, true))
+  if (KnownLinkAngles(j.px, slots).size() >= 2 &&
+      !BranchesMatchLinks(j, slots, o_.branch_tolerance_deg, true))
     return "the junction's yarns do not run towards its labeled neighbours";
   // Its place against the point two or more other cameras agree on.
   if (!rig_) return "";
