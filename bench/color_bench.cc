@@ -12,7 +12,7 @@
 #include <cstring>
 #include <string>
 
-#include "libreconstruct/net_coloring.h"
+#include "libreconstruct/coloring/net_coloring.h"
 
 int main(int argc, char** argv) {
   using namespace netlab::recon;

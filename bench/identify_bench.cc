@@ -22,9 +22,9 @@
 #include <vector>
 
 #include "calibration/rig.h"
-#include "libreconstruct/bayer.h"
-#include "libreconstruct/color_identify.h"
-#include "libreconstruct/render.h"
+#include "libreconstruct/recording/bayer.h"
+#include "libreconstruct/twin/coloured_net.h"
+#include "libreconstruct/twin/render.h"
 
 namespace netlab::recon {
 namespace {

@@ -28,9 +28,9 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "libreconstruct/frame_cache.h"
-#include "libreconstruct/frame_store.h"
-#include "libreconstruct/sequence.h"
+#include "libreconstruct/recording/frame_cache.h"
+#include "libreconstruct/recording/frame_store.h"
+#include "libreconstruct/recording/sequence.h"
 
 namespace netlab::recon {
 namespace {

@@ -32,11 +32,11 @@
 #include <vector>
 
 #include "calibration/rig.h"
-#include "libreconstruct/experiment.h"
-#include "libreconstruct/label_engine.h"
-#include "libreconstruct/labels.h"
-#include "libreconstruct/net_coloring.h"
-#include "libreconstruct/sequence.h"
+#include "libreconstruct/coloring/net_coloring.h"
+#include "libreconstruct/labeling/label_engine.h"
+#include "libreconstruct/labels/label_set.h"
+#include "libreconstruct/recording/experiment.h"
+#include "libreconstruct/recording/sequence.h"
 
 namespace {
 

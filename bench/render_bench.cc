@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "calibration/rig.h"
-#include "libreconstruct/render.h"
+#include "libreconstruct/twin/render.h"
 
 namespace netlab::recon {
 namespace {

@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "libnetsim/scenario.h"
+#include "libnetsim/scenario/scenario.h"
 
 namespace netlab::netsim {
 namespace {

@@ -19,8 +19,8 @@
 #include <string>
 
 #include "calibration/rig.h"
-#include "libreconstruct/bundle_adjust.h"
-#include "libreconstruct/triangulation.h"
+#include "libreconstruct/geometry/bundle_adjust.h"
+#include "libreconstruct/geometry/triangulation.h"
 
 namespace {
 

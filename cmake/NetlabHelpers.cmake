@@ -21,6 +21,8 @@ function(netlab_add_library name)
   add_library(${name} STATIC ${ARG_SOURCES})
   target_include_directories(${name} PUBLIC ${PROJECT_SOURCE_DIR})
   target_link_libraries(${name} PUBLIC ${ARG_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
+  # sqrt without the errno branch (netlab never reads errno): fewer instructions in hot loops.
+  target_compile_options(${name} PRIVATE -fno-math-errno)
   netlab_target_defaults(${name})
 endfunction()
 

@@ -1,4 +1,4 @@
-#include "libnetsim/hdf5_util.h"
+#include "common/hdf5_util.h"
 
 #include <mutex>
 #include <numeric>

@@ -11,9 +11,9 @@
 #include <iostream>
 #include <optional>
 
-#include "app/command_line.h"
-#include "app/commands.h"
-#include "app/json_writer.h"
+#include "app/cli/command_line.h"
+#include "app/cli/commands.h"
+#include "app/cli/json_writer.h"
 #include "calibration/calibrate.h"
 #include "calibration/rig_compare.h"
 

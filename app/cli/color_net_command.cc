@@ -7,11 +7,11 @@
 #include <exception>
 #include <iostream>
 
-#include "app/command_line.h"
-#include "app/commands.h"
-#include "app/json_writer.h"
-#include "libreconstruct/color_identify.h"
-#include "libreconstruct/net_coloring.h"
+#include "app/cli/command_line.h"
+#include "app/cli/commands.h"
+#include "app/cli/json_writer.h"
+#include "libreconstruct/coloring/color_identify.h"
+#include "libreconstruct/coloring/net_coloring.h"
 
 namespace netlab::app {
 namespace {

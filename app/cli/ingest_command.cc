@@ -12,13 +12,13 @@
 #include <iostream>
 #include <thread>
 
-#include "app/command_line.h"
-#include "app/commands.h"
-#include "app/json_writer.h"
-#include "app/progress_bar.h"
+#include "app/cli/command_line.h"
+#include "app/cli/commands.h"
+#include "app/cli/json_writer.h"
+#include "app/cli/progress_bar.h"
 #include "common/yaml_util.h"
-#include "libreconstruct/frame_store.h"
-#include "libreconstruct/sequence.h"
+#include "libreconstruct/recording/frame_store.h"
+#include "libreconstruct/recording/sequence.h"
 
 namespace netlab::app {
 namespace {

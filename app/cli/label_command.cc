@@ -10,16 +10,16 @@
 #include <map>
 #include <optional>
 
-#include "app/command_line.h"
-#include "app/commands.h"
-#include "app/json_writer.h"
+#include "app/cli/command_line.h"
+#include "app/cli/commands.h"
+#include "app/cli/json_writer.h"
 #include "calibration/rig.h"
-#include "libreconstruct/experiment.h"
-#include "libreconstruct/label_engine.h"
-#include "libreconstruct/label_store.h"
-#include "libreconstruct/labels.h"
-#include "libreconstruct/net_coloring.h"
-#include "libreconstruct/sequence.h"
+#include "libreconstruct/coloring/net_coloring.h"
+#include "libreconstruct/labeling/label_engine.h"
+#include "libreconstruct/labeling/label_store.h"
+#include "libreconstruct/labels/label_set.h"
+#include "libreconstruct/recording/experiment.h"
+#include "libreconstruct/recording/sequence.h"
 
 namespace netlab::app {
 namespace {

@@ -5,12 +5,12 @@
 #include <exception>
 #include <iostream>
 
-#include "app/command_line.h"
-#include "app/commands.h"
-#include "app/json_writer.h"
-#include "app/progress_bar.h"
+#include "app/cli/command_line.h"
+#include "app/cli/commands.h"
+#include "app/cli/json_writer.h"
+#include "app/cli/progress_bar.h"
 #include "common/yaml_util.h"
-#include "libreconstruct/synthetic_experiment.h"
+#include "libreconstruct/twin/synthetic_experiment.h"
 
 namespace netlab::app {
 namespace {

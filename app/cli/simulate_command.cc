@@ -6,11 +6,11 @@
 #include <exception>
 #include <iostream>
 
-#include "app/command_line.h"
-#include "app/commands.h"
-#include "app/json_writer.h"
+#include "app/cli/command_line.h"
+#include "app/cli/commands.h"
+#include "app/cli/json_writer.h"
 #include "common/log.h"
-#include "libnetsim/run_scenario.h"
+#include "libnetsim/scenario/run_scenario.h"
 
 namespace netlab::app {
 namespace {

@@ -11,14 +11,14 @@
 
 #include <Eigen/Geometry>
 
-#include "app/command_line.h"
-#include "app/commands.h"
-#include "app/json_writer.h"
+#include "app/cli/command_line.h"
+#include "app/cli/commands.h"
+#include "app/cli/json_writer.h"
 #include "calibration/rig.h"
-#include "libnetsim/track_file.h"
-#include "libreconstruct/bundle_adjust.h"
-#include "libreconstruct/labels.h"
-#include "libreconstruct/track_export.h"
+#include "libnetsim/tracks/track_file.h"
+#include "libreconstruct/geometry/bundle_adjust.h"
+#include "libreconstruct/geometry/track_export.h"
+#include "libreconstruct/labels/label_set.h"
 
 namespace netlab::app {
 namespace {

@@ -1,6 +1,6 @@
 #include "libnetsim/forces/bend_twist_force.h"
 
-#include "libnetsim/rotation.h"
+#include "libnetsim/model/rotation.h"
 
 namespace netlab::netsim {
 

@@ -13,7 +13,7 @@
 
 #include <Eigen/Core>
 
-#include "libnetsim/model.h"
+#include "libnetsim/model/model.h"
 
 namespace netlab::netsim {
 

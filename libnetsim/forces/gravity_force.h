@@ -7,7 +7,7 @@
 #include <optional>
 
 #include "libnetsim/forces/force.h"
-#include "libnetsim/time_series.h"
+#include "libnetsim/model/time_series.h"
 
 namespace netlab::netsim {
 

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "libnetsim/rotation.h"
+#include "libnetsim/model/rotation.h"
 
 namespace netlab::netsim {
 

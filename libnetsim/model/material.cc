@@ -1,4 +1,4 @@
-#include "libnetsim/material.h"
+#include "libnetsim/model/material.h"
 
 #include <cmath>
 #include <sstream>

@@ -1,4 +1,4 @@
-#include "libnetsim/model.h"
+#include "libnetsim/model/model.h"
 
 #include <sstream>
 

@@ -17,7 +17,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "libnetsim/material.h"
+#include "libnetsim/model/material.h"
 
 namespace netlab::netsim {
 

@@ -1,11 +1,11 @@
-#include "libnetsim/model_builder.h"
+#include "libnetsim/model/model_builder.h"
 
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
 
-#include "libnetsim/rotation.h"
+#include "libnetsim/model/rotation.h"
 
 namespace netlab::netsim {
 namespace {

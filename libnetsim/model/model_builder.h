@@ -16,7 +16,7 @@
 #include <utility>
 #include <vector>
 
-#include "libnetsim/model.h"
+#include "libnetsim/model/model.h"
 
 namespace netlab::netsim {
 

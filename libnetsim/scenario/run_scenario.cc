@@ -1,4 +1,4 @@
-#include "libnetsim/run_scenario.h"
+#include "libnetsim/scenario/run_scenario.h"
 
 #include <chrono>
 #include <cmath>
@@ -6,7 +6,7 @@
 #include <memory>
 #include <sstream>
 
-#include "libnetsim/track_file.h"
+#include "libnetsim/tracks/track_file.h"
 
 namespace netlab::netsim {
 

@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "libnetsim/scenario.h"
+#include "libnetsim/scenario/scenario.h"
 
 namespace netlab::netsim {
 

@@ -1,4 +1,4 @@
-#include "libnetsim/scenario.h"
+#include "libnetsim/scenario/scenario.h"
 
 #include <filesystem>
 #include <fstream>

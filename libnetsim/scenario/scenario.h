@@ -15,9 +15,9 @@
 #include "libnetsim/forces/contact_force.h"
 #include "libnetsim/forces/drag_force.h"
 #include "libnetsim/forces/point_load_force.h"
-#include "libnetsim/model_builder.h"
-#include "libnetsim/simulation.h"
-#include "libnetsim/time_series.h"
+#include "libnetsim/model/model_builder.h"
+#include "libnetsim/model/time_series.h"
+#include "libnetsim/simulation/simulation.h"
 
 namespace netlab::netsim {
 

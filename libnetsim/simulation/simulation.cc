@@ -1,12 +1,12 @@
 
-#include "libnetsim/simulation.h"
+#include "libnetsim/simulation/simulation.h"
 
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
 
 #include "libnetsim/forces/contact_force.h"
-#include "libnetsim/rotation.h"
+#include "libnetsim/model/rotation.h"
 
 namespace netlab::netsim {
 

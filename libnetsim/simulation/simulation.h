@@ -23,8 +23,8 @@
 #include <vector>
 
 #include "libnetsim/forces/force.h"
-#include "libnetsim/model.h"
-#include "libnetsim/stability.h"
+#include "libnetsim/model/model.h"
+#include "libnetsim/simulation/stability.h"
 
 namespace netlab::netsim {
 

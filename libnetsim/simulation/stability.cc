@@ -1,4 +1,4 @@
-#include "libnetsim/stability.h"
+#include "libnetsim/simulation/stability.h"
 
 #include <cmath>
 #include <limits>

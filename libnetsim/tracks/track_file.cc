@@ -1,11 +1,11 @@
-#include "libnetsim/track_file.h"
+#include "libnetsim/tracks/track_file.h"
 
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
 
-#include "libnetsim/hdf5_util.h"
+#include "common/hdf5_util.h"
 
 namespace netlab::netsim {
 namespace {

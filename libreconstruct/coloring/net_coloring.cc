@@ -1,4 +1,4 @@
-#include "libreconstruct/net_coloring.h"
+#include "libreconstruct/coloring/net_coloring.h"
 
 #include <algorithm>
 #include <chrono>

@@ -1,4 +1,4 @@
-#include "libreconstruct/bundle_adjust.h"
+#include "libreconstruct/geometry/bundle_adjust.h"
 
 #include <algorithm>
 #include <atomic>

@@ -37,8 +37,8 @@
 #include <Eigen/Core>
 
 #include "calibration/rig.h"
-#include "libreconstruct/labels.h"
-#include "libreconstruct/triangulation.h"
+#include "libreconstruct/geometry/triangulation.h"
+#include "libreconstruct/labels/label_set.h"
 
 namespace netlab::recon {
 

@@ -1,4 +1,4 @@
-#include "libreconstruct/track_export.h"
+#include "libreconstruct/geometry/track_export.h"
 
 #include <array>
 #include <charconv>
@@ -13,7 +13,7 @@
 #include <stdexcept>
 
 #include "common/yaml_util.h"
-#include "libreconstruct/csv_table.h"
+#include "libreconstruct/labels/csv_table.h"
 
 namespace netlab::recon {
 namespace {

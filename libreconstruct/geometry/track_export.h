@@ -1,5 +1,5 @@
 #pragma once
-// DLTdv8-style CSV export of knot tracks (the knot-track file, libnetsim/track_file.h):
+// DLTdv8-style CSV export of knot tracks (the knot-track file, libnetsim/tracks/track_file.h):
 //
 //   xyzpts.csv  a header row, then one row per frame of the tracks: columns pt{P}_X, pt{P}_Y,
 //               pt{P}_Z for P = 1..K (knot (row, col) of a rows x cols net is P = row*cols+col+1;
@@ -16,7 +16,7 @@
 
 #include <Eigen/Core>
 
-#include "libnetsim/track_file.h"
+#include "libnetsim/tracks/track_file.h"
 
 namespace netlab::recon {
 

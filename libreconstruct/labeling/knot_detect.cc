@@ -1,4 +1,4 @@
-#include "libreconstruct/knot_detect.h"
+#include "libreconstruct/labeling/knot_detect.h"
 
 #include <algorithm>
 #include <array>
@@ -10,7 +10,7 @@
 #include <Eigen/Eigenvalues>
 #include <opencv2/imgproc.hpp>
 
-#include "libreconstruct/bayer.h"
+#include "libreconstruct/recording/bayer.h"
 
 namespace netlab::recon {
 namespace {

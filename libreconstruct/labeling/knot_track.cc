@@ -1,4 +1,4 @@
-#include "libreconstruct/knot_track.h"
+#include "libreconstruct/labeling/knot_track.h"
 
 #include <algorithm>
 #include <cmath>

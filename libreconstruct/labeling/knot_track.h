@@ -24,7 +24,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
-#include "libreconstruct/knot_detect.h"
+#include "libreconstruct/labeling/knot_detect.h"
 
 namespace netlab::recon {
 

@@ -1,4 +1,4 @@
-#include "libreconstruct/label_engine.h"
+#include "libreconstruct/labeling/label_engine.h"
 
 #include <algorithm>
 #include <array>
@@ -9,7 +9,7 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "libreconstruct/triangulation.h"
+#include "libreconstruct/geometry/triangulation.h"
 
 namespace netlab::recon {
 namespace {

@@ -45,10 +45,10 @@
 #include <opencv2/core.hpp>
 
 #include "calibration/rig.h"
-#include "libreconstruct/knot_detect.h"
-#include "libreconstruct/knot_track.h"
-#include "libreconstruct/label_identity.h"
-#include "libreconstruct/label_store.h"
+#include "libreconstruct/labeling/knot_detect.h"
+#include "libreconstruct/labeling/knot_track.h"
+#include "libreconstruct/labeling/label_identity.h"
+#include "libreconstruct/labeling/label_store.h"
 
 namespace netlab::recon {
 

@@ -1,4 +1,4 @@
-#include "libreconstruct/label_identity.h"
+#include "libreconstruct/labeling/label_identity.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "libreconstruct/synthetic_experiment.h"
+#include "libreconstruct/coloring/yarn_coloring.h"
 
 namespace netlab::recon {
 namespace {

@@ -30,8 +30,8 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 
-#include "libreconstruct/color_identify.h"
-#include "libreconstruct/net_coloring.h"
+#include "libreconstruct/coloring/color_identify.h"
+#include "libreconstruct/coloring/net_coloring.h"
 
 namespace netlab::recon {
 

@@ -1,4 +1,4 @@
-#include "libreconstruct/label_store.h"
+#include "libreconstruct/labeling/label_store.h"
 
 #include <cmath>
 #include <stdexcept>

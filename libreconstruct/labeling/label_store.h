@@ -1,6 +1,6 @@
 #pragma once
 // The label store behind the labeling tools and the GUI: every knot's 2D label per camera and
-// frame (libreconstruct/labels.h: position, source, confidence, state), changed only through
+// frame (libreconstruct/labels/label_set.h: position, source, confidence, state), changed only through
 // operations that undo and redo as one step each, saved without loss.
 //
 //   LabelStore store(LabelSet::Empty(11, 11, cameras, frames));
@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "libreconstruct/labels.h"
+#include "libreconstruct/labels/label_set.h"
 
 namespace netlab::recon {
 

@@ -1,4 +1,4 @@
-#include "libreconstruct/csv_table.h"
+#include "libreconstruct/labels/csv_table.h"
 
 #include <charconv>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "libreconstruct/labels.h"
+#include "libreconstruct/labels/label_set.h"
 
 #include <algorithm>
 #include <array>
@@ -16,9 +16,9 @@
 #include <utility>
 
 #include "common/files.h"
+#include "common/hdf5_util.h"
 #include "common/yaml_util.h"
-#include "libnetsim/hdf5_util.h"
-#include "libreconstruct/csv_table.h"
+#include "libreconstruct/labels/csv_table.h"
 
 namespace netlab::recon {
 namespace {

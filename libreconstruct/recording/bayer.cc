@@ -1,4 +1,4 @@
-#include "libreconstruct/bayer.h"
+#include "libreconstruct/recording/bayer.h"
 
 #include <algorithm>
 #include <cmath>

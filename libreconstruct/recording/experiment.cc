@@ -1,4 +1,4 @@
-#include "libreconstruct/experiment.h"
+#include "libreconstruct/recording/experiment.h"
 
 #include <algorithm>
 #include <cmath>

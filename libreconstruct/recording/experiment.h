@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "libreconstruct/bayer.h"
+#include "libreconstruct/recording/bayer.h"
 
 namespace netlab::recon {
 

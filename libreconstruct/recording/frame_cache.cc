@@ -1,4 +1,4 @@
-#include "libreconstruct/frame_cache.h"
+#include "libreconstruct/recording/frame_cache.h"
 
 #include <algorithm>
 

@@ -22,7 +22,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "libreconstruct/sequence.h"
+#include "libreconstruct/recording/sequence.h"
 
 namespace netlab::recon {
 

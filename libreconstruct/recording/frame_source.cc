@@ -1,4 +1,4 @@
-#include "libreconstruct/frame_source.h"
+#include "libreconstruct/recording/frame_source.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,8 +10,8 @@
 #include <opencv2/videoio.hpp>
 #include <regex>
 
+#include "common/hdf5_util.h"
 #include "common/yaml_util.h"
-#include "libnetsim/hdf5_util.h"
 
 namespace netlab::recon {
 namespace {

@@ -1,4 +1,4 @@
-#include "libreconstruct/frame_store.h"
+#include "libreconstruct/recording/frame_store.h"
 
 #include <cmath>
 #include <filesystem>
@@ -6,7 +6,7 @@
 #include <mutex>
 #include <stdexcept>
 
-#include "libnetsim/hdf5_util.h"
+#include "common/hdf5_util.h"
 
 namespace netlab::recon {
 

@@ -13,7 +13,7 @@
 #include <functional>
 #include <string>
 
-#include "libreconstruct/sequence.h"
+#include "libreconstruct/recording/sequence.h"
 
 namespace netlab::recon {
 

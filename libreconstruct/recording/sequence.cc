@@ -1,4 +1,4 @@
-#include "libreconstruct/sequence.h"
+#include "libreconstruct/recording/sequence.h"
 
 #include <algorithm>
 #include <atomic>

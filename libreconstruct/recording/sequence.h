@@ -12,8 +12,8 @@
 
 #include <opencv2/core.hpp>
 
-#include "libreconstruct/experiment.h"
-#include "libreconstruct/frame_source.h"
+#include "libreconstruct/recording/experiment.h"
+#include "libreconstruct/recording/frame_source.h"
 
 namespace netlab::recon {
 

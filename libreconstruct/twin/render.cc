@@ -1,6 +1,6 @@
 // The renderer of a simulated net through a camera (see render.h).
 
-#include "libreconstruct/render.h"
+#include "libreconstruct/twin/render.h"
 
 #include <algorithm>
 #include <array>

@@ -48,12 +48,10 @@
 #include <opencv2/core.hpp>
 
 #include "calibration/rig.h"
-#include "libreconstruct/bayer.h"
+#include "libreconstruct/coloring/colour.h"
+#include "libreconstruct/recording/bayer.h"
 
 namespace netlab::recon {
-
-// Linear-light colour in BGR order, each channel in [0, 1] (1 = sensor white).
-using Colour = cv::Vec3f;
 
 // One yarn link: a chain of straight cylinders through `points` (world frame, m).
 struct ThreadPolyline {

@@ -30,23 +30,12 @@
 #include <vector>
 
 #include "calibration/rig.h"
-#include "libnetsim/scenario.h"
-#include "libnetsim/track_file.h"
-#include "libreconstruct/render.h"
+#include "libnetsim/scenario/scenario.h"
+#include "libnetsim/tracks/track_file.h"
+#include "libreconstruct/coloring/yarn_coloring.h"
+#include "libreconstruct/twin/render.h"
 
 namespace netlab::recon {
-
-// The colour of each yarn link of a net. Until the colouring tool lands (issue 6) a default
-// palette is cycled so that neighbouring links differ.
-struct YarnColoring {
-  std::vector<std::string> names;  // palette names
-  std::vector<Colour> palette;     // linear BGR in [0, 1]
-  std::vector<int> link_colour;    // per link, in the model's link order (see libnetsim/model.h)
-};
-YarnColoring DefaultColoring(int rows, int cols);
-// The colouring of a coloring.yaml (`netlab color-net`): its dyes' sRGB as linear colours
-// (without them, the default palette's colours in order). InputError on a bad file.
-YarnColoring LoadYarnColoring(const std::string& path);
 
 // The scene content of a simulation: topology and bodies from its stored scenario, node motion
 // from its frames.

@@ -10,9 +10,9 @@
 
 #include "libnetsim/forces/bend_twist_force.h"
 #include "libnetsim/forces/segment_force.h"
-#include "libnetsim/model_builder.h"
-#include "libnetsim/rotation.h"
-#include "libnetsim/simulation.h"
+#include "libnetsim/model/model_builder.h"
+#include "libnetsim/model/rotation.h"
+#include "libnetsim/simulation/simulation.h"
 
 namespace netlab::netsim::testing {
 

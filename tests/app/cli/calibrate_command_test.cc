@@ -13,7 +13,7 @@
 #include <sstream>
 
 #include "calibration/rig.h"
-#include "tests/app/run_netlab.h"
+#include "tests/app/cli/run_netlab.h"
 #include "tests/calibration/synthetic_dataset.h"
 
 namespace {

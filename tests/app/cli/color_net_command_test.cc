@@ -7,8 +7,8 @@
 #include <fstream>
 #include <string>
 
-#include "libreconstruct/net_coloring.h"
-#include "tests/app/run_netlab.h"
+#include "libreconstruct/coloring/net_coloring.h"
+#include "tests/app/cli/run_netlab.h"
 
 namespace {
 

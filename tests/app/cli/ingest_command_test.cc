@@ -8,8 +8,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 
-#include "libreconstruct/sequence.h"
-#include "tests/app/run_netlab.h"
+#include "libreconstruct/recording/sequence.h"
+#include "tests/app/cli/run_netlab.h"
 
 namespace {
 

@@ -1,10 +1,10 @@
-#include "app/json_writer.h"
+#include "app/cli/json_writer.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "tests/app/json_parse.h"
+#include "tests/app/cli/json_parse.h"
 
 namespace netlab::app {
 namespace {

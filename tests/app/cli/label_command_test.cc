@@ -7,9 +7,9 @@
 #include <fstream>
 #include <string>
 
-#include "libreconstruct/labels.h"
-#include "tests/app/run_netlab.h"
-#include "tests/app/small_shot.h"
+#include "libreconstruct/labels/label_set.h"
+#include "tests/app/cli/run_netlab.h"
+#include "tests/app/cli/small_shot.h"
 
 namespace {
 

@@ -9,11 +9,11 @@
 #include <string>
 
 #include "calibration/rig.h"
-#include "libnetsim/hdf5_util.h"
-#include "libnetsim/track_file.h"
-#include "libreconstruct/labels.h"
-#include "tests/app/run_netlab.h"
-#include "tests/app/small_shot.h"
+#include "common/hdf5_util.h"
+#include "libnetsim/tracks/track_file.h"
+#include "libreconstruct/labels/label_set.h"
+#include "tests/app/cli/run_netlab.h"
+#include "tests/app/cli/small_shot.h"
 
 namespace {
 

@@ -13,7 +13,7 @@
 
 #include <gtest/gtest.h>
 
-#include "tests/app/json_parse.h"
+#include "tests/app/cli/json_parse.h"
 
 namespace netlab::testing {
 

@@ -12,8 +12,8 @@
 #include <regex>
 #include <sstream>
 
-#include "libnetsim/track_file.h"
-#include "tests/app/run_netlab.h"
+#include "libnetsim/tracks/track_file.h"
+#include "tests/app/cli/run_netlab.h"
 
 namespace {
 

@@ -9,10 +9,10 @@
 #include <string>
 
 #include "calibration/rig.h"
-#include "libnetsim/track_file.h"
-#include "libreconstruct/labels.h"
-#include "libreconstruct/track_export.h"
-#include "tests/app/run_netlab.h"
+#include "libnetsim/tracks/track_file.h"
+#include "libreconstruct/geometry/track_export.h"
+#include "libreconstruct/labels/label_set.h"
+#include "tests/app/cli/run_netlab.h"
 
 namespace {
 

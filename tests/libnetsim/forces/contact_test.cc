@@ -8,7 +8,7 @@
 #include "libnetsim/forces/contact_force.h"
 #include "libnetsim/forces/gravity_force.h"
 #include "libnetsim/forces/segment_force.h"
-#include "libnetsim/simulation.h"
+#include "libnetsim/simulation/simulation.h"
 #include "tests/libnetsim/test_models.h"
 
 namespace netlab::netsim {

@@ -1,8 +1,8 @@
-#include "libnetsim/model_builder.h"
+#include "libnetsim/model/model_builder.h"
 
 #include <gtest/gtest.h>
 
-#include "libnetsim/rotation.h"
+#include "libnetsim/model/rotation.h"
 #include "tests/libnetsim/test_models.h"
 
 namespace netlab::netsim {

@@ -1,4 +1,4 @@
-#include "libnetsim/rotation.h"
+#include "libnetsim/model/rotation.h"
 
 #include <gtest/gtest.h>
 

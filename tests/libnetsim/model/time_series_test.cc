@@ -1,4 +1,4 @@
-#include "libnetsim/time_series.h"
+#include "libnetsim/model/time_series.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "libnetsim/scenario.h"
+#include "libnetsim/scenario/scenario.h"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 #include <fstream>
 
 #include "common/yaml_util.h"
-#include "libnetsim/run_scenario.h"
+#include "libnetsim/scenario/run_scenario.h"
 
 namespace netlab::netsim {
 namespace {

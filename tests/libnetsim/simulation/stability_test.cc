@@ -1,4 +1,4 @@
-#include "libnetsim/stability.h"
+#include "libnetsim/simulation/stability.h"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 
 #include "libnetsim/forces/bend_twist_force.h"
 #include "libnetsim/forces/segment_force.h"
-#include "libnetsim/simulation.h"
+#include "libnetsim/simulation/simulation.h"
 #include "tests/libnetsim/test_models.h"
 
 namespace netlab::netsim {

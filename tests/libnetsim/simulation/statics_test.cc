@@ -10,7 +10,7 @@
 #include "libnetsim/forces/gravity_force.h"
 #include "libnetsim/forces/point_load_force.h"
 #include "libnetsim/forces/segment_force.h"
-#include "libnetsim/simulation.h"
+#include "libnetsim/simulation/simulation.h"
 #include "tests/libnetsim/test_models.h"
 
 namespace netlab::netsim {

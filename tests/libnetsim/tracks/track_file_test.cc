@@ -1,4 +1,4 @@
-#include "libnetsim/track_file.h"
+#include "libnetsim/tracks/track_file.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "libreconstruct/color_identify.h"
+#include "libreconstruct/coloring/color_identify.h"
 
 #include <gtest/gtest.h>
 
@@ -15,8 +15,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include "calibration/rig.h"
-#include "libreconstruct/bayer.h"
-#include "libreconstruct/render.h"
+#include "libreconstruct/recording/bayer.h"
+#include "libreconstruct/twin/coloured_net.h"
+#include "libreconstruct/twin/render.h"
 
 namespace netlab::recon {
 namespace {

@@ -1,4 +1,4 @@
-#include "libreconstruct/triangulation.h"
+#include "libreconstruct/geometry/triangulation.h"
 
 #include <gtest/gtest.h>
 

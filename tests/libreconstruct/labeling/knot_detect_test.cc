@@ -1,11 +1,11 @@
-#include "libreconstruct/knot_detect.h"
+#include "libreconstruct/labeling/knot_detect.h"
 
 #include <gtest/gtest.h>
 
 #include <random>
 
-#include "libreconstruct/bayer.h"
-#include "tests/libreconstruct/rendered_net.h"
+#include "libreconstruct/recording/bayer.h"
+#include "tests/libreconstruct/labeling/rendered_net.h"
 
 namespace netlab::recon {
 namespace {

@@ -1,8 +1,8 @@
-#include "libreconstruct/knot_track.h"
+#include "libreconstruct/labeling/knot_track.h"
 
 #include <gtest/gtest.h>
 
-#include "tests/libreconstruct/rendered_net.h"
+#include "tests/libreconstruct/labeling/rendered_net.h"
 
 namespace netlab::recon {
 namespace {

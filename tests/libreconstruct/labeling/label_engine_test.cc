@@ -10,8 +10,8 @@
 #include <opencv2/core.hpp>
 
 #include "calibration/rig.h"
-#include "libreconstruct/label_engine.h"
-#include "libreconstruct/render.h"
+#include "libreconstruct/labeling/label_engine.h"
+#include "libreconstruct/twin/render.h"
 
 namespace netlab::recon {
 namespace {

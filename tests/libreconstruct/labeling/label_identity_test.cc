@@ -1,4 +1,4 @@
-#include "libreconstruct/label_identity.h"
+#include "libreconstruct/labeling/label_identity.h"
 
 #include <gtest/gtest.h>
 
@@ -14,10 +14,10 @@
 #include <opencv2/imgproc.hpp>
 
 #include "calibration/rig.h"
-#include "libreconstruct/bayer.h"
-#include "libreconstruct/render.h"
-#include "libreconstruct/synthetic_experiment.h"
-#include "tests/libreconstruct/test_files.h"
+#include "libreconstruct/recording/bayer.h"
+#include "libreconstruct/twin/render.h"
+#include "libreconstruct/twin/synthetic_experiment.h"
+#include "tests/libreconstruct/recording/test_files.h"
 
 namespace netlab::recon {
 

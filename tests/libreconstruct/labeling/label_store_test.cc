@@ -1,11 +1,11 @@
-#include "libreconstruct/label_store.h"
+#include "libreconstruct/labeling/label_store.h"
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <stdexcept>
 
-#include "tests/libreconstruct/test_files.h"
+#include "tests/libreconstruct/recording/test_files.h"
 
 namespace netlab::recon {
 namespace {

@@ -13,8 +13,8 @@
 #include <opencv2/core.hpp>
 
 #include "calibration/rig.h"
-#include "libreconstruct/bayer.h"
-#include "libreconstruct/render.h"
+#include "libreconstruct/recording/bayer.h"
+#include "libreconstruct/twin/render.h"
 
 namespace netlab::recon::testing {
 

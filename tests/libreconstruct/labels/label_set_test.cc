@@ -1,4 +1,4 @@
-#include "libreconstruct/labels.h"
+#include "libreconstruct/labels/label_set.h"
 
 #include <gtest/gtest.h>
 
@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
+#include "common/hdf5_util.h"
 #include "common/yaml_util.h"
-#include "libnetsim/hdf5_util.h"
-#include "tests/libreconstruct/test_files.h"
+#include "tests/libreconstruct/recording/test_files.h"
 
 namespace netlab::recon {
 namespace {

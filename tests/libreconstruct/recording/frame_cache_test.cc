@@ -1,4 +1,4 @@
-#include "libreconstruct/frame_cache.h"
+#include "libreconstruct/recording/frame_cache.h"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@
 #include <tuple>
 #include <vector>
 
-#include "tests/libreconstruct/test_files.h"
+#include "tests/libreconstruct/recording/test_files.h"
 
 namespace netlab::recon {
 namespace {

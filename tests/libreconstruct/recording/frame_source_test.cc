@@ -1,4 +1,4 @@
-#include "libreconstruct/frame_source.h"
+#include "libreconstruct/recording/frame_source.h"
 
 #include <gtest/gtest.h>
 
@@ -10,11 +10,11 @@
 #include <string>
 #include <vector>
 
+#include "common/hdf5_util.h"
 #include "common/yaml_util.h"
-#include "libnetsim/hdf5_util.h"
-#include "libreconstruct/frame_store.h"
-#include "libreconstruct/sequence.h"
-#include "tests/libreconstruct/test_files.h"
+#include "libreconstruct/recording/frame_store.h"
+#include "libreconstruct/recording/sequence.h"
+#include "tests/libreconstruct/recording/test_files.h"
 
 namespace netlab::recon {
 namespace {

@@ -1,4 +1,4 @@
-#include "libreconstruct/render.h"
+#include "libreconstruct/twin/render.h"
 
 #include <gtest/gtest.h>
 
