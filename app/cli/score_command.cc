@@ -1,0 +1,1 @@
+// netlab score (placeholder until the command lands)

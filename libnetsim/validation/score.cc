@@ -1,0 +1,934 @@
+#include "libnetsim/validation/score.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+#include <tuple>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+#include <Eigen/SVD>
+
+#include "common/hdf5_util.h"
+
+namespace netlab::netsim {
+namespace {
+
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+using Matrix7d = Eigen::Matrix<double, 7, 7>;
+using Vector7d = Eigen::Matrix<double, 7, 1>;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+[[noreturn]] void Fail(const std::string& what) { throw std::invalid_argument(what); }
+
+std::string KnotName(const std::array<int, 2>& g) {
+  return "(" + std::to_string(g[0]) + "," + std::to_string(g[1]) + ")";
+}
+
+// "frame 12 (t = 0.0670 s)": the frame number when the file has one, else the row.
+std::string FrameName(const KnotTracks& tracks, int row) {
+  std::ostringstream s;
+  s << "frame " << (tracks.frame_index.empty() ? row : tracks.frame_index[row])
+    << " (t = " << tracks.time[row] << " s)";
+  return s.str();
+}
+
+Matrix3d Skew(const Vector3d& a) {
+  Matrix3d m;
+  m << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
+  return m;
+}
+
+Matrix3d ExpSo3(const Vector3d& w) {
+  const double angle = w.norm();
+  if (angle < 1e-12) return Matrix3d::Identity() + Skew(w);
+  return Eigen::AngleAxisd(angle, w / angle).toRotationMatrix();
+}
+
+// The stored simulation seen as a function of time: 4-point Lagrange (cubic) interpolation of the
+// frames around t, its time derivative, and an estimate of its error from the 4th divided
+// difference: e(t) ~ |f''''| / 24 * |prod (t - t_m)|, the interpolation remainder.
+class SimInterpolant {
+ public:
+  SimInterpolant(const KnotTracks& sim, const std::vector<int>& sim_knot)
+      : sim_(sim), sim_knot_(sim_knot) {}
+
+  double begin() const { return sim_.time.front(); }
+  double end() const { return sim_.time.back(); }
+
+  // False when t is outside the stored span or a frame of the stencil is not valid.
+  bool At(double t, int k, Vector3d* p, Vector3d* v, double* error) const {
+    const auto& s = sim_.time;
+    const int n = static_cast<int>(s.size());
+    const double tol = 1e-9 * std::max(1.0, std::abs(t));
+    if (t < s.front() - tol || t > s.back() + tol) return false;
+    int i = static_cast<int>(std::upper_bound(s.begin(), s.end(), t) - s.begin()) - 1;
+    const int first = std::clamp(i - 1, 0, n - 4);
+    const int ks = sim_knot_[k];
+    double w[4], dw[4];
+    for (int a = 0; a < 4; ++a) {
+      // Lagrange basis l_a(t) and its derivative.
+      double num = 1.0, den = 1.0, dnum = 0.0;
+      for (int b = 0; b < 4; ++b) {
+        if (b == a) continue;
+        den *= s[first + a] - s[first + b];
+        double prod = 1.0;
+        for (int c = 0; c < 4; ++c)
+          if (c != a && c != b) prod *= t - s[first + c];
+        dnum += prod;
+        num *= t - s[first + b];
+      }
+      w[a] = num / den;
+      dw[a] = dnum / den;
+    }
+    Vector3d pos = Vector3d::Zero(), vel = Vector3d::Zero();
+    for (int a = 0; a < 4; ++a) {
+      if (!sim_.Valid(first + a, ks)) return false;
+      const Vector3d& q = sim_.Position(first + a, ks);
+      pos += w[a] * q;
+      vel += dw[a] * q;
+    }
+    *p = pos;
+    if (v) *v = vel;
+    if (error) {
+      // 4th divided difference over 5 frames (f''''/24), the stencil extended by one frame.
+      const int f5 = std::clamp(first, 0, n - 5);
+      *error = 0.0;
+      if (n >= 5) {
+        Vector3d dd[5];
+        for (int a = 0; a < 5; ++a) dd[a] = sim_.Position(f5 + a, ks);
+        for (int level = 1; level < 5; ++level)
+          for (int a = 0; a + level < 5; ++a)
+            dd[a] = (dd[a + 1] - dd[a]) / (s[f5 + a + level] - s[f5 + a]);
+        double prod = 1.0;
+        for (int a = 0; a < 4; ++a) prod *= t - s[first + a];
+        *error = dd[0].norm() * std::abs(prod);
+      }
+    }
+    return true;
+  }
+
+ private:
+  const KnotTracks& sim_;
+  const std::vector<int>& sim_knot_;
+};
+
+// One measured knot-frame that can be compared.
+struct Point {
+  int frame, knot;
+  Matrix3d meas_cov;  // m^2
+};
+
+struct Fit {
+  double tau = 0.0;
+  Matrix3d rotation = Matrix3d::Identity();
+  Vector3d translation = Vector3d::Zero();
+};
+
+// The evaluation of every point under one fit.
+struct Evaluation {
+  double cost = 0.0;  // sum d2
+  int used = 0;
+  Matrix7d normal = Matrix7d::Zero();  // J^T W J, parameters (tau, dtheta, dt)
+  Vector7d gradient = Vector7d::Zero();  // J^T W r
+};
+
+class Scorer {
+ public:
+  Scorer(const KnotTracks& meas, const KnotTracks& sim, const std::vector<int>& sim_knot,
+         std::vector<Point> points, const ScoreOptions& options)
+      : meas_(meas), sim_(sim), interp_(sim, sim_knot), sim_knot_(sim_knot),
+        points_(std::move(points)), options_(options) {}
+
+  // Sigma_sim of knot k at simulated time t, simulation frame (zero, isotropic or the file's).
+  Matrix3d SimCovariance(double t, int k) const {
+    if (!sim_.covariance.empty()) {
+      const auto& s = sim_.time;
+      const int i = std::clamp(
+          static_cast<int>(std::lower_bound(s.begin(), s.end(), t) - s.begin()), 0,
+          static_cast<int>(s.size()) - 1);
+      return sim_.covariance[static_cast<size_t>(i) * sim_.knots() + sim_knot_[k]];
+    }
+    return Matrix3d::Identity() * options_.sim_sigma_m * options_.sim_sigma_m;
+  }
+
+  // Residual, weight and Jacobian of one point; false when the simulation is not available.
+  bool Residual(const Point& pt, const Fit& fit, Vector3d* r, Matrix3d* w,
+                Eigen::Matrix<double, 3, 7>* jacobian, double* interp_error = nullptr,
+                Vector3d* sim_in_meas = nullptr) const {
+    const double t = meas_.time[pt.frame] + fit.tau;
+    Vector3d p, v;
+    double error = 0.0;
+    if (!interp_.At(t, pt.knot, &p, &v, &error)) return false;
+    const Vector3d a = fit.rotation * p + fit.translation;
+    *r = meas_.Position(pt.frame, pt.knot) - a;
+    const Matrix3d cov = pt.meas_cov +
+                         fit.rotation * SimCovariance(t, pt.knot) * fit.rotation.transpose() +
+                         Matrix3d::Identity() * error * error;
+    *w = cov.inverse();
+    if (jacobian) {
+      jacobian->col(0) = -(fit.rotation * v);
+      jacobian->block<3, 3>(0, 1) = Skew(a);
+      jacobian->block<3, 3>(0, 4) = -Matrix3d::Identity();
+    }
+    if (interp_error) *interp_error = error;
+    if (sim_in_meas) *sim_in_meas = a;
+    return true;
+  }
+
+  // Sum d2 (and the normal equations when asked) over every `stride`-th point.
+  Evaluation Evaluate(const Fit& fit, bool normal, int stride = 1) const {
+    Evaluation e;
+    Vector3d r;
+    Matrix3d w;
+    Eigen::Matrix<double, 3, 7> j;
+    for (size_t i = 0; i < points_.size(); i += stride) {
+      if (!active_.empty() && !active_[i]) continue;
+      if (!Residual(points_[i], fit, &r, &w, normal ? &j : nullptr)) continue;
+      e.cost += r.dot(w * r);
+      ++e.used;
+      if (normal) {
+        const Eigen::Matrix<double, 7, 3> jtw = j.transpose() * w;
+        e.normal.noalias() += jtw * j;
+        e.gradient.noalias() += jtw * r;
+      }
+    }
+    return e;
+  }
+
+  // Least-squares rigid motion meas_from_sim (Kabsch) at offset tau, over every stride-th point.
+  bool Kabsch(Fit* fit, int stride) const {
+    std::vector<Vector3d> a, b;
+    for (size_t i = 0; i < points_.size(); i += stride) {
+      Vector3d p;
+      if (!interp_.At(meas_.time[points_[i].frame] + fit->tau, points_[i].knot, &p, nullptr,
+                      nullptr))
+        continue;
+      a.push_back(p);
+      b.push_back(meas_.Position(points_[i].frame, points_[i].knot));
+    }
+    if (a.size() < 3) return false;
+    Vector3d ca = Vector3d::Zero(), cb = Vector3d::Zero();
+    for (size_t i = 0; i < a.size(); ++i) ca += a[i], cb += b[i];
+    ca /= a.size();
+    cb /= b.size();
+    Matrix3d h = Matrix3d::Zero();
+    for (size_t i = 0; i < a.size(); ++i) h += (a[i] - ca) * (b[i] - cb).transpose();
+    Eigen::JacobiSVD<Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Matrix3d d = Matrix3d::Identity();
+    if ((svd.matrixV() * svd.matrixU().transpose()).determinant() < 0) d(2, 2) = -1;
+    fit->rotation = svd.matrixV() * d * svd.matrixU().transpose();
+    fit->translation = cb - fit->rotation * ca;
+    return true;
+  }
+
+  const std::vector<Point>& points() const { return points_; }
+  const SimInterpolant& interpolant() const { return interp_; }
+
+  // Restricts Evaluate to the points simulated at every offset within tau +- margin, so that the
+  // refinement compares costs over one set of points.
+  void FixPointSet(double tau, double margin) {
+    active_.assign(points_.size(), 0);
+    Vector3d p;
+    for (size_t i = 0; i < points_.size(); ++i) {
+      const double t = meas_.time[points_[i].frame];
+      active_[i] = interp_.At(t + tau - margin, points_[i].knot, &p, nullptr, nullptr) &&
+                   interp_.At(t + tau + margin, points_[i].knot, &p, nullptr, nullptr);
+    }
+  }
+
+ private:
+  const KnotTracks& meas_;
+  const KnotTracks& sim_;
+  SimInterpolant interp_;
+  const std::vector<int>& sim_knot_;
+  std::vector<Point> points_;
+  std::vector<uint8_t> active_;  // empty: every point
+  const ScoreOptions& options_;
+};
+
+bool FitsTime(Alignment a) { return a == Alignment::kTime || a == Alignment::kTimeAndRigid; }
+bool FitsRigid(Alignment a) { return a == Alignment::kRigid || a == Alignment::kTimeAndRigid; }
+
+// The measured time span must overlap the simulation's by half at offset tau.
+bool EnoughOverlap(const KnotTracks& meas, const SimInterpolant& interp, double tau) {
+  const double lo = std::max(meas.time.front() + tau, interp.begin());
+  const double hi = std::min(meas.time.back() + tau, interp.end());
+  const double span = meas.time.back() - meas.time.front();
+  return hi > lo && (span <= 0 || hi - lo >= 0.5 * span);
+}
+
+// Integrated autocorrelation time of the d2 series (frames), pooled over knots, each series
+// centred on its own mean; Sokal's automatic window (the smallest W with W >= 5 tau(W)).
+double IntegratedAutocorrelation(const std::vector<double>& x, int frames, int knots) {
+  std::vector<double> centred(x.size(), kNaN);
+  for (int k = 0; k < knots; ++k) {
+    double sum = 0;
+    int n = 0;
+    for (int t = 0; t < frames; ++t)
+      if (std::isfinite(x[static_cast<size_t>(t) * knots + k])) sum += x[t * knots + k], ++n;
+    if (n < 2) continue;
+    for (int t = 0; t < frames; ++t) {
+      const size_t i = static_cast<size_t>(t) * knots + k;
+      if (std::isfinite(x[i])) centred[i] = x[i] - sum / n;
+    }
+  }
+  auto autocov = [&](int lag) {
+    double sum = 0;
+    long n = 0;
+    for (int t = 0; t + lag < frames; ++t)
+      for (int k = 0; k < knots; ++k) {
+        const double a = centred[static_cast<size_t>(t) * knots + k];
+        const double b = centred[static_cast<size_t>(t + lag) * knots + k];
+        if (std::isfinite(a) && std::isfinite(b)) sum += a * b, ++n;
+      }
+    return n > 0 ? sum / n : 0.0;
+  };
+  const double c0 = autocov(0);
+  if (!(c0 > 0)) return 1.0;
+  double tau = 1.0;
+  for (int lag = 1; lag < frames / 2; ++lag) {
+    tau += 2.0 * autocov(lag) / c0;
+    if (lag >= 5.0 * tau) break;
+  }
+  return std::max(1.0, tau);
+}
+
+// Within-frame inflation: var(sum over a frame's knots) / sum of the knots' variances.
+double DesignEffect(const std::vector<double>& x, int frames, int knots) {
+  std::vector<double> mean(knots, 0.0);
+  std::vector<int> count(knots, 0);
+  for (int t = 0; t < frames; ++t)
+    for (int k = 0; k < knots; ++k)
+      if (std::isfinite(x[static_cast<size_t>(t) * knots + k]))
+        mean[k] += x[t * knots + k], ++count[k];
+  for (int k = 0; k < knots; ++k) mean[k] = count[k] ? mean[k] / count[k] : 0.0;
+  double sum_sq_of_sums = 0, sum_of_sq = 0;
+  for (int t = 0; t < frames; ++t) {
+    double s = 0;
+    for (int k = 0; k < knots; ++k) {
+      const double v = x[static_cast<size_t>(t) * knots + k];
+      if (!std::isfinite(v)) continue;
+      s += v - mean[k];
+      sum_of_sq += (v - mean[k]) * (v - mean[k]);
+    }
+    sum_sq_of_sums += s * s;
+  }
+  return sum_of_sq > 0 ? std::max(1.0, sum_sq_of_sums / sum_of_sq) : 1.0;
+}
+
+double QuadArea(const Vector3d c[4]) {
+  return 0.5 * (c[2] - c[0]).cross(c[3] - c[1]).norm();
+}
+
+void AddRow(ScoreRow* row, double e2, double d2) {
+  row->points++;
+  row->rms_m += e2;  // sum of squares until Finish
+  row->max_m = std::max(row->max_m, std::sqrt(e2));
+  row->mean_d2 += d2;
+}
+void FinishRow(ScoreRow* row) {
+  if (row->points == 0) {
+    row->rms_m = row->mean_d2 = kNaN;
+    return;
+  }
+  row->rms_m = std::sqrt(row->rms_m / row->points);
+  row->mean_d2 /= row->points;
+}
+
+}  // namespace
+
+bool ParseAlignment(const std::string& text, Alignment* alignment) {
+  static const std::map<std::string, Alignment> names = {{"none", Alignment::kNone},
+                                                         {"time", Alignment::kTime},
+                                                         {"rigid", Alignment::kRigid},
+                                                         {"time+rigid", Alignment::kTimeAndRigid}};
+  const auto it = names.find(text);
+  if (it == names.end()) return false;
+  *alignment = it->second;
+  return true;
+}
+
+std::string AlignmentName(Alignment alignment) {
+  switch (alignment) {
+    case Alignment::kNone: return "none";
+    case Alignment::kTime: return "time";
+    case Alignment::kRigid: return "rigid";
+    case Alignment::kTimeAndRigid: return "time+rigid";
+  }
+  return "?";
+}
+
+bool ScoreOptions::IsValid(std::string* error) const {
+  auto fail = [&](const std::string& what) {
+    if (error) *error = what;
+    return false;
+  };
+  if (!std::isfinite(time_offset_s)) return fail("time_offset_s must be finite");
+  if (!(max_time_offset_s >= 0) || !std::isfinite(max_time_offset_s))
+    return fail("max_time_offset_s must be >= 0");
+  if (!(sim_sigma_m >= 0) || !std::isfinite(sim_sigma_m)) return fail("sim_sigma_m must be >= 0");
+  if (!(meas_sigma_m >= 0) || !std::isfinite(meas_sigma_m))
+    return fail("meas_sigma_m must be >= 0");
+  if (!(significance > 0 && significance < 1)) return fail("significance must be in (0, 1)");
+  if (!(max_interpolation_fraction > 0)) return fail("max_interpolation_fraction must be > 0");
+  return true;
+}
+
+// Q(a, x) by its series (x < a + 1) or continued fraction (Numerical Recipes 6.2); for the very
+// large a of long recordings (nu/2 > 1e5) the Wilson-Hilferty normal approximation of chi^2,
+// accurate there to ~1e-4 absolute.
+double UpperGammaQ(double a, double x) {
+  if (x <= 0) return 1.0;
+  if (a > 1e5) {
+    const double nu = 2 * a, chi2 = 2 * x;
+    const double z = (std::cbrt(chi2 / nu) - (1 - 2 / (9 * nu))) / std::sqrt(2 / (9 * nu));
+    return 0.5 * std::erfc(z / std::sqrt(2.0));
+  }
+  const double log_prefactor = -x + a * std::log(x) - std::lgamma(a);
+  if (x < a + 1) {
+    double term = 1.0 / a, sum = term;
+    for (int n = 1; n < 100000; ++n) {
+      term *= x / (a + n);
+      sum += term;
+      if (std::abs(term) < std::abs(sum) * 1e-15) break;
+    }
+    return std::clamp(1.0 - sum * std::exp(log_prefactor), 0.0, 1.0);
+  }
+  constexpr double kTiny = 1e-300;
+  double b = x + 1 - a, c = 1 / kTiny, d = 1 / b, h = d;
+  for (int i = 1; i < 100000; ++i) {
+    const double an = -i * (i - a);
+    b += 2;
+    d = an * d + b;
+    if (std::abs(d) < kTiny) d = kTiny;
+    c = b + an / c;
+    if (std::abs(c) < kTiny) c = kTiny;
+    d = 1 / d;
+    const double delta = d * c;
+    h *= delta;
+    if (std::abs(delta - 1) < 1e-15) break;
+  }
+  return std::clamp(std::exp(log_prefactor) * h, 0.0, 1.0);
+}
+
+double Chi2Quantile(double p, double nu) {
+  double lo = 0, hi = std::max(10.0, nu + 20 * std::sqrt(2 * nu) + 50);
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (1 - UpperGammaQ(nu / 2, mid / 2) < p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOptions& options,
+                  const std::string& meas_name, const std::string& sim_name) {
+  const auto start = std::chrono::steady_clock::now();
+  std::string why;
+  if (!options.IsValid(&why)) Fail("score options: " + why);
+  // The files' own shapes (the reader checks them; tracks built in memory may not be).
+  for (const auto& [tracks, name] : {std::pair(&meas, meas_name), std::pair(&sim, sim_name)}) {
+    try {
+      tracks->CheckConsistent();
+    } catch (const std::invalid_argument& e) {
+      Fail(name + ": " + e.what());
+    }
+    if (tracks->knots() == 0) Fail(name + ": /knots/grid has no knot");
+    for (int t = 0; t < tracks->frames(); ++t) {
+      if (!std::isfinite(tracks->time[t]))
+        Fail(name + ": /time[" + std::to_string(t) + "] is not a number");
+      if (t > 0 && !(tracks->time[t] > tracks->time[t - 1]))
+        Fail(name + ": /time is not increasing at row " + std::to_string(t) + " (" +
+             std::to_string(tracks->time[t - 1]) + " s then " + std::to_string(tracks->time[t]) +
+             " s)");
+    }
+  }
+  if (sim.frames() < 4)
+    Fail(sim_name + ": " + std::to_string(sim.frames()) +
+         " frames; cubic interpolation in time needs at least 4");
+  if (meas.frames() < 1) Fail(meas_name + ": no frame");
+
+  // The same net in both: every knot (net, row, col) of one has its counterpart in the other.
+  const int knots = meas.knots();
+  std::vector<int> sim_knot(knots);
+  for (int k = 0; k < knots; ++k) {
+    sim_knot[k] = sim.FindKnot(meas.grid[k][0], meas.grid[k][1], meas.net.empty() ? 0 : meas.net[k]);
+    if (sim_knot[k] < 0)
+      Fail("grid mismatch: knot " + KnotName(meas.grid[k]) + " of " + meas_name +
+           " (/knots/grid row " + std::to_string(k) + ") is not in " + sim_name + " (" +
+           std::to_string(sim.knots()) + " knots there, " + std::to_string(knots) + " here)");
+  }
+  if (sim.knots() != knots)
+    Fail("grid mismatch: " + sim_name + " has " + std::to_string(sim.knots()) + " knots, " +
+         meas_name + " " + std::to_string(knots) + ": not the same net");
+
+  // NaN in the simulation is a blow-up carried on: stop, naming it.
+  for (int t = 0; t < sim.frames(); ++t)
+    for (int k = 0; k < knots; ++k)
+      if (sim.Valid(t, k) && !sim.Position(t, k).allFinite())
+        Fail(sim_name + ": /knots/position is not a number at " + FrameName(sim, t) + ", knot " +
+             KnotName(sim.grid[k]));
+
+  // The measured points, each with a checked covariance.
+  if (meas.covariance.empty() && options.meas_sigma_m <= 0)
+    Fail(meas_name + ": no /knots/covariance to weight the residuals by (give a measurement "
+                     "sigma, --meas-sigma)");
+  std::vector<Point> points;
+  int masked = 0;
+  for (int t = 0; t < meas.frames(); ++t)
+    for (int k = 0; k < knots; ++k) {
+      if (!meas.Valid(t, k)) {
+        ++masked;
+        continue;
+      }
+      const std::string where = FrameName(meas, t) + ", knot " + KnotName(meas.grid[k]);
+      if (!meas.Position(t, k).allFinite())
+        Fail(meas_name + ": /knots/position is not a number at " + where +
+             " (a missing knot must have /knots/valid = 0)");
+      Matrix3d cov = Matrix3d::Identity() * options.meas_sigma_m * options.meas_sigma_m;
+      if (!meas.covariance.empty()) {
+        cov = meas.covariance[static_cast<size_t>(t) * knots + k];
+        if (!cov.allFinite()) Fail(meas_name + ": /knots/covariance is not a number at " + where);
+        const double scale = cov.cwiseAbs().maxCoeff();
+        const Eigen::LLT<Matrix3d> llt(cov);
+        if ((cov - cov.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale || scale <= 0 ||
+            llt.info() != Eigen::Success || llt.matrixL().toDenseMatrix().diagonal().minCoeff() <=
+                                                std::sqrt(scale) * 1e-9) {
+          std::ostringstream s;
+          s << meas_name << ": /knots/covariance is not symmetric positive definite at " << where
+            << " (eigenvalues " << Eigen::SelfAdjointEigenSolver<Matrix3d>(cov).eigenvalues().transpose()
+            << " m^2)";
+          Fail(s.str());
+        }
+      }
+      points.push_back({t, k, cov});
+    }
+  if (points.empty()) Fail(meas_name + ": no valid knot in any frame");
+
+  Scorer scorer(meas, sim, sim_knot, std::move(points), options);
+  const SimInterpolant& interp = scorer.interpolant();
+  ScoreResult result;
+  ScoreSummary& s = result.summary;
+  s.alignment = options.alignment;
+  s.sim_interval_s = (sim.time.back() - sim.time.front()) / (sim.frames() - 1);
+  s.meas_interval_s =
+      meas.frames() > 1 ? (meas.time.back() - meas.time.front()) / (meas.frames() - 1) : 0.0;
+
+  // Time overlap at the starting offset (or anywhere in the search window).
+  auto overlap_error = [&]() {
+    std::ostringstream o;
+    o << "no overlap in time: " << meas_name << " spans " << meas.time.front() << " .. "
+      << meas.time.back() << " s, " << sim_name << " " << sim.time.front() << " .. "
+      << sim.time.back() << " s (offset " << options.time_offset_s << " s";
+    if (FitsTime(options.alignment)) o << " +- " << options.max_time_offset_s << " s searched";
+    o << "; at least half of the measured span must be simulated)";
+    return o.str();
+  };
+
+  // 1. The time offset: a coarse search over the window (every point of a thinned set; with a
+  // rigid fit, the best rigid motion at each candidate), then Gauss-Newton on all parameters.
+  Fit fit;
+  fit.tau = options.time_offset_s;
+  const bool fit_time = FitsTime(options.alignment), fit_rigid = FitsRigid(options.alignment);
+  const int stride = std::max<int>(1, static_cast<int>(scorer.points().size() / 20000));
+  if (fit_time) {
+    const double step = 0.5 * std::min(s.sim_interval_s,
+                                       s.meas_interval_s > 0 ? s.meas_interval_s : s.sim_interval_s);
+    const int steps = static_cast<int>(std::ceil(options.max_time_offset_s / step));
+    double best = std::numeric_limits<double>::infinity();
+    Fit best_fit;
+    for (int j = -steps; j <= steps; ++j) {
+      Fit candidate;
+      candidate.tau = options.time_offset_s + j * step;
+      if (!EnoughOverlap(meas, interp, candidate.tau)) continue;
+      if (fit_rigid && !scorer.Kabsch(&candidate, stride)) continue;
+      const Evaluation e = scorer.Evaluate(candidate, false, stride);
+      if (e.used == 0) continue;
+      if (e.cost / e.used < best) best = e.cost / e.used, best_fit = candidate;
+    }
+    if (!std::isfinite(best)) Fail(overlap_error());
+    fit = best_fit;
+  } else {
+    if (!EnoughOverlap(meas, interp, fit.tau)) Fail(overlap_error());
+    if (fit_rigid && !scorer.Kabsch(&fit, stride)) Fail(overlap_error());
+  }
+  std::vector<int> free;  // indices into (tau, dtheta, dt)
+  if (fit_time) free.push_back(0);
+  if (fit_rigid)
+    for (int i = 1; i < 7; ++i) free.push_back(i);
+  const int p = static_cast<int>(free.size());
+  Eigen::MatrixXd normal_free;
+  if (p > 0) {
+    // Gauss-Newton with step halving; 7 parameters, normal equations summed over the points.
+    scorer.FixPointSet(fit.tau, fit_time ? 2 * s.sim_interval_s : 0.0);
+    Evaluation e = scorer.Evaluate(fit, true);
+    for (int iteration = 0; iteration < 30; ++iteration) {
+      Eigen::MatrixXd h(p, p);
+      Eigen::VectorXd g(p);
+      for (int a = 0; a < p; ++a) {
+        g(a) = e.gradient(free[a]);
+        for (int b = 0; b < p; ++b) h(a, b) = e.normal(free[a], free[b]);
+      }
+      const Eigen::VectorXd delta = -h.ldlt().solve(g);
+      bool improved = false;
+      for (double scale = 1.0; scale > 1e-4; scale *= 0.5) {
+        Vector7d full = Vector7d::Zero();
+        for (int a = 0; a < p; ++a) full(free[a]) = scale * delta(a);
+        Fit trial = fit;
+        trial.tau += full(0);
+        trial.rotation = ExpSo3(full.segment<3>(1)) * fit.rotation;
+        trial.translation = ExpSo3(full.segment<3>(1)) * fit.translation + full.segment<3>(4);
+        const Evaluation te = scorer.Evaluate(trial, true);
+        if (te.cost <= e.cost) {
+          fit = trial;
+          const double change = e.cost - te.cost;
+          e = te;
+          improved = change > 1e-10 * std::max(1.0, e.cost);
+          break;
+        }
+      }
+      if (!improved) break;
+    }
+    normal_free.resize(p, p);
+    for (int a = 0; a < p; ++a)
+      for (int b = 0; b < p; ++b) normal_free(a, b) = e.normal(free[a], free[b]);
+  }
+
+  // 2. Residuals and d2 at the fit; the per-frame and per-knot tables.
+  const int frames = meas.frames();
+  result.time = meas.time;
+  result.grid = meas.grid;
+  const size_t cells = static_cast<size_t>(frames) * knots;
+  result.residual.assign(cells, Vector3d::Constant(kNaN));
+  result.d2.assign(cells, kNaN);
+  result.compared.assign(cells, 0);
+  std::vector<Vector3d> sim_pos(cells, Vector3d::Constant(kNaN));  // measured frame
+  double interp_sq = 0, meas_var = 0;
+  for (const Point& pt : scorer.points()) {
+    Vector3d r, a;
+    Matrix3d w;
+    double error;
+    if (!scorer.Residual(pt, fit, &r, &w, nullptr, &error, &a)) {
+      ++masked;
+      continue;
+    }
+    const size_t i = static_cast<size_t>(pt.frame) * knots + pt.knot;
+    result.residual[i] = r;
+    result.d2[i] = r.dot(w * r);
+    result.compared[i] = 1;
+    sim_pos[i] = a;
+    interp_sq += error * error;
+    meas_var += pt.meas_cov.trace() / 3;
+  }
+  // The knots' classes, from each net's grid extent.
+  std::map<int, std::array<int, 2>> extent;
+  for (int k = 0; k < knots; ++k) {
+    auto& e = extent[meas.net.empty() ? 0 : meas.net[k]];
+    e[0] = std::max(e[0], meas.grid[k][0]);
+    e[1] = std::max(e[1], meas.grid[k][1]);
+  }
+  result.knot_class.resize(knots);
+  for (int k = 0; k < knots; ++k) {
+    const auto& e = extent[meas.net.empty() ? 0 : meas.net[k]];
+    const bool row_edge = meas.grid[k][0] == 0 || meas.grid[k][0] == e[0];
+    const bool col_edge = meas.grid[k][1] == 0 || meas.grid[k][1] == e[1];
+    result.knot_class[k] = static_cast<int>(row_edge && col_edge   ? KnotClass::kCorner
+                                            : row_edge || col_edge ? KnotClass::kEdge
+                                                                   : KnotClass::kInner);
+  }
+
+  // Skill baseline: straight-line flight of every knot from its simulated state at the first
+  // compared time.
+  int first_frame = frames;
+  for (int t = 0; t < frames && first_frame == frames; ++t)
+    for (int k = 0; k < knots; ++k)
+      if (result.compared[static_cast<size_t>(t) * knots + k]) first_frame = t;
+  const double t0 = meas.time[first_frame] + fit.tau;
+  std::vector<Vector3d> p0(knots), v0(knots);
+  std::vector<bool> has0(knots);
+  for (int k = 0; k < knots; ++k) has0[k] = interp.At(t0, k, &p0[k], &v0[k], nullptr);
+
+  // The corners of the first net (row-major order around the polygon) and the net's side: the
+  // thread length along its first row in the first simulated frame.
+  const auto& e0 = extent[meas.net.empty() ? 0 : meas.net[0]];
+  const int net0 = meas.net.empty() ? 0 : meas.net[0];
+  const int corners[4] = {meas.FindKnot(0, 0, net0), meas.FindKnot(0, e0[1], net0),
+                          meas.FindKnot(e0[0], e0[1], net0), meas.FindKnot(e0[0], 0, net0)};
+  for (int c = 0; c < e0[1]; ++c) {
+    const int a = meas.FindKnot(0, c, net0), b = meas.FindKnot(0, c + 1, net0);
+    if (a >= 0 && b >= 0)
+      s.side_m += (sim.Position(0, sim_knot[b]) - sim.Position(0, sim_knot[a])).norm();
+  }
+
+  for (auto& row : s.per_class) row = ScoreRow{};
+  for (int c = 0; c < 3; ++c) s.per_class[c].name = kKnotClassNames[c];
+  s.per_knot.resize(knots);
+  for (int k = 0; k < knots; ++k) s.per_knot[k].name = KnotName(meas.grid[k]);
+  result.rms_per_class.assign(frames, {kNaN, kNaN, kNaN});
+  result.area_measured.assign(frames, kNaN);
+  result.area_simulated.assign(frames, kNaN);
+  result.centroid_measured.assign(frames, Vector3d::Constant(kNaN));
+  result.centroid_simulated.assign(frames, Vector3d::Constant(kNaN));
+  result.corner_distance_measured.assign(frames, {kNaN, kNaN, kNaN, kNaN, kNaN, kNaN});
+  result.corner_distance_simulated = result.corner_distance_measured;
+  double sum_d2 = 0, sum_e2 = 0, sum_bd2 = 0, sum_be2 = 0;
+  int base_points = 0;
+  for (int t = 0; t < frames; ++t) {
+    std::array<double, 3> class_sq = {0, 0, 0};
+    std::array<int, 3> class_n = {0, 0, 0};
+    Vector3d cm = Vector3d::Zero(), cs = Vector3d::Zero();
+    int n = 0;
+    for (int k = 0; k < knots; ++k) {
+      const size_t i = static_cast<size_t>(t) * knots + k;
+      if (!result.compared[i]) continue;
+      const double e2 = result.residual[i].squaredNorm();
+      sum_d2 += result.d2[i];
+      sum_e2 += e2;
+      s.max_m = std::max(s.max_m, std::sqrt(e2));
+      AddRow(&s.per_knot[k], e2, result.d2[i]);
+      AddRow(&s.per_class[result.knot_class[k]], e2, result.d2[i]);
+      class_sq[result.knot_class[k]] += e2;
+      class_n[result.knot_class[k]]++;
+      cm += meas.Position(t, k);
+      cs += sim_pos[i];
+      ++n;
+      if (has0[k]) {
+        const double ts = meas.time[t] + fit.tau;
+        const Vector3d pb = fit.rotation * (p0[k] + v0[k] * (ts - t0)) + fit.translation;
+        const Vector3d rb = meas.Position(t, k) - pb;
+        sum_be2 += rb.squaredNorm();
+        ++base_points;
+      }
+    }
+    for (int c = 0; c < 3; ++c)
+      if (class_n[c]) result.rms_per_class[t][c] = std::sqrt(class_sq[c] / class_n[c]);
+    if (n > 0) {
+      result.centroid_measured[t] = cm / n;
+      result.centroid_simulated[t] = cs / n;
+    }
+    // Corner polygon and corner distances (01 12 23 30 02 13).
+    Vector3d pm[4], ps[4];
+    bool all_m = true, all_s = true;
+    for (int c = 0; c < 4; ++c) {
+      const int k = corners[c];
+      if (k < 0) {
+        all_m = all_s = false;
+        continue;
+      }
+      all_m = all_m && meas.Valid(t, k);
+      pm[c] = meas.Position(t, k);
+      Vector3d q;
+      if (interp.At(meas.time[t] + fit.tau, k, &q, nullptr, nullptr))
+        ps[c] = fit.rotation * q + fit.translation;
+      else
+        all_s = false;
+    }
+    static constexpr int kPairs[6][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 2}, {1, 3}};
+    if (all_m) {
+      result.area_measured[t] = QuadArea(pm);
+      for (int j = 0; j < 6; ++j)
+        result.corner_distance_measured[t][j] = (pm[kPairs[j][0]] - pm[kPairs[j][1]]).norm();
+    }
+    if (all_s) {
+      result.area_simulated[t] = QuadArea(ps);
+      for (int j = 0; j < 6; ++j)
+        result.corner_distance_simulated[t][j] = (ps[kPairs[j][0]] - ps[kPairs[j][1]]).norm();
+    }
+  }
+  // Baseline d2 with each point's own weight.
+  for (const Point& pt : scorer.points()) {
+    const size_t i = static_cast<size_t>(pt.frame) * knots + pt.knot;
+    if (!result.compared[i] || !has0[pt.knot]) continue;
+    const double ts = meas.time[pt.frame] + fit.tau;
+    const Vector3d pb =
+        fit.rotation * (p0[pt.knot] + v0[pt.knot] * (ts - t0)) + fit.translation;
+    const Vector3d rb = meas.Position(pt.frame, pt.knot) - pb;
+    Vector3d r;
+    Matrix3d w;
+    scorer.Residual(pt, fit, &r, &w, nullptr);
+    sum_bd2 += rb.dot(w * rb);
+  }
+
+  // 3. Sizes, errors, the test.
+  s.knots = knots;
+  s.masked = masked;
+  for (int t = 0; t < frames; ++t)
+    for (int k = 0; k < knots; ++k)
+      if (result.compared[static_cast<size_t>(t) * knots + k]) {
+        ++s.frames;
+        break;
+      }
+  for (uint8_t c : result.compared) s.points += c;
+  if (s.points == 0) Fail(overlap_error());
+  const int n = s.points;
+  s.rms_m = std::sqrt(sum_e2 / n);
+  s.rms_percent_of_side = s.side_m > 0 ? 100.0 * s.rms_m / s.side_m : kNaN;
+  s.mean_d2 = sum_d2 / n;
+  s.fitted_parameters = p;
+  s.dof = 3.0 * n - p;
+  s.tau_int = IntegratedAutocorrelation(result.d2, frames, knots);
+  s.design_effect = DesignEffect(result.d2, frames, knots);
+  const double inflation = s.tau_int * s.design_effect;
+  s.effective_points = n / inflation;
+  const double nu_eff = s.dof / inflation;
+  s.p_value = UpperGammaQ(nu_eff / 2, sum_d2 / inflation / 2);
+  s.critical_mean_d2 = Chi2Quantile(1 - options.significance, nu_eff) * inflation / n;
+  s.margin = s.critical_mean_d2 - s.mean_d2;
+  s.verdict = s.p_value >= options.significance ? "consistent" : "inconsistent";
+  s.covariance_too_large = 1 - UpperGammaQ(nu_eff / 2, sum_d2 / inflation / 2) <
+                           options.significance;
+  s.skill = sum_bd2 > 0 ? 1 - sum_d2 / sum_bd2 : kNaN;
+  s.baseline_rms_m = base_points > 0 ? std::sqrt(sum_be2 / base_points) : kNaN;
+
+  // The alignment's uncertainty: the inverse normal matrix, inflated by the correlation (fewer
+  // independent points) and by the misfit when the model does not explain the data.
+  s.time_offset_s = fit.tau;
+  s.rotation = fit.rotation;
+  s.translation = fit.translation;
+  if (p > 0) {
+    const Eigen::MatrixXd cov =
+        normal_free.inverse() * inflation * std::max(1.0, s.mean_d2 / 3.0);
+    int a = 0;
+    if (fit_time) s.time_offset_sigma_s = std::sqrt(cov(a, a)), ++a;
+    if (fit_rigid) s.rigid_covariance = cov.block(a, a, 6, 6);
+  }
+
+  // The simulation's sampling: is cubic interpolation good enough against the measurement?
+  s.interpolation_rms_m = std::sqrt(interp_sq / n);
+  const double meas_rms_sigma = std::sqrt(meas_var / n);
+  s.sim_too_sparse = s.interpolation_rms_m > options.max_interpolation_fraction * meas_rms_sigma;
+  if (s.sim_too_sparse) {
+    std::ostringstream o;
+    o << "simulation output too sparse: frames every " << s.sim_interval_s * 1e3
+      << " ms interpolate to " << s.interpolation_rms_m * 1e3 << " mm RMS, more than "
+      << options.max_interpolation_fraction * 100 << " % of the measurement's "
+      << meas_rms_sigma * 1e3 << " mm; write the simulation at a smaller output_interval "
+      << "(the interpolation error is added to Sigma_sim)";
+    s.notes.push_back(o.str());
+  }
+  if (s.sim_interval_s > s.meas_interval_s * 1.0001 && s.meas_interval_s > 0) {
+    std::ostringstream o;
+    o << "the simulation is stored every " << s.sim_interval_s * 1e3 << " ms, sparser than the "
+      << "measurement (" << s.meas_interval_s * 1e3 << " ms)";
+    s.notes.push_back(o.str());
+  }
+  if (!sim.covariance.empty()) {
+    s.sim_uncertainty = "from " + sim_name + " /knots/covariance";
+  } else if (options.sim_sigma_m > 0) {
+    std::ostringstream o;
+    o << "isotropic " << options.sim_sigma_m * 1e3 << " mm";
+    s.sim_uncertainty = o.str();
+  } else {
+    s.sim_uncertainty = "zero";
+    s.notes.push_back("Sigma_sim is zero (no discretisation study given): d2 weighs the "
+                      "measurement's covariance only");
+  }
+  if (meas.covariance.empty()) {
+    std::ostringstream o;
+    o << meas_name << " has no /knots/covariance: isotropic " << options.meas_sigma_m * 1e3
+      << " mm used";
+    s.notes.push_back(o.str());
+  }
+  if (s.covariance_too_large)
+    s.notes.push_back("mean d2 is far below its expectation: the covariances look too large");
+
+  // 4. Phases, from the simulated corner-polygon area: ejection until it first reaches half its
+  // maximum, spreading until the maximum opening, opened after it, contact from contact_time_s.
+  double max_area = -1;
+  int max_t = -1;
+  for (int t = 0; t < frames; ++t) {
+    if (std::isfinite(result.area_simulated[t]) && result.area_simulated[t] > max_area)
+      max_area = result.area_simulated[t], max_t = t;
+    if (std::isfinite(result.area_measured[t]) &&
+        result.area_measured[t] > s.max_area_measured_m2)
+      s.max_area_measured_m2 = result.area_measured[t], s.max_area_time_measured_s = meas.time[t];
+  }
+  const double t_end = meas.time.back() + 1e-9;
+  double t_half = meas.time.front(), t_max = t_end;
+  if (max_t >= 0) {
+    s.max_area_simulated_m2 = max_area;
+    s.max_area_time_simulated_s = meas.time[max_t];
+    t_max = meas.time[max_t];
+    for (int t = 0; t <= max_t; ++t)
+      if (result.area_simulated[t] >= 0.5 * max_area) {
+        t_half = meas.time[t];
+        break;
+      }
+  }
+  const double t_contact = std::isfinite(options.contact_time_s)
+                               ? std::max(options.contact_time_s - fit.tau, meas.time.front())
+                               : t_end;
+  t_max = std::min(t_max, t_contact);
+  t_half = std::min(t_half, t_max);
+  const std::array<std::tuple<const char*, double, double>, 4> phases = {
+      {{"ejection", meas.time.front(), t_half},
+       {"spreading", t_half, t_max},
+       {"opened", t_max, t_contact},
+       {"contact", t_contact, t_end}}};
+  for (const auto& [name, lo, hi] : phases) {
+    ScoreRow row;
+    row.name = name;
+    row.start_s = lo;
+    row.end_s = hi;
+    for (int t = 0; t < frames; ++t) {
+      if (meas.time[t] < lo || meas.time[t] >= hi) continue;
+      for (int k = 0; k < knots; ++k) {
+        const size_t i = static_cast<size_t>(t) * knots + k;
+        if (result.compared[i]) AddRow(&row, result.residual[i].squaredNorm(), result.d2[i]);
+      }
+    }
+    FinishRow(&row);
+    s.per_phase.push_back(row);
+  }
+  for (auto& row : s.per_class) FinishRow(&row);
+  for (auto& row : s.per_knot) FinishRow(&row);
+
+  // 5. The d2 histogram against chi^2_3 (bins of 0.5 up to 15, the last one open).
+  constexpr int kBins = 30;
+  constexpr double kWidth = 0.5;
+  result.d2_counts.assign(kBins, 0);
+  result.d2_expected.assign(kBins, 0);
+  for (int b = 0; b <= kBins; ++b) result.d2_edges.push_back(b * kWidth);
+  for (size_t i = 0; i < cells; ++i)
+    if (result.compared[i])
+      result.d2_counts[std::min(kBins - 1, static_cast<int>(result.d2[i] / kWidth))]++;
+  for (int b = 0; b < kBins; ++b) {
+    const double upper = b == kBins - 1 ? 1.0 : UpperGammaQ(1.5, result.d2_edges[b + 1] / 2);
+    result.d2_expected[b] = n * (UpperGammaQ(1.5, result.d2_edges[b] / 2) - upper);
+  }
+
+  s.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+std::string ScoreSummary::BriefReport() const {
+  std::ostringstream o;
+  o.precision(4);
+  o << "score: " << points << " knot-frames (" << frames << " frames x " << knots << " knots, "
+    << masked << " masked), alignment " << AlignmentName(alignment) << "\n";
+  o << "  RMS " << rms_m * 1e3 << " mm (" << rms_percent_of_side << " % of the " << side_m
+    << " m side), max " << max_m * 1e3 << " mm; corner/edge/inner RMS "
+    << per_class[0].rms_m * 1e3 << " / " << per_class[1].rms_m * 1e3 << " / "
+    << per_class[2].rms_m * 1e3 << " mm\n";
+  o << "  time offset " << time_offset_s * 1e3 << " +- " << time_offset_sigma_s * 1e3
+    << " ms; Sigma_sim " << sim_uncertainty << "\n";
+  o << "  mean d2 " << mean_d2 << " (expected 3; dof " << dof << ", effective points "
+    << effective_points << ", tau_int " << tau_int << " frames, design effect " << design_effect
+    << "), p = " << p_value << "\n";
+  o << "  verdict: " << verdict << " with the measurement uncertainty (rejected above mean d2 "
+    << critical_mean_d2 << ", margin " << margin << "); skill " << skill
+    << " against straight-line flight (" << baseline_rms_m * 1e3 << " mm RMS)\n";
+  for (const std::string& note : notes) o << "  note: " << note << "\n";
+  return o.str();
+}
+
+}  // namespace netlab::netsim

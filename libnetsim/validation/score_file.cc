@@ -1,0 +1,147 @@
+#include "libnetsim/validation/score_file.h"
+
+#include <filesystem>
+#include <stdexcept>
+
+#include "common/hdf5_util.h"
+
+namespace netlab::netsim {
+namespace {
+
+void Write(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims,
+           const double* data, const std::string& units) {
+  h5::WriteDataset(loc, name, H5T_NATIVE_DOUBLE, dims, data);
+  h5::SetUnits(loc, name, units);
+}
+
+void WriteScalar(hid_t loc, const std::string& name, double value, const std::string& units) {
+  Write(loc, name, {1}, &value, units);
+}
+
+// The per-row tables: one dataset per column.
+void WriteRows(hid_t loc, const std::vector<ScoreRow>& rows, bool spans) {
+  std::vector<double> rms, max, d2, points, start, end;
+  std::string names;
+  for (const ScoreRow& r : rows) {
+    rms.push_back(r.rms_m);
+    max.push_back(r.max_m);
+    d2.push_back(r.mean_d2);
+    points.push_back(r.points);
+    start.push_back(r.start_s);
+    end.push_back(r.end_s);
+    names += (names.empty() ? "" : "\n") + r.name;
+  }
+  const std::vector<hsize_t> dims = {rows.size()};
+  Write(loc, "rms_m", dims, rms.data(), "m");
+  Write(loc, "max_m", dims, max.data(), "m");
+  Write(loc, "mean_d2", dims, d2.data(), "1");
+  Write(loc, "points", dims, points.data(), "knot-frames");
+  if (spans) {
+    Write(loc, "start_s", dims, start.data(), "s");
+    Write(loc, "end_s", dims, end.data(), "s");
+  }
+  h5::WriteStringAttribute(loc, "names", names);
+}
+
+}  // namespace
+
+void WriteScore(const std::string& path, const ScoreResult& r) {
+  const ScoreSummary& s = r.summary;
+  const std::string partial = path + ".partial";
+  const hsize_t t = r.time.size(), k = r.grid.size();
+  {
+    h5::Id file = h5::CreateFile(partial);
+    const hid_t f = file.get();
+    h5::WriteStringAttribute(f, "format", kScoreFileFormat);
+    h5::WriteStringAttribute(f, "version", "1");
+    h5::WriteStringAttribute(f, "verdict", s.verdict);
+    h5::WriteStringAttribute(f, "alignment", AlignmentName(s.alignment));
+    std::string notes;
+    for (const auto& n : s.notes) notes += (notes.empty() ? "" : "\n") + n;
+    h5::WriteStringAttribute(f, "notes", notes);
+
+    Write(f, "time", {t}, r.time.data(), "s");
+    Write(f, "residual", {t, k, 3}, r.residual.data()->data(), "m");
+    Write(f, "d2", {t, k}, r.d2.data(), "1");
+    h5::WriteDataset(f, "compared", H5T_NATIVE_UINT8, {t, k}, r.compared.data());
+    h5::SetUnits(f, "compared", "1");
+
+    h5::Id knots = h5::CreateGroup(f, "knots");
+    std::vector<int32_t> grid;
+    for (const auto& g : r.grid) grid.insert(grid.end(), {g[0], g[1]});
+    h5::WriteDataset(knots.get(), "grid", H5T_NATIVE_INT32, {k, 2}, grid.data());
+    h5::SetUnits(knots.get(), "grid", "(row, col)");
+    std::vector<int32_t> classes(r.knot_class.begin(), r.knot_class.end());
+    h5::WriteDataset(knots.get(), "class", H5T_NATIVE_INT32, {k}, classes.data());
+    h5::SetUnits(knots.get(), "class", "0 corner, 1 edge, 2 inner");
+    WriteRows(knots.get(), s.per_knot, false);
+
+    h5::Id per_class = h5::CreateGroup(f, "per_class");
+    WriteRows(per_class.get(), {s.per_class.begin(), s.per_class.end()}, false);
+    h5::Id per_phase = h5::CreateGroup(f, "per_phase");
+    WriteRows(per_phase.get(), s.per_phase, true);
+
+    h5::Id evt = h5::CreateGroup(f, "error_vs_time");
+    Write(evt.get(), "rms_m", {t, 3}, r.rms_per_class.data()->data(), "m");
+    h5::WriteStringAttribute(evt.get(), "columns", "corner\nedge\ninner");
+
+    h5::Id global = h5::CreateGroup(f, "global");
+    Write(global.get(), "corner_area_measured", {t}, r.area_measured.data(), "m^2");
+    Write(global.get(), "corner_area_simulated", {t}, r.area_simulated.data(), "m^2");
+    Write(global.get(), "centroid_measured", {t, 3}, r.centroid_measured.data()->data(), "m");
+    Write(global.get(), "centroid_simulated", {t, 3}, r.centroid_simulated.data()->data(), "m");
+    Write(global.get(), "corner_distance_measured", {t, 6},
+          r.corner_distance_measured.data()->data(), "m");
+    Write(global.get(), "corner_distance_simulated", {t, 6},
+          r.corner_distance_simulated.data()->data(), "m");
+
+    h5::Id hist = h5::CreateGroup(f, "d2_histogram");
+    Write(hist.get(), "edges", {r.d2_edges.size()}, r.d2_edges.data(), "1");
+    Write(hist.get(), "counts", {r.d2_counts.size()}, r.d2_counts.data(), "knot-frames");
+    Write(hist.get(), "expected", {r.d2_expected.size()}, r.d2_expected.data(), "knot-frames");
+
+    h5::Id align = h5::CreateGroup(f, "alignment");
+    WriteScalar(align.get(), "time_offset_s", s.time_offset_s, "s");
+    WriteScalar(align.get(), "time_offset_sigma_s", s.time_offset_sigma_s, "s");
+    // Eigen is column-major: write the transposes' data for row-major HDF5.
+    const Eigen::Matrix3d rotation_rows = s.rotation.transpose();
+    Write(align.get(), "rotation", {3, 3}, rotation_rows.data(), "1 (x_in_meas = R x_in_sim + t)");
+    Write(align.get(), "translation", {3}, s.translation.data(), "m");
+    const Eigen::Matrix<double, 6, 6> cov_rows = s.rigid_covariance.transpose();
+    Write(align.get(), "covariance", {6, 6}, cov_rows.data(), "rad, m (rotation vector, translation)");
+
+    h5::Id summary = h5::CreateGroup(f, "summary");
+    const hid_t g = summary.get();
+    WriteScalar(g, "frames", s.frames, "1");
+    WriteScalar(g, "knots", s.knots, "1");
+    WriteScalar(g, "points", s.points, "knot-frames");
+    WriteScalar(g, "rms_mm", s.rms_m * 1e3, "mm");
+    WriteScalar(g, "rms_percent_of_side", s.rms_percent_of_side, "%");
+    WriteScalar(g, "max_mm", s.max_m * 1e3, "mm");
+    WriteScalar(g, "side_m", s.side_m, "m");
+    WriteScalar(g, "mean_d2", s.mean_d2, "1");
+    WriteScalar(g, "dof", s.dof, "1");
+    WriteScalar(g, "tau_int", s.tau_int, "frames");
+    WriteScalar(g, "design_effect", s.design_effect, "1");
+    WriteScalar(g, "effective_points", s.effective_points, "knot-frames");
+    WriteScalar(g, "p_value", s.p_value, "1");
+    WriteScalar(g, "critical_mean_d2", s.critical_mean_d2, "1");
+    WriteScalar(g, "margin", s.margin, "1");
+    WriteScalar(g, "skill", s.skill, "1");
+    WriteScalar(g, "baseline_rms_mm", s.baseline_rms_m * 1e3, "mm");
+    WriteScalar(g, "interpolation_rms_mm", s.interpolation_rms_m * 1e3, "mm");
+    WriteScalar(g, "max_area_measured_m2", s.max_area_measured_m2, "m^2");
+    WriteScalar(g, "max_area_time_measured_s", s.max_area_time_measured_s, "s");
+    WriteScalar(g, "max_area_simulated_m2", s.max_area_simulated_m2, "m^2");
+    WriteScalar(g, "max_area_time_simulated_s", s.max_area_time_simulated_s, "s");
+    h5::WriteStringAttribute(g, "sim_uncertainty", s.sim_uncertainty);
+    H5Fflush(f, H5F_SCOPE_GLOBAL);
+  }
+  std::error_code error;
+  std::filesystem::rename(partial, path, error);
+  if (error)
+    throw std::runtime_error(path + ": cannot rename " + partial + " into place: " +
+                             error.message());
+}
+
+}  // namespace netlab::netsim

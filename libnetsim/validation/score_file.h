@@ -1,0 +1,35 @@
+#pragma once
+// score.h5: what `netlab score` found, for plots and further analysis (docs/score.md lists every
+// dataset). Every dataset has a "units" attribute; masked knot-frames are NaN.
+//
+//   /time                          [T]       s     measured time of each row
+//   /residual                      [T,K,3]   m     measured - simulated, measured frame
+//   /d2                            [T,K]     1     Mahalanobis distance squared
+//   /compared                      [T,K]     1     1 where residual and d2 are defined
+//   /knots/grid                    [K,2]           (row, col)
+//   /knots/class                   [K]             0 corner, 1 edge, 2 inner
+//   /knots/rms_m, max_m, mean_d2, points   [K]     per knot
+//   /per_class/{rms_m,max_m,mean_d2,points} [3]    corner, edge, inner (attribute "names")
+//   /per_phase/{rms_m,max_m,mean_d2,points,start_s,end_s} [4]  (attribute "names")
+//   /error_vs_time/rms_m           [T,3]     m     RMS per class and frame
+//   /global/corner_area_{measured,simulated}        [T]    m^2
+//   /global/centroid_{measured,simulated}           [T,3]  m
+//   /global/corner_distance_{measured,simulated}    [T,6]  m  (corners 01 12 23 30 02 13)
+//   /d2_histogram/{edges [B+1], counts [B], expected [B]}  chi^2_3 expectation
+//   /alignment/{time_offset_s, time_offset_sigma_s [1], rotation [3,3], translation [3],
+//               covariance [6,6] (rotation vector rad, translation m)}  meas_from_sim
+//   /summary/<field>               [1]       the --json fields, units as attributes
+// Root attributes: format = "netlab-score", version = "1", verdict, alignment, notes.
+
+#include <string>
+
+#include "libnetsim/validation/score.h"
+
+namespace netlab::netsim {
+
+inline constexpr char kScoreFileFormat[] = "netlab-score";
+
+// Writes `result` to `path` via "<path>.partial" and a rename. Throws std::runtime_error.
+void WriteScore(const std::string& path, const ScoreResult& result);
+
+}  // namespace netlab::netsim
