@@ -16,6 +16,7 @@ const std::vector<Command>& Commands() {
       {"ingest", "check the synchronized camera recordings or convert them to HDF5", RunIngest},
       {"label", "label the knots automatically from seed labels (Find Path, tracking)", RunLabel},
       {"render", "film a simulated shot with a virtual camera rig, with ground truth", RunRender},
+      {"score", "score a simulation against measured knot tracks: error, d2, a verdict", RunScore},
       {"simulate", "run a Cosserat-rod net simulation from a scenario file", RunSimulate},
       {"triangulate", "3D knot tracks from 2D labels of calibrated cameras", RunTriangulate},
   };
