@@ -1,13 +1,16 @@
 #!/usr/bin/env bash
-# Sets up a fresh Debian machine (missing packages, build), then runs netlab's main job on the
+# Sets up a fresh Debian machine (missing packages, build), then runs netlab's whole loop on the
 # synthetic experiment, the digital twin of a parabolic-flight shot:
-#   1. simulate the first second of Net A shot at 0.5 m/s (scenarios/net_a_0.5.yaml);
-#   2. film it with the paper's four-camera rig at half resolution (raw Bayer frames, truth, and
-#      calibration images of the double-sided checker foil);
-#   3. check the recording as netlab reads any recording (netlab ingest);
-#   4. calibrate the rig from the rendered foil images and print its errors against the true rig;
-#   5. triangulate the knots from their true pixels (labels_true.h5, a perfect labeling) with the
-#      calibrated rig and compare the 3D tracks with the simulation.
+#   1. simulate the first second of Net A shot at 0.5 m/s (scenarios/net_a_0.5.yaml), and the same
+#      shot with a wrong model (no air drag: what the scoring must reject);
+#   2. colour the net's yarns and film the shot with the paper's four-camera rig at half
+#      resolution (raw Bayer frames, truth, and calibration images of the double-sided foil);
+#   3. calibrate the rig from the rendered foil images and print its errors against the true rig;
+#   4. label the knots with `netlab label` from the four corners of the first frame in each camera
+#      (taken from the truth: they stand for a person's 16 clicks);
+#   5. triangulate the labels with the calibrated rig into 3D tracks with covariances;
+#   6. score the tracks against the simulation that made the shot (consistent) and against the
+#      wrong one (rejected), each with an HTML report.
 # Everything lands in out/demo/. NETLAB_DEMO_SCALE and NETLAB_DEMO_FRAMES change the size.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
@@ -21,16 +24,21 @@ rm -rf "$out"
 mkdir -p "$out"
 SECONDS=0
 
-echo "== 1/5 simulate: Net A at 0.5 m/s, first second of flight" >&2
-"$netlab" simulate "$NETLAB_ROOT/scenarios/net_a_0.5.yaml" --duration 1.0 --out "$out/sim.h5"
+echo "== 1/6 simulate: Net A at 0.5 m/s, first second of flight; and without air drag" >&2
+"$netlab" simulate "$NETLAB_ROOT/scenarios/net_a_0.5.yaml" --duration 1.0 --out "$out/sim.h5" \
+  --quiet
+# The wrong model: the same scenario without its drag line (data files from the scenario folder).
+sed -e '/^drag:/d' -e "s|file: data/|file: $NETLAB_ROOT/scenarios/data/|" \
+  "$NETLAB_ROOT/scenarios/net_a_0.5.yaml" > "$out/net_a_0.5_no_drag.yaml"
+"$netlab" simulate "$out/net_a_0.5_no_drag.yaml" --duration 1.0 --out "$out/sim_no_drag.h5" \
+  --quiet
 
-echo "== 2/5 render: frames $frames through the paper's rig at scale $scale" >&2
-"$netlab" render --sim "$out/sim.h5" --out "$out/shot" --frames "$frames" --scale "$scale"
+echo "== 2/6 colour the yarns; render frames $frames through the paper's rig at scale $scale" >&2
+"$netlab" color-net --knots 11x11 --out "$out/coloring.yaml" --quiet
+"$netlab" render --sim "$out/sim.h5" --out "$out/shot" --frames "$frames" --scale "$scale" \
+  --coloring "$out/coloring.yaml"
 
-echo "== 3/5 ingest: check the rendered recording" >&2
-"$netlab" ingest "$out/shot/experiment.yaml" --check --decode
-
-echo "== 4/5 calibrate from the rendered foil images, compare with the true rig" >&2
+echo "== 3/6 calibrate from the rendered foil images, compare with the true rig" >&2
 images=()
 for camera in cam0 cam1 cam2 cam3; do
   images+=(--images "$camera=$out/shot/calibration/$camera/*.png")
@@ -38,10 +46,28 @@ done
 "$netlab" calibrate --board "$out/shot/calibration/foil.yaml" "${images[@]}" \
   --out "$out/rig_calibrated.yaml" --truth "$out/shot/rig_true.yaml"
 
-echo "== 5/5 triangulate the labeled knots with the calibrated rig, compare with the simulation" >&2
-"$netlab" triangulate --rig "$out/rig_calibrated.yaml" --labels "$out/shot/labels_true.h5" \
+echo "== 4/6 label: Find Path and tracking from the 4 corners of frame 0 in each camera" >&2
+python3 "$NETLAB_ROOT/scripts/seed_corners.py" "$out/shot/truth.h5" 11x11 "$out/seeds.csv" \
+  cam0 cam1 cam2 cam3
+"$netlab" label "$out/shot/experiment.yaml" --rig "$out/rig_calibrated.yaml" \
+  --coloring "$out/coloring.yaml" --seed "$out/seeds.csv" --out "$out/labels.h5"
+
+echo "== 5/6 triangulate the labels with the calibrated rig" >&2
+"$netlab" triangulate --rig "$out/rig_calibrated.yaml" --labels "$out/labels.h5" \
   --knots 11x11 --fps 179 --out "$out/tracks.h5" --csv "$out/" --truth "$out/sim.h5"
 
-echo "demo: done in ${SECONDS} s. Frames, truth and calibration images in $out/shot;" \
-  "calibrated rig in $out/rig_calibrated.yaml; 3D tracks in $out/tracks.h5 and" \
-  "$out/xyzpts.csv" >&2
+echo "== 6/6 score the tracks against the true simulation and against the one without drag" >&2
+# The calibrated rig has the foil's world frame, not the scenario's: fit one rigid motion (and the
+# launch-time offset) per score.
+"$netlab" score --measured "$out/tracks.h5" --sim "$out/sim.h5" --out "$out/score.h5" \
+  --report "$out/report.html" --align time+rigid --json > "$out/score.json"
+"$netlab" score --measured "$out/tracks.h5" --sim "$out/sim_no_drag.h5" \
+  --out "$out/score_no_drag.h5" --report "$out/report_no_drag.html" --align time+rigid \
+  --json > "$out/score_no_drag.json"
+
+verdict() { sed -e 's/.*"verdict":"\([a-z]*\)".*/\1/' "$1"; }
+echo "demo: done in ${SECONDS} s." >&2
+echo "  true simulation:    $(verdict "$out/score.json")   (report: $out/report.html)" >&2
+echo "  no-drag simulation: $(verdict "$out/score_no_drag.json")   (report: $out/report_no_drag.html)" >&2
+echo "  frames, truth and calibration images in $out/shot; rig in $out/rig_calibrated.yaml;" \
+  "labels in $out/labels.h5; 3D tracks in $out/tracks.h5" >&2

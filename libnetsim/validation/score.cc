@@ -174,7 +174,11 @@ class Scorer {
     const Matrix3d cov = pt.meas_cov +
                          fit.rotation * SimCovariance(t, pt.knot) * fit.rotation.transpose() +
                          Matrix3d::Identity() * error * error;
-    *w = cov.inverse();
+    // Through the Cholesky factor: W = L^-T L^-1 stays symmetric positive definite for the
+    // ill-conditioned covariances of two-camera points (a plain inverse gave negative d2 there).
+    const Eigen::LLT<Matrix3d> llt(cov);
+    const Matrix3d l_inv = llt.matrixL().solve(Matrix3d::Identity());
+    *w = l_inv.transpose() * l_inv;
     if (jacobian) {
       jacobian->col(0) = -(fit.rotation * v);
       jacobian->block<3, 3>(0, 1) = Skew(a);
@@ -585,10 +589,12 @@ ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOpti
         for (int a = 0; a < p; ++a) full(free[a]) = scale * delta(a);
         Fit trial = fit;
         trial.tau += full(0);
+        if (std::abs(trial.tau - options.time_offset_s) > options.max_time_offset_s) continue;
         trial.rotation = ExpSo3(full.segment<3>(1)) * fit.rotation;
         trial.translation = ExpSo3(full.segment<3>(1)) * fit.translation + full.segment<3>(4);
         const Evaluation te = scorer.Evaluate(trial, true);
-        if (te.cost <= e.cost) {
+        // The same points (the set is fixed; a step beyond its margin loses some) and no more cost.
+        if (te.used == e.used && te.cost <= e.cost) {
           fit = trial;
           const double change = e.cost - te.cost;
           e = te;
@@ -652,6 +658,7 @@ ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOpti
   for (int t = 0; t < frames && first_frame == frames; ++t)
     for (int k = 0; k < knots; ++k)
       if (result.compared[static_cast<size_t>(t) * knots + k]) first_frame = t;
+  if (first_frame == frames) Fail(overlap_error());
   const double t0 = meas.time[first_frame] + fit.tau;
   std::vector<Vector3d> p0(knots), v0(knots);
   std::vector<bool> has0(knots);
@@ -900,9 +907,10 @@ ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOpti
   for (int b = 0; b <= kBins; ++b) result.d2_edges.push_back(b * kWidth);
   for (size_t i = 0; i < cells; ++i)
     if (result.compared[i])
-      result.d2_counts[std::min(kBins - 1, static_cast<int>(result.d2[i] / kWidth))]++;
+      // In double first: a d2 of 1e10 (a wrong model) would overflow an int.
+      result.d2_counts[static_cast<int>(std::clamp(result.d2[i] / kWidth, 0.0, kBins - 1.0))]++;
   for (int b = 0; b < kBins; ++b) {
-    const double upper = b == kBins - 1 ? 1.0 : UpperGammaQ(1.5, result.d2_edges[b + 1] / 2);
+    const double upper = b == kBins - 1 ? 0.0 : UpperGammaQ(1.5, result.d2_edges[b + 1] / 2);
     result.d2_expected[b] = n * (UpperGammaQ(1.5, result.d2_edges[b] / 2) - upper);
   }
 
