@@ -114,7 +114,7 @@ class LinePlot {
     return o.str();
   }
 
-  static constexpr double kWidth = 560, kHeight = 300, kLeft = 62, kRight = 14, kTop = 14,
+  static constexpr double kWidth = 560, kHeight = 300, kLeft = 62, kRight = 14, kTop = 30,
                           kBottom = 44;
 
   template <typename Px, typename Py>
@@ -146,10 +146,10 @@ class LinePlot {
   void Legend(std::ostringstream& o) const {
     double x = kLeft + 12;
     for (const auto& s : series_) {
-      o << "<line x1=\"" << x << "\" x2=\"" << x + 22 << "\" y1=\"" << kTop + 14 << "\" y2=\""
-        << kTop + 14 << "\" stroke=\"" << s.colour << "\" stroke-width=\"3\""
+      o << "<line x1=\"" << x << "\" x2=\"" << x + 22 << "\" y1=\"" << kTop - 14 << "\" y2=\""
+        << kTop - 14 << "\" stroke=\"" << s.colour << "\" stroke-width=\"3\""
         << (s.dashed ? " stroke-dasharray=\"6 4\"" : "") << "/><text x=\"" << x + 27 << "\" y=\""
-        << kTop + 18 << "\">" << s.name << "</text>\n";
+        << kTop - 10 << "\">" << s.name << "</text>\n";
       x += 40 + 8 * s.name.size();
     }
   }
@@ -257,12 +257,12 @@ std::string Histogram(const ScoreResult& r) {
     o << (b ? "L" : "M") << Fixed(px(0.5 * (r.d2_edges[b] + r.d2_edges[b + 1])), 1) << ","
       << Fixed(py(r.d2_expected[b]), 1) << " ";
   o << "\"/>\n";
-  const double lx = w - right - 230;
-  o << "<rect x=\"" << lx << "\" y=\"" << top + 8 << "\" width=\"14\" height=\"10\" "
-    << "fill=\"#56b4e9\"/><text x=\"" << lx + 20 << "\" y=\"" << top + 18
-    << "\">measured d²</text><line x1=\"" << lx << "\" x2=\"" << lx + 14 << "\" y1=\"" << top + 32
-    << "\" y2=\"" << top + 32 << "\" stroke=\"#000\" stroke-width=\"2\"/><text x=\"" << lx + 20
-    << "\" y=\"" << top + 36 << "\">χ²₃ expected if consistent</text>\n</svg>\n";
+  const double lx = left + 12;
+  o << "<rect x=\"" << lx << "\" y=\"" << top - 19 << "\" width=\"14\" height=\"10\" "
+    << "fill=\"#56b4e9\"/><text x=\"" << lx + 20 << "\" y=\"" << top - 10
+    << "\">measured d²</text><line x1=\"" << lx + 130 << "\" x2=\"" << lx + 152 << "\" y1=\""
+    << top - 14 << "\" y2=\"" << top - 14 << "\" stroke=\"#000\" stroke-width=\"2\"/><text x=\""
+    << lx + 157 << "\" y=\"" << top - 10 << "\">χ²₃: expected if consistent</text>\n</svg>\n";
   return o.str();
 }
 
