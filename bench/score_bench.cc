@@ -5,6 +5,7 @@
 //
 //   build/bench/bench_score [--frames N]
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -13,8 +14,6 @@
 #include <filesystem>
 #include <random>
 #include <string>
-
-#include <Eigen/Geometry>
 
 #include "libnetsim/validation/score.h"
 #include "libnetsim/validation/score_file.h"
@@ -67,15 +66,18 @@ int main(int argc, char** argv) {
   pose.translation() = Eigen::Vector3d(0.01, -0.02, 0.005);
   const double tau = 0.0123;
   const KnotTracks sim = Tracks(frames + 40, 0.0, 0.0, nullptr, Eigen::Isometry3d::Identity());
-  const KnotTracks measured_aligned = Tracks(frames, tau, 5e-4, &rng, Eigen::Isometry3d::Identity());
+  const KnotTracks measured_aligned =
+      Tracks(frames, tau, 5e-4, &rng, Eigen::Isometry3d::Identity());
   const KnotTracks measured_moved = Tracks(frames, tau, 5e-4, &rng, pose);
   const auto dir = std::filesystem::temp_directory_path() / "netlab_bench_score";
   std::filesystem::create_directories(dir);
 
-  std::printf("bench_score: 121 knots x %d frames (%d knot-frames), 0.5 mm noise, offset %.1f ms\n\n",
-              frames, 121 * frames, tau * 1e3);
-  std::printf("| align | score (s) | score.h5 (s) | report (s) | offset error (us) | mean d2 | "
-              "tau_int | verdict |\n|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "bench_score: 121 knots x %d frames (%d knot-frames), 0.5 mm noise, offset %.1f ms\n\n",
+      frames, 121 * frames, tau * 1e3);
+  std::printf(
+      "| align | score (s) | score.h5 (s) | report (s) | offset error (us) | mean d2 | "
+      "tau_int | verdict |\n|---|---|---|---|---|---|---|---|\n");
   for (const char* name : {"none", "time", "rigid", "time+rigid"}) {
     netlab::netsim::ScoreOptions options;
     netlab::netsim::ParseAlignment(name, &options.alignment);

@@ -53,7 +53,7 @@ python3 "$NETLAB_ROOT/scripts/seed_corners.py" "$out/shot/truth.h5" 11x11 "$out/
 "$netlab" label "$out/shot/experiment.yaml" --rig "$out/rig_calibrated.yaml" \
   --coloring "$out/coloring.yaml" --seed "$out/seeds.csv" --out "$out/labels.h5"
 
-echo "== 5/6 triangulate with the calibrated rig: the labels of step 4, and the perfect labeling" >&2
+echo "== 5/6 triangulate with the calibrated rig: step 4's labels, and the perfect labeling" >&2
 "$netlab" triangulate --rig "$out/rig_calibrated.yaml" --labels "$out/labels.h5" \
   --knots 11x11 --fps 179 --out "$out/tracks_labeled.h5" --quiet
 # The true pixels (labels_true.h5) with a person's click noise as their stated uncertainty
@@ -76,7 +76,8 @@ score "$out/tracks_labeled.h5" "$out/sim.h5" score_labeled || true
 verdict() { sed -e 's/.*"verdict":"\([a-z]*\)".*/\1/' "$1"; }
 echo "demo: done in ${SECONDS} s." >&2
 echo "  true simulation:    $(verdict "$out/score.json")   (report: $out/score.html)" >&2
-echo "  no-drag simulation: $(verdict "$out/score_no_drag.json")   (report: $out/score_no_drag.html)" >&2
+echo "  no-drag simulation: $(verdict "$out/score_no_drag.json")" \
+  "  (report: $out/score_no_drag.html)" >&2
 echo "  tracks labeled from the corners vs the true simulation:" \
   "$(verdict "$out/score_labeled.json" 2>/dev/null)   (report: $out/score_labeled.html)" >&2
 echo "  frames, truth and calibration images in $out/shot; rig in $out/rig_calibrated.yaml;" \

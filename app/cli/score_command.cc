@@ -100,10 +100,10 @@ void PrintJson(const netsim::ScoreSummary& s, const std::string& out, const std:
 
 int RunScore(const std::vector<std::string>& args) {
   try {
-    const CommandLine cl(args, {"json", "quiet", "help"},
-                         {"measured", "sim", "out", "report", "align", "time-offset",
-                          "max-time-offset", "sim-sigma", "meas-sigma", "significance",
-                          "contact-time"});
+    const CommandLine cl(
+        args, {"json", "quiet", "help"},
+        {"measured", "sim", "out", "report", "align", "time-offset", "max-time-offset", "sim-sigma",
+         "meas-sigma", "significance", "contact-time"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -129,7 +129,8 @@ int RunScore(const std::vector<std::string>& args) {
     if (!options.IsValid(&why)) throw UsageError(why);
     const bool quiet = cl.Flag("quiet");
 
-    if (!quiet) std::fprintf(stderr, "reading %s and %s\n", measured_path.c_str(), sim_path.c_str());
+    if (!quiet)
+      std::fprintf(stderr, "reading %s and %s\n", measured_path.c_str(), sim_path.c_str());
     const netsim::KnotTracks measured = netsim::ReadKnotTracks(measured_path);
     const netsim::KnotTracks sim = netsim::ReadKnotTracks(sim_path);
     if (!quiet)

@@ -1,5 +1,10 @@
 #include "libnetsim/validation/score.h"
 
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -9,12 +14,6 @@
 #include <sstream>
 #include <stdexcept>
 #include <tuple>
-
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
-#include <Eigen/Geometry>
-#include <Eigen/LU>
-#include <Eigen/SVD>
 
 #include "common/hdf5_util.h"
 
@@ -138,7 +137,7 @@ struct Fit {
 struct Evaluation {
   double cost = 0.0;  // sum d2
   int used = 0;
-  Matrix7d normal = Matrix7d::Zero();  // J^T W J, parameters (tau, dtheta, dt)
+  Matrix7d normal = Matrix7d::Zero();    // J^T W J, parameters (tau, dtheta, dt)
   Vector7d gradient = Vector7d::Zero();  // J^T W r
 };
 
@@ -146,16 +145,20 @@ class Scorer {
  public:
   Scorer(const KnotTracks& meas, const KnotTracks& sim, const std::vector<int>& sim_knot,
          std::vector<Point> points, const ScoreOptions& options)
-      : meas_(meas), sim_(sim), interp_(sim, sim_knot), sim_knot_(sim_knot),
-        points_(std::move(points)), options_(options) {}
+      : meas_(meas),
+        sim_(sim),
+        interp_(sim, sim_knot),
+        sim_knot_(sim_knot),
+        points_(std::move(points)),
+        options_(options) {}
 
   // Sigma_sim of knot k at simulated time t, simulation frame (zero, isotropic or the file's).
   Matrix3d SimCovariance(double t, int k) const {
     if (!sim_.covariance.empty()) {
       const auto& s = sim_.time;
-      const int i = std::clamp(
-          static_cast<int>(std::lower_bound(s.begin(), s.end(), t) - s.begin()), 0,
-          static_cast<int>(s.size()) - 1);
+      const int i =
+          std::clamp(static_cast<int>(std::lower_bound(s.begin(), s.end(), t) - s.begin()), 0,
+                     static_cast<int>(s.size()) - 1);
       return sim_.covariance[static_cast<size_t>(i) * sim_.knots() + sim_knot_[k]];
     }
     return Matrix3d::Identity() * options_.sim_sigma_m * options_.sim_sigma_m;
@@ -330,9 +333,7 @@ double DesignEffect(const std::vector<double>& x, int frames, int knots) {
   return sum_of_sq > 0 ? std::max(1.0, sum_sq_of_sums / sum_of_sq) : 1.0;
 }
 
-double QuadArea(const Vector3d c[4]) {
-  return 0.5 * (c[2] - c[0]).cross(c[3] - c[1]).norm();
-}
+double QuadArea(const Vector3d c[4]) { return 0.5 * (c[2] - c[0]).cross(c[3] - c[1]).norm(); }
 
 void AddRow(ScoreRow* row, double e2, double d2) {
   row->points++;
@@ -364,10 +365,14 @@ bool ParseAlignment(const std::string& text, Alignment* alignment) {
 
 std::string AlignmentName(Alignment alignment) {
   switch (alignment) {
-    case Alignment::kNone: return "none";
-    case Alignment::kTime: return "time";
-    case Alignment::kRigid: return "rigid";
-    case Alignment::kTimeAndRigid: return "time+rigid";
+    case Alignment::kNone:
+      return "none";
+    case Alignment::kTime:
+      return "time";
+    case Alignment::kRigid:
+      return "rigid";
+    case Alignment::kTimeAndRigid:
+      return "time+rigid";
   }
   return "?";
 }
@@ -465,7 +470,8 @@ ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOpti
   const int knots = meas.knots();
   std::vector<int> sim_knot(knots);
   for (int k = 0; k < knots; ++k) {
-    sim_knot[k] = sim.FindKnot(meas.grid[k][0], meas.grid[k][1], meas.net.empty() ? 0 : meas.net[k]);
+    sim_knot[k] =
+        sim.FindKnot(meas.grid[k][0], meas.grid[k][1], meas.net.empty() ? 0 : meas.net[k]);
     if (sim_knot[k] < 0)
       Fail("grid mismatch: knot " + KnotName(meas.grid[k]) + " of " + meas_name +
            " (/knots/grid row " + std::to_string(k) + ") is not in " + sim_name + " (" +
@@ -484,8 +490,9 @@ ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOpti
 
   // The measured points, each with a checked covariance.
   if (meas.covariance.empty() && options.meas_sigma_m <= 0)
-    Fail(meas_name + ": no /knots/covariance to weight the residuals by (give a measurement "
-                     "sigma, --meas-sigma)");
+    Fail(meas_name +
+         ": no /knots/covariance to weight the residuals by (give a measurement "
+         "sigma, --meas-sigma)");
   std::vector<Point> points;
   int masked = 0;
   for (int t = 0; t < meas.frames(); ++t)
@@ -505,12 +512,12 @@ ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOpti
         const double scale = cov.cwiseAbs().maxCoeff();
         const Eigen::LLT<Matrix3d> llt(cov);
         if ((cov - cov.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale || scale <= 0 ||
-            llt.info() != Eigen::Success || llt.matrixL().toDenseMatrix().diagonal().minCoeff() <=
-                                                std::sqrt(scale) * 1e-9) {
+            llt.info() != Eigen::Success ||
+            llt.matrixL().toDenseMatrix().diagonal().minCoeff() <= std::sqrt(scale) * 1e-9) {
           std::ostringstream s;
           s << meas_name << ": /knots/covariance is not symmetric positive definite at " << where
-            << " (eigenvalues " << Eigen::SelfAdjointEigenSolver<Matrix3d>(cov).eigenvalues().transpose()
-            << " m^2)";
+            << " (eigenvalues "
+            << Eigen::SelfAdjointEigenSolver<Matrix3d>(cov).eigenvalues().transpose() << " m^2)";
           Fail(s.str());
         }
       }
@@ -545,8 +552,8 @@ ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOpti
   const bool fit_time = FitsTime(options.alignment), fit_rigid = FitsRigid(options.alignment);
   const int stride = std::max<int>(1, static_cast<int>(scorer.points().size() / 20000));
   if (fit_time) {
-    const double step = 0.5 * std::min(s.sim_interval_s,
-                                       s.meas_interval_s > 0 ? s.meas_interval_s : s.sim_interval_s);
+    const double step = 0.5 * std::min(s.sim_interval_s, s.meas_interval_s > 0 ? s.meas_interval_s
+                                                                               : s.sim_interval_s);
     const int steps = static_cast<int>(std::ceil(options.max_time_offset_s / step));
     double best = std::numeric_limits<double>::infinity();
     Fit best_fit;
@@ -756,8 +763,7 @@ ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOpti
     const size_t i = static_cast<size_t>(pt.frame) * knots + pt.knot;
     if (!result.compared[i] || !has0[pt.knot]) continue;
     const double ts = meas.time[pt.frame] + fit.tau;
-    const Vector3d pb =
-        fit.rotation * (p0[pt.knot] + v0[pt.knot] * (ts - t0)) + fit.translation;
+    const Vector3d pb = fit.rotation * (p0[pt.knot] + v0[pt.knot] * (ts - t0)) + fit.translation;
     const Vector3d rb = meas.Position(pt.frame, pt.knot) - pb;
     Vector3d r;
     Matrix3d w;
@@ -791,8 +797,8 @@ ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOpti
   s.critical_mean_d2 = Chi2Quantile(1 - options.significance, nu_eff) * inflation / n;
   s.margin = s.critical_mean_d2 - s.mean_d2;
   s.verdict = s.p_value >= options.significance ? "consistent" : "inconsistent";
-  s.covariance_too_large = 1 - UpperGammaQ(nu_eff / 2, sum_d2 / inflation / 2) <
-                           options.significance;
+  s.covariance_too_large =
+      1 - UpperGammaQ(nu_eff / 2, sum_d2 / inflation / 2) < options.significance;
   s.skill = sum_bd2 > 0 ? 1 - sum_d2 / sum_bd2 : kNaN;
   s.baseline_rms_m = base_points > 0 ? std::sqrt(sum_be2 / base_points) : kNaN;
 
@@ -802,8 +808,7 @@ ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOpti
   s.rotation = fit.rotation;
   s.translation = fit.translation;
   if (p > 0) {
-    const Eigen::MatrixXd cov =
-        normal_free.inverse() * inflation * std::max(1.0, s.mean_d2 / 3.0);
+    const Eigen::MatrixXd cov = normal_free.inverse() * inflation * std::max(1.0, s.mean_d2 / 3.0);
     int a = 0;
     if (fit_time) s.time_offset_sigma_s = std::sqrt(cov(a, a)), ++a;
     if (fit_rigid) s.rigid_covariance = cov.block(a, a, 6, 6);
@@ -836,8 +841,9 @@ ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOpti
     s.sim_uncertainty = o.str();
   } else {
     s.sim_uncertainty = "zero";
-    s.notes.push_back("Sigma_sim is zero (no discretisation study given): d2 weighs the "
-                      "measurement's covariance only");
+    s.notes.push_back(
+        "Sigma_sim is zero (no discretisation study given): d2 weighs the "
+        "measurement's covariance only");
   }
   if (meas.covariance.empty()) {
     std::ostringstream o;
@@ -855,8 +861,7 @@ ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOpti
   for (int t = 0; t < frames; ++t) {
     if (std::isfinite(result.area_simulated[t]) && result.area_simulated[t] > max_area)
       max_area = result.area_simulated[t], max_t = t;
-    if (std::isfinite(result.area_measured[t]) &&
-        result.area_measured[t] > s.max_area_measured_m2)
+    if (std::isfinite(result.area_measured[t]) && result.area_measured[t] > s.max_area_measured_m2)
       s.max_area_measured_m2 = result.area_measured[t], s.max_area_time_measured_s = meas.time[t];
   }
   const double t_end = meas.time.back() + 1e-9;
@@ -924,9 +929,8 @@ std::string ScoreSummary::BriefReport() const {
   o << "score: " << points << " knot-frames (" << frames << " frames x " << knots << " knots, "
     << masked << " masked), alignment " << AlignmentName(alignment) << "\n";
   o << "  RMS " << rms_m * 1e3 << " mm (" << rms_percent_of_side << " % of the " << side_m
-    << " m side), max " << max_m * 1e3 << " mm; corner/edge/inner RMS "
-    << per_class[0].rms_m * 1e3 << " / " << per_class[1].rms_m * 1e3 << " / "
-    << per_class[2].rms_m * 1e3 << " mm\n";
+    << " m side), max " << max_m * 1e3 << " mm; corner/edge/inner RMS " << per_class[0].rms_m * 1e3
+    << " / " << per_class[1].rms_m * 1e3 << " / " << per_class[2].rms_m * 1e3 << " mm\n";
   o << "  time offset " << time_offset_s * 1e3 << " +- " << time_offset_sigma_s * 1e3
     << " ms; Sigma_sim " << sim_uncertainty << "\n";
   o << "  mean d2 " << mean_d2 << " (expected 3; dof " << dof << ", effective points "

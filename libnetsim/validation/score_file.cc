@@ -8,8 +8,8 @@
 namespace netlab::netsim {
 namespace {
 
-void Write(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims,
-           const double* data, const std::string& units) {
+void Write(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims, const double* data,
+           const std::string& units) {
   h5::WriteDataset(loc, name, H5T_NATIVE_DOUBLE, dims, data);
   h5::SetUnits(loc, name, units);
 }
@@ -108,7 +108,8 @@ void WriteScore(const std::string& path, const ScoreResult& r) {
     Write(align.get(), "rotation", {3, 3}, rotation_rows.data(), "1 (x_in_meas = R x_in_sim + t)");
     Write(align.get(), "translation", {3}, s.translation.data(), "m");
     const Eigen::Matrix<double, 6, 6> cov_rows = s.rigid_covariance.transpose();
-    Write(align.get(), "covariance", {6, 6}, cov_rows.data(), "rad, m (rotation vector, translation)");
+    Write(align.get(), "covariance", {6, 6}, cov_rows.data(),
+          "rad, m (rotation vector, translation)");
 
     h5::Id summary = h5::CreateGroup(f, "summary");
     const hid_t g = summary.get();
@@ -140,8 +141,8 @@ void WriteScore(const std::string& path, const ScoreResult& r) {
   std::error_code error;
   std::filesystem::rename(partial, path, error);
   if (error)
-    throw std::runtime_error(path + ": cannot rename " + partial + " into place: " +
-                             error.message());
+    throw std::runtime_error(path + ": cannot rename " + partial +
+                             " into place: " + error.message());
 }
 
 }  // namespace netlab::netsim

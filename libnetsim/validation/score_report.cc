@@ -33,11 +33,20 @@ std::string Escape(const std::string& text) {
   std::string out;
   for (char c : text) {
     switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '&':
+        out += "&amp;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -65,8 +74,8 @@ class LinePlot {
  public:
   struct Series {
     std::string name, colour;
-    std::vector<double> x, y;       // plotted (display units)
-    std::vector<double> data;       // as in score.h5 (data-values)
+    std::vector<double> x, y;  // plotted (display units)
+    std::vector<double> data;  // as in score.h5 (data-values)
     bool dashed = false;
   };
 
@@ -88,11 +97,13 @@ class LinePlot {
     if (y1 <= y0) y1 = y0 + 1;
     y1 += 0.05 * (y1 - y0);
     auto px = [&](double x) { return kLeft + (x - x0) / (x1 - x0) * (kWidth - kLeft - kRight); };
-    auto py = [&](double y) { return kHeight - kBottom - (y - y0) / (y1 - y0) * (kHeight - kTop - kBottom); };
+    auto py = [&](double y) {
+      return kHeight - kBottom - (y - y0) / (y1 - y0) * (kHeight - kTop - kBottom);
+    };
     std::ostringstream o;
     o << "<svg id=\"" << id << "\" class=\"plot\" viewBox=\"0 0 " << kWidth << " " << kHeight
-      << "\" width=\"" << kWidth << "\" height=\"" << kHeight << "\" data-times=\""
-      << Values(times) << "\">\n";
+      << "\" width=\"" << kWidth << "\" height=\"" << kHeight << "\" data-times=\"" << Values(times)
+      << "\">\n";
     Axes(o, x0, x1, y0, y1, px, py, x_label, y_label);
     for (const auto& s : series_) {
       o << "<path data-series=\"" << s.name << "\" data-values=\"" << Values(s.data)
@@ -118,8 +129,8 @@ class LinePlot {
                           kBottom = 44;
 
   template <typename Px, typename Py>
-  static void Axes(std::ostringstream& o, double x0, double x1, double y0, double y1, Px px,
-                   Py py, const std::string& x_label, const std::string& y_label) {
+  static void Axes(std::ostringstream& o, double x0, double x1, double y0, double y1, Px px, Py py,
+                   const std::string& x_label, const std::string& y_label) {
     o << "<g class=\"axes\">\n";
     for (double t : Ticks(y0, y1)) {
       o << "<line x1=\"" << kLeft << "\" x2=\"" << kWidth - kRight << "\" y1=\"" << Fixed(py(t), 1)
@@ -299,15 +310,16 @@ std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info) {
     << ".notes{background:#fff8e1;padding:8px 16px;border-radius:6px;font-size:13px}\n"
     << "</style></head><body>\n";
   o << "<h1>netlab score</h1>\n<div class=\"files\">measured: " << Escape(info.measured_path)
-    << " &nbsp; simulation: " << Escape(info.sim_path) << " &nbsp; data: "
-    << Escape(info.score_path) << "</div>\n";
+    << " &nbsp; simulation: " << Escape(info.sim_path)
+    << " &nbsp; data: " << Escape(info.score_path) << "</div>\n";
   o << "<div class=\"verdict " << (ok ? "ok" : "bad") << "\"><b>"
-    << (ok ? "Consistent" : "Not consistent") << "</b> with the measurement uncertainty: mean d² = "
-    << Fixed(s.mean_d2, 2) << " where 3 is expected; the test rejects above "
-    << Fixed(s.critical_mean_d2, 2) << " (p = " << Num(s.p_value, 3) << ").</div>\n";
+    << (ok ? "Consistent" : "Not consistent")
+    << "</b> with the measurement uncertainty: mean d² = " << Fixed(s.mean_d2, 2)
+    << " where 3 is expected; the test rejects above " << Fixed(s.critical_mean_d2, 2)
+    << " (p = " << Num(s.p_value, 3) << ").</div>\n";
   o << "<div class=\"numbers\">"
-    << "<div>RMS error<b>" << Fixed(s.rms_m * 1e3, 2) << " mm</b>" << Fixed(s.rms_percent_of_side, 2)
-    << " % of the " << Fixed(s.side_m, 2) << " m side</div>"
+    << "<div>RMS error<b>" << Fixed(s.rms_m * 1e3, 2) << " mm</b>"
+    << Fixed(s.rms_percent_of_side, 2) << " % of the " << Fixed(s.side_m, 2) << " m side</div>"
     << "<div>largest error<b>" << Fixed(s.max_m * 1e3, 2) << " mm</b>over " << s.points
     << " knot-frames</div>"
     << "<div>time offset<b>" << Fixed(s.time_offset_s * 1e3, 3) << " ms</b>± "
@@ -350,7 +362,8 @@ std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info) {
     << evt.Svg("error-vs-time", "measured time (s)", "RMS error (mm)", r.time)
     << "<div class=\"caption\">RMS distance between measured and simulated knots in each frame; "
        "corners carry the masses and lead the net, edges and the inner knots follow.</div></div>\n";
-  o << "<div><h2>Error per knot</h2>\n" << KnotMap(r)
+  o << "<div><h2>Error per knot</h2>\n"
+    << KnotMap(r)
     << "<div class=\"caption\">Each square is a knot of the net, placed by its grid (row, col), "
        "coloured by its RMS error over all frames (hover for the numbers; grey: never measured)."
        "</div></div>\n";
@@ -360,7 +373,8 @@ std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info) {
     << Fixed(s.max_area_measured_m2, 3) << " m² at " << Fixed(s.max_area_time_measured_s, 3)
     << " s, simulated " << Fixed(s.max_area_simulated_m2, 3) << " m² at "
     << Fixed(s.max_area_time_simulated_s, 3) << " s.</div></div>\n";
-  o << "<div><h2>d² against its expectation</h2>\n" << Histogram(r)
+  o << "<div><h2>d² against its expectation</h2>\n"
+    << Histogram(r)
     << "<div class=\"caption\">If the simulation is right and the covariances are honest, the "
        "bars follow the black curve (χ² with 3 degrees of freedom). Bars piled up on the right: "
        "errors larger than the measurement explains.</div></div></div>\n";
@@ -380,8 +394,8 @@ std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info) {
        "from the given contact time.</p>\n";
   o << "<h2>Alignment (" << AlignmentName(s.alignment) << ")</h2>\n<table>"
     << Row({"fitted parameters", std::to_string(s.fitted_parameters)})
-    << Row({"time offset (ms)", Fixed(s.time_offset_s * 1e3, 3) + " ± " +
-                                    Fixed(s.time_offset_sigma_s * 1e3, 3)})
+    << Row({"time offset (ms)",
+            Fixed(s.time_offset_s * 1e3, 3) + " ± " + Fixed(s.time_offset_sigma_s * 1e3, 3)})
     << Row({"translation meas_from_sim (mm)", Fixed(s.translation.x() * 1e3, 2) + ", " +
                                                   Fixed(s.translation.y() * 1e3, 2) + ", " +
                                                   Fixed(s.translation.z() * 1e3, 2)})
@@ -405,8 +419,8 @@ void WriteScoreReport(const std::string& path, const ScoreResult& result, const 
   std::error_code error;
   std::filesystem::rename(partial, path, error);
   if (error)
-    throw std::runtime_error(path + ": cannot rename " + partial + " into place: " +
-                             error.message());
+    throw std::runtime_error(path + ": cannot rename " + partial +
+                             " into place: " + error.message());
 }
 
 }  // namespace netlab::netsim

@@ -7,7 +7,8 @@
 //
 // Every plotted series carries its data as written to score.h5 (SI units, NaN as "nan") in a
 // data-values attribute, so a test (and a curious reader) can check a plot against the file:
-//   <svg id="error-vs-time">   <path data-series="corner|edge|inner" data-values=...> (/error_vs_time/rms_m)
+//   <svg id="error-vs-time">   <path data-series="corner|edge|inner" data-values=...>
+//                              (/error_vs_time/rms_m)
 //   <svg id="knot-map">        data-values (/knots/rms_m), one <rect data-knot="(r,c)"> per knot
 //   <svg id="corner-area">     <path data-series="measured|simulated"> (/global/corner_area_*)
 //   <svg id="d2-histogram">    <g data-series="counts"> bars, <path data-series="expected">

@@ -60,9 +60,9 @@ TEST_F(ScoreCommand, ScoresAShiftedNoisyMeasurementAsConsistentWithTheContractFi
   // The measurement starts 12.3 ms into the simulation: the offset the command must find.
   netlab::netsim::WriteKnotTracks(Path("tracks.h5"), Flight(6, 6, 120, 0.0123, 5e-4, &rng));
   netlab::netsim::WriteKnotTracks(Path("sim.h5"), Flight(6, 6, 160, 0.0, 0.0, nullptr));
-  const auto r = RunNetlab("score --measured " + Path("tracks.h5") + " --sim " + Path("sim.h5") +
-                           " --out " + Path("score.h5") + " --report " + Path("report.html") +
-                           " --align time --json");
+  const auto r =
+      RunNetlab("score --measured " + Path("tracks.h5") + " --sim " + Path("sim.h5") + " --out " +
+                Path("score.h5") + " --report " + Path("report.html") + " --align time --json");
   ASSERT_EQ(r.status, 0) << r.err;
   const auto json = LastJson(r.out);
   for (const char* key : {"frames", "knots", "points", "rms_mm", "rms_percent_of_side", "max_mm",
@@ -92,8 +92,7 @@ TEST_F(ScoreCommand, ScoresAShiftedNoisyMeasurementAsConsistentWithTheContractFi
   double offset = 0;
   netlab::h5::ReadDataset(file.get(), "/alignment/time_offset_s", H5T_NATIVE_DOUBLE, &offset);
   EXPECT_NEAR(offset, json["time_offset_s"].number(), 1e-10);  // JSON has 10 digits
-  EXPECT_EQ(netlab::h5::DatasetDims(file.get(), "/residual"),
-            (std::vector<hsize_t>{120, 36, 3}));
+  EXPECT_EQ(netlab::h5::DatasetDims(file.get(), "/residual"), (std::vector<hsize_t>{120, 36, 3}));
 }
 
 TEST_F(ScoreCommand, AGridMismatchIsAnErrorNamingTheFiles) {

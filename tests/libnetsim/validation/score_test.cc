@@ -1,14 +1,12 @@
 #include "libnetsim/validation/score.h"
 
 #include <gtest/gtest.h>
-
 #include <unistd.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <filesystem>
 #include <random>
-
-#include <Eigen/Geometry>
 
 #include "libnetsim/scenario/run_scenario.h"
 #include "libnetsim/scenario/scenario.h"
@@ -46,8 +44,9 @@ KnotTracks MakeTracks(int rows, int cols, int frames, double t0, double fps = kF
 
 // The measured tracks of the simulation `sim_of`: frames at i / fps, simulated time i / fps +
 // tau, seen through meas_from_sim, with Gaussian noise of covariance `cov` (stored).
-KnotTracks Measure(int rows, int cols, int frames, double tau, const Eigen::Isometry3d& meas_from_sim,
-                   const Eigen::Matrix3d& cov, std::mt19937* rng) {
+KnotTracks Measure(int rows, int cols, int frames, double tau,
+                   const Eigen::Isometry3d& meas_from_sim, const Eigen::Matrix3d& cov,
+                   std::mt19937* rng) {
   KnotTracks m = MakeTracks(rows, cols, frames, 0.0);
   const Eigen::Matrix3d l = cov.llt().matrixL();
   std::normal_distribution<double> normal;
@@ -87,7 +86,7 @@ TEST(Score, SimulationAgainstItselfIsZero) {
 
 TEST(Score, RecoversAKnownTimeShiftToAFractionOfAMillisecond) {
   const KnotTracks sim = MakeTracks(11, 11, 200, 0.0);
-  const double tau = 0.0234;  // 4.19 frames: not a whole frame
+  const double tau = 0.0234;                                       // 4.19 frames: not a whole frame
   const Eigen::Matrix3d cov = Eigen::Matrix3d::Identity() * 1e-8;  // 0.1 mm
   const KnotTracks meas = Measure(11, 11, 150, tau, Eigen::Isometry3d::Identity(), cov, nullptr);
   ScoreOptions options;
@@ -176,8 +175,8 @@ TEST(Score, MissingKnotsAreMaskedNotFilled) {
 // A wrong model: the real net (made by the simulator) against one with no air drag, measured
 // with 0.3 mm noise.
 TEST(Score, APerturbedSimulationIsRejectedAndTheRightOneIsNot) {
-  const std::string dir = std::filesystem::temp_directory_path() /
-                          ("netlab_score_" + std::to_string(getpid()));
+  const std::string dir =
+      std::filesystem::temp_directory_path() / ("netlab_score_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
   const std::string scene = R"(
 name: small_net
@@ -186,12 +185,15 @@ output_interval: 0.005586592178770949
 integrator: {type: explicit, dt: auto}
 drag: {air_density: 1.0, drag_coefficient: 1.2}
 materials:
-  nylon: {diameter: 1.0e-3, linear_density: 8.95e-4, stretch_stiffness: 1571, stretch_damping: 7.6e-4,
-          bend_stiffness: 9.82e-5, bend_damping: 6.0e-9, twist_stiffness: 7.07e-5, twist_damping: 5.7e-11}
+  nylon: {diameter: 1.0e-3, linear_density: 8.95e-4, stretch_stiffness: 1571,
+          stretch_damping: 7.6e-4, bend_stiffness: 9.82e-5, bend_damping: 6.0e-9,
+          twist_stiffness: 7.07e-5, twist_damping: 5.7e-11}
 nets:
-  - {name: net, material: nylon, knots: [5, 5], mesh: 0.1, segments_per_link: 2, center: [0, 0, 0],
-     normal: [1, 0, 0], x_axis: [0, 1, 0], knot_mass: 3e-05, corner_mass: 0.02, velocity: [0.8, 0, 0],
-     corner_velocities: [[0.05, -0.05, -0.05], [0.05, 0.05, -0.05], [0.05, -0.05, 0.05], [0.05, 0.05, 0.05]]}
+  - {name: net, material: nylon, knots: [5, 5], mesh: 0.1, segments_per_link: 2,
+     center: [0, 0, 0], normal: [1, 0, 0], x_axis: [0, 1, 0], knot_mass: 3e-05,
+     corner_mass: 0.02, velocity: [0.8, 0, 0],
+     corner_velocities: [[0.05, -0.05, -0.05], [0.05, 0.05, -0.05], [0.05, -0.05, 0.05],
+                         [0.05, 0.05, 0.05]]}
 )";
   auto run = [&](const std::string& text, const std::string& name) {
     RunOptions run_options;
@@ -277,7 +279,9 @@ TEST(Score, ACovarianceThatIsNotPositiveDefiniteNamesFrameAndKnot) {
   meas.covariance[7 * 121 + 1].diagonal() << 1e-6, -1e-6, 1e-6;
   std::string error = ErrorOf(meas, sim);
   EXPECT_NE(error.find("tracks.h5: /knots/covariance is not symmetric positive definite at "
-                       "frame 7"), std::string::npos) << error;
+                       "frame 7"),
+            std::string::npos)
+      << error;
   EXPECT_NE(error.find("knot (0,1)"), std::string::npos) << error;
   meas.covariance[7 * 121 + 1] = Eigen::Matrix3d::Identity() * 1e-6;
   meas.covariance[9 * 121 + 1](0, 1) = 5e-7;  // not symmetric
@@ -318,7 +322,7 @@ TEST(Score, OptionsAreChecked) {
 }
 
 TEST(Chi2, MatchesPublishedQuantiles) {
-  EXPECT_NEAR(Chi2Quantile(0.95, 3), 7.8147, 1e-3);   // chi^2 tables
+  EXPECT_NEAR(Chi2Quantile(0.95, 3), 7.8147, 1e-3);  // chi^2 tables
   EXPECT_NEAR(Chi2Quantile(0.99, 10), 23.2093, 1e-3);
   EXPECT_NEAR(UpperGammaQ(1.5, 7.8147 / 2), 0.05, 1e-5);
   EXPECT_NEAR(UpperGammaQ(50, 124.342 / 2), 0.05, 1e-4);  // chi^2_100
