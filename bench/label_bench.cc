@@ -24,10 +24,12 @@
 #include <array>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <map>
 #include <random>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -85,153 +87,266 @@ void Usage() {
                "  netlab render --sim sim.h5 --out shot --frames 0:199 --coloring coloring.yaml\n");
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+struct BenchOptions {
   std::string shot, coloring_path;
-  int first = -1, last = -1;
-  double radius = 6.0;
-  uint64_t seed = 1;
-  std::vector<std::string> only;
+  int first = -1, last = -1;  // frame numbers; -1: the truth's
+  double radius = 6.0;        // Find Node's brush, px
+  uint64_t seed = 1;          // of the clicks' error
+  std::vector<std::string> only;  // cameras; empty: all
+};
+
+// The command line; false on a usage error.
+bool ParseArgs(int argc, char** argv, BenchOptions* o) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     const bool more = i + 1 < argc;
     if (a == "--shot" && more) {
-      shot = argv[++i];
+      o->shot = argv[++i];
     } else if (a == "--coloring" && more) {
-      coloring_path = argv[++i];
+      o->coloring_path = argv[++i];
     } else if (a == "--frames" && more) {
-      if (std::sscanf(argv[++i], "%d:%d", &first, &last) != 2) return Usage(), 2;
+      if (std::sscanf(argv[++i], "%d:%d", &o->first, &o->last) != 2) return false;
     } else if (a == "--radius" && more) {
-      radius = std::atof(argv[++i]);
+      o->radius = std::atof(argv[++i]);
     } else if (a == "--seed" && more) {
-      seed = std::strtoull(argv[++i], nullptr, 10);
+      o->seed = std::strtoull(argv[++i], nullptr, 10);
     } else if (a == "--cameras" && more) {
       std::stringstream ss(argv[++i]);
-      for (std::string name; std::getline(ss, name, ',');) only.push_back(name);
+      for (std::string name; std::getline(ss, name, ',');) o->only.push_back(name);
     } else {
-      Usage();
-      return 2;
+      return false;
     }
   }
-  if (shot.empty()) return Usage(), 2;
-  try {
-    recon::SynchronizedSequence sequence(recon::LoadExperiment(shot + "/experiment.yaml"));
-    const calib::Rig rig = calib::ReadRig(shot + "/rig_true.yaml");
-    const recon::LabelSet truth = recon::ReadLabels(shot + "/labels_true.h5");
-    const int rows = truth.rows, cols = truth.cols, knots = truth.knots();
-    if (first < 0) first = truth.frame_index.front(), last = truth.frame_index.back();
-    std::vector<int> frames, truth_row;
-    for (int t = 0; t < truth.frames(); ++t)
-      if (truth.frame_index[t] >= first && truth.frame_index[t] <= last) {
-        frames.push_back(truth.frame_index[t]);
-        truth_row.push_back(t);
-      }
-    std::vector<std::string> cameras;
-    std::vector<int> truth_camera, sequence_camera;
-    for (size_t c = 0; c < truth.cameras.size(); ++c) {
-      if (!only.empty() && std::find(only.begin(), only.end(), truth.cameras[c]) == only.end())
-        continue;
-      cameras.push_back(truth.cameras[c]);
-      truth_camera.push_back(static_cast<int>(c));
-      int s = -1;
-      for (size_t j = 0; j < sequence.experiment().cameras.size(); ++j)
-        if (sequence.experiment().cameras[j].name == truth.cameras[c]) s = static_cast<int>(j);
-      if (s < 0) throw std::runtime_error("no camera " + truth.cameras[c] + " in the experiment");
-      sequence_camera.push_back(s);
-    }
-    if (frames.empty() || cameras.empty()) throw std::runtime_error("no frames or cameras");
-    const int n_cam = static_cast<int>(cameras.size()), n_t = static_cast<int>(frames.size());
-    auto truth_at = [&](int c, int t, int k) -> const recon::Label& {
-      return truth.at(truth_camera[c], truth_row[t], k);
-    };
+  return !o->shot.empty();
+}
 
-    std::vector<Tally> tally(n_cam);
-    recon::LabelSet initial = recon::LabelSet::Empty(rows, cols, cameras, frames);
-    for (int c = 0; c < n_cam; ++c)
-      for (int k : {0, cols - 1, (rows - 1) * cols, knots - 1}) {
-        const recon::Label& l = truth_at(c, 0, k);
-        if (!l.present()) continue;
-        recon::Label s = l;
-        s.source = recon::LabelSource::kImported;
-        s.state = recon::LabelState::kAccepted;
-        initial.at(c, 0, k) = s;
-        ++tally[c].seeds;
+// The frames and cameras benchmarked, and where each is in the truth and the experiment.
+struct Shot {
+  recon::LabelSet truth;
+  int rows = 0, cols = 0, knots = 0;
+  std::vector<int> frames, truth_row;  // per frame row: its frame number, its row in the truth
+  std::vector<std::string> cameras;
+  std::vector<int> truth_camera, sequence_camera;  // per camera: its index in each
+
+  int n_cam() const { return static_cast<int>(cameras.size()); }
+  int n_t() const { return static_cast<int>(frames.size()); }
+  const recon::Label& Truth(int c, int t, int k) const {
+    return truth.at(truth_camera[c], truth_row[t], k);
+  }
+};
+
+// The truth's frames within --frames and its cameras among --cameras (each in the experiment).
+Shot SelectShot(recon::LabelSet truth, const recon::SynchronizedSequence& sequence,
+                BenchOptions* o) {
+  Shot shot;
+  shot.truth = std::move(truth);
+  const recon::LabelSet& tr = shot.truth;
+  shot.rows = tr.rows, shot.cols = tr.cols, shot.knots = tr.knots();
+  if (o->first < 0) o->first = tr.frame_index.front(), o->last = tr.frame_index.back();
+  for (int t = 0; t < tr.frames(); ++t)
+    if (tr.frame_index[t] >= o->first && tr.frame_index[t] <= o->last) {
+      shot.frames.push_back(tr.frame_index[t]);
+      shot.truth_row.push_back(t);
+    }
+  for (size_t c = 0; c < tr.cameras.size(); ++c) {
+    const auto& only = o->only;
+    if (!only.empty() && std::find(only.begin(), only.end(), tr.cameras[c]) == only.end())
+      continue;
+    shot.cameras.push_back(tr.cameras[c]);
+    shot.truth_camera.push_back(static_cast<int>(c));
+    int s = -1;
+    for (size_t j = 0; j < sequence.experiment().cameras.size(); ++j)
+      if (sequence.experiment().cameras[j].name == tr.cameras[c]) s = static_cast<int>(j);
+    if (s < 0) throw std::runtime_error("no camera " + tr.cameras[c] + " in the experiment");
+    shot.sequence_camera.push_back(s);
+  }
+  if (shot.frames.empty() || shot.cameras.empty()) throw std::runtime_error("no frames or cameras");
+  return shot;
+}
+
+// The person's first actions: the four corners of the first frame, in every camera that sees
+// them (counted as seeds).
+recon::LabelSet SeedCorners(const Shot& shot, std::vector<Tally>* tally) {
+  const int rows = shot.rows, cols = shot.cols;
+  recon::LabelSet initial = recon::LabelSet::Empty(rows, cols, shot.cameras, shot.frames);
+  for (int c = 0; c < shot.n_cam(); ++c)
+    for (int k : {0, cols - 1, (rows - 1) * cols, shot.knots - 1}) {
+      const recon::Label& l = shot.Truth(c, 0, k);
+      if (!l.present()) continue;
+      recon::Label s = l;
+      s.source = recon::LabelSource::kImported;
+      s.state = recon::LabelState::kAccepted;
+      initial.at(c, 0, k) = s;
+      ++(*tally)[c].seeds;
+    }
+  return initial;
+}
+
+// The person after the engine's pass over a frame (see the top of this file).
+struct ScriptedUser {
+  const Shot& shot;
+  recon::LabelEngine& engine;
+  recon::LabelStore& store;
+  double radius;
+  std::vector<Tally>& tally;
+  std::mt19937_64 rng;
+  std::uniform_real_distribution<double> click{-0.5, 0.5};
+  // Find Node results kept for review, by the check that doubted them: (count, > 1 px off).
+  std::map<std::string, std::pair<int, int>> doubts{};
+
+  // Every knot of frame row t in every camera: the engine's labels counted, and corrected.
+  void PlayFrame(int t) {
+    for (int c = 0; c < shot.n_cam(); ++c) {
+      std::vector<recon::LabelEdit> edits;
+      for (int k = 0; k < shot.knots; ++k) PlayKnot(c, t, k, &edits);
+      if (!edits.empty()) store.Apply("scripted user", edits);
+    }
+  }
+
+  // A hidden knot's label under review deleted; a visible knot without an accepted label given
+  // one by Find Node at its true position, else by a click.
+  void PlayKnot(int c, int t, int k, std::vector<recon::LabelEdit>* edits) {
+    Tally& y = tally[c];
+    const recon::Label& l = store.at(c, t, k);
+    const recon::Label& truth_l = shot.Truth(c, t, k);
+    if (l.present()) (l.state == recon::LabelState::kAccepted ? y.engine_accepted
+                                                                : y.engine_review)++;
+    if (!truth_l.present()) {
+      if (l.present() && l.state == recon::LabelState::kNeedsReview) {
+        ++y.deletes;
+        edits->push_back({c, t, k, recon::Label{}});
       }
-    recon::LabelStore store(std::move(initial));
+      return;
+    }
+    ++y.knot_frames;
+    if (l.present() && l.state == recon::LabelState::kAccepted) return;
+    ++y.find_node;
+    const recon::FindNodeResult r = engine.FindNodeAt(c, t, k, truth_l.px, radius);
+    // Found and accepted: done. Found but in doubt (its yarns or the other cameras
+    // disagree), or not found: the person clicks the knot.
+    if (r.status == recon::FindNodeStatus::kFound &&
+        store.at(c, t, k).state == recon::LabelState::kAccepted)
+      return;
+    if (r.status == recon::FindNodeStatus::kFound) {
+      const auto why = engine.reasons().find({c, t, k});
+      const std::string reason = why == engine.reasons().end() ? "" : why->second;
+      const bool off = (r.knot.px - truth_l.px).norm() > 1.0;
+      auto& [count, count_off] = doubts[reason.find("cameras") != std::string::npos
+                                            ? "the other cameras"
+                                            : "its yarns"];
+      ++count, count_off += off;
+    }
+    ++y.manual;
+    recon::Label m;
+    m.px = truth_l.px + Eigen::Vector2d(click(rng), click(rng));
+    m.source = recon::LabelSource::kManual;
+    m.confidence = 1.0f;
+    m.state = recon::LabelState::kAccepted;
+    edits->push_back({c, t, k, m});
+  }
+};
+
+// The errors of the accepted labels at the end (the first ten wrong ones named on stderr).
+void TallyErrors(const Shot& shot, const recon::LabelStore& store, std::vector<Tally>* tally) {
+  for (int c = 0; c < shot.n_cam(); ++c)
+    for (int t = 0; t < shot.n_t(); ++t)
+      for (int k = 0; k < shot.knots; ++k) {
+        const recon::Label& l = store.at(c, t, k);
+        if (!l.present() || l.state != recon::LabelState::kAccepted) continue;
+        const recon::Label& truth_l = shot.Truth(c, t, k);
+        const double e = truth_l.present() ? (l.px - truth_l.px).norm() : -1.0;
+        Tally& y = (*tally)[c];
+        if (!truth_l.present() || e > 2.0) {
+          if (++y.wrong <= 10)
+            std::fprintf(stderr, "wrong: %s frame %d knot %d (%d,%d) %s: %s\n",
+                         shot.cameras[c].c_str(), shot.frames[t], k, k / shot.cols, k % shot.cols,
+                         SourceName(l.source),
+                         e < 0 ? "the knot is hidden" : (std::to_string(e) + " px off").c_str());
+          if (e < 0) continue;
+        }
+        if (e > 1.0) ++y.over_1px;
+        y.error.push_back(e);
+        y.error_by_source[SourceName(l.source)].push_back(e);
+      }
+}
+
+// One row of the table.
+void PrintRow(const std::string& name, const Tally& y) {
+  std::printf("| %s | %lld | %lld (%lld / %lld / %lld / %lld) | %.4f | %lld | %lld | %lld / %lld "
+              "| %.3f | %.3f |\n",
+              name.c_str(), (long long)y.knot_frames, (long long)y.actions(),
+              (long long)y.seeds, (long long)y.find_node, (long long)y.manual,
+              (long long)y.deletes,
+              y.knot_frames ? static_cast<double>(y.actions()) / y.knot_frames : 0.0,
+              (long long)y.wrong, (long long)y.over_1px, (long long)y.engine_accepted,
+              (long long)y.engine_review, Quantile(y.error, 0.5), Quantile(y.error, 0.99));
+}
+
+// The table per camera and in all; then the errors by source. Returns the sum over cameras.
+Tally PrintTables(const BenchOptions& o, const Shot& shot, const std::vector<Tally>& tally) {
+  std::printf("Scripted user on %s, frames %d:%d (%d), %dx%d knots, Find Node radius %.0f px\n\n",
+              o.shot.c_str(), shot.frames.front(), shot.frames.back(), shot.n_t(), shot.rows,
+              shot.cols, o.radius);
+  std::printf("| camera | knot-frames | actions (seed / Find Node / manual / delete) | actions "
+              "per knot-frame | wrong accepted | > 1 px | engine: accepted / review | "
+              "median px | p99 px |\n|---|---|---|---|---|---|---|---|---|\n");
+  Tally all;
+  for (int c = 0; c < shot.n_cam(); ++c) {
+    PrintRow(shot.cameras[c], tally[c]);
+    const Tally& y = tally[c];
+    all.knot_frames += y.knot_frames, all.seeds += y.seeds, all.find_node += y.find_node;
+    all.manual += y.manual, all.deletes += y.deletes, all.wrong += y.wrong;
+    all.over_1px += y.over_1px;
+    all.engine_accepted += y.engine_accepted, all.engine_review += y.engine_review;
+    all.error.insert(all.error.end(), y.error.begin(), y.error.end());
+    for (const auto& [s, v] : y.error_by_source)
+      all.error_by_source[s].insert(all.error_by_source[s].end(), v.begin(), v.end());
+  }
+  PrintRow("all", all);
+  std::printf("\n| source | labels | median px | p99 px | max px |\n|---|---|---|---|---|\n");
+  for (const auto& [s, v] : all.error_by_source)
+    std::printf("| %s | %zu | %.3f | %.3f | %.3f |\n", s.c_str(), v.size(), Quantile(v, 0.5),
+                Quantile(v, 0.99), Quantile(v, 1.0));
+  return all;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  BenchOptions o;
+  if (!ParseArgs(argc, argv, &o)) return Usage(), 2;
+  try {
+    recon::SynchronizedSequence sequence(recon::LoadExperiment(o.shot + "/experiment.yaml"));
+    const calib::Rig rig = calib::ReadRig(o.shot + "/rig_true.yaml");
+    const Shot shot = SelectShot(recon::ReadLabels(o.shot + "/labels_true.h5"), sequence, &o);
+    const int n_t = shot.n_t();
+
+    // The person seeds the corners; the engine reads the shot's frames (timed).
+    std::vector<Tally> tally(shot.n_cam());
+    recon::LabelStore store(SeedCorners(shot, &tally));
     double read_s = 0.0;
     recon::LabelEngine engine(&store, &rig, [&](int c, int t) {
       const auto t0 = Clock::now();
       std::string error;
-      cv::Mat image = sequence.ReadDisplay(sequence_camera[c], frames[t], 0, &error);
+      cv::Mat image = sequence.ReadDisplay(shot.sequence_camera[c], shot.frames[t], 0, &error);
       read_s += Since(t0);
       return image;
     });
-    if (!coloring_path.empty()) {
+    if (!o.coloring_path.empty()) {
       std::vector<std::array<int, 3>> dyes;
-      const recon::NetColoring coloring = recon::ReadColoring(coloring_path, &dyes);
+      const recon::NetColoring coloring = recon::ReadColoring(o.coloring_path, &dyes);
       recon::Lighting lighting;
       lighting.exposure = 0.85;  // netlab render's illumination
       engine.SetCodebook(recon::CodebookFromColoring(coloring, dyes, lighting));
     }
-    std::mt19937_64 rng(seed);
-    std::uniform_real_distribution<double> click(-0.5, 0.5);
+    // The engine frame by frame, the person after each frame.
+    ScriptedUser user{shot, engine, store, o.radius, tally, std::mt19937_64(o.seed)};
     double engine_s = 0.0, user_s = 0.0;
-    // Find Node results kept for review, by the check that doubted them: (count, > 1 px off).
-    std::map<std::string, std::pair<int, int>> doubts;
-    for (int t = 0; t < n_t; ++t) {
-      auto t0 = Clock::now();
-      if (t == 0) {
-        engine.LabelFirstFrame(0);
-      } else {
-        engine.Track(t - 1, t);
-      }
-      engine.CrossCheck(t);
+    auto t0 = Clock::now();
+    engine.LabelFrames(0, n_t - 1, [&](int t) {
       engine_s += Since(t0);
       t0 = Clock::now();
-      for (int c = 0; c < n_cam; ++c) {
-        Tally& y = tally[c];
-        std::vector<recon::LabelEdit> edits;
-        for (int k = 0; k < knots; ++k) {
-          const recon::Label& l = store.at(c, t, k);
-          const recon::Label& truth_l = truth_at(c, t, k);
-          if (l.present()) (l.state == recon::LabelState::kAccepted ? y.engine_accepted
-                                                                      : y.engine_review)++;
-          if (!truth_l.present()) {
-            if (l.present() && l.state == recon::LabelState::kNeedsReview) {
-              ++y.deletes;
-              edits.push_back({c, t, k, recon::Label{}});
-            }
-            continue;
-          }
-          ++y.knot_frames;
-          if (l.present() && l.state == recon::LabelState::kAccepted) continue;
-          ++y.find_node;
-          const recon::FindNodeResult r = engine.FindNodeAt(c, t, k, truth_l.px, radius);
-          // Found and accepted: done. Found but in doubt (its yarns or the other cameras
-          // disagree), or not found: the person clicks the knot.
-          if (r.status == recon::FindNodeStatus::kFound &&
-              store.at(c, t, k).state == recon::LabelState::kAccepted)
-            continue;
-          if (r.status == recon::FindNodeStatus::kFound) {
-            const auto why = engine.reasons().find({c, t, k});
-            const std::string reason = why == engine.reasons().end() ? "" : why->second;
-            const bool off = (r.knot.px - truth_l.px).norm() > 1.0;
-            auto& [count, count_off] = doubts[reason.find("cameras") != std::string::npos
-                                                  ? "the other cameras"
-                                                  : "its yarns"];
-            ++count, count_off += off;
-          }
-          ++y.manual;
-          recon::Label m;
-          m.px = truth_l.px + Eigen::Vector2d(click(rng), click(rng));
-          m.source = recon::LabelSource::kManual;
-          m.confidence = 1.0f;
-          m.state = recon::LabelState::kAccepted;
-          edits.push_back({c, t, k, m});
-        }
-        if (!edits.empty()) store.Apply("scripted user", edits);
-      }
+      user.PlayFrame(t);
       user_s += Since(t0);
       if ((t + 1) % 20 == 0 || t + 1 == n_t) {
         int64_t kf = 0, act = 0;
@@ -239,65 +354,16 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "frame %d/%d: %.4f actions per knot-frame, engine %.1f s\n", t + 1,
                      n_t, kf ? static_cast<double>(act) / kf : 0.0, engine_s);
       }
-    }
-    // Errors of the accepted labels at the end.
-    for (int c = 0; c < n_cam; ++c)
-      for (int t = 0; t < n_t; ++t)
-        for (int k = 0; k < knots; ++k) {
-          const recon::Label& l = store.at(c, t, k);
-          if (!l.present() || l.state != recon::LabelState::kAccepted) continue;
-          const recon::Label& truth_l = truth_at(c, t, k);
-          const double e = truth_l.present() ? (l.px - truth_l.px).norm() : -1.0;
-          if (!truth_l.present() || e > 2.0) {
-            if (++tally[c].wrong <= 10)
-              std::fprintf(stderr, "wrong: %s frame %d knot %d (%d,%d) %s: %s\n",
-                           cameras[c].c_str(), frames[t], k, k / cols, k % cols,
-                           SourceName(l.source),
-                           e < 0 ? "the knot is hidden" : (std::to_string(e) + " px off").c_str());
-            if (e < 0) continue;
-          }
-          if (e > 1.0) ++tally[c].over_1px;
-          tally[c].error.push_back(e);
-          tally[c].error_by_source[SourceName(l.source)].push_back(e);
-        }
+      t0 = Clock::now();
+    });
+    TallyErrors(shot, store, &tally);
 
-    std::printf("Scripted user on %s, frames %d:%d (%d), %dx%d knots, Find Node radius %.0f px\n\n",
-                shot.c_str(), frames.front(), frames.back(), n_t, rows, cols, radius);
-    std::printf("| camera | knot-frames | actions (seed / Find Node / manual / delete) | actions "
-                "per knot-frame | wrong accepted | > 1 px | engine: accepted / review | "
-                "median px | p99 px |\n|---|---|---|---|---|---|---|---|---|\n");
-    Tally all;
-    auto row = [](const std::string& name, const Tally& y) {
-      std::printf("| %s | %lld | %lld (%lld / %lld / %lld / %lld) | %.4f | %lld | %lld | %lld / %lld "
-                  "| %.3f | %.3f |\n",
-                  name.c_str(), (long long)y.knot_frames, (long long)y.actions(),
-                  (long long)y.seeds, (long long)y.find_node, (long long)y.manual,
-                  (long long)y.deletes,
-                  y.knot_frames ? static_cast<double>(y.actions()) / y.knot_frames : 0.0,
-                  (long long)y.wrong, (long long)y.over_1px, (long long)y.engine_accepted,
-                  (long long)y.engine_review, Quantile(y.error, 0.5), Quantile(y.error, 0.99));
-    };
-    for (int c = 0; c < n_cam; ++c) {
-      row(cameras[c], tally[c]);
-      const Tally& y = tally[c];
-      all.knot_frames += y.knot_frames, all.seeds += y.seeds, all.find_node += y.find_node;
-      all.manual += y.manual, all.deletes += y.deletes, all.wrong += y.wrong;
-      all.over_1px += y.over_1px;
-      all.engine_accepted += y.engine_accepted, all.engine_review += y.engine_review;
-      all.error.insert(all.error.end(), y.error.begin(), y.error.end());
-      for (const auto& [s, v] : y.error_by_source)
-        all.error_by_source[s].insert(all.error_by_source[s].end(), v.begin(), v.end());
-    }
-    row("all", all);
-    std::printf("\n| source | labels | median px | p99 px | max px |\n|---|---|---|---|---|\n");
-    for (const auto& [s, v] : all.error_by_source)
-      std::printf("| %s | %zu | %.3f | %.3f | %.3f |\n", s.c_str(), v.size(), Quantile(v, 0.5),
-                  Quantile(v, 0.99), Quantile(v, 1.0));
+    const Tally all = PrintTables(o, shot, tally);
     std::printf("\nengine %.1f s (of which frame reading %.1f s): %.0f knot-frames/s; the "
                 "script's Find Node calls %.1f s; link length %.4f m\n",
                 engine_s, read_s, engine_s > 0 ? all.knot_frames / engine_s : 0.0, user_s,
                 engine.link_length_m());
-    for (const auto& [check, n] : doubts)
+    for (const auto& [check, n] : user.doubts)
       std::printf("Find Node kept for review by %s: %d (%d of them > 1 px off)\n", check.c_str(),
                   n.first, n.second);
     return 0;

@@ -9,6 +9,9 @@
 #include <iostream>
 #include <map>
 #include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "app/cli/command_line.h"
 #include "app/cli/commands.h"
@@ -61,6 +64,150 @@ struct CameraCounts {
   std::string first_frame_note;
 };
 
+// What is labeled: the net's shape, the experiment's cameras (each in the rig), the frames.
+struct LabelJob {
+  int rows = 0, cols = 0;
+  std::vector<std::string> cameras;
+  int first = 0, last = -1;      // frame numbers, inclusive
+  std::vector<int> frame_index;  // first to last: the frame number of each frame row
+};
+
+// What the command reports on stderr and as JSON.
+struct LabelReport {
+  std::vector<CameraCounts> counts;  // per camera of the job
+  int64_t labeled = 0, needs_review = 0, seeded = 0;
+  double wall_s = 0.0;
+};
+
+// The experiment's camera names, in its order; each must be in the rig.
+std::vector<std::string> ExperimentCameras(const recon::SynchronizedSequence& sequence,
+                                           const calib::Rig& rig, const std::string& rig_path) {
+  std::vector<std::string> cameras;
+  for (const auto& c : sequence.experiment().cameras) {
+    if (rig.Find(c.name) < 0)
+      throw std::runtime_error(rig_path + ": no camera '" + c.name +
+                               "' (the experiment's cameras must be in the rig)");
+    cameras.push_back(c.name);
+  }
+  return cameras;
+}
+
+// The frames to label (job->first, last, frame_index): --frames A:B, which must lie within the
+// recording, else the whole recording.
+void SelectFrames(const CommandLine& cl, const recon::SynchronizedSequence& sequence,
+                  LabelJob* job) {
+  int first = sequence.first_frame(), last = sequence.last_frame();
+  int a = first, b = last;
+  if (cl.FrameRange("frames", &a, &b)) {
+    if (a < first || b > last)
+      throw UsageError("--frames " + *cl.Option("frames") + " lies outside the recording's " +
+                       "frames " + std::to_string(first) + ":" + std::to_string(last));
+    first = a, last = b;
+  }
+  job->first = first, job->last = last;
+  for (int f = first; f <= last; ++f) job->frame_index.push_back(f);
+}
+
+// Empty labels over the job's frames with the seed labels of those frames in; *seeded: how
+// many. Throws when a seed's camera is not in the experiment, or no seed lies in the frames.
+recon::LabelSet SeededLabels(const LabelJob& job, const recon::LabelSet& seeds,
+                             const std::string& seed_path, int64_t* seeded) {
+  recon::LabelSet initial =
+      recon::LabelSet::Empty(job.rows, job.cols, job.cameras, job.frame_index);
+  *seeded = 0;
+  for (size_t sc = 0; sc < seeds.cameras.size(); ++sc) {
+    const int c = initial.FindCamera(seeds.cameras[sc]);
+    if (c < 0)
+      throw std::runtime_error(seed_path + ": camera '" + seeds.cameras[sc] +
+                               "' is not in the experiment");
+    for (int st = 0; st < seeds.frames(); ++st) {
+      const int t = seeds.frame_index[st] - job.first;
+      if (t < 0 || t >= initial.frames()) continue;
+      for (int k = 0; k < job.rows * job.cols; ++k) {
+        const recon::Label& l = seeds.at(static_cast<int>(sc), st, k);
+        if (!l.present()) continue;
+        initial.at(c, t, k) = l;
+        ++*seeded;
+      }
+    }
+  }
+  if (*seeded == 0) throw std::runtime_error(seed_path + ": no seed label in the frames");
+  return initial;
+}
+
+// The colour check against the net's colouring, as netlab render lights it (--illumination).
+void SetColourCheck(const CommandLine& cl, const recon::SynchronizedSequence& sequence,
+                    const recon::NetColoring& coloring,
+                    const std::vector<std::array<int, 3>>& dyes, recon::LabelEngine* engine) {
+  recon::Lighting lighting;
+  lighting.exposure = cl.DoubleOption("illumination", 0.85, 1e-3, 100.0);
+  recon::IdentityCheckOptions identity;
+  identity.identify.bayer = sequence.experiment().cameras.front().bayer;
+  engine->SetCodebook(recon::CodebookFromColoring(coloring, dyes, lighting), identity);
+}
+
+// Per camera: its labels, those for review, and its note (what went wrong: corners not seeded
+// in the first frame, frames unreadable).
+std::vector<CameraCounts> CountLabels(const LabelJob& job, const recon::LabelStore& store,
+                                      std::vector<std::string> notes) {
+  const int rows = job.rows, cols = job.cols;
+  const int corners[4] = {0, cols - 1, (rows - 1) * cols, rows * cols - 1};
+  std::vector<CameraCounts> counts(job.cameras.size());
+  for (size_t c = 0; c < job.cameras.size(); ++c) {
+    const int ci = static_cast<int>(c);
+    bool corners_seeded = true;
+    for (int k : corners) corners_seeded = corners_seeded && store.at(ci, 0, k).present();
+    if (!corners_seeded) notes[c] = "not every corner is seeded in the first frame" +
+                            std::string(notes[c].empty() ? "" : "; ") + notes[c];
+    counts[c].first_frame_note = notes[c];
+    for (int t = 0; t < store.labels().frames(); ++t)
+      for (int k = 0; k < rows * cols; ++k) {
+        const recon::Label& l = store.at(ci, t, k);
+        if (!l.present()) continue;
+        ++counts[c].labeled;
+        counts[c].needs_review += l.state == recon::LabelState::kNeedsReview;
+      }
+  }
+  return counts;
+}
+
+// The summary on stderr: per camera, then in all.
+void PrintReport(const LabelJob& job, const LabelReport& r, const std::string& out) {
+  for (size_t c = 0; c < job.cameras.size(); ++c)
+    std::fprintf(stderr, "%s: %lld labels, %lld for review%s%s\n", job.cameras[c].c_str(),
+                 static_cast<long long>(r.counts[c].labeled),
+                 static_cast<long long>(r.counts[c].needs_review),
+                 r.counts[c].first_frame_note.empty() ? "" : "; ",
+                 r.counts[c].first_frame_note.c_str());
+  std::fprintf(stderr, "%lld labels (%lld for review) over %zu frames in %.1f s; written %s\n",
+               static_cast<long long>(r.labeled), static_cast<long long>(r.needs_review),
+               job.frame_index.size(), r.wall_s, out.c_str());
+}
+
+// The summary as one JSON object on stdout (--json).
+void PrintJson(const LabelJob& job, const LabelReport& r) {
+  JsonWriter json;
+  json.BeginObject();
+  json.Key("labeled").Int(r.labeled);
+  json.Key("needs_review").Int(r.needs_review);
+  json.Key("frames").Int(static_cast<int64_t>(job.frame_index.size()));
+  json.Key("knots").Int(job.rows * job.cols);
+  json.Key("seeded").Int(r.seeded);
+  json.Key("cameras").BeginArray();
+  for (size_t c = 0; c < job.cameras.size(); ++c) {
+    json.BeginObject();
+    json.Key("name").String(job.cameras[c]);
+    json.Key("labeled").Int(r.counts[c].labeled);
+    json.Key("needs_review").Int(r.counts[c].needs_review);
+    json.Key("note").String(r.counts[c].first_frame_note);
+    json.EndObject();
+  }
+  json.EndArray();
+  json.Key("wall_s").Number(r.wall_s);
+  json.EndObject();
+  std::cout << json.str() << std::endl;
+}
+
 }  // namespace
 
 int RunLabel(const std::vector<std::string>& args) {
@@ -77,138 +224,51 @@ int RunLabel(const std::vector<std::string>& args) {
     const auto start = std::chrono::steady_clock::now();
     const bool quiet = cl.Flag("quiet");
     const std::string out = cl.Required("out");
+    // The inputs: rig, colouring, experiment, frames, seeds.
     const calib::Rig rig = calib::ReadRig(cl.Required("rig"));
     std::vector<std::array<int, 3>> dyes;
     const recon::NetColoring coloring = recon::ReadColoring(cl.Required("coloring"), &dyes);
-    const int rows = coloring.rows, cols = coloring.cols;
+    LabelJob job;
+    job.rows = coloring.rows, job.cols = coloring.cols;
     recon::SynchronizedSequence sequence(recon::LoadExperiment(cl.positional()[0]));
-    std::vector<std::string> cameras;
-    for (const auto& c : sequence.experiment().cameras) {
-      if (rig.Find(c.name) < 0)
-        throw std::runtime_error(cl.Required("rig") + ": no camera '" + c.name +
-                                 "' (the experiment's cameras must be in the rig)");
-      cameras.push_back(c.name);
-    }
-    int first = sequence.first_frame(), last = sequence.last_frame();
-    int a = first, b = last;
-    if (cl.FrameRange("frames", &a, &b)) {
-      if (a < first || b > last)
-        throw UsageError("--frames " + *cl.Option("frames") + " lies outside the recording's " +
-                         "frames " + std::to_string(first) + ":" + std::to_string(last));
-      first = a, last = b;
-    }
-    std::vector<int> frame_index;
-    for (int f = first; f <= last; ++f) frame_index.push_back(f);
-    const recon::LabelSet seeds = recon::ReadLabelsAny(cl.Required("seed"), rows, cols, cameras);
+    job.cameras = ExperimentCameras(sequence, rig, cl.Required("rig"));
+    SelectFrames(cl, sequence, &job);
+    const recon::LabelSet seeds =
+        recon::ReadLabelsAny(cl.Required("seed"), job.rows, job.cols, job.cameras);
+    LabelReport report;
+    recon::LabelStore store(SeededLabels(job, seeds, cl.Required("seed"), &report.seeded));
 
-    recon::LabelSet initial = recon::LabelSet::Empty(rows, cols, cameras, frame_index);
-    int64_t seeded = 0;
-    for (size_t sc = 0; sc < seeds.cameras.size(); ++sc) {
-      const int c = initial.FindCamera(seeds.cameras[sc]);
-      if (c < 0)
-        throw std::runtime_error(cl.Required("seed") + ": camera '" + seeds.cameras[sc] +
-                                 "' is not in the experiment");
-      for (int st = 0; st < seeds.frames(); ++st) {
-        const int t = seeds.frame_index[st] - first;
-        if (t < 0 || t >= initial.frames()) continue;
-        for (int k = 0; k < rows * cols; ++k) {
-          const recon::Label& l = seeds.at(static_cast<int>(sc), st, k);
-          if (!l.present()) continue;
-          initial.at(c, t, k) = l;
-          ++seeded;
-        }
-      }
-    }
-    if (seeded == 0) throw std::runtime_error(cl.Required("seed") + ": no seed label in the frames");
-    recon::LabelStore store(std::move(initial));
-
+    // The engine over the experiment's frames (the first unreadable one noted per camera).
     recon::LabelEngineOptions options;
     if (cl.Option("mesh")) options.link_length_m = cl.DoubleOption("mesh", 0.1, 1e-4, 10.0);
-    std::vector<std::string> notes(cameras.size());
+    std::vector<std::string> notes(job.cameras.size());
     recon::LabelEngine engine(
         &store, &rig,
         [&](int c, int t) {
           std::string error;
-          cv::Mat image = sequence.ReadDisplay(c, frame_index[t], 0, &error);
+          cv::Mat image = sequence.ReadDisplay(c, job.frame_index[t], 0, &error);
           if (image.empty() && notes[c].find("unreadable") == std::string::npos)
             notes[c] += (notes[c].empty() ? "" : "; ") + std::string("frame ") +
-                        std::to_string(frame_index[t]) + " unreadable: " + error;
+                        std::to_string(job.frame_index[t]) + " unreadable: " + error;
           return image;
         },
         options);
-    if (!cl.Flag("no-colour-check")) {
-      recon::Lighting lighting;
-      lighting.exposure = cl.DoubleOption("illumination", 0.85, 1e-3, 100.0);
-      recon::IdentityCheckOptions identity;
-      identity.identify.bayer = sequence.experiment().cameras.front().bayer;
-      engine.SetCodebook(recon::CodebookFromColoring(coloring, dyes, lighting), identity);
-    }
-    const int rows_t = static_cast<int>(frame_index.size());
-    engine.LabelFirstFrame(0);
-    engine.CrossCheck(0);
-    for (int t = 1; t < rows_t; ++t) {
-      engine.Track(t - 1, t);
-      engine.CrossCheck(t);
-      if (!quiet && t % 10 == 0)
-        std::fprintf(stderr, "frame %d of %d\n", t + 1, rows_t);
-    }
-    const int corners[4] = {0, cols - 1, (rows - 1) * cols, rows * cols - 1};
-    std::vector<CameraCounts> counts(cameras.size());
-    for (size_t c = 0; c < cameras.size(); ++c) {
-      const int ci = static_cast<int>(c);
-      bool corners_seeded = true;
-      for (int k : corners) corners_seeded = corners_seeded && store.at(ci, 0, k).present();
-      if (!corners_seeded) notes[c] = "not every corner is seeded in the first frame" +
-                              std::string(notes[c].empty() ? "" : "; ") + notes[c];
-      counts[c].first_frame_note = notes[c];
-      for (int t = 0; t < store.labels().frames(); ++t)
-        for (int k = 0; k < rows * cols; ++k) {
-          const recon::Label& l = store.at(ci, t, k);
-          if (!l.present()) continue;
-          ++counts[c].labeled;
-          counts[c].needs_review += l.state == recon::LabelState::kNeedsReview;
-        }
-    }
+    if (!cl.Flag("no-colour-check")) SetColourCheck(cl, sequence, coloring, dyes, &engine);
+    // Every frame labeled, with progress every ten frames.
+    const int rows_t = static_cast<int>(job.frame_index.size());
+    engine.LabelFrames(0, rows_t - 1, [&](int t) {
+      if (!quiet && t > 0 && t % 10 == 0) std::fprintf(stderr, "frame %d of %d\n", t + 1, rows_t);
+    });
+    // Counted, written, reported.
+    report.counts = CountLabels(job, store, notes);
     store.Save(out);
     if (const auto xypts = cl.Option("xypts")) recon::WriteXyPts(*xypts, store.labels());
-
-    int64_t labeled = 0, review = 0;
-    for (const auto& c : counts) labeled += c.labeled, review += c.needs_review;
-    const double wall_s =
+    for (const auto& c : report.counts)
+      report.labeled += c.labeled, report.needs_review += c.needs_review;
+    report.wall_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (!quiet) {
-      for (size_t c = 0; c < cameras.size(); ++c)
-        std::fprintf(stderr, "%s: %lld labels, %lld for review%s%s\n", cameras[c].c_str(),
-                     static_cast<long long>(counts[c].labeled),
-                     static_cast<long long>(counts[c].needs_review),
-                     counts[c].first_frame_note.empty() ? "" : "; ",
-                     counts[c].first_frame_note.c_str());
-      std::fprintf(stderr, "%lld labels (%lld for review) over %zu frames in %.1f s; written %s\n",
-                   static_cast<long long>(labeled), static_cast<long long>(review),
-                   frame_index.size(), wall_s, out.c_str());
-    }
-    if (cl.Flag("json")) {
-      JsonWriter json;
-      json.BeginObject();
-      json.Key("labeled").Int(labeled);
-      json.Key("needs_review").Int(review);
-      json.Key("frames").Int(static_cast<int64_t>(frame_index.size()));
-      json.Key("knots").Int(rows * cols);
-      json.Key("seeded").Int(seeded);
-      json.Key("cameras").BeginArray();
-      for (size_t c = 0; c < cameras.size(); ++c) {
-        json.BeginObject();
-        json.Key("name").String(cameras[c]);
-        json.Key("labeled").Int(counts[c].labeled);
-        json.Key("needs_review").Int(counts[c].needs_review);
-        json.Key("note").String(counts[c].first_frame_note);
-        json.EndObject();
-      }
-      json.EndArray();
-      json.Key("wall_s").Number(wall_s);
-      json.EndObject();
-      std::cout << json.str() << std::endl;
-    }
+    if (!quiet) PrintReport(job, report, out);
+    if (cl.Flag("json")) PrintJson(job, report);
     return 0;
   } catch (const UsageError& e) {
     std::fprintf(stderr, "netlab label: %s\n(see netlab label --help)\n", e.what());

@@ -1,15 +1,14 @@
 #include "libreconstruct/coloring/color_identify.h"
 
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
-#include <fstream>
+#include <cstdio>
 #include <limits>
 #include <numbers>
-#include <random>
+#include <optional>
 #include <set>
-#include <sstream>
 #include <stdexcept>
+#include <utility>
 
 namespace netlab::recon {
 namespace {
@@ -17,390 +16,7 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 
-double Clamp01(double v) { return std::clamp(v, 0.0, 1.0); }
-
-// CIE 1976 f(t) and its inverse (CIE 15:2004, eq. 8.3 / 8.4), delta = 6/29.
-double LabF(double t) {
-  constexpr double kDelta = 6.0 / 29.0;
-  return t > kDelta * kDelta * kDelta ? std::cbrt(t) : t / (3 * kDelta * kDelta) + 4.0 / 29.0;
-}
-double LabFInverse(double f) {
-  constexpr double kDelta = 6.0 / 29.0;
-  return f > kDelta ? f * f * f : 3 * kDelta * kDelta * (f - 4.0 / 29.0);
-}
-
-// Hue angle in degrees in [0, 360); 0 for the achromatic point (Sharma et al., eq. 4).
-double HueDegrees(double b, double a_prime) {
-  if (a_prime == 0.0 && b == 0.0) return 0.0;
-  double h = std::atan2(b, a_prime) / kDegToRad;
-  if (h < 0) h += 360.0;
-  return h;
-}
-
-std::string Trim(const std::string& s) {
-  const auto begin = s.find_first_not_of(" \t\r\n\"'");
-  if (begin == std::string::npos) return "";
-  const auto end = s.find_last_not_of(" \t\r\n\"'");
-  return s.substr(begin, end - begin + 1);
-}
-
-bool ParseNumber(const std::string& text, double* value) {
-  if (text.empty()) return false;
-  char* end = nullptr;
-  *value = std::strtod(text.c_str(), &end);
-  return end == text.c_str() + text.size() && std::isfinite(*value);
-}
-
 }  // namespace
-
-// ---------------------------------------------------------------------------------------------
-// Colour science.
-
-double SrgbToLinear(double encoded) {
-  return encoded <= 0.04045 ? encoded / 12.92 : std::pow((encoded + 0.055) / 1.055, 2.4);
-}
-
-double LinearToSrgb(double linear) {
-  return linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1.0 / 2.4) - 0.055;
-}
-
-Colour SrgbToLinearBgr(const std::array<double, 3>& srgb_rgb) {
-  return Colour(static_cast<float>(SrgbToLinear(srgb_rgb[2] / 255.0)),
-                static_cast<float>(SrgbToLinear(srgb_rgb[1] / 255.0)),
-                static_cast<float>(SrgbToLinear(srgb_rgb[0] / 255.0)));
-}
-
-std::array<double, 3> LinearBgrToSrgb(const Colour& bgr) {
-  std::array<double, 3> rgb;
-  for (int c = 0; c < 3; ++c) {
-    rgb[c] = std::round(255.0 * Clamp01(LinearToSrgb(Clamp01(bgr[2 - c]))));
-  }
-  return rgb;
-}
-
-Eigen::Vector3d LinearBgrToXyz(const Colour& bgr) {
-  // IEC 61966-2-1 primaries, D65 white.
-  const double r = bgr[2], g = bgr[1], b = bgr[0];
-  return {0.4124564 * r + 0.3575761 * g + 0.1804375 * b,
-          0.2126729 * r + 0.7151522 * g + 0.0721750 * b,
-          0.0193339 * r + 0.1191920 * g + 0.9503041 * b};
-}
-
-Eigen::Vector3d D65White() { return LinearBgrToXyz(Colour(1, 1, 1)); }
-
-Lab XyzToLab(const Eigen::Vector3d& xyz, const Eigen::Vector3d& white_xyz) {
-  const double fx = LabF(xyz.x() / white_xyz.x());
-  const double fy = LabF(xyz.y() / white_xyz.y());
-  const double fz = LabF(xyz.z() / white_xyz.z());
-  return {116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz)};
-}
-
-Eigen::Vector3d LabToXyz(const Lab& lab, const Eigen::Vector3d& white_xyz) {
-  const double fy = (lab.l + 16.0) / 116.0;
-  const double fx = fy + lab.a / 500.0;
-  const double fz = fy - lab.b / 200.0;
-  return {white_xyz.x() * LabFInverse(fx), white_xyz.y() * LabFInverse(fy),
-          white_xyz.z() * LabFInverse(fz)};
-}
-
-Lab LinearBgrToLab(const Colour& bgr) { return XyzToLab(LinearBgrToXyz(bgr)); }
-
-double CieDe2000(const Lab& x, const Lab& y, double k_l, double k_c, double k_h) {
-  // Eq. 2-5: C*, G, a', C', h'.
-  const double c1 = std::hypot(x.a, x.b), c2 = std::hypot(y.a, y.b);
-  const double c_mean = 0.5 * (c1 + c2);
-  const double c_mean7 = std::pow(c_mean, 7.0);
-  constexpr double k25_7 = 6103515625.0;  // 25^7
-  const double g = 0.5 * (1.0 - std::sqrt(c_mean7 / (c_mean7 + k25_7)));
-  const double a1p = (1.0 + g) * x.a, a2p = (1.0 + g) * y.a;
-  const double c1p = std::hypot(a1p, x.b), c2p = std::hypot(a2p, y.b);
-  const double h1p = HueDegrees(x.b, a1p), h2p = HueDegrees(y.b, a2p);
-
-  // Eq. 8-11: differences; the hue difference wraps into [-180, 180], 0 for an achromatic one.
-  const double dl = y.l - x.l;
-  const double dc = c2p - c1p;
-  double dh = 0.0;
-  if (c1p * c2p != 0.0) {
-    dh = h2p - h1p;
-    if (dh > 180.0) dh -= 360.0;
-    if (dh < -180.0) dh += 360.0;
-  }
-  const double dhh = 2.0 * std::sqrt(c1p * c2p) * std::sin(0.5 * dh * kDegToRad);
-
-  // Eq. 12-22: means and weighting functions.
-  const double l_mean = 0.5 * (x.l + y.l);
-  const double cp_mean = 0.5 * (c1p + c2p);
-  double h_mean = h1p + h2p;
-  if (c1p * c2p != 0.0) {
-    if (std::abs(h1p - h2p) <= 180.0) {
-      h_mean = 0.5 * (h1p + h2p);
-    } else if (h1p + h2p < 360.0) {
-      h_mean = 0.5 * (h1p + h2p + 360.0);
-    } else {
-      h_mean = 0.5 * (h1p + h2p - 360.0);
-    }
-  }
-  const double t = 1.0 - 0.17 * std::cos((h_mean - 30.0) * kDegToRad) +
-                   0.24 * std::cos(2.0 * h_mean * kDegToRad) +
-                   0.32 * std::cos((3.0 * h_mean + 6.0) * kDegToRad) -
-                   0.20 * std::cos((4.0 * h_mean - 63.0) * kDegToRad);
-  const double d_theta = 30.0 * std::exp(-std::pow((h_mean - 275.0) / 25.0, 2.0));
-  const double cp_mean7 = std::pow(cp_mean, 7.0);
-  const double r_c = 2.0 * std::sqrt(cp_mean7 / (cp_mean7 + k25_7));
-  const double l50 = (l_mean - 50.0) * (l_mean - 50.0);
-  const double s_l = 1.0 + 0.015 * l50 / std::sqrt(20.0 + l50);
-  const double s_c = 1.0 + 0.045 * cp_mean;
-  const double s_h = 1.0 + 0.015 * cp_mean * t;
-  const double r_t = -std::sin(2.0 * d_theta * kDegToRad) * r_c;
-  const double tl = dl / (k_l * s_l), tc = dc / (k_c * s_c), th = dhh / (k_h * s_h);
-  return std::sqrt(std::max(0.0, tl * tl + tc * tc + th * th + r_t * tc * th));
-}
-
-// ---------------------------------------------------------------------------------------------
-// The physical palette.
-
-Colour Lighting::Seen(const std::array<double, 3>& srgb_rgb) const {
-  const Colour linear = SrgbToLinearBgr(srgb_rgb);
-  Colour seen;
-  for (int c = 0; c < 3; ++c) {
-    seen[c] = static_cast<float>(Clamp01(exposure * gains_bgr[c] * linear[c]));
-  }
-  return seen;
-}
-
-Lab Lighting::SeenLab(const std::array<double, 3>& srgb_rgb) const {
-  return XyzToLab(LinearBgrToXyz(Seen(srgb_rgb)), white_xyz);
-}
-
-bool Lighting::IsValid(std::string* error) const {
-  auto fail = [&](const std::string& why) {
-    if (error) *error = why;
-    return false;
-  };
-  for (double g : gains_bgr) {
-    if (!(g > 0) || !std::isfinite(g)) return fail("Lighting: gains_bgr must be finite and > 0");
-  }
-  if (!(exposure > 0) || !std::isfinite(exposure)) return fail("Lighting: exposure must be > 0");
-  if (!(white_xyz.y() > 0) || !(white_xyz.x() > 0) || !(white_xyz.z() > 0)) {
-    return fail("Lighting: white_xyz must be positive");
-  }
-  return true;
-}
-
-namespace {
-
-// Pairwise and background CIEDE2000 of the candidates as seen.
-struct PaletteDistances {
-  int n = 0;
-  std::vector<double> pair;  // n x n
-  std::vector<double> background;  // n (inf without background)
-  double D(int i, int j) const { return pair[static_cast<size_t>(i) * n + j]; }
-};
-
-PaletteDistances ComputeDistances(const std::vector<Candidate>& candidates,
-                                  const Lighting& lighting) {
-  PaletteDistances d;
-  d.n = static_cast<int>(candidates.size());
-  std::vector<Lab> lab(d.n);
-  for (int i = 0; i < d.n; ++i) lab[i] = lighting.SeenLab(candidates[i].srgb);
-  d.pair.assign(static_cast<size_t>(d.n) * d.n, 0.0);
-  for (int i = 0; i < d.n; ++i) {
-    for (int j = i + 1; j < d.n; ++j) {
-      d.pair[static_cast<size_t>(i) * d.n + j] = d.pair[static_cast<size_t>(j) * d.n + i] =
-          CieDe2000(lab[i], lab[j]);
-    }
-  }
-  d.background.assign(d.n, kInf);
-  if (lighting.background) {
-    const Lab bg = XyzToLab(LinearBgrToXyz(*lighting.background), lighting.white_xyz);
-    for (int i = 0; i < d.n; ++i) d.background[i] = CieDe2000(lab[i], bg);
-  }
-  return d;
-}
-
-double Objective(const PaletteDistances& d, const std::vector<int>& chosen) {
-  double m = kInf;
-  for (size_t a = 0; a < chosen.size(); ++a) {
-    m = std::min(m, d.background[chosen[a]]);
-    for (size_t b = a + 1; b < chosen.size(); ++b) m = std::min(m, d.D(chosen[a], chosen[b]));
-  }
-  return m;
-}
-
-// Greedy farthest-point selection, then single swaps while one raises the minimum.
-std::vector<int> GreedySwap(const PaletteDistances& d, int k) {
-  std::vector<int> chosen;
-  std::vector<bool> in(d.n, false);
-  // Seed: the candidate farthest from the background, or the first when there is none.
-  int seed = 0;
-  for (int i = 1; i < d.n; ++i) {
-    if (d.background[i] > d.background[seed]) seed = i;
-  }
-  chosen.push_back(seed);
-  in[seed] = true;
-  while (static_cast<int>(chosen.size()) < k) {
-    int best = -1;
-    double best_value = -1;
-    for (int i = 0; i < d.n; ++i) {
-      if (in[i]) continue;
-      double m = d.background[i];
-      for (int j : chosen) m = std::min(m, d.D(i, j));
-      if (m > best_value) best_value = m, best = i;
-    }
-    chosen.push_back(best);
-    in[best] = true;
-  }
-  double value = Objective(d, chosen);
-  for (bool improved = true; improved;) {
-    improved = false;
-    for (int slot = 0; slot < k && !improved; ++slot) {
-      for (int i = 0; i < d.n && !improved; ++i) {
-        if (in[i]) continue;
-        std::vector<int> trial = chosen;
-        trial[slot] = i;
-        const double v = Objective(d, trial);
-        if (v > value + 1e-12) {
-          in[chosen[slot]] = false;
-          in[i] = true;
-          chosen = trial;
-          value = v;
-          improved = true;
-        }
-      }
-    }
-  }
-  std::sort(chosen.begin(), chosen.end());
-  return chosen;
-}
-
-// Depth-first over subsets in index order; a branch ends as soon as its running minimum cannot
-// beat the best complete choice (the minimum only falls as candidates are added).
-void BranchAndBound(const PaletteDistances& d, int k, int start, std::vector<int>* chosen,
-                    double running_min, double* best_value, std::vector<int>* best) {
-  if (static_cast<int>(chosen->size()) == k) {
-    if (running_min > *best_value) {
-      *best_value = running_min;
-      *best = *chosen;
-    }
-    return;
-  }
-  const int missing = k - static_cast<int>(chosen->size());
-  for (int i = start; i + missing <= d.n; ++i) {
-    double m = std::min(running_min, d.background[i]);
-    for (int j : *chosen) m = std::min(m, d.D(i, j));
-    if (!(m > *best_value)) continue;
-    chosen->push_back(i);
-    BranchAndBound(d, k, i + 1, chosen, m, best_value, best);
-    chosen->pop_back();
-  }
-}
-
-}  // namespace
-
-double PaletteMinDeltaE(const std::vector<Candidate>& candidates, const std::vector<int>& chosen,
-                        const Lighting& lighting) {
-  return Objective(ComputeDistances(candidates, lighting), chosen);
-}
-
-std::vector<int> ChoosePalette(const std::vector<Candidate>& candidates, int k,
-                               const Lighting& lighting, double* min_delta_e) {
-  std::string error;
-  if (!lighting.IsValid(&error)) throw std::invalid_argument("ChoosePalette: " + error);
-  if (k < 1 || k > static_cast<int>(candidates.size())) {
-    throw std::invalid_argument("ChoosePalette: k = " + std::to_string(k) + " with " +
-                                std::to_string(candidates.size()) + " candidates");
-  }
-  const PaletteDistances d = ComputeDistances(candidates, lighting);
-  std::vector<int> best = GreedySwap(d, k);
-  double best_value = Objective(d, best);
-  if (d.n <= kExactPaletteCandidates) {
-    // The local optimum is the incumbent: only strictly better subsets replace it.
-    std::vector<int> chosen;
-    BranchAndBound(d, k, 0, &chosen, kInf, &best_value, &best);
-  }
-  std::sort(best.begin(), best.end());
-  if (min_delta_e) *min_delta_e = best_value;
-  return best;
-}
-
-std::vector<Candidate> LoadCandidates(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("LoadCandidates: cannot read " + path);
-  std::vector<Candidate> out;
-  std::set<std::string> names;
-  std::string line;
-  for (int number = 1; std::getline(in, line); ++number) {
-    auto fail = [&](const std::string& why) {
-      throw std::runtime_error(path + ":" + std::to_string(number) + ": " + why + " in \"" +
-                               Trim(line) + "\"");
-    };
-    std::string text = line.substr(0, line.find('#'));
-    text = Trim(text);
-    if (text.empty()) continue;
-    if (text[0] == '-') text = Trim(text.substr(1));
-    // A YAML key introducing the list ("candidates:") carries no colour.
-    if (text.back() == ':' && text.find(',') == std::string::npos) continue;
-    for (char& c : text) {
-      if (c == '[' || c == ']' || c == '{' || c == '}') c = ' ';
-    }
-    std::vector<std::string> fields;
-    std::stringstream stream(text);
-    for (std::string field; std::getline(stream, field, ',');) fields.push_back(Trim(field));
-    std::string name;
-    std::array<std::string, 3> values;
-    if (text.find(':') != std::string::npos) {
-      // YAML flow mapping: name: x, r: .., g: .., b: ..
-      std::array<bool, 4> seen{false, false, false, false};
-      for (const std::string& field : fields) {
-        const auto colon = field.find(':');
-        if (colon == std::string::npos) fail("expected key: value");
-        const std::string key = Trim(field.substr(0, colon));
-        const std::string value = Trim(field.substr(colon + 1));
-        const int slot = key == "name" ? 0 : key == "r" ? 1 : key == "g" ? 2 : key == "b" ? 3 : -1;
-        if (slot < 0) fail("unknown key '" + key + "' (name, r, g, b)");
-        seen[slot] = true;
-        if (slot == 0) name = value;
-        else values[slot - 1] = value;
-      }
-      if (!(seen[0] && seen[1] && seen[2] && seen[3])) fail("expected keys name, r, g, b");
-    } else {
-      if (fields.size() != 4) fail("expected 4 fields 'name, r, g, b'");
-      name = fields[0];
-      values = {fields[1], fields[2], fields[3]};
-      // A CSV header.
-      if (out.empty() && values[0] == "r" && values[1] == "g" && values[2] == "b") continue;
-    }
-    if (name.empty()) fail("empty name");
-    Candidate candidate;
-    candidate.name = name;
-    for (int c = 0; c < 3; ++c) {
-      double v = 0;
-      if (!ParseNumber(values[c], &v)) fail("'" + values[c] + "' is not a number");
-      if (v < 0 || v > 255) fail("value " + values[c] + " outside 0..255");
-      candidate.srgb[c] = v;
-    }
-    if (!names.insert(name).second) fail("duplicate name '" + name + "'");
-    out.push_back(candidate);
-  }
-  if (out.empty()) throw std::runtime_error("LoadCandidates: no candidates in " + path);
-  return out;
-}
-
-std::vector<Candidate> DefaultYarnCandidates() {
-  return {
-      {"white", {240, 240, 235}},      {"black", {25, 25, 28}},
-      {"red", {200, 30, 40}},          {"dark red", {120, 20, 35}},
-      {"orange", {240, 120, 20}},      {"yellow", {250, 210, 30}},
-      {"lime", {150, 200, 40}},        {"green", {20, 140, 60}},
-      {"dark green", {20, 75, 40}},    {"turquoise", {30, 180, 180}},
-      {"light blue", {110, 170, 230}}, {"royal blue", {30, 60, 170}},
-      {"navy", {20, 30, 80}},          {"purple", {110, 40, 140}},
-      {"pink", {240, 120, 170}},       {"brown", {110, 70, 35}},
-  };
-}
-
-// ---------------------------------------------------------------------------------------------
-// Identification.
 
 bool KnotCodebook::Matches(int knot, const std::vector<int>& observed) const {
   const std::vector<int>& code = knots.at(knot).link_colours;
@@ -623,6 +239,12 @@ std::string KnotName(const CodebookKnot& k) {
   return name;
 }
 
+// Every palette index: what a yarn of unknown colour may be.
+std::vector<int> AllPaletteIndices(size_t palette_size) {
+  std::vector<int> all;
+  for (size_t c = 0; c < palette_size; ++c) all.push_back(static_cast<int>(c));
+  return all;
+}
 
 }  // namespace
 
@@ -660,7 +282,7 @@ YarnReading ClassifyYarnColour(const Colour& measured, const Colour& background,
   }
   if (r.best_delta_e > options.max_delta_e) {
     // Unknown colour: any palette colour may be behind it.
-    for (size_t c = 0; c < palette.size(); ++c) r.plausible.push_back(static_cast<int>(c));
+    r.plausible = AllPaletteIndices(palette.size());
     r.confidence = 0.0;
     return r;
   }
@@ -679,9 +301,23 @@ YarnReading ClassifyYarnColour(const Colour& measured, const Colour& background,
   return r;
 }
 
-KnotIdentification IdentifyKnot(const cv::Mat& bgr8, const Eigen::Vector2d& knot_px,
-                                const std::vector<Eigen::Vector2d>& yarn_directions,
-                                const IdentifyOptions& options, const KnotCodebook& codebook) {
+namespace {
+
+// The inputs that the steps of IdentifyKnot share.
+struct KnotView {
+  const LinearSampler& sampler;              // the frame, linear light
+  const Eigen::Vector2d& knot_px;            // the knot's centre (px)
+  const std::vector<Eigen::Vector2d>& dirs;  // its yarns' unit directions, in cyclic order
+  const IdentifyOptions& options;
+  const KnotCodebook& codebook;
+  int yarns() const { return static_cast<int>(dirs.size()); }
+};
+
+// Checks the arguments of IdentifyKnot (std::invalid_argument naming what is wrong) and returns
+// the yarn directions as unit vectors.
+std::vector<Eigen::Vector2d> CheckedUnitDirections(
+    const cv::Mat& bgr8, const std::vector<Eigen::Vector2d>& yarn_directions,
+    const IdentifyOptions& options, const KnotCodebook& codebook) {
   std::string error;
   if (bgr8.type() != CV_8UC3) throw std::invalid_argument("IdentifyKnot: frame is not CV_8UC3");
   if (!options.IsValid(&error)) throw std::invalid_argument("IdentifyKnot: " + error);
@@ -704,9 +340,387 @@ KnotIdentification IdentifyKnot(const cv::Mat& bgr8, const Eigen::Vector2d& knot
                                   " not in the codebook");
     }
   }
+  return dirs;
+}
 
+// The background around a knot and the noise of its pixels.
+struct LocalBackground {
+  Colour colour{0, 0, 0};       // the median per channel, linear BGR
+  Colour pixel_sigma{0, 0, 0};  // 1.4826 x the median absolute deviation (a Gaussian's sigma)
+};
+
+// The local background: the median of rings around the knot away from every yarn (>= 25 deg);
+// nullopt when none of them is visible.
+std::optional<LocalBackground> EstimateLocalBackground(const KnotView& view) {
+  const IdentifyOptions& options = view.options;
+  std::vector<float> channel[3];
+  const double cos_limit = std::cos(25.0 * kDegToRad);
+  for (double radius = options.inner_radius_px + 2; radius <= options.outer_radius_px;
+       radius += 2) {
+    for (int a = 0; a < 72; ++a) {
+      const Eigen::Vector2d u(std::cos(a * 5 * kDegToRad), std::sin(a * 5 * kDegToRad));
+      bool clear = true;
+      for (const Eigen::Vector2d& d : view.dirs) clear = clear && u.dot(d) < cos_limit;
+      Colour c;
+      // At pixel centres: bilinear interpolation would smooth the noise measured here.
+      const Eigen::Vector2d at = (view.knot_px + radius * u).array().round().matrix();
+      if (!clear || !view.sampler.At(at, &c)) continue;
+      for (int k = 0; k < 3; ++k) channel[k].push_back(c[k]);
+    }
+  }
+  if (channel[0].empty()) return std::nullopt;
+  LocalBackground background;
+  for (int k = 0; k < 3; ++k) {
+    auto mid = channel[k].begin() + channel[k].size() / 2;
+    std::nth_element(channel[k].begin(), mid, channel[k].end());
+    background.colour[k] = *mid;
+    // Pixel noise: 1.4826 x the median absolute deviation (a Gaussian's sigma).
+    std::vector<float> deviation;
+    for (float v : channel[k]) deviation.push_back(std::abs(v - background.colour[k]));
+    auto dmid = deviation.begin() + deviation.size() / 2;
+    std::nth_element(deviation.begin(), dmid, deviation.end());
+    background.pixel_sigma[k] = 1.4826f * *dmid;
+  }
+  return background;
+}
+
+// The pixel of most contrast against the background on one cross-section of a yarn.
+struct CrossSectionPeak {
+  double contrast = -1;  // -1: no pixel of the cross-section is usable
+  Colour colour;
+  Eigen::Vector2d px;
+};
+
+// The most contrasted point within +-search_half_width_px across yarn y at distance r from the
+// knot, among the points no nearer another yarn than 2 px (thread width and the bilinear
+// footprint).
+CrossSectionPeak MostContrastedAcross(const KnotView& view, int y, double r,
+                                      const Colour& background) {
+  const Eigen::Vector2d d = view.dirs[y], across(-d.y(), d.x());
+  CrossSectionPeak peak;
+  for (double t = -view.options.search_half_width_px; t <= view.options.search_half_width_px + 1e-9;
+       t += 0.5) {
+    const Eigen::Vector2d p = view.knot_px + r * d + t * across;
+    bool own = true;
+    for (int o = 0; o < view.yarns(); ++o) {
+      if (o != y && RayDistance(p, view.knot_px, view.dirs[o]) < 2.0) own = false;
+    }
+    Colour c;
+    if (!own || !view.sampler.At(p, &c)) continue;
+    const double contrast = Contrast(c, background);
+    if (contrast > peak.contrast) peak.contrast = contrast, peak.colour = c, peak.px = p;
+  }
+  return peak;
+}
+
+// What sampling along one yarn found.
+struct YarnSamples {
+  // (contrast, colour) of each cross-section's most contrasted point, where it is thread.
+  std::vector<std::pair<double, Colour>> samples;
+  // The cross-section integrals of (pixel - background) there, where inside the frame.
+  std::vector<Colour> integrals;
+  std::array<int, 3> sites{0, 0, 0};  // mosaic sites of each colour under the centreline
+  double travel = 0.0;                // px of rows or of columns (the fewer) crossed
+  bool phase_averaged = false;        // every mosaic phase seen: the integrals are unbiased
+};
+
+// Samples yarn y along [inner_radius_px, outer_radius_px] in steps of step_px.
+YarnSamples SampleYarn(const KnotView& view, int y, const Colour& background) {
+  const IdentifyOptions& options = view.options;
+  const Eigen::Vector2d d = view.dirs[y], across(-d.y(), d.x());
+  YarnSamples s;
+  // A thread that crosses at least one mosaic period (2 px) of rows and of columns along the
+  // segment has seen every colour site at every phase: the mean cross-section integral is an
+  // unbiased colour. Else (near an image axis) the best covered samples, with the channels
+  // whose sites it never crosses ignored.
+  s.travel = (options.outer_radius_px - options.inner_radius_px) *
+             std::min(std::abs(d.x()), std::abs(d.y()));
+  s.phase_averaged =
+      options.bayer == BayerPattern::kNone || s.travel >= options.min_phase_travel_px;
+  for (double r = options.inner_radius_px; r <= options.outer_radius_px + 1e-9;
+       r += options.step_px) {
+    const CrossSectionPeak peak = MostContrastedAcross(view, y, r, background);
+    if (peak.contrast >= options.min_contrast) {
+      s.samples.emplace_back(peak.contrast, peak.colour);
+      // The cross-section integral around the thread's centre: sum of (pixel - background)
+      // over 5 px across, i.e. width x (yarn - background) for a thread narrower than that.
+      Colour integral(0, 0, 0);
+      bool inside = true;
+      for (int t = -2; t <= 2 && inside; ++t) {
+        Colour c;
+        inside = view.sampler.At(peak.px + t * across, &c);
+        integral += c - background;
+      }
+      if (inside) s.integrals.push_back(integral);
+      if (options.bayer != BayerPattern::kNone) {
+        const int site = BayerColor(options.bayer, static_cast<int>(std::lround(peak.px.y())),
+                                    static_cast<int>(std::lround(peak.px.x())));
+        if (site >= 0) ++s.sites[site];
+      }
+    }
+  }
+  return s;
+}
+
+// Why the colour of yarn y cannot be read from its samples; empty when it can.
+std::string WhyColourUnread(const KnotView& view, int y, const YarnSamples& s) {
+  const IdentifyOptions& options = view.options;
+  if (!s.phase_averaged && !options.read_along_mosaic) {
+    char text[200];
+    std::snprintf(text, sizeof(text),
+                  "yarn %d: runs along the pixel rows or columns (%.1f px across them over the "
+                  "segment < %.1f): the mosaic does not see all its colours, colour unknown",
+                  y, s.travel, options.min_phase_travel_px);
+    return text;
+  }
+  if (static_cast<int>(s.samples.size()) < options.min_samples) {
+    return "yarn " + std::to_string(y) + ": only " + std::to_string(s.samples.size()) +
+           " thread samples (need " + std::to_string(options.min_samples) + "): colour unknown";
+  }
+  return "";
+}
+
+// A yarn whose colour was measured, to be classified once all yarns are (their widths agree).
+struct MeasuredYarn {
+  int y;
+  Colour mean, sigma;            // the colour (linear BGR) and its standard deviation
+  std::array<bool, 3> observed;  // B, G, R seen on their own mosaic sites
+  int samples;
+  bool phase_averaged;
+};
+
+// The colour of yarn y from its samples: the mean cross-section integral when phase-averaged
+// (with enough of them), else the mean of the best covered keep_fraction of the samples with the
+// red or blue channel ignored whose mosaic sites the thread does not cross; `unseen` receives
+// the names of those (" blue", " red").
+MeasuredYarn MeanYarnColour(const KnotView& view, int y, YarnSamples s,
+                            const LocalBackground& background, std::string* unseen) {
+  const IdentifyOptions& options = view.options;
+  auto& samples = s.samples;
+  std::sort(samples.begin(), samples.end(),
+            [](const auto& a, const auto& b) { return a.first > b.first; });
+  const size_t keep =
+      std::max<size_t>(std::min<size_t>(samples.size(), options.min_samples),
+                       static_cast<size_t>(std::ceil(options.keep_fraction * samples.size())));
+  Colour mean(0, 0, 0);
+  for (size_t i = 0; i < keep; ++i) mean += samples[i].second;
+  mean *= 1.0f / static_cast<float>(keep);
+  // Neighbouring samples share pixels (bilinear sampling, demosaicing): count half of them
+  // as independent.
+  const Colour& pixel_sigma = background.pixel_sigma;
+  Colour mean_sigma = pixel_sigma * (1.0f / std::sqrt(0.5f * static_cast<float>(keep)));
+  std::array<bool, 3> observed{true, true, true};
+  if (s.phase_averaged && static_cast<int>(s.integrals.size()) >= options.min_samples) {
+    Colour sum(0, 0, 0);
+    for (const Colour& c : s.integrals) sum += c;
+    mean = background.colour + sum * (1.0f / static_cast<float>(s.integrals.size()));
+    mean_sigma = pixel_sigma * std::sqrt(5.0f / (0.5f * static_cast<float>(s.integrals.size())));
+  } else if (options.bayer != BayerPattern::kNone) {
+    for (int c : {0, 2}) {
+      if (s.sites[c] < options.min_channel_sites) {
+        observed[c] = false;
+        *unseen += c == 0 ? " blue" : " red";
+      }
+    }
+  }
+  return {y, mean, mean_sigma, observed, static_cast<int>(samples.size()), s.phase_averaged};
+}
+
+// Samples yarn y and measures its colour. Appends its reading to result->yarns (a placeholder
+// that classification replaces when the colour was measured) and what it has to say to
+// result->reasons. nullopt when the colour cannot be read: then every palette colour is
+// plausible.
+std::optional<MeasuredYarn> MeasureYarn(const KnotView& view, int y,
+                                        const LocalBackground& background,
+                                        KnotIdentification* result) {
+  YarnSamples samples = SampleYarn(view, y, background.colour);
+  if (const std::string why = WhyColourUnread(view, y, samples); !why.empty()) {
+    YarnReading reading;
+    reading.samples = static_cast<int>(samples.samples.size());
+    reading.plausible = AllPaletteIndices(view.codebook.palette.size());
+    result->reasons.push_back(why);
+    result->yarns.push_back(reading);
+    return std::nullopt;
+  }
+  std::string unseen;
+  const MeasuredYarn measured = MeanYarnColour(view, y, std::move(samples), background, &unseen);
+  if (!unseen.empty()) {
+    result->reasons.push_back("yarn " + std::to_string(y) + ": runs along the mosaic, no" + unseen +
+                              " sites under it: channel ignored");
+  }
+  result->yarns.push_back(YarnReading{});
+  return measured;
+}
+
+// A measured yarn classified against the palette with its coverage (width) in [alpha_lo,
+// alpha_hi].
+YarnReading ClassifyMeasured(const KnotView& view, const MeasuredYarn& m, const Colour& background,
+                             double alpha_lo, double alpha_hi) {
+  IdentifyOptions o = view.options;
+  o.alpha_min = alpha_lo;
+  o.alpha_max = alpha_hi;
+  YarnReading r =
+      ClassifyYarnColour(m.mean, background, view.codebook.palette, o, m.observed, m.sigma);
+  r.samples = m.samples;
+  return r;
+}
+
+// Classification. The threads of one net have one diameter and meet at one depth, so their
+// image widths agree: the coverage (width) fitted to each phase-averaged yarn must lie within
+// width_tolerance of the median width of the yarns read with certainty. A colour that fits
+// only as a much thinner or wider thread (a dim yellow for an orange under a colour cast) is
+// thereby rejected. Replaces the measured yarns' readings in result->yarns.
+void ClassifyMeasuredYarns(const KnotView& view, const std::vector<MeasuredYarn>& measured,
+                           KnotIdentification* result) {
+  const IdentifyOptions& options = view.options;
+  const Colour& background = result->background;
+  for (const MeasuredYarn& m : measured) {
+    result->yarns[m.y] =
+        ClassifyMeasured(view, m, background, options.alpha_min, options.alpha_max);
+  }
+  // The widths of the phase-averaged yarns read with certainty.
+  std::vector<double> widths;
+  for (const MeasuredYarn& m : measured) {
+    const YarnReading& r = result->yarns[m.y];
+    if (m.phase_averaged && r.plausible.size() == 1 && r.best_delta_e <= options.max_delta_e) {
+      widths.push_back(r.alpha);
+    }
+  }
+  // Two or more: every phase-averaged yarn again, its width near their median.
+  if (widths.size() >= 2 && options.width_tolerance > 0) {
+    std::sort(widths.begin(), widths.end());
+    const double width = widths[widths.size() / 2];
+    for (const MeasuredYarn& m : measured) {
+      if (!m.phase_averaged) continue;
+      result->yarns[m.y] = ClassifyMeasured(
+          view, m, background, std::max(options.alpha_min, width / options.width_tolerance),
+          std::min(options.alpha_max, width * options.width_tolerance));
+    }
+    char text[120];
+    std::snprintf(text, sizeof(text), "thread width %.2f px (x/ %.2f allowed)", width,
+                  options.width_tolerance);
+    result->reasons.push_back(text);
+  }
+}
+
+// One line on a classified yarn: unknown, uncertain (its plausible colours) or its colour.
+std::string DescribeReading(const KnotView& view, int y, const YarnReading& reading) {
+  const std::vector<PaletteColour>& palette = view.codebook.palette;
+  const std::string name = palette[reading.best].name;
+  char text[200];
+  if (reading.best_delta_e > view.options.max_delta_e) {
+    std::snprintf(text, sizeof(text), "yarn %d: unknown colour (nearest %s at dE00 %.1f > %.1f)", y,
+                  name.c_str(), reading.best_delta_e, view.options.max_delta_e);
+  } else if (reading.plausible.size() > 1) {
+    std::string others;
+    for (int c : reading.plausible) others += (others.empty() ? "" : "/") + palette[c].name;
+    std::snprintf(text, sizeof(text), "yarn %d: uncertain colour %s (dE00 %.1f vs %.1f)", y,
+                  others.c_str(), reading.best_delta_e, reading.second_delta_e);
+  } else {
+    std::snprintf(text, sizeof(text), "yarn %d: %s (dE00 %.1f, next %.1f, width %.2f)", y,
+                  name.c_str(), reading.best_delta_e, reading.second_delta_e, reading.alpha);
+  }
+  return text;
+}
+
+// The codebook search: the candidate knots (options.candidate_knots, else all) that fit some
+// plausible reading of the yarns.
+std::vector<int> KnotsFittingSomeReading(const KnotView& view,
+                                         const std::vector<std::vector<int>>& plausible) {
+  std::vector<int> considered = view.options.candidate_knots;
+  if (considered.empty()) {
+    for (size_t k = 0; k < view.codebook.knots.size(); ++k) {
+      considered.push_back(static_cast<int>(k));
+    }
+  }
+  std::vector<int> fitting;
+  for (int k : considered) {
+    if (view.codebook.FitsSomeReading(k, plausible)) fitting.push_back(k);
+  }
+  return fitting;
+}
+
+// One knot fits. Identified only when some yarn was read with certainty and the best reading
+// of every read yarn (the unread ones free) is its code; else unknown. `all_clear`: every yarn
+// has one plausible colour.
+void ConfirmTheOneKnot(const KnotView& view, bool all_clear, KnotIdentification* result) {
+  const int n = view.yarns();
+  const int knot = result->knots.front();
+  const std::string name = KnotName(view.codebook.knots[knot]);
+  std::vector<std::vector<int>> best_reading(n);
+  int certain = 0;
+  for (int y = 0; y < n; ++y) {
+    const YarnReading& r = result->yarns[y];
+    const bool read = r.best >= 0 && r.best_delta_e <= view.options.max_delta_e;
+    best_reading[y] = read ? std::vector<int>{r.best} : r.plausible;
+    if (read && r.plausible.size() == 1) ++certain;
+  }
+  if (certain == 0) {
+    result->status = IdentifyStatus::kUnknown;
+    result->knots.clear();
+    result->reasons.push_back("no yarn colour read with certainty");
+    return;
+  }
+  if (!view.codebook.FitsSomeReading(knot, best_reading)) {
+    result->status = IdentifyStatus::kUnknown;
+    result->knots.clear();
+    result->reasons.push_back("only a second-choice reading fits knot " + name);
+    return;
+  }
+  // The confidence: the least of the clear yarns', halved and scaled by their share when some
+  // yarn is not clear.
+  result->status = IdentifyStatus::kIdentified;
+  double confidence = 1.0;
+  int clear = 0;
+  for (const YarnReading& r : result->yarns) {
+    if (r.plausible.size() == 1) confidence = std::min(confidence, r.confidence), ++clear;
+  }
+  result->confidence = confidence * (all_clear ? 1.0 : 0.5 * clear / n);
+  result->reasons.push_back("knot " + name +
+                            (all_clear ? "" : " (every plausible reading gives it)"));
+}
+
+// The decision from the yarns' readings: unknown when no knot fits, ambiguous when several do,
+// else identified when the one knot is confirmed; the reason appended.
+void Decide(const KnotView& view, KnotIdentification* result) {
+  bool all_clear = true;
+  std::vector<std::vector<int>> plausible(view.yarns());
+  for (int y = 0; y < view.yarns(); ++y) {
+    all_clear = all_clear && result->yarns[y].plausible.size() == 1;
+    plausible[y] = result->yarns[y].plausible;
+  }
+  result->knots = KnotsFittingSomeReading(view, plausible);
+  if (result->knots.empty()) {
+    result->status = IdentifyStatus::kUnknown;
+    result->reasons.push_back("no knot of the codebook has these colours");
+    return;
+  }
+  if (result->knots.size() > 1) {
+    result->status = IdentifyStatus::kAmbiguous;
+    std::string list;
+    for (int k : result->knots) {
+      // (Appended in two steps: GCC 12 warns falsely on (... ? "" : " ") + KnotName(...) here.)
+      if (!list.empty()) list += ' ';
+      list += KnotName(view.codebook.knots[k]);
+    }
+    result->reasons.push_back(std::to_string(result->knots.size()) + " knots fit: " + list);
+    return;
+  }
+  ConfirmTheOneKnot(view, all_clear, result);
+}
+
+}  // namespace
+
+KnotIdentification IdentifyKnot(const cv::Mat& bgr8, const Eigen::Vector2d& knot_px,
+                                const std::vector<Eigen::Vector2d>& yarn_directions,
+                                const IdentifyOptions& options, const KnotCodebook& codebook) {
+  const std::vector<Eigen::Vector2d> dirs =
+      CheckedUnitDirections(bgr8, yarn_directions, options, codebook);
   KnotIdentification result;
   const LinearSampler sampler(bgr8, options.image_is_linear);
+  const KnotView view{sampler, knot_px, dirs, options, codebook};
+
+  // The yarns must stay inside the frame.
   const double margin = options.outer_radius_px + options.search_half_width_px + 2;
   if (!(knot_px.x() >= margin && knot_px.y() >= margin && knot_px.x() < bgr8.cols - 1 - margin &&
         knot_px.y() < bgr8.rows - 1 - margin)) {
@@ -714,275 +728,31 @@ KnotIdentification IdentifyKnot(const cv::Mat& bgr8, const Eigen::Vector2d& knot
     return result;
   }
 
-  Colour pixel_sigma(0, 0, 0);
-  // Local background: the median of a ring around the knot away from every yarn (>= 25 deg).
-  {
-    std::vector<float> channel[3];
-    const double cos_limit = std::cos(25.0 * kDegToRad);
-    for (double radius = options.inner_radius_px + 2; radius <= options.outer_radius_px;
-         radius += 2) {
-      for (int a = 0; a < 72; ++a) {
-        const Eigen::Vector2d u(std::cos(a * 5 * kDegToRad), std::sin(a * 5 * kDegToRad));
-        bool clear = true;
-        for (const Eigen::Vector2d& d : dirs) clear = clear && u.dot(d) < cos_limit;
-        Colour c;
-        // At pixel centres: bilinear interpolation would smooth the noise measured here.
-        const Eigen::Vector2d at = (knot_px + radius * u).array().round().matrix();
-        if (!clear || !sampler.At(at, &c)) continue;
-        for (int k = 0; k < 3; ++k) channel[k].push_back(c[k]);
-      }
-    }
-    if (channel[0].empty()) {
-      result.reasons.push_back("no background visible between the yarns");
-      return result;
-    }
-    for (int k = 0; k < 3; ++k) {
-      auto mid = channel[k].begin() + channel[k].size() / 2;
-      std::nth_element(channel[k].begin(), mid, channel[k].end());
-      result.background[k] = *mid;
-      // Pixel noise: 1.4826 x the median absolute deviation (a Gaussian's sigma).
-      std::vector<float> deviation;
-      for (float v : channel[k]) deviation.push_back(std::abs(v - result.background[k]));
-      auto dmid = deviation.begin() + deviation.size() / 2;
-      std::nth_element(deviation.begin(), dmid, deviation.end());
-      pixel_sigma[k] = 1.4826f * *dmid;
-    }
+  // The local background and the pixel noise on it.
+  const std::optional<LocalBackground> background = EstimateLocalBackground(view);
+  if (!background) {
+    result.reasons.push_back("no background visible between the yarns");
+    return result;
   }
+  result.background = background->colour;
 
   // Each yarn: the most contrasted point of each cross-section, the best covered of them
-  // averaged, classified against the palette.
-  std::vector<std::vector<int>> plausible(n);
-  struct PendingYarn {
-    int y;
-    Colour mean, sigma;
-    std::array<bool, 3> observed;
-    int samples;
-    bool phase_averaged;
-  };
-  std::vector<PendingYarn> pending;
-  bool all_clear = true;
-  for (int y = 0; y < n; ++y) {
-    const Eigen::Vector2d d = dirs[y], across(-d.y(), d.x());
-    std::vector<std::pair<double, Colour>> samples;
-    std::array<int, 3> sites{0, 0, 0};  // mosaic sites of each colour under the centreline
-    std::vector<Colour> integrals;
-    // A thread that crosses at least one mosaic period (2 px) of rows and of columns along the
-    // segment has seen every colour site at every phase: the mean cross-section integral is an
-    // unbiased colour. Else (near an image axis) the best covered samples, with the channels
-    // whose sites it never crosses ignored.
-    const double travel = (options.outer_radius_px - options.inner_radius_px) *
-                          std::min(std::abs(d.x()), std::abs(d.y()));
-    const bool phase_averaged =
-        options.bayer == BayerPattern::kNone || travel >= options.min_phase_travel_px;
-    for (double r = options.inner_radius_px; r <= options.outer_radius_px + 1e-9;
-         r += options.step_px) {
-      double best_contrast = -1;
-      Colour best_colour;
-      Eigen::Vector2d best_p;
-      for (double t = -options.search_half_width_px; t <= options.search_half_width_px + 1e-9;
-           t += 0.5) {
-        const Eigen::Vector2d p = knot_px + r * d + t * across;
-        // Not nearer another yarn than 2 px (thread width and the bilinear footprint).
-        bool own = true;
-        for (int o = 0; o < n; ++o) {
-          if (o != y && RayDistance(p, knot_px, dirs[o]) < 2.0) own = false;
-        }
-        Colour c;
-        if (!own || !sampler.At(p, &c)) continue;
-        const double contrast = Contrast(c, result.background);
-        if (contrast > best_contrast) best_contrast = contrast, best_colour = c, best_p = p;
-      }
-      if (best_contrast >= options.min_contrast) {
-        samples.emplace_back(best_contrast, best_colour);
-        // The cross-section integral around the thread's centre: sum of (pixel - background)
-        // over 5 px across, i.e. width x (yarn - background) for a thread narrower than that.
-        Colour integral(0, 0, 0);
-        bool inside = true;
-        for (int t = -2; t <= 2 && inside; ++t) {
-          Colour c;
-          inside = sampler.At(best_p + t * across, &c);
-          integral += c - result.background;
-        }
-        if (inside) integrals.push_back(integral);
-        if (options.bayer != BayerPattern::kNone) {
-          const int site = BayerColor(options.bayer, static_cast<int>(std::lround(best_p.y())),
-                                      static_cast<int>(std::lround(best_p.x())));
-          if (site >= 0) ++sites[site];
-        }
-      }
+  // averaged.
+  std::vector<MeasuredYarn> measured;
+  for (int y = 0; y < view.yarns(); ++y) {
+    if (std::optional<MeasuredYarn> m = MeasureYarn(view, y, *background, &result)) {
+      measured.push_back(*m);
     }
-    YarnReading reading;
-    if (!phase_averaged && !options.read_along_mosaic) {
-      reading.samples = static_cast<int>(samples.size());
-      for (size_t c = 0; c < codebook.palette.size(); ++c) {
-        reading.plausible.push_back(static_cast<int>(c));
-      }
-      char text[200];
-      std::snprintf(text, sizeof(text),
-                    "yarn %d: runs along the pixel rows or columns (%.1f px across them over the "
-                    "segment < %.1f): the mosaic does not see all its colours, colour unknown",
-                    y, travel, options.min_phase_travel_px);
-      result.reasons.push_back(text);
-    } else if (static_cast<int>(samples.size()) < options.min_samples) {
-      reading.samples = static_cast<int>(samples.size());
-      for (size_t c = 0; c < codebook.palette.size(); ++c) {
-        reading.plausible.push_back(static_cast<int>(c));
-      }
-      result.reasons.push_back("yarn " + std::to_string(y) + ": only " +
-                               std::to_string(samples.size()) + " thread samples (need " +
-                               std::to_string(options.min_samples) + "): colour unknown");
-    } else {
-      std::sort(samples.begin(), samples.end(),
-                [](const auto& a, const auto& b) { return a.first > b.first; });
-      const size_t keep = std::max<size_t>(
-          std::min<size_t>(samples.size(), options.min_samples),
-          static_cast<size_t>(std::ceil(options.keep_fraction * samples.size())));
-      Colour mean(0, 0, 0);
-      for (size_t i = 0; i < keep; ++i) mean += samples[i].second;
-      mean *= 1.0f / static_cast<float>(keep);
-      // Neighbouring samples share pixels (bilinear sampling, demosaicing): count half of them
-      // as independent.
-      Colour mean_sigma = pixel_sigma * (1.0f / std::sqrt(0.5f * static_cast<float>(keep)));
-      std::array<bool, 3> observed{true, true, true};
-      std::string unseen;
-      if (phase_averaged && static_cast<int>(integrals.size()) >= options.min_samples) {
-        Colour sum(0, 0, 0);
-        for (const Colour& c : integrals) sum += c;
-        mean = result.background + sum * (1.0f / static_cast<float>(integrals.size()));
-        mean_sigma = pixel_sigma * std::sqrt(5.0f / (0.5f * static_cast<float>(integrals.size())));
-      } else if (options.bayer != BayerPattern::kNone) {
-        for (int c : {0, 2}) {
-          if (sites[c] < options.min_channel_sites) {
-            observed[c] = false;
-            unseen += c == 0 ? " blue" : " red";
-          }
-        }
-      }
-      pending.push_back({y, mean, mean_sigma, observed, static_cast<int>(samples.size()),
-                         phase_averaged});
-      if (!unseen.empty()) {
-        result.reasons.push_back("yarn " + std::to_string(y) + ": runs along the mosaic, no" +
-                                 unseen + " sites under it: channel ignored");
-      }
-    }
-    result.yarns.push_back(reading);
   }
 
-  // Classification. The threads of one net have one diameter and meet at one depth, so their
-  // image widths agree: the coverage (width) fitted to each phase-averaged yarn must lie within
-  // width_tolerance of the median width of the yarns read with certainty. A colour that fits
-  // only as a much thinner or wider thread (a dim yellow for an orange under a colour cast) is
-  // thereby rejected.
-  auto classify = [&](const PendingYarn& p, double alpha_lo, double alpha_hi) {
-    IdentifyOptions o = options;
-    o.alpha_min = alpha_lo;
-    o.alpha_max = alpha_hi;
-    YarnReading r =
-        ClassifyYarnColour(p.mean, result.background, codebook.palette, o, p.observed, p.sigma);
-    r.samples = p.samples;
-    return r;
-  };
-  for (const PendingYarn& p : pending) {
-    result.yarns[p.y] = classify(p, options.alpha_min, options.alpha_max);
-  }
-  std::vector<double> widths;
-  for (const PendingYarn& p : pending) {
-    const YarnReading& r = result.yarns[p.y];
-    if (p.phase_averaged && r.plausible.size() == 1 && r.best_delta_e <= options.max_delta_e) {
-      widths.push_back(r.alpha);
-    }
-  }
-  if (widths.size() >= 2 && options.width_tolerance > 0) {
-    std::sort(widths.begin(), widths.end());
-    const double width = widths[widths.size() / 2];
-    for (const PendingYarn& p : pending) {
-      if (!p.phase_averaged) continue;
-      result.yarns[p.y] = classify(p, std::max(options.alpha_min, width / options.width_tolerance),
-                                   std::min(options.alpha_max, width * options.width_tolerance));
-    }
-    char text[120];
-    std::snprintf(text, sizeof(text), "thread width %.2f px (x/ %.2f allowed)", width,
-                  options.width_tolerance);
-    result.reasons.push_back(text);
-  }
-  for (const PendingYarn& p : pending) {
-    const YarnReading& reading = result.yarns[p.y];
-    const std::string name = codebook.palette[reading.best].name;
-    char text[200];
-    if (reading.best_delta_e > options.max_delta_e) {
-      std::snprintf(text, sizeof(text), "yarn %d: unknown colour (nearest %s at dE00 %.1f > %.1f)",
-                    p.y, name.c_str(), reading.best_delta_e, options.max_delta_e);
-    } else if (reading.plausible.size() > 1) {
-      std::string others;
-      for (int c : reading.plausible) {
-        others += (others.empty() ? "" : "/") + codebook.palette[c].name;
-      }
-      std::snprintf(text, sizeof(text), "yarn %d: uncertain colour %s (dE00 %.1f vs %.1f)", p.y,
-                    others.c_str(), reading.best_delta_e, reading.second_delta_e);
-    } else {
-      std::snprintf(text, sizeof(text), "yarn %d: %s (dE00 %.1f, next %.1f, width %.2f)", p.y,
-                    name.c_str(), reading.best_delta_e, reading.second_delta_e, reading.alpha);
-    }
-    result.reasons.push_back(text);
-  }
-  for (int y = 0; y < n; ++y) {
-    all_clear = all_clear && result.yarns[y].plausible.size() == 1;
-    plausible[y] = result.yarns[y].plausible;
+  // Their colours classified against the palette (the widths made to agree), each explained.
+  ClassifyMeasuredYarns(view, measured, &result);
+  for (const MeasuredYarn& m : measured) {
+    result.reasons.push_back(DescribeReading(view, m.y, result.yarns[m.y]));
   }
 
-  // Knots that fit some plausible reading, among the candidates.
-  std::vector<int> considered = options.candidate_knots;
-  if (considered.empty()) {
-    for (size_t k = 0; k < codebook.knots.size(); ++k) considered.push_back(static_cast<int>(k));
-  }
-  for (int k : considered) {
-    if (codebook.FitsSomeReading(k, plausible)) result.knots.push_back(k);
-  }
-  if (result.knots.empty()) {
-    result.status = IdentifyStatus::kUnknown;
-    result.reasons.push_back("no knot of the codebook has these colours");
-    return result;
-  }
-  if (result.knots.size() > 1) {
-    result.status = IdentifyStatus::kAmbiguous;
-    std::string list;
-    for (int k : result.knots) list += (list.empty() ? "" : " ") + KnotName(codebook.knots[k]);
-    result.reasons.push_back(std::to_string(result.knots.size()) + " knots fit: " + list);
-    return result;
-  }
-  // One knot fits. Identified only when some yarn was read with certainty and the best reading
-  // of every read yarn (the unread ones free) is its code.
-  const int knot = result.knots.front();
-  std::vector<std::vector<int>> best_reading(n);
-  int certain = 0;
-  for (int y = 0; y < n; ++y) {
-    const YarnReading& r = result.yarns[y];
-    const bool read = r.best >= 0 && r.best_delta_e <= options.max_delta_e;
-    best_reading[y] = read ? std::vector<int>{r.best} : r.plausible;
-    if (read && r.plausible.size() == 1) ++certain;
-  }
-  if (certain == 0) {
-    result.status = IdentifyStatus::kUnknown;
-    result.knots.clear();
-    result.reasons.push_back("no yarn colour read with certainty");
-    return result;
-  }
-  if (!codebook.FitsSomeReading(knot, best_reading)) {
-    result.status = IdentifyStatus::kUnknown;
-    result.knots.clear();
-    result.reasons.push_back("only a second-choice reading fits knot " +
-                             KnotName(codebook.knots[knot]));
-    return result;
-  }
-  result.status = IdentifyStatus::kIdentified;
-  double confidence = 1.0;
-  int clear = 0;
-  for (const YarnReading& r : result.yarns) {
-    if (r.plausible.size() == 1) confidence = std::min(confidence, r.confidence), ++clear;
-  }
-  result.confidence = confidence * (all_clear ? 1.0 : 0.5 * clear / n);
-  result.reasons.push_back("knot " + KnotName(codebook.knots[knot]) +
-                           (all_clear ? "" : " (every plausible reading gives it)"));
+  // The knots that fit some plausible reading, and the decision.
+  Decide(view, &result);
   return result;
 }
 

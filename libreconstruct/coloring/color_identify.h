@@ -1,14 +1,8 @@
 #pragma once
-// Knot identity from yarn colours: colour science (sRGB, CIE XYZ, CIELAB, CIEDE2000), the choice
-// of a physical yarn palette that stays distinguishable under the experiment's lighting, and the
-// identification of one knot in a demosaiced frame from the colours of its 2-4 yarns.
-//
-// Colour conventions. Images and `Colour` values are linear light in BGR order, 1 = sensor white
-// (render.h). The 8-bit frames of Demosaic are linear too (value * 255, no sRGB curve). Yarn dye
-// colours are given as sRGB 0..255 in R, G, B order (what a colour picker shows). Lab is CIE 1976
-// L*a*b* relative to a reference white given in XYZ; the default white is that of linear (1, 1, 1)
-// through the sRGB primaries, i.e. D65 (IEC 61966-2-1), so a neutral camera white is Lab (100, 0,
-// 0).
+// Knot identity from yarn colours: the codebook of a net's knots (their link colours) and the
+// identification of one knot in a demosaiced frame from the colours of its 2-4 yarns. The colour
+// science (sRGB, CIE XYZ, CIELAB, CIEDE2000, the colour conventions) is in colour_science.h, the
+// physical palette (dyes, lighting, ChoosePalette) in palette.h; both come with this header.
 //
 // A wrong identity is the worst outcome. IdentifyKnot therefore reports kIdentified only when
 // every plausible reading of every yarn colour leads to the same single knot of the codebook;
@@ -27,95 +21,12 @@
 #include <opencv2/core.hpp>
 
 #include "libreconstruct/coloring/colour.h"
-#include "libreconstruct/recording/bayer.h"
+#include "libreconstruct/coloring/colour_science.h"
 #include "libreconstruct/coloring/net_coloring.h"
+#include "libreconstruct/coloring/palette.h"
+#include "libreconstruct/recording/bayer.h"
 
 namespace netlab::recon {
-
-// ---------------------------------------------------------------------------------------------
-// Colour science.
-
-struct Lab {
-  double l = 0.0, a = 0.0, b = 0.0;
-};
-
-// sRGB transfer function (IEC 61966-2-1) on one channel in [0, 1], and its inverse.
-double SrgbToLinear(double encoded);
-double LinearToSrgb(double linear);
-
-// sRGB 0..255 (R, G, B) -> linear BGR in [0, 1] and back (rounded, clamped).
-Colour SrgbToLinearBgr(const std::array<double, 3>& srgb_rgb);
-std::array<double, 3> LinearBgrToSrgb(const Colour& bgr);
-
-// Linear BGR -> CIE XYZ (Y = 1 for white) with the sRGB primaries and D65 white (IEC 61966-2-1).
-Eigen::Vector3d LinearBgrToXyz(const Colour& bgr);
-// The XYZ of linear white (1, 1, 1): D65, (0.9505, 1, 1.089).
-Eigen::Vector3d D65White();
-// CIE 1976 L*a*b* of `xyz` relative to the white `white_xyz` (CIE 15:2004, eq. 8.1-8.4).
-Lab XyzToLab(const Eigen::Vector3d& xyz, const Eigen::Vector3d& white_xyz = D65White());
-Eigen::Vector3d LabToXyz(const Lab& lab, const Eigen::Vector3d& white_xyz = D65White());
-// Shorthand: linear BGR -> Lab relative to D65.
-Lab LinearBgrToLab(const Colour& bgr);
-
-// CIEDE2000 colour difference, exactly as in G. Sharma, W. Wu, E. N. Dalal, "The CIEDE2000
-// color-difference formula: implementation notes, supplementary test data, and mathematical
-// observations", Color Res. Appl. 30(1), 2005, eq. 1-22 (hue angles in degrees, the mean hue
-// and hue difference rules of eq. 10 and 14 for the 180 degree discontinuity, h = 0 when
-// a' = b = 0). Parametric factors kL = kC = kH = 1 by default.
-double CieDe2000(const Lab& x, const Lab& y, double k_l = 1.0, double k_c = 1.0,
-                 double k_h = 1.0);
-
-// ---------------------------------------------------------------------------------------------
-// The physical palette.
-
-// A yarn dye one can buy: its colour as sRGB 0..255 (R, G, B) under daylight.
-struct Candidate {
-  std::string name;
-  std::array<double, 3> srgb{0, 0, 0};
-};
-
-// How the cameras see a dye. seen_linear_bgr = clamp(exposure * gains_bgr * linear(srgb), 0, 1)
-// per channel (the sensor clips at white), then Lab relative to `white_xyz` (the camera's white;
-// D65 for a white-balanced camera).
-struct Lighting {
-  std::array<double, 3> gains_bgr{1.0, 1.0, 1.0};  // illuminant colour / white balance error, > 0
-  double exposure = 1.0;                            // brightness scale (> 0)
-  Eigen::Vector3d white_xyz = D65White();          // Lab reference white (Y > 0)
-  // The background the yarns are seen against, linear BGR as seen (after gains and exposure).
-  // When set, every chosen colour must also differ from it by the reported minimum ΔE00.
-  std::optional<Colour> background;
-
-  // The linear BGR colour and the Lab the cameras see of an sRGB dye.
-  Colour Seen(const std::array<double, 3>& srgb_rgb) const;
-  Lab SeenLab(const std::array<double, 3>& srgb_rgb) const;
-  bool IsValid(std::string* error) const;
-};
-
-// The indices of `k` candidates that maximise the smallest CIEDE2000 difference among them as
-// seen under `lighting` (and from its background, when set). Exact (branch and bound over the
-// subsets) for up to kExactPaletteCandidates candidates; otherwise greedy farthest-point
-// selection improved by single swaps until no swap raises the minimum (a local optimum). Indices
-// ascending. *min_delta_e (if not null) receives the achieved minimum (the pairwise and
-// background differences; +inf when k == 1 without background). Throws std::invalid_argument
-// when k < 1, k > candidates.size() or the lighting is invalid.
-inline constexpr int kExactPaletteCandidates = 24;
-std::vector<int> ChoosePalette(const std::vector<Candidate>& candidates, int k,
-                               const Lighting& lighting, double* min_delta_e);
-// The objective of ChoosePalette for one choice of indices.
-double PaletteMinDeltaE(const std::vector<Candidate>& candidates, const std::vector<int>& chosen,
-                        const Lighting& lighting);
-
-// Reads candidates from a small text file, one per line, '#' starts a comment:
-//   CSV:   red, 200, 30, 40          (an optional header line "name,r,g,b")
-//   YAML:  - [red, 200, 30, 40]   or   - {name: red, r: 200, g: 30, b: 40}
-// Throws std::runtime_error naming the file and line on a malformed line, a value outside
-// 0..255, a duplicate name, or an unreadable / empty file.
-std::vector<Candidate> LoadCandidates(const std::string& path);
-// Sixteen common yarn dye colours (approximate sRGB of commercial acrylic yarns).
-std::vector<Candidate> DefaultYarnCandidates();
-
-// ---------------------------------------------------------------------------------------------
-// Identification.
 
 // How the colours of a knot's links identify it: CodeRule of net_coloring.h (set, multiset,
 // cyclic up to rotation and mirror; the degree must match too).

@@ -2,8 +2,8 @@
 // Yarn colouring of a net so that every knot is identified by the colours of its links.
 //
 // The net is a grid of rows x cols knots; links join horizontal and vertical neighbours. Link
-// order (the contract shared with the simulator, libnetsim/model/model.h): first the horizontal links
-// (r,c)-(r,c+1) row by row, then the vertical links (r,c)-(r+1,c) row by row.
+// order (the contract shared with the simulator, libnetsim/model/model.h): first the horizontal
+// links (r,c)-(r,c+1) row by row, then the vertical links (r,c)-(r+1,c) row by row.
 //
 // A knot's links in GEOMETRIC ORDER are the present ones among right, down, left, up (in that
 // order, absent links skipped). A knot's CODE under a rule:

@@ -14,7 +14,8 @@ namespace netlab::recon {
 struct YarnColoring {
   std::vector<std::string> names;  // palette names
   std::vector<Colour> palette;     // linear BGR in [0, 1]
-  std::vector<int> link_colour;    // per link, in the model's link order (see libnetsim/model/model.h)
+  // Per link, in the model's link order (libnetsim/model/model.h).
+  std::vector<int> link_colour;
 };
 YarnColoring DefaultColoring(int rows, int cols);
 // The colouring of a coloring.yaml (`netlab color-net`): its dyes' sRGB as linear colours

@@ -5,13 +5,13 @@
 // Adjustment modes:
 //   kNone    per-point triangulation only (linear + nonlinear refinement, outliers).
 //   kPoints  the points, with the switchable priors below, the cameras as calibrated.
-//   kRig     first the cameras' extrinsics over the sequence (intrinsics fixed): the cameras are
-//            bolted to one frame, so each keeps one pose for the whole sequence; the gauge is
-//            fixed explicitly by holding the reference camera (the rig's first) and the distance
-//            from it to the second camera (the scale); refined on up to `rig_frames` frames
-//            spread over the sequence, then every point is triangulated again with the new rig.
-//            The new rig is adopted only if the sequence determines it (camera centres and
-//            rotations to the given standard deviations): a small or flat net at one place
+//   kRig     first the cameras' extrinsics over the sequence (intrinsics fixed; rig_refinement.h):
+//            the cameras are bolted to one frame, so each keeps one pose for the whole sequence;
+//            the gauge is fixed explicitly by holding the reference camera (the rig's first) and
+//            the distance from it to the second camera (the scale); refined on up to `rig_frames`
+//            frames spread over the sequence, then every point is triangulated again with the
+//            new rig. The new rig is adopted only if the sequence determines it (camera centres
+//            and rotations to the given standard deviations): a small or flat net at one place
 //            trades a camera's position against its turn, and such a rig would spoil every point.
 //
 // Priors (kPoints / kRig; each switchable, each reported by how far it moved the points):
@@ -126,5 +126,13 @@ struct SequenceResult {
 // Throws netlab::InputError when the labels use a camera the rig lacks (naming it).
 SequenceResult ReconstructSequence(const calib::Rig& rig, const LabelSet& labels,
                                    const SequenceOptions& options);
+
+// What the user of a reconstruction should know and may act on, one sentence each (none when
+// all is well): the estimated labelling noise is more than a quarter of the outlier threshold
+// (good labels are being rejected); points of three or more views are pulled beyond the
+// threshold by the smoothness prior (prior_disagreements); fewer than 90 % of the knot-frames
+// seen twice or more were triangulated. The sentences name `netlab triangulate`'s options
+// (--outlier-px, --smooth-sigma).
+std::vector<std::string> SequenceWarnings(const SequenceResult& result);
 
 }  // namespace netlab::recon

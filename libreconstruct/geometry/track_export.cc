@@ -1,5 +1,6 @@
 #include "libreconstruct/geometry/track_export.h"
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -12,11 +13,42 @@
 #include <regex>
 #include <stdexcept>
 
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+
 #include "common/yaml_util.h"
 #include "libreconstruct/labels/csv_table.h"
 
 namespace netlab::recon {
 namespace {
+
+// Linear interpolation of the truth's knot `k` at time t; false outside its time span or where
+// either neighbouring sample is not valid.
+bool TruthAt(const netsim::KnotTracks& truth, int k, double t, Eigen::Vector3d* p) {
+  const auto& time = truth.time;
+  if (time.empty() || t < time.front() - 1e-9 || t > time.back() + 1e-9) return false;
+  const size_t hi = std::min<size_t>(
+      time.size() - 1, std::lower_bound(time.begin(), time.end(), t) - time.begin());
+  const size_t lo = hi > 0 ? hi - 1 : 0;
+  if (!truth.Valid(static_cast<int>(lo), k) || !truth.Valid(static_cast<int>(hi), k)) return false;
+  const double span = time[hi] - time[lo];
+  const double w = span > 0 ? std::clamp((t - time[lo]) / span, 0.0, 1.0) : 0.0;
+  *p = (1 - w) * truth.Position(static_cast<int>(lo), k) +
+       w * truth.Position(static_cast<int>(hi), k);
+  return true;
+}
+
+// RMS distance of the measured points from the true ones after the best rigid motion of the
+// former onto the latter (Umeyama, no scale); n >= 3 points.
+double AlignedRms(const std::vector<Eigen::Vector3d>& measured_points,
+                  const std::vector<Eigen::Vector3d>& true_points, int64_t n) {
+  const Eigen::Map<const Eigen::Matrix3Xd> measured(measured_points[0].data(), 3, n);
+  const Eigen::Map<const Eigen::Matrix3Xd> truth_xyz(true_points[0].data(), 3, n);
+  const Eigen::Matrix4d m = Eigen::umeyama(measured, truth_xyz, false);
+  const Eigen::Matrix3Xd moved =
+      (m.topLeftCorner<3, 3>() * measured).colwise() + m.topRightCorner<3, 1>();
+  return std::sqrt((moved - truth_xyz).colwise().squaredNorm().mean());
+}
 
 // The tracks' knot of each point P (index P - 1), or -1 where the tracks lack it.
 std::vector<int> KnotOfPoint(const netsim::KnotTracks& tracks, int rows, int cols) {
@@ -145,6 +177,52 @@ std::vector<std::vector<double>> ReadXyzRes(const std::string& path) {
   for (size_t t = 0; t < table.rows.size(); ++t)
     for (const auto& [p, column] : column_of_point) residual[t][p - 1] = table.rows[t][column];
   return residual;
+}
+
+netsim::KnotTracks TracksFromSequence(const SequenceResult& result, double fps,
+                                      const std::string& source) {
+  netsim::KnotTracks tracks;
+  tracks.source = source;
+  for (int f : result.frame_index) tracks.time.push_back(f / fps);
+  tracks.frame_index = result.frame_index;
+  for (int row = 0; row < result.rows; ++row)
+    for (int col = 0; col < result.cols; ++col) tracks.grid.push_back({row, col});
+  tracks.position = result.position;
+  tracks.valid = result.valid;
+  tracks.covariance = result.covariance;
+  tracks.reprojection_error_px = result.rms_px;
+  for (const auto& c : result.rig.cameras) tracks.camera_names.push_back(c.name);
+  for (const auto& o : result.outliers)
+    tracks.outliers.push_back({o.frame, o.knot, o.camera, o.residual_px});
+  return tracks;
+}
+
+TruthComparison CompareWithTruth(const netsim::KnotTracks& tracks,
+                                 const netsim::KnotTracks& truth) {
+  // Per valid point with a true position: its 3D error and its Mahalanobis distance.
+  double truth_ss = 0.0, mahalanobis = 0.0;
+  TruthComparison c;
+  std::vector<Eigen::Vector3d> measured_points, true_points;
+  for (int t = 0; t < tracks.frames(); ++t)
+    for (int k = 0; k < tracks.knots(); ++k) {
+      if (!tracks.Valid(t, k)) continue;
+      const int tk = truth.FindKnot(tracks.grid[k][0], tracks.grid[k][1]);
+      Eigen::Vector3d p;
+      if (tk < 0 || !TruthAt(truth, tk, tracks.time[t], &p)) continue;
+      const Eigen::Vector3d e = tracks.Position(t, k) - p;
+      measured_points.push_back(tracks.Position(t, k));
+      true_points.push_back(p);
+      truth_ss += e.squaredNorm();
+      c.max_m = std::max(c.max_m, e.norm());
+      const Eigen::Matrix3d& cov = tracks.covariance[static_cast<size_t>(t) * tracks.knots() + k];
+      mahalanobis += e.dot(cov.ldlt().solve(e));
+      ++c.points;
+    }
+  c.rms_m = c.points > 0 ? std::sqrt(truth_ss / c.points) : 0.0;
+  c.mean_mahalanobis2 = c.points > 0 ? mahalanobis / c.points : 0.0;
+  // The shape of the tracks, whatever the rig's world frame.
+  if (c.points >= 3) c.aligned_rms_m = AlignedRms(measured_points, true_points, c.points);
+  return c;
 }
 
 }  // namespace netlab::recon

@@ -1,5 +1,6 @@
 #pragma once
-// DLTdv8-style CSV export of knot tracks (the knot-track file, libnetsim/tracks/track_file.h):
+// Knot tracks out of a sequence reconstruction: in the layout of the knot-track file
+// (libnetsim/tracks/track_file.h), compared with true tracks, and exported as DLTdv8-style CSV:
 //
 //   xyzpts.csv  a header row, then one row per frame of the tracks: columns pt{P}_X, pt{P}_Y,
 //               pt{P}_Z for P = 1..K (knot (row, col) of a rows x cols net is P = row*cols+col+1;
@@ -11,14 +12,41 @@
 // Values are written with 17 significant digits so that reading gives back the same doubles.
 // Files are written through "<path>.partial" and a rename.
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "libnetsim/tracks/track_file.h"
+#include "libreconstruct/geometry/bundle_adjust.h"
 
 namespace netlab::recon {
+
+// The reconstruction as knot tracks: time = frame_index / fps (s), the knots of the rows x cols
+// net in row-major order, positions, validity, covariances, RMS reprojection residuals, the
+// outlier observations and the rig's camera names, the given source.
+netsim::KnotTracks TracksFromSequence(const SequenceResult& result, double fps,
+                                      const std::string& source);
+
+// Reconstructed tracks against true ones (e.g. the simulation that was rendered).
+struct TruthComparison {
+  int64_t points = 0;         // valid knot-frames the truth has a position for
+  double rms_m = 0.0;         // RMS 3D error over those, m; 0 without any
+  double max_m = 0.0;         // largest 3D error, m
+  double aligned_rms_m = 0.0;  // RMS error after the best rigid motion onto the truth, m (needs
+                               // three points; 0 otherwise)
+  double mean_mahalanobis2 = 0.0;  // mean e' C^-1 e, C the point's covariance: 3 when the
+                                   // covariances are right; 0 without any
+};
+
+// Compares every valid point of `tracks` (which must carry covariances) with the truth's knot at
+// the same grid position, linearly interpolated to the point's time; points outside the truth's
+// time span, or where it lacks the knot or a valid position, are left out. The aligned RMS is
+// after the best rigid motion (Umeyama, no scale) of the points onto the truth: a rig calibrated
+// from a foil or markers has its own world frame.
+TruthComparison CompareWithTruth(const netsim::KnotTracks& tracks,
+                                 const netsim::KnotTracks& truth);
 
 void WriteXyzPts(const std::string& path, const netsim::KnotTracks& tracks, int rows, int cols);
 void WriteXyzRes(const std::string& path, const netsim::KnotTracks& tracks, int rows, int cols);

@@ -283,14 +283,11 @@ double DetectorReach(const KnotDetectorOptions& o) {
   return 2.0 * o.ring_radius_px + 4 * o.ridge_sigma_px + 4;
 }
 
-KnotDetector::KnotDetector(const cv::Mat& image, cv::Rect roi, KnotDetectorOptions options)
-    : o_(options) {
-  const cv::Rect full(0, 0, image.cols, image.rows);
-  roi_ = roi.empty() ? full : (roi & full);
-  if (roi_.empty()) return;
-  // Foreground: the distance from the local background, a median over a window much wider than
-  // a yarn (the target mock-up or the aircraft behind the net are not one colour).
-  cv::Mat region = image(roi_), eight;
+namespace {
+
+// The region in 8 bits per channel (scaled so that its largest value is 255 when it is not).
+cv::Mat EightBit(const cv::Mat& region) {
+  cv::Mat eight;
   if (region.depth() == CV_8U) {
     eight = region;
   } else {
@@ -298,23 +295,100 @@ KnotDetector::KnotDetector(const cv::Mat& image, cv::Rect roi, KnotDetectorOptio
     cv::minMaxLoc(region.reshape(1), nullptr, &max);
     region.convertTo(eight, CV_8U, max > 0 ? 255.0 / max : 1.0);
   }
+  return eight;
+}
+
+// Where the background has edges: the direction of its gradient from the structure tensor
+// (doubled angles: cos 2 phi, sin 2 phi, times w = |gradient| / background_edge, at most 1), and
+// the tensor's trace (|gradient|^2). All CV_32F.
+struct BackgroundEdges {
+  cv::Mat c2, s2, trace;
+};
+
+BackgroundEdges FindBackgroundEdges(const cv::Mat& bg, double background_edge) {
+  cv::Mat gx, gy;
+  cv::Sobel(bg, gx, CV_32F, 1, 0, 3, 1.0 / 8);
+  cv::Sobel(bg, gy, CV_32F, 0, 1, 3, 1.0 / 8);
+  cv::Mat jxx(bg.size(), CV_32F), jyy(bg.size(), CV_32F), jxy(bg.size(), CV_32F);
+  const int nc = gx.channels();
+  for (int y = 0; y < bg.rows; ++y) {
+    const float* ax = gx.ptr<float>(y);
+    const float* ay = gy.ptr<float>(y);
+    for (int x = 0; x < bg.cols; ++x) {
+      float xx = 0, yy = 0, xy = 0;
+      for (int c = 0; c < nc; ++c) {
+        const float u = ax[nc * x + c], v = ay[nc * x + c];
+        xx += u * u, yy += v * v, xy += u * v;
+      }
+      jxx.at<float>(y, x) = xx, jyy.at<float>(y, x) = yy, jxy.at<float>(y, x) = xy;
+    }
+  }
+  for (cv::Mat* m : {&jxx, &jyy, &jxy}) cv::GaussianBlur(*m, *m, cv::Size(), 1.5);
+  BackgroundEdges edges;
+  edges.c2.create(bg.size(), CV_32F);
+  edges.s2.create(bg.size(), CV_32F);
+  const float level2 = static_cast<float>(background_edge * background_edge);
+  for (int y = 0; y < bg.rows; ++y)
+    for (int x = 0; x < bg.cols; ++x) {
+      const float a = jxx.at<float>(y, x) - jyy.at<float>(y, x), b = 2 * jxy.at<float>(y, x);
+      const float norm = std::sqrt(a * a + b * b);
+      const float trace = jxx.at<float>(y, x) + jyy.at<float>(y, x);
+      const float w = std::min(1.0f, std::sqrt(trace / level2));
+      edges.c2.at<float>(y, x) = norm > 0 ? w * a / norm : 0.0f;
+      edges.s2.at<float>(y, x) = norm > 0 ? w * b / norm : 0.0f;
+    }
+  edges.trace = jxx + jyy;
+  return edges;
+}
+
+}  // namespace
+
+KnotDetector::KnotDetector(const cv::Mat& image, cv::Rect roi, KnotDetectorOptions options)
+    : o_(options) {
+  const cv::Rect full(0, 0, image.cols, image.rows);
+  roi_ = roi.empty() ? full : (roi & full);
+  if (roi_.empty()) return;
+  // Foreground: the distance from the local background, a median over a window much wider than
+  // a yarn (the target mock-up or the aircraft behind the net are not one colour).
+  const cv::Mat eight = EightBit(image(roi_));
   pattern_ = static_cast<int>(DemosaicedFrom(eight));
   cv::Mat background, f, bg;
   cv::medianBlur(eight, background, o_.background_window_px | 1);
   eight.convertTo(f, CV_32F, 1.0 / 255);
   background.convertTo(bg, CV_32F, 1.0 / 255);
   diff_ = f - bg;
-  std::vector<cv::Mat> channels, differences;
-  cv::split(f, channels);
+  std::vector<cv::Mat> differences;
   cv::split(diff_, differences);
   cv::Mat fg = cv::Mat::zeros(f.size(), CV_32F);
   for (const cv::Mat& c : differences) fg += c.mul(c);
   cv::sqrt(fg, fg);
+  // Small solids (corner masses) are not yarns: masked.
+  MaskSolids(f);
+  // Edges of the background (of the target behind the net): the median follows a straight
+  // edge, but not to the pixel, nor round a corner, and what it misses is a thin line of
+  // foreground along the edge, a ridge like a yarn's. Such ridges run along the background's
+  // edge, a yarn crossing the edge does not: a ridge is weakened by w sin^2 of its angle to the
+  // background's gradient (FindBackgroundEdges).
+  BackgroundEdges edges;
+  if (o_.background_edge > 0) {
+    edges = FindBackgroundEdges(bg, o_.background_edge);
+    // Nor are the yarn model's samples taken on such an edge (the model has no step).
+    const float level2 = static_cast<float>(o_.background_edge * o_.background_edge);
+    masked_.setTo(kEdge, (edges.trace > 0.25f * level2) & (masked_ == 0));
+  }
+  // Ridges of the foreground at the thread's scale, and the branch peaks' threshold.
+  ComputeRidges(fg, edges.c2, edges.s2);
+  threshold_ = PeakThreshold();
+}
+
+void KnotDetector::MaskSolids(const cv::Mat& f) {
   // Small solids (corner masses) are not yarns: their rims look like ridges and meet the yarns
   // like junctions. A solid is what survives an opening with a disc several yarn widths across
   // (yarns and their crossings, however many, are thinner) of the region that stands out from
   // the region's median colour; only compact blobs count (a target face behind the net is
   // background, handled by the local median).
+  std::vector<cv::Mat> channels;
+  cv::split(f, channels);
   cv::Mat global = cv::Mat::zeros(f.size(), CV_32F);
   for (const cv::Mat& c : channels) {
     cv::Mat d = c - Quantile(c, 0.5, 3);
@@ -326,60 +400,21 @@ KnotDetector::KnotDetector(const cv::Mat& image, cv::Rect roi, KnotDetectorOptio
   cv::morphologyEx(bright, opened, cv::MORPH_OPEN,
                    cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(disc, disc)));
   FindSolids(opened, global);
-  // Edges of the background (of the target behind the net): the median follows a straight
-  // edge, but not to the pixel, nor round a corner, and what it misses is a thin line of
-  // foreground along the edge, a ridge like a yarn's. Such ridges run along the background's
-  // edge, a yarn crossing the edge does not: a ridge is weakened by w sin^2 of its angle to the
-  // background's gradient, w = |gradient| / background_edge (at most 1), the gradient's
-  // direction from the structure tensor of the background (doubled angles: cos 2 phi,
-  // sin 2 phi of the gradient, times w).
-  cv::Mat edge_c2, edge_s2;
-  if (o_.background_edge > 0) {
-    cv::Mat gx, gy;
-    cv::Sobel(bg, gx, CV_32F, 1, 0, 3, 1.0 / 8);
-    cv::Sobel(bg, gy, CV_32F, 0, 1, 3, 1.0 / 8);
-    cv::Mat jxx(f.size(), CV_32F), jyy(f.size(), CV_32F), jxy(f.size(), CV_32F);
-    const int nc = gx.channels();
-    for (int y = 0; y < f.rows; ++y) {
-      const float* ax = gx.ptr<float>(y);
-      const float* ay = gy.ptr<float>(y);
-      for (int x = 0; x < f.cols; ++x) {
-        float xx = 0, yy = 0, xy = 0;
-        for (int c = 0; c < nc; ++c) {
-          const float u = ax[nc * x + c], v = ay[nc * x + c];
-          xx += u * u, yy += v * v, xy += u * v;
-        }
-        jxx.at<float>(y, x) = xx, jyy.at<float>(y, x) = yy, jxy.at<float>(y, x) = xy;
-      }
-    }
-    for (cv::Mat* m : {&jxx, &jyy, &jxy}) cv::GaussianBlur(*m, *m, cv::Size(), 1.5);
-    edge_c2.create(f.size(), CV_32F);
-    edge_s2.create(f.size(), CV_32F);
-    const float level2 = static_cast<float>(o_.background_edge * o_.background_edge);
-    for (int y = 0; y < f.rows; ++y)
-      for (int x = 0; x < f.cols; ++x) {
-        const float a = jxx.at<float>(y, x) - jyy.at<float>(y, x), b = 2 * jxy.at<float>(y, x);
-        const float norm = std::sqrt(a * a + b * b), trace = jxx.at<float>(y, x) + jyy.at<float>(y, x);
-        const float w = std::min(1.0f, std::sqrt(trace / level2));
-        edge_c2.at<float>(y, x) = norm > 0 ? w * a / norm : 0.0f;
-        edge_s2.at<float>(y, x) = norm > 0 ? w * b / norm : 0.0f;
-      }
-    // Nor are the yarn model's samples taken on such an edge (the model has no step).
-    cv::Mat trace = jxx + jyy;
-    masked_.setTo(kEdge, (trace > 0.25f * level2) & (masked_ == 0));
-  }
-  // Ridges of the foreground at the thread's scale, with their direction: along a ridge the
-  // Hessian's larger eigenvalue (about 0) has its eigenvector, at angle theta; stored as
-  // R (cos 2 theta, sin 2 theta), which interpolates bilinearly (doubled angles).
+}
+
+void KnotDetector::ComputeRidges(const cv::Mat& fg, const cv::Mat& edge_c2,
+                                 const cv::Mat& edge_s2) {
+  // Along a ridge the Hessian's larger eigenvalue (about 0) has its eigenvector, at angle theta;
+  // stored as R (cos 2 theta, sin 2 theta), which interpolates bilinearly (doubled angles).
   cv::Mat smooth, dxx, dyy, dxy;
   cv::GaussianBlur(fg, smooth, cv::Size(), o_.ridge_sigma_px);
   cv::Sobel(smooth, dxx, CV_32F, 2, 0, 3);
   cv::Sobel(smooth, dyy, CV_32F, 0, 2, 3);
   cv::Sobel(smooth, dxy, CV_32F, 1, 1, 3);
-  ridge_.create(f.size(), CV_32F);
-  field_.create(f.size(), CV_32FC3);
-  for (int y = 0; y < f.rows; ++y)
-    for (int x = 0; x < f.cols; ++x) {
+  ridge_.create(fg.size(), CV_32F);
+  field_.create(fg.size(), CV_32FC3);
+  for (int y = 0; y < fg.rows; ++y)
+    for (int x = 0; x < fg.cols; ++x) {
       const float a = dxx.at<float>(y, x), b = dyy.at<float>(y, x), c = dxy.at<float>(y, x);
       const float root = std::sqrt(0.25f * (a - b) * (a - b) + c * c);
       const float lambda_min = 0.5f * (a + b) - root;
@@ -395,6 +430,9 @@ KnotDetector::KnotDetector(const cv::Mat& image, cv::Rect roi, KnotDetectorOptio
       ridge_.at<float>(y, x) = r;
       field_.at<cv::Vec3f>(y, x) = cv::Vec3f(r, r * c2, r * s2);
     }
+}
+
+double KnotDetector::PeakThreshold() const {
   // A branch peak must stand out from the background's noise (the median ridge strength is the
   // background's: yarns cover a small part of the region; a corner mass's masked pixels are
   // not counted). Not from the strong yarns: on a rendered shot of Net A the weakest yarn at a
@@ -407,10 +445,9 @@ KnotDetector::KnotDetector(const cv::Mat& image, cv::Rect roi, KnotDetectorOptio
     for (int x = 0; x < ridge_.cols; ++x)
       if (masked_.at<uchar>(y, x) != kSolid) open.push_back(ridge_.at<float>(y, x));
   const cv::Mat unmasked(open, false);
-  threshold_ = open.empty() ? o_.min_peak
-                            : std::max({o_.noise_factor * Quantile(unmasked, 0.5),
-                                        o_.peak_fraction * Quantile(unmasked, 0.99),
-                                        o_.min_peak});
+  return open.empty() ? o_.min_peak
+                      : std::max({o_.noise_factor * Quantile(unmasked, 0.5),
+                                  o_.peak_fraction * Quantile(unmasked, 0.99), o_.min_peak});
 }
 
 void KnotDetector::FindSolids(const cv::Mat& blobs, const cv::Mat& level) {
@@ -890,34 +927,19 @@ FindNodeResult FindNode(const cv::Mat& image, const Eigen::Vector2d& centre, dou
   return result;
 }
 
-FindPathResult FindPath(const cv::Mat& image, int cols, int knot_a, const Eigen::Vector2d& px_a,
-                        int knot_b, const Eigen::Vector2d& px_b,
-                        const KnotDetectorOptions& options) {
-  FindPathResult result;
-  const int ra = knot_a / cols, ca = knot_a % cols, rb = knot_b / cols, cb = knot_b % cols;
-  if (ra != rb && ca != cb) {
-    result.why = "the two knots are not in one row or column";
-    return result;
-  }
-  const int between = std::max(std::abs(ra - rb), std::abs(ca - cb)) - 1;
-  if (between < 0) {
-    result.why = "the two knots are the same";
-    return result;
-  }
-  // The region: the segment's bounding box with room for a sagging yarn and the rings.
-  const double length = (px_b - px_a).norm();
-  const int margin = static_cast<int>(std::ceil(0.15 * length + DetectorReach(options)));
-  const cv::Rect roi(static_cast<int>(std::floor(std::min(px_a.x(), px_b.x()))) - margin,
-                     static_cast<int>(std::floor(std::min(px_a.y(), px_b.y()))) - margin,
-                     static_cast<int>(std::abs(px_b.x() - px_a.x())) + 2 * margin + 2,
-                     static_cast<int>(std::abs(px_b.y() - px_a.y())) + 2 * margin + 2);
-  const KnotDetector detector(image, roi, options);
-  const cv::Rect box = roi & cv::Rect(0, 0, image.cols, image.rows);
+namespace {
+
+// The cheapest path from a to b on the detector's ridges (image px, pixel by pixel; the ROI
+// `box` of the detector within the image): Dijkstra, 8-connected, step cost length / (ridge +
+// small): the yarn is the cheap way. The ridge counts up to a few times the branch threshold:
+// beyond, a yarn is a yarn, and the shortest one is the row (through 1 / ridge itself a path took
+// a bright neighbouring column and two links across rather than its own dim column). nullopt
+// when b cannot be reached.
+std::optional<std::vector<Eigen::Vector2d>> FollowYarn(const KnotDetector& detector,
+                                                       const cv::Rect& box,
+                                                       const Eigen::Vector2d& px_a,
+                                                       const Eigen::Vector2d& px_b) {
   const cv::Mat& ridge = detector.ridge();
-  // Dijkstra, 8-connected, step cost length / (ridge + small): the yarn is the cheap way. The
-  // ridge counts up to a few times the branch threshold: beyond, a yarn is a yarn, and the
-  // shortest one is the row (through 1 / ridge itself a path took a bright neighbouring column
-  // and two links across rather than its own dim column).
   const float eps = static_cast<float>(0.05 * detector.peak_threshold());
   const float enough = static_cast<float>(3.0 * detector.peak_threshold());
   const int w = ridge.cols, h = ridge.rows;
@@ -953,66 +975,80 @@ FindPathResult FindPath(const cv::Mat& image, int cols, int knot_a, const Eigen:
         }
       }
   }
-  if (prev[to] < 0 && to != from) {
-    result.why = "no path between the two knots";
-    return result;
-  }
-  for (int i = to; i >= 0; i = prev[i]) result.path.emplace_back(box.x + i % w, box.y + i / w);
-  std::reverse(result.path.begin(), result.path.end());
-  // Junctions along the path, away from the two end knots, in order of arc length.
-  struct Found {
-    double arc;
-    Junction j;
-  };
-  std::vector<Found> found;
+  if (prev[to] < 0 && to != from) return std::nullopt;
+  std::vector<Eigen::Vector2d> path;
+  for (int i = to; i >= 0; i = prev[i]) path.emplace_back(box.x + i % w, box.y + i / w);
+  std::reverse(path.begin(), path.end());
+  return path;
+}
+
+// A junction on the followed yarn, at arc length `arc` (px) from a.
+struct PathJunction {
+  double arc;
+  Junction j;
+};
+
+// The junctions along the path, away from the two end knots, in order of arc length; *length:
+// the path's arc length (px).
+std::vector<PathJunction> JunctionsAlong(const KnotDetector& detector,
+                                         const std::vector<Eigen::Vector2d>& path,
+                                         const Eigen::Vector2d& px_a, const Eigen::Vector2d& px_b,
+                                         const KnotDetectorOptions& options, double* length) {
+  std::vector<PathJunction> found;
   double arc = 0.0;
-  for (size_t i = 0; i < result.path.size(); ++i) {
-    if (i > 0) arc += (result.path[i] - result.path[i - 1]).norm();
-    const Eigen::Vector2d& p = result.path[i];
+  for (size_t i = 0; i < path.size(); ++i) {
+    if (i > 0) arc += (path[i] - path[i - 1]).norm();
+    const Eigen::Vector2d& p = path[i];
     if ((p - px_a).norm() < 1.5 * options.ring_radius_px ||
         (p - px_b).norm() < 1.5 * options.ring_radius_px)
       continue;
     bool near = false;
-    for (const Found& f : found) near = near || (f.j.px - p).norm() < options.ring_radius_px;
+    for (const PathJunction& f : found) near = near || (f.j.px - p).norm() < options.ring_radius_px;
     if (near) continue;
     const std::optional<Junction> j = detector.Examine(p);
     if (!j || (j->px - px_a).norm() < options.ring_radius_px ||
         (j->px - px_b).norm() < options.ring_radius_px)
       continue;
     bool merged = false;
-    for (const Found& f : found) merged = merged || (f.j.px - j->px).norm() < options.merge_px;
+    for (const PathJunction& f : found)
+      merged = merged || (f.j.px - j->px).norm() < options.merge_px;
     if (!merged) found.push_back({arc, *j});
   }
-  std::sort(found.begin(), found.end(), [](const Found& x, const Found& y) { return x.arc < y.arc; });
-  if (static_cast<int>(found.size()) != between) {
-    result.why = "found " + std::to_string(found.size()) + " junctions along the yarn, but " +
-                 std::to_string(between) + " knots lie between";
-    return result;
+  std::sort(found.begin(), found.end(),
+            [](const PathJunction& x, const PathJunction& y) { return x.arc < y.arc; });
+  *length = arc;
+  return found;
+}
+
+// Why the `between` junctions along a yarn of arc length `total` are unevenly spaced (a gap
+// under half or over 1.6 times the mean); empty when they are not. The links between are of one
+// length: along the yarn the junctions are spread about evenly (perspective and sag change that
+// slowly). A gap far from the mean means a junction missed and a spurious one taken instead (the
+// edge of a corner mass looks like one), which a count alone does not see.
+std::string UnevenSpacing(const std::vector<PathJunction>& found, int between, double total) {
+  if (between <= 0) return "";
+  const double mean = total / (between + 1);
+  double previous = 0.0;
+  for (int i = 0; i <= between; ++i) {
+    const double next = i < between ? found[i].arc : total;
+    const double gap = next - previous;
+    if (gap < 0.5 * mean || gap > 1.6 * mean)
+      return "the junctions along the yarn are unevenly spaced (a gap of " +
+             std::to_string(static_cast<int>(gap)) + " px where " +
+             std::to_string(static_cast<int>(mean)) +
+             " px is the mean): a knot missed or a false junction";
+    previous = next;
   }
-  // The links between are of one length: along the yarn the junctions are spread about evenly
-  // (perspective and sag change that slowly). A gap far from the mean means a junction missed
-  // and a spurious one taken instead (the edge of a corner mass looks like one), which a count
-  // alone does not see.
-  if (between > 0) {
-    const double total = arc, mean = total / (between + 1);
-    double previous = 0.0;
-    for (int i = 0; i <= between; ++i) {
-      const double next = i < between ? found[i].arc : total;
-      const double gap = next - previous;
-      if (gap < 0.5 * mean || gap > 1.6 * mean) {
-        result.why = "the junctions along the yarn are unevenly spaced (a gap of " +
-                     std::to_string(static_cast<int>(gap)) + " px where " +
-                     std::to_string(static_cast<int>(mean)) +
-                     " px is the mean): a knot missed or a false junction";
-        return result;
-      }
-      previous = next;
-    }
-  }
-  // The row runs through each junction: it has a yarn towards the knot before it and one
-  // towards the knot after (within kRowTurnDeg of the straight line to it; sag bends a link by
-  // a few degrees). A path that left the row for a brighter parallel one and came back found
-  // that row's knots, evenly spaced: 2 wrong labels in a rendered shot before this check.
+  return "";
+}
+
+// Why the path left the row (or column); empty when it did not. The row runs through each
+// junction: it has a yarn towards the knot before it and one towards the knot after (within
+// kRowTurnDeg of the straight line to it; sag bends a link by a few degrees). A path that left
+// the row for a brighter parallel one and came back found that row's knots, evenly spaced: 2
+// wrong labels in a rendered shot before this check.
+std::string LeftTheRow(const std::vector<PathJunction>& found, int between,
+                       const Eigen::Vector2d& px_a, const Eigen::Vector2d& px_b) {
   constexpr double kRowTurnDeg = 20.0;
   for (int i = 0; i < between; ++i) {
     const Junction& j = found[i].j;
@@ -1022,15 +1058,61 @@ FindPathResult FindPath(const cv::Mat& image, int cols, int knot_a, const Eigen:
       const double towards = std::atan2(q.y() - j.px.y(), q.x() - j.px.x());
       double best = M_PI;
       for (double a : j.branch_angles_rad) best = std::min(best, AngleBetween(a, towards));
-      if (best > kRowTurnDeg * M_PI / 180) {
-        result.why = "junction " + std::to_string(i + 1) + " along the yarn has no yarn towards " +
-                     "the next knot of the row or column (" +
-                     std::to_string(static_cast<int>(best * 180 / M_PI)) +
-                     " degrees off): the path left the row";
-        return result;
-      }
+      if (best > kRowTurnDeg * M_PI / 180)
+        return "junction " + std::to_string(i + 1) + " along the yarn has no yarn towards " +
+               "the next knot of the row or column (" +
+               std::to_string(static_cast<int>(best * 180 / M_PI)) +
+               " degrees off): the path left the row";
     }
   }
+  return "";
+}
+
+}  // namespace
+
+FindPathResult FindPath(const cv::Mat& image, int cols, int knot_a, const Eigen::Vector2d& px_a,
+                        int knot_b, const Eigen::Vector2d& px_b,
+                        const KnotDetectorOptions& options) {
+  FindPathResult result;
+  const int ra = knot_a / cols, ca = knot_a % cols, rb = knot_b / cols, cb = knot_b % cols;
+  if (ra != rb && ca != cb) {
+    result.why = "the two knots are not in one row or column";
+    return result;
+  }
+  const int between = std::max(std::abs(ra - rb), std::abs(ca - cb)) - 1;
+  if (between < 0) {
+    result.why = "the two knots are the same";
+    return result;
+  }
+  // The region: the segment's bounding box with room for a sagging yarn and the rings.
+  const double length = (px_b - px_a).norm();
+  const int margin = static_cast<int>(std::ceil(0.15 * length + DetectorReach(options)));
+  const cv::Rect roi(static_cast<int>(std::floor(std::min(px_a.x(), px_b.x()))) - margin,
+                     static_cast<int>(std::floor(std::min(px_a.y(), px_b.y()))) - margin,
+                     static_cast<int>(std::abs(px_b.x() - px_a.x())) + 2 * margin + 2,
+                     static_cast<int>(std::abs(px_b.y() - px_a.y())) + 2 * margin + 2);
+  const KnotDetector detector(image, roi, options);
+  const cv::Rect box = roi & cv::Rect(0, 0, image.cols, image.rows);
+  // The yarn from a to b.
+  std::optional<std::vector<Eigen::Vector2d>> path = FollowYarn(detector, box, px_a, px_b);
+  if (!path) {
+    result.why = "no path between the two knots";
+    return result;
+  }
+  result.path = std::move(*path);
+  // Its junctions: as many as the knots between, evenly spaced, with the row running through.
+  double arc = 0.0;
+  const std::vector<PathJunction> found =
+      JunctionsAlong(detector, result.path, px_a, px_b, options, &arc);
+  if (static_cast<int>(found.size()) != between) {
+    result.why = "found " + std::to_string(found.size()) + " junctions along the yarn, but " +
+                 std::to_string(between) + " knots lie between";
+    return result;
+  }
+  result.why = UnevenSpacing(found, between, arc);
+  if (result.why.empty()) result.why = LeftTheRow(found, between, px_a, px_b);
+  if (!result.why.empty()) return result;
+  // The knots between, in order from a.
   const int dr = (rb > ra) - (rb < ra), dc = (cb > ca) - (cb < ca);
   for (int i = 0; i < between; ++i) {
     result.knots.push_back((ra + (i + 1) * dr) * cols + ca + (i + 1) * dc);

@@ -130,6 +130,15 @@ class KnotDetector {
   // The solids among the blobs (CV_8U), their centres from the outline in `level` (CV_32F, the
   // distance of each pixel's colour from the region's median colour); sets masked_ and solids_.
   void FindSolids(const cv::Mat& blobs, const cv::Mat& level);
+  // The constructor's steps. The solids of the region `f` (CV_32FC(n), 0..1) found and masked
+  // (FindSolids).
+  void MaskSolids(const cv::Mat& f);
+  // ridge_ and field_ from the foreground `fg` (CV_32F), each ridge weakened along the
+  // background's edges (edge_c2, edge_s2: the gradient's doubled-angle direction times its
+  // weight, CV_32F; empty: none).
+  void ComputeRidges(const cv::Mat& fg, const cv::Mat& edge_c2, const cv::Mat& edge_s2);
+  // The threshold a branch peak must exceed, from the ridges outside solids.
+  double PeakThreshold() const;
 
   KnotDetectorOptions o_;
   cv::Rect roi_;

@@ -29,19 +29,35 @@ double Median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
-}  // namespace
+// One camera's knots tracked from one frame to the next: the state TrackKnots' steps share.
+struct KnotTracking {
+  const cv::Mat& to;
+  const std::vector<std::pair<int, Eigen::Vector2d>>& knots;  // (knot, position in `from`)
+  int rows, cols;
+  const TrackOptions& options;
+  std::vector<cv::Point2f> p0{}, p1{};  // per knot: its position in `from`, its flow's end in `to`
+  std::vector<bool> trusted{};      // per knot: its flow passed the forward-backward check
+  std::map<int, size_t> index{};    // a knot's index in `knots`
+  std::vector<TrackedKnot> out{};   // per knot of `knots`
 
-std::vector<TrackedKnot> TrackKnots(const cv::Mat& from, const cv::Mat& to,
-                                    const std::vector<std::pair<int, Eigen::Vector2d>>& knots,
-                                    int rows, int cols, const TrackOptions& options) {
-  std::vector<TrackedKnot> out(knots.size());
-  if (knots.empty()) return out;
+  void Flow(const cv::Mat& from);
+  bool Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot* t) const;
+  void SnapTrustedFlow();
+  void PredictFromNeighbours();
+  void CheckRelativeMotion();
+  void RejectSharedJunctions();
+};
+
+// Lucas-Kanade flow forwards and back (p0, p1); a knot's flow is trusted when both ways
+// succeed and the way back returns within max_fb_error_px.
+void KnotTracking::Flow(const cv::Mat& from) {
   // Thin yarns vanish in the flow's coarse pyramid levels: blurred first, they stay visible.
   cv::Mat a, b;
   cv::GaussianBlur(Grey8(from), a, cv::Size(), options.flow_blur_px);
   cv::GaussianBlur(Grey8(to), b, cv::Size(), options.flow_blur_px);
-  std::vector<cv::Point2f> p0, p1, back;
-  for (const auto& [k, px] : knots) p0.emplace_back(static_cast<float>(px.x()), static_cast<float>(px.y()));
+  std::vector<cv::Point2f> back;
+  for (const auto& [k, px] : knots)
+    p0.emplace_back(static_cast<float>(px.x()), static_cast<float>(px.y()));
   std::vector<uchar> ok_forward, ok_back;
   std::vector<float> err;
   const cv::Size window(options.window_px, options.window_px);
@@ -51,49 +67,55 @@ std::vector<TrackedKnot> TrackKnots(const cv::Mat& from, const cv::Mat& to,
   cv::calcOpticalFlowPyrLK(b, a, p1, back, ok_back, err, window, options.pyramid_levels, stop, 0,
                            options.min_eigenvalue);
   // Flow per knot, where trusted.
-  std::map<int, size_t> index;
-  std::vector<bool> trusted(knots.size(), false);
+  trusted.assign(knots.size(), false);
   for (size_t i = 0; i < knots.size(); ++i) {
     index[knots[i].first] = i;
     const double fb = std::hypot(back[i].x - p0[i].x, back[i].y - p0[i].y);
     trusted[i] = ok_forward[i] && ok_back[i] && fb <= options.max_fb_error_px;
   }
-  // The knot detector's brush at a prediction, snap radius wide: true when exactly one junction
-  // of the knot's degree (2 corner, 3 edge, 4 inner) is there (t->px set to it), else false with
-  // the reason (t->px the best position there is).
-  auto snap = [&](size_t i, const Eigen::Vector2d& predicted, TrackedKnot* t) {
-    const int k = knots[i].first, r = k / cols, c = k % cols;
-    const int degree = (r > 0) + (r + 1 < rows) + (c > 0) + (c + 1 < cols);
-    const std::vector<Junction> near =
-        FindNode(to, predicted, options.snap_radius_px, options.detector).candidates;
-    t->px = predicted;
-    if (near.empty()) {
-      if (t->why.empty())
-        t->why = "no junction within " + std::to_string(options.snap_radius_px) + " px of the flow";
-      return false;
-    }
-    if (near.size() > 1) {
-      t->why = std::to_string(near.size()) + " junctions within the snap radius";
-      return false;
-    }
-    t->px = near[0].px;
-    t->confidence = near[0].confidence;
-    if (near[0].branches != degree) {
-      t->why = "the junction there has " + std::to_string(near[0].branches) + " yarns, the knot " +
-               std::to_string(degree);
-      return false;
-    }
-    return true;
-  };
-  // Knots with trusted flow: snapped at the flow's end.
+}
+
+// The knot detector's brush at a prediction, snap radius wide: true when exactly one junction
+// of the knot's degree (2 corner, 3 edge, 4 inner) is there (t->px set to it), else false with
+// the reason (t->px the best position there is).
+bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot* t) const {
+  const int k = knots[i].first, r = k / cols, c = k % cols;
+  const int degree = (r > 0) + (r + 1 < rows) + (c > 0) + (c + 1 < cols);
+  const std::vector<Junction> near =
+      FindNode(to, predicted, options.snap_radius_px, options.detector).candidates;
+  t->px = predicted;
+  if (near.empty()) {
+    if (t->why.empty())
+      t->why = "no junction within " + std::to_string(options.snap_radius_px) + " px of the flow";
+    return false;
+  }
+  if (near.size() > 1) {
+    t->why = std::to_string(near.size()) + " junctions within the snap radius";
+    return false;
+  }
+  t->px = near[0].px;
+  t->confidence = near[0].confidence;
+  if (near[0].branches != degree) {
+    t->why = "the junction there has " + std::to_string(near[0].branches) + " yarns, the knot " +
+             std::to_string(degree);
+    return false;
+  }
+  return true;
+}
+
+// Knots with trusted flow: snapped at the flow's end.
+void KnotTracking::SnapTrustedFlow() {
   for (size_t i = 0; i < knots.size(); ++i) {
     out[i].knot = knots[i].first;
-    if (trusted[i]) out[i].accepted = snap(i, Eigen::Vector2d(p1[i].x, p1[i].y), &out[i]);
+    if (trusted[i]) out[i].accepted = Snap(i, Eigen::Vector2d(p1[i].x, p1[i].y), &out[i]);
   }
-  // Knots without: predicted from their grid neighbours' motion (an occluded knot moves with
-  // the net): an accepted neighbour's motion is its junction's, else its trusted flow's. In
-  // rounds, as knots accepted in one round give the next their motion. Accepted when at least
-  // two accepted neighbours move as one (within max_neighbour_spread_px of their median).
+}
+
+// Knots without: predicted from their grid neighbours' motion (an occluded knot moves with
+// the net): an accepted neighbour's motion is its junction's, else its trusted flow's. In
+// rounds, as knots accepted in one round give the next their motion. Accepted when at least
+// two accepted neighbours move as one (within max_neighbour_spread_px of their median).
+void KnotTracking::PredictFromNeighbours() {
   std::vector<bool> done(knots.size(), false);
   std::vector<int> last_confirmed(knots.size(), -1);
   for (size_t i = 0; i < knots.size(); ++i) done[i] = trusted[i];
@@ -135,7 +157,7 @@ std::vector<TrackedKnot> TrackKnots(const cv::Mat& from, const cv::Mat& to,
       t = TrackedKnot{};
       t.knot = k;
       t.why = "flow lost (forward-backward check); predicted from the neighbours' motion";
-      if (!snap(i, px + median, &t)) continue;
+      if (!Snap(i, px + median, &t)) continue;
       if (confirmed.size() >= 2 && options.max_neighbour_spread_px > 0 &&
           spread <= options.max_neighbour_spread_px) {
         t.accepted = true;
@@ -144,52 +166,56 @@ std::vector<TrackedKnot> TrackKnots(const cv::Mat& from, const cv::Mat& to,
       }
     }
   }
-  // Every accepted knot moved as its accepted neighbours did (their motions as they were before
-  // this check: a knot that fails it does not take its neighbours with it). A knot's
-  // neighbours make it expect the mean motion of each pair of opposite ones (left and right, up
-  // and down), of each parallelogram with a diagonal one (right + down - down-right; both exact
-  // for a net that moves, turns and stretches evenly) and of its side neighbours together
-  // (where the net only moves). It fails when it is far from all of them: one neighbour off
-  // leaves another expectation right.
-  if (options.max_relative_motion_px > 0.0) {
-    std::vector<bool> accepted(out.size());
-    for (size_t i = 0; i < out.size(); ++i) accepted[i] = out[i].accepted;
-    auto motion = [&](int r, int c) -> std::optional<Eigen::Vector2d> {
-      if (r < 0 || c < 0 || r >= rows || c >= cols) return std::nullopt;
-      const auto it = index.find(r * cols + c);
-      if (it == index.end() || !accepted[it->second]) return std::nullopt;
-      return out[it->second].px - knots[it->second].second;
-    };
-    for (size_t i = 0; i < out.size(); ++i) {
-      if (!accepted[i]) continue;
-      const int k = knots[i].first, r = k / cols, c = k % cols;
-      std::vector<Eigen::Vector2d> expected;
-      for (const auto& [one, other] : {std::pair(motion(r, c - 1), motion(r, c + 1)),
-                                       std::pair(motion(r - 1, c), motion(r + 1, c))})
-        if (one && other) expected.push_back(0.5 * (*one + *other));
-      for (int dr : {-1, 1})
-        for (int dc : {-1, 1}) {
-          const auto up = motion(r + dr, c), side = motion(r, c + dc),
-                     diagonal = motion(r + dr, c + dc);
-          if (up && side && diagonal) expected.push_back(*up + *side - *diagonal);
-        }
-      Eigen::Vector2d sides = Eigen::Vector2d::Zero();
-      int n = 0;
-      for (const auto& m : {motion(r, c - 1), motion(r, c + 1), motion(r - 1, c), motion(r + 1, c)})
-        if (m) sides += *m, ++n;
-      if (n >= 2) expected.push_back(sides / n);
-      if (expected.empty()) continue;
-      const Eigen::Vector2d own = out[i].px - knots[i].second;
-      double off = std::numeric_limits<double>::infinity();
-      for (const auto& e : expected) off = std::min(off, (own - e).norm());
-      if (off <= options.max_relative_motion_px) continue;
-      char why[96];
-      std::snprintf(why, sizeof why, "moved %.1f px otherwise than its accepted neighbours", off);
-      out[i].accepted = false;
-      out[i].why = why;
-    }
+}
+
+// Every accepted knot moved as its accepted neighbours did (their motions as they were before
+// this check: a knot that fails it does not take its neighbours with it). A knot's
+// neighbours make it expect the mean motion of each pair of opposite ones (left and right, up
+// and down), of each parallelogram with a diagonal one (right + down - down-right; both exact
+// for a net that moves, turns and stretches evenly) and of its side neighbours together
+// (where the net only moves). It fails when it is far from all of them: one neighbour off
+// leaves another expectation right.
+void KnotTracking::CheckRelativeMotion() {
+  std::vector<bool> accepted(out.size());
+  for (size_t i = 0; i < out.size(); ++i) accepted[i] = out[i].accepted;
+  auto motion = [&](int r, int c) -> std::optional<Eigen::Vector2d> {
+    if (r < 0 || c < 0 || r >= rows || c >= cols) return std::nullopt;
+    const auto it = index.find(r * cols + c);
+    if (it == index.end() || !accepted[it->second]) return std::nullopt;
+    return out[it->second].px - knots[it->second].second;
+  };
+  for (size_t i = 0; i < out.size(); ++i) {
+    if (!accepted[i]) continue;
+    const int k = knots[i].first, r = k / cols, c = k % cols;
+    std::vector<Eigen::Vector2d> expected;
+    for (const auto& [one, other] : {std::pair(motion(r, c - 1), motion(r, c + 1)),
+                                     std::pair(motion(r - 1, c), motion(r + 1, c))})
+      if (one && other) expected.push_back(0.5 * (*one + *other));
+    for (int dr : {-1, 1})
+      for (int dc : {-1, 1}) {
+        const auto up = motion(r + dr, c), side = motion(r, c + dc),
+                   diagonal = motion(r + dr, c + dc);
+        if (up && side && diagonal) expected.push_back(*up + *side - *diagonal);
+      }
+    Eigen::Vector2d sides = Eigen::Vector2d::Zero();
+    int n = 0;
+    for (const auto& m : {motion(r, c - 1), motion(r, c + 1), motion(r - 1, c), motion(r + 1, c)})
+      if (m) sides += *m, ++n;
+    if (n >= 2) expected.push_back(sides / n);
+    if (expected.empty()) continue;
+    const Eigen::Vector2d own = out[i].px - knots[i].second;
+    double off = std::numeric_limits<double>::infinity();
+    for (const auto& e : expected) off = std::min(off, (own - e).norm());
+    if (off <= options.max_relative_motion_px) continue;
+    char why[96];
+    std::snprintf(why, sizeof why, "moved %.1f px otherwise than its accepted neighbours", off);
+    out[i].accepted = false;
+    out[i].why = why;
   }
-  // Two knots on one junction: neither is trusted.
+}
+
+// Two knots on one junction: neither is trusted.
+void KnotTracking::RejectSharedJunctions() {
   for (size_t i = 0; i < out.size(); ++i)
     for (size_t j = i + 1; j < out.size(); ++j)
       if ((out[i].px - out[j].px).norm() < options.snap_radius_px) {
@@ -198,7 +224,25 @@ std::vector<TrackedKnot> TrackKnots(const cv::Mat& from, const cv::Mat& to,
           t->accepted = false;
         }
       }
-  return out;
+}
+
+}  // namespace
+
+std::vector<TrackedKnot> TrackKnots(const cv::Mat& from, const cv::Mat& to,
+                                    const std::vector<std::pair<int, Eigen::Vector2d>>& knots,
+                                    int rows, int cols, const TrackOptions& options) {
+  if (knots.empty()) return {};
+  KnotTracking tracking{to, knots, rows, cols, options};
+  tracking.out.resize(knots.size());
+  // The flow, forwards and back.
+  tracking.Flow(from);
+  // Knots with trusted flow snapped at its end; the others predicted from their neighbours.
+  tracking.SnapTrustedFlow();
+  tracking.PredictFromNeighbours();
+  // The accepted knots checked against their neighbours' motion, and against each other.
+  if (options.max_relative_motion_px > 0.0) tracking.CheckRelativeMotion();
+  tracking.RejectSharedJunctions();
+  return std::move(tracking.out);
 }
 
 }  // namespace netlab::recon

@@ -345,339 +345,483 @@ void LabelEngine::EstimateLinkLength(const std::vector<std::optional<Eigen::Vect
   if (d.size() >= 4) link_length_m_ = Median(d);
 }
 
-EngineCounts LabelEngine::CrossCheck(int t) {
-  const LabelSet& set = store_->labels();
-  const int cameras = static_cast<int>(set.cameras.size());
-  const int knots = set.knots();
-  const bool geometry = rig_ && cameras >= 2;
-  TriangulationOptions topt;
-  topt.outlier_threshold_px = o_.epipolar_tolerance_px;
-  EngineCounts total;
+namespace {
 
-  // 1. Epipolar consistency of the accepted labels.
-  std::vector<std::optional<Eigen::Vector3d>> point(knots);
-  std::vector<std::optional<Eigen::Vector3d>> clean(knots);  // points with every view an inlier
-  auto triangulate_accepted = [&](std::vector<LabelEdit>* flags) {
-    for (int k = 0; k < knots; ++k) {
-      point[k].reset();
-      clean[k].reset();
-      std::vector<Observation> obs;
-      std::vector<int> from;
-      for (int c = 0; c < cameras; ++c)
-        if (Accepted(set.at(c, t, k))) {
-          obs.push_back({RigIndex(c), set.at(c, t, k).px});
-          from.push_back(c);
-        }
-      if (obs.size() < 2) continue;
-      const PointEstimate e = TriangulatePoint(*rig_, obs, topt);
-      if (e.valid) point[k] = e.position;
-      if (e.valid && e.outliers.empty()) clean[k] = e.position;
-      if (!flags) continue;
-      auto flag = [&](int i, const std::string& why) {
-        Label l = set.at(from[i], t, k);
-        l.state = LabelState::kNeedsReview;
-        flags->push_back({from[i], t, k, l});
-        Note(from[i], t, k, why);
-      };
-      if (!e.valid) {
-        for (size_t i = 0; i < from.size(); ++i)
-          flag(static_cast<int>(i), "epipolar check: the cameras disagree (" + e.why + ")");
-      } else {
-        for (int i : e.outliers)
-          flag(i, "epipolar check: " + std::to_string(e.residual_px[i]) +
-                      " px off the point the other cameras see");
-      }
-    }
+// The image-grid prediction of a knot in one camera from its accepted neighbours there.
+struct GridPrediction {
+  Eigen::Vector2d px;
+  double spacing;  // the longest link among the neighbours used (px)
+};
+
+// The midpoint of each two opposite accepted neighbours of knot k in (camera c, frame row t),
+// and the fourth corner of each parallelogram with a diagonal one, averaged; none when there is
+// no such guess or the guesses disagree (by a quarter of the spacing or more).
+std::optional<GridPrediction> PredictFromImageGrid(const LabelSet& set, int c, int t, int k) {
+  const int cols = set.cols, knots = set.knots();
+  auto at = [&](int j) -> std::optional<Eigen::Vector2d> {
+    if (j < 0 || j >= knots || !Accepted(set.at(c, t, j))) return std::nullopt;
+    return set.at(c, t, j).px;
   };
-  if (geometry) {
-    std::vector<LabelEdit> flags;
-    triangulate_accepted(&flags);
-    if (!flags.empty()) {
-      const EngineCounts n = Commit("epipolar check (frame row " + std::to_string(t) + ")", flags);
-      total.review += n.review;
-      triangulate_accepted(nullptr);
+  const int r = k / cols, col = k % cols;
+  std::vector<Eigen::Vector2d> guesses;
+  double spacing = 0.0;
+  auto pair = [&](int a, int b) {
+    const auto pa = at(a), pb = at(b);
+    if (!pa || !pb) return;
+    guesses.push_back(0.5 * (*pa + *pb));
+    spacing = std::max(spacing, 0.5 * (*pa - *pb).norm());
+  };
+  if (col > 0 && col + 1 < cols) pair(k - 1, k + 1);
+  if (r > 0 && r + 1 < set.rows) pair(k - cols, k + cols);
+  for (int dr : {-1, 1})
+    for (int dc : {-1, 1}) {
+      if (r + dr < 0 || r + dr >= set.rows || col + dc < 0 || col + dc >= cols) continue;
+      const auto a = at(k + dc), b = at(k + dr * cols), d = at(k + dr * cols + dc);
+      if (!a || !b || !d) continue;
+      guesses.push_back(*a + *b - *d);
+      spacing = std::max(spacing, std::max((*a - *d).norm(), (*b - *d).norm()));
     }
-    EstimateLinkLength(clean);
+  if (guesses.empty() || spacing <= 0.0) return std::nullopt;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& g : guesses) mean += g;
+  mean /= static_cast<double>(guesses.size());
+  bool agree = true;
+  for (const auto& g : guesses) agree = agree && (g - mean).norm() < 0.25 * spacing;
+  if (!agree) return std::nullopt;
+  return GridPrediction{mean, spacing};
+}
+
+// The samples thinned to about 3 px apart (the first of each cluster kept, in order).
+std::vector<Eigen::Vector2d> ThinSamples(const std::vector<Eigen::Vector2d>& region) {
+  std::vector<Eigen::Vector2d> thin = {region.front()};
+  for (const auto& q : region) {
+    bool close = false;
+    for (const auto& p : thin) close = close || (p - q).norm() < 3.0;
+    if (!close) thin.push_back(q);
   }
-  const double link = link_length_m_;
+  return thin;
+}
 
-  // 2. Fill Grid.
-  struct FillCandidate {
-    int camera;
-    Eigen::Vector2d px;
-    double confidence;
-    std::string how;
-  };
+// The largest gap from a sample to its nearest one (px), from 4 to 30 (a lone sample: 30).
+double LargestSampleGap(const std::vector<Eigen::Vector2d>& region) {
+  double step = 4.0;
+  for (size_t i = 0; i < region.size(); ++i) {
+    double nearest = 30.0;
+    for (size_t j = 0; j < region.size(); ++j)
+      if (j != i) nearest = std::min(nearest, (region[i] - region[j]).norm());
+    step = std::max(step, nearest);
+  }
+  return step;
+}
+
+// `n` added to `sum`.
+void Add(EngineCounts* sum, const EngineCounts& n) {
+  sum->accepted += n.accepted;
+  sum->review += n.review;
+}
+
+}  // namespace
+
+// CrossCheck's state in one frame row, shared by its steps.
+struct LabelEngine::FrameCheck {
+  int t = 0;
+  int cameras = 0, knots = 0;
+  bool geometry = false;  // a rig and two cameras or more: the checks in 3D run
+  TriangulationOptions topt;
+  // Per knot, the point its accepted labels triangulate to; `clean`: where every view is an
+  // inlier.
+  std::vector<std::optional<Eigen::Vector3d>> point, clean;
+  // The triangulated points as each camera sees them (NaN where there is none), this pass.
+  std::vector<std::vector<Eigen::Vector2d>> projected;
   // What each search looked at, so a later pass does not repeat a search that found nothing.
   std::map<std::pair<int, int>, Eigen::Vector2d> searched;
-  auto repeat = [&](int c, int k, const Eigen::Vector2d& centre) {
+
+  // Whether (camera c, knot k) was last searched at `centre` (within 0.5 px); if not, `centre`
+  // is noted as its last search.
+  bool Repeat(int c, int k, const Eigen::Vector2d& centre) {
     const auto key = std::make_pair(c, k);
     const auto it = searched.find(key);
     if (it != searched.end() && (it->second - centre).norm() < 0.5) return true;
     searched[key] = centre;
     return false;
-  };
-  for (int pass = 0; pass < o_.fill_passes; ++pass) {
-    std::vector<LabelEdit> edits;
-    std::map<int, std::vector<FillCandidate>> candidates;
-    // Positions already taken in each camera (accepted labels and the knots' projections), so a
-    // junction is never given to a second knot.
-    // The triangulated points as each camera sees them (NaN where there is none).
-    std::vector<std::vector<Eigen::Vector2d>> projected(
-        cameras, std::vector<Eigen::Vector2d>(knots, Eigen::Vector2d::Constant(NAN)));
-    if (geometry)
-      for (int c = 0; c < cameras; ++c)
-        for (int j = 0; j < knots; ++j)
-          if (point[j]) projected[c][j] = rig_->cameras[RigIndex(c)].ProjectWorld(*point[j]);
-    auto taken_near = [&](int c, int k, const Eigen::Vector2d& px) {
-      for (int j = 0; j < knots; ++j) {
-        if (j == k) continue;
-        const Label& l = set.at(c, t, j);
-        if (Accepted(l) && (l.px - px).norm() < o_.exclusion_px) return true;
-        const Eigen::Vector2d& q = projected[c][j];
-        if (q.allFinite() && (q - px).norm() < o_.exclusion_px) return true;
-      }
-      return false;
-    };
-    for (int c = 0; c < cameras; ++c) {
-      const cv::Mat& image = Image(c, t);
-      if (image.empty()) continue;
-      const cv::Size size = image.size();
-      // The detector needs its inner ring (and its filter's support) inside the frame.
-      const double margin = o_.detector.ring_radius_px + 2.0;
-      auto inside = [&](const Eigen::Vector2d& q) {
-        return q.allFinite() && q.x() >= margin && q.y() >= margin &&
-               q.x() <= size.width - 1 - margin && q.y() <= size.height - 1 - margin;
-      };
-      for (int k = 0; k < knots; ++k) {
-        if (Accepted(set.at(c, t, k))) continue;
-        // (a) The knot's own triangulated point.
-        if (geometry && point[k]) {
-          const Eigen::Vector2d q = projected[c][k];
-          if (!inside(q) || repeat(c, k, q)) continue;
-          // The brush a little wider than the tolerance: the detector's seeds are 1.5 px apart.
-          const FindNodeResult r =
-              FindNode(image, q, o_.projection_tolerance_px + 1.5, o_.detector);
-          if (r.status == FindNodeStatus::kFound &&
-              (r.knot.px - q).norm() <= o_.projection_tolerance_px && !taken_near(c, k, r.knot.px) &&
-              BranchesMatchLinks(r.knot, Slots(c, t, k, point), o_.branch_tolerance_deg)) {
-            edits.push_back({c, t, k, Made(r.knot.px, LabelSource::kFillGrid, r.knot.confidence,
-                                           true)});
-          }
-          continue;
-        }
-        // (b) Spheres of link length around triangulated neighbours.
-        std::vector<Eigen::Vector3d> around;
-        std::vector<int> around_knots;
-        for (int n : Neighbours(k))
-          if (geometry && point[n]) {
-            around.push_back(*point[n]);
-            around_knots.push_back(n);
-          }
-        bool opposite = false;
-        for (size_t i = 0; i < around_knots.size(); ++i)
-          for (size_t j = i + 1; j < around_knots.size(); ++j)
-            opposite = opposite || std::abs(around_knots[i] - around_knots[j]) == 2 ||
-                       std::abs(around_knots[i] - around_knots[j]) == 2 * set.cols;
-        std::vector<Eigen::Vector2d> region;  // projected candidate points
-        std::string how;
-        if (link > 0.0 && around.size() >= 2 && (opposite || around.size() >= 3)) {
-          // The pair farthest apart spans the circle; the rest filter it.
-          size_t ia = 0, ib = 1;
-          for (size_t i = 0; i < around.size(); ++i)
-            for (size_t j = i + 1; j < around.size(); ++j)
-              if ((around[i] - around[j]).norm() > (around[ia] - around[ib]).norm()) ia = i, ib = j;
-          const Eigen::Vector3d mid = 0.5 * (around[ia] + around[ib]);
-          const Eigen::Vector3d axis = (around[ib] - around[ia]).normalized();
-          const double half = 0.5 * (around[ib] - around[ia]).norm();
-          const double reach = link * (1.0 + o_.link_tolerance);
-          if (half <= reach) {
-            const double rho = std::sqrt(std::max(0.0, reach * reach - half * half));
-            const Eigen::Vector3d u = axis.unitOrthogonal(), v = axis.cross(u);
-            // The lens where the balls of link length meet (links may be slack), sampled.
-            for (double f : {1.0, 0.8, 0.6, 0.4, 0.2, 0.0})
-              for (int s = 0; s < (f > 0 ? 48 : 1); ++s) {
-                const double a = 2 * M_PI * s / 48;
-                const Eigen::Vector3d p = mid + f * rho * (std::cos(a) * u + std::sin(a) * v);
-                bool ok = true;
-                for (const auto& n : around) ok = ok && (p - n).norm() <= reach;
-                if (!ok) continue;
-                const Eigen::Vector2d q = rig_->cameras[RigIndex(c)].ProjectWorld(p);
-                if (inside(q)) region.push_back(q);
-              }
-            how = "spheres of link length around " + std::to_string(around.size()) +
-                  " triangulated neighbours";
-          }
-        }
-        if (region.empty()) {
-          // (c) The image-space grid in this camera.
-          const int cols = set.cols;
-          auto at = [&](int j) -> std::optional<Eigen::Vector2d> {
-            if (j < 0 || j >= knots || !Accepted(set.at(c, t, j))) return std::nullopt;
-            return set.at(c, t, j).px;
-          };
-          const int r = k / cols, col = k % cols;
-          std::vector<Eigen::Vector2d> guesses;
-          double spacing = 0.0;
-          auto pair = [&](int a, int b) {
-            const auto pa = at(a), pb = at(b);
-            if (!pa || !pb) return;
-            guesses.push_back(0.5 * (*pa + *pb));
-            spacing = std::max(spacing, 0.5 * (*pa - *pb).norm());
-          };
-          if (col > 0 && col + 1 < cols) pair(k - 1, k + 1);
-          if (r > 0 && r + 1 < set.rows) pair(k - cols, k + cols);
-          for (int dr : {-1, 1})
-            for (int dc : {-1, 1}) {
-              if (r + dr < 0 || r + dr >= set.rows || col + dc < 0 || col + dc >= cols) continue;
-              const auto a = at(k + dc), b = at(k + dr * cols), d = at(k + dr * cols + dc);
-              if (!a || !b || !d) continue;
-              guesses.push_back(*a + *b - *d);
-              spacing = std::max(spacing, std::max((*a - *d).norm(), (*b - *d).norm()));
-            }
-          if (guesses.empty() || spacing <= 0.0) continue;
-          Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-          for (const auto& g : guesses) mean += g;
-          mean /= static_cast<double>(guesses.size());
-          bool agree = true;
-          for (const auto& g : guesses) agree = agree && (g - mean).norm() < 0.25 * spacing;
-          if (!agree || !inside(mean) || repeat(c, k, mean)) continue;
-          region.push_back(mean);
-          how = "the image grid of its labeled neighbours";
-          const FindNodeResult f = FindNode(image, mean, 0.3 * spacing, o_.detector);
-          if (f.status == FindNodeStatus::kFound && !taken_near(c, k, f.knot.px) &&
-              BranchesMatchLinks(f.knot, Slots(c, t, k, point), o_.branch_tolerance_deg))
-            candidates[k].push_back({c, f.knot.px, f.knot.confidence, how});
-          continue;
-        }
-        // One unlabeled junction near the projected lens.
-        Eigen::AlignedBox2d box;
-        for (const auto& q : region) box.extend(q);
-        const Eigen::Vector2d centre = box.center();
-        const double radius = 0.5 * box.diagonal().norm() + 4.0;
-        if (radius > 150.0 || repeat(c, k, centre)) continue;  // too vague to search, or done
-        if (region.size() > 1) {  // thin the samples to about 3 px apart
-          std::vector<Eigen::Vector2d> thin = {region.front()};
-          for (const auto& q : region) {
-            bool close = false;
-            for (const auto& p : thin) close = close || (p - q).norm() < 3.0;
-            if (!close) thin.push_back(q);
-          }
-          region.swap(thin);
-        }
-        const double roi_margin = std::ceil(DetectorReach(o_.detector)) + 1.0;
-        const int x0 = std::max(0, static_cast<int>(centre.x() - radius - roi_margin));
-        const int y0 = std::max(0, static_cast<int>(centre.y() - radius - roi_margin));
-        const int x1 = std::min(size.width, static_cast<int>(centre.x() + radius + roi_margin + 1));
-        const int y1 = std::min(size.height, static_cast<int>(centre.y() + radius + roi_margin + 1));
-        const KnotDetector detector(image, cv::Rect(x0, y0, x1 - x0, y1 - y0), o_.detector);
-        double step = 4.0;  // the largest gap from a projected sample to its nearest one
-        for (size_t i = 0; i < region.size(); ++i) {
-          double nearest = 30.0;
-          for (size_t j = 0; j < region.size(); ++j)
-            if (j != i) nearest = std::min(nearest, (region[i] - region[j]).norm());
-          step = std::max(step, nearest);
-        }
-        // Searched only near the projected samples, and only from pixels on a yarn (a knot is
-        // where yarns meet): far fewer than the pixels of the region.
-        std::vector<Junction> near;
-        const double reach = 0.5 * step + 2.0;
-        const cv::Mat& ridge = detector.ridge();
-        const double on_yarn = 0.5 * detector.peak_threshold();
-        std::vector<Eigen::Vector2d> examined;
-        for (int y = 0; y < ridge.rows; ++y)
-          for (int x = 0; x < ridge.cols; ++x) {
-            if (ridge.at<float>(y, x) < on_yarn) continue;
-            const Eigen::Vector2d p(x0 + x, y0 + y);
-            bool in_region = false;
-            for (const auto& q : region) in_region = in_region || (q - p).norm() <= reach;
-            if (!in_region) continue;
-            bool done = false;
-            for (const auto& e : examined) done = done || (e - p).norm() < 1.5;
-            for (const Junction& n : near) done = done || (n.px - p).norm() < 3.0;
-            if (done) continue;
-            examined.push_back(p);
-            const std::optional<Junction> j = detector.Examine(p);
-            if (!j) continue;
-            bool merged = false;
-            for (const Junction& n : near) merged = merged || (n.px - j->px).norm() < o_.detector.merge_px;
-            if (!merged && !taken_near(c, k, j->px) &&
-                BranchesMatchLinks(*j, Slots(c, t, k, point), o_.branch_tolerance_deg))
-              near.push_back(*j);
-          }
-        if (near.size() == 1) candidates[k].push_back({c, near[0].px, near[0].confidence, how});
-      }
-    }
-    // Candidates become labels only when the cameras agree in 3D.
-    for (auto& [k, list] : candidates) {
-      bool confirmed = false;
-      std::string why = "Fill Grid: seen by one camera only (" + list.front().how + ")";
-      if (geometry) {
-        std::vector<Observation> obs;
-        for (int c = 0; c < cameras; ++c)
-          if (Accepted(set.at(c, t, k))) obs.push_back({RigIndex(c), set.at(c, t, k).px});
-        const size_t first = obs.size();
-        for (const auto& cand : list) obs.push_back({RigIndex(cand.camera), cand.px});
-        if (obs.size() >= 2) {
-          const PointEstimate e = TriangulatePoint(*rig_, obs, topt);
-          bool near_links = e.valid;
-          for (int n : Neighbours(k))
-            if (e.valid && point[n] && link > 0.0)
-              near_links = near_links &&
-                           (e.position - *point[n]).norm() <= link * (1.0 + o_.link_tolerance);
-          if (!e.valid)
-            why = "Fill Grid: the cameras' candidates disagree (" + e.why + ")";
-          else if (!near_links)
-            why = "Fill Grid: the cameras agree on a point farther than a link from its neighbours";
-          if (e.valid && near_links) {
-            for (size_t i = first; i < obs.size(); ++i) {
-              const bool inlier =
-                  std::find(e.inliers.begin(), e.inliers.end(), static_cast<int>(i)) !=
-                  e.inliers.end();
-              const FillCandidate& cand = list[i - first];
-              if (inlier) {
-                confirmed = true;
-                edits.push_back({cand.camera, t, k, Made(cand.px, LabelSource::kFillGrid,
-                                                         cand.confidence, true)});
-              }
-            }
-            if (!confirmed) why = "Fill Grid: off the epipolar geometry of the other cameras";
-          }
-        }
-      }
-      if (confirmed) continue;
-      for (const auto& cand : list)
-        if (!set.at(cand.camera, t, k).present()) {
-          edits.push_back({cand.camera, t, k,
-                           Made(cand.px, LabelSource::kFillGrid, cand.confidence, false)});
-          Note(cand.camera, t, k, why);
-        }
-    }
-    // One label per (camera, knot): the first edit wins (accepted ones come first per knot).
-    std::vector<LabelEdit> unique;
-    for (const auto& e : edits) {
-      bool seen = false;
-      for (const auto& u : unique) seen = seen || (u.camera == e.camera && u.knot == e.knot);
-      if (!seen) unique.push_back(e);
-    }
-    // Two knots given junctions this close in one camera: neither is trusted.
-    for (auto& a : unique)
-      for (auto& b : unique)
-        if (&a != &b && a.camera == b.camera && a.label.state == LabelState::kAccepted &&
-            (a.label.px - b.label.px).norm() < o_.exclusion_px) {
-          a.label.state = LabelState::kNeedsReview;
-          Note(a.camera, t, a.knot, "Fill Grid: another knot was found at the same place");
-        }
-    const EngineCounts n = Commit("Fill Grid (frame row " + std::to_string(t) + ", pass " +
-                                      std::to_string(pass + 1) + ")",
-                                  unique);
-    total.accepted += n.accepted;
-    total.review += n.review;
-    if (n.accepted == 0) break;
-    if (geometry) triangulate_accepted(nullptr);
   }
+};
+
+// One camera's frame in a Fill Grid pass.
+struct LabelEngine::FillView {
+  int camera;
+  const cv::Mat& image;
+  cv::Size size;
+  double margin;  // the detector needs its inner ring (and its filter's support) inside the frame
+
+  bool Inside(const Eigen::Vector2d& q) const {
+    return q.allFinite() && q.x() >= margin && q.y() >= margin &&
+           q.x() <= size.width - 1 - margin && q.y() <= size.height - 1 - margin;
+  }
+};
+
+// A junction a Fill Grid search found for a knot, and how it was searched for.
+struct LabelEngine::FillCandidate {
+  int camera;
+  Eigen::Vector2d px;
+  double confidence;
+  std::string how;
+};
+
+EngineCounts LabelEngine::CrossCheck(int t) {
+  const LabelSet& set = store_->labels();
+  FrameCheck f;
+  f.t = t;
+  f.cameras = static_cast<int>(set.cameras.size());
+  f.knots = set.knots();
+  f.geometry = rig_ && f.cameras >= 2;
+  f.topt.outlier_threshold_px = o_.epipolar_tolerance_px;
+  f.point.resize(f.knots);
+  f.clean.resize(f.knots);
+  EngineCounts total;
+  // 1. Epipolar consistency of the accepted labels.
+  if (f.geometry) total.review += CheckEpipolar(&f);
+  // 2. Fill Grid, pass after pass while a pass accepts labels (their points help the next).
+  for (int pass = 0; pass < o_.fill_passes; ++pass) {
+    const EngineCounts n = FillGridPass(&f, pass);
+    Add(&total, n);
+    if (n.accepted == 0) break;
+    if (f.geometry) TriangulateAccepted(&f, nullptr);
+  }
+  // 3. The yarn colours.
   if (codebook_) total.review += CheckColours(t);
   return total;
+}
+
+LabelingSummary LabelEngine::LabelFrames(int first, int last, const FrameDone& after_frame) {
+  LabelingSummary summary;
+  for (int t = first; t <= last; ++t) {
+    // The first frame row from its seeds, each later one tracked from the row before.
+    if (t == first)
+      Add(&summary.first_frame, LabelFirstFrame(t));
+    else
+      Add(&summary.tracked, Track(t - 1, t));
+    // Then the cameras cross-checked and the gaps filled.
+    Add(&summary.cross_checked, CrossCheck(t));
+    ++summary.frames;
+    if (after_frame) after_frame(t);
+  }
+  return summary;
+}
+
+void LabelEngine::TriangulateAccepted(FrameCheck* f, std::vector<LabelEdit>* flags) {
+  const LabelSet& set = store_->labels();
+  const int t = f->t;
+  for (int k = 0; k < f->knots; ++k) {
+    f->point[k].reset();
+    f->clean[k].reset();
+    // The knot's accepted labels, and the cameras they are from.
+    std::vector<Observation> obs;
+    std::vector<int> from;
+    for (int c = 0; c < f->cameras; ++c)
+      if (Accepted(set.at(c, t, k))) {
+        obs.push_back({RigIndex(c), set.at(c, t, k).px});
+        from.push_back(c);
+      }
+    if (obs.size() < 2) continue;
+    const PointEstimate e = TriangulatePoint(*rig_, obs, f->topt);
+    if (e.valid) f->point[k] = e.position;
+    if (e.valid && e.outliers.empty()) f->clean[k] = e.position;
+    if (!flags) continue;
+    // Every view of a point it cannot resolve, or the views it leaves out, to review.
+    auto flag = [&](int i, const std::string& why) {
+      Label l = set.at(from[i], t, k);
+      l.state = LabelState::kNeedsReview;
+      flags->push_back({from[i], t, k, l});
+      Note(from[i], t, k, why);
+    };
+    if (!e.valid) {
+      for (size_t i = 0; i < from.size(); ++i)
+        flag(static_cast<int>(i), "epipolar check: the cameras disagree (" + e.why + ")");
+    } else {
+      for (int i : e.outliers)
+        flag(i, "epipolar check: " + std::to_string(e.residual_px[i]) +
+                    " px off the point the other cameras see");
+    }
+  }
+}
+
+int LabelEngine::CheckEpipolar(FrameCheck* f) {
+  std::vector<LabelEdit> flags;
+  TriangulateAccepted(f, &flags);
+  int review = 0;
+  // The flags committed, the points triangulated again without them.
+  if (!flags.empty()) {
+    review = Commit("epipolar check (frame row " + std::to_string(f->t) + ")", flags).review;
+    TriangulateAccepted(f, nullptr);
+  }
+  EstimateLinkLength(f->clean);
+  return review;
+}
+
+EngineCounts LabelEngine::FillGridPass(FrameCheck* f, int pass) {
+  // Positions already taken in each camera (accepted labels and the knots' projections), so a
+  // junction is never given to a second knot: the projections of this pass's points.
+  f->projected.assign(f->cameras,
+                      std::vector<Eigen::Vector2d>(f->knots, Eigen::Vector2d::Constant(NAN)));
+  if (f->geometry)
+    for (int c = 0; c < f->cameras; ++c)
+      for (int j = 0; j < f->knots; ++j)
+        if (f->point[j]) f->projected[c][j] = rig_->cameras[RigIndex(c)].ProjectWorld(*f->point[j]);
+  // Each camera searched for its missing knots.
+  std::vector<LabelEdit> edits;
+  FillCandidates candidates;
+  for (int c = 0; c < f->cameras; ++c) SearchCamera(f, c, &edits, &candidates);
+  // Candidates become labels only when the cameras agree in 3D.
+  AcceptCandidates(*f, candidates, &edits);
+  const std::vector<LabelEdit> unique = OneLabelPerPlace(f->t, edits);
+  return Commit("Fill Grid (frame row " + std::to_string(f->t) + ", pass " +
+                    std::to_string(pass + 1) + ")",
+                unique);
+}
+
+void LabelEngine::SearchCamera(FrameCheck* f, int c, std::vector<LabelEdit>* edits,
+                               FillCandidates* candidates) {
+  const LabelSet& set = store_->labels();
+  const cv::Mat& image = Image(c, f->t);
+  if (image.empty()) return;
+  const FillView view{c, image, image.size(), o_.detector.ring_radius_px + 2.0};
+  for (int k = 0; k < f->knots; ++k) {
+    if (Accepted(set.at(c, f->t, k))) continue;
+    // (a) The knot's own triangulated point, where it has one.
+    if (f->geometry && f->point[k]) {
+      if (const std::optional<LabelEdit> e = SearchAtProjection(f, view, k)) edits->push_back(*e);
+      continue;
+    }
+    // (b) Spheres of link length around triangulated neighbours; (c) else the image-space grid
+    // in this camera.
+    std::string how;
+    std::vector<Eigen::Vector2d> region = LinkSphereRegion(*f, view, k, &how);
+    const std::optional<FillCandidate> found =
+        region.empty() ? SearchImageGrid(f, view, k)
+                       : SearchRegion(f, view, k, std::move(region), how);
+    if (found) (*candidates)[k].push_back(*found);
+  }
+}
+
+std::optional<LabelEdit> LabelEngine::SearchAtProjection(FrameCheck* f, const FillView& view,
+                                                         int k) {
+  const int c = view.camera;
+  const Eigen::Vector2d q = f->projected[c][k];
+  if (!view.Inside(q) || f->Repeat(c, k, q)) return std::nullopt;
+  // The brush a little wider than the tolerance: the detector's seeds are 1.5 px apart.
+  const FindNodeResult r = FindNode(view.image, q, o_.projection_tolerance_px + 1.5, o_.detector);
+  if (r.status == FindNodeStatus::kFound &&
+      (r.knot.px - q).norm() <= o_.projection_tolerance_px && !TakenNear(*f, c, k, r.knot.px) &&
+      BranchesMatchLinks(r.knot, Slots(c, f->t, k, f->point), o_.branch_tolerance_deg))
+    return LabelEdit{c, f->t, k,
+                     Made(r.knot.px, LabelSource::kFillGrid, r.knot.confidence, true)};
+  return std::nullopt;
+}
+
+std::vector<Eigen::Vector2d> LabelEngine::LinkSphereRegion(const FrameCheck& f,
+                                                           const FillView& view, int k,
+                                                           std::string* how) const {
+  const double link = link_length_m_;
+  // The knot's triangulated neighbours; two of them opposite fix it on a circle.
+  std::vector<Eigen::Vector3d> around;
+  std::vector<int> around_knots;
+  for (int n : Neighbours(k))
+    if (f.geometry && f.point[n]) {
+      around.push_back(*f.point[n]);
+      around_knots.push_back(n);
+    }
+  const int cols = store_->labels().cols;
+  bool opposite = false;
+  for (size_t i = 0; i < around_knots.size(); ++i)
+    for (size_t j = i + 1; j < around_knots.size(); ++j)
+      opposite = opposite || std::abs(around_knots[i] - around_knots[j]) == 2 ||
+                 std::abs(around_knots[i] - around_knots[j]) == 2 * cols;
+  std::vector<Eigen::Vector2d> region;  // projected candidate points
+  if (link > 0.0 && around.size() >= 2 && (opposite || around.size() >= 3)) {
+    // The pair farthest apart spans the circle; the rest filter it.
+    size_t ia = 0, ib = 1;
+    for (size_t i = 0; i < around.size(); ++i)
+      for (size_t j = i + 1; j < around.size(); ++j)
+        if ((around[i] - around[j]).norm() > (around[ia] - around[ib]).norm()) ia = i, ib = j;
+    const Eigen::Vector3d mid = 0.5 * (around[ia] + around[ib]);
+    const Eigen::Vector3d axis = (around[ib] - around[ia]).normalized();
+    const double half = 0.5 * (around[ib] - around[ia]).norm();
+    const double reach = link * (1.0 + o_.link_tolerance);
+    if (half <= reach) {
+      const double rho = std::sqrt(std::max(0.0, reach * reach - half * half));
+      const Eigen::Vector3d u = axis.unitOrthogonal(), v = axis.cross(u);
+      // The lens where the balls of link length meet (links may be slack), sampled.
+      for (double fr : {1.0, 0.8, 0.6, 0.4, 0.2, 0.0})
+        for (int s = 0; s < (fr > 0 ? 48 : 1); ++s) {
+          const double a = 2 * M_PI * s / 48;
+          const Eigen::Vector3d p = mid + fr * rho * (std::cos(a) * u + std::sin(a) * v);
+          bool ok = true;
+          for (const auto& n : around) ok = ok && (p - n).norm() <= reach;
+          if (!ok) continue;
+          const Eigen::Vector2d q = rig_->cameras[RigIndex(view.camera)].ProjectWorld(p);
+          if (view.Inside(q)) region.push_back(q);
+        }
+      *how = "spheres of link length around " + std::to_string(around.size()) +
+             " triangulated neighbours";
+    }
+  }
+  return region;
+}
+
+std::optional<LabelEngine::FillCandidate> LabelEngine::SearchRegion(
+    FrameCheck* f, const FillView& view, int k, std::vector<Eigen::Vector2d> region,
+    const std::string& how) {
+  const int c = view.camera;
+  // The region's bounding circle: too vague to search, or searched in an earlier pass.
+  Eigen::AlignedBox2d box;
+  for (const auto& q : region) box.extend(q);
+  const Eigen::Vector2d centre = box.center();
+  const double radius = 0.5 * box.diagonal().norm() + 4.0;
+  if (radius > 150.0 || f->Repeat(c, k, centre)) return std::nullopt;
+  if (region.size() > 1) region = ThinSamples(region);
+  // The detector over the circle, with room for its rings.
+  const double roi_margin = std::ceil(DetectorReach(o_.detector)) + 1.0;
+  const int x0 = std::max(0, static_cast<int>(centre.x() - radius - roi_margin));
+  const int y0 = std::max(0, static_cast<int>(centre.y() - radius - roi_margin));
+  const int x1 = std::min(view.size.width, static_cast<int>(centre.x() + radius + roi_margin + 1));
+  const int y1 = std::min(view.size.height, static_cast<int>(centre.y() + radius + roi_margin + 1));
+  const KnotDetector detector(view.image, cv::Rect(x0, y0, x1 - x0, y1 - y0), o_.detector);
+  // Searched only near the projected samples, and only from pixels on a yarn (a knot is
+  // where yarns meet): far fewer than the pixels of the region.
+  std::vector<Junction> near;
+  const double reach = 0.5 * LargestSampleGap(region) + 2.0;
+  const cv::Mat& ridge = detector.ridge();
+  const double on_yarn = 0.5 * detector.peak_threshold();
+  std::vector<Eigen::Vector2d> examined;
+  for (int y = 0; y < ridge.rows; ++y)
+    for (int x = 0; x < ridge.cols; ++x) {
+      if (ridge.at<float>(y, x) < on_yarn) continue;
+      const Eigen::Vector2d p(x0 + x, y0 + y);
+      bool in_region = false;
+      for (const auto& q : region) in_region = in_region || (q - p).norm() <= reach;
+      if (!in_region) continue;
+      bool done = false;
+      for (const auto& e : examined) done = done || (e - p).norm() < 1.5;
+      for (const Junction& n : near) done = done || (n.px - p).norm() < 3.0;
+      if (done) continue;
+      examined.push_back(p);
+      const std::optional<Junction> j = detector.Examine(p);
+      if (!j) continue;
+      bool merged = false;
+      for (const Junction& n : near)
+        merged = merged || (n.px - j->px).norm() < o_.detector.merge_px;
+      if (!merged && !TakenNear(*f, c, k, j->px) &&
+          BranchesMatchLinks(*j, Slots(c, f->t, k, f->point), o_.branch_tolerance_deg))
+        near.push_back(*j);
+    }
+  // The one unlabeled junction near the projected lens.
+  if (near.size() == 1) return FillCandidate{c, near[0].px, near[0].confidence, how};
+  return std::nullopt;
+}
+
+std::optional<LabelEngine::FillCandidate> LabelEngine::SearchImageGrid(FrameCheck* f,
+                                                                       const FillView& view,
+                                                                       int k) {
+  const int c = view.camera;
+  const std::optional<GridPrediction> g = PredictFromImageGrid(store_->labels(), c, f->t, k);
+  if (!g || !view.Inside(g->px) || f->Repeat(c, k, g->px)) return std::nullopt;
+  const FindNodeResult r = FindNode(view.image, g->px, 0.3 * g->spacing, o_.detector);
+  if (r.status == FindNodeStatus::kFound && !TakenNear(*f, c, k, r.knot.px) &&
+      BranchesMatchLinks(r.knot, Slots(c, f->t, k, f->point), o_.branch_tolerance_deg))
+    return FillCandidate{c, r.knot.px, r.knot.confidence,
+                         "the image grid of its labeled neighbours"};
+  return std::nullopt;
+}
+
+bool LabelEngine::TakenNear(const FrameCheck& f, int c, int k, const Eigen::Vector2d& px) const {
+  const LabelSet& set = store_->labels();
+  for (int j = 0; j < f.knots; ++j) {
+    if (j == k) continue;
+    const Label& l = set.at(c, f.t, j);
+    if (Accepted(l) && (l.px - px).norm() < o_.exclusion_px) return true;
+    const Eigen::Vector2d& q = f.projected[c][j];
+    if (q.allFinite() && (q - px).norm() < o_.exclusion_px) return true;
+  }
+  return false;
+}
+
+void LabelEngine::AcceptCandidates(const FrameCheck& f, const FillCandidates& candidates,
+                                   std::vector<LabelEdit>* edits) {
+  const LabelSet& set = store_->labels();
+  for (const auto& [k, list] : candidates) {
+    std::string why = "Fill Grid: seen by one camera only (" + list.front().how + ")";
+    if (f.geometry && ConfirmCandidates(f, k, list, edits, &why)) continue;
+    // Not confirmed: for review, where the camera has no label of the knot.
+    for (const auto& cand : list)
+      if (!set.at(cand.camera, f.t, k).present()) {
+        edits->push_back({cand.camera, f.t, k,
+                          Made(cand.px, LabelSource::kFillGrid, cand.confidence, false)});
+        Note(cand.camera, f.t, k, why);
+      }
+  }
+}
+
+bool LabelEngine::ConfirmCandidates(const FrameCheck& f, int k,
+                                    const std::vector<FillCandidate>& list,
+                                    std::vector<LabelEdit>* edits, std::string* why) const {
+  const LabelSet& set = store_->labels();
+  const double link = link_length_m_;
+  // The knot's accepted labels, then its candidates, triangulated together.
+  std::vector<Observation> obs;
+  for (int c = 0; c < f.cameras; ++c)
+    if (Accepted(set.at(c, f.t, k))) obs.push_back({RigIndex(c), set.at(c, f.t, k).px});
+  const size_t first = obs.size();
+  for (const auto& cand : list) obs.push_back({RigIndex(cand.camera), cand.px});
+  if (obs.size() < 2) return false;
+  const PointEstimate e = TriangulatePoint(*rig_, obs, f.topt);
+  // The point within a link (and the tolerance) of each triangulated neighbour.
+  bool near_links = e.valid;
+  for (int n : Neighbours(k))
+    if (e.valid && f.point[n] && link > 0.0)
+      near_links =
+          near_links && (e.position - *f.point[n]).norm() <= link * (1.0 + o_.link_tolerance);
+  if (!e.valid) {
+    *why = "Fill Grid: the cameras' candidates disagree (" + e.why + ")";
+    return false;
+  }
+  if (!near_links) {
+    *why = "Fill Grid: the cameras agree on a point farther than a link from its neighbours";
+    return false;
+  }
+  // The candidates the triangulation keeps as inliers are accepted.
+  bool confirmed = false;
+  for (size_t i = first; i < obs.size(); ++i) {
+    const bool inlier =
+        std::find(e.inliers.begin(), e.inliers.end(), static_cast<int>(i)) != e.inliers.end();
+    const FillCandidate& cand = list[i - first];
+    if (inlier) {
+      confirmed = true;
+      edits->push_back(
+          {cand.camera, f.t, k, Made(cand.px, LabelSource::kFillGrid, cand.confidence, true)});
+    }
+  }
+  if (!confirmed) *why = "Fill Grid: off the epipolar geometry of the other cameras";
+  return confirmed;
+}
+
+std::vector<LabelEdit> LabelEngine::OneLabelPerPlace(int t, const std::vector<LabelEdit>& edits) {
+  // One label per (camera, knot): the first edit wins (accepted ones come first per knot).
+  std::vector<LabelEdit> unique;
+  for (const auto& e : edits) {
+    bool seen = false;
+    for (const auto& u : unique) seen = seen || (u.camera == e.camera && u.knot == e.knot);
+    if (!seen) unique.push_back(e);
+  }
+  // Two knots given junctions this close in one camera: neither is trusted.
+  for (auto& a : unique)
+    for (auto& b : unique)
+      if (&a != &b && a.camera == b.camera && a.label.state == LabelState::kAccepted &&
+          (a.label.px - b.label.px).norm() < o_.exclusion_px) {
+        a.label.state = LabelState::kNeedsReview;
+        Note(a.camera, t, a.knot, "Fill Grid: another knot was found at the same place");
+      }
+  return unique;
 }
 
 void LabelEngine::SetCodebook(KnotCodebook codebook, IdentityCheckOptions options) {

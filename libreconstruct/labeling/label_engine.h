@@ -2,9 +2,9 @@
 // The labeling engine: the automatic tools of netlab label and of the GUI, over a label store.
 //
 //   LabelEngine engine(&store, rig, images, options);   // images(camera, t): that frame, BGR
-//   engine.LabelFirstFrame(0);     // per camera: Find Path from the four corners
-//   engine.CrossCheck(0);          // epipolar consistency, then Fill Grid
-//   for t = 1 ...: engine.Track(t - 1, t); engine.CrossCheck(t);
+//   engine.LabelFrames(0, last);   // frame 0: Find Path from the four corners, then CrossCheck
+//                                  // (epipolar consistency, Fill Grid); each later frame:
+//                                  // Track from the one before, then CrossCheck
 //   engine.FindNodeAt(camera, t, knot, centre, radius);  // the person's brush
 //
 // Every tool applies its labels as one undoable step of the store. A label is accepted only when
@@ -90,6 +90,15 @@ struct EngineCounts {
   int accepted = 0, review = 0;
 };
 
+// What LabelFrames did: the labels each step set (accepted, kept for review), summed over the
+// frames.
+struct LabelingSummary {
+  int frames = 0;               // frame rows labeled
+  EngineCounts first_frame;     // Find Path in the first frame row
+  EngineCounts tracked;         // Track into each later frame row
+  EngineCounts cross_checked;   // CrossCheck of every frame row (review: also those it flagged)
+};
+
 class LabelEngine {
  public:
   // `images(camera, t)`: camera index of the store, frame row t; an empty Mat when unreadable.
@@ -106,6 +115,12 @@ class LabelEngine {
   EngineCounts Track(int from, int to);
   // Epipolar consistency and Fill Grid in frame t (see above); then the colour check, when set.
   EngineCounts CrossCheck(int t);
+  // The automatic labeling of frame rows first to last (inclusive): LabelFirstFrame(first) and
+  // CrossCheck(first), then for each later row t Track(t - 1, t) and CrossCheck(t).
+  // `after_frame(t)`, when set, is called as soon as row t is done: a caller may report progress,
+  // or edit row t (a person's corrections) before the next row is tracked from it.
+  using FrameDone = std::function<void(int t)>;
+  LabelingSummary LabelFrames(int first, int last, const FrameDone& after_frame = {});
   // Checks every accepted label of frame t that a tool made (Find Path, Fill Grid, tracking,
   // Find Node; not the person's own clicks or imported seeds) against the yarn colours of its
   // knot (label_identity.h): a confident contradiction turns it to review with the colours read;
@@ -143,6 +158,49 @@ class LabelEngine {
   // labels, else the projections of their triangulated points.
   NeighbourSlots Slots(
       int camera, int t, int knot, const std::vector<std::optional<Eigen::Vector3d>>& point) const;
+
+  // CrossCheck's steps (label_engine.cc). FrameCheck: the state of one frame row's check, shared
+  // by its steps; FillView: one camera's frame in a Fill Grid pass; FillCandidate: a junction a
+  // search found for a knot, to be confirmed by the other cameras.
+  struct FrameCheck;
+  struct FillView;
+  struct FillCandidate;
+  using FillCandidates = std::map<int, std::vector<FillCandidate>>;  // per knot
+  // The accepted labels of every knot triangulated (FrameCheck::point, ::clean); with `flags`,
+  // the views the triangulation leaves out, or of a point it cannot resolve, flagged for review.
+  void TriangulateAccepted(FrameCheck* f, std::vector<LabelEdit>* flags);
+  // Epipolar consistency: the flags committed, the points triangulated again without them, the
+  // link length estimated. Returns the labels flagged.
+  int CheckEpipolar(FrameCheck* f);
+  // One pass of Fill Grid over every camera; its labels committed.
+  EngineCounts FillGridPass(FrameCheck* f, int pass);
+  // Fill Grid's searches in one camera for each knot without an accepted label there: an
+  // accepted label (a) appended to `edits`, a candidate (b, c) to `candidates`.
+  void SearchCamera(FrameCheck* f, int camera, std::vector<LabelEdit>* edits,
+                    FillCandidates* candidates);
+  // (a) At the projection of the knot's triangulated point: an accepted label when found there.
+  std::optional<LabelEdit> SearchAtProjection(FrameCheck* f, const FillView& view, int knot);
+  // (b) The projected samples of the lens where spheres of link length around the knot's
+  // triangulated neighbours meet (`how` says so); empty when they do not fix it.
+  std::vector<Eigen::Vector2d> LinkSphereRegion(const FrameCheck& f, const FillView& view,
+                                                int knot, std::string* how) const;
+  // The one unlabeled junction near a region's samples, as a candidate.
+  std::optional<FillCandidate> SearchRegion(FrameCheck* f, const FillView& view, int knot,
+                                            std::vector<Eigen::Vector2d> region,
+                                            const std::string& how);
+  // (c) At the image-grid prediction from the knot's labeled neighbours in that camera.
+  std::optional<FillCandidate> SearchImageGrid(FrameCheck* f, const FillView& view, int knot);
+  // Whether another knot's accepted label or projection is within exclusion_px of `px`.
+  bool TakenNear(const FrameCheck& f, int camera, int knot, const Eigen::Vector2d& px) const;
+  // Candidates become labels, accepted where the cameras agree in 3D, else for review.
+  void AcceptCandidates(const FrameCheck& f, const FillCandidates& candidates,
+                        std::vector<LabelEdit>* edits);
+  // A knot's candidates (with its accepted labels) triangulated: the inliers accepted (appended
+  // to `edits`, true); false with `why` when they are not confirmed.
+  bool ConfirmCandidates(const FrameCheck& f, int knot, const std::vector<FillCandidate>& list,
+                         std::vector<LabelEdit>* edits, std::string* why) const;
+  // One label per (camera, knot), and no accepted label within exclusion_px of another.
+  std::vector<LabelEdit> OneLabelPerPlace(int t, const std::vector<LabelEdit>& edits);
 
   LabelStore* store_;
   const calib::Rig* rig_;

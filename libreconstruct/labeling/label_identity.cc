@@ -1,11 +1,15 @@
 #include "libreconstruct/labeling/label_identity.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "libreconstruct/coloring/yarn_coloring.h"
 
@@ -22,7 +26,6 @@ std::array<bool, 4> PresentSlots(int row, int col, int rows, int cols) {
 bool Contains(const std::vector<int>& v, int x) {
   return std::find(v.begin(), v.end(), x) != v.end();
 }
-
 
 // True when the yarns and the knot's links can be paired one to one, each pair's link dye
 // plausible for its yarn: every yarn a distinct link when there are at most as many yarns as
@@ -105,6 +108,216 @@ double SolidRadius(const cv::Mat& bgr8, const Eigen::Vector2d& px, double backgr
   return rim;
 }
 
+// The labeled knot, checked against the codebook.
+struct LabeledKnot {
+  const CodebookKnot* knot = nullptr;
+  std::array<bool, 4> present{};  // the slots (right, down, left, up) the net has at it
+  int degree = 0;                 // its links
+  std::string name;               // "(row, col)"
+};
+
+// Checks the arguments of CheckIdentity (std::invalid_argument or std::out_of_range naming what
+// is wrong) and returns the labeled knot. The net's shape from the codebook's last knot;
+// row-major order is checked at the knot in question (O(1): this runs once per label).
+LabeledKnot CheckArguments(const cv::Mat& bgr8, const KnotCodebook& codebook, int knot,
+                           const Eigen::Vector2d& px, const IdentityCheckOptions& options) {
+  if (bgr8.type() != CV_8UC3)
+    throw std::invalid_argument("CheckIdentity: the frame is not CV_8UC3 (type " +
+                                std::to_string(bgr8.type()) + ", " +
+                                std::to_string(bgr8.channels()) + " channels)");
+  if (!px.allFinite()) throw std::invalid_argument("CheckIdentity: the knot's pixel is not finite");
+  if (codebook.knots.empty()) throw std::invalid_argument("CheckIdentity: empty codebook");
+  const int rows = codebook.knots.back().row + 1, cols = codebook.knots.back().col + 1;
+  const int knots = static_cast<int>(codebook.knots.size());
+  if (knot < 0 || knot >= knots)
+    throw std::out_of_range("CheckIdentity: knot " + std::to_string(knot) +
+                            " is not in the net (0.." + std::to_string(knots - 1) + ")");
+  LabeledKnot labeled;
+  labeled.knot = &codebook.knots[knot];
+  labeled.present = PresentSlots(labeled.knot->row, labeled.knot->col, rows, cols);
+  labeled.degree =
+      static_cast<int>(std::count(labeled.present.begin(), labeled.present.end(), true));
+  if (rows * cols != knots || labeled.knot->row != knot / cols ||
+      labeled.knot->col != knot % cols || labeled.knot->degree() != labeled.degree)
+    throw std::invalid_argument("CheckIdentity: the codebook is not a whole " +
+                                std::to_string(rows) + " x " + std::to_string(cols) +
+                                " net in row-major order at knot " + std::to_string(knot));
+  std::string error;
+  if (!options.IsValid(&error)) throw std::invalid_argument("CheckIdentity: " + error);
+  labeled.name = KnotName(labeled.knot->row, labeled.knot->col);
+  return labeled;
+}
+
+// The yarns to read at the knot.
+struct YarnsToRead {
+  std::vector<Eigen::Vector2d> dirs;  // image, unit
+  std::vector<std::string> names;     // "right", ... or "37 deg", ...
+  std::vector<int> links;             // each yarn's link (index into link_colours); empty: unknown
+};
+
+// The yarns towards the labeled neighbours (their links known) and the shortest link.
+struct LabeledNeighbours {
+  YarnsToRead yarns;
+  double shortest_link_px = std::numeric_limits<double>::infinity();  // image px; inf: none
+};
+
+// The labeled neighbours that are at least min_link_px away. Throws std::invalid_argument on a
+// neighbour in a slot the knot does not have.
+LabeledNeighbours FindLabeledNeighbours(const LabeledKnot& labeled, const Eigen::Vector2d& px,
+                                        const YarnDirections& yarns,
+                                        const IdentityCheckOptions& options) {
+  LabeledNeighbours out;
+  for (int s = 0, link = 0; s < 4; ++s) {
+    const std::optional<Eigen::Vector2d>& nb = yarns.neighbour_px[s];
+    if (!labeled.present[s]) {
+      if (nb)
+        throw std::invalid_argument("CheckIdentity: knot " + labeled.name + " has no " +
+                                    kSlotNames[s] + " neighbour, one was given");
+      continue;
+    }
+    if (nb && nb->allFinite() && (*nb - px).norm() >= options.min_link_px) {
+      out.yarns.dirs.push_back((*nb - px).normalized());
+      out.yarns.names.push_back(kSlotNames[s]);
+      out.yarns.links.push_back(link);
+      out.shortest_link_px = std::min(out.shortest_link_px, (*nb - px).norm());
+    }
+    ++link;
+  }
+  return out;
+}
+
+// The detector's branches in angle order (their links unknown). Throws std::invalid_argument on
+// a count outside 2..4 or an angle that is not finite.
+YarnsToRead BranchYarns(const std::vector<double>& branch_angles_rad) {
+  const int n = static_cast<int>(branch_angles_rad.size());
+  if (n < 2 || n > 4)
+    throw std::invalid_argument("CheckIdentity: " + std::to_string(n) +
+                                " branch angles (need 2..4)");
+  std::vector<double> angles = branch_angles_rad;
+  for (double& a : angles) {
+    if (!std::isfinite(a))
+      throw std::invalid_argument("CheckIdentity: a branch angle is not finite");
+    a = std::remainder(a, 2 * std::numbers::pi);
+  }
+  // Angle order is cyclic order around the knot (what the cyclic rule compares).
+  std::sort(angles.begin(), angles.end());
+  YarnsToRead out;
+  for (double a : angles) {
+    out.dirs.emplace_back(std::cos(a), std::sin(a));
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.0f deg", a * 180 / std::numbers::pi);
+    out.names.push_back(text);
+  }
+  return out;
+}
+
+// How far along the yarns to read: out to a fraction of the shortest labeled link, from beyond
+// any solid at the knot. nullopt, with the reason in *why, when a solid covers the knot out to
+// more than half of that.
+std::optional<IdentifyOptions> ReadingRange(const cv::Mat& bgr8, const Eigen::Vector2d& px,
+                                            double shortest_link_px, const LabeledKnot& labeled,
+                                            const IdentityCheckOptions& options, std::string* why) {
+  const IdentifyOptions& read_options = options.identify;
+  IdentifyOptions reading = read_options;
+  reading.candidate_knots.clear();
+  if (std::isfinite(shortest_link_px))
+    reading.outer_radius_px = std::clamp(options.link_fraction * shortest_link_px,
+                                         read_options.outer_radius_px, options.max_outer_radius_px);
+  const double solid = SolidRadius(bgr8, px, reading.outer_radius_px, 0.5 * reading.outer_radius_px,
+                                   read_options, options.solid_occupancy);
+  if (solid > 0.5 * reading.outer_radius_px) {
+    char text[160];
+    std::snprintf(text, sizeof(text),
+                  "a solid covers %s out to more than %.0f px: its yarns are not read",
+                  labeled.name.c_str(), 0.5 * reading.outer_radius_px);
+    *why = text;
+    return std::nullopt;
+  }
+  if (solid + 2 > reading.inner_radius_px) reading.inner_radius_px = solid + 2;
+  return reading;
+}
+
+// Each yarn's reading against the labeled knot's links.
+struct YarnComparison {
+  std::vector<std::vector<int>> plausible;  // each yarn's plausible dyes
+  std::string readings;                     // "right orange, down ?, ..."
+  std::string contradictions;               // "; "-separated, empty when none
+  int certain = 0;                          // yarns read with one plausible dye
+  int contradicting = 0;
+};
+
+// A known link's dye must be plausible for its read yarn. An unknown link: some dye of the knot
+// must be, unless there are more branches than links (this one may be the spurious one).
+YarnComparison CompareYarnsWithLinks(const KnotIdentification& id, const LabeledKnot& labeled,
+                                     const YarnsToRead& to_read, const KnotCodebook& codebook,
+                                     const IdentifyOptions& read_options) {
+  const int n = static_cast<int>(to_read.dirs.size());
+  const std::vector<int>& links = labeled.knot->link_colours;
+  YarnComparison out;
+  out.plausible.resize(n);
+  for (int y = 0; y < n; ++y) {
+    const YarnReading& r = id.yarns[y];
+    const bool read = r.best >= 0 && r.best_delta_e <= read_options.max_delta_e;
+    out.plausible[y] = r.plausible;
+    if (read && r.plausible.size() == 1) ++out.certain;
+    out.readings += (out.readings.empty() ? "" : ", ") + to_read.names[y] + " " +
+                    ReadingName(r, codebook, read, read_options.min_samples);
+    if (!read) continue;
+    bool contradicts = true;
+    if (!to_read.links.empty()) {
+      contradicts = !Contains(r.plausible, links[to_read.links[y]]);
+    } else if (n <= labeled.degree) {
+      for (int c : links) contradicts = contradicts && !Contains(r.plausible, c);
+    } else {
+      contradicts = false;
+    }
+    if (contradicts) {
+      ++out.contradicting;
+      const std::string wanted = to_read.links.empty()
+                                     ? "no link of " + labeled.name + " has it"
+                                     : labeled.name + "'s " + to_read.names[y] + " link is " +
+                                           codebook.palette[links[to_read.links[y]]].name;
+      out.contradictions += (out.contradictions.empty() ? "" : "; ") + to_read.names[y] +
+                            " yarn is " + ReadingName(r, codebook, true, 0) + ", " + wanted;
+    }
+  }
+  return out;
+}
+
+// The knot as a whole, when the links of the yarns are unknown: the yarns and the links must
+// pair up one to one (and in cyclic order under the cyclic rule, as many of each). Distinct
+// branches are distinct links whatever the rule (the set rule only means that the codes differ
+// as sets); the cyclic rule adds their order. Empty when they do, else how they do not.
+std::string WholeKnotMisfit(const KnotCodebook& codebook, int knot, const LabeledKnot& labeled,
+                            const std::vector<std::vector<int>>& plausible) {
+  const int n = static_cast<int>(plausible.size());
+  const std::vector<int>& links = labeled.knot->link_colours;
+  const bool cyclic = n == labeled.degree && codebook.rule == CodeRule::kCyclic;
+  const bool fits =
+      cyclic ? codebook.FitsSomeReading(knot, plausible) : FitsDistinctLinks(links, plausible);
+  if (fits) return "";
+  std::string code;
+  for (int c : links) code += (code.empty() ? "" : " ") + codebook.palette[c].name;
+  const std::string& name = labeled.name;
+  return cyclic               ? "not the cyclic code of " + name + " (" + code + ")"
+         : n > labeled.degree ? "without " + name + "'s links among them (" + code + ")"
+                              : "not distinct links of " + name + " (" + code + ")";
+}
+
+// "; colours fit (r, c) ..." (the first four), or empty when they fit nothing.
+std::string KnotsReadText(const std::vector<int>& knots_read, const KnotCodebook& codebook) {
+  std::string said;
+  if (!knots_read.empty()) {
+    said = "; colours fit ";
+    for (size_t i = 0; i < knots_read.size() && i < 4; ++i) {
+      const CodebookKnot& k = codebook.knots[knots_read[i]];
+      said += (i ? " " : "") + KnotName(k.row, k.col);
+    }
+    if (knots_read.size() > 4) said += " ...";
+  }
+  return said;
+}
+
 }  // namespace
 
 bool IdentityCheckOptions::IsValid(std::string* error) const {
@@ -171,192 +384,68 @@ std::string IdentityVerdictName(IdentityVerdict verdict) {
 IdentityCheck CheckIdentity(const cv::Mat& bgr8, const KnotCodebook& codebook, int knot,
                             const Eigen::Vector2d& px, const YarnDirections& yarns,
                             const IdentityCheckOptions& options) {
-  // Arguments. The net's shape from the codebook's last knot; row-major order is checked at the
-  // knot in question (O(1): this runs once per label).
-  if (bgr8.type() != CV_8UC3)
-    throw std::invalid_argument("CheckIdentity: the frame is not CV_8UC3 (type " +
-                                std::to_string(bgr8.type()) + ", " +
-                                std::to_string(bgr8.channels()) + " channels)");
-  if (!px.allFinite()) throw std::invalid_argument("CheckIdentity: the knot's pixel is not finite");
-  if (codebook.knots.empty()) throw std::invalid_argument("CheckIdentity: empty codebook");
-  const int rows = codebook.knots.back().row + 1, cols = codebook.knots.back().col + 1;
-  const int knots = static_cast<int>(codebook.knots.size());
-  if (knot < 0 || knot >= knots)
-    throw std::out_of_range("CheckIdentity: knot " + std::to_string(knot) +
-                            " is not in the net (0.." + std::to_string(knots - 1) + ")");
-  const CodebookKnot& labeled = codebook.knots[knot];
-  const std::array<bool, 4> present = PresentSlots(labeled.row, labeled.col, rows, cols);
-  const int degree = static_cast<int>(std::count(present.begin(), present.end(), true));
-  if (rows * cols != knots || labeled.row != knot / cols || labeled.col != knot % cols ||
-      labeled.degree() != degree)
-    throw std::invalid_argument("CheckIdentity: the codebook is not a whole " +
-                                std::to_string(rows) + " x " + std::to_string(cols) +
-                                " net in row-major order at knot " + std::to_string(knot));
-  std::string error;
-  if (!options.IsValid(&error)) throw std::invalid_argument("CheckIdentity: " + error);
-  const std::string name = KnotName(labeled.row, labeled.col);
-
-  const IdentifyOptions& read_options = options.identify;
+  const LabeledKnot labeled = CheckArguments(bgr8, codebook, knot, px, options);
   IdentityCheck result;
 
-  // The labeled neighbours: directions (with their links: index into link_colours) and the
-  // shortest link's image length.
-  std::vector<Eigen::Vector2d> neighbour_dirs;
-  std::vector<std::string> neighbour_names;
-  std::vector<int> neighbour_links;
-  double shortest_link_px = std::numeric_limits<double>::infinity();
-  for (int s = 0, link = 0; s < 4; ++s) {
-    const std::optional<Eigen::Vector2d>& nb = yarns.neighbour_px[s];
-    if (!present[s]) {
-      if (nb)
-        throw std::invalid_argument("CheckIdentity: knot " + name + " has no " + kSlotNames[s] +
-                                    " neighbour, one was given");
-      continue;
-    }
-    if (nb && nb->allFinite() && (*nb - px).norm() >= options.min_link_px) {
-      neighbour_dirs.push_back((*nb - px).normalized());
-      neighbour_names.push_back(kSlotNames[s]);
-      neighbour_links.push_back(link);
-      shortest_link_px = std::min(shortest_link_px, (*nb - px).norm());
-    }
-    ++link;
-  }
+  // The labeled neighbours: directions (with their links) and the shortest link's image length.
+  const LabeledNeighbours neighbours = FindLabeledNeighbours(labeled, px, yarns, options);
 
   // The yarn directions: the detector's branches in angle order (their links unknown), else the
   // neighbours'.
-  std::vector<Eigen::Vector2d> dirs;
-  std::vector<std::string> yarn_names;
-  std::vector<int> yarn_link;  // empty: unknown
-  if (!yarns.branch_angles_rad.empty()) {
-    const int n = static_cast<int>(yarns.branch_angles_rad.size());
-    if (n < 2 || n > 4)
-      throw std::invalid_argument("CheckIdentity: " + std::to_string(n) +
-                                  " branch angles (need 2..4)");
-    std::vector<double> angles = yarns.branch_angles_rad;
-    for (double& a : angles) {
-      if (!std::isfinite(a))
-        throw std::invalid_argument("CheckIdentity: a branch angle is not finite");
-      a = std::remainder(a, 2 * std::numbers::pi);
-    }
-    // Angle order is cyclic order around the knot (what the cyclic rule compares).
-    std::sort(angles.begin(), angles.end());
-    for (double a : angles) {
-      dirs.emplace_back(std::cos(a), std::sin(a));
-      char text[32];
-      std::snprintf(text, sizeof(text), "%.0f deg", a * 180 / std::numbers::pi);
-      yarn_names.push_back(text);
-    }
-  } else {
-    dirs = neighbour_dirs;
-    yarn_names = neighbour_names;
-    yarn_link = neighbour_links;
-  }
-  const int n = static_cast<int>(dirs.size());
+  const YarnsToRead to_read =
+      yarns.branch_angles_rad.empty() ? neighbours.yarns : BranchYarns(yarns.branch_angles_rad);
+  const int n = static_cast<int>(to_read.dirs.size());
   result.yarns = n;
   if (n < 2) {
-    result.why = "only " + std::to_string(n) + " yarn direction(s) for " + name +
+    result.why = "only " + std::to_string(n) + " yarn direction(s) for " + labeled.name +
                  " (labeled neighbours at least " +
                  std::to_string(static_cast<int>(options.min_link_px)) + " px away)";
     return result;
   }
 
-  // How far along the yarns to read: out to a fraction of the shortest labeled link, from beyond
-  // any solid at the knot.
-  IdentifyOptions reading = read_options;
-  reading.candidate_knots.clear();
-  if (std::isfinite(shortest_link_px))
-    reading.outer_radius_px = std::clamp(options.link_fraction * shortest_link_px,
-                                         read_options.outer_radius_px, options.max_outer_radius_px);
-  const double solid = SolidRadius(bgr8, px, reading.outer_radius_px, 0.5 * reading.outer_radius_px,
-                                   read_options, options.solid_occupancy);
-  if (solid > 0.5 * reading.outer_radius_px) {
-    char text[160];
-    std::snprintf(text, sizeof(text),
-                  "a solid covers %s out to more than %.0f px: its yarns are not read",
-                  name.c_str(), 0.5 * reading.outer_radius_px);
-    result.why = text;
-    return result;
-  }
-  if (solid + 2 > reading.inner_radius_px) reading.inner_radius_px = solid + 2;
+  // How far along the yarns to read (nothing when a solid covers the knot).
+  const std::optional<IdentifyOptions> reading =
+      ReadingRange(bgr8, px, neighbours.shortest_link_px, labeled, options, &result.why);
+  if (!reading) return result;
 
   // The colours, and what they say over the whole codebook.
-  const KnotIdentification id = IdentifyKnot(bgr8, px, dirs, reading, codebook);
+  const KnotIdentification id = IdentifyKnot(bgr8, px, to_read.dirs, *reading, codebook);
   if (static_cast<int>(id.yarns.size()) != n) {
     result.why = id.reasons.empty() ? "colours not read" : id.reasons.front();
     return result;
   }
-  if (id.status != IdentifyStatus::kUnknown && n == degree) result.knots_read = id.knots;
+  if (id.status != IdentifyStatus::kUnknown && n == labeled.degree) result.knots_read = id.knots;
 
   // Each yarn against the labeled knot's links.
-  const std::vector<int>& links = labeled.link_colours;
-  std::vector<std::vector<int>> plausible(n);
-  std::vector<bool> read(n);
-  std::string readings, contradictions;
-  for (int y = 0; y < n; ++y) {
-    const YarnReading& r = id.yarns[y];
-    read[y] = r.best >= 0 && r.best_delta_e <= read_options.max_delta_e;
-    plausible[y] = r.plausible;
-    if (read[y] && r.plausible.size() == 1) ++result.yarns_certain;
-    readings += (readings.empty() ? "" : ", ") + yarn_names[y] + " " +
-                ReadingName(r, codebook, read[y], read_options.min_samples);
-    if (!read[y]) continue;
-    // Known link: its dye must be plausible. Unknown: some dye of the knot must be, unless there
-    // are more branches than links (this one may be the spurious one).
-    bool contradicts = true;
-    if (!yarn_link.empty()) {
-      contradicts = !Contains(r.plausible, links[yarn_link[y]]);
-    } else if (n <= degree) {
-      for (int c : links) contradicts = contradicts && !Contains(r.plausible, c);
-    } else {
-      contradicts = false;
-    }
-    if (contradicts) {
-      ++result.yarns_contradicting;
-      const std::string wanted = yarn_link.empty() ? "no link of " + name + " has it"
-                                                   : name + "'s " + yarn_names[y] + " link is " +
-                                                         codebook.palette[links[yarn_link[y]]].name;
-      contradictions += (contradictions.empty() ? "" : "; ") + yarn_names[y] + " yarn is " +
-                        ReadingName(r, codebook, true, 0) + ", " + wanted;
-    }
-  }
+  const YarnComparison compared =
+      CompareYarnsWithLinks(id, labeled, to_read, codebook, options.identify);
+  result.yarns_certain = compared.certain;
+  result.yarns_contradicting = compared.contradicting;
 
-  // The knot as a whole, when the links of the yarns are unknown: the yarns and the links must
-  // pair up one to one (and in cyclic order under the cyclic rule, as many of each).
+  // The knot as a whole, when the links of the yarns are unknown.
   bool fits = result.yarns_contradicting == 0;
   std::string whole;
-  if (fits && yarn_link.empty()) {
-    // Distinct branches are distinct links whatever the rule (the set rule only means that
-    // the codes differ as sets); the cyclic rule adds their order.
-    const bool cyclic = n == degree && codebook.rule == CodeRule::kCyclic;
-    fits = cyclic ? codebook.FitsSomeReading(knot, plausible) : FitsDistinctLinks(links, plausible);
-    if (!fits) {
-      std::string code;
-      for (int c : links) code += (code.empty() ? "" : " ") + codebook.palette[c].name;
-      whole = cyclic       ? "not the cyclic code of " + name + " (" + code + ")"
-              : n > degree ? "without " + name + "'s links among them (" + code + ")"
-                           : "not distinct links of " + name + " (" + code + ")";
-    }
+  if (fits && to_read.links.empty()) {
+    whole = WholeKnotMisfit(codebook, knot, labeled, compared.plausible);
+    fits = whole.empty();
   }
-  std::string said;
-  if (!result.knots_read.empty()) {
-    said = "; colours fit ";
-    for (size_t i = 0; i < result.knots_read.size() && i < 4; ++i) {
-      const CodebookKnot& k = codebook.knots[result.knots_read[i]];
-      said += (i ? " " : "") + KnotName(k.row, k.col);
-    }
-    if (result.knots_read.size() > 4) said += " ...";
-  }
+
+  // The verdict: a contradiction, too few yarns read with certainty, or consistent.
+  const std::string said = KnotsReadText(result.knots_read, codebook);
+  const std::string& name = labeled.name;
   if (!fits) {
     result.verdict = IdentityVerdict::kMismatch;
     result.why = "label " + name + " contradicted by its colours: " +
-                 (contradictions.empty() ? readings + " are " + whole : contradictions) + said;
-  } else if (result.yarns_certain < std::min(options.min_certain_yarns, degree)) {
+                 (compared.contradictions.empty() ? compared.readings + " are " + whole
+                                                  : compared.contradictions) +
+                 said;
+  } else if (result.yarns_certain < std::min(options.min_certain_yarns, labeled.degree)) {
     result.verdict = IdentityVerdict::kUnreadable;
     result.why = std::to_string(result.yarns_certain) + " yarn colour(s) read with certainty (" +
-                 readings + ")";
+                 compared.readings + ")";
   } else {
     result.verdict = IdentityVerdict::kConsistent;
-    result.why = readings + ": fit " + name + said;
+    result.why = compared.readings + ": fit " + name + said;
   }
   return result;
 }

@@ -1,7 +1,7 @@
 #pragma once
 // The label store behind the labeling tools and the GUI: every knot's 2D label per camera and
-// frame (libreconstruct/labels/label_set.h: position, source, confidence, state), changed only through
-// operations that undo and redo as one step each, saved without loss.
+// frame (libreconstruct/labels/label_set.h: position, source, confidence, state), changed only
+// through operations that undo and redo as one step each, saved without loss.
 //
 //   LabelStore store(LabelSet::Empty(11, 11, cameras, frames));
 //   store.Apply("Find Node", {{camera, t, knot, label}});   // one undoable step

@@ -98,6 +98,84 @@ cv::Mat SynchronizedSequence::ReadDisplay(int camera, int frame, int level,
   return Downscale(DemosaicHalf(raw, bayer, corrections_[camera]), 1 << (level - 1));
 }
 
+namespace {
+
+// What checking one frame found: readable?, its size, its pixels' hash (when decoded).
+struct FrameResult {
+  bool ok = false;
+  FrameInfo info;
+  uint64_t hash = 0;
+  std::string error;
+};
+
+// Marks frames unlike the camera's first readable frame (`reference`) as unreadable, and lists
+// the unreadable, readable and duplicated (identical to the previous) frames in `cam`.
+void SortFrames(const FrameSource& source, const std::vector<int>& idx,
+                const FrameInfo& reference, bool decode, std::vector<FrameResult>& results,
+                CameraReport& cam, std::set<int>& readable) {
+  for (size_t k = 0; k < idx.size(); ++k) {
+    FrameResult& r = results[k];
+    if (r.ok && !(r.info == reference)) {
+      r.ok = false;
+      r.error = "size " + std::to_string(r.info.width) + "x" + std::to_string(r.info.height) +
+                " differs from the camera's " + std::to_string(reference.width) + "x" +
+                std::to_string(reference.height);
+    }
+    if (!r.ok) {
+      cam.unreadable.push_back(idx[k]);
+      cam.problems.push_back(cam.name + " frame " + std::to_string(idx[k]) + " (" +
+                             source.Where(idx[k]) + "): " + r.error);
+    } else {
+      readable.insert(idx[k]);
+      if (decode && k > 0 && results[k - 1].ok && results[k - 1].hash == r.hash &&
+          idx[k - 1] == idx[k] - 1)
+        cam.duplicated.push_back(idx[k]);  // identical to the previous frame
+    }
+  }
+}
+
+// Timestamps against the frame rate: a step under half a period is a duplicate, one over the
+// frame count's periods plus a half a gap after the previous frame.
+void CheckTimestamps(const std::vector<int>& idx, const std::map<int, double>& times, double fps,
+                     CameraReport& cam) {
+  if (times.empty()) return;
+  const double period = 1.0 / fps;
+  const int* previous = nullptr;
+  for (const int& f : idx) {
+    const auto it = times.find(f);
+    if (it == times.end()) continue;
+    if (previous) {
+      const double dt = it->second - times.at(*previous);
+      const int steps = f - *previous;
+      if (dt < 0.5 * period) {
+        if (std::find(cam.duplicated.begin(), cam.duplicated.end(), f) == cam.duplicated.end())
+          cam.duplicated.push_back(f);
+      } else if (dt > (steps + 0.5) * period) {
+        cam.timestamp_gaps.push_back(*previous);
+      }
+    }
+    previous = &f;
+  }
+  std::sort(cam.duplicated.begin(), cam.duplicated.end());
+}
+
+// Warnings for cameras that differ from the first in frame size or count.
+void CompareCameras(CheckReport& report) {
+  for (size_t c = 1; c < report.cameras.size(); ++c) {
+    const CameraReport& a = report.cameras[0];
+    const CameraReport& b = report.cameras[c];
+    if (a.width != b.width || a.height != b.height)
+      report.warnings.push_back("cameras " + a.name + " and " + b.name + " differ in frame size (" +
+                                std::to_string(a.width) + "x" + std::to_string(a.height) + " and " +
+                                std::to_string(b.width) + "x" + std::to_string(b.height) + ")");
+    if (a.frames != b.frames)
+      report.warnings.push_back("cameras " + a.name + " and " + b.name + " differ in frame count (" +
+                                std::to_string(a.frames) + " and " + std::to_string(b.frames) + ")");
+  }
+}
+
+}  // namespace
+
 CheckReport SynchronizedSequence::Check(bool decode,
                                         const std::function<void(int, int)>& progress,
                                         int threads) const {
@@ -108,15 +186,9 @@ CheckReport SynchronizedSequence::Check(bool decode,
   report.decoded = decode;
   const int n = num_cameras();
 
-  // Per (camera, position in its index list): readable?, size, hash.
-  struct Result {
-    bool ok = false;
-    FrameInfo info;
-    uint64_t hash = 0;
-    std::string error;
-  };
-  std::vector<std::vector<Result>> results(n);
-  std::vector<std::pair<int, int>> tasks;
+  // Every frame of every camera, read (or only its header) on `threads` threads.
+  std::vector<std::vector<FrameResult>> results(n);
+  std::vector<std::pair<int, int>> tasks;  // (camera, position in its index list)
   for (int c = 0; c < n; ++c) {
     results[c].resize(sources_[c]->indices().size());
     for (size_t k = 0; k < results[c].size(); ++k) tasks.emplace_back(c, static_cast<int>(k));
@@ -127,7 +199,7 @@ CheckReport SynchronizedSequence::Check(bool decode,
     for (int t; (t = next++) < static_cast<int>(tasks.size());) {
       const auto [c, k] = tasks[t];
       const int index = sources_[c]->indices()[k];
-      Result& r = results[c][k];
+      FrameResult& r = results[c][k];
       if (decode) {
         const cv::Mat raw = sources_[c]->Read(index, &r.error);
         if (!raw.empty()) {
@@ -151,15 +223,16 @@ CheckReport SynchronizedSequence::Check(bool decode,
   worker();
   for (std::thread& t : pool) t.join();
 
+  // Per camera: its frame size (that of its first readable frame), then each frame's verdict,
+  // the frames missing from the sequence's range, and the timestamps.
   std::vector<std::set<int>> readable(n);
   for (int c = 0; c < n; ++c) {
     CameraReport cam;
     cam.name = experiment_.cameras[c].name;
     const auto& idx = sources_[c]->indices();
     cam.frames = static_cast<int>(idx.size());
-    // The camera's frame size: that of its first readable frame.
     FrameInfo reference;
-    for (const Result& r : results[c])
+    for (const FrameResult& r : results[c])
       if (r.ok) {
         reference = r.info;
         break;
@@ -170,51 +243,12 @@ CheckReport SynchronizedSequence::Check(bool decode,
     if (reference.channels == 3 && experiment_.cameras[c].bayer != BayerPattern::kNone)
       report.warnings.push_back(cam.name + ": the frames are already colour; bayer: " +
                                 BayerPatternName(experiment_.cameras[c].bayer) + " is ignored");
-    for (size_t k = 0; k < idx.size(); ++k) {
-      Result& r = results[c][k];
-      if (r.ok && !(r.info == reference)) {
-        r.ok = false;
-        r.error = "size " + std::to_string(r.info.width) + "x" + std::to_string(r.info.height) +
-                  " differs from the camera's " + std::to_string(reference.width) + "x" +
-                  std::to_string(reference.height);
-      }
-      if (!r.ok) {
-        cam.unreadable.push_back(idx[k]);
-        cam.problems.push_back(cam.name + " frame " + std::to_string(idx[k]) + " (" +
-                               sources_[c]->Where(idx[k]) + "): " + r.error);
-      } else {
-        readable[c].insert(idx[k]);
-        if (decode && k > 0 && results[c][k - 1].ok && results[c][k - 1].hash == r.hash &&
-            idx[k - 1] == idx[k] - 1)
-          cam.duplicated.push_back(idx[k]);  // identical to the previous frame
-      }
-    }
+    SortFrames(*sources_[c], idx, reference, decode, results[c], cam, readable[c]);
     for (int f = first_, k = 0; f <= last_; ++f) {
       while (k < static_cast<int>(idx.size()) && idx[k] < f) ++k;
       if (k >= static_cast<int>(idx.size()) || idx[k] != f) cam.missing.push_back(f);
     }
-    // Timestamps against the frame rate.
-    const auto& times = timestamps_[c];
-    if (!times.empty()) {
-      const double period = 1.0 / experiment_.fps;
-      const int* previous = nullptr;
-      for (const int& f : idx) {
-        const auto it = times.find(f);
-        if (it == times.end()) continue;
-        if (previous) {
-          const double dt = it->second - times.at(*previous);
-          const int steps = f - *previous;
-          if (dt < 0.5 * period) {
-            if (std::find(cam.duplicated.begin(), cam.duplicated.end(), f) == cam.duplicated.end())
-              cam.duplicated.push_back(f);
-          } else if (dt > (steps + 0.5) * period) {
-            cam.timestamp_gaps.push_back(*previous);
-          }
-        }
-        previous = &f;
-      }
-      std::sort(cam.duplicated.begin(), cam.duplicated.end());
-    }
+    CheckTimestamps(idx, timestamps_[c], experiment_.fps, cam);
     report.frames_read += cam.frames;
     report.cameras.push_back(cam);
   }
@@ -223,17 +257,7 @@ CheckReport SynchronizedSequence::Check(bool decode,
     for (int c = 0; c < n && all; ++c) all = readable[c].count(f) > 0;
     report.synchronized_frames += all;
   }
-  for (int c = 1; c < n; ++c) {
-    const CameraReport& a = report.cameras[0];
-    const CameraReport& b = report.cameras[c];
-    if (a.width != b.width || a.height != b.height)
-      report.warnings.push_back("cameras " + a.name + " and " + b.name + " differ in frame size (" +
-                                std::to_string(a.width) + "x" + std::to_string(a.height) + " and " +
-                                std::to_string(b.width) + "x" + std::to_string(b.height) + ")");
-    if (a.frames != b.frames)
-      report.warnings.push_back("cameras " + a.name + " and " + b.name + " differ in frame count (" +
-                                std::to_string(a.frames) + " and " + std::to_string(b.frames) + ")");
-  }
+  CompareCameras(report);
   report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   report.read_fps = report.wall_s > 0 ? report.frames_read / report.wall_s : 0.0;
   return report;

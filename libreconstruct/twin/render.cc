@@ -440,183 +440,252 @@ std::vector<Solid> CameraSolids(const calib::Camera& camera, const Scene& scene,
 // overlap it; for each pixel in one of those rectangles, one centre sample where its four
 // corners see the same face of the same solid, else supersample^2 samples (rays interpolated
 // between the pixel's corner rays).
-void DrawSolids(const std::vector<Solid>& solids, const SceneRenderOptions& options,
-                const Eigen::Vector3d& light, RayGrid& rays, Canvas& canvas) {
-  if (solids.empty()) return;
-  // (tile, solid) pairs, grouped by tile.
-  std::vector<std::pair<int, int>> pairs;
-  for (int i = 0; i < static_cast<int>(solids.size()); ++i) {
-    const PixelRect& r = solids[i].rect;
-    for (int ty = r.y0 >> Tile::kShift; ty <= r.y1 >> Tile::kShift; ++ty)
-      for (int tx = r.x0 >> Tile::kShift; tx <= r.x1 >> Tile::kShift; ++tx)
-        pairs.emplace_back(ty * canvas.tiles_x() + tx, i);
+class SolidCaster {
+ public:
+  SolidCaster(const std::vector<Solid>& solids, const SceneRenderOptions& options,
+              const Eigen::Vector3d& light, RayGrid& rays, Canvas& canvas)
+      : solids_(solids),
+        options_(options),
+        light_(light),
+        rays_(rays),
+        canvas_(canvas),
+        supersample_(options.solid_supersample),
+        inv_samples_(1.0f / static_cast<float>(supersample_ * supersample_)),
+        background_(canvas.background()) {}
+
+  // Casts the solids into every tile that one of their rectangles overlaps.
+  void Draw() {
+    if (solids_.empty()) return;
+    const std::vector<std::pair<int, int>> pairs = TileSolidPairs();
+    for (size_t begin = 0; begin < pairs.size();) {
+      // The solids of one tile.
+      const int tile_index = pairs[begin].first;
+      list_.clear();
+      size_t end = begin;
+      for (; end < pairs.size() && pairs[end].first == tile_index; ++end)
+        list_.push_back(pairs[end].second);
+      begin = end;
+      DrawTile(tile_index % canvas_.tiles_x(), tile_index / canvas_.tiles_x());
+    }
   }
-  std::sort(pairs.begin(), pairs.end());
 
-  const int s = options.solid_supersample;
-  const float inv_samples = 1.0f / static_cast<float>(s * s);
-  const Colour background = canvas.background();
-  std::vector<int> list;
-  std::vector<Eigen::Vector3d> corner_rays;
-  std::vector<int> corner_ids;
-  std::vector<double> corner_depths;
-  std::vector<Eigen::Vector3d> border_rays;
-  for (size_t begin = 0; begin < pairs.size();) {
-    const int tile_index = pairs[begin].first;
-    list.clear();
-    size_t end = begin;
-    for (; end < pairs.size() && pairs[end].first == tile_index; ++end)
-      list.push_back(pairs[end].second);
-    begin = end;
-    const int tx = tile_index % canvas.tiles_x(), ty = tile_index / canvas.tiles_x();
+ private:
+  // (tile, solid) pairs, grouped by tile.
+  std::vector<std::pair<int, int>> TileSolidPairs() const {
+    std::vector<std::pair<int, int>> pairs;
+    for (int i = 0; i < static_cast<int>(solids_.size()); ++i) {
+      const PixelRect& r = solids_[i].rect;
+      for (int ty = r.y0 >> Tile::kShift; ty <= r.y1 >> Tile::kShift; ++ty)
+        for (int tx = r.x0 >> Tile::kShift; tx <= r.x1 >> Tile::kShift; ++tx)
+          pairs.emplace_back(ty * canvas_.tiles_x() + tx, i);
+    }
+    std::sort(pairs.begin(), pairs.end());
+    return pairs;
+  }
 
-    // The part of the tile inside the solids' rectangles.
+  // The part of tile (tx, ty) inside the rectangles of the tile's solids (list_).
+  PixelRect RegionOf(int tx, int ty) const {
     const int tile_x0 = tx << Tile::kShift, tile_y0 = ty << Tile::kShift;
     PixelRect region{std::numeric_limits<int>::max(), std::numeric_limits<int>::max(), -1, -1};
-    for (int i : list) {
-      const PixelRect& r = solids[i].rect;
+    for (int i : list_) {
+      const PixelRect& r = solids_[i].rect;
       region.x0 = std::min(region.x0, std::max(r.x0, tile_x0));
       region.y0 = std::min(region.y0, std::max(r.y0, tile_y0));
       region.x1 = std::max(region.x1, std::min(r.x1, tile_x0 + Tile::kMask));
       region.y1 = std::max(region.y1, std::min(r.y1, tile_y0 + Tile::kMask));
     }
-    region.x1 = std::min(region.x1, canvas.width() - 1);
-    region.y1 = std::min(region.y1, canvas.height() - 1);
-    if (region.empty()) continue;
+    region.x1 = std::min(region.x1, canvas_.width() - 1);
+    region.y1 = std::min(region.y1, canvas_.height() - 1);
+    return region;
+  }
 
-    // What the corner rays see: solid * 8 + face, or -1.
-    auto nearest = [&](const Eigen::Vector3d& ray, double* depth, int* id) {
-      *id = -1;
-      *depth = std::numeric_limits<double>::infinity();
-      for (int i : list) {
-        double t;
-        int face;
-        if (solids[i].Intersect(ray, &t, &face) && t < *depth) {
-          *depth = t;
-          *id = i * 8 + face;
-        }
-      }
-      return *id >= 0;
-    };
-    const int cw = region.x1 - region.x0 + 2, ch = region.y1 - region.y0 + 2;
-
-    // A tile inside one face of a box: the face's image is convex in undistorted coordinates,
-    // so when every corner on the tile's border sees it, the whole tile does. Its colour is the
-    // face's; 1 / depth is affine in undistorted coordinates, nearly so in pixels: bilinear
-    // from the tile's corners.
-    const Solid& first = solids[list[0]];
-    const int tile_x1 = std::min(tile_x0 + Tile::kMask, canvas.width() - 1);
-    const int tile_y1 = std::min(tile_y0 + Tile::kMask, canvas.height() - 1);
-    if (list.size() == 1 && !first.is_ball && !first.supersample_all && region.x0 == tile_x0 &&
-        region.y0 == tile_y0 && region.x1 == tile_x1 && region.y1 == tile_y1) {
-      border_rays.resize(2 * (cw + ch));
-      Eigen::Vector3d* top = border_rays.data();
-      Eigen::Vector3d* bottom = top + cw;
-      Eigen::Vector3d* left = bottom + cw;
-      Eigen::Vector3d* right = left + ch;
-      rays.Corners(region.x0, region.y0, cw, 1, top);
-      rays.Corners(region.x0, region.y0 + ch - 1, cw, 1, bottom);
-      rays.Corners(region.x0, region.y0, 1, ch, left);
-      rays.Corners(region.x0 + cw - 1, region.y0, 1, ch, right);
-      int face = -1;
-      bool uniform = true;
-      double depth = 1.0, corner_depth[4] = {1.0, 1.0, 1.0, 1.0};
-      for (size_t c = 0; c < border_rays.size() && uniform; ++c) {
-        int hit = -1;
-        uniform = first.Intersect(border_rays[c], &depth, &hit) && (face < 0 || hit == face);
-        face = hit;
-        if (c == 0) corner_depth[0] = depth;
-        if (c == static_cast<size_t>(cw) - 1) corner_depth[1] = depth;
-        if (c == static_cast<size_t>(cw)) corner_depth[2] = depth;
-        if (c == 2 * static_cast<size_t>(cw) - 1) corner_depth[3] = depth;
-      }
-      if (uniform) {
-        Tile& tile = canvas.At(tx, ty);
-        const Colour colour = first.face_colours[face];
-        const double w = cw - 1, h = ch - 1;
-        for (int y = region.y0; y <= region.y1; ++y) {
-          const double fy = (y - region.y0 + 0.5) / h;
-          const double inv_left = (1 - fy) / corner_depth[0] + fy / corner_depth[2];
-          const double inv_right = (1 - fy) / corner_depth[1] + fy / corner_depth[3];
-          for (int x = region.x0; x <= region.x1; ++x) {
-            const double fx = (x - region.x0 + 0.5) / w;
-            const int i = Tile::Index(x, y);
-            tile.colour[i] = colour;
-            tile.solid_alpha[i] = 1.0f;
-            tile.solid_depth[i] = static_cast<float>(1.0 / ((1 - fx) * inv_left + fx * inv_right));
-          }
-        }
-        continue;
+  // What a ray sees among the tile's solids: its depth and id (solid * 8 + face), or -1 and
+  // infinity; false on a miss.
+  bool Nearest(const Eigen::Vector3d& ray, double* depth, int* id) const {
+    *id = -1;
+    *depth = std::numeric_limits<double>::infinity();
+    for (int i : list_) {
+      double t;
+      int face;
+      if (solids_[i].Intersect(ray, &t, &face) && t < *depth) {
+        *depth = t;
+        *id = i * 8 + face;
       }
     }
+    return *id >= 0;
+  }
 
-    corner_rays.resize(static_cast<size_t>(cw) * ch);
-    corner_ids.resize(corner_rays.size());
-    corner_depths.resize(corner_rays.size());
-    rays.Corners(region.x0, region.y0, cw, ch, corner_rays.data());
-    for (size_t c = 0; c < corner_rays.size(); ++c)
-      nearest(corner_rays[c], &corner_depths[c], &corner_ids[c]);
+  // Casts the tile's solids (list_) into tile (tx, ty): the whole tile at once where it lies
+  // inside one box face, else pixel by pixel from the rays through the pixels' corners.
+  void DrawTile(int tx, int ty) {
+    region_ = RegionOf(tx, ty);
+    if (region_.empty()) return;
+    // The corner grid of the region: (width + 1) x (height + 1) corners.
+    cw_ = region_.x1 - region_.x0 + 2;
+    ch_ = region_.y1 - region_.y0 + 2;
+    if (FillInsideFace(tx, ty)) return;
 
-    Tile& tile = canvas.At(tx, ty);
-    for (int y = region.y0; y <= region.y1; ++y)
-      for (int x = region.x0; x <= region.x1; ++x) {
+    // What the corner rays see: solid * 8 + face, or -1.
+    corner_rays_.resize(static_cast<size_t>(cw_) * ch_);
+    corner_ids_.resize(corner_rays_.size());
+    corner_depths_.resize(corner_rays_.size());
+    rays_.Corners(region_.x0, region_.y0, cw_, ch_, corner_rays_.data());
+    for (size_t c = 0; c < corner_rays_.size(); ++c)
+      Nearest(corner_rays_[c], &corner_depths_[c], &corner_ids_[c]);
+
+    // Each pixel in a solid's rectangle: one sample where its corners agree, else supersampled.
+    Tile& tile = canvas_.At(tx, ty);
+    for (int y = region_.y0; y <= region_.y1; ++y)
+      for (int x = region_.x0; x <= region_.x1; ++x) {
         bool inside = false, supersample = false;
-        for (int i : list) {
-          if (!solids[i].rect.Contains(x, y)) continue;
+        for (int i : list_) {
+          if (!solids_[i].rect.Contains(x, y)) continue;
           inside = true;
-          supersample = supersample || solids[i].supersample_all;
+          supersample = supersample || solids_[i].supersample_all;
         }
         if (!inside) continue;
-        const size_t c = static_cast<size_t>(y - region.y0) * cw + (x - region.x0);
-        const Eigen::Vector3d& r00 = corner_rays[c];
-        const Eigen::Vector3d& r10 = corner_rays[c + 1];
-        const Eigen::Vector3d& r01 = corner_rays[c + cw];
-        const Eigen::Vector3d& r11 = corner_rays[c + cw + 1];
-        const int id = corner_ids[c];
-        if (!supersample && id == corner_ids[c + 1] && id == corner_ids[c + cw] &&
-            id == corner_ids[c + cw + 1]) {
-          if (id < 0) continue;  // no solid here
-          // All of one face: a box face is flat-shaded and its depth nearly affine across the
-          // pixel; a ball's shading is taken at the centre.
-          const Solid& solid = solids[id / 8];
-          double depth = 0.25 * (corner_depths[c] + corner_depths[c + 1] +
-                                 corner_depths[c + cw] + corner_depths[c + cw + 1]);
-          int hit = id;
-          const Eigen::Vector3d ray = 0.25 * (r00 + r10 + r01 + r11);
-          if (solid.is_ball && !nearest(ray, &depth, &hit)) continue;
-          const int i = Tile::Index(x, y);
-          tile.colour[i] = solids[hit / 8].Shade(ray, depth, hit % 8, light, options.ambient);
-          tile.solid_alpha[i] = 1.0f;
-          tile.solid_depth[i] = static_cast<float>(depth);
-          continue;
-        }
-        // s x s samples at ((a + 1/2) / s, (b + 1/2) / s) of the pixel.
-        cv::Vec3f sum(0, 0, 0);
-        int hits = 0;
-        double min_depth = std::numeric_limits<double>::infinity();
-        for (int b = 0; b < s; ++b) {
-          const double fy = (b + 0.5) / s;
-          const Eigen::Vector3d left = (1 - fy) * r00 + fy * r01;
-          const Eigen::Vector3d right = (1 - fy) * r10 + fy * r11;
-          for (int a = 0; a < s; ++a) {
-            const double fx = (a + 0.5) / s;
-            const Eigen::Vector3d ray = (1 - fx) * left + fx * right;
-            double depth;
-            int hit;
-            if (!nearest(ray, &depth, &hit)) continue;
-            sum += solids[hit / 8].Shade(ray, depth, hit % 8, light, options.ambient);
-            ++hits;
-            min_depth = std::min(min_depth, depth);
-          }
-        }
-        if (hits == 0) continue;
-        const int i = Tile::Index(x, y);
-        tile.solid[i] = sum * inv_samples;
-        tile.solid_alpha[i] = static_cast<float>(hits) * inv_samples;
-        tile.solid_depth[i] = static_cast<float>(min_depth);
-        tile.colour[i] = tile.solid[i] + background * (1.0f - tile.solid_alpha[i]);
+        const size_t c = static_cast<size_t>(y - region_.y0) * cw_ + (x - region_.x0);
+        const int id = corner_ids_[c];
+        if (!supersample && id == corner_ids_[c + 1] && id == corner_ids_[c + cw_] &&
+            id == corner_ids_[c + cw_ + 1])
+          ShadeOneFace(x, y, c, tile);
+        else
+          Supersample(x, y, c, tile);
       }
   }
+
+  // A tile inside one face of a box: the face's image is convex in undistorted coordinates,
+  // so when every corner on the tile's border sees it, the whole tile does. Its colour is the
+  // face's; 1 / depth is affine in undistorted coordinates, nearly so in pixels: bilinear
+  // from the tile's corners. False (nothing drawn) unless the tile is such a tile.
+  bool FillInsideFace(int tx, int ty) {
+    const Solid& first = solids_[list_[0]];
+    const int tile_x0 = tx << Tile::kShift, tile_y0 = ty << Tile::kShift;
+    const int tile_x1 = std::min(tile_x0 + Tile::kMask, canvas_.width() - 1);
+    const int tile_y1 = std::min(tile_y0 + Tile::kMask, canvas_.height() - 1);
+    if (!(list_.size() == 1 && !first.is_ball && !first.supersample_all && region_.x0 == tile_x0 &&
+          region_.y0 == tile_y0 && region_.x1 == tile_x1 && region_.y1 == tile_y1))
+      return false;
+    // The rays through the corners on the border: top, bottom, left, right.
+    border_rays_.resize(2 * (cw_ + ch_));
+    Eigen::Vector3d* top = border_rays_.data();
+    Eigen::Vector3d* bottom = top + cw_;
+    Eigen::Vector3d* left = bottom + cw_;
+    Eigen::Vector3d* right = left + ch_;
+    rays_.Corners(region_.x0, region_.y0, cw_, 1, top);
+    rays_.Corners(region_.x0, region_.y0 + ch_ - 1, cw_, 1, bottom);
+    rays_.Corners(region_.x0, region_.y0, 1, ch_, left);
+    rays_.Corners(region_.x0 + cw_ - 1, region_.y0, 1, ch_, right);
+    // Do they all see one face? The depths at the tile's four corners on the way.
+    int face = -1;
+    bool uniform = true;
+    double depth = 1.0, corner_depth[4] = {1.0, 1.0, 1.0, 1.0};
+    for (size_t c = 0; c < border_rays_.size() && uniform; ++c) {
+      int hit = -1;
+      uniform = first.Intersect(border_rays_[c], &depth, &hit) && (face < 0 || hit == face);
+      face = hit;
+      if (c == 0) corner_depth[0] = depth;
+      if (c == static_cast<size_t>(cw_) - 1) corner_depth[1] = depth;
+      if (c == static_cast<size_t>(cw_)) corner_depth[2] = depth;
+      if (c == 2 * static_cast<size_t>(cw_) - 1) corner_depth[3] = depth;
+    }
+    if (!uniform) return false;
+    // The face's colour everywhere, 1 / depth bilinear.
+    Tile& tile = canvas_.At(tx, ty);
+    const Colour colour = first.face_colours[face];
+    const double w = cw_ - 1, h = ch_ - 1;
+    for (int y = region_.y0; y <= region_.y1; ++y) {
+      const double fy = (y - region_.y0 + 0.5) / h;
+      const double inv_left = (1 - fy) / corner_depth[0] + fy / corner_depth[2];
+      const double inv_right = (1 - fy) / corner_depth[1] + fy / corner_depth[3];
+      for (int x = region_.x0; x <= region_.x1; ++x) {
+        const double fx = (x - region_.x0 + 0.5) / w;
+        const int i = Tile::Index(x, y);
+        tile.colour[i] = colour;
+        tile.solid_alpha[i] = 1.0f;
+        tile.solid_depth[i] = static_cast<float>(1.0 / ((1 - fx) * inv_left + fx * inv_right));
+      }
+    }
+    return true;
+  }
+
+  // Pixel (x, y), whose four corners (from corner c of the grid) see the same face or nothing:
+  // a box face is flat-shaded and its depth nearly affine across the pixel; a ball's shading
+  // is taken at the centre.
+  void ShadeOneFace(int x, int y, size_t c, Tile& tile) const {
+    const int id = corner_ids_[c];
+    if (id < 0) return;  // no solid here
+    const Solid& solid = solids_[id / 8];
+    double depth = 0.25 * (corner_depths_[c] + corner_depths_[c + 1] + corner_depths_[c + cw_] +
+                           corner_depths_[c + cw_ + 1]);
+    int hit = id;
+    const Eigen::Vector3d ray = 0.25 * (corner_rays_[c] + corner_rays_[c + 1] +
+                                        corner_rays_[c + cw_] + corner_rays_[c + cw_ + 1]);
+    if (solid.is_ball && !Nearest(ray, &depth, &hit)) return;
+    const int i = Tile::Index(x, y);
+    tile.colour[i] = solids_[hit / 8].Shade(ray, depth, hit % 8, light_, options_.ambient);
+    tile.solid_alpha[i] = 1.0f;
+    tile.solid_depth[i] = static_cast<float>(depth);
+  }
+
+  // Pixel (x, y) from s x s samples at ((a + 1/2) / s, (b + 1/2) / s) of the pixel, their rays
+  // bilinear between its corner rays (from corner c of the grid); the solids' coverage blends
+  // them over the background.
+  void Supersample(int x, int y, size_t c, Tile& tile) const {
+    const int s = supersample_;
+    const Eigen::Vector3d& r00 = corner_rays_[c];
+    const Eigen::Vector3d& r10 = corner_rays_[c + 1];
+    const Eigen::Vector3d& r01 = corner_rays_[c + cw_];
+    const Eigen::Vector3d& r11 = corner_rays_[c + cw_ + 1];
+    cv::Vec3f sum(0, 0, 0);
+    int hits = 0;
+    double min_depth = std::numeric_limits<double>::infinity();
+    for (int b = 0; b < s; ++b) {
+      const double fy = (b + 0.5) / s;
+      const Eigen::Vector3d left = (1 - fy) * r00 + fy * r01;
+      const Eigen::Vector3d right = (1 - fy) * r10 + fy * r11;
+      for (int a = 0; a < s; ++a) {
+        const double fx = (a + 0.5) / s;
+        const Eigen::Vector3d ray = (1 - fx) * left + fx * right;
+        double depth;
+        int hit;
+        if (!Nearest(ray, &depth, &hit)) continue;
+        sum += solids_[hit / 8].Shade(ray, depth, hit % 8, light_, options_.ambient);
+        ++hits;
+        min_depth = std::min(min_depth, depth);
+      }
+    }
+    if (hits == 0) return;
+    const int i = Tile::Index(x, y);
+    tile.solid[i] = sum * inv_samples_;
+    tile.solid_alpha[i] = static_cast<float>(hits) * inv_samples_;
+    tile.solid_depth[i] = static_cast<float>(min_depth);
+    tile.colour[i] = tile.solid[i] + background_ * (1.0f - tile.solid_alpha[i]);
+  }
+
+  const std::vector<Solid>& solids_;
+  const SceneRenderOptions& options_;
+  const Eigen::Vector3d& light_;  // camera frame
+  RayGrid& rays_;
+  Canvas& canvas_;
+  const int supersample_;    // samples per side of a supersampled pixel
+  const float inv_samples_;  // 1 / supersample_^2
+  const Colour background_;
+  // The tile being drawn: its solids (indices in solids_), the part of it they cover, and that
+  // part's corner grid (cw_ x ch_ corners, row by row).
+  std::vector<int> list_;
+  PixelRect region_;
+  int cw_ = 0, ch_ = 0;
+  std::vector<Eigen::Vector3d> corner_rays_;
+  std::vector<int> corner_ids_;
+  std::vector<double> corner_depths_;
+  std::vector<Eigen::Vector3d> border_rays_;  // FillInsideFace's
+};
+
+// Ray casts the solids into the canvas (see SolidCaster).
+void DrawSolids(const std::vector<Solid>& solids, const SceneRenderOptions& options,
+                const Eigen::Vector3d& light, RayGrid& rays, Canvas& canvas) {
+  SolidCaster(solids, options, light, rays, canvas).Draw();
 }
 
 // ---------------------------------------------------------------------------------------------

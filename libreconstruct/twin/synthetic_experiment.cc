@@ -331,20 +331,31 @@ calib::Rig ScaleRig(const calib::Rig& rig, double scale) {
   return scaled;
 }
 
-RenderSummary RenderExperiment(const RenderJob& job,
-                               const std::function<void(int, int)>& progress) {
-  const auto start = std::chrono::steady_clock::now();
-  const SimulatedShot shot(job.simulation);
-  const std::vector<YarnColoring>& coloring = job.coloring;
-  for (size_t n = 0; n < coloring.size() && n < shot.model().nets.size(); ++n) {
-    const netsim::NetInfo& net = shot.model().nets[n];
+namespace {
+
+// Throws InputError when a net's colouring has not one colour per link of the net.
+void CheckColouring(const std::vector<YarnColoring>& coloring, const netsim::Model& model) {
+  for (size_t n = 0; n < coloring.size() && n < model.nets.size(); ++n) {
+    const netsim::NetInfo& net = model.nets[n];
     if (static_cast<int>(coloring[n].link_colour.size()) != net.num_links())
       throw InputError("the colouring has " + std::to_string(coloring[n].link_colour.size()) +
                        " links, net '" + net.name + "' (" + std::to_string(net.rows) + "x" +
                        std::to_string(net.cols) + " knots) has " + std::to_string(net.num_links()));
   }
-  const calib::Rig& rig = job.rig;
-  if (rig.cameras.empty()) throw InputError("the rig has no cameras");
+}
+
+// The frames to render, first..last: frame k is at time start + k / fps of the simulation.
+struct FrameRange {
+  double start_time = 0.0;  // s
+  double fps = 0.0;
+  int first = 0, last = 0;
+
+  int count() const { return last - first + 1; }
+  double Time(int k) const { return start_time + k / fps; }
+};
+
+// The job's frames; InputError when they are not within the simulation.
+FrameRange FramesOf(const RenderJob& job, const SimulatedShot& shot) {
   if (!(job.fps > 0)) throw InputError("fps must be > 0");
   const int available =
       static_cast<int>(std::floor((shot.end_time() - shot.start_time()) * job.fps + 1e-6));
@@ -354,25 +365,22 @@ RenderSummary RenderExperiment(const RenderJob& job,
     throw InputError("frames " + std::to_string(first) + ":" + std::to_string(last) +
                      " are outside the simulation's frames 0:" + std::to_string(available) +
                      " at " + std::to_string(job.fps) + " fps");
-  const int frames = last - first + 1, cameras = static_cast<int>(rig.cameras.size());
-  auto frame_time = [&](int k) { return shot.start_time() + k / job.fps; };
+  return {shot.start_time(), job.fps, first, last};
+}
 
-  const fs::path out(job.out_dir);
-  fs::create_directories(out);
-  calib::WriteRig((out / "rig_true.yaml").string(), rig);
-
-  // Frames: every (frame, camera) on job.threads threads.
+// The experiment file's content, each camera's folder made and its timestamps.csv written.
+Experiment PrepareExperiment(const RenderJob& job, const FrameRange& range, const fs::path& out) {
   Experiment experiment;
   experiment.name = fs::path(job.simulation).stem().string() + "_rendered";
   experiment.fps = job.fps;
   experiment.path = (out / "experiment.yaml").string();
   experiment.base_dir = out.string();
-  for (const calib::Camera& camera : rig.cameras) {
+  for (const calib::Camera& camera : job.rig.cameras) {
     fs::create_directories(out / camera.name);
     std::ostringstream times;
     times << "frame_index,time_s\n";
     times.precision(12);
-    for (int k = first; k <= last; ++k) times << k << "," << frame_time(k) << "\n";
+    for (int k = range.first; k <= range.last; ++k) times << k << "," << range.Time(k) << "\n";
     WriteTextFile(out / camera.name / "timestamps.csv", times.str());
     CameraSpec spec;
     spec.name = camera.name;
@@ -383,37 +391,56 @@ RenderSummary RenderExperiment(const RenderJob& job,
     spec.black_level = job.sensor.black_level;
     experiment.cameras.push_back(spec);
   }
+  return experiment;
+}
 
+// Runs `work` on `threads` threads (at least one: this one) and waits for them all.
+void RunOnThreads(int threads, const std::function<void()>& work) {
+  std::vector<std::thread> pool;
+  for (int t = 1; t < std::max(1, threads); ++t) pool.emplace_back(work);
+  work();
+  for (std::thread& t : pool) t.join();
+}
+
+// Renders frame k of camera c: the scene averaged over the exposure (blur samples), exposed by
+// the sensor, written as out/<camera>/frame_%06d.pgm.
+void RenderFrame(const RenderJob& job, const SimulatedShot& shot, const FrameRange& range,
+                 const fs::path& out, int k, int c) {
   const SceneRenderOptions render_options;
   const int samples = std::max(1, job.blur_samples);
-  const int total = frames * cameras;
+  const calib::Camera& camera = job.rig.cameras[c];
+  cv::Mat accumulator;
+  for (int s = 0; s < samples; ++s) {
+    const double t =
+        range.Time(k) + ((s + 0.5) / samples - 0.5) * (samples > 1 ? job.exposure_s : 0.0);
+    Scene scene = shot.SceneAt(t, job.coloring, job.background);
+    for (ThreadPolyline& yarn : scene.threads) yarn.colour *= job.illumination;
+    for (Ball& ball : scene.balls) ball.colour *= job.illumination;
+    for (Box& box : scene.boxes) box.colour *= job.illumination;
+    RenderScene(camera, scene, render_options, 1.0f / samples, &accumulator);
+  }
+  SensorOptions sensor = job.sensor;
+  sensor.seed = job.sensor.seed * 1000003ull + static_cast<uint64_t>(k) * 16 + c;
+  const cv::Mat raw = Expose(accumulator, camera.intrinsics, sensor);
+  char name[32];
+  std::snprintf(name, sizeof(name), "frame_%06d.pgm", k);
+  const fs::path file = out / camera.name / name;
+  if (!cv::imwrite(file.string(), raw)) throw std::runtime_error(file.string() + ": cannot write");
+}
+
+// Renders every (frame, camera) on job.threads threads, reporting progress(done, total) after
+// each; the first failure stops them and is thrown as std::runtime_error.
+void RenderFrames(const RenderJob& job, const SimulatedShot& shot, const FrameRange& range,
+                  const fs::path& out, const std::function<void(int, int)>& progress) {
+  const int cameras = static_cast<int>(job.rig.cameras.size());
+  const int total = range.count() * cameras;
   std::atomic<int> next{0}, done{0};
   std::mutex mutex;
   std::string failure;
-  const auto render_start = std::chrono::steady_clock::now();
-  auto worker = [&] {
+  RunOnThreads(job.threads, [&] {
     for (int task; (task = next++) < total;) {
-      const int k = first + task / cameras, c = task % cameras;
       try {
-        const calib::Camera& camera = rig.cameras[c];
-        cv::Mat accumulator;
-        for (int s = 0; s < samples; ++s) {
-          const double t =
-              frame_time(k) + ((s + 0.5) / samples - 0.5) * (samples > 1 ? job.exposure_s : 0.0);
-          Scene scene = shot.SceneAt(t, coloring, job.background);
-          for (ThreadPolyline& yarn : scene.threads) yarn.colour *= job.illumination;
-          for (Ball& ball : scene.balls) ball.colour *= job.illumination;
-          for (Box& box : scene.boxes) box.colour *= job.illumination;
-          RenderScene(camera, scene, render_options, 1.0f / samples, &accumulator);
-        }
-        SensorOptions sensor = job.sensor;
-        sensor.seed = job.sensor.seed * 1000003ull + static_cast<uint64_t>(k) * 16 + c;
-        const cv::Mat raw = Expose(accumulator, camera.intrinsics, sensor);
-        char name[32];
-        std::snprintf(name, sizeof(name), "frame_%06d.pgm", k);
-        const fs::path file = out / camera.name / name;
-        if (!cv::imwrite(file.string(), raw))
-          throw std::runtime_error(file.string() + ": cannot write");
+        RenderFrame(job, shot, range, out, range.first + task / cameras, task % cameras);
       } catch (const std::exception& e) {
         std::lock_guard<std::mutex> lock(mutex);
         if (failure.empty()) failure = e.what();
@@ -425,74 +452,89 @@ RenderSummary RenderExperiment(const RenderJob& job,
         progress(d, total);
       }
     }
-  };
-  std::vector<std::thread> pool;
-  for (int t = 1; t < std::max(1, job.threads); ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& t : pool) t.join();
+  });
   if (!failure.empty()) throw std::runtime_error(failure);
-  const double render_s = Seconds(render_start);
-  WriteExperiment(experiment.path, experiment);
+}
 
-  // Truth: the knots at the frame times, their pixels and visibility per camera.
-  netsim::KnotTracks truth;
-  truth.grid = shot.tracks().grid;
-  truth.net = shot.tracks().net;
-  truth.net_names = shot.tracks().net_names;
-  truth.source = "netlab render";
-  truth.scenario = shot.tracks().scenario;
-  const int knots = truth.knots();
-  std::vector<std::vector<double>> pixels(cameras, std::vector<double>(size_t(frames) * knots * 2));
-  std::vector<std::vector<uint8_t>> visibility(cameras,
-                                               std::vector<uint8_t>(size_t(frames) * knots));
-  std::vector<int> frame_index;
-  RenderSummary summary;
-  summary.knots_visible_mean.assign(cameras, 0.0);
-  summary.knots_visible_min.assign(cameras, knots);
-  for (int k = first; k <= last; ++k) {
-    const double t = frame_time(k);
+// The truth of the rendered frames: the knots at the frame times, their pixels and visibility
+// per camera, and how many each camera sees.
+struct FrameTruth {
+  netsim::KnotTracks tracks;
+  std::vector<int> frame_index;                  // [T] the camera frame of each row
+  std::vector<std::vector<double>> pixels;       // [camera][T * K * 2] px
+  std::vector<std::vector<uint8_t>> visibility;  // [camera][T * K] (KnotVisibility's codes)
+  std::vector<double> knots_visible_mean;        // per camera: visible knots per frame, mean
+  std::vector<int> knots_visible_min;            // per camera
+};
+
+// The truth of the frames of `range` as `rig` sees them.
+FrameTruth TruthOf(const SimulatedShot& shot, const calib::Rig& rig, const FrameRange& range) {
+  const int frames = range.count(), cameras = static_cast<int>(rig.cameras.size());
+  FrameTruth truth;
+  truth.tracks.grid = shot.tracks().grid;
+  truth.tracks.net = shot.tracks().net;
+  truth.tracks.net_names = shot.tracks().net_names;
+  truth.tracks.source = "netlab render";
+  truth.tracks.scenario = shot.tracks().scenario;
+  const int knots = truth.tracks.knots();
+  truth.pixels.assign(cameras, std::vector<double>(size_t(frames) * knots * 2));
+  truth.visibility.assign(cameras, std::vector<uint8_t>(size_t(frames) * knots));
+  truth.knots_visible_mean.assign(cameras, 0.0);
+  truth.knots_visible_min.assign(cameras, knots);
+  for (int k = range.first; k <= range.last; ++k) {
+    // The knots at the frame time, and the solids that can hide them.
+    const double t = range.Time(k);
     const std::vector<Eigen::Vector3d> nodes = shot.NodesAt(t);
     const std::vector<Eigen::Vector3d> x = shot.KnotsAt(nodes);
     const Scene solids = shot.SolidsAt(t, nodes);
-    truth.time.push_back(t);
-    frame_index.push_back(k);
+    truth.tracks.time.push_back(t);
+    truth.frame_index.push_back(k);
     for (int j = 0; j < knots; ++j) {
-      truth.position.push_back(x[j]);
-      truth.valid.push_back(1);
+      truth.tracks.position.push_back(x[j]);
+      truth.tracks.valid.push_back(1);
     }
-    const size_t row = k - first;
+    // Their pixels and visibility in each camera.
+    const size_t row = k - range.first;
     for (int c = 0; c < cameras; ++c) {
       int visible = 0;
       for (int j = 0; j < knots; ++j) {
         const Eigen::Vector2d px = rig.cameras[c].ProjectWorld(x[j]);
-        pixels[c][(row * knots + j) * 2] = px.x();
-        pixels[c][(row * knots + j) * 2 + 1] = px.y();
+        truth.pixels[c][(row * knots + j) * 2] = px.x();
+        truth.pixels[c][(row * knots + j) * 2 + 1] = px.y();
         const uint8_t v = KnotVisibility(rig.cameras[c], x[j], solids);
-        visibility[c][row * knots + j] = v;
+        truth.visibility[c][row * knots + j] = v;
         visible += v == 0;
       }
-      summary.knots_visible_mean[c] += visible / static_cast<double>(frames);
-      summary.knots_visible_min[c] = std::min(summary.knots_visible_min[c], visible);
+      truth.knots_visible_mean[c] += visible / static_cast<double>(frames);
+      truth.knots_visible_min[c] = std::min(truth.knots_visible_min[c], visible);
     }
   }
+  return truth;
+}
+
+// truth.h5 (see synthetic_experiment.h), written whole under another name first; the rig's text
+// is read back from out/rig_true.yaml.
+void WriteTruth(const fs::path& out, const calib::Rig& rig, const FrameTruth& truth) {
+  const int frames = static_cast<int>(truth.frame_index.size());
+  const int knots = truth.tracks.knots();
   const fs::path truth_path = out / "truth.h5";
   const std::string writing = truth_path.string() + ".writing";
-  netsim::WriteKnotTracks(writing, truth);
+  netsim::WriteKnotTracks(writing, truth.tracks);
   {
     std::lock_guard<std::mutex> lock(h5::Mutex());
     h5::Id file = h5::OpenFileReadWrite(writing);
     h5::WriteDataset(file.get(), "frame_index", H5T_NATIVE_INT32, {static_cast<hsize_t>(frames)},
-                     frame_index.data());
+                     truth.frame_index.data());
     h5::Id group = h5::CreateGroup(file.get(), "cameras");
-    for (int c = 0; c < cameras; ++c) {
+    for (size_t c = 0; c < rig.cameras.size(); ++c) {
       h5::Id camera = h5::CreateGroup(group.get(), rig.cameras[c].name);
       h5::WriteDataset(camera.get(), "knots_px", H5T_NATIVE_DOUBLE,
                        {static_cast<hsize_t>(frames), static_cast<hsize_t>(knots), 2},
-                       pixels[c].data());
+                       truth.pixels[c].data());
       h5::SetUnits(camera.get(), "knots_px", "px");
       h5::WriteDataset(camera.get(), "visibility", H5T_NATIVE_UINT8,
                        {static_cast<hsize_t>(frames), static_cast<hsize_t>(knots)},
-                       visibility[c].data());
+                       truth.visibility[c].data());
     }
     std::ifstream rig_file(out / "rig_true.yaml");
     std::stringstream rig_text;
@@ -500,85 +542,145 @@ RenderSummary RenderExperiment(const RenderJob& job,
     h5::WriteStringDataset(file.get(), "rig", rig_text.str());
   }
   fs::rename(writing, truth_path);
-  WriteTrueLabels(out / "labels_true.h5", rig, truth.grid, frame_index, pixels, visibility);
+}
 
-  // Calibration images: the double-sided foil at poses every camera sees.
-  if (job.calibration_views > 0) {
-    const calib::CalibrationTarget foil = Foil();
-    fs::create_directories(out / "calibration");
-    WriteTextFile(out / "calibration" / "foil.yaml", kFoilYaml);
-    std::mt19937 rng(static_cast<unsigned>(job.sensor.seed));
-    std::vector<int> all(cameras);
-    for (int c = 0; c < cameras; ++c) all[c] = c;
-    // Half the views where every camera sees the foil (they tie the cameras into one frame), the
-    // others nearer to one camera each, so the foil also covers the edges of the wide views
-    // where distortion is largest.
-    const Eigen::Vector3d aim = AimPoint(rig);
-    const Eigen::Quaterniond facing = calib::FacingPlusX(foil.faces[0].pattern);
-    const int shared = (job.calibration_views + 1) / 2;
-    std::vector<calib::Rigid3d> poses =
-        calib::RandomTargetPoses(rig, foil, all, shared, aim + Eigen::Vector3d(0.25, 0.0, 0.1),
-                                 Eigen::Vector3d(0.35, 0.35, 0.3), facing, 0.6, rng);
-    for (int i = 0; i < job.calibration_views - shared; ++i) {
-      const int c = i % cameras;
-      const Eigen::Vector3d near = aim + 0.45 * (rig.cameras[c].Center() - aim);
-      try {
-        const auto pose = calib::RandomTargetPoses(
-            rig, foil, {c}, 1, near, Eigen::Vector3d(0.2, 0.2, 0.15), facing, 0.5, rng);
-        poses.push_back(pose.front());
-      } catch (const std::runtime_error&) {
-        // This camera cannot see the whole foil that close: the shared views cover it.
-      }
-    }
-    const auto prints = calib::MakeTargetPrints(foil);
-    calib::RenderOptions options;
-    options.noise_sigma = std::max(1.0, job.sensor.noise_sigma);
-    for (int c = 0; c < cameras; ++c) {
-      const calib::Camera& camera = rig.cameras[c];
-      fs::create_directories(out / "calibration" / camera.name);
-      const calib::CameraRays rays(camera.intrinsics);
-      std::atomic<int> view{0};
-      auto render_views = [&] {
-        calib::RenderOptions o = options;
-        for (int v; (v = view++) < static_cast<int>(poses.size());) {
-          o.seed = job.sensor.seed * 7919 + static_cast<uint64_t>(c) * 1000 + v;
-          char name[32];
-          std::snprintf(name, sizeof(name), "view_%03d.png", v);
-          cv::imwrite((out / "calibration" / camera.name / name).string(),
-                      calib::RenderTarget(camera, rays, prints, poses[v], o));
-        }
-      };
-      std::vector<std::thread> views;
-      for (int t = 1; t < std::max(1, job.threads); ++t) views.emplace_back(render_views);
-      render_views();
-      for (std::thread& t : views) t.join();
-      summary.calibration_images += static_cast<int>(poses.size());
-    }
-    // The marker map on the target, one image per camera (the markers do not move).
-    const auto markers =
-        TargetMarkers(shot.SolidsAt(shot.start_time(), shot.NodesAt(shot.start_time())), rig);
-    if (!markers.empty()) {
-      WriteTextFile(out / "calibration" / "markers.yaml", MarkerMapYaml(markers));
-      const calib::CalibrationTarget map =
-          calib::CalibrationTarget::MarkerMap("DICT_4X4_50", markers);
-      const auto map_prints = calib::MakeTargetPrints(map);
-      for (int c = 0; c < cameras; ++c) {
-        const calib::Camera& camera = rig.cameras[c];
-        fs::create_directories(out / "calibration" / "markers" / camera.name);
-        calib::RenderOptions o = options;
-        o.seed = job.sensor.seed * 7919 + 999;
-        cv::imwrite((out / "calibration" / "markers" / camera.name / "view_000.png").string(),
-                    calib::RenderTarget(camera, calib::CameraRays(camera.intrinsics), map_prints,
-                                        calib::Rigid3d(), o));
-        ++summary.calibration_images;
-      }
+// The render options of the calibration images.
+calib::RenderOptions CalibrationRenderOptions(const RenderJob& job) {
+  calib::RenderOptions options;
+  options.noise_sigma = std::max(1.0, job.sensor.noise_sigma);
+  return options;
+}
+
+// The foil's poses of the calibration views. Half the views where every camera sees the foil
+// (they tie the cameras into one frame), the others nearer to one camera each, so the foil also
+// covers the edges of the wide views where distortion is largest.
+std::vector<calib::Rigid3d> FoilPoses(const RenderJob& job, const calib::CalibrationTarget& foil) {
+  const calib::Rig& rig = job.rig;
+  const int cameras = static_cast<int>(rig.cameras.size());
+  std::mt19937 rng(static_cast<unsigned>(job.sensor.seed));
+  std::vector<int> all(cameras);
+  for (int c = 0; c < cameras; ++c) all[c] = c;
+  const Eigen::Vector3d aim = AimPoint(rig);
+  const Eigen::Quaterniond facing = calib::FacingPlusX(foil.faces[0].pattern);
+  const int shared = (job.calibration_views + 1) / 2;
+  std::vector<calib::Rigid3d> poses =
+      calib::RandomTargetPoses(rig, foil, all, shared, aim + Eigen::Vector3d(0.25, 0.0, 0.1),
+                               Eigen::Vector3d(0.35, 0.35, 0.3), facing, 0.6, rng);
+  for (int i = 0; i < job.calibration_views - shared; ++i) {
+    const int c = i % cameras;
+    const Eigen::Vector3d near = aim + 0.45 * (rig.cameras[c].Center() - aim);
+    try {
+      const auto pose = calib::RandomTargetPoses(rig, foil, {c}, 1, near,
+                                                 Eigen::Vector3d(0.2, 0.2, 0.15), facing, 0.5, rng);
+      poses.push_back(pose.front());
+    } catch (const std::runtime_error&) {
+      // This camera cannot see the whole foil that close: the shared views cover it.
     }
   }
+  return poses;
+}
 
-  summary.frames = frames;
-  summary.cameras = cameras;
-  summary.knots = knots;
+// Renders the foil at `poses` in every camera into out/calibration/<camera>/view_%03d.png, the
+// views of a camera on job.threads threads; returns the number of images.
+int RenderFoilViews(const RenderJob& job, const calib::CalibrationTarget& foil,
+                    const std::vector<calib::Rigid3d>& poses, const fs::path& out) {
+  const auto prints = calib::MakeTargetPrints(foil);
+  const calib::RenderOptions options = CalibrationRenderOptions(job);
+  int images = 0;
+  for (size_t c = 0; c < job.rig.cameras.size(); ++c) {
+    const calib::Camera& camera = job.rig.cameras[c];
+    fs::create_directories(out / "calibration" / camera.name);
+    const calib::CameraRays rays(camera.intrinsics);
+    std::atomic<int> view{0};
+    RunOnThreads(job.threads, [&] {
+      calib::RenderOptions o = options;
+      for (int v; (v = view++) < static_cast<int>(poses.size());) {
+        o.seed = job.sensor.seed * 7919 + static_cast<uint64_t>(c) * 1000 + v;
+        char name[32];
+        std::snprintf(name, sizeof(name), "view_%03d.png", v);
+        cv::imwrite((out / "calibration" / camera.name / name).string(),
+                    calib::RenderTarget(camera, rays, prints, poses[v], o));
+      }
+    });
+    images += static_cast<int>(poses.size());
+  }
+  return images;
+}
+
+// The marker map on the target (calibration/markers.yaml) and one image of it per camera
+// (calibration/markers/<camera>/view_000.png: the markers do not move); none without a target
+// box. Returns the number of images.
+int RenderMarkerViews(const RenderJob& job, const SimulatedShot& shot, const fs::path& out) {
+  const auto markers =
+      TargetMarkers(shot.SolidsAt(shot.start_time(), shot.NodesAt(shot.start_time())), job.rig);
+  if (markers.empty()) return 0;
+  WriteTextFile(out / "calibration" / "markers.yaml", MarkerMapYaml(markers));
+  const calib::CalibrationTarget map = calib::CalibrationTarget::MarkerMap("DICT_4X4_50", markers);
+  const auto map_prints = calib::MakeTargetPrints(map);
+  int images = 0;
+  for (const calib::Camera& camera : job.rig.cameras) {
+    fs::create_directories(out / "calibration" / "markers" / camera.name);
+    calib::RenderOptions o = CalibrationRenderOptions(job);
+    o.seed = job.sensor.seed * 7919 + 999;
+    cv::imwrite((out / "calibration" / "markers" / camera.name / "view_000.png").string(),
+                calib::RenderTarget(camera, calib::CameraRays(camera.intrinsics), map_prints,
+                                    calib::Rigid3d(), o));
+    ++images;
+  }
+  return images;
+}
+
+// Calibration images: the double-sided foil at poses every camera sees, and the marker map.
+// Returns the number of images.
+int RenderCalibrationImages(const RenderJob& job, const SimulatedShot& shot, const fs::path& out) {
+  const calib::CalibrationTarget foil = Foil();
+  fs::create_directories(out / "calibration");
+  WriteTextFile(out / "calibration" / "foil.yaml", kFoilYaml);
+  const std::vector<calib::Rigid3d> poses = FoilPoses(job, foil);
+  const int foil_images = RenderFoilViews(job, foil, poses, out);
+  return foil_images + RenderMarkerViews(job, shot, out);
+}
+
+}  // namespace
+
+RenderSummary RenderExperiment(const RenderJob& job,
+                               const std::function<void(int, int)>& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  // Check the job against the simulation.
+  const SimulatedShot shot(job.simulation);
+  CheckColouring(job.coloring, shot.model());
+  const calib::Rig& rig = job.rig;
+  if (rig.cameras.empty()) throw InputError("the rig has no cameras");
+  const FrameRange range = FramesOf(job, shot);
+
+  // The output folder, the rig and each camera's folder.
+  const fs::path out(job.out_dir);
+  fs::create_directories(out);
+  calib::WriteRig((out / "rig_true.yaml").string(), rig);
+  const Experiment experiment = PrepareExperiment(job, range, out);
+
+  // Frames: every (frame, camera) on job.threads threads.
+  const auto render_start = std::chrono::steady_clock::now();
+  RenderFrames(job, shot, range, out, progress);
+  const double render_s = Seconds(render_start);
+  WriteExperiment(experiment.path, experiment);
+
+  // Truth: the knots at the frame times, their pixels and visibility per camera.
+  FrameTruth truth = TruthOf(shot, rig, range);
+  WriteTruth(out, rig, truth);
+  WriteTrueLabels(out / "labels_true.h5", rig, truth.tracks.grid, truth.frame_index, truth.pixels,
+                  truth.visibility);
+
+  RenderSummary summary;
+  // Calibration images.
+  if (job.calibration_views > 0)
+    summary.calibration_images = RenderCalibrationImages(job, shot, out);
+  summary.frames = range.count();
+  summary.cameras = static_cast<int>(rig.cameras.size());
+  summary.knots = truth.tracks.knots();
   for (const calib::Camera& camera : rig.cameras) summary.camera_names.push_back(camera.name);
+  summary.knots_visible_mean = std::move(truth.knots_visible_mean);
+  summary.knots_visible_min = std::move(truth.knots_visible_min);
   summary.render_s = render_s;
   summary.wall_s = Seconds(start);
   return summary;

@@ -311,5 +311,41 @@ TEST(ReconstructSequence, TheSmoothnessPriorCatchesATwoViewMislabelGeometryCanno
   EXPECT_LT(RmsError(smooth), 0.5 * RmsError(plain));
 }
 
+
+TEST(SequenceWarnings, NoneWhenAllIsWell) {
+  SequenceResult r;
+  r.candidates = 100;
+  r.triangulated = 90;  // 90 %: not fewer
+  r.sigma_px = 0.5;
+  r.sigma_estimated = true;
+  r.outlier_threshold_px = 2.0;  // four times the noise: not less
+  EXPECT_TRUE(SequenceWarnings(r).empty());
+  // A given noise is the user's own: no warning about it, whatever the threshold.
+  r.sigma_estimated = false;
+  r.outlier_threshold_px = 0.5;
+  EXPECT_TRUE(SequenceWarnings(r).empty());
+  // Nothing seen twice: nothing to warn about.
+  EXPECT_TRUE(SequenceWarnings(SequenceResult{}).empty());
+}
+
+TEST(SequenceWarnings, NameTheNoiseThePriorAndTheUntriangulatedInThatOrder) {
+  SequenceResult r;
+  r.sigma_px = 0.5;
+  r.sigma_estimated = true;
+  r.outlier_threshold_px = 1.9;
+  r.prior_disagreements = 3;
+  r.candidates = 100;
+  r.triangulated = 89;
+  const std::vector<std::string> w = SequenceWarnings(r);
+  ASSERT_EQ(w.size(), 3u);
+  EXPECT_EQ(w[0],
+            "the labelling noise (0.500000 px) is more than a quarter of --outlier-px: good labels "
+            "are being rejected; raise --outlier-px to ~5x the noise");
+  EXPECT_EQ(w[1],
+            "3 points seen by three or more cameras are pulled beyond the outlier threshold by the "
+            "smoothness prior: --smooth-sigma may be too small for this motion");
+  EXPECT_EQ(w[2], "11 of 100 knot-frames seen twice or more were not triangulated (see /outliers)");
+}
+
 }  // namespace
 }  // namespace netlab::recon

@@ -12,8 +12,11 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Geometry>
+
+#include "calibration/rig.h"
 #include "common/yaml_util.h"
-#include "tests/libreconstruct/recording/test_files.h"
+#include "tests/libreconstruct/test_files.h"
 
 namespace netlab::recon {
 namespace {
@@ -178,6 +181,137 @@ TEST(XyzRes, MalformedFilesAreNamedByLineAndColumn) {
                        {"bad.csv:2:", "'pt2_dltres'", "'1e999'"}));
   EXPECT_TRUE(Mentions(ReadError("pt1_dltres,pt2_X\n0.5,1\n", true), {"bad.csv:1:", "'pt2_X'"}));
   EXPECT_TRUE(Mentions(ReadError("pt1_dltres\n0.5,1\n", true), {"bad.csv:2:", "got 2"}));
+}
+
+
+// A 2 x 3 net's reconstruction over frames 4 and 5, knot 4 not valid in frame 5, one outlier.
+SequenceResult ExampleResult() {
+  SequenceResult r;
+  r.rows = kRows;
+  r.cols = kCols;
+  r.frame_index = {4, 5};
+  r.rig = calib::PaperRig();
+  for (int i = 0; i < 2 * kRows * kCols; ++i) {
+    r.position.emplace_back(i, 0.5 * i, -i);
+    r.valid.push_back(i != kRows * kCols + 4);
+    r.covariance.push_back(Eigen::Matrix3d::Identity() * (i + 1));
+    r.rms_px.push_back(0.1 * i);
+  }
+  r.outliers.push_back({5, 2, 1, 7.5});
+  return r;
+}
+
+TEST(TracksFromSequence, CarriesEveryFieldWithTimeFromTheFrameRateAndKnotsRowMajor) {
+  const SequenceResult r = ExampleResult();
+  const netsim::KnotTracks tracks = TracksFromSequence(r, 100.0, "a test");
+  EXPECT_NO_THROW(tracks.CheckConsistent());
+  EXPECT_EQ(tracks.source, "a test");
+  EXPECT_EQ(tracks.time, (std::vector<double>{0.04, 0.05}));
+  EXPECT_EQ(tracks.frame_index, r.frame_index);
+  ASSERT_EQ(tracks.knots(), kRows * kCols);
+  EXPECT_EQ(tracks.grid[4], (std::array<int, 2>{1, 1}));
+  EXPECT_EQ(tracks.FindKnot(1, 2), 5);
+  EXPECT_EQ(tracks.Position(1, 3), Eigen::Vector3d(9, 4.5, -9));
+  EXPECT_FALSE(tracks.Valid(1, 4));
+  EXPECT_EQ(tracks.covariance, r.covariance);
+  EXPECT_EQ(tracks.reprojection_error_px, r.rms_px);
+  ASSERT_EQ(tracks.camera_names.size(), r.rig.cameras.size());
+  EXPECT_EQ(tracks.camera_names[3], r.rig.cameras[3].name);
+  ASSERT_EQ(tracks.outliers.size(), 1u);
+  EXPECT_EQ(tracks.outliers[0].frame, 5);
+  EXPECT_EQ(tracks.outliers[0].knot, 2);
+  EXPECT_EQ(tracks.outliers[0].camera, 1);
+  EXPECT_EQ(tracks.outliers[0].residual_px, 7.5);
+}
+
+// True tracks of a 2 x 3 net sampled at 0, 0.1, 0.2 s, every knot moving at (1, 2, 0) m/s from
+// (row, col, 0).
+netsim::KnotTracks Truth() {
+  netsim::KnotTracks truth;
+  truth.time = {0.0, 0.1, 0.2};
+  for (int row = 0; row < kRows; ++row)
+    for (int col = 0; col < kCols; ++col) truth.grid.push_back({row, col});
+  for (double t : truth.time)
+    for (const auto& [row, col] : truth.grid) {
+      truth.position.emplace_back(row + t, col + 2.0 * t, 0.0);
+      truth.valid.push_back(1);
+    }
+  return truth;
+}
+
+// Measured tracks between the truth's samples: true positions through `motion`; covariances
+// diag(var) (m^2).
+netsim::KnotTracks Measured(const std::vector<double>& times,
+                            const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& motion,
+                            double var) {
+  netsim::KnotTracks tracks = Truth();
+  tracks.time = times;
+  tracks.position.clear();
+  tracks.valid.clear();
+  for (double t : times)
+    for (const auto& [row, col] : tracks.grid) {
+      tracks.position.push_back(motion(Eigen::Vector3d(row + t, col + 2.0 * t, 0.0)));
+      tracks.valid.push_back(1);
+      tracks.covariance.push_back(var * Eigen::Matrix3d::Identity());
+    }
+  return tracks;
+}
+
+TEST(CompareWithTruth, AnOffsetGivesItsLengthAndNothingAfterAlignment) {
+  // Every point 3 mm off along y, between the truth's samples; covariance (3 mm)^2 / 2 per axis.
+  const Eigen::Vector3d offset(0.0, 0.003, 0.0);
+  const netsim::KnotTracks tracks = Measured(
+      {0.05, 0.125}, [&](const Eigen::Vector3d& p) { return Eigen::Vector3d(p + offset); },
+      0.5 * 0.003 * 0.003);
+  const TruthComparison c = CompareWithTruth(tracks, Truth());
+  EXPECT_EQ(c.points, 2 * kRows * kCols);
+  EXPECT_NEAR(c.rms_m, 0.003, 1e-12);
+  EXPECT_NEAR(c.max_m, 0.003, 1e-12);
+  EXPECT_NEAR(c.aligned_rms_m, 0.0, 1e-9);
+  EXPECT_NEAR(c.mean_mahalanobis2, 2.0, 1e-6);
+}
+
+TEST(CompareWithTruth, ARigidMotionVanishesAfterAlignment) {
+  // The truth turned by 0.1 rad about z and moved: large errors, none after the best motion.
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const netsim::KnotTracks tracks = Measured(
+      {0.0, 0.1, 0.2},
+      [&](const Eigen::Vector3d& p) {
+        return Eigen::Vector3d(turn * p + Eigen::Vector3d(1.0, 0.0, 0.0));
+      },
+      1e-6);
+  const TruthComparison c = CompareWithTruth(tracks, Truth());
+  EXPECT_EQ(c.points, 3 * kRows * kCols);
+  EXPECT_GT(c.rms_m, 0.5);
+  EXPECT_NEAR(c.aligned_rms_m, 0.0, 1e-9);
+}
+
+TEST(CompareWithTruth, LeavesOutPointsTheTruthCannotGive) {
+  // Frame 0 before the truth's span, frame 2 after it; in frame 1 knot 0 not valid, knot 1 at a
+  // grid position the truth lacks, and knot 2 between a valid and an invalid true sample.
+  netsim::KnotTracks tracks =
+      Measured({-0.01, 0.15, 0.21}, [](const Eigen::Vector3d& p) { return p; }, 1e-6);
+  tracks.valid[kRows * kCols + 0] = 0;
+  tracks.grid[1] = {5, 5};
+  netsim::KnotTracks truth = Truth();
+  truth.valid[2 * kRows * kCols + 2] = 0;
+  const TruthComparison c = CompareWithTruth(tracks, truth);
+  EXPECT_EQ(c.points, kRows * kCols - 3);
+  EXPECT_NEAR(c.rms_m, 0.0, 1e-12);
+  // Fewer than three points: no alignment; none at all: zeros.
+  tracks.valid.assign(tracks.valid.size(), 0);
+  tracks.valid[kRows * kCols + 3] = tracks.valid[kRows * kCols + 4] = 1;
+  tracks.position[kRows * kCols + 3].z() += 0.004;
+  const TruthComparison two = CompareWithTruth(tracks, truth);
+  EXPECT_EQ(two.points, 2);
+  EXPECT_NEAR(two.rms_m, 0.004 / std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(two.max_m, 0.004, 1e-12);
+  EXPECT_EQ(two.aligned_rms_m, 0.0);
+  tracks.valid.assign(tracks.valid.size(), 0);
+  const TruthComparison none = CompareWithTruth(tracks, truth);
+  EXPECT_EQ(none.points, 0);
+  EXPECT_EQ(none.rms_m, 0.0);
+  EXPECT_EQ(none.mean_mahalanobis2, 0.0);
 }
 
 }  // namespace

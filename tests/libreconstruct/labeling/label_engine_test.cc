@@ -238,6 +238,55 @@ TEST(LabelEngine, TracksAndCrossChecksASequence) {
   }
 }
 
+// LabelFrames is Find Path in the first frame, then tracking, each frame cross-checked: the same
+// labels as those steps called one by one, with each frame handed to the caller before the next
+// is tracked from it.
+TEST(LabelEngine, LabelFramesLabelsFrameByFrameAsItsStepsDo) {
+  const Shot shot = Render(3);
+  LabelSet labels = Empty(shot);
+  for (int c = 0; c < 3; ++c)
+    for (int k : {0, kCols - 1, (kRows - 1) * kCols, kKnots - 1})
+      labels.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
+  LabelStore by_steps(labels), by_frames(std::move(labels));
+  LabelEngine steps(&by_steps, &shot.rig, Images(shot));
+  EngineCounts first = steps.LabelFirstFrame(0), tracked, checked = steps.CrossCheck(0);
+  for (int t = 1; t < 3; ++t) {
+    const EngineCounts n = steps.Track(t - 1, t), m = steps.CrossCheck(t);
+    tracked.accepted += n.accepted, tracked.review += n.review;
+    checked.accepted += m.accepted, checked.review += m.review;
+  }
+  LabelEngine engine(&by_frames, &shot.rig, Images(shot));
+  std::vector<int> done;
+  const LabelingSummary summary = engine.LabelFrames(0, 2, [&](int t) {
+    done.push_back(t);
+    for (int c = 0; c < 3 && t + 1 < 3; ++c)
+      for (int k = 0; k < kKnots; ++k)
+        EXPECT_FALSE(by_frames.at(c, t + 1, k).present()) << "frame " << t + 1 << " too early";
+  });
+  EXPECT_EQ(done, (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(summary.frames, 3);
+  EXPECT_GT(summary.first_frame.accepted, 0);
+  EXPECT_GT(summary.tracked.accepted, 0);
+  EXPECT_EQ(summary.first_frame.accepted, first.accepted);
+  EXPECT_EQ(summary.first_frame.review, first.review);
+  EXPECT_EQ(summary.tracked.accepted, tracked.accepted);
+  EXPECT_EQ(summary.tracked.review, tracked.review);
+  EXPECT_EQ(summary.cross_checked.accepted, checked.accepted);
+  EXPECT_EQ(summary.cross_checked.review, checked.review);
+  for (int c = 0; c < 3; ++c)
+    for (int t = 0; t < 3; ++t)
+      for (int k = 0; k < kKnots; ++k) {
+        const Label& a = by_steps.at(c, t, k);
+        const Label& b = by_frames.at(c, t, k);
+        ASSERT_EQ(a.present(), b.present()) << "camera " << c << " frame " << t << " knot " << k;
+        if (!a.present()) continue;
+        EXPECT_EQ(a.px, b.px);
+        EXPECT_EQ(a.state, b.state);
+        EXPECT_EQ(a.source, b.source);
+      }
+  for (int t = 0; t < 3; ++t) CheckAccepted(shot, by_frames, t);
+}
+
 // The person's brush near knot 12 in camera a, whose neighbours there and whose views in b and
 // c are labeled: Find Node labels it, accepted, as one undoable step.
 TEST(LabelEngine, FindNodeLabelsTheKnotUnderTheBrush) {

@@ -17,7 +17,7 @@
 #include "libreconstruct/recording/bayer.h"
 #include "libreconstruct/twin/render.h"
 #include "libreconstruct/twin/synthetic_experiment.h"
-#include "tests/libreconstruct/recording/test_files.h"
+#include "tests/libreconstruct/test_files.h"
 
 namespace netlab::recon {
 

@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <stdexcept>
 
-#include "tests/libreconstruct/recording/test_files.h"
+#include "tests/libreconstruct/test_files.h"
 
 namespace netlab::recon {
 namespace {

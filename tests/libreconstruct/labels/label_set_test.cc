@@ -18,7 +18,7 @@
 
 #include "common/hdf5_util.h"
 #include "common/yaml_util.h"
-#include "tests/libreconstruct/recording/test_files.h"
+#include "tests/libreconstruct/test_files.h"
 
 namespace netlab::recon {
 namespace {

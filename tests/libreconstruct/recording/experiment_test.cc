@@ -6,7 +6,7 @@
 #include <string>
 
 #include "common/yaml_util.h"
-#include "tests/libreconstruct/recording/test_files.h"
+#include "tests/libreconstruct/test_files.h"
 
 namespace netlab::recon {
 namespace {

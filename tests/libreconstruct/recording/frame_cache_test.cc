@@ -12,7 +12,7 @@
 #include <tuple>
 #include <vector>
 
-#include "tests/libreconstruct/recording/test_files.h"
+#include "tests/libreconstruct/test_files.h"
 
 namespace netlab::recon {
 namespace {

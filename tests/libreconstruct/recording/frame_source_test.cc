@@ -14,7 +14,7 @@
 #include "common/yaml_util.h"
 #include "libreconstruct/recording/frame_store.h"
 #include "libreconstruct/recording/sequence.h"
-#include "tests/libreconstruct/recording/test_files.h"
+#include "tests/libreconstruct/test_files.h"
 
 namespace netlab::recon {
 namespace {
