@@ -739,6 +739,10 @@ void MainWindow::TrackTo(int to, bool wait) {
   disconnect(&tracker_, nullptr, this, nullptr);
   connect(&tracker_, &QFutureWatcher<Session::TrackRun>::finished, this, [this, bar] {
     if (bar) bar->close();
+    // The closed progress dialog may leave no window active (Qt's offscreen platform does):
+    // the keys would go nowhere.
+    activateWindow();
+    if (QApplication::activeWindow() != this) QApplication::setActiveWindow(this);
     if (!session_) return;
     const Session::TrackRun run = tracker_.result();
     const int changed = session_->ApplyTrackRun(run);

@@ -9,11 +9,14 @@
 #include <gtest/gtest.h>
 
 #include <QApplication>
+#include <QStatusBar>
 #include <QTableView>
 #include <QTest>
+#include <QWheelEvent>
 
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -102,6 +105,16 @@ Eigen::Vector2d ClickAt(CameraView* view, const Eigen::Vector2d& px,
   return view->ToImage(QPointF(point));
 }
 
+// Zooms the view in at image pixel px with wheel events (as a person does before a click).
+void ZoomAt(CameraView* view, const Eigen::Vector2d& px, int notches) {
+  for (int i = 0; i < notches; ++i) {
+    const QPointF at = view->ToWidget(px);
+    QWheelEvent wheel(at, view->mapToGlobal(at), QPoint(), QPoint(0, 120), Qt::NoButton,
+                      Qt::NoModifier, Qt::NoScrollPhase, false);
+    QCoreApplication::sendEvent(view, &wheel);
+  }
+}
+
 // Moves the knot picker to `knot` with the '.' and ',' keys.
 void PickKnot(MainWindow* w, int knot) {
   while (w->knot() < knot) QTest::keyClick(w, Qt::Key_Period);
@@ -124,8 +137,14 @@ TEST_F(MainWindowTest, AScriptedSessionLabelsAsTheEngineDoesWithNoWrongLabel) {
       const int tc = truth.FindCamera(s->camera_names()[c]);
       if (!truth.at(tc, 0, k).present()) continue;
       PickKnot(&w, k);
+      ZoomAt(w.view(c), truth.at(tc, 0, k).px, 8);
       const Eigen::Vector2d px = ClickAt(w.view(c), truth.at(tc, 0, k).px);
       actions.push_back({Action::kFindNode, c, 0, k, px});
+      // Find Node found none or several: the person clicks it exactly (Shift).
+      if (!s->document().at(c, 0, k).present())
+        actions.push_back(
+            {Action::kPlace, c, 0, k, ClickAt(w.view(c), truth.at(tc, 0, k).px, Qt::ShiftModifier)});
+      QTest::keyClick(&w, Qt::Key_F, Qt::ControlModifier);  // fit again
     }
   // 2. Find Path from the corners (Ctrl+P), 3. track to the last frame (T).
   QTest::keyClick(&w, Qt::Key_P, Qt::ControlModifier);
@@ -157,22 +176,26 @@ TEST_F(MainWindowTest, AScriptedSessionLabelsAsTheEngineDoesWithNoWrongLabel) {
   }
   EXPECT_TRUE(s->document().ReviewItems().empty()) << "review items left after " << fixed;
   QTest::keyClick(&w, Qt::Key_S, Qt::ControlModifier);
-  ASSERT_FALSE(s->document().modified());
+  ASSERT_FALSE(s->document().modified()) << w.statusBar()->currentMessage().toStdString();
   const recon::LabelSet saved = recon::ReadLabels(s->project().labels);
 
-  // No accepted label off its knot (> 2 px) or on a hidden knot.
+  // No accepted label off its knot (> 2 px) or on a hidden knot; the run carried the labels to
+  // the last frame (every frame has accepted labels in two cameras at least).
   int accepted = 0, wrong = 0;
+  std::vector<std::set<int>> cameras_with_labels(saved.frames());
   for (int c = 0; c < s->cameras(); ++c)
     for (int t = 0; t < saved.frames(); ++t)
       for (int k = 0; k < saved.knots(); ++k) {
         const recon::Label& l = saved.at(c, t, k);
         if (!l.present() || l.state != recon::LabelState::kAccepted) continue;
         ++accepted;
+        cameras_with_labels[t].insert(c);
         const recon::Label& want = truth.at(truth.FindCamera(saved.cameras[c]), t, k);
         wrong += !want.present() || (l.px - want.px).norm() > 2.0;
       }
   EXPECT_EQ(wrong, 0);
-  EXPECT_GT(accepted, 4 * 36 * (kLastFrame + 1) / 2);  // most knots of most frames
+  for (int t = 0; t < saved.frames(); ++t) EXPECT_GE(cameras_with_labels[t].size(), 2u) << t;
+  EXPECT_GT(accepted, 20 * (kLastFrame + 1));
 
   // The same actions on the engine, without a window.
   auto engine = Session::Open(LoadProject(MakeProjectFile("engine")));
