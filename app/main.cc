@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "app/cli/commands.h"
+#include "app/gui/gui_command.h"
 
 namespace netlab::app {
 
@@ -13,6 +14,7 @@ const std::vector<Command>& Commands() {
   static const std::vector<Command> commands = {
       {"calibrate", "calibrate the cameras into one world frame from target images", RunCalibrate},
       {"color-net", "colour a net's yarns so every knot is known by its links' colours", RunColorNet},
+      {"gui", "the labeling workstation: four views, the tools, review, undo", gui::RunGui},
       {"ingest", "check the synchronized camera recordings or convert them to HDF5", RunIngest},
       {"label", "label the knots automatically from seed labels (Find Path, tracking)", RunLabel},
       {"render", "film a simulated shot with a virtual camera rig, with ground truth", RunRender},

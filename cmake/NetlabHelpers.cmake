@@ -26,12 +26,16 @@ function(netlab_add_library name)
   netlab_target_defaults(${name})
 endfunction()
 
-# netlab_add_test(NAME SOURCES a_test.cc DEPS lib [LABELS slow])
-# One gtest binary per source file, registered with ctest by gtest_discover_tests.
+# netlab_add_test(NAME SOURCES a_test.cc DEPS lib [LABELS slow] [OWN_MAIN])
+# One gtest binary per source file, registered with ctest by gtest_discover_tests. OWN_MAIN: the
+# test defines main() itself (Qt tests make their QApplication there).
 function(netlab_add_test name)
-  cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;DEPS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "OWN_MAIN" "TIMEOUT" "SOURCES;DEPS;LABELS" ${ARGN})
   add_executable(${name} ${ARG_SOURCES})
-  target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main)
+  target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest)
+  if(NOT ARG_OWN_MAIN)
+    target_link_libraries(${name} PRIVATE GTest::gtest_main)
+  endif()
   target_compile_definitions(${name} PRIVATE
     NETLAB_SOURCE_DIR="${PROJECT_SOURCE_DIR}" NETLAB_BINARY_DIR="${PROJECT_BINARY_DIR}")
   netlab_target_defaults(${name})

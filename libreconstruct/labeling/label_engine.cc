@@ -495,16 +495,31 @@ EngineCounts LabelEngine::CrossCheck(int t) {
 
 LabelingSummary LabelEngine::LabelFrames(int first, int last, const FrameDone& after_frame) {
   LabelingSummary summary;
-  for (int t = first; t <= last; ++t) {
-    // The first frame row from its seeds, each later one tracked from the row before.
-    if (t == first)
-      Add(&summary.first_frame, LabelFirstFrame(t));
-    else
-      Add(&summary.tracked, Track(t - 1, t));
-    // Then the cameras cross-checked and the gaps filled.
+  if (first > last) return summary;
+  // The first frame row from its seeds, then the cameras cross-checked and the gaps filled.
+  Add(&summary.first_frame, LabelFirstFrame(first));
+  Add(&summary.cross_checked, CrossCheck(first));
+  summary.frames = 1;
+  if (after_frame) after_frame(first);
+  // Each later row tracked from the one before.
+  const LabelingSummary rest = TrackFrames(first, last, [&](int t) {
+    if (after_frame) after_frame(t);
+    return true;
+  });
+  Add(&summary.tracked, rest.tracked);
+  Add(&summary.cross_checked, rest.cross_checked);
+  summary.frames += rest.frames;
+  return summary;
+}
+
+LabelingSummary LabelEngine::TrackFrames(int from, int to, const Checkpoint& checkpoint) {
+  LabelingSummary summary;
+  const int step = to >= from ? 1 : -1;
+  for (int t = from + step; t != to + step; t += step) {
+    Add(&summary.tracked, Track(t - step, t));
     Add(&summary.cross_checked, CrossCheck(t));
     ++summary.frames;
-    if (after_frame) after_frame(t);
+    if (checkpoint && !checkpoint(t)) break;
   }
   return summary;
 }

@@ -121,6 +121,12 @@ class LabelEngine {
   // or edit row t (a person's corrections) before the next row is tracked from it.
   using FrameDone = std::function<void(int t)>;
   LabelingSummary LabelFrames(int first, int last, const FrameDone& after_frame = {});
+  // Tracking from a labeled frame row `from` towards row `to`, forwards or backwards: each row t
+  // after `from` is tracked from the row before it (in the run's direction), then cross-checked.
+  // `checkpoint(t)`, when set, is called once row t is done; false stops the run there (the
+  // person cancelled, or too much needs review). summary.frames counts the rows done.
+  using Checkpoint = std::function<bool(int t)>;
+  LabelingSummary TrackFrames(int from, int to, const Checkpoint& checkpoint = {});
   // Checks every accepted label of frame t that a tool made (Find Path, Fill Grid, tracking,
   // Find Node; not the person's own clicks or imported seeds) against the yarn colours of its
   // knot (label_identity.h): a confident contradiction turns it to review with the colours read;

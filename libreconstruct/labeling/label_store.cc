@@ -40,6 +40,7 @@ int LabelStore::Apply(const std::string& name, const std::vector<LabelEdit>& edi
   steps_.push_back(std::move(step));
   done_ = steps_.size();
   modified_ = true;
+  Notify(Change::kApplied, steps_.back());
   return static_cast<int>(steps_.back().changes.size());
 }
 
@@ -53,14 +54,26 @@ bool LabelStore::Undo() {
   for (auto it = step.changes.rbegin(); it != step.changes.rend(); ++it)
     labels_.at(it->camera, it->t, it->knot) = it->before;
   modified_ = true;
+  Notify(Change::kUndone, step);
   return true;
 }
 
 bool LabelStore::Redo() {
   if (!CanRedo()) return false;
-  for (const Change& c : steps_[done_++].changes) labels_.at(c.camera, c.t, c.knot) = c.after;
+  const Step& step = steps_[done_++];
+  for (const LabelChange& c : step.changes) labels_.at(c.camera, c.t, c.knot) = c.after;
   modified_ = true;
+  Notify(Change::kRedone, step);
   return true;
+}
+
+void LabelStore::Notify(Change change, const Step& step) const {
+  if (!listener_) return;
+  std::vector<LabelEdit> now;
+  now.reserve(step.changes.size());
+  for (const LabelChange& c : step.changes)
+    now.push_back({c.camera, c.t, c.knot, labels_.at(c.camera, c.t, c.knot)});
+  listener_(change, step.name, now);
 }
 
 void LabelStore::Save(const std::string& path) {

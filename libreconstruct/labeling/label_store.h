@@ -10,8 +10,10 @@
 //                                                          // mid-save keeps the old file
 //
 // A step that changes nothing is not recorded. A new step after Undo drops the steps that could
-// have been redone (as every editor does).
+// have been redone (as every editor does). A listener (SetListener) hears of every change: a
+// window mirrors the steps in its undo stack, journals them and redraws what changed.
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -27,6 +29,15 @@ struct LabelEdit {
 class LabelStore {
  public:
   explicit LabelStore(LabelSet labels);
+
+  // What a change was: a new step (Apply), or a step taken back (Undo) or done again (Redo).
+  enum class Change { kApplied, kUndone, kRedone };
+  // Called after every change with the step's name and the labels it changed, as they are now
+  // (a label the step changed twice is listed twice). Called on the thread that changed the
+  // store.
+  using Listener = std::function<void(Change change, const std::string& step,
+                                      const std::vector<LabelEdit>& now)>;
+  void SetListener(Listener listener) { listener_ = std::move(listener); }
 
   const LabelSet& labels() const { return labels_; }
   const Label& at(int camera, int t, int knot) const { return labels_.at(camera, t, knot); }
@@ -50,18 +61,21 @@ class LabelStore {
   static LabelStore Load(const std::string& path);
 
  private:
-  struct Change {
+  struct LabelChange {
     int camera, t, knot;
     Label before, after;
   };
   struct Step {
     std::string name;
-    std::vector<Change> changes;
+    std::vector<LabelChange> changes;
   };
+  // Tells the listener, if any, of `step` as it is now.
+  void Notify(Change change, const Step& step) const;
   LabelSet labels_;
   std::vector<Step> steps_;
   size_t done_ = 0;  // steps_[0, done_) are applied
   bool modified_ = false;
+  Listener listener_;
 };
 
 }  // namespace netlab::recon

@@ -1,0 +1,266 @@
+#include "app/gui/camera_view.h"
+
+#include <QMouseEvent>
+#include <QPainter>
+#include <QPainterPath>
+#include <QWheelEvent>
+
+#include <algorithm>
+#include <cmath>
+
+namespace netlab::gui {
+namespace {
+
+
+}  // namespace
+
+CameraView::CameraView(int camera, QWidget* parent) : QWidget(parent), camera_(camera) {
+  setMouseTracking(true);
+  setFocusPolicy(Qt::StrongFocus);
+  setMinimumSize(160, 160);
+  setAttribute(Qt::WA_OpaquePaintEvent);
+}
+
+void CameraView::SetFrame(const cv::Mat& bgr, int full_width, int full_height,
+                          const QString& problem) {
+  frame_ = bgr;
+  problem_ = problem;
+  if (full_width > 0) full_width_ = full_width, full_height_ = full_height;
+  RebuildImage();
+  if (!fitted_ && full_width_ > 0) Fit();
+  update();
+}
+
+void CameraView::SetOverlay(ViewOverlay overlay) {
+  overlay_ = std::move(overlay);
+  update();
+}
+
+void CameraView::SetTone(double gain, double offset, double gamma) {
+  gain_ = gain, tone_offset_ = offset, gamma_ = gamma;
+  RebuildImage();
+  update();
+}
+
+void CameraView::RebuildImage() {
+  if (frame_.empty()) {
+    image_ = QImage();
+    return;
+  }
+  // The tone curve as a lookup table (thin dark threads on 12-bit data need it).
+  cv::Mat shown = frame_;
+  if (gain_ != 1.0 || tone_offset_ != 0.0 || gamma_ != 1.0) {
+    cv::Mat lut(1, 256, CV_8U);
+    for (int i = 0; i < 256; ++i) {
+      const double v = std::clamp(gain_ * (i / 255.0 - 0.5) + 0.5 + tone_offset_, 0.0, 1.0);
+      lut.at<uint8_t>(i) = static_cast<uint8_t>(std::lround(255.0 * std::pow(v, gamma_)));
+    }
+    cv::LUT(frame_, lut, shown);
+  }
+  image_ = QImage(shown.data, shown.cols, shown.rows, static_cast<int>(shown.step),
+                  QImage::Format_BGR888)
+               .copy();
+}
+
+QPointF CameraView::ToWidget(const Eigen::Vector2d& px) const {
+  return {(px.x() + 0.5) * scale_ + offset_.x(), (px.y() + 0.5) * scale_ + offset_.y()};
+}
+
+Eigen::Vector2d CameraView::ToImage(const QPointF& point) const {
+  return {(point.x() - offset_.x()) / scale_ - 0.5, (point.y() - offset_.y()) / scale_ - 0.5};
+}
+
+void CameraView::Fit() {
+  if (full_width_ <= 0) return;
+  scale_ = std::min(width() / double(full_width_), height() / double(full_height_));
+  offset_ = QPointF((width() - full_width_ * scale_) / 2, (height() - full_height_ * scale_) / 2);
+  fitted_ = true;
+  update();
+}
+
+void CameraView::ZoomTo(const Eigen::Vector2d& px, double pixels_across) {
+  scale_ = std::min(width(), height()) / std::max(pixels_across, 4.0);
+  offset_ = QPointF(width() / 2.0 - (px.x() + 0.5) * scale_,
+                    height() / 2.0 - (px.y() + 0.5) * scale_);
+  fitted_ = true;
+  update();
+}
+
+int CameraView::LabelNear(const QPointF& point, double radius_widget) const {
+  int best = -1;
+  double best_d = radius_widget;
+  for (const ViewOverlay::Mark& m : overlay_.labels) {
+    const QPointF d = ToWidget(m.px) - point;
+    const double dist = std::hypot(d.x(), d.y());
+    if (dist <= best_d) best_d = dist, best = m.knot;
+  }
+  return best;
+}
+
+void CameraView::paintEvent(QPaintEvent*) {
+  QPainter painter(this);
+  painter.fillRect(rect(), QColor(24, 24, 24));
+  if (!image_.isNull()) {
+    // A half-resolution image covers the same full-resolution pixels.
+    const double s = full_width_ > 0 ? double(full_width_) / image_.width() : 1.0;
+    const QRectF target(offset_.x(), offset_.y(), image_.width() * s * scale_,
+                        image_.height() * s * scale_);
+    painter.setRenderHint(QPainter::SmoothPixmapTransform, scale_ < 1.0);
+    painter.drawImage(target, image_);
+  } else {
+    painter.setPen(QColor(255, 120, 90));
+    painter.drawText(rect(), Qt::AlignCenter | Qt::TextWordWrap,
+                     problem_.isEmpty() ? QString("loading ...") : problem_);
+  }
+  DrawOverlay(painter);
+  // The caption and the focus frame.
+  painter.setPen(Qt::white);
+  painter.fillRect(QRect(0, 0, width(), 20), QColor(0, 0, 0, 150));
+  painter.drawText(QRect(6, 0, width() - 12, 20), Qt::AlignVCenter | Qt::AlignLeft,
+                   overlay_.caption);
+  if (hasFocus()) {
+    painter.setPen(QPen(QColor(90, 160, 255), 2));
+    painter.drawRect(rect().adjusted(1, 1, -1, -1));
+  }
+}
+
+void CameraView::DrawOverlay(QPainter& painter) const {
+  painter.setRenderHint(QPainter::Antialiasing, true);
+  if (show_epipolar_) {
+    painter.setPen(QPen(QColor(255, 230, 0, 170), 1.2, Qt::DashLine));
+    for (const auto& curve : overlay_.epipolar) {
+      QPainterPath path;
+      for (size_t i = 0; i < curve.size(); ++i)
+        i == 0 ? path.moveTo(ToWidget(curve[i])) : path.lineTo(ToWidget(curve[i]));
+      painter.drawPath(path);
+    }
+  }
+  if (show_links_) {
+    painter.setPen(QPen(QColor(120, 200, 255, 140), 1.0));
+    for (const auto& [a, b] : overlay_.links) painter.drawLine(ToWidget(a), ToWidget(b));
+  }
+  if (show_labels_) {
+    const double r = std::clamp(scale_ * 3.0, 3.0, 9.0);
+    for (const ViewOverlay::Mark& m : overlay_.labels) {
+      const Eigen::Vector2d px = m.knot == dragging_ ? drag_px_ : m.px;
+      const QPointF p = ToWidget(px);
+      painter.setPen(QPen(m.colour, m.review ? 2.0 : 1.5));
+      painter.setBrush(Qt::NoBrush);
+      if (m.review)  // a diamond: kept for review
+        painter.drawPolygon(QPolygonF({p + QPointF(0, -r - 1), p + QPointF(r + 1, 0),
+                                       p + QPointF(0, r + 1), p + QPointF(-r - 1, 0)}));
+      else
+        painter.drawEllipse(p, r, r);
+      painter.drawPoint(p);
+      if (m.knot == overlay_.selected_knot) {
+        painter.setPen(QPen(Qt::white, 2.0));
+        painter.drawEllipse(p, r + 4, r + 4);
+      }
+    }
+  }
+  painter.setPen(QPen(QColor(255, 60, 60), 1.5));
+  for (const Eigen::Vector2d& c : overlay_.candidates) {  // several junctions: none taken
+    const QPointF p = ToWidget(c);
+    painter.drawLine(p + QPointF(-5, -5), p + QPointF(5, 5));
+    painter.drawLine(p + QPointF(-5, 5), p + QPointF(5, -5));
+  }
+  if (overlay_.reprojected) {
+    const QPointF p = ToWidget(*overlay_.reprojected);
+    painter.setPen(QPen(QColor(255, 80, 255), 1.5));
+    painter.drawLine(p + QPointF(-7, 0), p + QPointF(7, 0));
+    painter.drawLine(p + QPointF(0, -7), p + QPointF(0, 7));
+  }
+  if (cursor_inside_ && !pan_from_ && dragging_ < 0) {  // the brush
+    painter.setPen(QPen(QColor(255, 255, 255, 150), 1.0, Qt::DotLine));
+    painter.setBrush(Qt::NoBrush);
+    painter.drawEllipse(cursor_, brush_radius_ * scale_, brush_radius_ * scale_);
+  }
+}
+
+void CameraView::resizeEvent(QResizeEvent*) {
+  if (fitted_) Fit();
+}
+
+void CameraView::wheelEvent(QWheelEvent* event) {
+  const double steps = event->angleDelta().y() / 120.0;
+  if (event->modifiers() & Qt::ControlModifier) {  // the brush
+    SetBrushRadius(std::clamp(brush_radius_ * std::pow(1.15, steps), 2.0, 60.0));
+    return;
+  }
+  // Zoom about the cursor: the image pixel under it stays put.
+  const QPointF at = event->position();
+  const Eigen::Vector2d px = ToImage(at);
+  scale_ = std::clamp(scale_ * std::pow(1.25, steps), 0.02, 64.0);
+  offset_ = at - QPointF((px.x() + 0.5) * scale_, (px.y() + 0.5) * scale_);
+  update();
+}
+
+void CameraView::mousePressEvent(QMouseEvent* event) {
+  setFocus();
+  emit activated(camera_);
+  const bool pan = event->button() == Qt::MiddleButton || event->button() == Qt::RightButton;
+  if (pan) {
+    pan_from_ = event->position();
+    return;
+  }
+  if (event->button() != Qt::LeftButton) return;
+  // On a label without Shift: select it (and maybe drag it); elsewhere: a click for the tools.
+  const int near = (event->modifiers() & Qt::ShiftModifier) ? -1 : LabelNear(event->position());
+  if (near >= 0) {
+    dragging_ = near;
+    for (const auto& m : overlay_.labels)
+      if (m.knot == near) drag_px_ = m.px;
+    emit labelSelected(camera_, near);
+    return;
+  }
+  emit clicked(camera_, ToImage(event->position()), event->modifiers());
+}
+
+void CameraView::mouseMoveEvent(QMouseEvent* event) {
+  cursor_ = event->position();
+  cursor_inside_ = true;
+  if (pan_from_) {
+    offset_ += event->position() - *pan_from_;
+    pan_from_ = event->position();
+  } else if (dragging_ >= 0) {
+    drag_px_ = ToImage(event->position());
+  }
+  // The pixel under the cursor and its value.
+  const Eigen::Vector2d px = ToImage(event->position());
+  QString value;
+  if (!frame_.empty() && full_width_ > 0) {
+    const double s = double(frame_.cols) / full_width_;
+    const int x = static_cast<int>(std::lround(px.x() * s));
+    const int y = static_cast<int>(std::lround(px.y() * s));
+    if (x >= 0 && y >= 0 && x < frame_.cols && y < frame_.rows) {
+      const cv::Vec3b v = frame_.at<cv::Vec3b>(y, x);
+      value = QString("RGB %1 %2 %3").arg(v[2]).arg(v[1]).arg(v[0]);
+    }
+  }
+  emit cursorMoved(camera_, px, value);
+  update();
+}
+
+void CameraView::mouseReleaseEvent(QMouseEvent* event) {
+  if (pan_from_ && (event->button() == Qt::MiddleButton || event->button() == Qt::RightButton)) {
+    pan_from_.reset();
+    return;
+  }
+  if (dragging_ >= 0 && event->button() == Qt::LeftButton) {
+    const int knot = dragging_;
+    dragging_ = -1;
+    Eigen::Vector2d original(0, 0);
+    for (const auto& m : overlay_.labels)
+      if (m.knot == knot) original = m.px;
+    // A drag of less than a screen pixel is a selection, not a move.
+    if ((ToWidget(drag_px_) - ToWidget(original)).manhattanLength() >= 1.0)
+      emit labelDragged(camera_, knot, drag_px_);
+    update();
+  }
+}
+
+void CameraView::mouseDoubleClickEvent(QMouseEvent* event) {
+  if (event->button() == Qt::MiddleButton) Fit();
+}
+
+}  // namespace netlab::gui

@@ -1,0 +1,110 @@
+#pragma once
+// One camera's view: its frame at the current index with the labels drawn over it. Zoom at the
+// cursor (wheel), pan (drag with the middle or right button), fit (double click with the middle
+// button, or the window's key); the brush radius with Ctrl+wheel; brightness, contrast and gamma through a lookup table.
+// The view only draws and forwards: a click, Shift+click, a drag of a label and the cursor's
+// pixel go out as signals in image pixels (OpenCV's convention: the centre of the top-left pixel
+// is (0, 0)); the window decides what they do.
+
+#include <QImage>
+#include <QPointF>
+#include <QWidget>
+
+#include <optional>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+namespace netlab::gui {
+
+// What a view draws over its frame (filled by the window for the current frame and camera).
+struct ViewOverlay {
+  struct Mark {
+    int knot = -1;
+    Eigen::Vector2d px;
+    QColor colour;
+    bool review = false;
+  };
+  std::vector<Mark> labels;
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> links;  // between labeled neighbours
+  int selected_knot = -1;
+  std::vector<std::vector<Eigen::Vector2d>> epipolar;  // curves from the other cameras' labels
+  std::optional<Eigen::Vector2d> reprojected;          // the selected knot's triangulated point
+  std::vector<Eigen::Vector2d> candidates;             // Find Node's when it found several
+  QString caption;                                     // camera, frame, residual
+};
+
+class CameraView : public QWidget {
+  Q_OBJECT
+
+ public:
+  explicit CameraView(int camera, QWidget* parent = nullptr);
+
+  int camera() const { return camera_; }
+  // The frame (8-bit BGR; empty: `problem` says why nothing is shown), its size in full-
+  // resolution pixels (a half-resolution image is drawn scaled up), and what goes over it.
+  void SetFrame(const cv::Mat& bgr, int full_width, int full_height, const QString& problem = {});
+  void SetOverlay(ViewOverlay overlay);
+  const ViewOverlay& overlay() const { return overlay_; }
+  void SetShowLabels(bool show) { show_labels_ = show, update(); }
+  void SetShowLinks(bool show) { show_links_ = show, update(); }
+  void SetShowEpipolar(bool show) { show_epipolar_ = show, update(); }
+  // Display lookup: out = 255 * clamp(gain * (in / 255 - 0.5) + 0.5 + offset)^gamma.
+  void SetTone(double gain, double offset, double gamma);
+  void SetBrushRadius(double px) { brush_radius_ = px, update(); }
+  double brush_radius() const { return brush_radius_; }
+
+  // Image pixel <-> widget point.
+  QPointF ToWidget(const Eigen::Vector2d& px) const;
+  Eigen::Vector2d ToImage(const QPointF& point) const;
+  void Fit();
+  // Zooms so that the image pixel `px` is centred with `pixels_across` image pixels across.
+  void ZoomTo(const Eigen::Vector2d& px, double pixels_across);
+  double scale() const { return scale_; }
+  // The label within `radius_widget` widget pixels of the point, nearest first (-1 if none).
+  int LabelNear(const QPointF& point, double radius_widget = 8.0) const;
+  bool has_image() const { return !image_.isNull(); }
+
+ signals:
+  void clicked(int camera, Eigen::Vector2d px, Qt::KeyboardModifiers modifiers);
+  void labelDragged(int camera, int knot, Eigen::Vector2d px);  // on release: one step
+  void labelSelected(int camera, int knot);
+  void cursorMoved(int camera, Eigen::Vector2d px, QString value);
+  void activated(int camera);  // the person works in this view
+
+ protected:
+  void paintEvent(QPaintEvent* event) override;
+  void resizeEvent(QResizeEvent* event) override;
+  void wheelEvent(QWheelEvent* event) override;
+  void mousePressEvent(QMouseEvent* event) override;
+  void mouseMoveEvent(QMouseEvent* event) override;
+  void mouseReleaseEvent(QMouseEvent* event) override;
+  void mouseDoubleClickEvent(QMouseEvent* event) override;
+
+ private:
+  void RebuildImage();
+  void DrawOverlay(QPainter& painter) const;
+
+  int camera_;
+  cv::Mat frame_;       // as given
+  QImage image_;        // after the lookup table
+  int full_width_ = 0, full_height_ = 0;
+  QString problem_;
+  ViewOverlay overlay_;
+  bool show_labels_ = true, show_links_ = true, show_epipolar_ = true;
+  double gain_ = 1.0, tone_offset_ = 0.0, gamma_ = 1.0;
+  double brush_radius_ = 6.0;
+  // View transform: widget = (image + 0.5) * scale_ + offset_ (image in full-resolution px).
+  double scale_ = 1.0;
+  QPointF offset_;
+  bool fitted_ = false;
+  // Interaction.
+  std::optional<QPointF> pan_from_;
+  int dragging_ = -1;  // the knot being dragged
+  Eigen::Vector2d drag_px_;
+  QPointF cursor_;
+  bool cursor_inside_ = false;
+};
+
+}  // namespace netlab::gui

@@ -1,0 +1,217 @@
+#include "app/gui/document/label_document.h"
+
+#include <QUndoCommand>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+
+#include "common/yaml_util.h"
+
+namespace netlab::gui {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr char kJournalMagic[] = "netlab-journal";
+
+// The journal's first line: what label set it belongs to.
+std::string JournalHeader(const recon::LabelSet& set) {
+  std::string cameras;
+  for (const std::string& c : set.cameras) cameras += (cameras.empty() ? "" : ",") + c;
+  return std::string(kJournalMagic) + " 1 " + std::to_string(set.rows) + " " +
+         std::to_string(set.cols) + " " + std::to_string(set.frames()) + " " + cameras;
+}
+
+const char* ChangeName(recon::LabelStore::Change change) {
+  switch (change) {
+    case recon::LabelStore::Change::kApplied: return "applied";
+    case recon::LabelStore::Change::kUndone: return "undone";
+    case recon::LabelStore::Change::kRedone: return "redone";
+  }
+  return "?";
+}
+
+std::string Number(double v) {
+  if (!std::isfinite(v)) return "nan";
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.17g", v);
+  return buffer;
+}
+
+}  // namespace
+
+// One step of the store as a command of the stack. Pushed after the store applied it (so the
+// first redo does nothing); undo and redo drive the store, whose listener then journals and
+// notifies.
+class LabelDocument::StoreStep : public QUndoCommand {
+ public:
+  StoreStep(LabelDocument* doc, const std::string& name)
+      : QUndoCommand(QString::fromStdString(name)), doc_(doc) {}
+  void undo() override { Drive([this] { doc_->store_.Undo(); }); }
+  void redo() override {
+    if (first_) {
+      first_ = false;
+      return;
+    }
+    Drive([this] { doc_->store_.Redo(); });
+  }
+
+ private:
+  template <typename F>
+  void Drive(F f) {
+    doc_->replaying_undo_ = true;
+    f();
+    doc_->replaying_undo_ = false;
+  }
+  LabelDocument* doc_;
+  bool first_ = true;
+};
+
+LabelDocument::LabelDocument(recon::LabelSet labels, std::string labels_path, QObject* parent)
+    : QObject(parent), store_(std::move(labels)), labels_path_(std::move(labels_path)) {
+  // What is under review at the start.
+  const recon::LabelSet& set = store_.labels();
+  for (int c = 0; c < static_cast<int>(set.cameras.size()); ++c)
+    for (int t = 0; t < set.frames(); ++t)
+      for (int k = 0; k < set.knots(); ++k)
+        if (set.at(c, t, k).present() && set.at(c, t, k).state == recon::LabelState::kNeedsReview)
+          review_.insert({t, c, k});
+  store_.SetListener([this](recon::LabelStore::Change change, const std::string& step,
+                            const std::vector<recon::LabelEdit>& now) {
+    OnStoreChanged(change, step, now);
+  });
+  connect(&undo_, &QUndoStack::cleanChanged, this,
+          [this](bool clean) { emit modifiedChanged(!clean); });
+}
+
+LabelDocument::~LabelDocument() { store_.SetListener({}); }
+
+int LabelDocument::Apply(const std::string& name, const std::vector<recon::LabelEdit>& edits) {
+  return store_.Apply(name, edits);
+}
+
+void LabelDocument::OnStoreChanged(recon::LabelStore::Change change, const std::string& step,
+                                   const std::vector<recon::LabelEdit>& now) {
+  // The journal first: an edit the window shows is an edit that survives a crash.
+  Journal(change, step, now);
+  std::set<int> frames;
+  for (const recon::LabelEdit& e : now) {
+    frames.insert(e.t);
+    if (e.label.present() && e.label.state == recon::LabelState::kNeedsReview)
+      review_.insert({e.t, e.camera, e.knot});
+    else
+      review_.erase({e.t, e.camera, e.knot});
+  }
+  if (change == recon::LabelStore::Change::kApplied && !replaying_undo_)
+    undo_.push(new StoreStep(this, step));
+  emit labelsChanged(QList<int>(frames.begin(), frames.end()));
+}
+
+void LabelDocument::Journal(recon::LabelStore::Change change, const std::string& step,
+                            const std::vector<recon::LabelEdit>& now) {
+  if (!journal_.is_open()) {
+    journal_.open(JournalPath(labels_path_), std::ios::trunc);
+    journal_ << JournalHeader(store_.labels()) << "\n";
+  }
+  journal_ << "step " << ChangeName(change) << " " << step << "\n";
+  for (const recon::LabelEdit& e : now)
+    journal_ << e.camera << " " << e.t << " " << e.knot << " " << Number(e.label.px.x()) << " "
+             << Number(e.label.px.y()) << " " << static_cast<int>(e.label.source) << " "
+             << Number(e.label.confidence) << " " << static_cast<int>(e.label.state) << "\n";
+  journal_ << "end\n";
+  journal_.flush();
+}
+
+std::string LabelDocument::Reason(int camera, int t, int knot) const {
+  if (at(camera, t, knot).state != recon::LabelState::kNeedsReview) return "";
+  const auto it = reasons_.find({camera, t, knot});
+  return it == reasons_.end() ? "" : it->second;
+}
+
+void LabelDocument::MergeReasons(const recon::ReviewReasons& reasons) {
+  for (const auto& [key, why] : reasons) reasons_[key] = why;
+}
+
+std::vector<LabelKey> LabelDocument::ReviewItems() const {
+  std::vector<LabelKey> items;
+  items.reserve(review_.size());
+  for (const auto& [t, c, k] : review_) items.emplace_back(c, t, k);
+  return items;
+}
+
+std::set<int> LabelDocument::ReviewFrames() const {
+  std::set<int> frames;
+  for (const auto& item : review_) frames.insert(std::get<0>(item));
+  return frames;
+}
+
+void LabelDocument::Save() {
+  store_.Save(labels_path_);  // .partial + rename: on failure the old file stays
+  undo_.setClean();
+  if (journal_.is_open()) journal_.close();
+  std::error_code ignored;
+  fs::remove(JournalPath(labels_path_), ignored);
+}
+
+bool LabelDocument::HasJournal(const std::string& labels_path) {
+  return fs::exists(JournalPath(labels_path));
+}
+
+int LabelDocument::Recover() {
+  const std::string path = JournalPath(labels_path_);
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open the journal");
+  std::string line;
+  std::getline(in, line);
+  if (line != JournalHeader(store_.labels()))
+    throw InputError(path + ":1: the journal is of another label set (" + line + ", this is " +
+                     JournalHeader(store_.labels()) + ")");
+  // Every complete step's labels as they ended up; a step cut short by the crash is left out.
+  std::map<LabelKey, recon::Label> last;
+  std::vector<std::pair<LabelKey, recon::Label>> pending;
+  const recon::LabelSet& set = store_.labels();
+  for (int line_no = 2; std::getline(in, line); ++line_no) {
+    if (line.rfind("step ", 0) == 0) {
+      pending.clear();
+    } else if (line == "end") {
+      for (const auto& [key, label] : pending) last[key] = label;
+      pending.clear();
+    } else {
+      std::istringstream fields(line);
+      int c, t, k, source, state;
+      std::string x, y, confidence;
+      if (!(fields >> c >> t >> k >> x >> y >> source >> confidence >> state) || c < 0 ||
+          c >= static_cast<int>(set.cameras.size()) || t < 0 || t >= set.frames() || k < 0 ||
+          k >= set.knots())
+        throw InputError(path + ":" + std::to_string(line_no) + ": not a label of this set: " +
+                         line);
+      recon::Label label;
+      label.px = {std::stod(x), std::stod(y)};
+      label.source = static_cast<recon::LabelSource>(source);
+      label.confidence = std::stof(confidence);
+      label.state = static_cast<recon::LabelState>(state);
+      pending.emplace_back(LabelKey{c, t, k}, label);
+    }
+  }
+  in.close();
+  std::vector<recon::LabelEdit> edits;
+  for (const auto& [key, label] : last)
+    edits.push_back({std::get<0>(key), std::get<1>(key), std::get<2>(key), label});
+  // The old journal stays until the recovered step is in the new one.
+  const std::string kept = path + ".recovering";
+  fs::rename(path, kept);
+  const int restored = Apply("Recover unsaved edits", edits);
+  std::error_code ignored;
+  fs::remove(kept, ignored);
+  return restored;
+}
+
+void LabelDocument::DiscardJournal() {
+  if (journal_.is_open()) journal_.close();
+  std::error_code ignored;
+  fs::remove(JournalPath(labels_path_), ignored);
+}
+
+}  // namespace netlab::gui

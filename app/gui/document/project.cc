@@ -1,0 +1,103 @@
+#include "app/gui/document/project.h"
+
+#include <filesystem>
+#include <fstream>
+
+#include "common/files.h"
+#include "common/yaml_util.h"
+#include "libreconstruct/coloring/net_coloring.h"
+
+namespace netlab::gui {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string Resolve(const fs::path& folder, const std::string& file) {
+  if (file.empty()) return "";
+  const fs::path p(file);
+  return (p.is_absolute() ? p : folder / p).lexically_normal().string();
+}
+
+// `file` relative to `folder` when it lies below it, else absolute.
+std::string Relative(const fs::path& folder, const std::string& file) {
+  if (file.empty()) return "";
+  const fs::path rel = fs::absolute(file).lexically_normal().lexically_relative(folder);
+  if (rel.empty() || *rel.begin() == "..") return fs::absolute(file).lexically_normal().string();
+  return rel.string();
+}
+
+}  // namespace
+
+Project LoadProject(const std::string& path) {
+  const YamlMap root(LoadYamlFile(path), path, "");
+  root.AllowOnly({"netlab_project", "experiment", "rig", "coloring", "labels", "net"});
+  if (root.Int("netlab_project") != 1)
+    throw InputError(root.Where("netlab_project") + ": version 1 expected");
+  Project p;
+  p.path = fs::absolute(path).lexically_normal().string();
+  const fs::path folder = fs::path(p.path).parent_path();
+  p.experiment = Resolve(folder, root.String("experiment"));
+  p.rig = Resolve(folder, root.String("rig"));
+  p.coloring = Resolve(folder, root.String("coloring", ""));
+  p.labels = Resolve(folder, root.String("labels"));
+  if (root.Has("net")) {
+    const YamlMap net = root.Map("net");
+    net.AllowOnly({"rows", "cols", "mesh"});
+    p.rows = net.Int("rows");
+    p.cols = net.Int("cols");
+    p.mesh_m = net.Positive("mesh", 0.0, true);
+    if (p.rows < 2 || p.cols < 2 || p.rows > 1000 || p.cols > 1000)
+      throw InputError(net.Where("rows") + ": the net needs 2..1000 rows and columns (got " +
+                       std::to_string(p.rows) + "x" + std::to_string(p.cols) + ")");
+  } else if (!p.coloring.empty()) {
+    const recon::NetColoring coloring = recon::ReadColoring(p.coloring);
+    p.rows = coloring.rows, p.cols = coloring.cols;
+  } else {
+    throw InputError(root.Where("net") + ": the net's grid is needed (net: {rows, cols}) when " +
+                     "there is no coloring");
+  }
+  return p;
+}
+
+void SaveProject(const Project& project, const std::string& path) {
+  const fs::path folder = fs::absolute(path).lexically_normal().parent_path();
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  out << YAML::Key << "netlab_project" << YAML::Value << 1;
+  out << YAML::Key << "experiment" << YAML::Value << Relative(folder, project.experiment);
+  out << YAML::Key << "rig" << YAML::Value << Relative(folder, project.rig);
+  if (!project.coloring.empty())
+    out << YAML::Key << "coloring" << YAML::Value << Relative(folder, project.coloring);
+  out << YAML::Key << "labels" << YAML::Value << Relative(folder, project.labels);
+  out << YAML::Key << "net" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  out << YAML::Key << "rows" << YAML::Value << project.rows;
+  out << YAML::Key << "cols" << YAML::Value << project.cols;
+  if (project.mesh_m > 0) out << YAML::Key << "mesh" << YAML::Value << project.mesh_m;
+  out << YAML::EndMap << YAML::EndMap;
+  const std::string partial = path + ".partial";
+  {
+    std::ofstream file(partial);
+    file << out.c_str() << "\n";
+    if (!file) throw std::runtime_error(path + ": cannot write " + partial);
+  }
+  RenameInto(partial, path);
+}
+
+Project MakeProject(const std::string& experiment, const std::string& rig,
+                    const std::string& coloring, const std::string& labels, int rows, int cols) {
+  Project p;
+  p.experiment = fs::absolute(experiment).lexically_normal().string();
+  p.rig = fs::absolute(rig).lexically_normal().string();
+  p.coloring = coloring.empty() ? "" : fs::absolute(coloring).lexically_normal().string();
+  p.labels = fs::absolute(labels).lexically_normal().string();
+  p.rows = rows, p.cols = cols;
+  if ((rows <= 0 || cols <= 0) && !coloring.empty()) {
+    const recon::NetColoring c = recon::ReadColoring(coloring);
+    p.rows = c.rows, p.cols = c.cols;
+  }
+  if (p.rows < 2 || p.cols < 2)
+    throw InputError("the net's grid is unknown: give --coloring or --knots ROWSxCOLS");
+  return p;
+}
+
+}  // namespace netlab::gui

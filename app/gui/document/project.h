@@ -1,0 +1,43 @@
+#pragma once
+// The project file of the workstation (project.yaml): what one labeling job is made of. Paths
+// are stored relative to the project file's folder (absolute ones stay absolute), so a project
+// folder can be moved or copied whole.
+//
+//   netlab_project: 1
+//   experiment: shot/experiment.yaml    # the four camera streams (recording/experiment.h)
+//   rig: rig.yaml                       # the calibrated rig; its cameras include the experiment's
+//   coloring: coloring.yaml             # optional: the yarn colours (netlab color-net)
+//   labels: labels.h5                   # created on the first save when it does not exist
+//   net: {rows: 11, cols: 11, mesh: 0.1}  # the grid; mesh (m, knot to knot) optional
+//
+// Without `net`, the grid is the colouring's. Bad input throws netlab::InputError naming the file,
+// line and key.
+
+#include <string>
+
+namespace netlab::gui {
+
+struct Project {
+  std::string path;        // the project file itself (absolute)
+  std::string experiment;  // absolute paths, resolved against the project's folder
+  std::string rig;
+  std::string coloring;    // "" when none
+  std::string labels;
+  int rows = 0, cols = 0;  // the net's knots
+  double mesh_m = 0.0;     // link length, m; 0: estimated by the engine
+
+  int knots() const { return rows * cols; }
+};
+
+Project LoadProject(const std::string& path);
+// Writes `project` to `path` (relative paths where the files lie under its folder) through
+// "<path>.partial" and a rename; std::runtime_error when it cannot.
+void SaveProject(const Project& project, const std::string& path);
+
+// A project for an experiment: the other files absolute or relative to the working directory;
+// the grid from `coloring` when rows/cols are 0. InputError when the colouring cannot be read
+// and no grid is given.
+Project MakeProject(const std::string& experiment, const std::string& rig,
+                    const std::string& coloring, const std::string& labels, int rows, int cols);
+
+}  // namespace netlab::gui

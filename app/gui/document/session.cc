@@ -1,0 +1,263 @@
+#include "app/gui/document/session.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <stdexcept>
+
+#include "calibration/camera.h"
+#include "common/yaml_util.h"
+#include "libreconstruct/coloring/net_coloring.h"
+#include "libreconstruct/labeling/knot_detect.h"
+#include "libreconstruct/labeling/label_identity.h"
+#include "libreconstruct/recording/experiment.h"
+
+namespace netlab::gui {
+namespace {
+
+// The labels of the project: its file when it exists (the same net and cameras), else empty.
+recon::LabelSet OpenLabels(const Project& p, const std::vector<std::string>& cameras,
+                           const std::vector<int>& frames) {
+  recon::LabelSet empty = recon::LabelSet::Empty(p.rows, p.cols, cameras, frames);
+  if (!std::filesystem::exists(p.labels)) return empty;
+  const recon::LabelSet read = recon::ReadLabelsAny(p.labels, p.rows, p.cols, cameras);
+  // Onto the recording's frames, by camera name and frame number.
+  for (size_t rc = 0; rc < read.cameras.size(); ++rc) {
+    const int c = empty.FindCamera(read.cameras[rc]);
+    if (c < 0)
+      throw InputError(p.labels + ": camera '" + read.cameras[rc] + "' is not in the experiment");
+    for (int rt = 0; rt < read.frames(); ++rt) {
+      const int t = read.frame_index[rt] - frames.front();
+      if (t < 0 || t >= empty.frames())
+        throw InputError(p.labels + ": frame " + std::to_string(read.frame_index[rt]) +
+                         " is outside the recording's frames " + std::to_string(frames.front()) +
+                         ":" + std::to_string(frames.back()));
+      for (int k = 0; k < empty.knots(); ++k)
+        empty.at(c, t, k) = read.at(static_cast<int>(rc), rt, k);
+    }
+  }
+  return empty;
+}
+
+bool Accepted(const recon::Label& l) {
+  return l.present() && l.state == recon::LabelState::kAccepted;
+}
+
+}  // namespace
+
+std::unique_ptr<Session> Session::Open(const Project& project,
+                                       recon::FrameCacheOptions cache_options) {
+  std::unique_ptr<Session> s(new Session());
+  s->project_ = project;
+  s->sequence_ =
+      std::make_unique<recon::SynchronizedSequence>(recon::LoadExperiment(project.experiment));
+  s->rig_ = calib::ReadRig(project.rig);
+  for (const auto& c : s->sequence_->experiment().cameras) {
+    const int r = s->rig_.Find(c.name);
+    if (r < 0)
+      throw InputError(project.rig + ": no camera '" + c.name +
+                       "' (the experiment's cameras must be in the rig)");
+    s->camera_names_.push_back(c.name);
+    s->rig_index_.push_back(r);
+  }
+  if (s->sequence_->last_frame() < s->sequence_->first_frame())
+    throw InputError(project.experiment + ": the recording has no frames");
+  for (int f = s->sequence_->first_frame(); f <= s->sequence_->last_frame(); ++f)
+    s->frame_numbers_.push_back(f);
+  // The colour check, when the project has the net's colouring.
+  if (!project.coloring.empty()) {
+    std::vector<std::array<int, 3>> dyes;
+    const recon::NetColoring coloring = recon::ReadColoring(project.coloring, &dyes);
+    if (coloring.rows != project.rows || coloring.cols != project.cols)
+      throw InputError(project.coloring + ": a " + std::to_string(coloring.rows) + "x" +
+                       std::to_string(coloring.cols) + " net, the project's is " +
+                       std::to_string(project.rows) + "x" + std::to_string(project.cols));
+    s->codebook_ = recon::CodebookFromColoring(coloring, dyes, recon::Lighting{});
+    s->identity_.identify.bayer = s->sequence_->experiment().cameras.front().bayer;
+  }
+  s->engine_options_.link_length_m = project.mesh_m;
+  s->cache_ = std::make_unique<recon::FrameCache>(*s->sequence_, cache_options);
+  s->document_ = std::make_unique<LabelDocument>(
+      OpenLabels(project, s->camera_names_, s->frame_numbers_), project.labels);
+  return s;
+}
+
+Session::~Session() {
+  engine_.reset();  // it points into the document's store
+}
+
+cv::Mat Session::Image(int camera, int t, std::string* error) const {
+  const auto image = cache_->Get(camera, frame_numbers_[t], 0, error);
+  return image ? *image : cv::Mat();
+}
+
+std::unique_ptr<recon::LabelEngine> Session::MakeEngine(recon::LabelStore* store) const {
+  auto engine = std::make_unique<recon::LabelEngine>(
+      store, &rig_, [this](int c, int t) { return Image(c, t); }, engine_options_);
+  if (codebook_) engine->SetCodebook(*codebook_, identity_);
+  return engine;
+}
+
+recon::LabelEngine& Session::engine() {
+  if (!engine_) engine_ = MakeEngine(document_->store());
+  return *engine_;
+}
+
+recon::FindNodeResult Session::FindNode(int camera, int t, int knot, const Eigen::Vector2d& centre,
+                                        double radius_px) {
+  const recon::FindNodeResult result = engine().FindNodeAt(camera, t, knot, centre, radius_px);
+  document_->MergeReasons(engine().reasons());
+  return result;
+}
+
+void Session::PlaceLabel(int camera, int t, int knot, const Eigen::Vector2d& px,
+                         const std::string& step) {
+  recon::Label label;
+  label.px = px;
+  label.source = recon::LabelSource::kManual;
+  label.confidence = 1.0f;
+  label.state = recon::LabelState::kAccepted;
+  document_->Apply(step, {{camera, t, knot, label}});
+}
+
+void Session::AcceptLabel(int camera, int t, int knot) {
+  recon::Label label = document_->at(camera, t, knot);
+  if (!label.present()) return;
+  label.state = recon::LabelState::kAccepted;
+  document_->Apply("Accept", {{camera, t, knot, label}});
+}
+
+void Session::DeleteLabel(int camera, int t, int knot) {
+  document_->Apply("Delete", {{camera, t, knot, recon::Label{}}});
+}
+
+std::string Session::FindPathBetween(int camera, int t, int knot_a, int knot_b) {
+  const recon::Label& a = document_->at(camera, t, knot_a);
+  const recon::Label& b = document_->at(camera, t, knot_b);
+  if (!a.present() || !b.present()) return "both ends of the path must be labeled";
+  std::string error;
+  const cv::Mat image = Image(camera, t, &error);
+  if (image.empty()) return "frame unreadable: " + error;
+  const recon::FindPathResult path = recon::FindPath(image, project_.cols, knot_a, a.px, knot_b,
+                                                     b.px, engine_options_.detector);
+  if (!path.ok) return path.why;
+  std::vector<recon::LabelEdit> edits;
+  for (size_t i = 0; i < path.knots.size(); ++i) {
+    recon::Label label;
+    label.px = path.junctions[i].px;
+    label.source = recon::LabelSource::kFindPath;
+    label.confidence = 1.0f;
+    label.state = recon::LabelState::kAccepted;
+    edits.push_back({camera, t, path.knots[i], label});
+  }
+  document_->Apply("Find Path", edits);
+  return "";
+}
+
+recon::EngineCounts Session::FindPathFromCorners(int t) {
+  // One step each (Find Path, then the check): undo takes back the check first.
+  recon::EngineCounts counts = engine().LabelFirstFrame(t);
+  const recon::EngineCounts checked = engine().CrossCheck(t);
+  counts.accepted += checked.accepted, counts.review += checked.review;
+  document_->MergeReasons(engine().reasons());
+  return counts;
+}
+
+recon::EngineCounts Session::FillGrid(int t) {
+  const recon::EngineCounts counts = engine().CrossCheck(t);
+  document_->MergeReasons(engine().reasons());
+  return counts;
+}
+
+Session::TrackRun Session::Track(recon::LabelSet snapshot, int from, int to,
+                                 const std::atomic<bool>* cancel,
+                                 const std::function<void(int, int)>& progress,
+                                 int max_review) const {
+  TrackRun run;
+  run.from = from, run.to = to, run.last_done = from;
+  const recon::LabelSet before = snapshot;
+  recon::LabelStore store(std::move(snapshot));
+  const std::unique_ptr<recon::LabelEngine> engine = MakeEngine(&store);
+  const int total = std::abs(to - from);
+  engine->TrackFrames(from, to, [&](int t) {
+    run.last_done = t;
+    if (progress) progress(std::abs(t - from), total);
+    if (cancel && cancel->load()) {
+      run.cancelled = true;
+      return false;
+    }
+    int review = 0;
+    for (int c = 0; c < cameras(); ++c)
+      for (int k = 0; k < store.labels().knots(); ++k)
+        review += store.at(c, t, k).present() &&
+                  store.at(c, t, k).state == recon::LabelState::kNeedsReview;
+    if (max_review > 0 && review > max_review) {
+      run.stopped_for_review = true;
+      return false;
+    }
+    return true;
+  });
+  // What the run changed, in the rows it went through.
+  const int lo = std::min(from, run.last_done), hi = std::max(from, run.last_done);
+  for (int c = 0; c < cameras(); ++c)
+    for (int t = lo; t <= hi; ++t)
+      for (int k = 0; k < before.knots(); ++k) {
+        const recon::Label& a = before.at(c, t, k);
+        const recon::Label& b = store.at(c, t, k);
+        const bool same = a.present() == b.present() && a.state == b.state &&
+                          a.source == b.source && (!a.present() || a.px == b.px);
+        if (!same) run.edits.push_back({c, t, k, b});
+      }
+  run.reasons = engine->reasons();
+  return run;
+}
+
+int Session::ApplyTrackRun(const TrackRun& run) {
+  document_->MergeReasons(run.reasons);
+  const std::string name = "Track frames " + std::to_string(frame_numbers_[run.from]) + "-" +
+                           std::to_string(frame_numbers_[run.last_done]);
+  return document_->Apply(name, run.edits);
+}
+
+recon::PointEstimate Session::Triangulate(int t, int knot) const {
+  std::vector<recon::Observation> obs;
+  for (int c = 0; c < cameras(); ++c)
+    if (Accepted(document_->at(c, t, knot)))
+      obs.push_back({rig_index_[c], document_->at(c, t, knot).px});
+  if (obs.size() < 2) {
+    recon::PointEstimate none;
+    none.why = "labeled in fewer than two cameras";
+    return none;
+  }
+  return recon::TriangulatePoint(rig_, obs);
+}
+
+std::vector<std::vector<Eigen::Vector2d>> Session::EpipolarCurve(int from, const Eigen::Vector2d& px,
+                                                                 int to) const {
+  const calib::Camera& a = rig_camera(from);
+  const calib::Camera& b = rig_camera(to);
+  std::vector<std::vector<Eigen::Vector2d>> pieces(1);
+  const Eigen::Vector2d xy = calib::UndistortPoint(a.intrinsics, px);
+  if (!xy.allFinite()) return {};
+  // The viewing ray in the world, sampled at depths spaced evenly in 1 / depth (even in the
+  // other image, roughly), each point projected through b's lens.
+  const calib::Rigid3d world_from_a = a.cam_from_world.Inverse();
+  constexpr int kSamples = 160;
+  constexpr double kNear = 0.2, kFar = 20.0;  // m
+  for (int i = 0; i <= kSamples; ++i) {
+    const double inverse = 1.0 / kNear + (1.0 / kFar - 1.0 / kNear) * i / kSamples;
+    const Eigen::Vector3d p_in_a = Eigen::Vector3d(xy.x(), xy.y(), 1.0) / inverse;
+    const Eigen::Vector2d q = b.ProjectWorld(world_from_a * p_in_a);
+    const bool inside = q.allFinite() && q.x() >= -0.5 && q.y() >= -0.5 &&
+                        q.x() <= b.intrinsics.width - 0.5 && q.y() <= b.intrinsics.height - 0.5;
+    if (inside)
+      pieces.back().push_back(q);
+    else if (!pieces.back().empty())
+      pieces.emplace_back();
+  }
+  if (pieces.back().empty()) pieces.pop_back();
+  return pieces;
+}
+
+}  // namespace netlab::gui

@@ -1,0 +1,125 @@
+#pragma once
+// One open project, without a window: the recording (frames through a bounded cache), the rig,
+// the net's colouring, the labels document and the engine's tools as undoable steps. The window
+// draws what a Session holds and forwards the person's actions to it; tests drive it directly.
+//
+//   auto session = Session::Open(LoadProject("project.yaml"));   // InputError names the file
+//   session->FindNode(camera, t, knot, click_px, 6.0);           // one undo step
+//   auto run = session->Track(session->document().labels(), t, t + 30, &cancel);  // any thread
+//   session->ApplyTrackRun(run);                                 // GUI thread: one undo step
+//
+// Frame rows t = 0 .. frames() - 1 are the recording's frames first_frame() + t.
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "app/gui/document/label_document.h"
+#include "app/gui/document/project.h"
+#include "calibration/rig.h"
+#include "libreconstruct/geometry/triangulation.h"
+#include "libreconstruct/labeling/label_engine.h"
+#include "libreconstruct/recording/frame_cache.h"
+#include "libreconstruct/recording/sequence.h"
+
+namespace netlab::gui {
+
+class Session {
+ public:
+  // Opens the project's files: InputError (or std::runtime_error) naming the file and what is
+  // wrong. The labels file is read when it exists (its net and cameras must match), else the
+  // labels start empty.
+  static std::unique_ptr<Session> Open(const Project& project,
+                                       recon::FrameCacheOptions cache_options = {});
+  ~Session();
+
+  const Project& project() const { return project_; }
+  const recon::SynchronizedSequence& sequence() const { return *sequence_; }
+  recon::FrameCache& cache() { return *cache_; }
+  const calib::Rig& rig() const { return rig_; }
+  LabelDocument& document() { return *document_; }
+  const LabelDocument& document() const { return *document_; }
+  int cameras() const { return static_cast<int>(camera_names_.size()); }
+  const std::vector<std::string>& camera_names() const { return camera_names_; }
+  int frames() const { return static_cast<int>(frame_numbers_.size()); }
+  int frame_number(int t) const { return frame_numbers_[t]; }
+  const std::vector<int>& frame_numbers() const { return frame_numbers_; }
+  double fps() const { return sequence_->experiment().fps; }
+  // The rig camera of store camera c.
+  const calib::Camera& rig_camera(int c) const { return rig_.cameras[rig_index_[c]]; }
+
+  // The full-resolution BGR image of (camera, t) from the cache; empty with the reason when it
+  // cannot be read. Thread-safe.
+  cv::Mat Image(int camera, int t, std::string* error = nullptr) const;
+
+  // The tools, each one undoable step (GUI thread). Find Node: the person's brush (never a
+  // guess: none or several leave the labels as they were).
+  recon::FindNodeResult FindNode(int camera, int t, int knot, const Eigen::Vector2d& centre,
+                                 double radius_px);
+  // A label exactly where the person put it (source: person, accepted). Also accepts and corrects
+  // a derived or doubtful label in one gesture (a drag ends here).
+  void PlaceLabel(int camera, int t, int knot, const Eigen::Vector2d& px,
+                  const std::string& step = "Place");
+  void AcceptLabel(int camera, int t, int knot);
+  void DeleteLabel(int camera, int t, int knot);
+  // Find Path between two labeled knots of one row or column in (camera, t): the knots between
+  // labeled (accepted: the path's junctions are evenly spaced, or it is refused). Returns the
+  // refusal's reason, "" on success.
+  std::string FindPathBetween(int camera, int t, int knot_a, int knot_b);
+  // Find Path from the four seeded corners in every camera that has them, then the epipolar
+  // check and Fill Grid (the first frame of netlab label).
+  recon::EngineCounts FindPathFromCorners(int t);
+  // The epipolar check and Fill Grid in frame t.
+  recon::EngineCounts FillGrid(int t);
+
+  // A tracking run from labeled row `from` towards `to` on `snapshot` (document().labels(),
+  // copied on the GUI thread); runs on any thread and never touches the document. Stops when
+  // `cancel` is set, or after a frame with more than max_review labels kept for review (0: no
+  // limit). progress(done, total) is called from the running thread.
+  struct TrackRun {
+    int from = 0, to = 0, last_done = 0;
+    bool cancelled = false, stopped_for_review = false;
+    std::vector<recon::LabelEdit> edits;  // what the run changed
+    recon::ReviewReasons reasons;
+  };
+  TrackRun Track(recon::LabelSet snapshot, int from, int to, const std::atomic<bool>* cancel,
+                 const std::function<void(int done, int total)>& progress = {},
+                 int max_review = 0) const;
+  // Applies a run as one undo step (GUI thread). Returns the labels changed.
+  int ApplyTrackRun(const TrackRun& run);
+
+  // The knot's point from the accepted labels of frame t (two views or more), with the
+  // reprojection residual per view.
+  recon::PointEstimate Triangulate(int t, int knot) const;
+  // Where a label (camera `from`, pixel px) can be in camera `to`: its viewing ray, projected
+  // through `to`'s lens distortion, as a polyline (depths 0.2 .. 20 m; points behind `to` or
+  // outside its image are left out, splitting the curve).
+  std::vector<std::vector<Eigen::Vector2d>> EpipolarCurve(int from, const Eigen::Vector2d& px,
+                                                          int to) const;
+
+ private:
+  Session() = default;
+  std::unique_ptr<recon::LabelEngine> MakeEngine(recon::LabelStore* store) const;
+  recon::LabelEngine& engine();
+
+  Project project_;
+  std::unique_ptr<recon::SynchronizedSequence> sequence_;
+  std::unique_ptr<recon::FrameCache> cache_;
+  calib::Rig rig_;
+  std::vector<int> rig_index_;
+  std::vector<std::string> camera_names_;
+  std::vector<int> frame_numbers_;
+  std::optional<recon::KnotCodebook> codebook_;
+  recon::IdentityCheckOptions identity_;
+  recon::LabelEngineOptions engine_options_;
+  std::unique_ptr<LabelDocument> document_;
+  std::unique_ptr<recon::LabelEngine> engine_;  // over the document's store (GUI thread)
+};
+
+}  // namespace netlab::gui

@@ -1,0 +1,126 @@
+// netlab gui [PROJECT.yaml [--frame N] [--screenshot OUT.png]]
+// netlab gui EXPERIMENT.yaml --rig RIG --labels LABELS [--coloring C] [--knots RxC] [--project P]
+#include "app/gui/gui_command.h"
+
+#include <QApplication>
+#include <QFileInfo>
+
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <filesystem>
+
+#include "app/cli/command_line.h"
+#include "app/gui/document/project.h"
+#include "app/gui/main_window.h"
+#include "common/yaml_util.h"
+
+namespace netlab::gui {
+namespace {
+
+constexpr char kHelp[] =
+    "usage: netlab gui [PROJECT.yaml] [--frame N] [--screenshot OUT.png]\n"
+    "       netlab gui EXPERIMENT.yaml --rig rig.yaml --labels labels.h5 [--coloring C.yaml]\n"
+    "                  [--knots RxC] [--project project.yaml]\n\n"
+    "The labeling workstation (docs/gui.md): four synchronized camera views, Find Node, Find\n"
+    "Path, Fill Grid and tracking as undoable steps, the review queue, autosave with recovery.\n"
+    "  netlab gui                  an empty window: File > Open / New project, recent projects\n"
+    "  netlab gui PROJECT.yaml     opens a project (experiment, rig, colouring, labels, net)\n"
+    "  netlab gui EXPERIMENT.yaml --rig ... --labels ...\n"
+    "                              makes a project of them (written to --project, default\n"
+    "                              project.yaml beside the labels file) and opens it\n\n"
+    "options:\n"
+    "  --frame N           open at frame number N\n"
+    "  --screenshot FILE   draw the frame with its overlays, save the window as PNG and exit\n"
+    "                      (works without a display)\n"
+    "  --rig, --labels, --coloring FILE, --knots RxC (without a colouring), --project FILE\n\n"
+    "Keys: F1 in the window lists them all. exit status: 0, 1 bad input, 2 usage error.\n";
+
+bool IsProjectFile(const std::string& path) {
+  const YAML::Node root = LoadYamlFile(path);
+  return root.IsMap() && root["netlab_project"];
+}
+
+bool HasDisplay() {
+  return std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY") ||
+         std::getenv("QT_QPA_PLATFORM");
+}
+
+}  // namespace
+
+int RunGui(const std::vector<std::string>& args) {
+  std::string project_path, screenshot;
+  int frame = -1;
+  try {
+    const app::CommandLine cl(args, {"help"},
+                              {"frame", "screenshot", "rig", "labels", "coloring", "knots",
+                               "project"});
+    if (cl.Flag("help")) {
+      std::fputs(kHelp, stdout);
+      return 0;
+    }
+    if (cl.positional().size() > 1)
+      throw app::UsageError("expected at most one project or experiment file");
+    screenshot = cl.Option("screenshot").value_or("");
+    frame = cl.IntOption("frame", -1, 0, 100000000);
+    if (!cl.positional().empty()) {
+      const std::string& file = cl.positional()[0];
+      if (IsProjectFile(file)) {
+        project_path = file;
+      } else {
+        // An experiment: make its project first.
+        int rows = 0, cols = 0;
+        if (cl.Option("knots")) cl.Knots("knots", &rows, &cols);
+        const std::string labels = cl.Required("labels");
+        const Project project = MakeProject(file, cl.Required("rig"),
+                                            cl.Option("coloring").value_or(""), labels, rows, cols);
+        project_path = cl.Option("project").value_or(
+            (std::filesystem::absolute(labels).parent_path() / "project.yaml").string());
+        SaveProject(project, project_path);
+        std::fprintf(stderr, "netlab gui: wrote %s\n", project_path.c_str());
+      }
+    } else if (!screenshot.empty()) {
+      throw app::UsageError("--screenshot needs a project");
+    }
+  } catch (const app::UsageError& e) {
+    std::fprintf(stderr, "netlab gui: %s\n\n%s", e.what(), kHelp);
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "netlab gui: %s\n", e.what());
+    return 1;
+  }
+  // A screenshot needs no screen; a window does.
+  if (!screenshot.empty() && !HasDisplay()) setenv("QT_QPA_PLATFORM", "offscreen", 1);
+  if (screenshot.empty() && !HasDisplay()) {
+    std::fprintf(stderr,
+                 "netlab gui: no display (DISPLAY is not set). Run it on a desktop, under "
+                 "xvfb-run, or with --screenshot.\n");
+    return 1;
+  }
+  int argc = 1;
+  char name[] = "netlab";
+  char* argv[] = {name, nullptr};
+  QApplication app(argc, argv);
+  QApplication::setOrganizationName("netlab");
+  QApplication::setApplicationName("netlab-gui");
+  MainWindow window;
+  if (!project_path.empty()) {
+    if (!window.OpenProject(QString::fromStdString(project_path), screenshot.empty())) return 1;
+    if (frame >= 0) window.SetFrame(frame - window.session()->frame_number(0));
+  }
+  if (!screenshot.empty()) {
+    window.resize(1600, 1000);
+    window.show();
+    if (!window.WaitForFrame()) std::fprintf(stderr, "netlab gui: the frame did not load in time\n");
+    if (!window.grab().save(QString::fromStdString(screenshot))) {
+      std::fprintf(stderr, "netlab gui: cannot write %s\n", screenshot.c_str());
+      return 1;
+    }
+    std::fprintf(stderr, "netlab gui: wrote %s\n", screenshot.c_str());
+    return 0;
+  }
+  window.show();
+  return QApplication::exec();
+}
+
+}  // namespace netlab::gui

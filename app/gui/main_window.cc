@@ -1,0 +1,887 @@
+#include "app/gui/main_window.h"
+
+#include <QtConcurrent/QtConcurrent>
+
+#include <QAction>
+#include <QApplication>
+#include <QCloseEvent>
+#include <QDateTime>
+#include <QDialog>
+#include <QDockWidget>
+#include <QElapsedTimer>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QGridLayout>
+#include <QHBoxLayout>
+#include <QHeaderView>
+#include <QInputDialog>
+#include <QLabel>
+#include <QMenuBar>
+#include <QMessageBox>
+#include <QProgressDialog>
+#include <QPushButton>
+#include <QSortFilterProxyModel>
+#include <QSpinBox>
+#include <QStackedWidget>
+#include <QStatusBar>
+#include <QTableView>
+#include <QTableWidget>
+#include <QTimer>
+#include <QToolBar>
+#include <QUndoStack>
+#include <QVBoxLayout>
+
+#include <algorithm>
+#include <cmath>
+#include <exception>
+
+#include "app/gui/camera_view.h"
+#include "app/gui/settings.h"
+#include "app/gui/timeline.h"
+
+namespace netlab::gui {
+namespace {
+
+// Label colours: by state first (review: orange diamonds), then by where the label came from.
+QColor LabelColour(const recon::Label& l) {
+  if (l.state == recon::LabelState::kNeedsReview) return QColor(255, 140, 0);
+  switch (l.source) {
+    case recon::LabelSource::kManual: return QColor(0, 230, 255);
+    case recon::LabelSource::kFindNode: return QColor(80, 255, 120);
+    case recon::LabelSource::kFindPath: return QColor(170, 255, 60);
+    case recon::LabelSource::kFillGrid: return QColor(255, 240, 80);
+    case recon::LabelSource::kTracked: return QColor(60, 220, 60);
+    default: return QColor(200, 200, 255);
+  }
+}
+
+}  // namespace
+
+MainWindow::MainWindow() {
+  setWindowTitle("netlab");
+  resize(1400, 980);
+  stack_ = new QStackedWidget(this);
+  setCentralWidget(stack_);
+  BuildWelcome();
+  BuildWorkspace();
+  BuildActions();
+  stack_->setCurrentWidget(welcome_);
+  play_timer_ = new QTimer(this);
+  play_timer_->setInterval(33);
+  connect(play_timer_, &QTimer::timeout, this, [this] {
+    if (frame_ + 1 >= (session_ ? session_->frames() : 0)) play_timer_->stop();
+    else if (frame_shown_) SetFrame(frame_ + 1);
+  });
+  connect(&loader_, &QFutureWatcher<Loaded>::finished, this, &MainWindow::OnFrameLoaded);
+}
+
+MainWindow::~MainWindow() {
+  cancel_ = true;
+  tracker_.waitForFinished();
+  loader_.waitForFinished();
+  review_table_->setModel(nullptr);
+}
+
+void MainWindow::BuildWelcome() {
+  welcome_ = new QWidget;
+  auto* layout = new QVBoxLayout(welcome_);
+  auto* title = new QLabel("<h2>netlab — knot labeling workstation</h2>"
+                           "<p>Open a project (project.yaml) or make one from an experiment, its "
+                           "rig and the net's colouring.</p>");
+  title->setAlignment(Qt::AlignCenter);
+  layout->addStretch();
+  layout->addWidget(title);
+  auto* buttons = new QHBoxLayout;
+  auto* open = new QPushButton("Open project…");
+  auto* create = new QPushButton("New project…");
+  connect(open, &QPushButton::clicked, this, &MainWindow::OpenDialog);
+  connect(create, &QPushButton::clicked, this, &MainWindow::NewProject);
+  buttons->addStretch();
+  buttons->addWidget(open);
+  buttons->addWidget(create);
+  buttons->addStretch();
+  layout->addLayout(buttons);
+  const QStringList recent = Settings::RecentProjects();
+  if (!recent.isEmpty()) {
+    layout->addWidget(new QLabel("<p align=center>Recent projects</p>"));
+    for (const QString& path : recent) {
+      auto* button = new QPushButton(path);
+      button->setFlat(true);
+      connect(button, &QPushButton::clicked, this, [this, path] { OpenProject(path); });
+      layout->addWidget(button);
+    }
+  }
+  layout->addStretch();
+  stack_->addWidget(welcome_);
+}
+
+void MainWindow::BuildWorkspace() {
+  workspace_ = new QWidget;
+  auto* layout = new QVBoxLayout(workspace_);
+  layout->setContentsMargins(2, 2, 2, 2);
+  grid_ = new QGridLayout;
+  grid_->setSpacing(2);
+  for (int c = 0; c < 4; ++c) {
+    views_[c] = new CameraView(c);
+    grid_->addWidget(views_[c], c / 2, c % 2);
+    connect(views_[c], &CameraView::clicked, this, &MainWindow::OnClick);
+    connect(views_[c], &CameraView::labelDragged, this, &MainWindow::OnDrag);
+    connect(views_[c], &CameraView::labelSelected, this, &MainWindow::OnSelect);
+    connect(views_[c], &CameraView::cursorMoved, this, &MainWindow::OnCursor);
+    connect(views_[c], &CameraView::activated, this, &MainWindow::SetCamera);
+  }
+  layout->addLayout(grid_, 1);
+  auto* bar = new QHBoxLayout;
+  frame_box_ = new QSpinBox;
+  frame_box_->setPrefix("frame ");
+  frame_box_->setKeyboardTracking(false);
+  timeline_ = new Timeline;
+  bar->addWidget(frame_box_);
+  bar->addWidget(timeline_, 1);
+  layout->addLayout(bar);
+  connect(timeline_, &Timeline::seek, this, &MainWindow::SetFrame);
+  connect(frame_box_, &QSpinBox::valueChanged, this, [this](int f) {
+    if (session_) SetFrame(f - session_->frame_number(0));
+  });
+  stack_->addWidget(workspace_);
+
+  // The knot picker: which knot a click labels.
+  auto* picker = addToolBar("Knot");
+  picker->setObjectName("knot_toolbar");
+  picker->addWidget(new QLabel(" Knot to label: row "));
+  row_box_ = new QSpinBox;
+  col_box_ = new QSpinBox;
+  picker->addWidget(row_box_);
+  picker->addWidget(new QLabel(" col "));
+  picker->addWidget(col_box_);
+  picker->addWidget(new QLabel("   click: Find Node in the brush · Shift+click: exactly here · "
+                               "drag a label: move it · F1: all keys"));
+  auto picked = [this] { SetKnot(row_box_->value() * session_->project().cols + col_box_->value()); };
+  connect(row_box_, &QSpinBox::valueChanged, this, [this, picked] { if (session_) picked(); });
+  connect(col_box_, &QSpinBox::valueChanged, this, [this, picked] { if (session_) picked(); });
+
+  // The review queue.
+  auto* dock = new QDockWidget("Review queue", this);
+  dock->setObjectName("review_dock");
+  review_table_ = new QTableView;
+  review_table_->setSelectionBehavior(QAbstractItemView::SelectRows);
+  review_table_->setSelectionMode(QAbstractItemView::SingleSelection);
+  review_table_->setSortingEnabled(true);
+  review_table_->horizontalHeader()->setStretchLastSection(true);
+  review_table_->verticalHeader()->setVisible(false);
+  dock->setWidget(review_table_);
+  dock->setMinimumWidth(380);
+  addDockWidget(Qt::RightDockWidgetArea, dock);
+  connect(review_table_, &QTableView::activated, this, [this](const QModelIndex& index) {
+    const int c = index.data(ReviewModel::kCameraRole).toInt();
+    SetFrame(index.data(ReviewModel::kFrameRowRole).toInt());
+    SetCamera(c);
+    SetKnot(index.data(ReviewModel::kKnotRole).toInt());
+    ZoomOnKnot();
+  });
+
+  status_frame_ = new QLabel;
+  status_cursor_ = new QLabel;
+  status_knot_ = new QLabel;
+  statusBar()->addPermanentWidget(status_knot_);
+  statusBar()->addPermanentWidget(status_cursor_);
+  statusBar()->addPermanentWidget(status_frame_);
+}
+
+QAction* MainWindow::AddAction(QMenu* menu, const QString& name, const QString& keys,
+                               void (MainWindow::*slot)()) {
+  auto* action = new QAction(name, this);
+  QList<QKeySequence> sequences;
+  for (const QString& k : Settings::Shortcut(name, keys).split(";", Qt::SkipEmptyParts))
+    sequences.append(QKeySequence(k.trimmed()));
+  action->setShortcuts(sequences);
+  action->setShortcutContext(Qt::WindowShortcut);
+  connect(action, &QAction::triggered, this, slot);
+  menu->addAction(action);
+  addAction(action);
+  actions_.push_back(action);
+  return action;
+}
+
+void MainWindow::BuildActions() {
+  QMenu* file = menuBar()->addMenu("&File");
+  AddAction(file, "New project…", "Ctrl+N", &MainWindow::NewProject);
+  AddAction(file, "Open project…", "Ctrl+O", &MainWindow::OpenDialog);
+  recent_menu_ = file->addMenu("Open recent");
+  connect(recent_menu_, &QMenu::aboutToShow, this, [this] {
+    recent_menu_->clear();
+    for (const QString& path : Settings::RecentProjects())
+      recent_menu_->addAction(path, this, [this, path] { OpenProject(path); });
+  });
+  AddAction(file, "Save labels", "Ctrl+S", &MainWindow::Save);
+  file->addSeparator();
+  auto* quit = file->addAction("Quit", this, &QWidget::close);
+  quit->setShortcut(QKeySequence("Ctrl+Q"));
+
+  QMenu* edit = menuBar()->addMenu("&Edit");
+  AddAction(edit, "Undo", "Ctrl+Z", &MainWindow::Undo);
+  AddAction(edit, "Redo", "Ctrl+Shift+Z;Ctrl+Y", &MainWindow::Redo);
+  edit->addSeparator();
+  QMenu* go = menuBar()->addMenu("&Go");
+  AddAction(go, "Next frame", "F;Right", &MainWindow::NextFrame);
+  AddAction(go, "Previous frame", "B;Left", &MainWindow::PreviousFrame);
+  AddAction(go, "Forward 10 frames", "Shift+F;Shift+Right", &MainWindow::Forward10);
+  AddAction(go, "Back 10 frames", "Shift+B;Shift+Left", &MainWindow::Back10);
+  AddAction(go, "First frame", "Home", &MainWindow::FirstFrame);
+  AddAction(go, "Last frame", "End", &MainWindow::LastFrame);
+  AddAction(go, "Go to frame…", "Ctrl+G", &MainWindow::GoToFrame);
+  AddAction(go, "Play / pause", "P", &MainWindow::TogglePlay);
+  go->addSeparator();
+  AddAction(go, "Next review item", "Space", &MainWindow::NextReviewItem);
+  AddAction(go, "Previous review item", "Shift+Space", &MainWindow::PreviousReviewItem);
+  AddAction(go, "Next knot", ".", &MainWindow::NextKnot);
+  AddAction(go, "Previous knot", ",", &MainWindow::PreviousKnot);
+
+  AddAction(edit, "Accept label", "A", &MainWindow::AcceptSelected);
+  AddAction(edit, "Delete label", "Delete;D", &MainWindow::DeleteSelected);
+  AddAction(edit, "Nudge left 0.5 px", "Ctrl+Left", &MainWindow::NudgeLeft);
+  AddAction(edit, "Nudge right 0.5 px", "Ctrl+Right", &MainWindow::NudgeRight);
+  AddAction(edit, "Nudge up 0.5 px", "Ctrl+Up", &MainWindow::NudgeUp);
+  AddAction(edit, "Nudge down 0.5 px", "Ctrl+Down", &MainWindow::NudgeDown);
+
+  QMenu* tools = menuBar()->addMenu("&Tools");
+  AddAction(tools, "Find Path from the corners", "Ctrl+P", &MainWindow::FindPathCorners);
+  AddAction(tools, "Find Path to the previous knot", "Shift+P", &MainWindow::FindPathToPrevious);
+  AddAction(tools, "Fill Grid in this frame", "G", &MainWindow::FillGridHere);
+  AddAction(tools, "Track forwards", "T", &MainWindow::TrackForward);
+  AddAction(tools, "Track backwards", "Shift+T", &MainWindow::TrackBackward);
+  AddAction(tools, "Track to frame…", "Ctrl+T", &MainWindow::TrackToFrame);
+  AddAction(tools, "Larger brush", "+;=", &MainWindow::BrushLarger);
+  AddAction(tools, "Smaller brush", "-", &MainWindow::BrushSmaller);
+
+  QMenu* view = menuBar()->addMenu("&View");
+  AddAction(view, "Zoom every view on the knot", "Z", &MainWindow::ZoomOnKnot);
+  AddAction(view, "Fit every view", "Ctrl+F", &MainWindow::FitAll);
+  AddAction(view, "Maximise this camera / all cameras", "M", &MainWindow::ToggleMaximise);
+  AddAction(view, "Half resolution", "H", &MainWindow::ToggleHalf);
+  AddAction(view, "Brighter", "]", &MainWindow::Brighter);
+  AddAction(view, "Darker", "[", &MainWindow::Darker);
+  AddAction(view, "Gamma up (lift the darks)", "Shift+]", &MainWindow::GammaUp);
+  AddAction(view, "Gamma down", "Shift+[", &MainWindow::GammaDown);
+  AddAction(view, "Reset brightness", "\\", &MainWindow::ResetTone);
+  AddAction(view, "Show labels", "L", &MainWindow::ToggleLabels);
+  AddAction(view, "Show links", "K", &MainWindow::ToggleLinks);
+  AddAction(view, "Show epipolar curves", "E", &MainWindow::ToggleEpipolar);
+
+  QMenu* help = menuBar()->addMenu("&Help");
+  AddAction(help, "Keyboard shortcuts", "F1;?", &MainWindow::ShowShortcuts);
+}
+
+bool MainWindow::OpenProject(const QString& path, bool ask) {
+  std::unique_ptr<Session> session;
+  try {
+    session = Session::Open(LoadProject(path.toStdString()));
+  } catch (const std::exception& e) {
+    QMessageBox::critical(this, "Cannot open the project",
+                          QString("%1\n\n%2").arg(path, QString::fromLocal8Bit(e.what())));
+    return false;
+  }
+  if (!MaybeSave()) return false;
+  // A journal left by a session that ended without saving: offer to recover it.
+  const std::string labels = session->project().labels;
+  if (LabelDocument::HasJournal(labels)) {
+    const QString when = QFileInfo(QString::fromStdString(LabelDocument::JournalPath(labels)))
+                             .lastModified()
+                             .toString("yyyy-MM-dd hh:mm:ss");
+    const auto answer =
+        ask ? QMessageBox::question(this, "Recover unsaved edits?",
+                                    QString("The last session on %1 ended without saving (its "
+                                            "journal was last written %2). Recover its edits?")
+                                        .arg(QString::fromStdString(labels), when),
+                                    QMessageBox::Yes | QMessageBox::No, QMessageBox::Yes)
+            : QMessageBox::No;
+    try {
+      if (answer == QMessageBox::Yes) {
+        const int n = session->document().Recover();
+        statusBar()->showMessage(QString("Recovered %1 labels from the journal").arg(n), 8000);
+      } else if (ask) {
+        session->document().DiscardJournal();
+      }
+    } catch (const std::exception& e) {
+      QMessageBox::warning(this, "Cannot recover", QString::fromLocal8Bit(e.what()));
+    }
+  }
+  review_table_->setModel(nullptr);
+  review_model_.reset();
+  session_ = std::move(session);
+  review_model_ = std::make_unique<ReviewModel>(&session_->document(), session_->frame_numbers());
+  review_proxy_ = new QSortFilterProxyModel(review_model_.get());
+  review_proxy_->setSourceModel(review_model_.get());
+  review_proxy_->setSortRole(Qt::EditRole);
+  review_table_->setModel(review_proxy_);
+  review_table_->setColumnWidth(ReviewModel::kCamera, 60);
+  review_table_->setColumnWidth(ReviewModel::kFrame, 55);
+  review_table_->setColumnWidth(ReviewModel::kKnot, 95);
+  review_table_->setColumnWidth(ReviewModel::kSource, 75);
+  review_table_->setColumnWidth(ReviewModel::kSeverity, 60);
+  connect(&session_->document(), &LabelDocument::labelsChanged, this,
+          &MainWindow::OnLabelsChanged);
+  connect(&session_->document(), &LabelDocument::modifiedChanged, this,
+          [this](bool modified) { setWindowModified(modified); });
+  setWindowTitle(QString("netlab — %1[*]").arg(QFileInfo(path).fileName()));
+  const Project& p = session_->project();
+  row_box_->setRange(0, p.rows - 1);
+  col_box_->setRange(0, p.cols - 1);
+  frame_box_->setRange(session_->frame_number(0), session_->frame_number(session_->frames() - 1));
+  timeline_->SetRange(session_->frames());
+  timeline_->SetReviewFrames(session_->document().ReviewFrames());
+  for (int c = 0; c < 4; ++c) views_[c]->setVisible(c < session_->cameras());
+  candidates_.assign(session_->cameras(), {});
+  Settings::AddRecentProject(QFileInfo(path).absoluteFilePath());
+  stack_->setCurrentWidget(workspace_);
+  frame_ = -1;
+  SetKnot(0);
+  SetFrame(0);
+  return true;
+}
+
+void MainWindow::SetFrame(int t) {
+  if (!session_) return;
+  t = std::clamp(t, 0, session_->frames() - 1);
+  if (t == frame_) return;
+  const int direction = frame_ < 0 ? 0 : (t > frame_ ? 1 : -1);
+  frame_ = t;
+  for (auto& c : candidates_) c.clear();
+  session_->cache().SetPlayhead(session_->frame_number(t), direction, half_ ? 1 : 0);
+  {
+    const QSignalBlocker block(frame_box_);
+    frame_box_->setValue(session_->frame_number(t));
+  }
+  timeline_->SetCurrent(t);
+  RefreshOverlays();
+  RequestFrame();
+  RefreshStatus();
+}
+
+void MainWindow::RequestFrame() {
+  // Decoded off the GUI thread; a newer request makes this one's answer stale.
+  frame_shown_ = false;
+  const long request = ++request_;
+  const int t = frame_, level = half_ ? 1 : 0;
+  Session* session = session_.get();
+  if (loader_.isRunning()) return;  // OnFrameLoaded asks again for the newest frame
+  loader_.setFuture(QtConcurrent::run([session, request, t, level]() {
+    Loaded loaded;
+    loaded.request = request;
+    loaded.t = t;
+    for (int c = 0; c < session->cameras() && c < 4; ++c) {
+      std::string error;
+      const auto image = session->cache().Get(c, session->frame_number(t), level, &error);
+      if (image) loaded.images[c] = *image;
+      else loaded.problems[c] = QString("frame %1 cannot be read:\n%2")
+                                    .arg(session->frame_number(t))
+                                    .arg(QString::fromStdString(error));
+    }
+    return loaded;
+  }));
+}
+
+void MainWindow::OnFrameLoaded() {
+  const Loaded loaded = loader_.result();
+  if (!session_) return;
+  if (loaded.request != request_ || loaded.t != frame_) {  // the person moved on
+    --request_;
+    RequestFrame();
+    return;
+  }
+  for (int c = 0; c < session_->cameras() && c < 4; ++c) {
+    const calib::CameraIntrinsics& in = session_->rig_camera(c).intrinsics;
+    views_[c]->SetFrame(loaded.images[c], in.width, in.height, loaded.problems[c]);
+  }
+  frame_shown_ = true;
+}
+
+bool MainWindow::WaitForFrame(int timeout_ms) {
+  QElapsedTimer timer;
+  timer.start();
+  while (!frame_shown_ && timer.elapsed() < timeout_ms)
+    QCoreApplication::processEvents(QEventLoop::AllEvents, 20);
+  QCoreApplication::processEvents();
+  return frame_shown_;
+}
+
+void MainWindow::RefreshOverlays() {
+  if (!session_) return;
+  const LabelDocument& doc = session_->document();
+  const Project& p = session_->project();
+  const recon::PointEstimate point = session_->Triangulate(frame_, knot_);
+  for (int c = 0; c < session_->cameras() && c < 4; ++c) {
+    ViewOverlay o;
+    o.selected_knot = knot_;
+    for (int k = 0; k < p.knots(); ++k) {
+      const recon::Label& l = doc.at(c, frame_, k);
+      if (!l.present()) continue;
+      o.labels.push_back({k, l.px, LabelColour(l), l.state == recon::LabelState::kNeedsReview});
+      // Links to the right and down neighbours that are labeled.
+      for (const int n : {k % p.cols + 1 < p.cols ? k + 1 : -1, k + p.cols < p.knots() ? k + p.cols : -1})
+        if (n >= 0 && doc.at(c, frame_, n).present()) o.links.emplace_back(l.px, doc.at(c, frame_, n).px);
+    }
+    // The selected knot: its epipolar curves from the other cameras' labels, its reprojection.
+    for (int other = 0; other < session_->cameras(); ++other) {
+      const recon::Label& l = doc.at(other, frame_, knot_);
+      if (other == c || !l.present()) continue;
+      for (auto& piece : session_->EpipolarCurve(other, l.px, c)) o.epipolar.push_back(piece);
+    }
+    QString residual;
+    if (point.valid) {
+      o.reprojected = session_->rig_camera(c).ProjectWorld(point.position);
+      if (doc.at(c, frame_, knot_).present())
+        residual = QString(" · residual %1 px")
+                       .arg((doc.at(c, frame_, knot_).px - *o.reprojected).norm(), 0, 'f', 2);
+    }
+    o.candidates = candidates_[c];
+    o.caption = QString("%1 · frame %2 · knot %3%4")
+                    .arg(QString::fromStdString(session_->camera_names()[c]))
+                    .arg(session_->frame_number(frame_))
+                    .arg(KnotName(knot_), residual);
+    views_[c]->SetOverlay(std::move(o));
+  }
+}
+
+void MainWindow::RefreshStatus() {
+  if (!session_) return;
+  status_frame_->setText(QString("frame %1 (%2 of %3) · t = %4 s · %5")
+                             .arg(session_->frame_number(frame_))
+                             .arg(frame_ + 1)
+                             .arg(session_->frames())
+                             .arg(session_->frame_number(frame_) / session_->fps(), 0, 'f', 4)
+                             .arg(QString::fromStdString(session_->camera_names()[camera_])));
+  const recon::PointEstimate point = session_->Triangulate(frame_, knot_);
+  status_knot_->setText(QString("knot %1%2").arg(KnotName(knot_),
+                                                 point.valid ? QString(" · RMS residual %1 px")
+                                                                   .arg(point.rms_px, 0, 'f', 2)
+                                                             : QString()));
+}
+
+void MainWindow::OnLabelsChanged(const QList<int>& frames) {
+  timeline_->SetReviewFrames(session_->document().ReviewFrames());
+  if (frames.contains(frame_)) {
+    RefreshOverlays();
+    RefreshStatus();
+  }
+}
+
+QString MainWindow::KnotName(int knot) const {
+  if (!session_) return {};
+  return QString("(%1, %2)").arg(knot / session_->project().cols).arg(knot % session_->project().cols);
+}
+
+void MainWindow::SetCamera(int c) {
+  if (!session_ || c < 0 || c >= session_->cameras()) return;
+  camera_ = c;
+  RefreshStatus();
+}
+
+void MainWindow::SetKnot(int knot) {
+  if (!session_) return;
+  knot = std::clamp(knot, 0, session_->project().knots() - 1);
+  if (knot != knot_) previous_knot_ = knot_;
+  knot_ = knot;
+  {
+    const QSignalBlocker a(row_box_), b(col_box_);
+    row_box_->setValue(knot / session_->project().cols);
+    col_box_->setValue(knot % session_->project().cols);
+  }
+  RefreshOverlays();
+  RefreshStatus();
+}
+
+void MainWindow::OnClick(int camera, const Eigen::Vector2d& px, Qt::KeyboardModifiers modifiers) {
+  if (!session_ || tracker_.isRunning()) return;
+  SetCamera(camera);
+  if (modifiers & Qt::ShiftModifier) {  // exactly where clicked: the person's own label
+    session_->PlaceLabel(camera, frame_, knot_, px, "Place " + KnotName(knot_).toStdString());
+    statusBar()->showMessage(QString("Placed knot %1 by hand").arg(KnotName(knot_)), 4000);
+    return;
+  }
+  const recon::FindNodeResult r =
+      session_->FindNode(camera, frame_, knot_, px, views_[camera]->brush_radius());
+  candidates_[camera].clear();
+  switch (r.status) {
+    case recon::FindNodeStatus::kFound: {
+      const bool review = session_->document().at(camera, frame_, knot_).state ==
+                          recon::LabelState::kNeedsReview;
+      statusBar()->showMessage(
+          QString("Find Node: knot %1 %2").arg(KnotName(knot_),
+                                               review ? "found, kept for review: " +
+                                                            QString::fromStdString(session_->document().Reason(camera, frame_, knot_))
+                                                      : "found and accepted"),
+          6000);
+      break;
+    }
+    case recon::FindNodeStatus::kNone:
+      statusBar()->showMessage("Find Node: no knot in the brush (" +
+                                   QString::fromStdString(r.why) +
+                                   "); Shift+click places the label exactly",
+                               8000);
+      break;
+    case recon::FindNodeStatus::kSeveral:
+      for (const recon::Junction& j : r.candidates) candidates_[camera].push_back(j.px);
+      statusBar()->showMessage(QString("Find Node: %1 junctions in the brush (red crosses); "
+                                       "click closer with a smaller brush (-), or Shift+click")
+                                   .arg(r.candidates.size()),
+                               8000);
+      RefreshOverlays();
+      break;
+  }
+}
+
+void MainWindow::OnDrag(int camera, int knot, const Eigen::Vector2d& px) {
+  if (!session_ || tracker_.isRunning()) return;
+  session_->PlaceLabel(camera, frame_, knot, px, "Move " + KnotName(knot).toStdString());
+}
+
+void MainWindow::OnSelect(int camera, int knot) {
+  SetCamera(camera);
+  SetKnot(knot);
+}
+
+void MainWindow::OnCursor(int camera, const Eigen::Vector2d& px, const QString& value) {
+  status_cursor_->setText(QString("%1 · x %2 y %3 %4")
+                              .arg(QString::fromStdString(session_ ? session_->camera_names()[camera] : ""))
+                              .arg(px.x(), 0, 'f', 1)
+                              .arg(px.y(), 0, 'f', 1)
+                              .arg(value));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Actions.
+
+void MainWindow::NewProject() {
+  const QString experiment = QFileDialog::getOpenFileName(this, "The experiment (1 of 4)", {},
+                                                          "Experiment (*.yaml)");
+  if (experiment.isEmpty()) return;
+  const QString rig =
+      QFileDialog::getOpenFileName(this, "The calibrated rig (2 of 4)", QFileInfo(experiment).path(),
+                                   "Rig (*.yaml)");
+  if (rig.isEmpty()) return;
+  const QString coloring = QFileDialog::getOpenFileName(
+      this, "The net's colouring, coloring.yaml (3 of 4; Cancel: none)", QFileInfo(rig).path(),
+      "Colouring (*.yaml)");
+  int rows = 0, cols = 0;
+  if (coloring.isEmpty()) {
+    bool ok = false;
+    rows = cols = QInputDialog::getInt(this, "The net", "Knots per side (a square net):", 11, 2,
+                                       1000, 1, &ok);
+    if (!ok) return;
+  }
+  const QString labels = QFileDialog::getSaveFileName(
+      this, "Where the labels are saved (4 of 4)", QFileInfo(experiment).path() + "/labels.h5",
+      "Labels (*.h5)", nullptr, QFileDialog::DontConfirmOverwrite);
+  if (labels.isEmpty()) return;
+  const QString path = QFileDialog::getSaveFileName(
+      this, "Save the project as", QFileInfo(labels).path() + "/project.yaml", "Project (*.yaml)");
+  if (path.isEmpty()) return;
+  try {
+    SaveProject(MakeProject(experiment.toStdString(), rig.toStdString(), coloring.toStdString(),
+                            labels.toStdString(), rows, cols),
+                path.toStdString());
+  } catch (const std::exception& e) {
+    QMessageBox::critical(this, "Cannot make the project", QString::fromLocal8Bit(e.what()));
+    return;
+  }
+  OpenProject(path);
+}
+
+void MainWindow::OpenDialog() {
+  const QString path =
+      QFileDialog::getOpenFileName(this, "Open a project", {}, "netlab project (*.yaml)");
+  if (!path.isEmpty()) OpenProject(path);
+}
+
+void MainWindow::Save() {
+  if (!session_) return;
+  try {
+    session_->document().Save();
+    statusBar()->showMessage(
+        QString("Saved %1").arg(QString::fromStdString(session_->document().labels_path())), 4000);
+  } catch (const std::exception& e) {
+    QMessageBox::critical(this, "Cannot save the labels",
+                          QString("%1\n\nThe file on disk is unchanged; your edits are kept in "
+                                  "the journal.")
+                              .arg(QString::fromLocal8Bit(e.what())));
+  }
+}
+
+void MainWindow::Undo() {
+  if (session_ && !tracker_.isRunning()) session_->document().undo_stack()->undo();
+}
+
+void MainWindow::Redo() {
+  if (session_ && !tracker_.isRunning()) session_->document().undo_stack()->redo();
+}
+
+void MainWindow::LastFrame() {
+  if (session_) SetFrame(session_->frames() - 1);
+}
+
+void MainWindow::GoToFrame() {
+  if (!session_) return;
+  bool ok = false;
+  const int f = QInputDialog::getInt(this, "Go to frame", "Frame number:",
+                                     session_->frame_number(frame_), session_->frame_number(0),
+                                     session_->frame_number(session_->frames() - 1), 1, &ok);
+  if (ok) SetFrame(f - session_->frame_number(0));
+}
+
+void MainWindow::TogglePlay() {
+  if (play_timer_->isActive()) play_timer_->stop();
+  else play_timer_->start();
+}
+
+void MainWindow::NextReview(bool backwards) {
+  if (!session_ || !review_model_ || review_model_->rowCount() == 0) {
+    statusBar()->showMessage("Nothing to review", 3000);
+    return;
+  }
+  const LabelKey here{camera_, frame_, knot_};
+  const int row = backwards ? review_model_->Previous(here) : review_model_->Next(here);
+  const auto [c, t, k] = review_model_->items()[row];
+  SetFrame(t);
+  SetCamera(c);
+  SetKnot(k);
+  if (maximised_ != c) Maximise(c);
+  ZoomOnKnot();
+  const QModelIndex index = review_proxy_->mapFromSource(review_model_->index(row, 0));
+  review_table_->selectRow(index.row());
+  statusBar()->showMessage(
+      QString("Review %1 of %2: %3 — A accepts, a click fixes with Find Node, D deletes")
+          .arg(row + 1)
+          .arg(review_model_->rowCount())
+          .arg(QString::fromStdString(session_->document().Reason(c, t, k))),
+      10000);
+}
+
+void MainWindow::AcceptSelected() {
+  if (session_ && !tracker_.isRunning()) session_->AcceptLabel(camera_, frame_, knot_);
+}
+
+void MainWindow::DeleteSelected() {
+  if (session_ && !tracker_.isRunning()) session_->DeleteLabel(camera_, frame_, knot_);
+}
+
+void MainWindow::Nudge(double dx, double dy) {
+  if (!session_ || tracker_.isRunning()) return;
+  const recon::Label& l = session_->document().at(camera_, frame_, knot_);
+  if (!l.present()) return;
+  // Half a pixel when a pixel is a screen pixel or larger; scaled up when zoomed out, so a nudge
+  // is always visible.
+  const double factor = std::max(1.0, 1.0 / std::max(views_[camera_]->scale(), 1e-3));
+  session_->PlaceLabel(camera_, frame_, knot_, l.px + Eigen::Vector2d(dx, dy) * factor,
+                       "Nudge " + KnotName(knot_).toStdString());
+}
+
+void MainWindow::FindPathCorners() {
+  if (!session_ || tracker_.isRunning()) return;
+  const recon::EngineCounts n = session_->FindPathFromCorners(frame_);
+  statusBar()->showMessage(QString("Find Path from the corners and Fill Grid: %1 accepted, %2 "
+                                   "for review")
+                               .arg(n.accepted)
+                               .arg(n.review),
+                           8000);
+}
+
+void MainWindow::FindPathToPrevious() {
+  if (!session_ || tracker_.isRunning() || previous_knot_ < 0) return;
+  const std::string why = session_->FindPathBetween(camera_, frame_, previous_knot_, knot_);
+  statusBar()->showMessage(why.empty() ? QString("Find Path %1 → %2: done")
+                                             .arg(KnotName(previous_knot_), KnotName(knot_))
+                                       : "Find Path refused: " + QString::fromStdString(why),
+                           8000);
+}
+
+void MainWindow::FillGridHere() {
+  if (!session_ || tracker_.isRunning()) return;
+  const recon::EngineCounts n = session_->FillGrid(frame_);
+  statusBar()->showMessage(
+      QString("Epipolar check and Fill Grid: %1 accepted, %2 for review").arg(n.accepted).arg(n.review),
+      8000);
+}
+
+void MainWindow::TrackForward() { if (session_) TrackTo(session_->frames() - 1); }
+void MainWindow::TrackBackward() { TrackTo(0); }
+
+void MainWindow::TrackToFrame() {
+  if (!session_) return;
+  bool ok = false;
+  const int f = QInputDialog::getInt(this, "Track to frame", "Track up to frame number:",
+                                     session_->frame_number(std::min(frame_ + 30, session_->frames() - 1)),
+                                     session_->frame_number(0),
+                                     session_->frame_number(session_->frames() - 1), 1, &ok);
+  if (ok) TrackTo(f - session_->frame_number(0));
+}
+
+void MainWindow::TrackTo(int to, bool wait) {
+  if (!session_ || tracker_.isRunning() || to == frame_) return;
+  // A snapshot on the GUI thread; the run never touches the document.
+  const int from = frame_;
+  cancel_ = false;
+  auto* progress = new QProgressDialog(
+      QString("Tracking from frame %1 to %2 …")
+          .arg(session_->frame_number(from))
+          .arg(session_->frame_number(to)),
+      "Cancel", 0, std::abs(to - from), this);
+  progress->setWindowModality(Qt::WindowModal);
+  progress->setMinimumDuration(300);
+  progress->setAttribute(Qt::WA_DeleteOnClose);
+  connect(progress, &QProgressDialog::canceled, this, [this] { cancel_ = true; });
+  Session* session = session_.get();
+  QPointer<QProgressDialog> bar(progress);
+  auto report = [this, bar](int done, int) {
+    QMetaObject::invokeMethod(this, [bar, done] { if (bar) bar->setValue(done); },
+                              Qt::QueuedConnection);
+  };
+  disconnect(&tracker_, nullptr, this, nullptr);
+  connect(&tracker_, &QFutureWatcher<Session::TrackRun>::finished, this, [this, bar] {
+    if (bar) bar->close();
+    // The closed progress dialog may leave no window active (Qt's offscreen platform does):
+    // the keys would go nowhere.
+    activateWindow();
+    if (QApplication::activeWindow() != this) QApplication::setActiveWindow(this);
+    if (!session_) return;
+    const Session::TrackRun run = tracker_.result();
+    const int changed = session_->ApplyTrackRun(run);
+    statusBar()->showMessage(
+        QString("Tracked to frame %1: %2 labels%3")
+            .arg(session_->frame_number(run.last_done))
+            .arg(changed)
+            .arg(run.cancelled ? " (cancelled)"
+                 : run.stopped_for_review
+                     ? QString(" (stopped: over %1 labels for review in one frame)").arg(kMaxReviewPerFrame)
+                     : QString()),
+        10000);
+    SetFrame(run.last_done);
+  });
+  tracker_.setFuture(QtConcurrent::run([session, snapshot = session_->document().labels(), from,
+                                        to, report, this]() {
+    return session->Track(snapshot, from, to, &cancel_, report, kMaxReviewPerFrame);
+  }));
+  if (wait) {
+    while (tracker_.isRunning()) QCoreApplication::processEvents(QEventLoop::AllEvents, 20);
+    QCoreApplication::processEvents();
+  }
+}
+
+void MainWindow::ZoomOnKnot() {
+  if (!session_) return;
+  // Every view onto the knot: its label, else its reprojected point.
+  const recon::PointEstimate point = session_->Triangulate(frame_, knot_);
+  for (int c = 0; c < session_->cameras(); ++c) {
+    const recon::Label& l = session_->document().at(c, frame_, knot_);
+    if (l.present()) views_[c]->ZoomTo(l.px, 80);
+    else if (point.valid) views_[c]->ZoomTo(session_->rig_camera(c).ProjectWorld(point.position), 80);
+  }
+}
+
+void MainWindow::FitAll() {
+  for (CameraView* v : views_) v->Fit();
+}
+
+void MainWindow::SetHalfResolution(bool half) {
+  half_ = half;
+  if (session_) {
+    session_->cache().SetPlayhead(session_->frame_number(frame_), 0, half_ ? 1 : 0);
+    RequestFrame();
+  }
+  statusBar()->showMessage(half_ ? "Half resolution" : "Full resolution", 2000);
+}
+
+void MainWindow::Maximise(int c) {
+  maximised_ = c;
+  for (int i = 0; i < 4; ++i)
+    views_[i]->setVisible(session_ && i < session_->cameras() && (c < 0 || i == c));
+}
+
+void MainWindow::ToggleMaximise() { Maximise(maximised_ >= 0 ? -1 : camera_); }
+
+void MainWindow::Tone(double gain, double offset, double gamma) {
+  gain_ *= gain;
+  gamma_ *= gamma;
+  for (CameraView* v : views_) v->SetTone(gain_, offset, gamma_);
+}
+
+void MainWindow::ResetTone() {
+  gain_ = gamma_ = 1.0;
+  Tone(1, 0, 1);
+}
+
+void MainWindow::ToggleLabels() {
+  show_labels_ = !show_labels_;
+  for (CameraView* v : views_) v->SetShowLabels(show_labels_);
+}
+
+void MainWindow::ToggleLinks() {
+  show_links_ = !show_links_;
+  for (CameraView* v : views_) v->SetShowLinks(show_links_);
+}
+
+void MainWindow::ToggleEpipolar() {
+  show_epipolar_ = !show_epipolar_;
+  for (CameraView* v : views_) v->SetShowEpipolar(show_epipolar_);
+}
+
+void MainWindow::BrushLarger() {
+  for (CameraView* v : views_) v->SetBrushRadius(std::min(60.0, v->brush_radius() * 1.25));
+}
+
+void MainWindow::BrushSmaller() {
+  for (CameraView* v : views_) v->SetBrushRadius(std::max(2.0, v->brush_radius() / 1.25));
+}
+
+void MainWindow::ShowShortcuts() {
+  QDialog dialog(this);
+  dialog.setWindowTitle("Keyboard shortcuts");
+  auto* layout = new QVBoxLayout(&dialog);
+  auto* table = new QTableWidget(static_cast<int>(actions_.size()) + 4, 2);
+  table->setHorizontalHeaderLabels({"Action", "Keys"});
+  int row = 0;
+  for (QAction* a : actions_) {
+    QStringList keys;
+    for (const QKeySequence& k : a->shortcuts()) keys << k.toString(QKeySequence::NativeText);
+    table->setItem(row, 0, new QTableWidgetItem(a->text()));
+    table->setItem(row++, 1, new QTableWidgetItem(keys.join("  or  ")));
+  }
+  const std::pair<const char*, const char*> mouse[] = {
+      {"Find Node at the brush (the knot to label)", "click"},
+      {"Place the label exactly", "Shift+click"},
+      {"Select / move a label", "click / drag it"},
+      {"Zoom at the cursor · pan · brush size", "wheel · middle or right drag · Ctrl+wheel"}};
+  for (const auto& [what, how] : mouse) {
+    table->setItem(row, 0, new QTableWidgetItem(what));
+    table->setItem(row++, 1, new QTableWidgetItem(how));
+  }
+  table->horizontalHeader()->setStretchLastSection(true);
+  table->resizeColumnsToContents();
+  table->setEditTriggers(QAbstractItemView::NoEditTriggers);
+  layout->addWidget(new QLabel("Shortcuts are stored in the settings (netlab-gui, key "
+                               "shortcuts/<action>) and can be changed there."));
+  layout->addWidget(table);
+  dialog.resize(620, 700);
+  dialog.exec();
+}
+
+bool MainWindow::MaybeSave() {
+  if (!session_ || !session_->document().modified()) return true;
+  const auto answer = QMessageBox::question(
+      this, "Unsaved labels", "The labels have unsaved edits. Save them?",
+      QMessageBox::Save | QMessageBox::Discard | QMessageBox::Cancel, QMessageBox::Save);
+  if (answer == QMessageBox::Cancel) return false;
+  if (answer == QMessageBox::Save) {
+    Save();
+    return !session_->document().modified();
+  }
+  session_->document().DiscardJournal();
+  return true;
+}
+
+void MainWindow::closeEvent(QCloseEvent* event) {
+  if (MaybeSave()) event->accept();
+  else event->ignore();
+}
+
+}  // namespace netlab::gui

@@ -1,0 +1,186 @@
+#pragma once
+// The labeling workstation's window: four camera views sharing one frame index, the timeline,
+// the review queue, the tools and their shortcuts. It draws the Session's state and forwards the
+// person's actions to it; everything it changes goes through the document's undo stack.
+//
+// Frames are decoded off the GUI thread (the frame cache's prefetch, and a worker for a frame
+// not yet cached); a tracking run runs on a worker with progress and Cancel.
+
+#include <QFutureWatcher>
+#include <QMainWindow>
+
+#include <array>
+#include <atomic>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "app/gui/document/review_model.h"
+#include "app/gui/document/session.h"
+
+class QLabel;
+class QSortFilterProxyModel;
+class QSpinBox;
+class QStackedWidget;
+class QTableView;
+class QTimer;
+class QGridLayout;
+
+namespace netlab::gui {
+
+class CameraView;
+class Timeline;
+
+class MainWindow : public QMainWindow {
+  Q_OBJECT
+
+ public:
+  MainWindow();
+  ~MainWindow() override;
+
+  // A tracking run stops after a frame with more labels than this kept for review.
+  static constexpr int kMaxReviewPerFrame = 20;
+
+  // Opens a project (asks about a journal left by a crash unless `ask` is false, then recovers
+  // nothing). False, with a dialog naming the file and the reason, when it cannot be opened.
+  bool OpenProject(const QString& path, bool ask = true);
+  Session* session() { return session_.get(); }
+
+  // The current frame row, camera (the one the person works in) and knot (the knot picker).
+  int frame() const { return frame_; }
+  int camera() const { return camera_; }
+  int knot() const { return knot_; }
+  void SetFrame(int t);
+  void SetCamera(int c);
+  void SetKnot(int knot);
+  CameraView* view(int c) const { return views_[c]; }
+  QTableView* review_table() const { return review_table_; }
+  // Half-resolution display (faster decode and paint at 2048^2).
+  void SetHalfResolution(bool half);
+  // Shows one camera alone (-1: all four).
+  void Maximise(int c);
+
+  // Waits (processing events) until the current frame is drawn in every view; false after
+  // `timeout_ms`.
+  bool WaitForFrame(int timeout_ms = 20000);
+  // Tracks from the current frame to `to` (worker thread, progress dialog); waits when `wait`.
+  void TrackTo(int to, bool wait = false);
+  // Whether a tracking run is under way (the views take no edits meanwhile).
+  bool busy() const { return tracker_.isRunning(); }
+  // The review queue: the next / previous item (frame, camera maximised, knot selected, zoomed).
+  void NextReview(bool backwards = false);
+
+ protected:
+  void closeEvent(QCloseEvent* event) override;
+
+ private:
+  void BuildWelcome();
+  void BuildWorkspace();
+  void BuildActions();
+  QAction* AddAction(QMenu* menu, const QString& name, const QString& keys,
+                     void (MainWindow::*slot)());
+  void RequestFrame();
+  void OnFrameLoaded();
+  void RefreshOverlays();
+  void RefreshStatus();
+  void OnLabelsChanged(const QList<int>& frames);
+  // The person's actions.
+  void OnClick(int camera, const Eigen::Vector2d& px, Qt::KeyboardModifiers modifiers);
+  void OnDrag(int camera, int knot, const Eigen::Vector2d& px);
+  void OnSelect(int camera, int knot);
+  void OnCursor(int camera, const Eigen::Vector2d& px, const QString& value);
+  bool MaybeSave();  // asks about unsaved edits: false when the person cancels
+  QString KnotName(int knot) const;
+
+  // Actions (slots without arguments, for QAction).
+  void NewProject();
+  void OpenDialog();
+  void Save();
+  void Undo();
+  void Redo();
+  void NextFrame() { SetFrame(frame_ + 1); }
+  void PreviousFrame() { SetFrame(frame_ - 1); }
+  void Forward10() { SetFrame(frame_ + 10); }
+  void Back10() { SetFrame(frame_ - 10); }
+  void FirstFrame() { SetFrame(0); }
+  void LastFrame();
+  void GoToFrame();
+  void TogglePlay();
+  void NextKnot() { SetKnot(knot_ + 1); }
+  void PreviousKnot() { SetKnot(knot_ - 1); }
+  void NextReviewItem() { NextReview(false); }
+  void PreviousReviewItem() { NextReview(true); }
+  void AcceptSelected();
+  void DeleteSelected();
+  void NudgeLeft() { Nudge(-0.5, 0); }
+  void NudgeRight() { Nudge(0.5, 0); }
+  void NudgeUp() { Nudge(0, -0.5); }
+  void NudgeDown() { Nudge(0, 0.5); }
+  void Nudge(double dx, double dy);
+  void FindPathCorners();
+  void FindPathToPrevious();
+  void FillGridHere();
+  void TrackForward();
+  void TrackBackward();
+  void TrackToFrame();
+  void ZoomOnKnot();
+  void FitAll();
+  void ToggleHalf() { SetHalfResolution(!half_); }
+  void ToggleMaximise();
+  void Brighter() { Tone(1.25, 0, 1); }
+  void Darker() { Tone(0.8, 0, 1); }
+  void GammaUp() { Tone(1, 0, 0.85); }
+  void GammaDown() { Tone(1, 0, 1.0 / 0.85); }
+  void ResetTone();
+  void Tone(double gain, double offset, double gamma);
+  void ToggleLabels();
+  void ToggleLinks();
+  void ToggleEpipolar();
+  void BrushLarger();
+  void BrushSmaller();
+  void ShowShortcuts();
+
+  std::unique_ptr<Session> session_;
+  std::unique_ptr<ReviewModel> review_model_;
+  QSortFilterProxyModel* review_proxy_ = nullptr;
+  QTableView* review_table_ = nullptr;
+  QStackedWidget* stack_ = nullptr;
+  QWidget* welcome_ = nullptr;
+  QWidget* workspace_ = nullptr;
+  QGridLayout* grid_ = nullptr;
+  std::array<CameraView*, 4> views_{};
+  Timeline* timeline_ = nullptr;
+  QSpinBox* frame_box_ = nullptr;
+  QSpinBox* row_box_ = nullptr;
+  QSpinBox* col_box_ = nullptr;
+  QLabel* status_frame_ = nullptr;
+  QLabel* status_cursor_ = nullptr;
+  QLabel* status_knot_ = nullptr;
+  QTimer* play_timer_ = nullptr;
+  std::vector<QAction*> actions_;
+  QMenu* recent_menu_ = nullptr;
+
+  int frame_ = 0, camera_ = 0, knot_ = 0, previous_knot_ = -1;
+  int maximised_ = -1;
+  bool half_ = false;
+  bool show_labels_ = true, show_links_ = true, show_epipolar_ = true;
+  double gain_ = 1.0, gamma_ = 1.0;
+  // The frame being loaded: a request id, so that a late answer for another frame is dropped.
+  struct Loaded {
+    long request = 0;
+    int t = 0;
+    std::array<cv::Mat, 4> images;
+    std::array<QString, 4> problems;
+  };
+  long request_ = 0;
+  QFutureWatcher<Loaded> loader_;
+  bool frame_shown_ = false;
+  std::vector<std::vector<Eigen::Vector2d>> candidates_;  // per camera, Find Node's several
+  // The tracking run on a worker.
+  QFutureWatcher<Session::TrackRun> tracker_;
+  std::atomic<bool> cancel_{false};
+};
+
+}  // namespace netlab::gui

@@ -1,0 +1,273 @@
+// The workstation's window on a shot rendered by `netlab render`, driven by real mouse and key
+// events (Qt's offscreen platform): a scripted person seeds the corners, runs Find Path and a
+// tracking run, fixes every review item with Find Node at the true place, saves. The labels file
+// must equal what the same actions give on the engine without a window, with no wrong accepted
+// label. And a screenshot: the overlays are drawn where the labels are.
+
+#include "app/gui/main_window.h"
+
+#include <gtest/gtest.h>
+
+#include <QApplication>
+#include <QStatusBar>
+#include <QTableView>
+#include <QTest>
+#include <QWheelEvent>
+
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "app/gui/camera_view.h"
+#include "app/gui/document/project.h"
+#include "tests/app/cli/run_netlab.h"
+
+namespace netlab::gui {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::RunNetlab;
+
+// A 6 x 6-knot net shot past a box for 0.2 s (36 frames), as tests/app/cli/small_shot.h.
+constexpr char kShot[] = R"(name: gui_shot
+duration: 0.2
+output_interval: 0.005586592178770949
+integrator: {type: explicit, dt: auto}
+gravity: [0, 0, 0]
+materials:
+  nylon: {diameter: 1.0e-3, linear_density: 8.95e-4, stretch_stiffness: 1571,
+          bend_stiffness: 9.82e-5, twist_stiffness: 7.07e-5}
+nets:
+  - {name: net, material: nylon, knots: [6, 6], mesh: 0.1, segments_per_link: 2,
+     center: [1.0, 0, 0], normal: [1, 0, 0], x_axis: [0, 1, 0], knot_mass: 3e-05,
+     corner_mass: 0.02, corner_radius: 0.01, velocity: [0.5, 0, 0]}
+bodies:
+  - {name: target, shape: box, center: [2.2, 0, 0], size: [0.4, 0.3, 0.3]}
+)";
+constexpr int kLastFrame = 30;  // frames 0..30: a tracking run of 30 frames
+
+const fs::path& Dir() {
+  static const fs::path dir =
+      fs::temp_directory_path() / ("netlab_gui_test_" + std::to_string(getpid()));
+  return dir;
+}
+
+// One action of the scripted person, to replay on the engine without a window.
+struct Action {
+  enum Kind { kFindNode, kPlace, kDelete, kAccept, kFindPath, kTrack } kind;
+  int camera = 0, t = 0, knot = 0;
+  Eigen::Vector2d px = Eigen::Vector2d::Zero();
+};
+
+class MainWindowTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    fs::remove_all(Dir());
+    fs::create_directories(Dir());
+    std::ofstream((Dir() / "shot.yaml").string()) << kShot;
+    const std::string d = Dir().string();
+    ASSERT_EQ(RunNetlab("simulate " + d + "/shot.yaml --out " + d + "/sim.h5 --quiet").status, 0);
+    ASSERT_EQ(RunNetlab("color-net --knots 6x6 --out " + d + "/coloring.yaml --quiet").status, 0);
+    const auto render = RunNetlab("render --sim " + d + "/sim.h5 --out " + d + "/shot --frames 0:" +
+                                  std::to_string(kLastFrame) + " --calibration-views 0 --coloring " +
+                                  d + "/coloring.yaml --quiet");
+    ASSERT_EQ(render.status, 0) << render.err;
+  }
+  static void TearDownTestSuite() { fs::remove_all(Dir()); }
+
+  // A project over the rendered shot whose labels go to `labels` (copied from `start` if given).
+  std::string MakeProjectFile(const std::string& name, const std::string& start = "") {
+    const std::string d = Dir().string();
+    const std::string labels = d + "/" + name + ".h5";
+    fs::remove(labels);
+    fs::remove(labels + ".journal");
+    if (!start.empty()) fs::copy_file(start, labels);
+    const std::string path = d + "/" + name + ".yaml";
+    SaveProject(MakeProject(d + "/shot/experiment.yaml", d + "/shot/rig_true.yaml",
+                            d + "/coloring.yaml", labels, 0, 0),
+                path);
+    return path;
+  }
+  static recon::LabelSet Truth() {
+    return recon::ReadLabels((Dir() / "shot/labels_true.h5").string());
+  }
+};
+
+// Clicks (with `modifiers`) the view of camera c at image pixel px; returns the image pixel the
+// click lands on (the widget point is whole pixels).
+Eigen::Vector2d ClickAt(CameraView* view, const Eigen::Vector2d& px,
+                        Qt::KeyboardModifiers modifiers = {}) {
+  const QPoint point = view->ToWidget(px).toPoint();
+  QTest::mouseMove(view, point);
+  QTest::mouseClick(view, Qt::LeftButton, modifiers, point);
+  return view->ToImage(QPointF(point));
+}
+
+// Zooms the view in at image pixel px with wheel events (as a person does before a click).
+void ZoomAt(CameraView* view, const Eigen::Vector2d& px, int notches) {
+  for (int i = 0; i < notches; ++i) {
+    const QPointF at = view->ToWidget(px);
+    QWheelEvent wheel(at, view->mapToGlobal(at), QPoint(), QPoint(0, 120), Qt::NoButton,
+                      Qt::NoModifier, Qt::NoScrollPhase, false);
+    QCoreApplication::sendEvent(view, &wheel);
+  }
+}
+
+// Moves the knot picker to `knot` with the '.' and ',' keys.
+void PickKnot(MainWindow* w, int knot) {
+  while (w->knot() < knot) QTest::keyClick(w, Qt::Key_Period);
+  while (w->knot() > knot) QTest::keyClick(w, Qt::Key_Comma);
+}
+
+TEST_F(MainWindowTest, AScriptedSessionLabelsAsTheEngineDoesWithNoWrongLabel) {
+  const recon::LabelSet truth = Truth();
+  const std::string project = MakeProjectFile("session");
+  MainWindow w;
+  w.resize(1400, 1000);
+  w.show();
+  ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), false));
+  ASSERT_TRUE(w.WaitForFrame());
+  Session* s = w.session();
+  std::vector<Action> actions;
+  // 1. The four corners of frame 0 in every camera that sees them: a Find Node click each.
+  for (int c = 0; c < s->cameras(); ++c)
+    for (int k : {0, 5, 30, 35}) {
+      const int tc = truth.FindCamera(s->camera_names()[c]);
+      if (!truth.at(tc, 0, k).present()) continue;
+      PickKnot(&w, k);
+      ZoomAt(w.view(c), truth.at(tc, 0, k).px, 8);
+      const Eigen::Vector2d px = ClickAt(w.view(c), truth.at(tc, 0, k).px);
+      actions.push_back({Action::kFindNode, c, 0, k, px});
+      // Find Node found none or several: the person clicks it exactly (Shift).
+      if (!s->document().at(c, 0, k).present())
+        actions.push_back(
+            {Action::kPlace, c, 0, k, ClickAt(w.view(c), truth.at(tc, 0, k).px, Qt::ShiftModifier)});
+      QTest::keyClick(&w, Qt::Key_F, Qt::ControlModifier);  // fit again
+    }
+  // 2. Find Path from the corners (Ctrl+P), 3. track to the last frame (T).
+  QTest::keyClick(&w, Qt::Key_P, Qt::ControlModifier);
+  actions.push_back({Action::kFindPath, 0, 0, 0, {}});
+  QTest::keyClick(&w, Qt::Key_T);
+  ASSERT_TRUE(QTest::qWaitFor([&] { return !w.busy(); }, 300000));
+  actions.push_back({Action::kTrack, 0, 0, 0, {}});
+  // 4. Every review item (Space): a Find Node click at the true place; a hidden knot deleted (D);
+  // a label already there accepted (A); where Find Node cannot decide, Shift+click exactly.
+  int fixed = 0;
+  for (; fixed < 400 && !s->document().ReviewItems().empty(); ++fixed) {
+    QTest::keyClick(&w, Qt::Key_Space);
+    const int c = w.camera(), t = w.frame(), k = w.knot();
+    ASSERT_EQ(s->document().at(c, t, k).state, recon::LabelState::kNeedsReview);
+    const recon::Label& want = truth.at(truth.FindCamera(s->camera_names()[c]), t, k);
+    if (!want.present()) {
+      QTest::keyClick(&w, Qt::Key_D);
+      actions.push_back({Action::kDelete, c, t, k, {}});
+      continue;
+    }
+    if ((s->document().at(c, t, k).px - want.px).norm() < 1.0) {
+      QTest::keyClick(&w, Qt::Key_A);
+      actions.push_back({Action::kAccept, c, t, k, {}});
+      continue;
+    }
+    actions.push_back({Action::kFindNode, c, t, k, ClickAt(w.view(c), want.px)});
+    if (s->document().at(c, t, k).state != recon::LabelState::kAccepted)
+      actions.push_back({Action::kPlace, c, t, k, ClickAt(w.view(c), want.px, Qt::ShiftModifier)});
+  }
+  EXPECT_TRUE(s->document().ReviewItems().empty()) << "review items left after " << fixed;
+  QTest::keyClick(&w, Qt::Key_S, Qt::ControlModifier);
+  ASSERT_FALSE(s->document().modified()) << w.statusBar()->currentMessage().toStdString();
+  const recon::LabelSet saved = recon::ReadLabels(s->project().labels);
+
+  // No accepted label off its knot (> 2 px) or on a hidden knot; the run carried the labels to
+  // the last frame (every frame has accepted labels in two cameras at least).
+  int accepted = 0, wrong = 0;
+  std::vector<std::set<int>> cameras_with_labels(saved.frames());
+  for (int c = 0; c < s->cameras(); ++c)
+    for (int t = 0; t < saved.frames(); ++t)
+      for (int k = 0; k < saved.knots(); ++k) {
+        const recon::Label& l = saved.at(c, t, k);
+        if (!l.present() || l.state != recon::LabelState::kAccepted) continue;
+        ++accepted;
+        cameras_with_labels[t].insert(c);
+        const recon::Label& want = truth.at(truth.FindCamera(saved.cameras[c]), t, k);
+        wrong += !want.present() || (l.px - want.px).norm() > 2.0;
+      }
+  EXPECT_EQ(wrong, 0);
+  for (int t = 0; t < saved.frames(); ++t) EXPECT_GE(cameras_with_labels[t].size(), 2u) << t;
+  EXPECT_GT(accepted, 20 * (kLastFrame + 1));
+
+  // The same actions on the engine, without a window.
+  auto engine = Session::Open(LoadProject(MakeProjectFile("engine")));
+  for (const Action& a : actions) switch (a.kind) {
+      case Action::kFindNode: engine->FindNode(a.camera, a.t, a.knot, a.px, 6.0); break;
+      case Action::kPlace:
+        engine->PlaceLabel(a.camera, a.t, a.knot, a.px);
+        break;
+      case Action::kDelete: engine->DeleteLabel(a.camera, a.t, a.knot); break;
+      case Action::kAccept: engine->AcceptLabel(a.camera, a.t, a.knot); break;
+      case Action::kFindPath: engine->FindPathFromCorners(0); break;
+      case Action::kTrack:
+        engine->ApplyTrackRun(engine->Track(engine->document().labels(), 0, kLastFrame, nullptr,
+                                             {}, MainWindow::kMaxReviewPerFrame));
+        break;
+    }
+  const recon::LabelSet& direct = engine->document().labels();
+  int differ = 0;
+  for (int c = 0; c < s->cameras(); ++c)
+    for (int t = 0; t < saved.frames(); ++t)
+      for (int k = 0; k < saved.knots(); ++k) {
+        const recon::Label &a = saved.at(c, t, k), &b = direct.at(c, t, k);
+        differ += a.present() != b.present() || a.state != b.state || a.source != b.source ||
+                  (a.present() && (a.px - b.px).norm() > 1e-9);
+      }
+  EXPECT_EQ(differ, 0);
+  // Every step is undoable: undoing all of them empties the labels.
+  while (s->document().undo_stack()->canUndo()) QTest::keyClick(&w, Qt::Key_Z, Qt::ControlModifier);
+  EXPECT_EQ(s->document().labels().CountPresent(), 0);
+}
+
+TEST_F(MainWindowTest, TheScreenshotDrawsTheOverlaysWhereTheLabelsAre) {
+  const std::string project =
+      MakeProjectFile("screenshot", (Dir() / "shot/labels_true.h5").string());
+  MainWindow w;
+  w.resize(1400, 1000);
+  w.show();
+  ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), false));
+  ASSERT_TRUE(w.WaitForFrame());
+  const QImage shot = w.grab().toImage();
+  shot.save((Dir() / "screenshot.png").string().c_str());
+  // Not blank: the frame's pixels vary.
+  std::set<QRgb> colours;
+  for (int y = 0; y < shot.height(); y += 7)
+    for (int x = 0; x < shot.width(); x += 7) colours.insert(shot.pixel(x, y));
+  EXPECT_GT(colours.size(), 50u);
+  // At every label of camera 0, the ring of an imported label is drawn (pale blue).
+  const recon::LabelSet& labels = w.session()->document().labels();
+  int checked = 0, drawn = 0;
+  for (int k = 0; k < labels.knots(); ++k) {
+    const recon::Label& l = labels.at(0, 0, k);
+    if (!l.present()) continue;
+    ++checked;
+    const QPoint centre = w.view(0)->mapTo(&w, w.view(0)->ToWidget(l.px).toPoint());
+    bool found = false;
+    for (int dy = -5; dy <= 5 && !found; ++dy)
+      for (int dx = -5; dx <= 5 && !found; ++dx) {
+        const QColor c = shot.pixelColor(centre + QPoint(dx, dy));
+        found = std::abs(c.red() - 200) < 40 && std::abs(c.green() - 200) < 40 && c.blue() > 215;
+      }
+    drawn += found;
+  }
+  EXPECT_GT(checked, 20);
+  EXPECT_EQ(drawn, checked);
+}
+
+}  // namespace
+}  // namespace netlab::gui
+
+int main(int argc, char** argv) {
+  if (qEnvironmentVariableIsEmpty("QT_QPA_PLATFORM")) qputenv("QT_QPA_PLATFORM", "offscreen");
+  QApplication app(argc, argv);
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
