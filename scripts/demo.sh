@@ -82,3 +82,6 @@ echo "  tracks labeled from the corners vs the true simulation:" \
   "$(verdict "$out/score_labeled.json" 2>/dev/null)   (report: $out/score_labeled.html)" >&2
 echo "  frames, truth and calibration images in $out/shot; rig in $out/rig_calibrated.yaml;" \
   "labels in $out/labels.h5; 3D tracks in $out/tracks.h5" >&2
+echo "  open the shot in the labeling workstation (docs/gui.md):" >&2
+echo "    $netlab gui $out/shot/experiment.yaml --rig $out/rig_calibrated.yaml" \
+  "--coloring $out/coloring.yaml --labels $out/labels.h5" >&2

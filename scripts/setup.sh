@@ -12,7 +12,7 @@ netlab_packages=(
   g++ cmake make pkg-config
   libeigen3-dev libyaml-cpp-dev libhdf5-dev libgtest-dev
   libceres-dev libopencv-dev libopencv-contrib-dev qt6-base-dev
-  hdf5-tools python3
+  hdf5-tools python3 fonts-dejavu-core
 )
 
 netlab_install_missing() {

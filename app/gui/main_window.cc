@@ -170,7 +170,7 @@ void MainWindow::BuildWorkspace() {
   review_table_->horizontalHeader()->setStretchLastSection(true);
   review_table_->verticalHeader()->setVisible(false);
   dock->setWidget(review_table_);
-  dock->setMinimumWidth(380);
+  dock->setMinimumWidth(480);
   addDockWidget(Qt::RightDockWidgetArea, dock);
   connect(review_table_, &QTableView::activated, this, [this](const QModelIndex& index) {
     const int c = index.data(ReviewModel::kCameraRole).toInt();
@@ -314,11 +314,11 @@ bool MainWindow::OpenProject(const QString& path, bool ask) {
   review_proxy_->setSourceModel(review_model_.get());
   review_proxy_->setSortRole(Qt::EditRole);
   review_table_->setModel(review_proxy_);
-  review_table_->setColumnWidth(ReviewModel::kCamera, 60);
-  review_table_->setColumnWidth(ReviewModel::kFrame, 55);
-  review_table_->setColumnWidth(ReviewModel::kKnot, 95);
-  review_table_->setColumnWidth(ReviewModel::kSource, 75);
-  review_table_->setColumnWidth(ReviewModel::kSeverity, 60);
+  review_table_->setColumnWidth(ReviewModel::kCamera, 52);
+  review_table_->setColumnWidth(ReviewModel::kFrame, 48);
+  review_table_->setColumnWidth(ReviewModel::kKnot, 60);
+  review_table_->setColumnWidth(ReviewModel::kSource, 70);
+  review_table_->setColumnWidth(ReviewModel::kSeverity, 56);
   connect(&session_->document(), &LabelDocument::labelsChanged, this,
           &MainWindow::OnLabelsChanged);
   connect(&session_->document(), &LabelDocument::modifiedChanged, this,

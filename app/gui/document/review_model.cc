@@ -77,7 +77,7 @@ QVariant ReviewModel::data(const QModelIndex& index, int role) const {
       return QString::number(Severity(key), 'f', 2);
     case kReason: {
       const std::string why = document_->Reason(c, t, k);
-      return QString::fromStdString(why.empty() ? "kept for review" : why);
+      return QString::fromStdString(why.empty() ? "kept for review (reason not saved)" : why);
     }
   }
   return {};
@@ -86,8 +86,8 @@ QVariant ReviewModel::data(const QModelIndex& index, int role) const {
 QVariant ReviewModel::headerData(int section, Qt::Orientation orientation, int role) const {
   if (role != Qt::DisplayRole) return {};
   if (orientation == Qt::Vertical) return section + 1;
-  static const char* const kNames[kColumns] = {"Camera", "Frame", "Knot (row, col)", "Source",
-                                               "Severity", "Reason"};
+  static const char* const kNames[kColumns] = {"Camera", "Frame", "Knot", "Source", "Severity",
+                                               "Reason"};
   return section >= 0 && section < kColumns ? QVariant(kNames[section]) : QVariant();
 }
 
