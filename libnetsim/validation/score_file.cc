@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "common/files.h"
 #include "common/hdf5_util.h"
 
 namespace netlab::netsim {
@@ -138,11 +139,7 @@ void WriteScore(const std::string& path, const ScoreResult& r) {
     h5::WriteStringAttribute(g, "sim_uncertainty", s.sim_uncertainty);
     H5Fflush(f, H5F_SCOPE_GLOBAL);
   }
-  std::error_code error;
-  std::filesystem::rename(partial, path, error);
-  if (error)
-    throw std::runtime_error(path + ": cannot rename " + partial +
-                             " into place: " + error.message());
+  RenameInto(partial, path);
 }
 
 }  // namespace netlab::netsim

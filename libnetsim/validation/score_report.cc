@@ -8,6 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/files.h"
+
 namespace netlab::netsim {
 namespace {
 
@@ -416,11 +418,7 @@ void WriteScoreReport(const std::string& path, const ScoreResult& result, const 
     out << ScoreReportHtml(result, info);
     if (!out) throw std::runtime_error(partial + ": write failed (disk full?)");
   }
-  std::error_code error;
-  std::filesystem::rename(partial, path, error);
-  if (error)
-    throw std::runtime_error(path + ": cannot rename " + partial +
-                             " into place: " + error.message());
+  RenameInto(partial, path);
 }
 
 }  // namespace netlab::netsim

@@ -23,6 +23,7 @@
 #include "app/gui/camera_view.h"
 #include "app/gui/document/project.h"
 #include "tests/app/cli/run_netlab.h"
+#include "tests/app/cli/small_shot.h"
 
 namespace netlab::gui {
 namespace {
@@ -30,22 +31,12 @@ namespace {
 namespace fs = std::filesystem;
 using testing::RunNetlab;
 
-// A 6 x 6-knot net shot past a box for 0.2 s (36 frames), as tests/app/cli/small_shot.h.
-constexpr char kShot[] = R"(name: gui_shot
-duration: 0.2
-output_interval: 0.005586592178770949
-integrator: {type: explicit, dt: auto}
-gravity: [0, 0, 0]
-materials:
-  nylon: {diameter: 1.0e-3, linear_density: 8.95e-4, stretch_stiffness: 1571,
-          bend_stiffness: 9.82e-5, twist_stiffness: 7.07e-5}
-nets:
-  - {name: net, material: nylon, knots: [6, 6], mesh: 0.1, segments_per_link: 2,
-     center: [1.0, 0, 0], normal: [1, 0, 0], x_axis: [0, 1, 0], knot_mass: 3e-05,
-     corner_mass: 0.02, corner_radius: 0.01, velocity: [0.5, 0, 0]}
-bodies:
-  - {name: target, shape: box, center: [2.2, 0, 0], size: [0.4, 0.3, 0.3]}
-)";
+// The command tests' small shot (a 6 x 6-knot net past a box), 0.2 s long (36 frames).
+std::string Shot() {
+  std::string scenario = testing::kSmallShotScenario;
+  const std::string from = "duration: 0.06", to = "duration: 0.2";
+  return scenario.replace(scenario.find(from), from.size(), to);
+}
 constexpr int kLastFrame = 30;  // frames 0..30: a tracking run of 30 frames
 
 const fs::path& Dir() {
@@ -66,7 +57,7 @@ class MainWindowTest : public ::testing::Test {
   static void SetUpTestSuite() {
     fs::remove_all(Dir());
     fs::create_directories(Dir());
-    std::ofstream((Dir() / "shot.yaml").string()) << kShot;
+    std::ofstream((Dir() / "shot.yaml").string()) << Shot();
     const std::string d = Dir().string();
     ASSERT_EQ(RunNetlab("simulate " + d + "/shot.yaml --out " + d + "/sim.h5 --quiet").status, 0);
     ASSERT_EQ(RunNetlab("color-net --knots 6x6 --out " + d + "/coloring.yaml --quiet").status, 0);
