@@ -56,7 +56,10 @@ std::string Escape(const std::string& text) {
 
 std::string Values(const std::vector<double>& v) {
   std::string s;
-  for (size_t i = 0; i < v.size(); ++i) s += (i ? " " : "") + Num(v[i]);
+  for (size_t i = 0; i < v.size(); ++i) {
+    if (i) s += ' ';
+    s += Num(v[i]);
+  }
   return s;
 }
 
