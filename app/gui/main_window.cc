@@ -334,9 +334,10 @@ bool MainWindow::OpenProject(const QString& path, bool ask) {
   candidates_.assign(session_->cameras(), {});
   Settings::AddRecentProject(QFileInfo(path).absoluteFilePath());
   stack_->setCurrentWidget(workspace_);
-  frame_ = -1;
-  SetKnot(0);
+  camera_ = 0, maximised_ = -1, previous_knot_ = -1;
+  frame_ = -1;  // no frame shown yet: SetFrame(0) loads it
   SetFrame(0);
+  SetKnot(0);
   return true;
 }
 
@@ -406,7 +407,7 @@ bool MainWindow::WaitForFrame(int timeout_ms) {
 }
 
 void MainWindow::RefreshOverlays() {
-  if (!session_) return;
+  if (!session_ || frame_ < 0) return;
   const LabelDocument& doc = session_->document();
   const Project& p = session_->project();
   const recon::PointEstimate point = session_->Triangulate(frame_, knot_);
@@ -444,7 +445,7 @@ void MainWindow::RefreshOverlays() {
 }
 
 void MainWindow::RefreshStatus() {
-  if (!session_) return;
+  if (!session_ || frame_ < 0) return;
   status_frame_->setText(QString("frame %1 (%2 of %3) · t = %4 s · %5")
                              .arg(session_->frame_number(frame_))
                              .arg(frame_ + 1)

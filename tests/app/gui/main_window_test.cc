@@ -24,6 +24,7 @@
 #include "app/gui/document/project.h"
 #include "tests/app/cli/run_netlab.h"
 #include "tests/app/cli/small_shot.h"
+#include "tests/app/gui/scripted_person.h"
 
 namespace netlab::gui {
 namespace {
@@ -44,13 +45,6 @@ const fs::path& Dir() {
       fs::temp_directory_path() / ("netlab_gui_test_" + std::to_string(getpid()));
   return dir;
 }
-
-// One action of the scripted person, to replay on the engine without a window.
-struct Action {
-  enum Kind { kFindNode, kPlace, kDelete, kAccept, kFindPath, kTrack } kind;
-  int camera = 0, t = 0, knot = 0;
-  Eigen::Vector2d px = Eigen::Vector2d::Zero();
-};
 
 class MainWindowTest : public ::testing::Test {
  protected:
@@ -86,32 +80,6 @@ class MainWindowTest : public ::testing::Test {
   }
 };
 
-// Clicks (with `modifiers`) the view of camera c at image pixel px; returns the image pixel the
-// click lands on (the widget point is whole pixels).
-Eigen::Vector2d ClickAt(CameraView* view, const Eigen::Vector2d& px,
-                        Qt::KeyboardModifiers modifiers = {}) {
-  const QPoint point = view->ToWidget(px).toPoint();
-  QTest::mouseMove(view, point);
-  QTest::mouseClick(view, Qt::LeftButton, modifiers, point);
-  return view->ToImage(QPointF(point));
-}
-
-// Zooms the view in at image pixel px with wheel events (as a person does before a click).
-void ZoomAt(CameraView* view, const Eigen::Vector2d& px, int notches) {
-  for (int i = 0; i < notches; ++i) {
-    const QPointF at = view->ToWidget(px);
-    QWheelEvent wheel(at, view->mapToGlobal(at), QPoint(), QPoint(0, 120), Qt::NoButton,
-                      Qt::NoModifier, Qt::NoScrollPhase, false);
-    QCoreApplication::sendEvent(view, &wheel);
-  }
-}
-
-// Moves the knot picker to `knot` with the '.' and ',' keys.
-void PickKnot(MainWindow* w, int knot) {
-  while (w->knot() < knot) QTest::keyClick(w, Qt::Key_Period);
-  while (w->knot() > knot) QTest::keyClick(w, Qt::Key_Comma);
-}
-
 TEST_F(MainWindowTest, AScriptedSessionLabelsAsTheEngineDoesWithNoWrongLabel) {
   const recon::LabelSet truth = Truth();
   const std::string project = MakeProjectFile("session");
@@ -121,51 +89,10 @@ TEST_F(MainWindowTest, AScriptedSessionLabelsAsTheEngineDoesWithNoWrongLabel) {
   ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), false));
   ASSERT_TRUE(w.WaitForFrame());
   Session* s = w.session();
-  std::vector<Action> actions;
-  // 1. The four corners of frame 0 in every camera that sees them: a Find Node click each.
-  for (int c = 0; c < s->cameras(); ++c)
-    for (int k : {0, 5, 30, 35}) {
-      const int tc = truth.FindCamera(s->camera_names()[c]);
-      if (!truth.at(tc, 0, k).present()) continue;
-      PickKnot(&w, k);
-      ZoomAt(w.view(c), truth.at(tc, 0, k).px, 8);
-      const Eigen::Vector2d px = ClickAt(w.view(c), truth.at(tc, 0, k).px);
-      actions.push_back({Action::kFindNode, c, 0, k, px});
-      // Find Node found none or several: the person clicks it exactly (Shift).
-      if (!s->document().at(c, 0, k).present())
-        actions.push_back(
-            {Action::kPlace, c, 0, k, ClickAt(w.view(c), truth.at(tc, 0, k).px, Qt::ShiftModifier)});
-      QTest::keyClick(&w, Qt::Key_F, Qt::ControlModifier);  // fit again
-    }
-  // 2. Find Path from the corners (Ctrl+P), 3. track to the last frame (T).
-  QTest::keyClick(&w, Qt::Key_P, Qt::ControlModifier);
-  actions.push_back({Action::kFindPath, 0, 0, 0, {}});
-  QTest::keyClick(&w, Qt::Key_T);
-  ASSERT_TRUE(QTest::qWaitFor([&] { return !w.busy(); }, 300000));
-  actions.push_back({Action::kTrack, 0, 0, 0, {}});
-  // 4. Every review item (Space): a Find Node click at the true place; a hidden knot deleted (D);
-  // a label already there accepted (A); where Find Node cannot decide, Shift+click exactly.
-  int fixed = 0;
-  for (; fixed < 400 && !s->document().ReviewItems().empty(); ++fixed) {
-    QTest::keyClick(&w, Qt::Key_Space);
-    const int c = w.camera(), t = w.frame(), k = w.knot();
-    ASSERT_EQ(s->document().at(c, t, k).state, recon::LabelState::kNeedsReview);
-    const recon::Label& want = truth.at(truth.FindCamera(s->camera_names()[c]), t, k);
-    if (!want.present()) {
-      QTest::keyClick(&w, Qt::Key_D);
-      actions.push_back({Action::kDelete, c, t, k, {}});
-      continue;
-    }
-    if ((s->document().at(c, t, k).px - want.px).norm() < 1.0) {
-      QTest::keyClick(&w, Qt::Key_A);
-      actions.push_back({Action::kAccept, c, t, k, {}});
-      continue;
-    }
-    actions.push_back({Action::kFindNode, c, t, k, ClickAt(w.view(c), want.px)});
-    if (s->document().at(c, t, k).state != recon::LabelState::kAccepted)
-      actions.push_back({Action::kPlace, c, t, k, ClickAt(w.view(c), want.px, Qt::ShiftModifier)});
-  }
-  EXPECT_TRUE(s->document().ReviewItems().empty()) << "review items left after " << fixed;
+  const ScriptedSession session = PlayScriptedSession(&w, truth);
+  ASSERT_TRUE(session.finished) << "the tracking run did not end";
+  const std::vector<Action>& actions = session.actions;
+  EXPECT_TRUE(s->document().ReviewItems().empty()) << "review items left";
   QTest::keyClick(&w, Qt::Key_S, Qt::ControlModifier);
   ASSERT_FALSE(s->document().modified()) << w.statusBar()->currentMessage().toStdString();
   const recon::LabelSet saved = recon::ReadLabels(s->project().labels);

@@ -1,0 +1,176 @@
+// bench_gui: the workstation's speed as a person feels it, on a rendered shot (Qt's offscreen
+// platform, raster drawing; a printed table, never a test).
+//
+//   netlab simulate scenarios/net_a_0.5.yaml --duration 0.4 --out sim.h5
+//   netlab color-net --knots 11x11 --out coloring.yaml
+//   netlab render --sim sim.h5 --out shot --frames 0:59 --coloring coloring.yaml
+//   build/bench/bench_gui --shot shot --coloring coloring.yaml [--frames 40] [--json]
+//
+// A. Frame change latency: from the key press (Right) to all four 2048^2 views painted with the
+//    frame's labels (labels_true.h5: every visible knot) and overlays, over `--frames` frames:
+//    uncached (first visit, the cache emptied by a new window) and cached (the same frames
+//    again), at full and half resolution.
+// B. The scripted person (tests/app/gui/scripted_person.h) labeling the shot through the window:
+//    actions per knot-frame and wall time per action.
+// --json prints cached_ms and uncached_half_ms ({median, p95}) and actions_per_knot_frame.
+
+#include <QApplication>
+#include <QElapsedTimer>
+#include <QTest>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "app/gui/document/project.h"
+#include "app/gui/main_window.h"
+#include "libreconstruct/labels/label_set.h"
+#include "tests/app/gui/scripted_person.h"
+
+namespace netlab::gui {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Stats {
+  double median = 0, p95 = 0, max = 0;
+};
+
+Stats Summarise(std::vector<double> ms) {
+  Stats s;
+  if (ms.empty()) return s;
+  std::sort(ms.begin(), ms.end());
+  s.median = ms[ms.size() / 2];
+  s.p95 = ms[std::min(ms.size() - 1, static_cast<size_t>(0.95 * ms.size()))];
+  s.max = ms.back();
+  return s;
+}
+
+// A project over the shot whose labels start as `start` (copied) or empty.
+std::string ProjectFile(const std::string& shot, const std::string& coloring,
+                        const std::string& dir, const std::string& name,
+                        const std::string& start) {
+  const std::string labels = dir + "/" + name + ".h5";
+  fs::remove(labels);
+  fs::remove(labels + ".journal");
+  if (!start.empty()) fs::copy_file(start, labels);
+  const std::string path = dir + "/" + name + ".yaml";
+  SaveProject(MakeProject(shot + "/experiment.yaml", shot + "/rig_true.yaml", coloring, labels, 0,
+                          0),
+              path);
+  return path;
+}
+
+// Frame changes by key presses, each timed until the four views are painted.
+std::vector<double> ScrubTimes(MainWindow* w, int frames) {
+  std::vector<double> ms;
+  for (int i = 0; i < frames; ++i) {
+    QElapsedTimer timer;
+    timer.start();
+    QTest::keyClick(w, Qt::Key_Right);
+    if (!w->WaitForFrame(60000)) break;
+    w->repaint();  // the four views and their overlays, now
+    ms.push_back(timer.nsecsElapsed() * 1e-6);
+  }
+  return ms;
+}
+
+// Uncached, then cached, latency at one resolution (a new window: an empty cache).
+std::pair<Stats, Stats> Latency(const std::string& project, bool half, int frames) {
+  MainWindow w;
+  w.resize(1600, 1000);
+  w.show();
+  w.OpenProject(QString::fromStdString(project), false);
+  w.SetHalfResolution(half);
+  w.WaitForFrame(60000);
+  // Uncached: the prefetch is not given time to run ahead (the person scrubs at once).
+  const Stats uncached = Summarise(ScrubTimes(&w, frames));
+  w.SetFrame(0);
+  w.WaitForFrame(60000);
+  const Stats cached = Summarise(ScrubTimes(&w, frames));
+  return {uncached, cached};
+}
+
+}  // namespace
+}  // namespace netlab::gui
+
+int main(int argc, char** argv) {
+  using namespace netlab::gui;
+  std::string shot, coloring;
+  int frames = 40;
+  bool json = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--shot" && i + 1 < argc) shot = argv[++i];
+    else if (a == "--coloring" && i + 1 < argc) coloring = argv[++i];
+    else if (a == "--frames" && i + 1 < argc) frames = std::stoi(argv[++i]);
+    else if (a == "--json") json = true;
+    else {
+      std::fprintf(stderr, "usage: bench_gui --shot DIR --coloring coloring.yaml [--frames N] "
+                           "[--json]\n");
+      return 2;
+    }
+  }
+  if (shot.empty() || coloring.empty()) {
+    std::fprintf(stderr, "bench_gui: --shot and --coloring are needed (see the top of "
+                         "bench/gui_bench.cc for how to make them)\n");
+    return 2;
+  }
+  if (qEnvironmentVariableIsEmpty("QT_QPA_PLATFORM")) qputenv("QT_QPA_PLATFORM", "offscreen");
+  int qt_argc = 1;
+  QApplication app(qt_argc, argv);
+  const std::string dir = (fs::temp_directory_path() / "netlab_bench_gui").string();
+  fs::create_directories(dir);
+  const netlab::recon::LabelSet truth = netlab::recon::ReadLabels(shot + "/labels_true.h5");
+  frames = std::min(frames, truth.frames() - 1);
+
+  // A. Latency with every visible knot labeled.
+  const std::string labeled =
+      ProjectFile(shot, coloring, dir, "latency", shot + "/labels_true.h5");
+  const auto [full_uncached, full_cached] = Latency(labeled, false, frames);
+  const auto [half_uncached, half_cached] = Latency(labeled, true, frames);
+  std::printf("A. frame change latency, 4 cameras, %d labels per camera-frame at most, %d frames "
+              "(ms: median / p95 / max)\n",
+              truth.knots(), frames);
+  std::printf("| resolution | uncached | from cache |\n|---|---|---|\n");
+  auto row = [](const char* name, const Stats& u, const Stats& c) {
+    std::printf("| %s | %.1f / %.1f / %.1f | %.1f / %.1f / %.1f |\n", name, u.median, u.p95, u.max,
+                c.median, c.p95, c.max);
+  };
+  row("full", full_uncached, full_cached);
+  row("half", half_uncached, half_cached);
+
+  // B. The scripted person through the window.
+  MainWindow w;
+  w.resize(1600, 1000);
+  w.show();
+  w.OpenProject(QString::fromStdString(ProjectFile(shot, coloring, dir, "session", "")), false);
+  w.WaitForFrame(60000);
+  QElapsedTimer timer;
+  timer.start();
+  const ScriptedSession session = PlayScriptedSession(&w, truth);
+  const double wall_s = timer.nsecsElapsed() * 1e-9;
+  // Person actions: the labeling ones, plus the keys that start Find Path and the run (counted
+  // in actions), plus one Space per review item.
+  const int actions = static_cast<int>(session.actions.size()) + session.review_items;
+  long knot_frames = 0;
+  for (int c = 0; c < static_cast<int>(truth.cameras.size()); ++c)
+    for (int t = 0; t < truth.frames(); ++t)
+      for (int k = 0; k < truth.knots(); ++k) knot_frames += truth.at(c, t, k).present();
+  const double per_knot_frame = knot_frames > 0 ? double(actions) / knot_frames : 0.0;
+  std::printf("\nB. the scripted person through the window: %d actions (%d review items) for %ld "
+              "visible knot-frames: %.4f actions per knot-frame; %.1f s in all, %.0f ms per "
+              "action%s\n",
+              actions, session.review_items, knot_frames, per_knot_frame, wall_s,
+              actions > 0 ? 1000.0 * wall_s / actions : 0.0,
+              session.finished ? "" : " (the tracking run did not end)");
+  if (json)
+    std::printf("{\"cached_ms\": {\"median\": %.3f, \"p95\": %.3f}, \"uncached_half_ms\": "
+                "{\"median\": %.3f, \"p95\": %.3f}, \"actions_per_knot_frame\": %.6f}\n",
+                full_cached.median, full_cached.p95, half_uncached.median, half_uncached.p95,
+                per_knot_frame);
+  fs::remove_all(dir);
+  return 0;
+}
