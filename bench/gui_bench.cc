@@ -160,12 +160,28 @@ int main(int argc, char** argv) {
     for (int t = 0; t < truth.frames(); ++t)
       for (int k = 0; k < truth.knots(); ++k) knot_frames += truth.at(c, t, k).present();
   const double per_knot_frame = knot_frames > 0 ? double(actions) / knot_frames : 0.0;
+  // What the session left: accepted labels right (<= 2 px) and wrong, visible knots unlabeled.
+  long right = 0, wrong = 0, unlabeled = 0;
+  const netlab::recon::LabelSet& got = w.session()->document().labels();
+  for (int c = 0; c < static_cast<int>(got.cameras.size()); ++c)
+    for (int t = 0; t < got.frames(); ++t)
+      for (int k = 0; k < got.knots(); ++k) {
+        const auto& l = got.at(c, t, k);
+        const auto& want = truth.at(truth.FindCamera(got.cameras[c]), t, k);
+        const bool accepted = l.present() && l.state == netlab::recon::LabelState::kAccepted;
+        if (accepted && want.present() && (l.px - want.px).norm() <= 2.0) ++right;
+        else if (accepted) ++wrong;
+        else if (want.present()) ++unlabeled;
+      }
   std::printf("\nB. the scripted person through the window: %d actions (%d review items) for %ld "
               "visible knot-frames: %.4f actions per knot-frame; %.1f s in all, %.0f ms per "
               "action%s\n",
               actions, session.review_items, knot_frames, per_knot_frame, wall_s,
               actions > 0 ? 1000.0 * wall_s / actions : 0.0,
               session.finished ? "" : " (the tracking run did not end)");
+  std::printf("   left: %ld accepted labels right, %ld wrong, %ld visible knot-frames unlabeled "
+              "(the script walks the review queue only; it does not click unlabeled knots)\n",
+              right, wrong, unlabeled);
   if (json)
     std::printf("{\"cached_ms\": {\"median\": %.3f, \"p95\": %.3f}, \"uncached_half_ms\": "
                 "{\"median\": %.3f, \"p95\": %.3f}, \"actions_per_knot_frame\": %.6f}\n",

@@ -261,6 +261,7 @@ int RunLabel(const std::vector<std::string>& args) {
     });
     // Counted, written, reported.
     report.counts = CountLabels(job, store, notes);
+    store.SetReasons(engine.reasons());
     store.Save(out);
     if (const auto xypts = cl.Option("xypts")) recon::WriteXyPts(*xypts, store.labels());
     for (const auto& c : report.counts)

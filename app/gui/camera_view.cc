@@ -45,6 +45,7 @@ void CameraView::SetTone(double gain, double offset, double gamma) {
 void CameraView::RebuildImage() {
   if (frame_.empty()) {
     image_ = QImage();
+    shown_ = cv::Mat();
     return;
   }
   // The tone curve as a lookup table (thin dark threads on 12-bit data need it).
@@ -57,9 +58,10 @@ void CameraView::RebuildImage() {
     }
     cv::LUT(frame_, lut, shown);
   }
-  image_ = QImage(shown.data, shown.cols, shown.rows, static_cast<int>(shown.step),
-                  QImage::Format_BGR888)
-               .copy();
+  // The QImage draws straight from the Mat's pixels (no copy: shown_ keeps them alive).
+  shown_ = shown;
+  image_ = QImage(shown_.data, shown_.cols, shown_.rows, static_cast<int>(shown_.step),
+                  QImage::Format_BGR888);
 }
 
 QPointF CameraView::ToWidget(const Eigen::Vector2d& px) const {

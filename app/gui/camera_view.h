@@ -88,7 +88,8 @@ class CameraView : public QWidget {
 
   int camera_;
   cv::Mat frame_;       // as given
-  QImage image_;        // after the lookup table
+  cv::Mat shown_;       // after the lookup table (frame_ itself when the tone is neutral)
+  QImage image_;        // over shown_'s pixels
   int full_width_ = 0, full_height_ = 0;
   QString problem_;
   ViewOverlay overlay_;

@@ -76,8 +76,8 @@ struct LabelEngineOptions {
   int fill_passes = 4;
 };
 
-// Per camera, frame and knot: why a label needs review (absent: it does not, or there is none).
-using ReviewReasons = std::map<std::tuple<int, int, int>, std::string>;
+// Per camera, frame and knot: why a label needs review (absent: it does not, or there is none):
+// ReviewReasons of libreconstruct/labels/label_set.h.
 
 // The image positions of a knot's grid neighbours, slots right, down, left, up: `present` says
 // which the net has, `px` which are known.

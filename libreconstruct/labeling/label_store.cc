@@ -76,6 +76,18 @@ void LabelStore::Notify(Change change, const Step& step) const {
   listener_(change, step.name, now);
 }
 
+void LabelStore::SetReasons(const ReviewReasons& reasons) {
+  labels_.reasons.clear();
+  const int cameras = static_cast<int>(labels_.cameras.size());
+  for (const auto& [key, why] : reasons) {
+    const auto [c, t, k] = key;
+    if (c >= 0 && c < cameras && t >= 0 && t < labels_.frames() && k >= 0 &&
+        k < labels_.knots() && labels_.at(c, t, k).present() &&
+        labels_.at(c, t, k).state == LabelState::kNeedsReview)
+      labels_.reasons[key] = why;
+  }
+}
+
 void LabelStore::Save(const std::string& path) {
   WriteLabels(path, labels_);
   modified_ = false;

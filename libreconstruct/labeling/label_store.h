@@ -54,6 +54,10 @@ class LabelStore {
   bool Undo();
   bool Redo();
 
+  // Why labels are under review, saved with them (metadata, not an undoable step): the reasons
+  // of labels under review are kept, the others dropped.
+  void SetReasons(const ReviewReasons& reasons);
+
   // Whether anything changed since the last Save or Load.
   bool modified() const { return modified_; }
   // labels.h5 through "<path>.partial" and a rename (labels.h: WriteLabels).

@@ -12,6 +12,7 @@
 #include <optional>
 #include <regex>
 #include <set>
+#include <sstream>
 #include <stdexcept>
 #include <utility>
 
@@ -165,8 +166,41 @@ void WriteLabelsFile(const std::string& file_path, const LabelSet& labels) {
   h5::Id cameras = h5::CreateGroup(f, "cameras");
   for (int c = 0; c < static_cast<int>(labels.cameras.size()); ++c)
     WriteCamera(cameras.get(), labels, c);
+  if (!labels.reasons.empty()) {
+    std::string text;
+    for (const auto& [key, why] : labels.reasons) {
+      std::string line = why;  // one line each: no tab or line break inside
+      for (char& ch : line)
+        if (ch == '\t' || ch == '\n' || ch == '\r') ch = ' ';
+      text += std::to_string(std::get<0>(key)) + "\t" + std::to_string(std::get<1>(key)) + "\t" +
+              std::to_string(std::get<2>(key)) + "\t" + line + "\n";
+    }
+    h5::WriteStringDataset(f, "review_reasons", text);
+  }
   if (H5Fflush(f, H5F_SCOPE_GLOBAL) < 0)
     throw std::runtime_error(file_path + ": cannot flush (disk full?)");
+}
+
+// /review_reasons: "camera<TAB>t<TAB>knot<TAB>reason" lines, each address inside the set.
+ReviewReasons ReadReasons(const std::string& path, hid_t f, const LabelSet& labels) {
+  ReviewReasons reasons;
+  std::istringstream text(h5::ReadStringDataset(f, "review_reasons"));
+  int line_no = 0;
+  for (std::string line; std::getline(text, line);) {
+    ++line_no;
+    if (line.empty()) continue;
+    std::istringstream fields(line);
+    int c = -1, t = -1, k = -1;
+    std::string why;
+    if (!(fields >> c >> t >> k) || c < 0 || c >= static_cast<int>(labels.cameras.size()) ||
+        t < 0 || t >= labels.frames() || k < 0 || k >= labels.knots())
+      throw InputError(path + ": /review_reasons line " + std::to_string(line_no) +
+                       ": not 'camera frame-row knot reason' inside the set: " + line);
+    fields.ignore(1);  // the tab before the reason
+    std::getline(fields, why);
+    reasons[{c, t, k}] = why;
+  }
+  return reasons;
 }
 
 // Reads an open labels file; HDF5 failures surface as std::runtime_error.
@@ -265,6 +299,7 @@ LabelSet ReadLabelsFile(const std::string& path, hid_t f) {
       camera[i].state = static_cast<LabelState>(state[i]);
     }
   }
+  if (h5::Exists(f, "review_reasons")) labels.reasons = ReadReasons(path, f, labels);
   return labels;
 }
 

@@ -11,6 +11,9 @@
 //   /cameras/<name>/source            [T,K]    uint8    LabelSource
 //   /cameras/<name>/confidence        [T,K]    float32  0..1
 //   /cameras/<name>/state             [T,K]    uint8    LabelState
+//   /review_reasons                   scalar   string   optional: why labels are under review,
+//                                                       a line "camera<TAB>t<TAB>knot<TAB>reason"
+//                                                       each (camera index, frame row, knot)
 // Written to "<path>.partial" and renamed into place.
 //
 // xypts.csv (DLTdv8 style): a header row, then one row per frame (row i is frame i, from 0);
@@ -26,7 +29,9 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <map>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <Eigen/Core>
@@ -56,12 +61,16 @@ struct Label {
   bool present() const { return std::isfinite(px.x()) && std::isfinite(px.y()); }
 };
 
+// Per (camera, frame row, knot): why a label is under review (the labeling tools' reasons).
+using ReviewReasons = std::map<std::tuple<int, int, int>, std::string>;
+
 struct LabelSet {
   int rows = 0, cols = 0;
   std::vector<std::string> cameras;  // names, in the rig's order for xypts.csv
   std::vector<int> frame_index;      // [T] frame numbers
   // labels[c][t * knots() + k] for camera c, row t of frame_index, knot k (row-major).
   std::vector<std::vector<Label>> labels;
+  ReviewReasons reasons;  // saved in labels.h5; not in xypts.csv
 
   int knots() const { return rows * cols; }
   int frames() const { return static_cast<int>(frame_index.size()); }

@@ -71,6 +71,7 @@ class LabelDocument::StoreStep : public QUndoCommand {
 
 LabelDocument::LabelDocument(recon::LabelSet labels, std::string labels_path, QObject* parent)
     : QObject(parent), store_(std::move(labels)), labels_path_(std::move(labels_path)) {
+  reasons_ = store_.labels().reasons;  // from the file
   // What is under review at the start.
   const recon::LabelSet& set = store_.labels();
   for (int c = 0; c < static_cast<int>(set.cameras.size()); ++c)
@@ -148,6 +149,7 @@ std::set<int> LabelDocument::ReviewFrames() const {
 }
 
 void LabelDocument::Save() {
+  store_.SetReasons(reasons_);  // those of the labels still under review go into the file
   store_.Save(labels_path_);  // .partial + rename: on failure the old file stays
   undo_.setClean();
   if (journal_.is_open()) journal_.close();

@@ -77,7 +77,7 @@ QVariant ReviewModel::data(const QModelIndex& index, int role) const {
       return QString::number(Severity(key), 'f', 2);
     case kReason: {
       const std::string why = document_->Reason(c, t, k);
-      return QString::fromStdString(why.empty() ? "kept for review (reason not saved)" : why);
+      return QString::fromStdString(why.empty() ? "kept for review (no reason recorded)" : why);
     }
   }
   return {};

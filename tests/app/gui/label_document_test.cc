@@ -105,6 +105,21 @@ TEST_F(LabelDocumentTest, TheReviewQueueFollowsTheLabelsState) {
   EXPECT_EQ(doc.ReviewFrames(), (std::set<int>{4}));
 }
 
+TEST_F(LabelDocumentTest, ReviewReasonsAreSavedWithTheLabelsTheyExplain) {
+  {
+    LabelDocument doc(Empty(), path_);
+    doc.Apply("Track", {{1, 2, 3, At(1, 1, recon::LabelState::kNeedsReview)},
+                        {0, 1, 1, At(2, 2, recon::LabelState::kNeedsReview)}});
+    doc.MergeReasons({{{1, 2, 3}, "the epipolar check left this view out"},
+                      {{0, 1, 1}, "yarns miss the neighbours' links"}});
+    doc.Apply("Accept", {{0, 1, 1, At(2, 2)}});  // its reason no longer applies
+    doc.Save();
+  }
+  const LabelDocument reopened(recon::ReadLabels(path_), path_);
+  EXPECT_EQ(reopened.Reason(1, 2, 3), "the epipolar check left this view out");
+  EXPECT_EQ(reopened.labels().reasons.size(), 1u);
+}
+
 TEST_F(LabelDocumentTest, TheJournalRecoversEveryEditSinceTheLastSave) {
   recon::LabelSet expected;
   {

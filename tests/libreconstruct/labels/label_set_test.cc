@@ -170,6 +170,21 @@ TEST(LabelsFile, RoundTripKeepsEveryFieldExactly) {
   EXPECT_TRUE(std::isnan(read.at(0, 0, 0).px.x()));
 }
 
+TEST(LabelsFile, ReviewReasonsRoundTripAsOneLineEach) {
+  ScratchDir dir("labels");
+  LabelSet written = Example();
+  written.reasons[{1, 4, 2}] = "moved 2.1 px otherwise than its neighbours";
+  written.reasons[{0, 0, 0}] = "two\tlines\nin one";  // tabs and breaks become spaces
+  WriteLabels(dir / "labels.h5", written);
+  const LabelSet read = ReadLabels(dir / "labels.h5");
+  EXPECT_EQ(read.reasons.size(), 2u);
+  EXPECT_EQ(read.reasons.at({1, 4, 2}), "moved 2.1 px otherwise than its neighbours");
+  EXPECT_EQ(read.reasons.at({0, 0, 0}), "two lines in one");
+  // A file without reasons (every file before them) reads with none.
+  WriteLabels(dir / "plain.h5", Example());
+  EXPECT_TRUE(ReadLabels(dir / "plain.h5").reasons.empty());
+}
+
 TEST(LabelsFile, RoundTripOfNoFramesAndNoCameras) {
   ScratchDir dir("labels");
   for (const LabelSet& written : {LabelSet::Empty(2, 2, {"a", "b"}, {}),
