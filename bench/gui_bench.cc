@@ -17,7 +17,6 @@
 #include <QApplication>
 #include <QElapsedTimer>
 #include <QTest>
-
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -50,16 +49,15 @@ Stats Summarise(std::vector<double> ms) {
 
 // A project over the shot whose labels start as `start` (copied) or empty.
 std::string ProjectFile(const std::string& shot, const std::string& coloring,
-                        const std::string& dir, const std::string& name,
-                        const std::string& start) {
+                        const std::string& dir, const std::string& name, const std::string& start) {
   const std::string labels = dir + "/" + name + ".h5";
   fs::remove(labels);
   fs::remove(labels + ".journal");
   if (!start.empty()) fs::copy_file(start, labels);
   const std::string path = dir + "/" + name + ".yaml";
-  SaveProject(MakeProject(shot + "/experiment.yaml", shot + "/rig_true.yaml", coloring, labels, 0,
-                          0),
-              path);
+  SaveProject(
+      MakeProject(shot + "/experiment.yaml", shot + "/rig_true.yaml", coloring, labels, 0, 0),
+      path);
   return path;
 }
 
@@ -103,19 +101,25 @@ int main(int argc, char** argv) {
   bool json = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--shot" && i + 1 < argc) shot = argv[++i];
-    else if (a == "--coloring" && i + 1 < argc) coloring = argv[++i];
-    else if (a == "--frames" && i + 1 < argc) frames = std::stoi(argv[++i]);
-    else if (a == "--json") json = true;
+    if (a == "--shot" && i + 1 < argc)
+      shot = argv[++i];
+    else if (a == "--coloring" && i + 1 < argc)
+      coloring = argv[++i];
+    else if (a == "--frames" && i + 1 < argc)
+      frames = std::stoi(argv[++i]);
+    else if (a == "--json")
+      json = true;
     else {
-      std::fprintf(stderr, "usage: bench_gui --shot DIR --coloring coloring.yaml [--frames N] "
-                           "[--json]\n");
+      std::fprintf(stderr,
+                   "usage: bench_gui --shot DIR --coloring coloring.yaml [--frames N] "
+                   "[--json]\n");
       return 2;
     }
   }
   if (shot.empty() || coloring.empty()) {
-    std::fprintf(stderr, "bench_gui: --shot and --coloring are needed (see the top of "
-                         "bench/gui_bench.cc for how to make them)\n");
+    std::fprintf(stderr,
+                 "bench_gui: --shot and --coloring are needed (see the top of "
+                 "bench/gui_bench.cc for how to make them)\n");
     return 2;
   }
   if (qEnvironmentVariableIsEmpty("QT_QPA_PLATFORM")) qputenv("QT_QPA_PLATFORM", "offscreen");
@@ -127,13 +131,13 @@ int main(int argc, char** argv) {
   frames = std::min(frames, truth.frames() - 1);
 
   // A. Latency with every visible knot labeled.
-  const std::string labeled =
-      ProjectFile(shot, coloring, dir, "latency", shot + "/labels_true.h5");
+  const std::string labeled = ProjectFile(shot, coloring, dir, "latency", shot + "/labels_true.h5");
   const auto [full_uncached, full_cached] = Latency(labeled, false, frames);
   const auto [half_uncached, half_cached] = Latency(labeled, true, frames);
-  std::printf("A. frame change latency, 4 cameras, %d labels per camera-frame at most, %d frames "
-              "(ms: median / p95 / max)\n",
-              truth.knots(), frames);
+  std::printf(
+      "A. frame change latency, 4 cameras, %d labels per camera-frame at most, %d frames "
+      "(ms: median / p95 / max)\n",
+      truth.knots(), frames);
   std::printf("| resolution | uncached | from cache |\n|---|---|---|\n");
   auto row = [](const char* name, const Stats& u, const Stats& c) {
     std::printf("| %s | %.1f / %.1f / %.1f | %.1f / %.1f / %.1f |\n", name, u.median, u.p95, u.max,
@@ -169,24 +173,30 @@ int main(int argc, char** argv) {
         const auto& l = got.at(c, t, k);
         const auto& want = truth.at(truth.FindCamera(got.cameras[c]), t, k);
         const bool accepted = l.present() && l.state == netlab::recon::LabelState::kAccepted;
-        if (accepted && want.present() && (l.px - want.px).norm() <= 2.0) ++right;
-        else if (accepted) ++wrong;
-        else if (want.present()) ++unlabeled;
+        if (accepted && want.present() && (l.px - want.px).norm() <= 2.0)
+          ++right;
+        else if (accepted)
+          ++wrong;
+        else if (want.present())
+          ++unlabeled;
       }
-  std::printf("\nB. the scripted person through the window: %d actions (%d review items) for %ld "
-              "visible knot-frames: %.4f actions per knot-frame; %.1f s in all, %.0f ms per "
-              "action%s\n",
-              actions, session.review_items, knot_frames, per_knot_frame, wall_s,
-              actions > 0 ? 1000.0 * wall_s / actions : 0.0,
-              session.finished ? "" : " (the tracking run did not end)");
-  std::printf("   left: %ld accepted labels right, %ld wrong, %ld visible knot-frames unlabeled "
-              "(the script walks the review queue only; it does not click unlabeled knots)\n",
-              right, wrong, unlabeled);
+  std::printf(
+      "\nB. the scripted person through the window: %d actions (%d review items) for %ld "
+      "visible knot-frames: %.4f actions per knot-frame; %.1f s in all, %.0f ms per "
+      "action%s\n",
+      actions, session.review_items, knot_frames, per_knot_frame, wall_s,
+      actions > 0 ? 1000.0 * wall_s / actions : 0.0,
+      session.finished ? "" : " (the tracking run did not end)");
+  std::printf(
+      "   left: %ld accepted labels right, %ld wrong, %ld visible knot-frames unlabeled "
+      "(the script walks the review queue only; it does not click unlabeled knots)\n",
+      right, wrong, unlabeled);
   if (json)
-    std::printf("{\"cached_ms\": {\"median\": %.3f, \"p95\": %.3f}, \"uncached_half_ms\": "
-                "{\"median\": %.3f, \"p95\": %.3f}, \"actions_per_knot_frame\": %.6f}\n",
-                full_cached.median, full_cached.p95, half_uncached.median, half_uncached.p95,
-                per_knot_frame);
+    std::printf(
+        "{\"cached_ms\": {\"median\": %.3f, \"p95\": %.3f}, \"uncached_half_ms\": "
+        "{\"median\": %.3f, \"p95\": %.3f}, \"actions_per_knot_frame\": %.6f}\n",
+        full_cached.median, full_cached.p95, half_uncached.median, half_uncached.p95,
+        per_knot_frame);
   fs::remove_all(dir);
   return 0;
 }

@@ -4,15 +4,11 @@
 #include <QPainter>
 #include <QPainterPath>
 #include <QWheelEvent>
-
 #include <algorithm>
 #include <cmath>
 
 namespace netlab::gui {
-namespace {
-
-
-}  // namespace
+namespace {}  // namespace
 
 CameraView::CameraView(int camera, QWidget* parent) : QWidget(parent), camera_(camera) {
   setMouseTracking(true);
@@ -82,8 +78,8 @@ void CameraView::Fit() {
 
 void CameraView::ZoomTo(const Eigen::Vector2d& px, double pixels_across) {
   scale_ = std::min(width(), height()) / std::max(pixels_across, 4.0);
-  offset_ = QPointF(width() / 2.0 - (px.x() + 0.5) * scale_,
-                    height() / 2.0 - (px.y() + 0.5) * scale_);
+  offset_ =
+      QPointF(width() / 2.0 - (px.x() + 0.5) * scale_, height() / 2.0 - (px.y() + 0.5) * scale_);
   fitted_ = true;
   update();
 }

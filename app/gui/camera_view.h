@@ -1,20 +1,18 @@
 #pragma once
 // One camera's view: its frame at the current index with the labels drawn over it. Zoom at the
 // cursor (wheel), pan (drag with the middle or right button), fit (double click with the middle
-// button, or the window's key); the brush radius with Ctrl+wheel; brightness, contrast and gamma through a lookup table.
-// The view only draws and forwards: a click, Shift+click, a drag of a label and the cursor's
-// pixel go out as signals in image pixels (OpenCV's convention: the centre of the top-left pixel
-// is (0, 0)); the window decides what they do.
+// button, or the window's key); the brush radius with Ctrl+wheel; brightness, contrast and gamma
+// through a lookup table. The view only draws and forwards: a click, Shift+click, a drag of a label
+// and the cursor's pixel go out as signals in image pixels (OpenCV's convention: the centre of the
+// top-left pixel is (0, 0)); the window decides what they do.
 
+#include <Eigen/Core>
 #include <QImage>
 #include <QPointF>
 #include <QWidget>
-
+#include <opencv2/core.hpp>
 #include <optional>
 #include <vector>
-
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
 
 namespace netlab::gui {
 
@@ -87,9 +85,9 @@ class CameraView : public QWidget {
   void DrawOverlay(QPainter& painter) const;
 
   int camera_;
-  cv::Mat frame_;       // as given
-  cv::Mat shown_;       // after the lookup table (frame_ itself when the tone is neutral)
-  QImage image_;        // over shown_'s pixels
+  cv::Mat frame_;  // as given
+  cv::Mat shown_;  // after the lookup table (frame_ itself when the tone is neutral)
+  QImage image_;   // over shown_'s pixels
   int full_width_ = 0, full_height_ = 0;
   QString problem_;
   ViewOverlay overlay_;

@@ -4,7 +4,6 @@
 
 #include <QApplication>
 #include <QFileInfo>
-
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -42,8 +41,7 @@ bool IsProjectFile(const std::string& path) {
 }
 
 bool HasDisplay() {
-  return std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY") ||
-         std::getenv("QT_QPA_PLATFORM");
+  return std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY") || std::getenv("QT_QPA_PLATFORM");
 }
 
 }  // namespace
@@ -52,9 +50,8 @@ int RunGui(const std::vector<std::string>& args) {
   std::string project_path, screenshot;
   int frame = -1;
   try {
-    const app::CommandLine cl(args, {"help"},
-                              {"frame", "screenshot", "rig", "labels", "coloring", "knots",
-                               "project"});
+    const app::CommandLine cl(
+        args, {"help"}, {"frame", "screenshot", "rig", "labels", "coloring", "knots", "project"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -111,7 +108,8 @@ int RunGui(const std::vector<std::string>& args) {
   if (!screenshot.empty()) {
     window.resize(1600, 1000);
     window.show();
-    if (!window.WaitForFrame()) std::fprintf(stderr, "netlab gui: the frame did not load in time\n");
+    if (!window.WaitForFrame())
+      std::fprintf(stderr, "netlab gui: the frame did not load in time\n");
     if (!window.grab().save(QString::fromStdString(screenshot))) {
       std::fprintf(stderr, "netlab gui: cannot write %s\n", screenshot.c_str());
       return 1;

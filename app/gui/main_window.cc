@@ -1,7 +1,5 @@
 #include "app/gui/main_window.h"
 
-#include <QtConcurrent/QtConcurrent>
-
 #include <QAction>
 #include <QApplication>
 #include <QCloseEvent>
@@ -30,7 +28,7 @@
 #include <QToolBar>
 #include <QUndoStack>
 #include <QVBoxLayout>
-
+#include <QtConcurrent/QtConcurrent>
 #include <algorithm>
 #include <cmath>
 #include <exception>
@@ -46,12 +44,18 @@ namespace {
 QColor LabelColour(const recon::Label& l) {
   if (l.state == recon::LabelState::kNeedsReview) return QColor(255, 140, 0);
   switch (l.source) {
-    case recon::LabelSource::kManual: return QColor(0, 230, 255);
-    case recon::LabelSource::kFindNode: return QColor(80, 255, 120);
-    case recon::LabelSource::kFindPath: return QColor(170, 255, 60);
-    case recon::LabelSource::kFillGrid: return QColor(255, 240, 80);
-    case recon::LabelSource::kTracked: return QColor(60, 220, 60);
-    default: return QColor(200, 200, 255);
+    case recon::LabelSource::kManual:
+      return QColor(0, 230, 255);
+    case recon::LabelSource::kFindNode:
+      return QColor(80, 255, 120);
+    case recon::LabelSource::kFindPath:
+      return QColor(170, 255, 60);
+    case recon::LabelSource::kFillGrid:
+      return QColor(255, 240, 80);
+    case recon::LabelSource::kTracked:
+      return QColor(60, 220, 60);
+    default:
+      return QColor(200, 200, 255);
   }
 }
 
@@ -69,8 +73,10 @@ MainWindow::MainWindow() {
   play_timer_ = new QTimer(this);
   play_timer_->setInterval(33);
   connect(play_timer_, &QTimer::timeout, this, [this] {
-    if (frame_ + 1 >= (session_ ? session_->frames() : 0)) play_timer_->stop();
-    else if (frame_shown_) SetFrame(frame_ + 1);
+    if (frame_ + 1 >= (session_ ? session_->frames() : 0))
+      play_timer_->stop();
+    else if (frame_shown_)
+      SetFrame(frame_ + 1);
   });
   connect(&loader_, &QFutureWatcher<Loaded>::finished, this, &MainWindow::OnFrameLoaded);
 }
@@ -85,9 +91,10 @@ MainWindow::~MainWindow() {
 void MainWindow::BuildWelcome() {
   welcome_ = new QWidget;
   auto* layout = new QVBoxLayout(welcome_);
-  auto* title = new QLabel("<h2>netlab — knot labeling workstation</h2>"
-                           "<p>Open a project (project.yaml) or make one from an experiment, its "
-                           "rig and the net's colouring.</p>");
+  auto* title = new QLabel(
+      "<h2>netlab — knot labeling workstation</h2>"
+      "<p>Open a project (project.yaml) or make one from an experiment, its "
+      "rig and the net's colouring.</p>");
   title->setAlignment(Qt::AlignCenter);
   layout->addStretch();
   layout->addWidget(title);
@@ -154,11 +161,18 @@ void MainWindow::BuildWorkspace() {
   picker->addWidget(row_box_);
   picker->addWidget(new QLabel(" col "));
   picker->addWidget(col_box_);
-  picker->addWidget(new QLabel("   click: Find Node in the brush · Shift+click: exactly here · "
-                               "drag a label: move it · F1: all keys"));
-  auto picked = [this] { SetKnot(row_box_->value() * session_->project().cols + col_box_->value()); };
-  connect(row_box_, &QSpinBox::valueChanged, this, [this, picked] { if (session_) picked(); });
-  connect(col_box_, &QSpinBox::valueChanged, this, [this, picked] { if (session_) picked(); });
+  picker->addWidget(
+      new QLabel("   click: Find Node in the brush · Shift+click: exactly here · "
+                 "drag a label: move it · F1: all keys"));
+  auto picked = [this] {
+    SetKnot(row_box_->value() * session_->project().cols + col_box_->value());
+  };
+  connect(row_box_, &QSpinBox::valueChanged, this, [this, picked] {
+    if (session_) picked();
+  });
+  connect(col_box_, &QSpinBox::valueChanged, this, [this, picked] {
+    if (session_) picked();
+  });
 
   // The review queue.
   auto* dock = new QDockWidget("Review queue", this);
@@ -319,8 +333,7 @@ bool MainWindow::OpenProject(const QString& path, bool ask) {
   review_table_->setColumnWidth(ReviewModel::kKnot, 60);
   review_table_->setColumnWidth(ReviewModel::kSource, 70);
   review_table_->setColumnWidth(ReviewModel::kSeverity, 56);
-  connect(&session_->document(), &LabelDocument::labelsChanged, this,
-          &MainWindow::OnLabelsChanged);
+  connect(&session_->document(), &LabelDocument::labelsChanged, this, &MainWindow::OnLabelsChanged);
   connect(&session_->document(), &LabelDocument::modifiedChanged, this,
           [this](bool modified) { setWindowModified(modified); });
   setWindowTitle(QString("netlab — %1[*]").arg(QFileInfo(path).fileName()));
@@ -373,10 +386,12 @@ void MainWindow::RequestFrame() {
     for (int c = 0; c < session->cameras() && c < 4; ++c) {
       std::string error;
       const auto image = session->cache().Get(c, session->frame_number(t), level, &error);
-      if (image) loaded.images[c] = *image;
-      else loaded.problems[c] = QString("frame %1 cannot be read:\n%2")
-                                    .arg(session->frame_number(t))
-                                    .arg(QString::fromStdString(error));
+      if (image)
+        loaded.images[c] = *image;
+      else
+        loaded.problems[c] = QString("frame %1 cannot be read:\n%2")
+                                 .arg(session->frame_number(t))
+                                 .arg(QString::fromStdString(error));
     }
     return loaded;
   }));
@@ -419,8 +434,10 @@ void MainWindow::RefreshOverlays() {
       if (!l.present()) continue;
       o.labels.push_back({k, l.px, LabelColour(l), l.state == recon::LabelState::kNeedsReview});
       // Links to the right and down neighbours that are labeled.
-      for (const int n : {k % p.cols + 1 < p.cols ? k + 1 : -1, k + p.cols < p.knots() ? k + p.cols : -1})
-        if (n >= 0 && doc.at(c, frame_, n).present()) o.links.emplace_back(l.px, doc.at(c, frame_, n).px);
+      for (const int n :
+           {k % p.cols + 1 < p.cols ? k + 1 : -1, k + p.cols < p.knots() ? k + p.cols : -1})
+        if (n >= 0 && doc.at(c, frame_, n).present())
+          o.links.emplace_back(l.px, doc.at(c, frame_, n).px);
     }
     // The selected knot: its epipolar curves from the other cameras' labels, its reprojection.
     for (int other = 0; other < session_->cameras(); ++other) {
@@ -453,10 +470,11 @@ void MainWindow::RefreshStatus() {
                              .arg(session_->frame_number(frame_) / session_->fps(), 0, 'f', 4)
                              .arg(QString::fromStdString(session_->camera_names()[camera_])));
   const recon::PointEstimate point = session_->Triangulate(frame_, knot_);
-  status_knot_->setText(QString("knot %1%2").arg(KnotName(knot_),
-                                                 point.valid ? QString(" · RMS residual %1 px")
-                                                                   .arg(point.rms_px, 0, 'f', 2)
-                                                             : QString()));
+  status_knot_->setText(
+      QString("knot %1%2")
+          .arg(KnotName(knot_), point.valid
+                                    ? QString(" · RMS residual %1 px").arg(point.rms_px, 0, 'f', 2)
+                                    : QString()));
 }
 
 void MainWindow::OnLabelsChanged(const QList<int>& frames) {
@@ -469,7 +487,9 @@ void MainWindow::OnLabelsChanged(const QList<int>& frames) {
 
 QString MainWindow::KnotName(int knot) const {
   if (!session_) return {};
-  return QString("(%1, %2)").arg(knot / session_->project().cols).arg(knot % session_->project().cols);
+  return QString("(%1, %2)")
+      .arg(knot / session_->project().cols)
+      .arg(knot % session_->project().cols);
 }
 
 void MainWindow::SetCamera(int c) {
@@ -505,19 +525,19 @@ void MainWindow::OnClick(int camera, const Eigen::Vector2d& px, Qt::KeyboardModi
   candidates_[camera].clear();
   switch (r.status) {
     case recon::FindNodeStatus::kFound: {
-      const bool review = session_->document().at(camera, frame_, knot_).state ==
-                          recon::LabelState::kNeedsReview;
+      const bool review =
+          session_->document().at(camera, frame_, knot_).state == recon::LabelState::kNeedsReview;
       statusBar()->showMessage(
-          QString("Find Node: knot %1 %2").arg(KnotName(knot_),
-                                               review ? "found, kept for review: " +
-                                                            QString::fromStdString(session_->document().Reason(camera, frame_, knot_))
-                                                      : "found and accepted"),
+          QString("Find Node: knot %1 %2")
+              .arg(KnotName(knot_), review ? "found, kept for review: " +
+                                                 QString::fromStdString(session_->document().Reason(
+                                                     camera, frame_, knot_))
+                                           : "found and accepted"),
           6000);
       break;
     }
     case recon::FindNodeStatus::kNone:
-      statusBar()->showMessage("Find Node: no knot in the brush (" +
-                                   QString::fromStdString(r.why) +
+      statusBar()->showMessage("Find Node: no knot in the brush (" + QString::fromStdString(r.why) +
                                    "); Shift+click places the label exactly",
                                8000);
       break;
@@ -543,23 +563,23 @@ void MainWindow::OnSelect(int camera, int knot) {
 }
 
 void MainWindow::OnCursor(int camera, const Eigen::Vector2d& px, const QString& value) {
-  status_cursor_->setText(QString("%1 · x %2 y %3 %4")
-                              .arg(QString::fromStdString(session_ ? session_->camera_names()[camera] : ""))
-                              .arg(px.x(), 0, 'f', 1)
-                              .arg(px.y(), 0, 'f', 1)
-                              .arg(value));
+  status_cursor_->setText(
+      QString("%1 · x %2 y %3 %4")
+          .arg(QString::fromStdString(session_ ? session_->camera_names()[camera] : ""))
+          .arg(px.x(), 0, 'f', 1)
+          .arg(px.y(), 0, 'f', 1)
+          .arg(value));
 }
 
 // ---------------------------------------------------------------------------------------------
 // Actions.
 
 void MainWindow::NewProject() {
-  const QString experiment = QFileDialog::getOpenFileName(this, "The experiment (1 of 4)", {},
-                                                          "Experiment (*.yaml)");
+  const QString experiment =
+      QFileDialog::getOpenFileName(this, "The experiment (1 of 4)", {}, "Experiment (*.yaml)");
   if (experiment.isEmpty()) return;
-  const QString rig =
-      QFileDialog::getOpenFileName(this, "The calibrated rig (2 of 4)", QFileInfo(experiment).path(),
-                                   "Rig (*.yaml)");
+  const QString rig = QFileDialog::getOpenFileName(this, "The calibrated rig (2 of 4)",
+                                                   QFileInfo(experiment).path(), "Rig (*.yaml)");
   if (rig.isEmpty()) return;
   const QString coloring = QFileDialog::getOpenFileName(
       this, "The net's colouring, coloring.yaml (3 of 4; Cancel: none)", QFileInfo(rig).path(),
@@ -624,15 +644,17 @@ void MainWindow::LastFrame() {
 void MainWindow::GoToFrame() {
   if (!session_) return;
   bool ok = false;
-  const int f = QInputDialog::getInt(this, "Go to frame", "Frame number:",
-                                     session_->frame_number(frame_), session_->frame_number(0),
-                                     session_->frame_number(session_->frames() - 1), 1, &ok);
+  const int f = QInputDialog::getInt(
+      this, "Go to frame", "Frame number:", session_->frame_number(frame_),
+      session_->frame_number(0), session_->frame_number(session_->frames() - 1), 1, &ok);
   if (ok) SetFrame(f - session_->frame_number(0));
 }
 
 void MainWindow::TogglePlay() {
-  if (play_timer_->isActive()) play_timer_->stop();
-  else play_timer_->start();
+  if (play_timer_->isActive())
+    play_timer_->stop();
+  else
+    play_timer_->start();
 }
 
 void MainWindow::NextReview(bool backwards) {
@@ -690,30 +712,34 @@ void MainWindow::FindPathCorners() {
 void MainWindow::FindPathToPrevious() {
   if (!session_ || tracker_.isRunning() || previous_knot_ < 0) return;
   const std::string why = session_->FindPathBetween(camera_, frame_, previous_knot_, knot_);
-  statusBar()->showMessage(why.empty() ? QString("Find Path %1 → %2: done")
-                                             .arg(KnotName(previous_knot_), KnotName(knot_))
-                                       : "Find Path refused: " + QString::fromStdString(why),
-                           8000);
+  statusBar()->showMessage(
+      why.empty()
+          ? QString("Find Path %1 → %2: done").arg(KnotName(previous_knot_), KnotName(knot_))
+          : "Find Path refused: " + QString::fromStdString(why),
+      8000);
 }
 
 void MainWindow::FillGridHere() {
   if (!session_ || tracker_.isRunning()) return;
   const recon::EngineCounts n = session_->FillGrid(frame_);
-  statusBar()->showMessage(
-      QString("Epipolar check and Fill Grid: %1 accepted, %2 for review").arg(n.accepted).arg(n.review),
-      8000);
+  statusBar()->showMessage(QString("Epipolar check and Fill Grid: %1 accepted, %2 for review")
+                               .arg(n.accepted)
+                               .arg(n.review),
+                           8000);
 }
 
-void MainWindow::TrackForward() { if (session_) TrackTo(session_->frames() - 1); }
+void MainWindow::TrackForward() {
+  if (session_) TrackTo(session_->frames() - 1);
+}
 void MainWindow::TrackBackward() { TrackTo(0); }
 
 void MainWindow::TrackToFrame() {
   if (!session_) return;
   bool ok = false;
-  const int f = QInputDialog::getInt(this, "Track to frame", "Track up to frame number:",
-                                     session_->frame_number(std::min(frame_ + 30, session_->frames() - 1)),
-                                     session_->frame_number(0),
-                                     session_->frame_number(session_->frames() - 1), 1, &ok);
+  const int f = QInputDialog::getInt(
+      this, "Track to frame", "Track up to frame number:",
+      session_->frame_number(std::min(frame_ + 30, session_->frames() - 1)),
+      session_->frame_number(0), session_->frame_number(session_->frames() - 1), 1, &ok);
   if (ok) TrackTo(f - session_->frame_number(0));
 }
 
@@ -722,11 +748,10 @@ void MainWindow::TrackTo(int to, bool wait) {
   // A snapshot on the GUI thread; the run never touches the document.
   const int from = frame_;
   cancel_ = false;
-  auto* progress = new QProgressDialog(
-      QString("Tracking from frame %1 to %2 …")
-          .arg(session_->frame_number(from))
-          .arg(session_->frame_number(to)),
-      "Cancel", 0, std::abs(to - from), this);
+  auto* progress = new QProgressDialog(QString("Tracking from frame %1 to %2 …")
+                                           .arg(session_->frame_number(from))
+                                           .arg(session_->frame_number(to)),
+                                       "Cancel", 0, std::abs(to - from), this);
   progress->setWindowModality(Qt::WindowModal);
   progress->setMinimumDuration(300);
   progress->setAttribute(Qt::WA_DeleteOnClose);
@@ -734,8 +759,12 @@ void MainWindow::TrackTo(int to, bool wait) {
   Session* session = session_.get();
   QPointer<QProgressDialog> bar(progress);
   auto report = [this, bar](int done, int) {
-    QMetaObject::invokeMethod(this, [bar, done] { if (bar) bar->setValue(done); },
-                              Qt::QueuedConnection);
+    QMetaObject::invokeMethod(
+        this,
+        [bar, done] {
+          if (bar) bar->setValue(done);
+        },
+        Qt::QueuedConnection);
   };
   disconnect(&tracker_, nullptr, this, nullptr);
   connect(&tracker_, &QFutureWatcher<Session::TrackRun>::finished, this, [this, bar] {
@@ -753,15 +782,16 @@ void MainWindow::TrackTo(int to, bool wait) {
             .arg(changed)
             .arg(run.cancelled ? " (cancelled)"
                  : run.stopped_for_review
-                     ? QString(" (stopped: over %1 labels for review in one frame)").arg(kMaxReviewPerFrame)
+                     ? QString(" (stopped: over %1 labels for review in one frame)")
+                           .arg(kMaxReviewPerFrame)
                      : QString()),
         10000);
     SetFrame(run.last_done);
   });
-  tracker_.setFuture(QtConcurrent::run([session, snapshot = session_->document().labels(), from,
-                                        to, report, this]() {
-    return session->Track(snapshot, from, to, &cancel_, report, kMaxReviewPerFrame);
-  }));
+  tracker_.setFuture(QtConcurrent::run(
+      [session, snapshot = session_->document().labels(), from, to, report, this]() {
+        return session->Track(snapshot, from, to, &cancel_, report, kMaxReviewPerFrame);
+      }));
   if (wait) {
     while (tracker_.isRunning()) QCoreApplication::processEvents(QEventLoop::AllEvents, 20);
     QCoreApplication::processEvents();
@@ -774,8 +804,10 @@ void MainWindow::ZoomOnKnot() {
   const recon::PointEstimate point = session_->Triangulate(frame_, knot_);
   for (int c = 0; c < session_->cameras(); ++c) {
     const recon::Label& l = session_->document().at(c, frame_, knot_);
-    if (l.present()) views_[c]->ZoomTo(l.px, 80);
-    else if (point.valid) views_[c]->ZoomTo(session_->rig_camera(c).ProjectWorld(point.position), 80);
+    if (l.present())
+      views_[c]->ZoomTo(l.px, 80);
+    else if (point.valid)
+      views_[c]->ZoomTo(session_->rig_camera(c).ProjectWorld(point.position), 80);
   }
 }
 
@@ -859,8 +891,9 @@ void MainWindow::ShowShortcuts() {
   table->horizontalHeader()->setStretchLastSection(true);
   table->resizeColumnsToContents();
   table->setEditTriggers(QAbstractItemView::NoEditTriggers);
-  layout->addWidget(new QLabel("Shortcuts are stored in the settings (netlab-gui, key "
-                               "shortcuts/<action>) and can be changed there."));
+  layout->addWidget(
+      new QLabel("Shortcuts are stored in the settings (netlab-gui, key "
+                 "shortcuts/<action>) and can be changed there."));
   layout->addWidget(table);
   dialog.resize(620, 700);
   dialog.exec();
@@ -881,8 +914,10 @@ bool MainWindow::MaybeSave() {
 }
 
 void MainWindow::closeEvent(QCloseEvent* event) {
-  if (MaybeSave()) event->accept();
-  else event->ignore();
+  if (MaybeSave())
+    event->accept();
+  else
+    event->ignore();
 }
 
 }  // namespace netlab::gui

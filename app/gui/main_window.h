@@ -8,14 +8,12 @@
 
 #include <QFutureWatcher>
 #include <QMainWindow>
-
 #include <array>
 #include <atomic>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "app/gui/document/review_model.h"
 #include "app/gui/document/session.h"

@@ -3,7 +3,6 @@
 // that has labels kept for review. Click or drag to seek.
 
 #include <QWidget>
-
 #include <set>
 
 namespace netlab::gui {

@@ -1,7 +1,6 @@
 #include "app/gui/document/label_document.h"
 
 #include <QUndoCommand>
-
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -26,9 +25,12 @@ std::string JournalHeader(const recon::LabelSet& set) {
 
 const char* ChangeName(recon::LabelStore::Change change) {
   switch (change) {
-    case recon::LabelStore::Change::kApplied: return "applied";
-    case recon::LabelStore::Change::kUndone: return "undone";
-    case recon::LabelStore::Change::kRedone: return "redone";
+    case recon::LabelStore::Change::kApplied:
+      return "applied";
+    case recon::LabelStore::Change::kUndone:
+      return "undone";
+    case recon::LabelStore::Change::kRedone:
+      return "redone";
   }
   return "?";
 }
@@ -49,7 +51,9 @@ class LabelDocument::StoreStep : public QUndoCommand {
  public:
   StoreStep(LabelDocument* doc, const std::string& name)
       : QUndoCommand(QString::fromStdString(name)), doc_(doc) {}
-  void undo() override { Drive([this] { doc_->store_.Undo(); }); }
+  void undo() override {
+    Drive([this] { doc_->store_.Undo(); });
+  }
   void redo() override {
     if (first_) {
       first_ = false;
@@ -79,10 +83,9 @@ LabelDocument::LabelDocument(recon::LabelSet labels, std::string labels_path, QO
       for (int k = 0; k < set.knots(); ++k)
         if (set.at(c, t, k).present() && set.at(c, t, k).state == recon::LabelState::kNeedsReview)
           review_.insert({t, c, k});
-  store_.SetListener([this](recon::LabelStore::Change change, const std::string& step,
-                            const std::vector<recon::LabelEdit>& now) {
-    OnStoreChanged(change, step, now);
-  });
+  store_.SetListener(
+      [this](recon::LabelStore::Change change, const std::string& step,
+             const std::vector<recon::LabelEdit>& now) { OnStoreChanged(change, step, now); });
   connect(&undo_, &QUndoStack::cleanChanged, this,
           [this](bool clean) { emit modifiedChanged(!clean); });
 }
@@ -150,7 +153,7 @@ std::set<int> LabelDocument::ReviewFrames() const {
 
 void LabelDocument::Save() {
   store_.SetReasons(reasons_);  // those of the labels still under review go into the file
-  store_.Save(labels_path_);  // .partial + rename: on failure the old file stays
+  store_.Save(labels_path_);    // .partial + rename: on failure the old file stays
   undo_.setClean();
   if (journal_.is_open()) journal_.close();
   std::error_code ignored;
@@ -187,8 +190,8 @@ int LabelDocument::Recover() {
       if (!(fields >> c >> t >> k >> x >> y >> source >> confidence >> state) || c < 0 ||
           c >= static_cast<int>(set.cameras.size()) || t < 0 || t >= set.frames() || k < 0 ||
           k >= set.knots())
-        throw InputError(path + ":" + std::to_string(line_no) + ": not a label of this set: " +
-                         line);
+        throw InputError(path + ":" + std::to_string(line_no) +
+                         ": not a label of this set: " + line);
       recon::Label label;
       label.px = {std::stod(x), std::stod(y)};
       label.source = static_cast<recon::LabelSource>(source);

@@ -15,7 +15,6 @@
 
 #include <QObject>
 #include <QUndoStack>
-
 #include <fstream>
 #include <map>
 #include <set>

@@ -21,7 +21,7 @@ struct Project {
   std::string path;        // the project file itself (absolute)
   std::string experiment;  // absolute paths, resolved against the project's folder
   std::string rig;
-  std::string coloring;    // "" when none
+  std::string coloring;  // "" when none
   std::string labels;
   int rows = 0, cols = 0;  // the net's knots
   double mesh_m = 0.0;     // link length, m; 0: estimated by the engine

@@ -15,14 +15,22 @@ bool QueueOrder(const LabelKey& a, const LabelKey& b) {
 
 QString SourceName(recon::LabelSource source) {
   switch (source) {
-    case recon::LabelSource::kNone: return "none";
-    case recon::LabelSource::kManual: return "person";
-    case recon::LabelSource::kFindNode: return "Find Node";
-    case recon::LabelSource::kFindPath: return "Find Path";
-    case recon::LabelSource::kFillGrid: return "Fill Grid";
-    case recon::LabelSource::kTracked: return "tracked";
-    case recon::LabelSource::kColour: return "colour";
-    case recon::LabelSource::kImported: return "imported";
+    case recon::LabelSource::kNone:
+      return "none";
+    case recon::LabelSource::kManual:
+      return "person";
+    case recon::LabelSource::kFindNode:
+      return "Find Node";
+    case recon::LabelSource::kFindPath:
+      return "Find Path";
+    case recon::LabelSource::kFillGrid:
+      return "Fill Grid";
+    case recon::LabelSource::kTracked:
+      return "tracked";
+    case recon::LabelSource::kColour:
+      return "colour";
+    case recon::LabelSource::kImported:
+      return "imported";
   }
   return "?";
 }
@@ -66,12 +74,15 @@ QVariant ReviewModel::data(const QModelIndex& index, int role) const {
   // EditRole gives sortable values (numbers), DisplayRole the text.
   const bool sort = role == Qt::EditRole;
   switch (index.column()) {
-    case kCamera: return QString::fromStdString(set.cameras[c]);
-    case kFrame: return frame_numbers_[t];
+    case kCamera:
+      return QString::fromStdString(set.cameras[c]);
+    case kFrame:
+      return frame_numbers_[t];
     case kKnot:
       if (sort) return k;
       return QString("(%1, %2)").arg(k / set.cols).arg(k % set.cols);
-    case kSource: return SourceName(document_->at(c, t, k).source);
+    case kSource:
+      return SourceName(document_->at(c, t, k).source);
     case kSeverity:
       if (sort) return Severity(key);
       return QString::number(Severity(key), 'f', 2);
@@ -86,8 +97,8 @@ QVariant ReviewModel::data(const QModelIndex& index, int role) const {
 QVariant ReviewModel::headerData(int section, Qt::Orientation orientation, int role) const {
   if (role != Qt::DisplayRole) return {};
   if (orientation == Qt::Vertical) return section + 1;
-  static const char* const kNames[kColumns] = {"Camera", "Frame", "Knot", "Source", "Severity",
-                                               "Reason"};
+  static const char* const kNames[kColumns] = {"Camera", "Frame",    "Knot",
+                                               "Source", "Severity", "Reason"};
   return section >= 0 && section < kColumns ? QVariant(kNames[section]) : QVariant();
 }
 

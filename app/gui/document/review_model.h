@@ -5,7 +5,6 @@
 // through a QSortFilterProxyModel. The model follows the document's changes by itself.
 
 #include <QAbstractTableModel>
-
 #include <string>
 #include <vector>
 

@@ -139,8 +139,8 @@ std::string Session::FindPathBetween(int camera, int t, int knot_a, int knot_b) 
   std::string error;
   const cv::Mat image = Image(camera, t, &error);
   if (image.empty()) return "frame unreadable: " + error;
-  const recon::FindPathResult path = recon::FindPath(image, project_.cols, knot_a, a.px, knot_b,
-                                                     b.px, engine_options_.detector);
+  const recon::FindPathResult path =
+      recon::FindPath(image, project_.cols, knot_a, a.px, knot_b, b.px, engine_options_.detector);
   if (!path.ok) return path.why;
   std::vector<recon::LabelEdit> edits;
   for (size_t i = 0; i < path.knots.size(); ++i) {
@@ -233,7 +233,8 @@ recon::PointEstimate Session::Triangulate(int t, int knot) const {
   return recon::TriangulatePoint(rig_, obs);
 }
 
-std::vector<std::vector<Eigen::Vector2d>> Session::EpipolarCurve(int from, const Eigen::Vector2d& px,
+std::vector<std::vector<Eigen::Vector2d>> Session::EpipolarCurve(int from,
+                                                                 const Eigen::Vector2d& px,
                                                                  int to) const {
   const calib::Camera& a = rig_camera(from);
   const calib::Camera& b = rig_camera(to);

@@ -10,15 +10,14 @@
 //
 // Frame rows t = 0 .. frames() - 1 are the recording's frames first_frame() + t.
 
+#include <Eigen/Core>
 #include <atomic>
 #include <functional>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
 
 #include "app/gui/document/label_document.h"
 #include "app/gui/document/project.h"

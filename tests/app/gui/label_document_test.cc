@@ -7,7 +7,6 @@
 
 #include <QCoreApplication>
 #include <QSignalSpy>
-
 #include <filesystem>
 #include <fstream>
 #include <iterator>

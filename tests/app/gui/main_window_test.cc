@@ -13,7 +13,6 @@
 #include <QTableView>
 #include <QTest>
 #include <QWheelEvent>
-
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -55,9 +54,10 @@ class MainWindowTest : public ::testing::Test {
     const std::string d = Dir().string();
     ASSERT_EQ(RunNetlab("simulate " + d + "/shot.yaml --out " + d + "/sim.h5 --quiet").status, 0);
     ASSERT_EQ(RunNetlab("color-net --knots 6x6 --out " + d + "/coloring.yaml --quiet").status, 0);
-    const auto render = RunNetlab("render --sim " + d + "/sim.h5 --out " + d + "/shot --frames 0:" +
-                                  std::to_string(kLastFrame) + " --calibration-views 0 --coloring " +
-                                  d + "/coloring.yaml --quiet");
+    const auto render =
+        RunNetlab("render --sim " + d + "/sim.h5 --out " + d +
+                  "/shot --frames 0:" + std::to_string(kLastFrame) +
+                  " --calibration-views 0 --coloring " + d + "/coloring.yaml --quiet");
     ASSERT_EQ(render.status, 0) << render.err;
   }
   static void TearDownTestSuite() { fs::remove_all(Dir()); }
@@ -118,16 +118,24 @@ TEST_F(MainWindowTest, AScriptedSessionLabelsAsTheEngineDoesWithNoWrongLabel) {
   // The same actions on the engine, without a window.
   auto engine = Session::Open(LoadProject(MakeProjectFile("engine")));
   for (const Action& a : actions) switch (a.kind) {
-      case Action::kFindNode: engine->FindNode(a.camera, a.t, a.knot, a.px, 6.0); break;
+      case Action::kFindNode:
+        engine->FindNode(a.camera, a.t, a.knot, a.px, 6.0);
+        break;
       case Action::kPlace:
         engine->PlaceLabel(a.camera, a.t, a.knot, a.px);
         break;
-      case Action::kDelete: engine->DeleteLabel(a.camera, a.t, a.knot); break;
-      case Action::kAccept: engine->AcceptLabel(a.camera, a.t, a.knot); break;
-      case Action::kFindPath: engine->FindPathFromCorners(0); break;
+      case Action::kDelete:
+        engine->DeleteLabel(a.camera, a.t, a.knot);
+        break;
+      case Action::kAccept:
+        engine->AcceptLabel(a.camera, a.t, a.knot);
+        break;
+      case Action::kFindPath:
+        engine->FindPathFromCorners(0);
+        break;
       case Action::kTrack:
-        engine->ApplyTrackRun(engine->Track(engine->document().labels(), 0, kLastFrame, nullptr,
-                                             {}, MainWindow::kMaxReviewPerFrame));
+        engine->ApplyTrackRun(engine->Track(engine->document().labels(), 0, kLastFrame, nullptr, {},
+                                            MainWindow::kMaxReviewPerFrame));
         break;
     }
   const recon::LabelSet& direct = engine->document().labels();

@@ -57,8 +57,8 @@ TEST(ReviewModel, NextAndPreviousWalkTheQueueInOrderAndWrap) {
   LabelDocument doc(recon::LabelSet::Empty(2, 2, {"a", "b"}, {0, 1, 2}), "/nonexistent/l.h5");
   ReviewModel model(&doc, {0, 1, 2});
   EXPECT_EQ(model.Next({0, 0, 0}), -1);  // empty
-  doc.Apply("Track", {{1, 0, 3, Review(1, 0.5f)}, {0, 2, 1, Review(1, 0.5f)},
-                      {0, 0, 2, Review(1, 0.5f)}});
+  doc.Apply("Track",
+            {{1, 0, 3, Review(1, 0.5f)}, {0, 2, 1, Review(1, 0.5f)}, {0, 0, 2, Review(1, 0.5f)}});
   // Queue: (frame 0, a, 2), (frame 0, b, 3), (frame 2, a, 1).
   LabelKey at{0, 0, 0};
   std::vector<LabelKey> walked;

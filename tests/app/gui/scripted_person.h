@@ -6,13 +6,11 @@
 // (Space): a label within 1 px of the truth accepted (A), a hidden knot's deleted (D), any other
 // fixed with a Find Node click at the true place (and a Shift+click if that stays in doubt).
 
+#include <Eigen/Core>
 #include <QCoreApplication>
 #include <QTest>
 #include <QWheelEvent>
-
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "app/gui/camera_view.h"
 #include "app/gui/main_window.h"
