@@ -2,7 +2,8 @@
 // A scripted person at the workstation, with real mouse, wheel and key events (shared by the
 // window's test and bench_gui): seeds the four corners of frame 0 in every camera (a Find Node
 // click each, zoomed in; a Shift+click where Find Node finds none or several), runs Find Path
-// from the corners (Ctrl+P) and a tracking run to the last frame (T), then walks the review queue
+// from the corners (Ctrl+P), clicks every visible knot of frame 0 still without an accepted label
+// (as the corners), runs a tracking run to the last frame (T), then walks the review queue
 // (Space): a label within 1 px of the truth accepted (A), a hidden knot's deleted (D), any other
 // fixed with a Find Node click at the true place (and a Shift+click if that stays in doubt).
 
@@ -78,9 +79,24 @@ inline ScriptedSession PlayScriptedSession(MainWindow* w, const recon::LabelSet&
             {Action::kPlace, c, 0, k, ClickAt(w->view(c), want(c, 0, k).px, Qt::ShiftModifier)});
       QTest::keyClick(w, Qt::Key_F, Qt::ControlModifier);  // fit again
     }
-  // 2. Find Path from the corners, 3. track to the last frame.
+  // 2. Find Path from the corners; then every visible knot of frame 0 that is not accepted in a
+  // camera, clicked there (Find Node, zoomed in; Shift+click where it cannot decide).
   QTest::keyClick(w, Qt::Key_P, Qt::ControlModifier);
   out.actions.push_back({Action::kFindPath, 0, 0, 0, {}});
+  for (int c = 0; c < s->cameras(); ++c)
+    for (int k = 0; k < rows * cols; ++k) {
+      const recon::Label& l = s->document().at(c, 0, k);
+      if (!want(c, 0, k).present() || (l.present() && l.state == recon::LabelState::kAccepted))
+        continue;
+      PickKnot(w, k);
+      ZoomAt(w->view(c), want(c, 0, k).px, 8);
+      out.actions.push_back({Action::kFindNode, c, 0, k, ClickAt(w->view(c), want(c, 0, k).px)});
+      if (s->document().at(c, 0, k).state != recon::LabelState::kAccepted)
+        out.actions.push_back(
+            {Action::kPlace, c, 0, k, ClickAt(w->view(c), want(c, 0, k).px, Qt::ShiftModifier)});
+      QTest::keyClick(w, Qt::Key_F, Qt::ControlModifier);
+    }
+  // 3. Track to the last frame.
   QTest::keyClick(w, Qt::Key_T);
   out.finished = QTest::qWaitFor([&] { return !w->busy(); }, 600000);
   out.actions.push_back({Action::kTrack, 0, 0, 0, {}});
