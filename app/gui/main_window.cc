@@ -334,6 +334,13 @@ bool MainWindow::OpenProject(const QString& path, bool ask) {
   review_table_->setColumnWidth(ReviewModel::kSource, 70);
   review_table_->setColumnWidth(ReviewModel::kSeverity, 56);
   connect(&session_->document(), &LabelDocument::labelsChanged, this, &MainWindow::OnLabelsChanged);
+  connect(&session_->document(), &LabelDocument::journalFailed, this,
+          [this](const QString& message) {
+            QMessageBox::warning(this, "Edits are not journaled",
+                                 message +
+                                     "\n\nSave often (Ctrl+S), or make the labels' folder "
+                                     "writable.");
+          });
   connect(&session_->document(), &LabelDocument::modifiedChanged, this,
           [this](bool modified) { setWindowModified(modified); });
   setWindowTitle(QString("netlab — %1[*]").arg(QFileInfo(path).fileName()));

@@ -126,6 +126,13 @@ void LabelDocument::Journal(recon::LabelStore::Change change, const std::string&
              << Number(e.label.confidence) << " " << static_cast<int>(e.label.state) << "\n";
   journal_ << "end\n";
   journal_.flush();
+  // A journal that cannot be written protects nothing: say so, once.
+  if (!journal_ && !journal_failed_) {
+    journal_failed_ = true;
+    emit journalFailed(QString::fromStdString(
+        JournalPath(labels_path_) +
+        ": cannot write the edit journal; edits since the last save are lost if netlab stops"));
+  }
 }
 
 std::string LabelDocument::Reason(int camera, int t, int knot) const {

@@ -80,6 +80,8 @@ class LabelDocument : public QObject {
   // Labels of these frame rows changed (an edit, undo or redo).
   void labelsChanged(const QList<int>& frames);
   void modifiedChanged(bool modified);
+  // The journal could not be written (once per document): edits are not crash-safe.
+  void journalFailed(const QString& message);
 
  private:
   class StoreStep;
@@ -94,6 +96,7 @@ class LabelDocument : public QObject {
   recon::ReviewReasons reasons_;
   std::set<std::tuple<int, int, int>> review_;  // (t, camera, knot) under review
   std::ofstream journal_;
+  bool journal_failed_ = false;
   bool replaying_undo_ = false;  // the stack is driving the store: do not push again
 };
 

@@ -189,6 +189,16 @@ TEST_F(LabelDocumentTest, AJournalOfAnotherLabelSetIsRefusedByName) {
   }
 }
 
+TEST_F(LabelDocumentTest, AJournalThatCannotBeWrittenIsSaidOnce) {
+  LabelDocument doc(Empty(), (dir_ / "no_such_folder" / "labels.h5").string());
+  QSignalSpy failed(&doc, &LabelDocument::journalFailed);
+  doc.Apply("Place", {{0, 0, 0, At(1, 1)}});
+  doc.Apply("Place", {{0, 0, 1, At(2, 2)}});
+  ASSERT_EQ(failed.count(), 1);
+  EXPECT_TRUE(failed.first().at(0).toString().contains("labels.h5.journal"));
+  EXPECT_EQ(doc.undo_stack()->count(), 2);  // the edits themselves are kept
+}
+
 TEST_F(LabelDocumentTest, AFailedSaveLeavesThePreviousFileAndTheJournal) {
   LabelDocument doc(Empty(), path_);
   doc.Apply("Place", {{0, 0, 0, At(1, 1)}});
