@@ -82,7 +82,7 @@ inline ScriptedSession PlayScriptedSession(MainWindow* w, const recon::LabelSet&
   // 2. Find Path from the corners; then every visible knot of frame 0 that is not accepted in a
   // camera, clicked there (Find Node, zoomed in; Shift+click where it cannot decide).
   QTest::keyClick(w, Qt::Key_P, Qt::ControlModifier);
-  out.actions.push_back({Action::kFindPath, 0, 0, 0, {}});
+  out.actions.push_back({Action::kFindPath, 0, 0, 0, Eigen::Vector2d::Zero()});
   for (int c = 0; c < s->cameras(); ++c)
     for (int k = 0; k < rows * cols; ++k) {
       const recon::Label& l = s->document().at(c, 0, k);
@@ -99,7 +99,7 @@ inline ScriptedSession PlayScriptedSession(MainWindow* w, const recon::LabelSet&
   // 3. Track to the last frame.
   QTest::keyClick(w, Qt::Key_T);
   out.finished = QTest::qWaitFor([&] { return !w->busy(); }, 600000);
-  out.actions.push_back({Action::kTrack, 0, 0, 0, {}});
+  out.actions.push_back({Action::kTrack, 0, 0, 0, Eigen::Vector2d::Zero()});
   // 4. The review queue.
   for (; out.review_items < max_review_items && !s->document().ReviewItems().empty();
        ++out.review_items) {
@@ -108,10 +108,10 @@ inline ScriptedSession PlayScriptedSession(MainWindow* w, const recon::LabelSet&
     const recon::Label& truth_label = want(c, t, k);
     if (!truth_label.present()) {
       QTest::keyClick(w, Qt::Key_D);
-      out.actions.push_back({Action::kDelete, c, t, k, {}});
+      out.actions.push_back({Action::kDelete, c, t, k, Eigen::Vector2d::Zero()});
     } else if ((s->document().at(c, t, k).px - truth_label.px).norm() < 1.0) {
       QTest::keyClick(w, Qt::Key_A);
-      out.actions.push_back({Action::kAccept, c, t, k, {}});
+      out.actions.push_back({Action::kAccept, c, t, k, Eigen::Vector2d::Zero()});
     } else {
       out.actions.push_back({Action::kFindNode, c, t, k, ClickAt(w->view(c), truth_label.px)});
       if (s->document().at(c, t, k).state != recon::LabelState::kAccepted)
