@@ -133,7 +133,7 @@ void PrintJson(const calib::CalibrationResult& result, const calib::RigCompariso
 }  // namespace
 
 int RunCalibrate(const std::vector<std::string>& args) {
-  try {
+  return RunGuarded("calibrate", [&] {
     const CommandLine cl(args, {"json", "quiet", "help", "rational"},
                          {"board", "images", "out", "fix-intrinsics", "truth"});
     if (cl.Flag("help")) {
@@ -212,13 +212,7 @@ int RunCalibrate(const std::vector<std::string>& args) {
     }
     if (cl.Flag("json")) PrintJson(result, comparison ? &*comparison : nullptr);
     return 0;
-  } catch (const UsageError& e) {
-    std::fprintf(stderr, "netlab calibrate: %s\n(see netlab calibrate --help)\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "netlab calibrate: error: %s\n", e.what());
-    return 1;
-  }
+  });
 }
 
 }  // namespace netlab::app

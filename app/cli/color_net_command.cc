@@ -44,7 +44,7 @@ constexpr char kHelp[] =
 }  // namespace
 
 int RunColorNet(const std::vector<std::string>& args) {
-  try {
+  return RunGuarded("color-net", [&] {
     const CommandLine cl(args, {"json", "quiet", "help", "adjacent-distinct"},
                          {"knots", "rule", "distance", "radius", "palette", "out", "time-limit",
                           "background"});
@@ -140,13 +140,7 @@ int RunColorNet(const std::vector<std::string>& args) {
       std::cout << json.str() << std::endl;
     }
     return 0;
-  } catch (const UsageError& e) {
-    std::fprintf(stderr, "netlab color-net: %s\n(see netlab color-net --help)\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "netlab color-net: error: %s\n", e.what());
-    return 1;
-  }
+  });
 }
 
 }  // namespace netlab::app

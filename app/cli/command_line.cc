@@ -130,4 +130,16 @@ bool CommandLine::FrameRange(const std::string& name, int* first, int* last) con
   return true;
 }
 
+int RunGuarded(const char* name, const std::function<int()>& body) {
+  try {
+    return body();
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "netlab %s: %s\n(see netlab %s --help)\n", name, e.what(), name);
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "netlab %s: error: %s\n", name, e.what());
+    return 1;
+  }
+}
+
 }  // namespace netlab::app

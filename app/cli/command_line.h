@@ -2,6 +2,7 @@
 // Argument parsing shared by netlab's subcommands: positional arguments, `--flag`, `--key VALUE`
 // (or `--key=VALUE`), and repeated keys. Unknown options are an error naming them.
 
+#include <functional>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -42,5 +43,10 @@ class CommandLine {
   std::map<std::string, bool> flags_;
   std::vector<std::string> positional_;
 };
+
+// Runs a subcommand's body and turns what it throws into the exit status and message every
+// command has: UsageError -> "netlab NAME: <what>" and "(see netlab NAME --help)", status 2; any
+// other std::exception -> "netlab NAME: error: <what>", status 1. Otherwise the body's status.
+int RunGuarded(const char* name, const std::function<int()>& body);
 
 }  // namespace netlab::app

@@ -133,7 +133,7 @@ void PrintJson(const recon::SynchronizedSequence& sequence, const recon::CheckRe
 }  // namespace
 
 int RunIngest(const std::vector<std::string>& args) {
-  try {
+  return RunGuarded("ingest", [&] {
     const CommandLine cl(args, {"check", "decode", "json", "quiet", "help"},
                          {"to-hdf5", "compress", "threads"});
     if (cl.Flag("help")) {
@@ -193,13 +193,7 @@ int RunIngest(const std::vector<std::string>& args) {
       PrintJson(sequence, cl.Flag("check") ? &check : nullptr, decode_fps, sampled,
                 to_hdf5 ? &conversion : nullptr);
     return 0;
-  } catch (const UsageError& e) {
-    std::fprintf(stderr, "netlab ingest: %s\n(see netlab ingest --help)\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "netlab ingest: error: %s\n", e.what());
-    return 1;
-  }
+  });
 }
 
 }  // namespace netlab::app

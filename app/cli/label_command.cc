@@ -211,7 +211,7 @@ void PrintJson(const LabelJob& job, const LabelReport& r) {
 }  // namespace
 
 int RunLabel(const std::vector<std::string>& args) {
-  try {
+  return RunGuarded("label", [&] {
     const CommandLine cl(args, {"json", "quiet", "help", "no-colour-check"},
                          {"rig", "coloring", "seed", "out", "frames", "mesh", "xypts", "illumination"});
     if (cl.Flag("help")) {
@@ -271,13 +271,7 @@ int RunLabel(const std::vector<std::string>& args) {
     if (!quiet) PrintReport(job, report, out);
     if (cl.Flag("json")) PrintJson(job, report);
     return 0;
-  } catch (const UsageError& e) {
-    std::fprintf(stderr, "netlab label: %s\n(see netlab label --help)\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "netlab label: error: %s\n", e.what());
-    return 1;
-  }
+  });
 }
 
 }  // namespace netlab::app

@@ -71,7 +71,7 @@ void PrintJson(const recon::RenderSummary& s, const std::string& out) {
 }  // namespace
 
 int RunRender(const std::vector<std::string>& args) {
-  try {
+  return RunGuarded("render", [&] {
     const CommandLine cl(args, {"json", "quiet", "help"},
                          {"sim", "out", "rig", "frames", "scale", "noise", "fps", "bit-depth",
                           "bayer", "background", "exposure", "blur-samples", "vignetting",
@@ -128,13 +128,7 @@ int RunRender(const std::vector<std::string>& args) {
     }
     if (cl.Flag("json")) PrintJson(summary, job.out_dir);
     return 0;
-  } catch (const UsageError& e) {
-    std::fprintf(stderr, "netlab render: %s\n(see netlab render --help)\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "netlab render: error: %s\n", e.what());
-    return 1;
-  }
+  });
 }
 
 }  // namespace netlab::app

@@ -99,7 +99,7 @@ void PrintJson(const netsim::ScoreSummary& s, const std::string& out, const std:
 }  // namespace
 
 int RunScore(const std::vector<std::string>& args) {
-  try {
+  return RunGuarded("score", [&] {
     const CommandLine cl(
         args, {"json", "quiet", "help"},
         {"measured", "sim", "out", "report", "align", "time-offset", "max-time-offset", "sim-sigma",
@@ -153,13 +153,7 @@ int RunScore(const std::vector<std::string>& args) {
     }
     if (cl.Flag("json")) PrintJson(result.summary, out, report);
     return 0;
-  } catch (const UsageError& e) {
-    std::fprintf(stderr, "netlab score: %s\n(see netlab score --help)\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "netlab score: error: %s\n", e.what());
-    return 1;
-  }
+  });
 }
 
 }  // namespace netlab::app

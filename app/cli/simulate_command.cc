@@ -67,7 +67,7 @@ void PrintJson(const netsim::RunSummary& s) {
 }  // namespace
 
 int RunSimulate(const std::vector<std::string>& args) {
-  try {
+  return RunGuarded("simulate", [&] {
     const CommandLine cl(args, {"json", "quiet", "help"}, {"out", "duration"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
@@ -98,13 +98,7 @@ int RunSimulate(const std::vector<std::string>& args) {
     }
     if (cl.Flag("json")) PrintJson(summary);
     return summary.stable ? 0 : 1;
-  } catch (const UsageError& e) {
-    std::fprintf(stderr, "netlab simulate: %s\n(see netlab simulate --help)\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "netlab simulate: error: %s\n", e.what());
-    return 1;
-  }
+  });
 }
 
 }  // namespace netlab::app

@@ -268,7 +268,7 @@ void PrintJson(const TriangulateArgs& a, const Outcome& o) {
 }  // namespace
 
 int RunTriangulate(const std::vector<std::string>& args) {
-  try {
+  return RunGuarded("triangulate", [&] {
     const CommandLine cl(args, {"json", "quiet", "help", "use-unreviewed"},
                          {"rig", "labels", "knots", "fps", "out", "csv", "ba", "outlier-px",
                           "sigma-px", "link-length", "link-sigma", "smooth-sigma", "rig-frames",
@@ -309,13 +309,7 @@ int RunTriangulate(const std::vector<std::string>& args) {
     if (!a.quiet) PrintSummary(a, o);
     if (a.json) PrintJson(a, o);
     return 0;
-  } catch (const UsageError& e) {
-    std::fprintf(stderr, "netlab triangulate: %s\n(see netlab triangulate --help)\n", e.what());
-    return 2;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "netlab triangulate: error: %s\n", e.what());
-    return 1;
-  }
+  });
 }
 
 }  // namespace netlab::app
