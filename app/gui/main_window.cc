@@ -229,8 +229,7 @@ void MainWindow::BuildActions() {
   });
   AddAction(file, "Save labels", "Ctrl+S", &MainWindow::Save);
   file->addSeparator();
-  auto* quit = file->addAction("Quit", this, &QWidget::close);
-  quit->setShortcut(QKeySequence("Ctrl+Q"));
+  AddAction(file, "Quit", "Ctrl+Q", &MainWindow::Quit);
 
   QMenu* edit = menuBar()->addMenu("&Edit");
   AddAction(edit, "Undo", "Ctrl+Z", &MainWindow::Undo);
@@ -896,6 +895,7 @@ void MainWindow::ShowShortcuts() {
     table->setItem(row++, 1, new QTableWidgetItem(how));
   }
   table->horizontalHeader()->setStretchLastSection(true);
+  table->verticalHeader()->setVisible(false);
   table->resizeColumnsToContents();
   table->setEditTriggers(QAbstractItemView::NoEditTriggers);
   layout->addWidget(

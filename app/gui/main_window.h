@@ -98,6 +98,7 @@ class MainWindow : public QMainWindow {
   void Save();
   void Undo();
   void Redo();
+  void Quit() { close(); }
   void NextFrame() { SetFrame(frame_ + 1); }
   void PreviousFrame() { SetFrame(frame_ - 1); }
   void Forward10() { SetFrame(frame_ + 10); }

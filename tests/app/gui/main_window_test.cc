@@ -11,6 +11,8 @@
 #include <QApplication>
 #include <QStatusBar>
 #include <QTableView>
+#include <QTableWidget>
+#include <QTimer>
 #include <QTest>
 #include <QWheelEvent>
 #include <filesystem>
@@ -60,7 +62,9 @@ class MainWindowTest : public ::testing::Test {
                   " --calibration-views 0 --coloring " + d + "/coloring.yaml --quiet");
     ASSERT_EQ(render.status, 0) << render.err;
   }
-  static void TearDownTestSuite() { fs::remove_all(Dir()); }
+  static void TearDownTestSuite() {
+    if (!getenv("NETLAB_KEEP_TEST_FILES")) fs::remove_all(Dir());
+  }
 
   // A project over the rendered shot whose labels go to `labels` (copied from `start` if given).
   std::string MakeProjectFile(const std::string& name, const std::string& start = "") {
@@ -186,6 +190,36 @@ TEST_F(MainWindowTest, TheScreenshotDrawsTheOverlaysWhereTheLabelsAre) {
   }
   EXPECT_GT(checked, 20);
   EXPECT_EQ(drawn, checked);
+}
+
+TEST_F(MainWindowTest, F1ListsEveryActionWithItsKeys) {
+  MainWindow w;
+  w.resize(1400, 1000);
+  w.show();
+  ASSERT_TRUE(w.OpenProject(QString::fromStdString(MakeProjectFile("keys")), false));
+  w.activateWindow();
+  ASSERT_TRUE(QTest::qWaitForWindowActive(&w));
+  int rows = -1;
+  QString first_keys;
+  // The cheat sheet is modal: read it once it is up, then close it (whatever it holds, so that
+  // a failure never leaves the test waiting on it).
+  QTimer::singleShot(200, [&] {
+    QWidget* dialog = QApplication::activeModalWidget();
+    if (dialog == nullptr) return;
+    dialog->grab().save((Dir() / "shortcuts.png").string().c_str());
+    if (const auto* table = dialog->findChild<QTableWidget*>()) {
+      rows = table->rowCount();
+      for (int r = 0; r < rows; ++r)
+        if (table->item(r, 0)->text() == "Save labels") first_keys = table->item(r, 1)->text();
+    }
+    dialog->close();
+  });
+  QTest::keyClick(&w, Qt::Key_F1);
+  int actions = 0;
+  for (QAction* a : w.actions()) actions += !a->shortcuts().isEmpty();
+  EXPECT_GE(actions, 40);
+  EXPECT_EQ(rows, actions + 4);  // and the four mouse gestures
+  EXPECT_EQ(first_keys, QKeySequence("Ctrl+S").toString(QKeySequence::NativeText));
 }
 
 }  // namespace
