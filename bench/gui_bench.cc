@@ -172,7 +172,7 @@ int main(int argc, char** argv) {
       for (int k = 0; k < got.knots(); ++k) {
         const auto& l = got.at(c, t, k);
         const auto& want = truth.at(truth.FindCamera(got.cameras[c]), t, k);
-        const bool accepted = l.present() && l.state == netlab::recon::LabelState::kAccepted;
+        const bool accepted = l.accepted();
         if (accepted && want.present() && (l.px - want.px).norm() <= 2.0)
           ++right;
         else if (accepted)

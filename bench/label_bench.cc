@@ -219,7 +219,7 @@ struct ScriptedUser {
       return;
     }
     ++y.knot_frames;
-    if (l.present() && l.state == recon::LabelState::kAccepted) return;
+    if (l.accepted()) return;
     ++y.find_node;
     const recon::FindNodeResult r = engine.FindNodeAt(c, t, k, truth_l.px, radius);
     // Found and accepted: done. Found but in doubt (its yarns or the other cameras

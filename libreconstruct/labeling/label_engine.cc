@@ -23,7 +23,6 @@ Label Made(const Eigen::Vector2d& px, LabelSource source, double confidence, boo
   return l;
 }
 
-bool Accepted(const Label& l) { return l.present() && l.state == LabelState::kAccepted; }
 
 double Median(std::vector<double> v) {
   if (v.empty()) return 0.0;
@@ -140,7 +139,7 @@ NeighbourSlots LabelEngine::Slots(
     if (n < 0) continue;
     slots.present[s] = true;
     const Label& l = set.at(camera, t, n);
-    if (Accepted(l)) {
+    if (l.accepted()) {
       slots.px[s] = l.px;
     } else if (rig_ && n < static_cast<int>(point.size()) && point[n]) {
       const Eigen::Vector2d q = rig_->cameras[RigIndex(camera)].ProjectWorld(*point[n]);
@@ -320,7 +319,7 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
   if (!rig_) return "";
   std::vector<Observation> others;
   for (int c = 0; c < static_cast<int>(set.cameras.size()); ++c)
-    if (c != camera && Accepted(set.at(c, t, knot)))
+    if (c != camera && set.at(c, t, knot).accepted())
       others.push_back({RigIndex(c), set.at(c, t, knot).px});
   if (others.size() < 2) return "";
   TriangulationOptions topt;
@@ -359,7 +358,7 @@ struct GridPrediction {
 std::optional<GridPrediction> PredictFromImageGrid(const LabelSet& set, int c, int t, int k) {
   const int cols = set.cols, knots = set.knots();
   auto at = [&](int j) -> std::optional<Eigen::Vector2d> {
-    if (j < 0 || j >= knots || !Accepted(set.at(c, t, j))) return std::nullopt;
+    if (j < 0 || j >= knots || !set.at(c, t, j).accepted()) return std::nullopt;
     return set.at(c, t, j).px;
   };
   const int r = k / cols, col = k % cols;
@@ -534,7 +533,7 @@ void LabelEngine::TriangulateAccepted(FrameCheck* f, std::vector<LabelEdit>* fla
     std::vector<Observation> obs;
     std::vector<int> from;
     for (int c = 0; c < f->cameras; ++c)
-      if (Accepted(set.at(c, t, k))) {
+      if (set.at(c, t, k).accepted()) {
         obs.push_back({RigIndex(c), set.at(c, t, k).px});
         from.push_back(c);
       }
@@ -602,7 +601,7 @@ void LabelEngine::SearchCamera(FrameCheck* f, int c, std::vector<LabelEdit>* edi
   if (image.empty()) return;
   const FillView view{c, image, image.size(), o_.detector.ring_radius_px + 2.0};
   for (int k = 0; k < f->knots; ++k) {
-    if (Accepted(set.at(c, f->t, k))) continue;
+    if (set.at(c, f->t, k).accepted()) continue;
     // (a) The knot's own triangulated point, where it has one.
     if (f->geometry && f->point[k]) {
       if (const std::optional<LabelEdit> e = SearchAtProjection(f, view, k)) edits->push_back(*e);
@@ -754,7 +753,7 @@ bool LabelEngine::TakenNear(const FrameCheck& f, int c, int k, const Eigen::Vect
   for (int j = 0; j < f.knots; ++j) {
     if (j == k) continue;
     const Label& l = set.at(c, f.t, j);
-    if (Accepted(l) && (l.px - px).norm() < o_.exclusion_px) return true;
+    if (l.accepted() && (l.px - px).norm() < o_.exclusion_px) return true;
     const Eigen::Vector2d& q = f.projected[c][j];
     if (q.allFinite() && (q - px).norm() < o_.exclusion_px) return true;
   }
@@ -785,7 +784,7 @@ bool LabelEngine::ConfirmCandidates(const FrameCheck& f, int k,
   // The knot's accepted labels, then its candidates, triangulated together.
   std::vector<Observation> obs;
   for (int c = 0; c < f.cameras; ++c)
-    if (Accepted(set.at(c, f.t, k))) obs.push_back({RigIndex(c), set.at(c, f.t, k).px});
+    if (set.at(c, f.t, k).accepted()) obs.push_back({RigIndex(c), set.at(c, f.t, k).px});
   const size_t first = obs.size();
   for (const auto& cand : list) obs.push_back({RigIndex(cand.camera), cand.px});
   if (obs.size() < 2) return false;
@@ -860,12 +859,12 @@ int LabelEngine::CheckColours(int t) {
     if (image.empty() || image.type() != CV_8UC3) continue;
     for (int k = 0; k < set.knots(); ++k) {
       const Label& l = set.at(c, t, k);
-      if (!Accepted(l) || l.source == LabelSource::kManual || l.source == LabelSource::kImported)
+      if (!l.accepted() || l.source == LabelSource::kManual || l.source == LabelSource::kImported)
         continue;
       YarnDirections yarns;
       const std::array<int, 4> slot_knot = SlotKnots(k);
       for (int s = 0; s < 4; ++s)
-        if (slot_knot[s] >= 0 && Accepted(set.at(c, t, slot_knot[s])))
+        if (slot_knot[s] >= 0 && set.at(c, t, slot_knot[s]).accepted())
           yarns.neighbour_px[s] = set.at(c, t, slot_knot[s]).px;
       const IdentityCheck check = CheckIdentity(image, *codebook_, k, l.px, yarns, identity_);
       if (check.verdict != IdentityVerdict::kMismatch) continue;

@@ -59,6 +59,7 @@ struct Label {
   LabelState state = LabelState::kNone;
 
   bool present() const { return std::isfinite(px.x()) && std::isfinite(px.y()); }
+  bool accepted() const { return present() && state == LabelState::kAccepted; }
 };
 
 // Per (camera, frame row, knot): why a label is under review (the labeling tools' reasons).

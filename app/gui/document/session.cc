@@ -40,10 +40,6 @@ recon::LabelSet OpenLabels(const Project& p, const std::vector<std::string>& cam
   return empty;
 }
 
-bool Accepted(const recon::Label& l) {
-  return l.present() && l.state == recon::LabelState::kAccepted;
-}
-
 }  // namespace
 
 std::unique_ptr<Session> Session::Open(const Project& project,
@@ -176,7 +172,6 @@ Session::TrackRun Session::Track(recon::LabelSet snapshot, int from, int to,
                                  int max_review) const {
   TrackRun run;
   run.from = from, run.to = to, run.last_done = from;
-  const recon::LabelSet before = snapshot;
   recon::LabelStore store(std::move(snapshot));
   const std::unique_ptr<recon::LabelEngine> engine = MakeEngine(&store);
   const int total = std::abs(to - from);
@@ -198,17 +193,13 @@ Session::TrackRun Session::Track(recon::LabelSet snapshot, int from, int to,
     }
     return true;
   });
-  // What the run changed, in the rows it went through.
+  // The rows the run went through, as it left them; applying them changes only what differs
+  // (LabelStore::Apply skips a label equal to the one it replaces).
   const int lo = std::min(from, run.last_done), hi = std::max(from, run.last_done);
   for (int c = 0; c < cameras(); ++c)
     for (int t = lo; t <= hi; ++t)
-      for (int k = 0; k < before.knots(); ++k) {
-        const recon::Label& a = before.at(c, t, k);
-        const recon::Label& b = store.at(c, t, k);
-        const bool same = a.present() == b.present() && a.state == b.state &&
-                          a.source == b.source && (!a.present() || a.px == b.px);
-        if (!same) run.edits.push_back({c, t, k, b});
-      }
+      for (int k = 0; k < store.labels().knots(); ++k)
+        run.edits.push_back({c, t, k, store.at(c, t, k)});
   run.reasons = engine->reasons();
   return run;
 }
@@ -223,7 +214,7 @@ int Session::ApplyTrackRun(const TrackRun& run) {
 recon::PointEstimate Session::Triangulate(int t, int knot) const {
   std::vector<recon::Observation> obs;
   for (int c = 0; c < cameras(); ++c)
-    if (Accepted(document_->at(c, t, knot)))
+    if (document_->at(c, t, knot).accepted())
       obs.push_back({rig_index_[c], document_->at(c, t, knot).px});
   if (obs.size() < 2) {
     recon::PointEstimate none;

@@ -84,7 +84,7 @@ class Session {
   struct TrackRun {
     int from = 0, to = 0, last_done = 0;
     bool cancelled = false, stopped_for_review = false;
-    std::vector<recon::LabelEdit> edits;  // what the run changed
+    std::vector<recon::LabelEdit> edits;  // the rows it went through, as it left them
     recon::ReviewReasons reasons;
   };
   TrackRun Track(recon::LabelSet snapshot, int from, int to, const std::atomic<bool>* cancel,

@@ -15,14 +15,7 @@
 namespace netlab::netsim {
 namespace {
 
-std::vector<double> ReadDoubles(hid_t file, const std::string& name) {
-  const auto dims = h5::DatasetDims(file, name);
-  size_t n = 1;
-  for (hsize_t d : dims) n *= d;
-  std::vector<double> v(n);
-  h5::ReadDataset(file, name, H5T_NATIVE_DOUBLE, v.data());
-  return v;
-}
+using testing::ReadDoubles;
 
 std::vector<double> Column(const std::vector<double>& v, int columns, int c) {
   std::vector<double> out;

@@ -8,10 +8,22 @@
 #include <filesystem>
 #include <random>
 #include <string>
+#include <vector>
 
+#include "common/hdf5_util.h"
 #include "libnetsim/validation/score.h"
 
 namespace netlab::netsim::testing {
+
+// Every value of a float64 dataset of a score file, flattened.
+inline std::vector<double> ReadDoubles(hid_t file, const std::string& name) {
+  const auto dims = h5::DatasetDims(file, name);
+  size_t n = 1;
+  for (hsize_t d : dims) n *= d;
+  std::vector<double> v(n);
+  h5::ReadDataset(file, name, H5T_NATIVE_DOUBLE, v.data());
+  return v;
+}
 
 inline KnotTracks SmallFlight(int frames, double t0, double noise_m, std::mt19937* rng) {
   KnotTracks tracks;
