@@ -37,6 +37,12 @@ recon::LabelSet OpenLabels(const Project& p, const std::vector<std::string>& cam
         empty.at(c, t, k) = read.at(static_cast<int>(rc), rt, k);
     }
   }
+  // Why labels are under review, moved with them (by camera name and frame number).
+  for (const auto& [key, why] : read.reasons) {
+    const auto [rc, rt, k] = key;
+    const int c = empty.FindCamera(read.cameras[rc]);
+    empty.reasons[{c, read.frame_index[rt] - frames.front(), k}] = why;
+  }
   return empty;
 }
 

@@ -192,6 +192,26 @@ TEST_F(MainWindowTest, TheScreenshotDrawsTheOverlaysWhereTheLabelsAre) {
   EXPECT_EQ(drawn, checked);
 }
 
+TEST_F(MainWindowTest, ALabelsFileOfOtherFramesAndCameraOrderKeepsItsReviewReasons) {
+  // A file over frames 5..6 with the cameras reversed: its labels and their reasons move onto the
+  // recording's frames and cameras together.
+  const recon::LabelSet truth = Truth();
+  std::vector<std::string> reversed(truth.cameras.rbegin(), truth.cameras.rend());
+  recon::LabelSet file = recon::LabelSet::Empty(truth.rows, truth.cols, reversed, {5, 6});
+  recon::Label doubt;
+  doubt.px = Eigen::Vector2d(100.0, 200.0);
+  doubt.state = recon::LabelState::kNeedsReview;
+  file.at(0, 1, 3) = doubt;
+  file.reasons[{0, 1, 3}] = "epipolar check: 4.2 px off";
+  const std::string path = (Dir() / "reasons_in.h5").string();
+  recon::WriteLabels(path, file);
+  auto s = Session::Open(LoadProject(MakeProjectFile("reasons", path)));
+  const int c = s->document().labels().FindCamera(reversed[0]);
+  ASSERT_GE(c, 0);
+  EXPECT_TRUE(s->document().labels().at(c, 6, 3).present());
+  EXPECT_EQ(s->document().Reason(c, 6, 3), "epipolar check: 4.2 px off");
+}
+
 TEST_F(MainWindowTest, F1ListsEveryActionWithItsKeys) {
   MainWindow w;
   w.resize(1400, 1000);
