@@ -6,9 +6,9 @@ xypts.csv with one row (frame 0) and only the corners' columns.
 usage: seed_corners.py truth.h5 ROWSxCOLS out.csv CAMERA...   (cameras in the experiment's order)
 
 Reads the HDF5 file with h5dump (Debian's hdf5-tools), raw little-endian, so no Python HDF5
-module is needed. A corner outside a camera's image in the first frame (visibility 2) is NaN; one
-hidden behind its own corner mass (visibility 1) is seeded where the mass is, as a person would
-click it (the knot is at the mass's centre).
+module is needed. A corner outside a camera's image in the first frame (visibility 2) or
+hidden behind a solid (visibility 1: the target) is NaN, as a person would leave it: `netlab
+label` starts from three corners as well as four.
 """
 import os
 import struct
@@ -43,7 +43,7 @@ def main():
             visibility = dump(truth, f"/cameras/{camera}/visibility", (0, 0), (1, knots), "B")
             column = f"pt{k + 1}_cam{c + 1}"
             header += [column + "_X", column + "_Y"]
-            seen = visibility[k] in (0, 1)
+            seen = visibility[k] == 0
             values += [repr(px[2 * k]) if seen else "NaN", repr(px[2 * k + 1]) if seen else "NaN"]
     with open(out, "w") as f:
         f.write(",".join(header) + "\n" + ",".join(values) + "\n")

@@ -32,9 +32,9 @@ constexpr char kHelp[] =
     "                    --out labels.h5 [--xypts xypts.csv] [--frames A:B] [--mesh M]\n"
     "                    [--illumination F] [--no-colour-check] [--json]\n\n"
     "Runs the automatic part of the labeling from seed labels (docs/labeling.md):\n"
-    "  1. first frame, each camera whose four corner knots are seeded: Find Path along the four\n"
-    "     sides, then along every row and every column (an inner knot is accepted when its row\n"
-    "     and its column agree);\n"
+    "  1. first frame, each camera with four corner knots seeded, or three (one hidden): Find\n"
+    "     Path along the sides, then along every row and every column (an inner knot is\n"
+    "     accepted when its row and its column agree);\n"
     "  2. every frame: labels tracked from the previous frame; the cameras cross-checked with\n"
     "     epipolar geometry; Fill Grid labels the knots still missing where their triangulated\n"
     "     point, or the spheres of link length around their triangulated neighbours, project;\n"
@@ -155,10 +155,11 @@ std::vector<CameraCounts> CountLabels(const LabelJob& job, const recon::LabelSto
   std::vector<CameraCounts> counts(job.cameras.size());
   for (size_t c = 0; c < job.cameras.size(); ++c) {
     const int ci = static_cast<int>(c);
-    bool corners_seeded = true;
-    for (int k : corners) corners_seeded = corners_seeded && store.at(ci, 0, k).present();
-    if (!corners_seeded) notes[c] = "not every corner is seeded in the first frame" +
-                            std::string(notes[c].empty() ? "" : "; ") + notes[c];
+    int corners_labeled = 0;
+    for (int k : corners) corners_labeled += store.at(ci, 0, k).present();
+    if (corners_labeled < 3)
+      notes[c] = "fewer than three corners in the first frame: labeled where the other cameras "
+                 "see the knots" + std::string(notes[c].empty() ? "" : "; ") + notes[c];
     counts[c].first_frame_note = notes[c];
     for (int t = 0; t < store.labels().frames(); ++t)
       for (int k = 0; k < rows * cols; ++k) {

@@ -4,9 +4,12 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <functional>
+#include <map>
 #include <optional>
 #include <stdexcept>
 
+#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "libreconstruct/geometry/triangulation.h"
@@ -163,15 +166,59 @@ std::vector<int> LabelEngine::Neighbours(int knot) const {
   return n;
 }
 
+void LabelEngine::FindFarSides(int camera, int t, const cv::Mat& image,
+                               const std::function<std::optional<Eigen::Vector2d>(int)>& px,
+                               std::vector<LabelEdit>* edits,
+                               std::map<int, Junction>* junction_of) {
+  const LabelSet& set = store_->labels();
+  const int rows = set.rows, cols = set.cols;
+  // The unseeded corner's row and column.
+  int far_row = 0, far_col = 0;
+  for (int k : {0, cols - 1, (rows - 1) * cols, rows * cols - 1})
+    if (!set.at(camera, t, k).present()) far_row = k / cols, far_col = k % cols;
+  // The knots found along the other two sides: the grid's map into the image.
+  std::vector<cv::Point2f> grid, image_px;
+  for (int k = 0; k < rows * cols; ++k) {
+    const int r = k / cols, c = k % cols;
+    if (r == far_row || c == far_col) continue;
+    if ((r != 0 && r != rows - 1) && (c != 0 && c != cols - 1)) continue;
+    if (const auto p = px(k)) {
+      grid.emplace_back(static_cast<float>(c), static_cast<float>(r));
+      image_px.emplace_back(static_cast<float>(p->x()), static_cast<float>(p->y()));
+    }
+  }
+  if (grid.size() < 6) return;
+  const cv::Mat h = cv::findHomography(grid, image_px, 0);
+  if (h.empty()) return;
+  auto predict = [&](int r, int c) {
+    std::vector<cv::Point2f> in{{static_cast<float>(c), static_cast<float>(r)}}, out;
+    cv::perspectiveTransform(in, out, h);
+    return Eigen::Vector2d(out[0].x, out[0].y);
+  };
+  for (int k = 0; k < rows * cols; ++k) {
+    const int r = k / cols, c = k % cols;
+    if ((r != far_row && c != far_col) || (r == far_row && c == far_col) || px(k)) continue;
+    // A brush of a third of a link: the nearest other knot is two thirds away, or more.
+    const Eigen::Vector2d p = predict(r, c);
+    const double link_px = std::min((predict(r, c + 1) - p).norm(), (predict(r + 1, c) - p).norm());
+    const FindNodeResult found = FindNode(image, p, link_px / 3.0, o_.detector);
+    if (found.status != FindNodeStatus::kFound || found.knot.solid) continue;
+    // Accepted only if its yarns then leave it towards its neighbours (checked with the rest).
+    edits->push_back({camera, t, k,
+                      Made(found.knot.px, LabelSource::kFindPath, found.knot.confidence, true)});
+    (*junction_of)[k] = found.knot;
+  }
+}
+
 EngineCounts LabelEngine::LabelFirstFrame(int t) {
   const LabelSet& set = store_->labels();
   const int rows = set.rows, cols = set.cols;
   const int corners[4] = {0, cols - 1, (rows - 1) * cols, rows * cols - 1};
   std::vector<LabelEdit> edits;
   for (int camera = 0; camera < static_cast<int>(set.cameras.size()); ++camera) {
-    bool seeded = true;
-    for (int k : corners) seeded = seeded && set.at(camera, t, k).present();
-    if (!seeded) continue;
+    int seeded = 0;
+    for (int k : corners) seeded += set.at(camera, t, k).present();
+    if (seeded < 3) continue;
     const cv::Mat& image = Image(camera, t);
     if (image.empty()) continue;
     const size_t first_edit = edits.size();
@@ -201,6 +248,9 @@ EngineCounts LabelEngine::LabelFirstFrame(int t) {
           junction_of[r.knots[i]] = r.junctions[i];
         }
     }
+    // A corner hidden (behind the target, say): the knots of its two sides where the grid of the
+    // other two sides puts them, so that the rows and columns can still be followed.
+    if (seeded == 3) FindFarSides(camera, t, image, px, &edits, &junction_of);
     // Inner knots: along their row and along their column; both must agree.
     std::map<int, Eigen::Vector2d> by_row, by_column;
     std::map<int, double> confidence;

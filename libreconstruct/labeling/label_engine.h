@@ -108,8 +108,10 @@ class LabelEngine {
   LabelEngine(LabelStore* store, const calib::Rig* rig, ImageSource images,
               LabelEngineOptions options = {});
 
-  // Find Path from the four seeded corners of frame t in every camera that has them (sides,
-  // then rows and columns; inner knots where row and column agree). Returns the labels set.
+  // Find Path from the seeded corners of frame t in every camera that has four, or three (sides,
+  // then rows and columns; inner knots where row and column agree). With three, the fourth
+  // corner's two sides are found first where the grid of the other two sides puts them (a
+  // corner behind the target). Returns the labels set.
   EngineCounts LabelFirstFrame(int t);
   // Tracks every label of frame `from` into frame `to` (an adjacent frame) where `to` has none.
   EngineCounts Track(int from, int to);
@@ -152,6 +154,12 @@ class LabelEngine {
   int RigIndex(int camera) const { return rig_index_[camera]; }
   void Note(int camera, int t, int knot, const std::string& why);
   EngineCounts Commit(const std::string& name, const std::vector<LabelEdit>& edits);
+  // LabelFirstFrame with three corners seeded: Find Node on the knots of the fourth corner's
+  // row and column (not the corner), where the homography of the other two sides' knots (`px`:
+  // each knot's label so far) puts them; into *edits as accepted, for the branch check to judge.
+  void FindFarSides(int camera, int t, const cv::Mat& image,
+                    const std::function<std::optional<Eigen::Vector2d>(int)>& px,
+                    std::vector<LabelEdit>* edits, std::map<int, Junction>* junction_of);
   // The median distance between neighbouring triangulated knots (every view an inlier), unless
   // the link length is set.
   void EstimateLinkLength(const std::vector<std::optional<Eigen::Vector3d>>& points);

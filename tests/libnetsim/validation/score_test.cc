@@ -139,6 +139,27 @@ TEST(Score, GaussianNoiseOfKnownCovarianceGivesMeanD2ThreeAndConsistent) {
   EXPECT_GT(s.p_value, 0.01);
 }
 
+// Noise of 1 mm stated as 2 mm: the simulation is not rejected, but the too-large covariances are
+// said, with their factor (2 in standard deviation: 100 %); stated right, nothing is said.
+TEST(Score, OverstatedCovariancesAreSaid) {
+  const KnotTracks sim = MakeTracks(11, 11, 200, 0.0);
+  const Eigen::Matrix3d cov = Eigen::Matrix3d::Identity() * 1e-6;
+  std::mt19937 rng(5);
+  KnotTracks meas = Measure(11, 11, 150, 0.0, Eigen::Isometry3d::Identity(), cov, &rng);
+  ScoreOptions options;
+  options.alignment = Alignment::kNone;
+  const ScoreSummary right = Score(meas, sim, options).summary;
+  EXPECT_FALSE(right.covariance_too_large);
+  for (auto& c : meas.covariance) c *= 4.0;
+  const ScoreSummary s = Score(meas, sim, options).summary;
+  EXPECT_EQ(s.verdict, "consistent");
+  EXPECT_NEAR(s.mean_d2, 0.75, 0.03);
+  EXPECT_TRUE(s.covariance_too_large);
+  bool said = false;
+  for (const auto& note : s.notes) said = said || note.find("by about 100 %") != std::string::npos;
+  EXPECT_TRUE(said);
+}
+
 // The verdict's false-rejection rate is the stated significance: 200 noisy measurements of a right
 // simulation at significance 0.1 are rejected 20 times on average (binomial sd 4.2).
 TEST(Score, RejectsARightSimulationAtTheStatedRate) {

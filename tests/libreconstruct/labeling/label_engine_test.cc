@@ -287,6 +287,32 @@ TEST(LabelEngine, LabelFramesLabelsFrameByFrameAsItsStepsDo) {
   for (int t = 0; t < 3; ++t) CheckAccepted(shot, by_frames, t);
 }
 
+// Three seeded corners are enough in the first frame (the target hides the fourth from a rear
+// camera): every knot but the unseeded corner is found, each its own, in every camera, whichever
+// corner is missing; two corners are not enough to start from.
+TEST(LabelEngine, FindPathStartsFromThreeCorners) {
+  const Shot shot = Render(1);
+  const int corners[4] = {0, kCols - 1, (kRows - 1) * kCols, kKnots - 1};
+  for (int missing = 0; missing < 4; ++missing) {
+    LabelSet labels = Empty(shot);
+    for (int c = 0; c < 3; ++c)
+      for (int i = 0; i < 4; ++i)
+        if (i != missing) labels.at(c, 0, corners[i]) = Accepted(shot.Truth(c, 0, corners[i]));
+    LabelStore store(std::move(labels));
+    LabelEngine engine(&store, &shot.rig, Images(shot));
+    const EngineCounts n = engine.LabelFirstFrame(0);
+    EXPECT_EQ(n.accepted, 3 * (kKnots - 4)) << "corner " << missing << " missing";
+    EXPECT_EQ(n.review, 0) << "corner " << missing << " missing";
+    EXPECT_EQ(CheckAccepted(shot, store, 0), 3 * (kKnots - 1));
+  }
+  LabelSet two = Empty(shot);
+  for (int c = 0; c < 3; ++c)
+    for (int k : {corners[0], corners[3]}) two.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
+  LabelStore store(std::move(two));
+  LabelEngine engine(&store, &shot.rig, Images(shot));
+  EXPECT_EQ(engine.LabelFirstFrame(0).accepted + engine.LabelFirstFrame(0).review, 0);
+}
+
 // The person's brush near knot 12 in camera a, whose neighbours there and whose views in b and
 // c are labeled: Find Node labels it, accepted, as one undoable step.
 TEST(LabelEngine, FindNodeLabelsTheKnotUnderTheBrush) {
