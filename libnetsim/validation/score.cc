@@ -874,6 +874,8 @@ ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOpti
     if (std::isfinite(result.area_measured[t]) && result.area_measured[t] > s.max_area_measured_m2)
       s.max_area_measured_m2 = result.area_measured[t], s.max_area_time_measured_s = meas.time[t];
   }
+  if (s.max_area_measured_m2 <= 0)  // no frame with all four corners measured
+    s.max_area_measured_m2 = s.max_area_time_measured_s = kNaN;
   const double t_end = meas.time.back() + 1e-9;
   double t_half = meas.time.front(), t_max = t_end;
   if (max_t >= 0) {

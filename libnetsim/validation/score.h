@@ -127,7 +127,7 @@ struct ScoreSummary {
   std::vector<ScoreRow> per_knot;     // [K], name "(row,col)"
   std::vector<ScoreRow> per_phase;    // ejection, spreading, opened, contact
   // Global measures (measured vs simulated).
-  double max_area_measured_m2 = 0.0, max_area_time_measured_s = 0.0;
+  double max_area_measured_m2 = 0.0, max_area_time_measured_s = 0.0;  // NaN: never measured
   double max_area_simulated_m2 = 0.0, max_area_time_simulated_s = 0.0;
   std::vector<std::string> notes;  // what a reader must know (Sigma_sim zero, sparse output...)
   double wall_s = 0.0;

@@ -188,6 +188,22 @@ std::string Heat(double f) {
   return buffer;
 }
 
+// The corner-polygon plot's caption: the largest area measured and simulated, and when; or why
+// there is no measured curve (the polygon needs all four corners in a frame).
+std::string AreaCaption(const ScoreResult& r) {
+  const ScoreSummary& s = r.summary;
+  int measured = 0;
+  for (double a : r.area_measured) measured += std::isfinite(a);
+  std::string text = measured == 0
+                         ? "Measured: none (no frame has all four corners measured). "
+                         : "Maximum measured " + Fixed(s.max_area_measured_m2, 3) + " m² at " +
+                               Fixed(s.max_area_time_measured_s, 3) + " s, ";
+  text += (measured == 0 ? "Simulated: maximum " : "simulated ") +
+          Fixed(s.max_area_simulated_m2, 3) + " m² at " + Fixed(s.max_area_time_simulated_s, 3) +
+          " s.";
+  return text;
+}
+
 std::string KnotMap(const ScoreResult& r) {
   const ScoreSummary& s = r.summary;
   int rows = 0, cols = 0;
@@ -374,10 +390,8 @@ std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info) {
        "</div></div>\n";
   o << "<div><h2>Opening of the net: corner-polygon area</h2>\n"
     << area.Svg("corner-area", "measured time (s)", "area (m²)", r.time, false)
-    << "<div class=\"caption\">Area spanned by the four corner knots. Maximum measured "
-    << Fixed(s.max_area_measured_m2, 3) << " m² at " << Fixed(s.max_area_time_measured_s, 3)
-    << " s, simulated " << Fixed(s.max_area_simulated_m2, 3) << " m² at "
-    << Fixed(s.max_area_time_simulated_s, 3) << " s.</div></div>\n";
+    << "<div class=\"caption\">Area spanned by the four corner knots. " << AreaCaption(r)
+    << "</div></div>\n";
   o << "<div><h2>d² against its expectation</h2>\n"
     << Histogram(r)
     << "<div class=\"caption\">If the simulation is right and the covariances are honest, the "
