@@ -40,7 +40,8 @@ constexpr char kHelp[] =
     "                      /knots/covariance\n"
     "  --significance A    test level: inconsistent when p < A (default 0.01)\n"
     "  --contact-time S    simulated time of first contact with the target: starts the\n"
-    "                      \"contact\" phase (default: no contact phase)\n"
+    "                      \"contact\" phase (default: the simulation's first contact, which\n"
+    "                      netlab simulate stores; none: no contact phase)\n"
     "  --quiet             no summary on stderr\n"
     "  --json              print one JSON summary object on stdout as the last output: frames,\n"
     "                      knots, points, rms_mm, rms_percent_of_side, max_mm, mean_d2, dof,\n"
@@ -84,6 +85,8 @@ void PrintJson(const netsim::ScoreSummary& s, const std::string& out, const std:
   json.Key("per_phase").BeginObject();
   for (const auto& row : s.per_phase) json.Key(row.name).Number(row.rms_m * 1e3);
   json.EndObject();
+  json.Key("contact_time_s").Number(s.contact_time_s);
+  json.Key("contact_from").String(s.contact_from);
   json.Key("max_area_measured_m2").Number(s.max_area_measured_m2);
   json.Key("max_area_simulated_m2").Number(s.max_area_simulated_m2);
   json.Key("notes").BeginArray();

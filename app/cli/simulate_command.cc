@@ -47,6 +47,7 @@ void PrintJson(const netsim::RunSummary& s) {
   json.Key("segment_steps_per_s").Number(s.segment_steps_per_s);
   json.Key("real_time_factor").Number(s.real_time_factor);
   json.Key("max_penetration").Number(s.max_penetration);
+  json.Key("contact_start_s").Number(s.contact_start_s);
   json.Key("max_inertia_scale").Number(s.max_inertia_scale);
   json.Key("probes").BeginObject();
   for (const auto& [name, p] : s.probes) json.Key(name).Vector3(p);

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -25,8 +26,8 @@ std::string RunSummary::BriefReport() const {
      << " s wall: " << segment_steps_per_s / 1e6 << " M segment-steps/s, " << real_time_factor
      << " x real time\n";
   if (!max_penetration_at.empty())
-    os << "  contact     deepest penetration " << max_penetration * 1e3 << " mm at "
-       << max_penetration_at << "\n";
+    os << "  contact     from t = " << contact_start_s << " s; deepest penetration "
+       << max_penetration * 1e3 << " mm at " << max_penetration_at << "\n";
   os << "  energy      kinetic " << energy.kinetic << " J, elastic " << energy.elastic
      << " J, potential " << energy.potential << " J\n";
   for (const auto& [name, p] : probes)
@@ -81,8 +82,13 @@ RunSummary RunScenario(const Scenario& scenario, const RunOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   write_frame();
   const long progress_every = std::max(1L, total_steps / 50);
+  double contact_start = std::numeric_limits<double>::quiet_NaN();
   for (long step = 1; step <= total_steps; ++step) {
     if (!sim.Step()) break;
+    if (std::isnan(contact_start) && sim.max_penetration() > 0.0) {
+      contact_start = sim.state().time;  // the first step that found a node inside a body
+      if (writer) writer->SetContactStart(contact_start);
+    }
     if (step % steps_per_frame == 0) write_frame();
     if (options.progress && step % progress_every == 0)
       options.progress(static_cast<double>(step) / total_steps);
@@ -98,6 +104,7 @@ RunSummary RunScenario(const Scenario& scenario, const RunOptions& options) {
                            : 0.0;
   summary.real_time_factor = summary.wall_s > 0.0 ? s.time / summary.wall_s : 0.0;
   summary.max_penetration = sim.max_penetration();
+  summary.contact_start_s = contact_start;
   if (sim.max_penetration_node() >= 0)
     summary.max_penetration_at = model.DescribeNode(sim.max_penetration_node());
   for (size_t p = 0; p < built.probe_nodes.size(); ++p)

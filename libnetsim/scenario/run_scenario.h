@@ -3,6 +3,7 @@
 // knot-track file (track_file.h), and summarises the run. The engine behind `netlab simulate`.
 
 #include <functional>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -36,6 +37,7 @@ struct RunSummary {
   double real_time_factor = 0.0;  // sim_time / wall_s
   double max_penetration = 0.0;   // m, deepest contact penetration
   std::string max_penetration_at; // where it happened ("" when no contact)
+  double contact_start_s = std::numeric_limits<double>::quiet_NaN();  // first contact; NaN: none
   std::vector<std::pair<std::string, Vector3d>> probes;  // positions at the end, m
   Energy energy;                                      // at the end
   std::vector<std::string> active;                    // forces in use

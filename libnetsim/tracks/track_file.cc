@@ -1,6 +1,7 @@
 #include "libnetsim/tracks/track_file.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <stdexcept>
@@ -15,6 +16,13 @@ void RenameInto(const std::string& from, const std::string& to) {
   std::filesystem::rename(from, to, error);
   if (error) throw std::runtime_error(to + ": cannot rename " + from + " into place: " +
                                       error.message());
+}
+
+// /contact_start (s), when the simulation had a contact.
+void WriteContactStart(hid_t file, double time_s) {
+  if (!std::isfinite(time_s)) return;
+  h5::WriteDataset(file, "contact_start", H5T_NATIVE_DOUBLE, {1}, &time_s);
+  h5::SetUnits(file, "contact_start", "s");
 }
 
 void WriteRootAttributes(hid_t file, const std::string& source) {
@@ -133,6 +141,7 @@ void WriteKnotTracks(const std::string& path, const KnotTracks& tracks) {
       }
     }
     if (!tracks.scenario.empty()) h5::WriteStringDataset(file.get(), "scenario", tracks.scenario);
+    WriteContactStart(file.get(), tracks.contact_start_s);
     H5Fflush(file.get(), H5F_SCOPE_GLOBAL);
   }
   RenameInto(partial, path);
@@ -218,6 +227,11 @@ KnotTracks ReadKnotTracks(const std::string& path) {
     }
   }
   if (h5::Exists(f, "/scenario")) tracks.scenario = h5::ReadStringDataset(f, "/scenario");
+  if (h5::Exists(f, "/contact_start")) {
+    if (h5::DatasetDims(f, "/contact_start") != std::vector<hsize_t>{1})
+      fail("/contact_start must hold one time (s)");
+    h5::ReadDataset(f, "/contact_start", H5T_NATIVE_DOUBLE, &tracks.contact_start_s);
+  }
   return tracks;
 }
 
@@ -299,6 +313,7 @@ void TrackFileWriter::AppendFrame(double time, const std::vector<Eigen::Vector3d
 
 void TrackFileWriter::Commit() {
   if (!handles_) return;
+  WriteContactStart(handles_->file.get(), contact_start_s_);
   H5Fflush(handles_->file.get(), H5F_SCOPE_GLOBAL);
   handles_.reset();
   RenameInto(partial_path_, path_);

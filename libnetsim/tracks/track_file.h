@@ -18,12 +18,15 @@
 //   /nodes/position               [T,N,3]    float64  m         (optional: simulations)
 //   /probes/<name>                [T,3]      float64  m         (optional: simulations)
 //   /scenario                     string     the scenario YAML  (optional: simulations)
+//   /contact_start                [1]        float64  s: the first contact of the net with a
+//                                 body (optional: simulations that had one)
 // Root attributes: "format" = "netlab-knot-tracks", "version" = "1", "source" (the command).
 // Files are written to "<path>.partial" and renamed into place when complete, so an interrupted
 // write never replaces a good file.
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -52,6 +55,8 @@ struct KnotTracks {
   std::vector<std::string> camera_names;      // non-empty: /outliers is written
   std::string source;                         // e.g. "netlab simulate"
   std::string scenario;                       // scenario YAML, or empty
+  // s: the simulation's first contact of the net with a body; NaN: none (or not a simulation)
+  double contact_start_s = std::numeric_limits<double>::quiet_NaN();
 
   int frames() const { return static_cast<int>(time.size()); }
   int knots() const { return static_cast<int>(grid.size()); }
@@ -103,6 +108,8 @@ class TrackFileWriter {
                    const std::vector<Eigen::Vector3d>& knots,
                    const std::vector<Eigen::Vector3d>& probes);
   int frames() const { return frames_; }
+  // The time of the net's first contact with a body, written as /contact_start at Commit.
+  void SetContactStart(double time_s) { contact_start_s_ = time_s; }
 
   // Closes the file and renames it to `path`. Without Commit the partial file stays.
   void Commit();
@@ -115,6 +122,7 @@ class TrackFileWriter {
   Layout layout_;
   int frames_ = 0;
   std::unique_ptr<Handles> handles_;
+  double contact_start_s_ = std::numeric_limits<double>::quiet_NaN();
 };
 
 }  // namespace netlab::netsim

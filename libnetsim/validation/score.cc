@@ -888,8 +888,14 @@ ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOpti
         break;
       }
   }
-  const double t_contact = std::isfinite(options.contact_time_s)
-                               ? std::max(options.contact_time_s - fit.tau, meas.time.front())
+  // The contact phase from the given time, else from the simulation's own first contact.
+  s.contact_time_s = std::isfinite(options.contact_time_s) ? options.contact_time_s
+                                                            : sim.contact_start_s;
+  s.contact_from = std::isfinite(options.contact_time_s) ? "given"
+                   : std::isfinite(sim.contact_start_s)  ? "simulation"
+                                                         : "none";
+  const double t_contact = std::isfinite(s.contact_time_s)
+                               ? std::clamp(s.contact_time_s - fit.tau, meas.time.front(), t_end)
                                : t_end;
   t_max = std::min(t_max, t_contact);
   t_half = std::min(t_half, t_max);

@@ -59,7 +59,8 @@ struct ScoreOptions {
   double meas_sigma_m = 0.0;
   // Test level: the verdict is "inconsistent" when the p-value is below it.
   double significance = 0.01;
-  // s, simulated time of first contact with the target (starts the "contact" phase); NaN: none.
+  // s, simulated time of first contact with the target (starts the "contact" phase); NaN: the
+  // simulation's own first contact (netlab simulate stores it), or no contact phase without one.
   double contact_time_s = std::numeric_limits<double>::quiet_NaN();
   // The simulation's output is "too sparse" when its interpolation error (RMS) exceeds this
   // fraction of the measurement's RMS standard deviation.
@@ -127,6 +128,10 @@ struct ScoreSummary {
   std::vector<ScoreRow> per_knot;     // [K], name "(row,col)"
   std::vector<ScoreRow> per_phase;    // ejection, spreading, opened, contact
   // Global measures (measured vs simulated).
+  // Simulated time the contact phase starts at (NaN: no contact phase), and whence: "given"
+  // (ScoreOptions::contact_time_s), "simulation" (its first contact, /contact_start) or "none".
+  double contact_time_s = std::numeric_limits<double>::quiet_NaN();
+  std::string contact_from = "none";
   double max_area_measured_m2 = 0.0, max_area_time_measured_s = 0.0;  // NaN: never measured
   double max_area_simulated_m2 = 0.0, max_area_time_simulated_s = 0.0;
   std::vector<std::string> notes;  // what a reader must know (Sigma_sim zero, sparse output...)

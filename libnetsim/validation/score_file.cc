@@ -136,7 +136,9 @@ void WriteScore(const std::string& path, const ScoreResult& r) {
     WriteScalar(g, "max_area_time_measured_s", s.max_area_time_measured_s, "s");
     WriteScalar(g, "max_area_simulated_m2", s.max_area_simulated_m2, "m^2");
     WriteScalar(g, "max_area_time_simulated_s", s.max_area_time_simulated_s, "s");
+    WriteScalar(g, "contact_time_s", s.contact_time_s, "s");
     h5::WriteStringAttribute(g, "sim_uncertainty", s.sim_uncertainty);
+    h5::WriteStringAttribute(g, "contact_from", s.contact_from);
     H5Fflush(f, H5F_SCOPE_GLOBAL);
   }
   RenameInto(partial, path);

@@ -408,9 +408,14 @@ std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info) {
     o << Row({"phase: " + row.name, std::to_string(row.points), Fixed(row.rms_m * 1e3, 2),
               Fixed(row.max_m * 1e3, 2), Fixed(row.mean_d2, 2), Fixed(row.start_s, 3),
               Fixed(row.end_s, 3)});
+  const std::string contact =
+      s.contact_from == "given"        ? "contact from the given time of first contact"
+      : s.contact_from == "simulation" ? "contact from the simulation's first contact with the "
+                                         "target (" + Fixed(s.contact_time_s, 3) + " s simulated)"
+                                       : "no contact phase (the simulation has no contact)";
   o << "</table>\n<p class=\"caption\">Phases from the simulated corner polygon: ejection until "
-       "it reaches half its largest area, spreading until the largest, opened after it, contact "
-       "from the given contact time.</p>\n";
+       "it reaches half its largest area, spreading until the largest, opened after it; "
+    << contact << ". Phases the measurement does not reach have no knot-frames.</p>\n";
   o << "<h2>Alignment (" << AlignmentName(s.alignment) << ")</h2>\n<table>"
     << Row({"fitted parameters", std::to_string(s.fitted_parameters)})
     << Row({"time offset (ms)",

@@ -5,11 +5,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
 #include "common/yaml_util.h"
 #include "libnetsim/scenario/run_scenario.h"
+#include "libnetsim/tracks/track_file.h"
 
 namespace netlab::netsim {
 namespace {
@@ -176,6 +178,45 @@ TEST(Scenario, RunWritesFramesAtTheOutputInterval) {
   EXPECT_EQ(summary.probes[0].first, "tip");
   EXPECT_TRUE(std::filesystem::exists(options.out_path));
   EXPECT_FALSE(std::filesystem::exists(options.out_path + ".partial"));
+  std::filesystem::remove_all(dir);
+}
+
+// A 3 x 3 net flying at 1 m/s towards a box whose face is 2 cm ahead: the run records its first
+// contact (the face minus the thread's radius, 19.5 mm, at 1 m/s) in the summary and the file;
+// with the box out of reach, none.
+TEST(Scenario, RunRecordsTheFirstContactWithABody) {
+  const std::string scenario = R"(name: contact
+duration: 0.03
+output_interval: 0.001
+integrator: {type: explicit, dt: auto}
+gravity: [0, 0, 0]
+materials:
+  nylon: {diameter: 1.0e-3, linear_density: 8.95e-4, stretch_stiffness: 1571,
+          bend_stiffness: 9.82e-5, twist_stiffness: 7.07e-5}
+nets:
+  - {name: net, material: nylon, knots: [3, 3], mesh: 0.05, segments_per_link: 2,
+     center: [0, 0, 0], normal: [1, 0, 0], x_axis: [0, 1, 0], knot_mass: 3e-05,
+     velocity: [1.0, 0, 0]}
+bodies:
+  - {name: target, shape: box, center: [0.12, 0, 0], size: [0.2, 0.3, 0.3]}
+)";
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("netlab_contact_test_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  RunOptions options;
+  options.out_path = (dir / "contact.h5").string();
+  const RunSummary hit = RunScenario(ParseScenario(scenario, "test.yaml", ""), options);
+  ASSERT_TRUE(hit.stable) << hit.error;
+  EXPECT_NEAR(hit.contact_start_s, 0.0195, 5e-4);
+  EXPECT_EQ(ReadKnotTracks(options.out_path).contact_start_s, hit.contact_start_s);
+
+  options.out_path = (dir / "miss.h5").string();
+  const RunSummary miss = RunScenario(
+      ParseScenario(Replace(scenario, "center: [0.12, 0, 0]", "center: [0.5, 0, 0]"), "test.yaml",
+                    ""),
+      options);
+  EXPECT_TRUE(std::isnan(miss.contact_start_s));
+  EXPECT_TRUE(std::isnan(ReadKnotTracks(options.out_path).contact_start_s));
   std::filesystem::remove_all(dir);
 }
 

@@ -42,6 +42,7 @@ KnotTracks Example() {
   t.frame_index = {10, 11, 12};
   t.camera_names = {"cam0", "cam1"};
   t.outliers = {{11, 1, 0, 23.5}, {12, 0, 1, std::nan("")}};
+  t.contact_start_s = 0.15;
   return t;
 }
 
@@ -70,6 +71,7 @@ TEST_F(TrackFile, RoundTripKeepsEverything) {
   EXPECT_TRUE(std::isnan(out.outliers[1].residual_px));
   EXPECT_FALSE(out.Valid(1, 1));
   EXPECT_EQ(out.FindKnot(0, 1), 1);
+  EXPECT_EQ(out.contact_start_s, 0.15);
   EXPECT_FALSE(std::filesystem::exists(Path("tracks.h5.partial")));
 }
 

@@ -160,6 +160,37 @@ TEST(Score, OverstatedCovariancesAreSaid) {
   EXPECT_TRUE(said);
 }
 
+// The contact phase starts at the simulation's own first contact (netlab simulate stores it),
+// in measured time (the offset taken off); a given time overrides it; without either there is no
+// contact phase.
+TEST(Score, TheContactPhaseStartsAtTheSimulationsFirstContact) {
+  KnotTracks sim = MakeTracks(5, 5, 200, 0.0);
+  const KnotTracks meas =
+      Measure(5, 5, 150, 0.01, Eigen::Isometry3d::Identity(), Eigen::Matrix3d::Identity() * 1e-8,
+              nullptr);
+  ScoreOptions options;
+  options.alignment = Alignment::kNone;
+  options.time_offset_s = 0.01;
+  auto contact = [](const ScoreSummary& s) { return s.per_phase.back(); };
+  const ScoreSummary none = Score(meas, sim, options).summary;
+  EXPECT_EQ(none.contact_from, "none");
+  EXPECT_EQ(contact(none).points, 0);
+
+  sim.contact_start_s = 0.5;
+  const ScoreSummary from_sim = Score(meas, sim, options).summary;
+  EXPECT_EQ(from_sim.contact_from, "simulation");
+  EXPECT_EQ(from_sim.contact_time_s, 0.5);
+  EXPECT_EQ(contact(from_sim).name, "contact");
+  EXPECT_NEAR(contact(from_sim).start_s, 0.49, 1e-9);
+  // Measured frames from 0.49 s to the last (149 / 179 s): 62 frames of 25 knots.
+  EXPECT_EQ(contact(from_sim).points, 25 * (149 - static_cast<int>(std::ceil(0.49 * kFps)) + 1));
+
+  options.contact_time_s = 0.3;
+  const ScoreSummary given = Score(meas, sim, options).summary;
+  EXPECT_EQ(given.contact_from, "given");
+  EXPECT_NEAR(contact(given).start_s, 0.29, 1e-9);
+}
+
 // The verdict's false-rejection rate is the stated significance: 200 noisy measurements of a right
 // simulation at significance 0.1 are rejected 20 times on average (binomial sd 4.2).
 TEST(Score, RejectsARightSimulationAtTheStatedRate) {
