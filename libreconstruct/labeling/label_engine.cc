@@ -310,6 +310,19 @@ EngineCounts LabelEngine::LabelFirstFrame(int t) {
   return Commit("Find Path (frame row " + std::to_string(t) + ")", edits);
 }
 
+namespace {
+
+// Whether tracking from `from` may write `to`: where there is no label yet, and where the label
+// there was tracked from one under review while `from` has since been accepted (a person checked
+// the origin: its track is followed again, with tracking's own checks; nothing else is replaced).
+bool Trackable(const Label& to, const Label& from) {
+  if (!to.present()) return true;
+  return from.accepted() && to.state == LabelState::kNeedsReview &&
+         to.source == LabelSource::kTracked;
+}
+
+}  // namespace
+
 EngineCounts LabelEngine::Track(int from, int to) {
   const LabelSet& set = store_->labels();
   std::vector<LabelEdit> edits;
@@ -318,7 +331,7 @@ EngineCounts LabelEngine::Track(int from, int to) {
     std::vector<bool> was_accepted;
     for (int k = 0; k < set.knots(); ++k) {
       const Label& l = set.at(camera, from, k);
-      if (!l.present() || set.at(camera, to, k).present()) continue;
+      if (!l.present() || !Trackable(set.at(camera, to, k), l)) continue;
       knots.emplace_back(k, l.px);
       was_accepted.push_back(l.state == LabelState::kAccepted);
     }

@@ -113,7 +113,8 @@ class LabelEngine {
   // corner's two sides are found first where the grid of the other two sides puts them (a
   // corner behind the target). Returns the labels set.
   EngineCounts LabelFirstFrame(int t);
-  // Tracks every label of frame `from` into frame `to` (an adjacent frame) where `to` has none.
+  // Tracks every label of frame `from` into frame `to` (an adjacent frame) where `to` has none,
+  // and where `to` has a label tracked from one under review that has since been accepted.
   EngineCounts Track(int from, int to);
   // Epipolar consistency and Fill Grid in frame t (see above); then the colour check, when set.
   EngineCounts CrossCheck(int t);

@@ -238,6 +238,34 @@ TEST(LabelEngine, TracksAndCrossChecksASequence) {
   }
 }
 
+// A label tracked from one under review stays under review; once the person accepts the origin,
+// tracking again follows it: the descendant is tracked anew and accepted (its own checks
+// passing), while accepted labels and a person's labels under review are never replaced.
+TEST(LabelEngine, TrackingAgainFromAnAcceptedOriginReplacesItsDoubtfulDescendants) {
+  const Shot shot = Render(3);
+  LabelSet labels = Empty(shot);
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < kKnots; ++k) labels.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
+  labels.at(0, 0, 12).state = LabelState::kNeedsReview;
+  LabelStore store(std::move(labels));
+  LabelEngine engine(&store, &shot.rig, Images(shot));
+  engine.Track(0, 1);
+  ASSERT_EQ(store.at(0, 1, 12).state, LabelState::kNeedsReview);
+  ASSERT_EQ(store.at(0, 1, 12).source, LabelSource::kTracked);
+  // A person's label under review in frame 1 (knot 6), and an accepted one moved by hand (7).
+  Label mine = Accepted(shot.Truth(0, 1, 6));
+  mine.state = LabelState::kNeedsReview;
+  const Eigen::Vector2d moved = shot.Truth(0, 1, 7) + Eigen::Vector2d(0.4, 0.0);
+  store.Apply("person", {{0, 1, 6, mine}, {0, 1, 7, Accepted(moved)}});
+  store.Apply("accept", {{0, 0, 12, Accepted(shot.Truth(0, 0, 12))}});
+  engine.Track(0, 1);
+  EXPECT_EQ(store.at(0, 1, 12).state, LabelState::kAccepted);
+  EXPECT_LT((store.at(0, 1, 12).px - shot.Truth(0, 1, 12)).norm(), 1.0);
+  EXPECT_EQ(store.at(0, 1, 6).state, LabelState::kNeedsReview);
+  EXPECT_EQ(store.at(0, 1, 6).source, LabelSource::kManual);
+  EXPECT_EQ(store.at(0, 1, 7).px, moved);
+}
+
 // LabelFrames is Find Path in the first frame, then tracking, each frame cross-checked: the same
 // labels as those steps called one by one, with each frame handed to the caller before the next
 // is tracked from it.
