@@ -79,12 +79,14 @@ MainWindow::MainWindow() {
       SetFrame(frame_ + 1);
   });
   connect(&loader_, &QFutureWatcher<Loaded>::finished, this, &MainWindow::OnFrameLoaded);
+  connect(&colours_, &QFutureWatcher<ColoursRead>::finished, this, &MainWindow::OnColoursRead);
 }
 
 MainWindow::~MainWindow() {
   cancel_ = true;
   tracker_.waitForFinished();
   loader_.waitForFinished();
+  colours_.waitForFinished();
   review_table_->setModel(nullptr);
 }
 
@@ -186,6 +188,16 @@ void MainWindow::BuildWorkspace() {
   dock->setWidget(review_table_);
   dock->setMinimumWidth(480);
   addDockWidget(Qt::RightDockWidgetArea, dock);
+  // The selected knot's colours: what its code expects, what the yarns say.
+  auto* colours_dock = new QDockWidget("Knot colours", this);
+  colours_dock->setObjectName("colours_dock");
+  colours_label_ = new QLabel("Select a labeled knot to see its yarn colours.");
+  colours_label_->setWordWrap(true);
+  colours_label_->setTextFormat(Qt::RichText);
+  colours_label_->setAlignment(Qt::AlignTop | Qt::AlignLeft);
+  colours_label_->setMargin(6);
+  colours_dock->setWidget(colours_label_);
+  addDockWidget(Qt::RightDockWidgetArea, colours_dock);
   connect(review_table_, &QTableView::activated, this, [this](const QModelIndex& index) {
     const int c = index.data(ReviewModel::kCameraRole).toInt();
     SetFrame(index.data(ReviewModel::kFrameRowRole).toInt());
@@ -321,6 +333,8 @@ bool MainWindow::OpenProject(const QString& path, bool ask) {
   }
   review_table_->setModel(nullptr);
   review_model_.reset();
+  loader_.waitForFinished();  // the workers read the session being replaced
+  colours_.waitForFinished();
   session_ = std::move(session);
   review_model_ = std::make_unique<ReviewModel>(&session_->document(), session_->frame_numbers());
   review_proxy_ = new QSortFilterProxyModel(review_model_.get());
@@ -481,6 +495,74 @@ void MainWindow::RefreshStatus() {
           .arg(KnotName(knot_), point.valid
                                     ? QString(" · RMS residual %1 px").arg(point.rms_px, 0, 'f', 2)
                                     : QString()));
+  RequestColours();
+}
+
+void MainWindow::RequestColours() {
+  if (!session_ || frame_ < 0 || colours_label_ == nullptr) return;
+  const recon::Label& label = session_->document().at(camera_, frame_, knot_);
+  const QString where = QString("knot %1 in %2")
+                            .arg(KnotName(knot_))
+                            .arg(QString::fromStdString(session_->camera_names()[camera_]));
+  ++colours_request_;
+  if (!label.present()) {
+    colours_label_->setText(QString("<b>%1</b>: no label.").arg(where));
+    return;
+  }
+  if (colours_.isRunning()) {  // OnColoursRead asks again for the newest selection
+    colours_again_ = true;
+    return;
+  }
+  colours_label_->setText(QString("<b>%1</b>: reading the yarns…").arg(where));
+  const Session* session = session_.get();
+  const long request = colours_request_;
+  const int c = camera_, t = frame_, k = knot_;
+  const Eigen::Vector2d px = label.px;
+  const Session::Neighbours around = session_->KnotNeighbours(c, t, k);
+  colours_.setFuture(QtConcurrent::run([session, request, c, t, k, px, around] {
+    return ColoursRead{request, session->CheckKnotColours(c, t, k, px, around)};
+  }));
+}
+
+void MainWindow::OnColoursRead() {
+  const ColoursRead read = colours_.result();
+  if (!session_) return;
+  if (colours_again_ || read.request != colours_request_) {  // the selection moved on
+    colours_again_ = false;
+    RequestColours();
+    return;
+  }
+  if (!read.colours) {
+    colours_label_->setText("No colouring in the project, or the frame cannot be read.");
+    return;
+  }
+  const Session::KnotColours& k = *read.colours;
+  QString text = QString("<b>knot %1 in %2</b><br>expected, by link:<br>")
+                     .arg(KnotName(knot_))
+                     .arg(QString::fromStdString(session_->camera_names()[camera_]));
+  for (const auto& link : k.expected)
+    text += QString("<span style=\"background-color:rgb(%1,%2,%3)\">&nbsp;&nbsp;&nbsp;&nbsp;"
+                    "</span> %4 towards %5<br>")
+                .arg(std::lround(link.srgb[0]))
+                .arg(std::lround(link.srgb[1]))
+                .arg(std::lround(link.srgb[2]))
+                .arg(QString::fromStdString(link.dye), QString::fromStdString(link.side));
+  const char* colour = k.verdict == "consistent" ? "#1b7837"
+                       : k.verdict == "mismatch" ? "#b2182b"
+                                                 : "#555555";
+  const char* meaning = k.verdict == "consistent" ? "the label's knot"
+                        : k.verdict == "mismatch"   ? "not the label's knot: check it"
+                                                    : "too few yarns read for sure: no evidence "
+                                                      "either way";
+  text += QString("<br>the yarns say: <b style=\"color:%1\">%2</b> (%3)")
+              .arg(colour, QString::fromStdString(k.verdict), meaning);
+  if (!k.knots_read.empty() && k.knots_read.size() <= 3) {
+    QStringList names;
+    for (int n : k.knots_read) names << KnotName(n);
+    text += QString(" · they fit %1").arg(names.join(", "));
+  }
+  if (!k.why.empty()) text += "<br><small>" + QString::fromStdString(k.why).toHtmlEscaped() + "</small>";
+  colours_label_->setText(text);
 }
 
 void MainWindow::OnLabelsChanged(const QList<int>& frames) {

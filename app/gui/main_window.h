@@ -83,6 +83,9 @@ class MainWindow : public QMainWindow {
   void OnFrameLoaded();
   void RefreshOverlays();
   void RefreshStatus();
+  // The selected knot's colour check in the current camera, on a worker; OnColoursRead shows it.
+  void RequestColours();
+  void OnColoursRead();
   void OnLabelsChanged(const QList<int>& frames);
   // The person's actions.
   void OnClick(int camera, const Eigen::Vector2d& px, Qt::KeyboardModifiers modifiers);
@@ -177,6 +180,15 @@ class MainWindow : public QMainWindow {
   QFutureWatcher<Loaded> loader_;
   bool frame_shown_ = false;
   std::vector<std::vector<Eigen::Vector2d>> candidates_;  // per camera, Find Node's several
+  // The knot colours panel: what the selected label's yarns say against its code.
+  struct ColoursRead {
+    long request = 0;
+    std::optional<Session::KnotColours> colours;
+  };
+  QLabel* colours_label_ = nullptr;
+  long colours_request_ = 0;
+  bool colours_again_ = false;  // asked again while one was running
+  QFutureWatcher<ColoursRead> colours_;
   // The tracking run on a worker.
   QFutureWatcher<Session::TrackRun> tracker_;
   std::atomic<bool> cancel_{false};

@@ -30,7 +30,8 @@ std::string Relative(const fs::path& folder, const std::string& file) {
 
 Project LoadProject(const std::string& path) {
   const YamlMap root(LoadYamlFile(path), path, "");
-  root.AllowOnly({"netlab_project", "experiment", "rig", "coloring", "labels", "net"});
+  root.AllowOnly(
+      {"netlab_project", "experiment", "rig", "coloring", "labels", "net", "illumination"});
   if (root.Int("netlab_project") != 1)
     throw InputError(root.Where("netlab_project") + ": version 1 expected");
   Project p;
@@ -40,6 +41,13 @@ Project LoadProject(const std::string& path) {
   p.rig = Resolve(folder, root.String("rig"));
   p.coloring = Resolve(folder, root.String("coloring", ""));
   p.labels = Resolve(folder, root.String("labels"));
+  if (root.Has("illumination")) {
+    p.illumination = root.Positive("illumination", 0.85, false);
+    if (p.illumination > 100.0)
+      throw InputError(root.Where("illumination") + ": " + std::to_string(p.illumination) +
+                       " is not an exposure (a white dye reads 0.85 of sensor white under "
+                       "netlab render's lights)");
+  }
   if (root.Has("net")) {
     const YamlMap net = root.Map("net");
     net.AllowOnly({"rows", "cols", "mesh"});
@@ -73,7 +81,9 @@ void SaveProject(const Project& project, const std::string& path) {
   out << YAML::Key << "rows" << YAML::Value << project.rows;
   out << YAML::Key << "cols" << YAML::Value << project.cols;
   if (project.mesh_m > 0) out << YAML::Key << "mesh" << YAML::Value << project.mesh_m;
-  out << YAML::EndMap << YAML::EndMap;
+  out << YAML::EndMap;
+  out << YAML::Key << "illumination" << YAML::Value << project.illumination;
+  out << YAML::EndMap;
   const std::string partial = path + ".partial";
   {
     std::ofstream file(partial);

@@ -9,6 +9,9 @@
 //   coloring: coloring.yaml             # optional: the yarn colours (netlab color-net)
 //   labels: labels.h5                   # created on the first save when it does not exist
 //   net: {rows: 11, cols: 11, mesh: 0.1}  # the grid; mesh (m, knot to knot) optional
+//   illumination: 0.85                  # optional: how brightly the yarns are lit, for the colour
+//                                       # check (a white dye reads this of sensor white; netlab
+//                                       # label's --illumination, default netlab render's 0.85)
 //
 // Without `net`, the grid is the colouring's. Bad input throws netlab::InputError naming the file,
 // line and key.
@@ -25,6 +28,7 @@ struct Project {
   std::string labels;
   int rows = 0, cols = 0;  // the net's knots
   double mesh_m = 0.0;     // link length, m; 0: estimated by the engine
+  double illumination = 0.85;  // the colour check's exposure (netlab label --illumination)
 
   int knots() const { return rows * cols; }
 };

@@ -8,6 +8,7 @@
 
 #include "calibration/camera.h"
 #include "common/yaml_util.h"
+#include "libreconstruct/coloring/colour_science.h"
 #include "libreconstruct/coloring/net_coloring.h"
 #include "libreconstruct/labeling/knot_detect.h"
 #include "libreconstruct/labeling/label_identity.h"
@@ -75,7 +76,9 @@ std::unique_ptr<Session> Session::Open(const Project& project,
       throw InputError(project.coloring + ": a " + std::to_string(coloring.rows) + "x" +
                        std::to_string(coloring.cols) + " net, the project's is " +
                        std::to_string(project.rows) + "x" + std::to_string(project.cols));
-    s->codebook_ = recon::CodebookFromColoring(coloring, dyes, recon::Lighting{});
+    recon::Lighting lighting;  // as netlab label lights the codebook (--illumination)
+    lighting.exposure = project.illumination;
+    s->codebook_ = recon::CodebookFromColoring(coloring, dyes, lighting);
     s->identity_.identify.bayer = s->sequence_->experiment().cameras.front().bayer;
   }
   s->engine_options_.link_length_m = project.mesh_m;
@@ -215,6 +218,55 @@ int Session::ApplyTrackRun(const TrackRun& run) {
   const std::string name = "Track frames " + std::to_string(frame_numbers_[run.from]) + "-" +
                            std::to_string(frame_numbers_[run.last_done]);
   return document_->Apply(name, run.edits);
+}
+
+namespace {
+
+// The grid neighbours of `knot`, slots right, down, left, up; -1 where the net has none.
+std::array<int, 4> NeighbourSlots(int rows, int cols, int knot) {
+  const int r = knot / cols, c = knot % cols;
+  return {c + 1 < cols ? knot + 1 : -1, r + 1 < rows ? knot + cols : -1, c > 0 ? knot - 1 : -1,
+          r > 0 ? knot - cols : -1};
+}
+
+}  // namespace
+
+Session::Neighbours Session::KnotNeighbours(int camera, int t, int knot) const {
+  const recon::LabelSet& labels = document_->labels();
+  Neighbours px;
+  const std::array<int, 4> around = NeighbourSlots(labels.rows, labels.cols, knot);
+  for (int s = 0; s < 4; ++s)
+    if (around[s] >= 0 && labels.at(camera, t, around[s]).present())
+      px[s] = labels.at(camera, t, around[s]).px;
+  return px;
+}
+
+std::optional<Session::KnotColours> Session::CheckKnotColours(
+    int camera, int t, int knot, const Eigen::Vector2d& px, const Neighbours& neighbour_px) const {
+  if (!codebook_ || knot < 0 || knot >= project_.knots()) return std::nullopt;
+  const cv::Mat image = Image(camera, t);
+  if (image.empty() || image.type() != CV_8UC3) return std::nullopt;
+  static const char* const kSides[4] = {"right", "down", "left", "up"};
+  const std::array<int, 4> around = NeighbourSlots(project_.rows, project_.cols, knot);
+  recon::YarnDirections yarns;
+  KnotColours out;
+  // The code's colours run over the knot's links in slot order (CodebookFromColoring).
+  const recon::CodebookKnot& code = codebook_->knots[knot];
+  int link = 0;
+  for (int s = 0; s < 4; ++s) {
+    if (around[s] < 0) continue;
+    yarns.neighbour_px[s] = neighbour_px[s];
+    if (link < code.degree()) {
+      const recon::PaletteColour& dye = codebook_->palette[code.link_colours[link++]];
+      out.expected.push_back({kSides[s], dye.name, recon::LinearBgrToSrgb(dye.linear_bgr)});
+    }
+  }
+  const recon::IdentityCheck check =
+      recon::CheckIdentity(image, *codebook_, knot, px, yarns, identity_);
+  out.verdict = recon::IdentityVerdictName(check.verdict);
+  out.why = check.why;
+  out.knots_read = check.knots_read;
+  return out;
 }
 
 recon::PointEstimate Session::Triangulate(int t, int knot) const {

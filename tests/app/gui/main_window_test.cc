@@ -9,12 +9,15 @@
 #include <gtest/gtest.h>
 
 #include <QApplication>
+#include <QDockWidget>
+#include <QLabel>
 #include <QStatusBar>
 #include <QTableView>
 #include <QTableWidget>
 #include <QTimer>
 #include <QTest>
 #include <QWheelEvent>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -190,6 +193,48 @@ TEST_F(MainWindowTest, TheScreenshotDrawsTheOverlaysWhereTheLabelsAre) {
   }
   EXPECT_GT(checked, 20);
   EXPECT_EQ(drawn, checked);
+}
+
+// Clicking a label selects its knot and camera; the colours panel then shows what the knot's code
+// expects (a swatch per link) and what its yarns say, read on a worker. On true labels the yarns
+// never say "mismatch"; where they say "consistent" they fit the knot itself (on this small shot
+// the thin yarns mostly read "unreadable": the check says nothing it is not sure of).
+TEST_F(MainWindowTest, TheColoursPanelSaysWhatTheSelectedKnotsYarnsSay) {
+  const std::string project = MakeProjectFile("colours", (Dir() / "shot/labels_true.h5").string());
+  MainWindow w;
+  w.resize(1400, 1000);
+  w.show();
+  ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), false));
+  ASSERT_TRUE(w.WaitForFrame());
+  auto* dock = w.findChild<QDockWidget*>("colours_dock");
+  ASSERT_NE(dock, nullptr);
+  auto* panel = qobject_cast<QLabel*>(dock->widget());
+  ASSERT_NE(panel, nullptr);
+  const recon::LabelSet& labels = w.session()->document().labels();
+  int read = 0, consistent = 0;
+  for (int c = 0; c < w.session()->cameras(); ++c)
+    for (int k = 0; k < labels.knots(); ++k) {
+      const int row = k / labels.cols, col = k % labels.cols;
+      if (row == 0 || col == 0 || row + 1 == labels.rows || col + 1 == labels.cols ||
+          !labels.at(c, 0, k).present())
+        continue;  // inner knots (four links) the camera sees
+      QTest::mouseClick(w.view(c), Qt::LeftButton, Qt::NoModifier,
+                        w.view(c)->ToWidget(labels.at(c, 0, k).px).toPoint());
+      const QString name = QString("(%1, %2)").arg(row).arg(col);
+      QTRY_VERIFY_WITH_TIMEOUT(
+          panel->text().contains("the yarns say") && panel->text().contains("knot " + name), 10000);
+      const QString text = panel->text();
+      ++read;
+      EXPECT_EQ(text.count("background-color"), 4) << text.toStdString();
+      EXPECT_FALSE(text.contains(">mismatch<")) << text.toStdString();
+      if (text.contains(">consistent<")) {
+        ++consistent;
+        EXPECT_TRUE(text.contains("they fit " + name)) << text.toStdString();
+      }
+      if (read == 1) w.grab().save((Dir() / "colours.png").string().c_str());
+    }
+  EXPECT_GT(read, 30);
+  std::printf("colours panel: %d of %d true inner labels read consistent\n", consistent, read);
 }
 
 TEST_F(MainWindowTest, ALabelsFileOfOtherFramesAndCameraOrderKeepsItsReviewReasons) {
