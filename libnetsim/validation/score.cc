@@ -443,13 +443,25 @@ double Chi2Quantile(double p, double nu) {
   return 0.5 * (lo + hi);
 }
 
-ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOptions& options,
-                  const std::string& meas_name, const std::string& sim_name) {
-  const auto start = std::chrono::steady_clock::now();
+namespace {
+
+// The inputs of one Score() call, as its stages read them.
+struct ScoreInput {
+  const KnotTracks& meas;
+  const KnotTracks& sim;
+  const ScoreOptions& options;
+  const std::string& meas_name;
+  const std::string& sim_name;
+};
+
+// The options, and the files' own shapes and time axes.
+void CheckInput(const ScoreInput& in) {
+  const KnotTracks &meas = in.meas, &sim = in.sim;
   std::string why;
-  if (!options.IsValid(&why)) Fail("score options: " + why);
+  if (!in.options.IsValid(&why)) Fail("score options: " + why);
   // The files' own shapes (the reader checks them; tracks built in memory may not be).
-  for (const auto& [tracks, name] : {std::pair(&meas, meas_name), std::pair(&sim, sim_name)}) {
+  for (const auto& [tracks, name] :
+       {std::pair(&meas, in.meas_name), std::pair(&sim, in.sim_name)}) {
     try {
       tracks->CheckConsistent();
     } catch (const std::invalid_argument& e) {
@@ -466,11 +478,16 @@ ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOpti
     }
   }
   if (sim.frames() < 4)
-    Fail(sim_name + ": " + std::to_string(sim.frames()) +
+    Fail(in.sim_name + ": " + std::to_string(sim.frames()) +
          " frames; cubic interpolation in time needs at least 4");
-  if (meas.frames() < 1) Fail(meas_name + ": no frame");
+  if (meas.frames() < 1) Fail(in.meas_name + ": no frame");
+}
 
-  // The same net in both: every knot (net, row, col) of one has its counterpart in the other.
+// The same net in both: every knot (net, row, col) of one has its counterpart in the other.
+// Returns the simulation's index of each measured knot.
+std::vector<int> MatchKnots(const ScoreInput& in) {
+  const KnotTracks &meas = in.meas, &sim = in.sim;
+  const std::string &meas_name = in.meas_name, &sim_name = in.sim_name;
   const int knots = meas.knots();
   std::vector<int> sim_knot(knots);
   for (int k = 0; k < knots; ++k) {
@@ -484,458 +501,690 @@ ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOpti
   if (sim.knots() != knots)
     Fail("grid mismatch: " + sim_name + " has " + std::to_string(sim.knots()) + " knots, " +
          meas_name + " " + std::to_string(knots) + ": not the same net");
+  return sim_knot;
+}
 
-  // NaN in the simulation is a blow-up carried on: stop, naming it.
+// NaN in the simulation is a blow-up carried on: stop, naming it.
+void CheckSimulationFinite(const ScoreInput& in) {
+  const KnotTracks& sim = in.sim;
+  const int knots = in.meas.knots();  // the simulation's too (MatchKnots)
   for (int t = 0; t < sim.frames(); ++t)
     for (int k = 0; k < knots; ++k)
       if (sim.Valid(t, k) && !sim.Position(t, k).allFinite())
-        Fail(sim_name + ": /knots/position is not a number at " + FrameName(sim, t) + ", knot " +
+        Fail(in.sim_name + ": /knots/position is not a number at " + FrameName(sim, t) + ", knot " +
              KnotName(sim.grid[k]));
+}
 
-  // The measured points, each with a checked covariance.
-  if (meas.covariance.empty() && options.meas_sigma_m <= 0)
+// Sigma_meas of knot k in frame t (`where`, for the message): the file's, checked symmetric
+// positive definite, else the isotropic meas_sigma_m.
+Matrix3d MeasuredCovariance(const ScoreInput& in, int t, int k, const std::string& where) {
+  const KnotTracks& meas = in.meas;
+  if (meas.covariance.empty())
+    return Matrix3d::Identity() * in.options.meas_sigma_m * in.options.meas_sigma_m;
+  const Matrix3d cov = meas.covariance[static_cast<size_t>(t) * meas.knots() + k];
+  if (!cov.allFinite()) Fail(in.meas_name + ": /knots/covariance is not a number at " + where);
+  const double scale = cov.cwiseAbs().maxCoeff();
+  const Eigen::LLT<Matrix3d> llt(cov);
+  if ((cov - cov.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale || scale <= 0 ||
+      llt.info() != Eigen::Success ||
+      llt.matrixL().toDenseMatrix().diagonal().minCoeff() <= std::sqrt(scale) * 1e-9) {
+    std::ostringstream s;
+    s << in.meas_name << ": /knots/covariance is not symmetric positive definite at " << where
+      << " (eigenvalues " << Eigen::SelfAdjointEigenSolver<Matrix3d>(cov).eigenvalues().transpose()
+      << " m^2)";
+    Fail(s.str());
+  }
+  return cov;
+}
+
+// The measured points, each with a checked covariance; the knot-frames not measured (valid = 0)
+// are counted in `masked`.
+std::vector<Point> MeasuredPoints(const ScoreInput& in, int* masked) {
+  const KnotTracks& meas = in.meas;
+  const std::string& meas_name = in.meas_name;
+  if (meas.covariance.empty() && in.options.meas_sigma_m <= 0)
     Fail(meas_name +
          ": no /knots/covariance to weight the residuals by (give a measurement "
          "sigma, --meas-sigma)");
   std::vector<Point> points;
-  int masked = 0;
   for (int t = 0; t < meas.frames(); ++t)
-    for (int k = 0; k < knots; ++k) {
+    for (int k = 0; k < meas.knots(); ++k) {
       if (!meas.Valid(t, k)) {
-        ++masked;
+        ++*masked;
         continue;
       }
       const std::string where = FrameName(meas, t) + ", knot " + KnotName(meas.grid[k]);
       if (!meas.Position(t, k).allFinite())
         Fail(meas_name + ": /knots/position is not a number at " + where +
              " (a missing knot must have /knots/valid = 0)");
-      Matrix3d cov = Matrix3d::Identity() * options.meas_sigma_m * options.meas_sigma_m;
-      if (!meas.covariance.empty()) {
-        cov = meas.covariance[static_cast<size_t>(t) * knots + k];
-        if (!cov.allFinite()) Fail(meas_name + ": /knots/covariance is not a number at " + where);
-        const double scale = cov.cwiseAbs().maxCoeff();
-        const Eigen::LLT<Matrix3d> llt(cov);
-        if ((cov - cov.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale || scale <= 0 ||
-            llt.info() != Eigen::Success ||
-            llt.matrixL().toDenseMatrix().diagonal().minCoeff() <= std::sqrt(scale) * 1e-9) {
-          std::ostringstream s;
-          s << meas_name << ": /knots/covariance is not symmetric positive definite at " << where
-            << " (eigenvalues "
-            << Eigen::SelfAdjointEigenSolver<Matrix3d>(cov).eigenvalues().transpose() << " m^2)";
-          Fail(s.str());
-        }
-      }
-      points.push_back({t, k, cov});
+      points.push_back({t, k, MeasuredCovariance(in, t, k, where)});
     }
   if (points.empty()) Fail(meas_name + ": no valid knot in any frame");
+  return points;
+}
 
-  Scorer scorer(meas, sim, sim_knot, std::move(points), options);
-  const SimInterpolant& interp = scorer.interpolant();
-  ScoreResult result;
-  ScoreSummary& s = result.summary;
-  s.alignment = options.alignment;
-  s.sim_interval_s = (sim.time.back() - sim.time.front()) / (sim.frames() - 1);
-  s.meas_interval_s =
+// Time overlap at the starting offset (or anywhere in the search window): what to say when there
+// is none.
+std::string NoOverlapMessage(const ScoreInput& in) {
+  const KnotTracks &meas = in.meas, &sim = in.sim;
+  std::ostringstream o;
+  o << "no overlap in time: " << in.meas_name << " spans " << meas.time.front() << " .. "
+    << meas.time.back() << " s, " << in.sim_name << " " << sim.time.front() << " .. "
+    << sim.time.back() << " s (offset " << in.options.time_offset_s << " s";
+  if (FitsTime(in.options.alignment)) o << " +- " << in.options.max_time_offset_s << " s searched";
+  o << "; at least half of the measured span must be simulated)";
+  return o.str();
+}
+
+// The alignment asked for, and both files' sampling intervals.
+void StartSummary(const ScoreInput& in, ScoreSummary* s) {
+  const KnotTracks &meas = in.meas, &sim = in.sim;
+  s->alignment = in.options.alignment;
+  s->sim_interval_s = (sim.time.back() - sim.time.front()) / (sim.frames() - 1);
+  s->meas_interval_s =
       meas.frames() > 1 ? (meas.time.back() - meas.time.front()) / (meas.frames() - 1) : 0.0;
+}
 
-  // Time overlap at the starting offset (or anywhere in the search window).
-  auto overlap_error = [&]() {
-    std::ostringstream o;
-    o << "no overlap in time: " << meas_name << " spans " << meas.time.front() << " .. "
-      << meas.time.back() << " s, " << sim_name << " " << sim.time.front() << " .. "
-      << sim.time.back() << " s (offset " << options.time_offset_s << " s";
-    if (FitsTime(options.alignment)) o << " +- " << options.max_time_offset_s << " s searched";
-    o << "; at least half of the measured span must be simulated)";
-    return o.str();
-  };
-
-  // 1. The time offset: a coarse search over the window (every point of a thinned set; with a
-  // rigid fit, the best rigid motion at each candidate), then Gauss-Newton on all parameters.
+// What stage 1 hands on: the fit, and the normal matrix of its free parameters there.
+struct FittedAlignment {
   Fit fit;
-  fit.tau = options.time_offset_s;
-  const bool fit_time = FitsTime(options.alignment), fit_rigid = FitsRigid(options.alignment);
+  int parameters = 0;      // p: 1 for the time offset, 6 for the rigid motion
+  Eigen::MatrixXd normal;  // J^T W J over the free parameters, p x p (empty when p = 0)
+};
+
+// The starting fit: with the time fitted, a coarse search over the window on a thinned set of
+// points (with a rigid fit, the best rigid motion at each candidate); else the fixed offset.
+Fit SearchTimeOffset(const ScoreInput& in, const ScoreSummary& s, const Scorer& scorer) {
+  const KnotTracks& meas = in.meas;
+  const ScoreOptions& options = in.options;
+  const SimInterpolant& interp = scorer.interpolant();
+  const bool fit_rigid = FitsRigid(options.alignment);
   const int stride = std::max<int>(1, static_cast<int>(scorer.points().size() / 20000));
-  if (fit_time) {
-    const double step = 0.5 * std::min(s.sim_interval_s, s.meas_interval_s > 0 ? s.meas_interval_s
-                                                                               : s.sim_interval_s);
-    const int steps = static_cast<int>(std::ceil(options.max_time_offset_s / step));
-    double best = std::numeric_limits<double>::infinity();
-    Fit best_fit;
-    for (int j = -steps; j <= steps; ++j) {
-      Fit candidate;
-      candidate.tau = options.time_offset_s + j * step;
-      if (!EnoughOverlap(meas, interp, candidate.tau)) continue;
-      if (fit_rigid && !scorer.Kabsch(&candidate, stride)) continue;
-      const Evaluation e = scorer.Evaluate(candidate, false, stride);
-      if (e.used == 0) continue;
-      if (e.cost / e.used < best) best = e.cost / e.used, best_fit = candidate;
-    }
-    if (!std::isfinite(best)) Fail(overlap_error());
-    fit = best_fit;
-  } else {
-    if (!EnoughOverlap(meas, interp, fit.tau)) Fail(overlap_error());
-    if (fit_rigid && !scorer.Kabsch(&fit, stride)) Fail(overlap_error());
+  if (!FitsTime(options.alignment)) {
+    Fit fit;
+    fit.tau = options.time_offset_s;
+    if (!EnoughOverlap(meas, interp, fit.tau)) Fail(NoOverlapMessage(in));
+    if (fit_rigid && !scorer.Kabsch(&fit, stride)) Fail(NoOverlapMessage(in));
+    return fit;
   }
+  const double step = 0.5 * std::min(s.sim_interval_s,
+                                     s.meas_interval_s > 0 ? s.meas_interval_s : s.sim_interval_s);
+  const int steps = static_cast<int>(std::ceil(options.max_time_offset_s / step));
+  double best = std::numeric_limits<double>::infinity();
+  Fit best_fit;
+  for (int j = -steps; j <= steps; ++j) {
+    Fit candidate;
+    candidate.tau = options.time_offset_s + j * step;
+    if (!EnoughOverlap(meas, interp, candidate.tau)) continue;
+    if (fit_rigid && !scorer.Kabsch(&candidate, stride)) continue;
+    const Evaluation e = scorer.Evaluate(candidate, false, stride);
+    if (e.used == 0) continue;
+    if (e.cost / e.used < best) best = e.cost / e.used, best_fit = candidate;
+  }
+  if (!std::isfinite(best)) Fail(NoOverlapMessage(in));
+  return best_fit;
+}
+
+// Gauss-Newton with step halving from *fit, over the `free` parameters (indices into (tau,
+// dtheta, dt)); 7 parameters, normal equations summed over the points. Returns the normal matrix
+// of the free parameters at the fit.
+Eigen::MatrixXd RefineFit(const ScoreOptions& options, const std::vector<int>& free,
+                          const Scorer& scorer, Fit* fit) {
+  const int p = static_cast<int>(free.size());
+  Evaluation e = scorer.Evaluate(*fit, true);
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    Eigen::MatrixXd h(p, p);
+    Eigen::VectorXd g(p);
+    for (int a = 0; a < p; ++a) {
+      g(a) = e.gradient(free[a]);
+      for (int b = 0; b < p; ++b) h(a, b) = e.normal(free[a], free[b]);
+    }
+    const Eigen::VectorXd delta = -h.ldlt().solve(g);
+    bool improved = false;
+    for (double scale = 1.0; scale > 1e-4; scale *= 0.5) {
+      Vector7d full = Vector7d::Zero();
+      for (int a = 0; a < p; ++a) full(free[a]) = scale * delta(a);
+      Fit trial = *fit;
+      trial.tau += full(0);
+      if (std::abs(trial.tau - options.time_offset_s) > options.max_time_offset_s) continue;
+      trial.rotation = ExpSo3(full.segment<3>(1)) * fit->rotation;
+      trial.translation = ExpSo3(full.segment<3>(1)) * fit->translation + full.segment<3>(4);
+      const Evaluation te = scorer.Evaluate(trial, true);
+      // The same points (the set is fixed; a step beyond its margin loses some) and no more cost.
+      if (te.used == e.used && te.cost <= e.cost) {
+        *fit = trial;
+        const double change = e.cost - te.cost;
+        e = te;
+        improved = change > 1e-10 * std::max(1.0, e.cost);
+        break;
+      }
+    }
+    if (!improved) break;
+  }
+  Eigen::MatrixXd normal_free(p, p);
+  for (int a = 0; a < p; ++a)
+    for (int b = 0; b < p; ++b) normal_free(a, b) = e.normal(free[a], free[b]);
+  return normal_free;
+}
+
+// Stage 1: the coarse search, then Gauss-Newton on every fitted parameter.
+FittedAlignment FitAlignment(const ScoreInput& in, const ScoreSummary& s, Scorer* scorer) {
+  const bool fit_time = FitsTime(in.options.alignment);
+  FittedAlignment fitted;
+  fitted.fit = SearchTimeOffset(in, s, *scorer);
   std::vector<int> free;  // indices into (tau, dtheta, dt)
   if (fit_time) free.push_back(0);
-  if (fit_rigid)
+  if (FitsRigid(in.options.alignment))
     for (int i = 1; i < 7; ++i) free.push_back(i);
-  const int p = static_cast<int>(free.size());
-  Eigen::MatrixXd normal_free;
-  if (p > 0) {
-    // Gauss-Newton with step halving; 7 parameters, normal equations summed over the points.
-    scorer.FixPointSet(fit.tau, fit_time ? 2 * s.sim_interval_s : 0.0);
-    Evaluation e = scorer.Evaluate(fit, true);
-    for (int iteration = 0; iteration < 30; ++iteration) {
-      Eigen::MatrixXd h(p, p);
-      Eigen::VectorXd g(p);
-      for (int a = 0; a < p; ++a) {
-        g(a) = e.gradient(free[a]);
-        for (int b = 0; b < p; ++b) h(a, b) = e.normal(free[a], free[b]);
-      }
-      const Eigen::VectorXd delta = -h.ldlt().solve(g);
-      bool improved = false;
-      for (double scale = 1.0; scale > 1e-4; scale *= 0.5) {
-        Vector7d full = Vector7d::Zero();
-        for (int a = 0; a < p; ++a) full(free[a]) = scale * delta(a);
-        Fit trial = fit;
-        trial.tau += full(0);
-        if (std::abs(trial.tau - options.time_offset_s) > options.max_time_offset_s) continue;
-        trial.rotation = ExpSo3(full.segment<3>(1)) * fit.rotation;
-        trial.translation = ExpSo3(full.segment<3>(1)) * fit.translation + full.segment<3>(4);
-        const Evaluation te = scorer.Evaluate(trial, true);
-        // The same points (the set is fixed; a step beyond its margin loses some) and no more cost.
-        if (te.used == e.used && te.cost <= e.cost) {
-          fit = trial;
-          const double change = e.cost - te.cost;
-          e = te;
-          improved = change > 1e-10 * std::max(1.0, e.cost);
-          break;
-        }
-      }
-      if (!improved) break;
-    }
-    normal_free.resize(p, p);
-    for (int a = 0; a < p; ++a)
-      for (int b = 0; b < p; ++b) normal_free(a, b) = e.normal(free[a], free[b]);
+  fitted.parameters = static_cast<int>(free.size());
+  if (fitted.parameters > 0) {
+    scorer->FixPointSet(fitted.fit.tau, fit_time ? 2 * s.sim_interval_s : 0.0);
+    fitted.normal = RefineFit(in.options, free, *scorer, &fitted.fit);
   }
+  return fitted;
+}
 
-  // 2. Residuals and d2 at the fit; the per-frame and per-knot tables.
-  const int frames = meas.frames();
-  result.time = meas.time;
-  result.grid = meas.grid;
-  const size_t cells = static_cast<size_t>(frames) * knots;
-  result.residual.assign(cells, Vector3d::Constant(kNaN));
-  result.d2.assign(cells, kNaN);
-  result.compared.assign(cells, 0);
-  std::vector<Vector3d> sim_pos(cells, Vector3d::Constant(kNaN));  // measured frame
-  double interp_sq = 0, meas_var = 0;
+// Sums over the compared knot-frames that stage 3 turns into the summary's numbers.
+struct ResidualSums {
+  double d2 = 0, e2 = 0;                    // sum d2, sum |r|^2
+  double interp_sq = 0, meas_var = 0;       // sum sigma_interp^2, sum trace(Sigma_meas) / 3
+  double baseline_d2 = 0, baseline_e2 = 0;  // the straight-line flight's sum d2, sum |r|^2
+  int baseline_points = 0;
+};
+
+// r and d2 of every measured point at the fit ([T*K], NaN where not compared), and the
+// simulated positions in the measured frame. A point the simulation does not reach is masked.
+void ResidualsAtFit(const KnotTracks& meas, const Scorer& scorer, const Fit& fit,
+                    ScoreResult* result, std::vector<Vector3d>* sim_pos, ResidualSums* sums) {
+  result->time = meas.time;
+  result->grid = meas.grid;
+  const size_t cells = static_cast<size_t>(meas.frames()) * meas.knots();
+  result->residual.assign(cells, Vector3d::Constant(kNaN));
+  result->d2.assign(cells, kNaN);
+  result->compared.assign(cells, 0);
+  sim_pos->assign(cells, Vector3d::Constant(kNaN));
   for (const Point& pt : scorer.points()) {
     Vector3d r, a;
     Matrix3d w;
     double error;
     if (!scorer.Residual(pt, fit, &r, &w, nullptr, &error, &a)) {
-      ++masked;
+      ++result->summary.masked;
       continue;
     }
-    const size_t i = static_cast<size_t>(pt.frame) * knots + pt.knot;
-    result.residual[i] = r;
-    result.d2[i] = r.dot(w * r);
-    result.compared[i] = 1;
-    sim_pos[i] = a;
-    interp_sq += error * error;
-    meas_var += pt.meas_cov.trace() / 3;
+    const size_t i = static_cast<size_t>(pt.frame) * meas.knots() + pt.knot;
+    result->residual[i] = r;
+    result->d2[i] = r.dot(w * r);
+    result->compared[i] = 1;
+    (*sim_pos)[i] = a;
+    sums->interp_sq += error * error;
+    sums->meas_var += pt.meas_cov.trace() / 3;
   }
-  // The knots' classes, from each net's grid extent.
+}
+
+// Each net's grid extent: its largest row and column.
+std::map<int, std::array<int, 2>> NetExtents(const KnotTracks& meas) {
   std::map<int, std::array<int, 2>> extent;
-  for (int k = 0; k < knots; ++k) {
+  for (int k = 0; k < meas.knots(); ++k) {
     auto& e = extent[meas.net.empty() ? 0 : meas.net[k]];
     e[0] = std::max(e[0], meas.grid[k][0]);
     e[1] = std::max(e[1], meas.grid[k][1]);
   }
-  result.knot_class.resize(knots);
-  for (int k = 0; k < knots; ++k) {
-    const auto& e = extent[meas.net.empty() ? 0 : meas.net[k]];
+  return extent;
+}
+
+// The knots' classes, from each net's grid extent.
+std::vector<int> KnotClasses(const KnotTracks& meas,
+                             const std::map<int, std::array<int, 2>>& extent) {
+  std::vector<int> knot_class(meas.knots());
+  for (int k = 0; k < meas.knots(); ++k) {
+    const auto& e = extent.at(meas.net.empty() ? 0 : meas.net[k]);
     const bool row_edge = meas.grid[k][0] == 0 || meas.grid[k][0] == e[0];
     const bool col_edge = meas.grid[k][1] == 0 || meas.grid[k][1] == e[1];
-    result.knot_class[k] = static_cast<int>(row_edge && col_edge   ? KnotClass::kCorner
-                                            : row_edge || col_edge ? KnotClass::kEdge
-                                                                   : KnotClass::kInner);
+    knot_class[k] = static_cast<int>(row_edge && col_edge   ? KnotClass::kCorner
+                                     : row_edge || col_edge ? KnotClass::kEdge
+                                                            : KnotClass::kInner);
   }
+  return knot_class;
+}
 
-  // Skill baseline: straight-line flight of every knot from its simulated state at the first
-  // compared time.
+// The first measured frame with a compared knot; the number of frames when there is none.
+int FirstComparedFrame(const ScoreResult& result, int frames, int knots) {
   int first_frame = frames;
   for (int t = 0; t < frames && first_frame == frames; ++t)
     for (int k = 0; k < knots; ++k)
       if (result.compared[static_cast<size_t>(t) * knots + k]) first_frame = t;
-  if (first_frame == frames) Fail(overlap_error());
-  const double t0 = meas.time[first_frame] + fit.tau;
-  std::vector<Vector3d> p0(knots), v0(knots);
-  std::vector<bool> has0(knots);
-  for (int k = 0; k < knots; ++k) has0[k] = interp.At(t0, k, &p0[k], &v0[k], nullptr);
+  return first_frame;
+}
 
-  // The corners of the first net (row-major order around the polygon) and the net's side: the
-  // thread length along its first row in the first simulated frame.
-  const auto& e0 = extent[meas.net.empty() ? 0 : meas.net[0]];
+// Skill baseline: straight-line flight of every knot from its simulated state at the first
+// compared time (simulated time t0), seen in the measured frame through the fit.
+class StraightLineFlight {
+ public:
+  StraightLineFlight(const SimInterpolant& interp, const Fit& fit, double t0, int knots)
+      : fit_(fit), t0_(t0), p0_(knots), v0_(knots), has0_(knots) {
+    for (int k = 0; k < knots; ++k) has0_[k] = interp.At(t0, k, &p0_[k], &v0_[k], nullptr);
+  }
+
+  // False when the simulation has no state of knot k at t0.
+  bool Covers(int k) const { return has0_[k]; }
+
+  // Knot k at measured time t_meas, measured frame.
+  Vector3d At(int k, double t_meas) const {
+    const double ts = t_meas + fit_.tau;
+    return fit_.rotation * (p0_[k] + v0_[k] * (ts - t0_)) + fit_.translation;
+  }
+
+ private:
+  const Fit& fit_;
+  double t0_;
+  std::vector<Vector3d> p0_, v0_;
+  std::vector<bool> has0_;
+};
+
+// The corners of the first net (row-major order around the polygon).
+std::array<int, 4> FirstNetCorners(const KnotTracks& meas,
+                                   const std::map<int, std::array<int, 2>>& extent) {
+  const auto& e0 = extent.at(meas.net.empty() ? 0 : meas.net[0]);
   const int net0 = meas.net.empty() ? 0 : meas.net[0];
-  const int corners[4] = {meas.FindKnot(0, 0, net0), meas.FindKnot(0, e0[1], net0),
-                          meas.FindKnot(e0[0], e0[1], net0), meas.FindKnot(e0[0], 0, net0)};
+  return {meas.FindKnot(0, 0, net0), meas.FindKnot(0, e0[1], net0),
+          meas.FindKnot(e0[0], e0[1], net0), meas.FindKnot(e0[0], 0, net0)};
+}
+
+// The net's side: the thread length along the first net's first row in the first simulated
+// frame.
+double FirstRowLength(const KnotTracks& meas, const KnotTracks& sim,
+                      const std::vector<int>& sim_knot,
+                      const std::map<int, std::array<int, 2>>& extent) {
+  const auto& e0 = extent.at(meas.net.empty() ? 0 : meas.net[0]);
+  const int net0 = meas.net.empty() ? 0 : meas.net[0];
+  double side = 0.0;
   for (int c = 0; c < e0[1]; ++c) {
     const int a = meas.FindKnot(0, c, net0), b = meas.FindKnot(0, c + 1, net0);
     if (a >= 0 && b >= 0)
-      s.side_m += (sim.Position(0, sim_knot[b]) - sim.Position(0, sim_knot[a])).norm();
+      side += (sim.Position(0, sim_knot[b]) - sim.Position(0, sim_knot[a])).norm();
   }
+  return side;
+}
 
+// The tables' rows named and emptied, the per-frame series NaN until filled.
+void StartTables(const KnotTracks& meas, ScoreResult* result) {
+  ScoreSummary& s = result->summary;
+  const int frames = meas.frames(), knots = meas.knots();
   for (auto& row : s.per_class) row = ScoreRow{};
   for (int c = 0; c < 3; ++c) s.per_class[c].name = kKnotClassNames[c];
   s.per_knot.resize(knots);
   for (int k = 0; k < knots; ++k) s.per_knot[k].name = KnotName(meas.grid[k]);
-  result.rms_per_class.assign(frames, {kNaN, kNaN, kNaN});
-  result.area_measured.assign(frames, kNaN);
-  result.area_simulated.assign(frames, kNaN);
-  result.centroid_measured.assign(frames, Vector3d::Constant(kNaN));
-  result.centroid_simulated.assign(frames, Vector3d::Constant(kNaN));
-  result.corner_distance_measured.assign(frames, {kNaN, kNaN, kNaN, kNaN, kNaN, kNaN});
-  result.corner_distance_simulated = result.corner_distance_measured;
-  double sum_d2 = 0, sum_e2 = 0, sum_bd2 = 0, sum_be2 = 0;
-  int base_points = 0;
-  for (int t = 0; t < frames; ++t) {
-    std::array<double, 3> class_sq = {0, 0, 0};
-    std::array<int, 3> class_n = {0, 0, 0};
-    Vector3d cm = Vector3d::Zero(), cs = Vector3d::Zero();
-    int n = 0;
-    for (int k = 0; k < knots; ++k) {
-      const size_t i = static_cast<size_t>(t) * knots + k;
-      if (!result.compared[i]) continue;
-      const double e2 = result.residual[i].squaredNorm();
-      sum_d2 += result.d2[i];
-      sum_e2 += e2;
-      s.max_m = std::max(s.max_m, std::sqrt(e2));
-      AddRow(&s.per_knot[k], e2, result.d2[i]);
-      AddRow(&s.per_class[result.knot_class[k]], e2, result.d2[i]);
-      class_sq[result.knot_class[k]] += e2;
-      class_n[result.knot_class[k]]++;
-      cm += meas.Position(t, k);
-      cs += sim_pos[i];
-      ++n;
-      if (has0[k]) {
-        const double ts = meas.time[t] + fit.tau;
-        const Vector3d pb = fit.rotation * (p0[k] + v0[k] * (ts - t0)) + fit.translation;
-        const Vector3d rb = meas.Position(t, k) - pb;
-        sum_be2 += rb.squaredNorm();
-        ++base_points;
-      }
-    }
-    for (int c = 0; c < 3; ++c)
-      if (class_n[c]) result.rms_per_class[t][c] = std::sqrt(class_sq[c] / class_n[c]);
-    if (n > 0) {
-      result.centroid_measured[t] = cm / n;
-      result.centroid_simulated[t] = cs / n;
-    }
-    // Corner polygon and corner distances (01 12 23 30 02 13).
-    Vector3d pm[4], ps[4];
-    bool all_m = true, all_s = true;
-    for (int c = 0; c < 4; ++c) {
-      const int k = corners[c];
-      if (k < 0) {
-        all_m = all_s = false;
-        continue;
-      }
-      all_m = all_m && meas.Valid(t, k);
-      pm[c] = meas.Position(t, k);
-      Vector3d q;
-      if (interp.At(meas.time[t] + fit.tau, k, &q, nullptr, nullptr))
-        ps[c] = fit.rotation * q + fit.translation;
-      else
-        all_s = false;
-    }
-    static constexpr int kPairs[6][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 2}, {1, 3}};
-    if (all_m) {
-      result.area_measured[t] = QuadArea(pm);
-      for (int j = 0; j < 6; ++j)
-        result.corner_distance_measured[t][j] = (pm[kPairs[j][0]] - pm[kPairs[j][1]]).norm();
-    }
-    if (all_s) {
-      result.area_simulated[t] = QuadArea(ps);
-      for (int j = 0; j < 6; ++j)
-        result.corner_distance_simulated[t][j] = (ps[kPairs[j][0]] - ps[kPairs[j][1]]).norm();
+  result->rms_per_class.assign(frames, {kNaN, kNaN, kNaN});
+  result->area_measured.assign(frames, kNaN);
+  result->area_simulated.assign(frames, kNaN);
+  result->centroid_measured.assign(frames, Vector3d::Constant(kNaN));
+  result->centroid_simulated.assign(frames, Vector3d::Constant(kNaN));
+  result->corner_distance_measured.assign(frames, {kNaN, kNaN, kNaN, kNaN, kNaN, kNaN});
+  result->corner_distance_simulated = result->corner_distance_measured;
+}
+
+// Frame t's compared knots into the sums, the per-knot and per-class rows, the frame's RMS per
+// class and its centroids; and the baseline's error there.
+void TabulateFrame(int t, const KnotTracks& meas, const std::vector<Vector3d>& sim_pos,
+                   const StraightLineFlight& baseline, ScoreResult* result, ResidualSums* sums) {
+  ScoreSummary& s = result->summary;
+  const int knots = meas.knots();
+  std::array<double, 3> class_sq = {0, 0, 0};
+  std::array<int, 3> class_n = {0, 0, 0};
+  Vector3d cm = Vector3d::Zero(), cs = Vector3d::Zero();
+  int n = 0;
+  for (int k = 0; k < knots; ++k) {
+    const size_t i = static_cast<size_t>(t) * knots + k;
+    if (!result->compared[i]) continue;
+    const double e2 = result->residual[i].squaredNorm();
+    const int knot_class = result->knot_class[k];
+    sums->d2 += result->d2[i];
+    sums->e2 += e2;
+    s.max_m = std::max(s.max_m, std::sqrt(e2));
+    AddRow(&s.per_knot[k], e2, result->d2[i]);
+    AddRow(&s.per_class[knot_class], e2, result->d2[i]);
+    class_sq[knot_class] += e2;
+    class_n[knot_class]++;
+    cm += meas.Position(t, k);
+    cs += sim_pos[i];
+    ++n;
+    if (baseline.Covers(k)) {
+      const Vector3d rb = meas.Position(t, k) - baseline.At(k, meas.time[t]);
+      sums->baseline_e2 += rb.squaredNorm();
+      ++sums->baseline_points;
     }
   }
-  // Baseline d2 with each point's own weight.
+  for (int c = 0; c < 3; ++c)
+    if (class_n[c]) result->rms_per_class[t][c] = std::sqrt(class_sq[c] / class_n[c]);
+  if (n > 0) {
+    result->centroid_measured[t] = cm / n;
+    result->centroid_simulated[t] = cs / n;
+  }
+}
+
+// Frame t's corner polygon and corner distances (01 12 23 30 02 13), measured and simulated.
+void CornerPolygon(int t, const KnotTracks& meas, const SimInterpolant& interp, const Fit& fit,
+                   const std::array<int, 4>& corners, ScoreResult* result) {
+  Vector3d pm[4], ps[4];
+  bool all_m = true, all_s = true;
+  for (int c = 0; c < 4; ++c) {
+    const int k = corners[c];
+    if (k < 0) {
+      all_m = all_s = false;
+      continue;
+    }
+    all_m = all_m && meas.Valid(t, k);
+    pm[c] = meas.Position(t, k);
+    Vector3d q;
+    if (interp.At(meas.time[t] + fit.tau, k, &q, nullptr, nullptr))
+      ps[c] = fit.rotation * q + fit.translation;
+    else
+      all_s = false;
+  }
+  static constexpr int kPairs[6][2] = {{0, 1}, {1, 2}, {2, 3}, {3, 0}, {0, 2}, {1, 3}};
+  if (all_m) {
+    result->area_measured[t] = QuadArea(pm);
+    for (int j = 0; j < 6; ++j)
+      result->corner_distance_measured[t][j] = (pm[kPairs[j][0]] - pm[kPairs[j][1]]).norm();
+  }
+  if (all_s) {
+    result->area_simulated[t] = QuadArea(ps);
+    for (int j = 0; j < 6; ++j)
+      result->corner_distance_simulated[t][j] = (ps[kPairs[j][0]] - ps[kPairs[j][1]]).norm();
+  }
+}
+
+// Baseline sum d2, with each point's own weight.
+double BaselineD2(const KnotTracks& meas, const Scorer& scorer, const Fit& fit,
+                  const StraightLineFlight& baseline, const ScoreResult& result) {
+  double sum_bd2 = 0;
   for (const Point& pt : scorer.points()) {
-    const size_t i = static_cast<size_t>(pt.frame) * knots + pt.knot;
-    if (!result.compared[i] || !has0[pt.knot]) continue;
-    const double ts = meas.time[pt.frame] + fit.tau;
-    const Vector3d pb = fit.rotation * (p0[pt.knot] + v0[pt.knot] * (ts - t0)) + fit.translation;
-    const Vector3d rb = meas.Position(pt.frame, pt.knot) - pb;
+    const size_t i = static_cast<size_t>(pt.frame) * meas.knots() + pt.knot;
+    if (!result.compared[i] || !baseline.Covers(pt.knot)) continue;
+    const Vector3d rb =
+        meas.Position(pt.frame, pt.knot) - baseline.At(pt.knot, meas.time[pt.frame]);
     Vector3d r;
     Matrix3d w;
     scorer.Residual(pt, fit, &r, &w, nullptr);
     sum_bd2 += rb.dot(w * rb);
   }
+  return sum_bd2;
+}
 
-  // 3. Sizes, errors, the test.
+// Stage 2: r and d2 at the fit; the per-frame, per-knot and per-class tables; the sums of the
+// test and of the skill's baseline.
+ResidualSums CompareAtFit(const ScoreInput& in, const Scorer& scorer,
+                          const std::vector<int>& sim_knot, const Fit& fit, ScoreResult* result) {
+  const KnotTracks& meas = in.meas;
+  const int frames = meas.frames(), knots = meas.knots();
+  ResidualSums sums;
+  std::vector<Vector3d> sim_pos;  // measured frame
+  ResidualsAtFit(meas, scorer, fit, result, &sim_pos, &sums);
+  const std::map<int, std::array<int, 2>> extent = NetExtents(meas);
+  result->knot_class = KnotClasses(meas, extent);
+  const int first_frame = FirstComparedFrame(*result, frames, knots);
+  if (first_frame == frames) Fail(NoOverlapMessage(in));
+  const StraightLineFlight baseline(scorer.interpolant(), fit, meas.time[first_frame] + fit.tau,
+                                    knots);
+  const std::array<int, 4> corners = FirstNetCorners(meas, extent);
+  result->summary.side_m = FirstRowLength(meas, in.sim, sim_knot, extent);
+  StartTables(meas, result);
+  for (int t = 0; t < frames; ++t) {
+    TabulateFrame(t, meas, sim_pos, baseline, result, &sums);
+    CornerPolygon(t, meas, scorer.interpolant(), fit, corners, result);
+  }
+  sums.baseline_d2 = BaselineD2(meas, scorer, fit, baseline, *result);
+  for (auto& row : result->summary.per_class) FinishRow(&row);
+  for (auto& row : result->summary.per_knot) FinishRow(&row);
+  return sums;
+}
+
+// Stage 3's sizes, errors and the test: sum d2 against chi^2, inflated by the correlation in time
+// and within a frame; the skill against the baseline.
+void ConsistencyTest(const ScoreInput& in, const ResidualSums& sums, int parameters,
+                     ScoreResult* result) {
+  ScoreSummary& s = result->summary;
+  const int frames = in.meas.frames(), knots = in.meas.knots(), p = parameters;
   s.knots = knots;
-  s.masked = masked;
   for (int t = 0; t < frames; ++t)
     for (int k = 0; k < knots; ++k)
-      if (result.compared[static_cast<size_t>(t) * knots + k]) {
+      if (result->compared[static_cast<size_t>(t) * knots + k]) {
         ++s.frames;
         break;
       }
-  for (uint8_t c : result.compared) s.points += c;
-  if (s.points == 0) Fail(overlap_error());
+  for (uint8_t c : result->compared) s.points += c;
+  if (s.points == 0) Fail(NoOverlapMessage(in));
   const int n = s.points;
-  s.rms_m = std::sqrt(sum_e2 / n);
+  s.rms_m = std::sqrt(sums.e2 / n);
   s.rms_percent_of_side = s.side_m > 0 ? 100.0 * s.rms_m / s.side_m : kNaN;
-  s.mean_d2 = sum_d2 / n;
+  s.mean_d2 = sums.d2 / n;
   s.fitted_parameters = p;
   s.dof = 3.0 * n - p;
-  s.tau_int = IntegratedAutocorrelation(result.d2, frames, knots);
-  s.design_effect = DesignEffect(result.d2, frames, knots);
+  s.tau_int = IntegratedAutocorrelation(result->d2, frames, knots);
+  s.design_effect = DesignEffect(result->d2, frames, knots);
   const double inflation = s.tau_int * s.design_effect;
   s.effective_points = n / inflation;
   const double nu_eff = s.dof / inflation;
-  s.p_value = UpperGammaQ(nu_eff / 2, sum_d2 / inflation / 2);
-  s.critical_mean_d2 = Chi2Quantile(1 - options.significance, nu_eff) * inflation / n;
+  s.p_value = UpperGammaQ(nu_eff / 2, sums.d2 / inflation / 2);
+  s.critical_mean_d2 = Chi2Quantile(1 - in.options.significance, nu_eff) * inflation / n;
   s.margin = s.critical_mean_d2 - s.mean_d2;
-  s.verdict = s.p_value >= options.significance ? "consistent" : "inconsistent";
+  s.verdict = s.p_value >= in.options.significance ? "consistent" : "inconsistent";
   s.covariance_too_large =
-      1 - UpperGammaQ(nu_eff / 2, sum_d2 / inflation / 2) < options.significance;
-  s.skill = sum_bd2 > 0 ? 1 - sum_d2 / sum_bd2 : kNaN;
-  s.baseline_rms_m = base_points > 0 ? std::sqrt(sum_be2 / base_points) : kNaN;
+      1 - UpperGammaQ(nu_eff / 2, sums.d2 / inflation / 2) < in.options.significance;
+  s.skill = sums.baseline_d2 > 0 ? 1 - sums.d2 / sums.baseline_d2 : kNaN;
+  s.baseline_rms_m =
+      sums.baseline_points > 0 ? std::sqrt(sums.baseline_e2 / sums.baseline_points) : kNaN;
+}
 
-  // The alignment's uncertainty: the inverse normal matrix, inflated by the correlation (fewer
-  // independent points) and by the misfit when the model does not explain the data.
-  s.time_offset_s = fit.tau;
-  s.rotation = fit.rotation;
-  s.translation = fit.translation;
-  if (p > 0) {
-    const Eigen::MatrixXd cov = normal_free.inverse() * inflation * std::max(1.0, s.mean_d2 / 3.0);
+// The fitted alignment and its uncertainty: the inverse normal matrix, inflated by the
+// correlation (fewer independent points) and by the misfit when the model does not explain the
+// data.
+void SummariseAlignment(const ScoreOptions& options, const FittedAlignment& fitted,
+                        ScoreSummary* s) {
+  s->time_offset_s = fitted.fit.tau;
+  s->rotation = fitted.fit.rotation;
+  s->translation = fitted.fit.translation;
+  if (fitted.parameters > 0) {
+    const double inflation = s->tau_int * s->design_effect;
+    const Eigen::MatrixXd cov =
+        fitted.normal.inverse() * inflation * std::max(1.0, s->mean_d2 / 3.0);
     int a = 0;
-    if (fit_time) s.time_offset_sigma_s = std::sqrt(cov(a, a)), ++a;
-    if (fit_rigid) s.rigid_covariance = cov.block(a, a, 6, 6);
+    if (FitsTime(options.alignment)) s->time_offset_sigma_s = std::sqrt(cov(a, a)), ++a;
+    if (FitsRigid(options.alignment)) s->rigid_covariance = cov.block(a, a, 6, 6);
   }
+}
 
-  // The simulation's sampling: is cubic interpolation good enough against the measurement?
-  s.interpolation_rms_m = std::sqrt(interp_sq / n);
-  const double meas_rms_sigma = std::sqrt(meas_var / n);
-  s.sim_too_sparse = s.interpolation_rms_m > options.max_interpolation_fraction * meas_rms_sigma;
-  if (s.sim_too_sparse) {
+// The simulation's sampling: is cubic interpolation good enough against the measurement?
+void CheckSampling(const ScoreOptions& options, const ResidualSums& sums, ScoreSummary* s) {
+  const int n = s->points;
+  s->interpolation_rms_m = std::sqrt(sums.interp_sq / n);
+  const double meas_rms_sigma = std::sqrt(sums.meas_var / n);
+  s->sim_too_sparse = s->interpolation_rms_m > options.max_interpolation_fraction * meas_rms_sigma;
+  if (s->sim_too_sparse) {
     std::ostringstream o;
-    o << "simulation output too sparse: frames every " << s.sim_interval_s * 1e3
-      << " ms interpolate to " << s.interpolation_rms_m * 1e3 << " mm RMS, more than "
+    o << "simulation output too sparse: frames every " << s->sim_interval_s * 1e3
+      << " ms interpolate to " << s->interpolation_rms_m * 1e3 << " mm RMS, more than "
       << options.max_interpolation_fraction * 100 << " % of the measurement's "
       << meas_rms_sigma * 1e3 << " mm; write the simulation at a smaller output_interval "
       << "(the interpolation error is added to Sigma_sim)";
-    s.notes.push_back(o.str());
+    s->notes.push_back(o.str());
   }
-  if (s.sim_interval_s > s.meas_interval_s * 1.0001 && s.meas_interval_s > 0) {
+  if (s->sim_interval_s > s->meas_interval_s * 1.0001 && s->meas_interval_s > 0) {
     std::ostringstream o;
-    o << "the simulation is stored every " << s.sim_interval_s * 1e3 << " ms, sparser than the "
-      << "measurement (" << s.meas_interval_s * 1e3 << " ms)";
-    s.notes.push_back(o.str());
+    o << "the simulation is stored every " << s->sim_interval_s * 1e3 << " ms, sparser than the "
+      << "measurement (" << s->meas_interval_s * 1e3 << " ms)";
+    s->notes.push_back(o.str());
   }
-  if (!sim.covariance.empty()) {
-    s.sim_uncertainty = "from " + sim_name + " /knots/covariance";
+}
+
+// Where Sigma_sim and Sigma_meas come from, and whether the test finds them too large.
+void DescribeUncertainties(const ScoreInput& in, ScoreSummary* s) {
+  const ScoreOptions& options = in.options;
+  if (!in.sim.covariance.empty()) {
+    s->sim_uncertainty = "from " + in.sim_name + " /knots/covariance";
   } else if (options.sim_sigma_m > 0) {
     std::ostringstream o;
     o << "isotropic " << options.sim_sigma_m * 1e3 << " mm";
-    s.sim_uncertainty = o.str();
+    s->sim_uncertainty = o.str();
   } else {
-    s.sim_uncertainty = "zero";
-    s.notes.push_back(
+    s->sim_uncertainty = "zero";
+    s->notes.push_back(
         "Sigma_sim is zero (no discretisation study given): d2 weighs the "
         "measurement's covariance only");
   }
-  if (meas.covariance.empty()) {
+  if (in.meas.covariance.empty()) {
     std::ostringstream o;
-    o << meas_name << " has no /knots/covariance: isotropic " << options.meas_sigma_m * 1e3
+    o << in.meas_name << " has no /knots/covariance: isotropic " << options.meas_sigma_m * 1e3
       << " mm used";
-    s.notes.push_back(o.str());
+    s->notes.push_back(o.str());
   }
-  if (s.covariance_too_large && s.mean_d2 > 0 && s.points > 0) {
+  if (s->covariance_too_large && s->mean_d2 > 0 && s->points > 0) {
     // What the stated uncertainty exceeds the scatter by, in standard deviation.
     std::ostringstream o;
     o << "mean d2 is below its expectation beyond chance: the stated covariances are larger than "
-      << "the scatter (by about " << std::lround(100 * (std::sqrt(s.dof / s.points / s.mean_d2) - 1))
+      << "the scatter (by about "
+      << std::lround(100 * (std::sqrt(s->dof / s->points / s->mean_d2) - 1))
       << " % in standard deviation)";
-    s.notes.push_back(o.str());
+    s->notes.push_back(o.str());
   }
+}
 
-  // 4. Phases, from the simulated corner-polygon area: ejection until it first reaches half its
-  // maximum, spreading until the maximum opening, opened after it, contact from contact_time_s.
+// The largest corner-polygon areas, measured and simulated, and when, into the summary. Returns
+// the frame of the simulated one; -1 when no frame has all four corners simulated.
+int LargestAreas(const KnotTracks& meas, ScoreResult* result) {
+  ScoreSummary& s = result->summary;
   double max_area = -1;
   int max_t = -1;
-  for (int t = 0; t < frames; ++t) {
-    if (std::isfinite(result.area_simulated[t]) && result.area_simulated[t] > max_area)
-      max_area = result.area_simulated[t], max_t = t;
-    if (std::isfinite(result.area_measured[t]) && result.area_measured[t] > s.max_area_measured_m2)
-      s.max_area_measured_m2 = result.area_measured[t], s.max_area_time_measured_s = meas.time[t];
+  for (int t = 0; t < meas.frames(); ++t) {
+    if (std::isfinite(result->area_simulated[t]) && result->area_simulated[t] > max_area)
+      max_area = result->area_simulated[t], max_t = t;
+    if (std::isfinite(result->area_measured[t]) &&
+        result->area_measured[t] > s.max_area_measured_m2)
+      s.max_area_measured_m2 = result->area_measured[t], s.max_area_time_measured_s = meas.time[t];
   }
   if (s.max_area_measured_m2 <= 0)  // no frame with all four corners measured
     s.max_area_measured_m2 = s.max_area_time_measured_s = kNaN;
-  const double t_end = meas.time.back() + 1e-9;
-  double t_half = meas.time.front(), t_max = t_end;
   if (max_t >= 0) {
     s.max_area_simulated_m2 = max_area;
     s.max_area_time_simulated_s = meas.time[max_t];
+  }
+  return max_t;
+}
+
+// A phase's name and measured time span [start, end), s.
+using PhaseSpan = std::tuple<const char*, double, double>;
+
+// The phases' spans from the simulated area's largest frame max_t (see LargestAreas) and the
+// contact time (simulated, so shifted by the offset tau).
+std::array<PhaseSpan, 4> PhaseSpans(const KnotTracks& meas, const ScoreResult& result, int max_t,
+                                    double tau) {
+  const ScoreSummary& s = result.summary;
+  const double t_end = meas.time.back() + 1e-9;
+  double t_half = meas.time.front(), t_max = t_end;
+  if (max_t >= 0) {
     t_max = meas.time[max_t];
     for (int t = 0; t <= max_t; ++t)
-      if (result.area_simulated[t] >= 0.5 * max_area) {
+      if (result.area_simulated[t] >= 0.5 * s.max_area_simulated_m2) {
         t_half = meas.time[t];
         break;
       }
   }
-  // The contact phase from the given time, else from the simulation's own first contact.
-  s.contact_time_s = std::isfinite(options.contact_time_s) ? options.contact_time_s
-                                                            : sim.contact_start_s;
-  s.contact_from = std::isfinite(options.contact_time_s) ? "given"
-                   : std::isfinite(sim.contact_start_s)  ? "simulation"
-                                                         : "none";
   const double t_contact = std::isfinite(s.contact_time_s)
-                               ? std::clamp(s.contact_time_s - fit.tau, meas.time.front(), t_end)
+                               ? std::clamp(s.contact_time_s - tau, meas.time.front(), t_end)
                                : t_end;
   t_max = std::min(t_max, t_contact);
   t_half = std::min(t_half, t_max);
-  const std::array<std::tuple<const char*, double, double>, 4> phases = {
-      {{"ejection", meas.time.front(), t_half},
-       {"spreading", t_half, t_max},
-       {"opened", t_max, t_contact},
-       {"contact", t_contact, t_end}}};
-  for (const auto& [name, lo, hi] : phases) {
-    ScoreRow row;
-    row.name = name;
-    row.start_s = lo;
-    row.end_s = hi;
-    for (int t = 0; t < frames; ++t) {
-      if (meas.time[t] < lo || meas.time[t] >= hi) continue;
-      for (int k = 0; k < knots; ++k) {
-        const size_t i = static_cast<size_t>(t) * knots + k;
-        if (result.compared[i]) AddRow(&row, result.residual[i].squaredNorm(), result.d2[i]);
-      }
-    }
-    FinishRow(&row);
-    s.per_phase.push_back(row);
-  }
-  for (auto& row : s.per_class) FinishRow(&row);
-  for (auto& row : s.per_knot) FinishRow(&row);
+  return {{{"ejection", meas.time.front(), t_half},
+           {"spreading", t_half, t_max},
+           {"opened", t_max, t_contact},
+           {"contact", t_contact, t_end}}};
+}
 
-  // 5. The d2 histogram against chi^2_3 (bins of 0.5 up to 15, the last one open).
+// The table row of the knot-frames compared in the measured time span [lo, hi).
+ScoreRow PhaseRow(const PhaseSpan& span, const KnotTracks& meas, const ScoreResult& result) {
+  const auto& [name, lo, hi] = span;
+  const int knots = meas.knots();
+  ScoreRow row;
+  row.name = name;
+  row.start_s = lo;
+  row.end_s = hi;
+  for (int t = 0; t < meas.frames(); ++t) {
+    if (meas.time[t] < lo || meas.time[t] >= hi) continue;
+    for (int k = 0; k < knots; ++k) {
+      const size_t i = static_cast<size_t>(t) * knots + k;
+      if (result.compared[i]) AddRow(&row, result.residual[i].squaredNorm(), result.d2[i]);
+    }
+  }
+  FinishRow(&row);
+  return row;
+}
+
+// Stage 4: where the contact phase starts, and the per-phase table.
+void ScorePhases(const ScoreInput& in, double tau, ScoreResult* result) {
+  ScoreSummary& s = result->summary;
+  const int max_t = LargestAreas(in.meas, result);
+  // The contact phase from the given time, else from the simulation's own first contact.
+  s.contact_time_s =
+      std::isfinite(in.options.contact_time_s) ? in.options.contact_time_s : in.sim.contact_start_s;
+  s.contact_from = std::isfinite(in.options.contact_time_s) ? "given"
+                   : std::isfinite(in.sim.contact_start_s)  ? "simulation"
+                                                            : "none";
+  for (const PhaseSpan& span : PhaseSpans(in.meas, *result, max_t, tau))
+    s.per_phase.push_back(PhaseRow(span, in.meas, *result));
+}
+
+// Stage 5: counts of the compared d2 and their expectation under chi^2_3.
+void D2Histogram(ScoreResult* result) {
   constexpr int kBins = 30;
   constexpr double kWidth = 0.5;
-  result.d2_counts.assign(kBins, 0);
-  result.d2_expected.assign(kBins, 0);
-  for (int b = 0; b <= kBins; ++b) result.d2_edges.push_back(b * kWidth);
-  for (size_t i = 0; i < cells; ++i)
-    if (result.compared[i])
+  const int n = result->summary.points;
+  result->d2_counts.assign(kBins, 0);
+  result->d2_expected.assign(kBins, 0);
+  for (int b = 0; b <= kBins; ++b) result->d2_edges.push_back(b * kWidth);
+  for (size_t i = 0; i < result->compared.size(); ++i)
+    if (result->compared[i])
       // In double first: a d2 of 1e10 (a wrong model) would overflow an int.
-      result.d2_counts[static_cast<int>(std::clamp(result.d2[i] / kWidth, 0.0, kBins - 1.0))]++;
+      result->d2_counts[static_cast<int>(std::clamp(result->d2[i] / kWidth, 0.0, kBins - 1.0))]++;
   for (int b = 0; b < kBins; ++b) {
-    const double upper = b == kBins - 1 ? 0.0 : UpperGammaQ(1.5, result.d2_edges[b + 1] / 2);
-    result.d2_expected[b] = n * (UpperGammaQ(1.5, result.d2_edges[b] / 2) - upper);
+    const double upper = b == kBins - 1 ? 0.0 : UpperGammaQ(1.5, result->d2_edges[b + 1] / 2);
+    result->d2_expected[b] = n * (UpperGammaQ(1.5, result->d2_edges[b] / 2) - upper);
   }
+}
+
+}  // namespace
+
+ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOptions& options,
+                  const std::string& meas_name, const std::string& sim_name) {
+  const auto start = std::chrono::steady_clock::now();
+  const ScoreInput in{meas, sim, options, meas_name, sim_name};
+  CheckInput(in);
+  const std::vector<int> sim_knot = MatchKnots(in);
+  CheckSimulationFinite(in);
+  ScoreResult result;
+  ScoreSummary& s = result.summary;
+  Scorer scorer(meas, sim, sim_knot, MeasuredPoints(in, &s.masked), options);
+  StartSummary(in, &s);
+
+  // 1. The time offset: a coarse search over the window (every point of a thinned set; with a
+  // rigid fit, the best rigid motion at each candidate), then Gauss-Newton on all parameters.
+  const FittedAlignment fitted = FitAlignment(in, s, &scorer);
+
+  // 2. Residuals and d2 at the fit; the per-frame and per-knot tables.
+  const ResidualSums sums = CompareAtFit(in, scorer, sim_knot, fitted.fit, &result);
+
+  // 3. Sizes, errors, the test; the alignment's uncertainty; the sampling and the uncertainties'
+  // sources, with a note for each thing a reader must know.
+  ConsistencyTest(in, sums, fitted.parameters, &result);
+  SummariseAlignment(options, fitted, &s);
+  CheckSampling(options, sums, &s);
+  DescribeUncertainties(in, &s);
+
+  // 4. Phases, from the simulated corner-polygon area: ejection until it first reaches half its
+  // maximum, spreading until the maximum opening, opened after it, contact from contact_time_s.
+  ScorePhases(in, fitted.fit.tau, &result);
+
+  // 5. The d2 histogram against chi^2_3 (bins of 0.5 up to 15, the last one open).
+  D2Histogram(&result);
 
   s.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;

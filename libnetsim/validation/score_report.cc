@@ -304,12 +304,8 @@ std::string Row(const std::vector<std::string>& cells, const char* tag = "td") {
   return s + "</tr>\n";
 }
 
-}  // namespace
-
-std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info) {
-  const ScoreSummary& s = r.summary;
-  const bool ok = s.verdict == "consistent";
-  std::ostringstream o;
+// The document's head (title, inline style) and the opening of its body.
+void WriteHead(std::ostringstream& o, const ScoreSummary& s) {
   o << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n"
     << "<title>netlab score: " << Escape(s.verdict) << "</title>\n<style>\n"
     << "body{font-family:system-ui,sans-serif;max-width:1180px;margin:24px auto;padding:0 16px;"
@@ -330,6 +326,11 @@ std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info) {
        "padding:3px 10px;text-align:right}th{background:#f4f4f4}td:first-child{text-align:left}\n"
     << ".notes{background:#fff8e1;padding:8px 16px;border-radius:6px;font-size:13px}\n"
     << "</style></head><body>\n";
+}
+
+// The title and the files, the verdict, the few numbers that decide it and how to read them.
+void WriteVerdict(std::ostringstream& o, const ScoreSummary& s, const ReportInfo& info) {
+  const bool ok = s.verdict == "consistent";
   o << "<h1>netlab score</h1>\n<div class=\"files\">measured: " << Escape(info.measured_path)
     << " &nbsp; simulation: " << Escape(info.sim_path)
     << " &nbsp; data: " << Escape(info.score_path) << "</div>\n";
@@ -354,13 +355,18 @@ std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info) {
     << " knot-frames masked (not measured). Errors are correlated in time (τ_int "
     << Fixed(s.tau_int, 1) << " frames) and across a frame's knots (×" << Fixed(s.design_effect, 2)
     << "): the test counts " << Fixed(s.effective_points, 0) << " independent points.</p>\n";
-  if (!s.notes.empty()) {
-    o << "<div class=\"notes\"><b>Notes</b><ul>";
-    for (const auto& n : s.notes) o << "<li>" << Escape(n) << "</li>";
-    o << "</ul></div>\n";
-  }
+}
 
-  // Error vs time per class.
+// What a reader must know, when there is anything.
+void WriteNotes(std::ostringstream& o, const ScoreSummary& s) {
+  if (s.notes.empty()) return;
+  o << "<div class=\"notes\"><b>Notes</b><ul>";
+  for (const auto& n : s.notes) o << "<li>" << Escape(n) << "</li>";
+  o << "</ul></div>\n";
+}
+
+// Error vs time per class: each class's RMS error per frame, plotted in mm, its data in m.
+LinePlot ErrorVsTimePlot(const ScoreResult& r) {
   LinePlot evt;
   for (int c = 0; c < 3; ++c) {
     LinePlot::Series series{kKnotClassNames[c], kClassColours[c], r.time, {}, {}};
@@ -370,7 +376,11 @@ std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info) {
     }
     evt.Add(series);
   }
-  // Corner-polygon area.
+  return evt;
+}
+
+// Corner-polygon area, measured (solid) and simulated (dashed).
+LinePlot CornerAreaPlot(const ScoreResult& r) {
   LinePlot area;
   LinePlot::Series measured{"measured", "#000000", r.time, {}, r.area_measured};
   LinePlot::Series simulated{"simulated", "#cc79a7", r.time, {}, r.area_simulated, true};
@@ -378,9 +388,13 @@ std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info) {
   simulated.y = r.area_simulated;
   area.Add(measured);
   area.Add(simulated);
+  return area;
+}
 
+// The four plots, two by two, each with its caption.
+void WritePlots(std::ostringstream& o, const ScoreResult& r) {
   o << "<div class=\"grid2\"><div><h2>Error over time, per knot class</h2>\n"
-    << evt.Svg("error-vs-time", "measured time (s)", "RMS error (mm)", r.time)
+    << ErrorVsTimePlot(r).Svg("error-vs-time", "measured time (s)", "RMS error (mm)", r.time)
     << "<div class=\"caption\">RMS distance between measured and simulated knots in each frame; "
        "corners carry the masses and lead the net, edges and the inner knots follow.</div></div>\n";
   o << "<div><h2>Error per knot</h2>\n"
@@ -389,7 +403,7 @@ std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info) {
        "coloured by its RMS error over all frames (hover for the numbers; grey: never measured)."
        "</div></div>\n";
   o << "<div><h2>Opening of the net: corner-polygon area</h2>\n"
-    << area.Svg("corner-area", "measured time (s)", "area (m²)", r.time, false)
+    << CornerAreaPlot(r).Svg("corner-area", "measured time (s)", "area (m²)", r.time, false)
     << "<div class=\"caption\">Area spanned by the four corner knots. " << AreaCaption(r)
     << "</div></div>\n";
   o << "<div><h2>d² against its expectation</h2>\n"
@@ -397,8 +411,10 @@ std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info) {
     << "<div class=\"caption\">If the simulation is right and the covariances are honest, the "
        "bars follow the black curve (χ² with 3 degrees of freedom). Bars piled up on the right: "
        "errors larger than the measurement explains.</div></div></div>\n";
+}
 
-  // Tables.
+// Tables: per knot class and per phase, with how the phases were cut.
+void WriteClassAndPhaseTables(std::ostringstream& o, const ScoreSummary& s) {
   o << "<h2>Per knot class and per phase</h2>\n<table>"
     << Row({"", "knot-frames", "RMS (mm)", "max (mm)", "mean d²", "from (s)", "to (s)"}, "th");
   for (const auto& row : s.per_class)
@@ -416,6 +432,10 @@ std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info) {
   o << "</table>\n<p class=\"caption\">Phases from the simulated corner polygon: ejection until "
        "it reaches half its largest area, spreading until the largest, opened after it; "
     << contact << ". Phases the measurement does not reach have no knot-frames.</p>\n";
+}
+
+// The alignment's table: what was fitted, the fit, and the simulation's sampling.
+void WriteAlignmentTable(std::ostringstream& o, const ScoreSummary& s) {
   o << "<h2>Alignment (" << AlignmentName(s.alignment) << ")</h2>\n<table>"
     << Row({"fitted parameters", std::to_string(s.fitted_parameters)})
     << Row({"time offset (ms)",
@@ -428,6 +448,18 @@ std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info) {
     << Row({"simulation stored every (ms)", Fixed(s.sim_interval_s * 1e3, 3)})
     << Row({"interpolation error (mm RMS)", Fixed(s.interpolation_rms_m * 1e3, 4)})
     << Row({"degrees of freedom", Num(s.dof, 8)}) << "</table>\n";
+}
+
+}  // namespace
+
+std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info) {
+  std::ostringstream o;
+  WriteHead(o, r.summary);
+  WriteVerdict(o, r.summary, info);
+  WriteNotes(o, r.summary);
+  WritePlots(o, r);
+  WriteClassAndPhaseTables(o, r.summary);
+  WriteAlignmentTable(o, r.summary);
   o << "</body></html>\n";
   return o.str();
 }
