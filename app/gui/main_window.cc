@@ -35,6 +35,7 @@
 
 #include "app/gui/camera_view.h"
 #include "app/gui/settings.h"
+#include "app/gui/shortcut_editor.h"
 #include "app/gui/timeline.h"
 
 namespace netlab::gui {
@@ -217,10 +218,9 @@ void MainWindow::BuildWorkspace() {
 QAction* MainWindow::AddAction(QMenu* menu, const QString& name, const QString& keys,
                                void (MainWindow::*slot)()) {
   auto* action = new QAction(name, this);
-  QList<QKeySequence> sequences;
-  for (const QString& k : Settings::Shortcut(name, keys).split(";", Qt::SkipEmptyParts))
-    sequences.append(QKeySequence(k.trimmed()));
-  action->setShortcuts(sequences);
+  action->setObjectName(name);  // the settings name and the default, for the shortcut editor
+  action->setProperty(ShortcutEditor::kDefaultKeysProperty, keys);
+  action->setShortcuts(Settings::Shortcuts(name, keys));
   action->setShortcutContext(Qt::WindowShortcut);
   connect(action, &QAction::triggered, this, slot);
   menu->addAction(action);
@@ -960,13 +960,17 @@ void MainWindow::ShowShortcuts() {
   auto* layout = new QVBoxLayout(&dialog);
   auto* table = new QTableWidget(static_cast<int>(actions_.size()) + 4, 2);
   table->setHorizontalHeaderLabels({"Action", "Keys"});
-  int row = 0;
-  for (QAction* a : actions_) {
-    QStringList keys;
-    for (const QKeySequence& k : a->shortcuts()) keys << k.toString(QKeySequence::NativeText);
-    table->setItem(row, 0, new QTableWidgetItem(a->text()));
-    table->setItem(row++, 1, new QTableWidgetItem(keys.join("  or  ")));
-  }
+  const auto fill_keys = [&] {  // the actions' rows (again after the editor changed them)
+    int row = 0;
+    for (QAction* a : actions_) {
+      QStringList keys;
+      for (const QKeySequence& k : a->shortcuts()) keys << k.toString(QKeySequence::NativeText);
+      table->setItem(row, 0, new QTableWidgetItem(a->text()));
+      table->setItem(row++, 1, new QTableWidgetItem(keys.join("  or  ")));
+    }
+  };
+  fill_keys();
+  int row = static_cast<int>(actions_.size());
   const std::pair<const char*, const char*> mouse[] = {
       {"Find Node at the brush (the knot to label)", "click"},
       {"Place the label exactly", "Shift+click"},
@@ -980,9 +984,19 @@ void MainWindow::ShowShortcuts() {
   table->verticalHeader()->setVisible(false);
   table->resizeColumnsToContents();
   table->setEditTriggers(QAbstractItemView::NoEditTriggers);
-  layout->addWidget(
-      new QLabel("Shortcuts are stored in the settings (netlab-gui, key "
-                 "shortcuts/<action>) and can be changed there."));
+  auto* change = new QPushButton("Change shortcuts…");
+  connect(change, &QPushButton::clicked, &dialog, [&] {
+    ShortcutEditor editor(actions_, &dialog);
+    if (editor.exec() != QDialog::Accepted) return;
+    fill_keys();
+    table->resizeColumnsToContents();
+  });
+  auto* top = new QHBoxLayout;
+  top->addWidget(new QLabel("Change any key with “Change shortcuts…”; yours are kept in the "
+                            "settings (netlab-gui)."),
+                 1);
+  top->addWidget(change);
+  layout->addLayout(top);
   layout->addWidget(table);
   dialog.resize(620, 700);
   dialog.exec();
