@@ -199,6 +199,13 @@ void MainWindow::BuildWorkspace() {
   colours_label_->setMargin(6);
   colours_dock->setWidget(colours_label_);
   addDockWidget(Qt::RightDockWidgetArea, colours_dock);
+  colours_timer_ = new QTimer(this);
+  colours_timer_->setSingleShot(true);
+  colours_timer_->setInterval(150);
+  connect(colours_timer_, &QTimer::timeout, this, &MainWindow::RequestColours);
+  connect(colours_dock, &QDockWidget::visibilityChanged, this, [this](bool visible) {
+    if (visible) colours_timer_->start();
+  });
   connect(review_table_, &QTableView::activated, this, [this](const QModelIndex& index) {
     const int c = index.data(ReviewModel::kCameraRole).toInt();
     SetFrame(index.data(ReviewModel::kFrameRowRole).toInt());
@@ -495,15 +502,16 @@ void MainWindow::RefreshStatus() {
           .arg(KnotName(knot_), point.valid
                                     ? QString(" · RMS residual %1 px").arg(point.rms_px, 0, 'f', 2)
                                     : QString()));
-  RequestColours();
+  colours_timer_->start();
 }
 
 void MainWindow::RequestColours() {
-  if (!session_ || frame_ < 0 || colours_label_ == nullptr) return;
+  if (!session_ || frame_ < 0 || !colours_label_->isVisible()) return;
   const recon::Label& label = session_->document().at(camera_, frame_, knot_);
-  const QString where = QString("knot %1 in %2")
+  const QString where = QString("knot %1 in %2, frame %3")
                             .arg(KnotName(knot_))
-                            .arg(QString::fromStdString(session_->camera_names()[camera_]));
+                            .arg(QString::fromStdString(session_->camera_names()[camera_]))
+                            .arg(session_->frame_number(frame_));
   ++colours_request_;
   if (!label.present()) {
     colours_label_->setText(QString("<b>%1</b>: no label.").arg(where));
@@ -518,9 +526,10 @@ void MainWindow::RequestColours() {
   const long request = colours_request_;
   const int c = camera_, t = frame_, k = knot_;
   const Eigen::Vector2d px = label.px;
-  const Session::Neighbours around = session_->KnotNeighbours(c, t, k);
-  colours_.setFuture(QtConcurrent::run([session, request, c, t, k, px, around] {
-    return ColoursRead{request, session->CheckKnotColours(c, t, k, px, around)};
+  const recon::YarnDirections yarns =
+      recon::AcceptedNeighbourYarns(session_->document().labels(), c, t, k);
+  colours_.setFuture(QtConcurrent::run([session, request, c, t, k, px, yarns] {
+    return ColoursRead{request, session->CheckKnotColours(c, t, k, px, yarns)};
   }));
 }
 
@@ -537,9 +546,10 @@ void MainWindow::OnColoursRead() {
     return;
   }
   const Session::KnotColours& k = *read.colours;
-  QString text = QString("<b>knot %1 in %2</b><br>expected, by link:<br>")
+  QString text = QString("<b>knot %1 in %2, frame %3</b><br>expected, by link:<br>")
                      .arg(KnotName(knot_))
-                     .arg(QString::fromStdString(session_->camera_names()[camera_]));
+                     .arg(QString::fromStdString(session_->camera_names()[camera_]))
+                     .arg(session_->frame_number(frame_));
   for (const auto& link : k.expected)
     text += QString("<span style=\"background-color:rgb(%1,%2,%3)\">&nbsp;&nbsp;&nbsp;&nbsp;"
                     "</span> %4 towards %5<br>")

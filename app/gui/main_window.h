@@ -186,6 +186,9 @@ class MainWindow : public QMainWindow {
     std::optional<Session::KnotColours> colours;
   };
   QLabel* colours_label_ = nullptr;
+  // Restarted by every change of frame, camera or knot: the check (a level-0 frame, decoded if
+  // need be) runs once the person stops there, not for every frame scrubbed past.
+  QTimer* colours_timer_ = nullptr;
   long colours_request_ = 0;
   bool colours_again_ = false;  // asked again while one was running
   QFutureWatcher<ColoursRead> colours_;

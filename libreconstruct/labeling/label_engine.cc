@@ -152,11 +152,23 @@ NeighbourSlots LabelEngine::Slots(
   return slots;
 }
 
-std::array<int, 4> LabelEngine::SlotKnots(int knot) const {
-  const int rows = store_->labels().rows, cols = store_->labels().cols;
+std::array<int, 4> GridSlots(int rows, int cols, int knot) {
   const int r = knot / cols, c = knot % cols;
   return {c + 1 < cols ? knot + 1 : -1, r + 1 < rows ? knot + cols : -1, c > 0 ? knot - 1 : -1,
           r > 0 ? knot - cols : -1};
+}
+
+YarnDirections AcceptedNeighbourYarns(const LabelSet& set, int camera, int t, int knot) {
+  YarnDirections yarns;
+  const std::array<int, 4> slot_knot = GridSlots(set.rows, set.cols, knot);
+  for (int s = 0; s < 4; ++s)
+    if (slot_knot[s] >= 0 && set.at(camera, t, slot_knot[s]).accepted())
+      yarns.neighbour_px[s] = set.at(camera, t, slot_knot[s]).px;
+  return yarns;
+}
+
+std::array<int, 4> LabelEngine::SlotKnots(int knot) const {
+  return GridSlots(store_->labels().rows, store_->labels().cols, knot);
 }
 
 std::vector<int> LabelEngine::Neighbours(int knot) const {
@@ -924,12 +936,8 @@ int LabelEngine::CheckColours(int t) {
       const Label& l = set.at(c, t, k);
       if (!l.accepted() || l.source == LabelSource::kManual || l.source == LabelSource::kImported)
         continue;
-      YarnDirections yarns;
-      const std::array<int, 4> slot_knot = SlotKnots(k);
-      for (int s = 0; s < 4; ++s)
-        if (slot_knot[s] >= 0 && set.at(c, t, slot_knot[s]).accepted())
-          yarns.neighbour_px[s] = set.at(c, t, slot_knot[s]).px;
-      const IdentityCheck check = CheckIdentity(image, *codebook_, k, l.px, yarns, identity_);
+      const IdentityCheck check = CheckIdentity(image, *codebook_, k, l.px,
+                                                AcceptedNeighbourYarns(set, c, t, k), identity_);
       if (check.verdict != IdentityVerdict::kMismatch) continue;
       Label flagged = l;
       flagged.state = LabelState::kNeedsReview;

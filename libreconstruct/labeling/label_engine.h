@@ -90,6 +90,15 @@ struct EngineCounts {
   int accepted = 0, review = 0;
 };
 
+// A knot's grid neighbours right, down, left, up in a rows x cols net (knot = row * cols + col);
+// -1 where the net has none.
+std::array<int, 4> GridSlots(int rows, int cols, int knot);
+
+// The directions of a labeled knot's yarns for the colour check (CheckIdentity): its accepted
+// grid neighbours' pixels in (camera, t), slots right, down, left, up (a doubtful neighbour would
+// point the check at the wrong yarn).
+YarnDirections AcceptedNeighbourYarns(const LabelSet& set, int camera, int t, int knot);
+
 // What LabelFrames did: the labels each step set (accepted, kept for review), summed over the
 // frames.
 struct LabelingSummary {
@@ -164,7 +173,7 @@ class LabelEngine {
   // The median distance between neighbouring triangulated knots (every view an inlier), unless
   // the link length is set.
   void EstimateLinkLength(const std::vector<std::optional<Eigen::Vector3d>>& points);
-  // A knot's grid neighbours right, down, left, up; -1 where the net has none.
+  // GridSlots of the store's net.
   std::array<int, 4> SlotKnots(int knot) const;
   std::vector<int> Neighbours(int knot) const;  // those there are, in that order
   // Why a junction Find Node found for `knot` in (camera, t) is doubtful; empty when it is not.

@@ -220,46 +220,22 @@ int Session::ApplyTrackRun(const TrackRun& run) {
   return document_->Apply(name, run.edits);
 }
 
-namespace {
-
-// The grid neighbours of `knot`, slots right, down, left, up; -1 where the net has none.
-std::array<int, 4> NeighbourSlots(int rows, int cols, int knot) {
-  const int r = knot / cols, c = knot % cols;
-  return {c + 1 < cols ? knot + 1 : -1, r + 1 < rows ? knot + cols : -1, c > 0 ? knot - 1 : -1,
-          r > 0 ? knot - cols : -1};
-}
-
-}  // namespace
-
-Session::Neighbours Session::KnotNeighbours(int camera, int t, int knot) const {
-  const recon::LabelSet& labels = document_->labels();
-  Neighbours px;
-  const std::array<int, 4> around = NeighbourSlots(labels.rows, labels.cols, knot);
-  for (int s = 0; s < 4; ++s)
-    if (around[s] >= 0 && labels.at(camera, t, around[s]).present())
-      px[s] = labels.at(camera, t, around[s]).px;
-  return px;
-}
-
 std::optional<Session::KnotColours> Session::CheckKnotColours(
-    int camera, int t, int knot, const Eigen::Vector2d& px, const Neighbours& neighbour_px) const {
+    int camera, int t, int knot, const Eigen::Vector2d& px,
+    const recon::YarnDirections& yarns) const {
   if (!codebook_ || knot < 0 || knot >= project_.knots()) return std::nullopt;
   const cv::Mat image = Image(camera, t);
   if (image.empty() || image.type() != CV_8UC3) return std::nullopt;
   static const char* const kSides[4] = {"right", "down", "left", "up"};
-  const std::array<int, 4> around = NeighbourSlots(project_.rows, project_.cols, knot);
-  recon::YarnDirections yarns;
+  const std::array<int, 4> around = recon::GridSlots(project_.rows, project_.cols, knot);
   KnotColours out;
   // The code's colours run over the knot's links in slot order (CodebookFromColoring).
   const recon::CodebookKnot& code = codebook_->knots[knot];
   int link = 0;
-  for (int s = 0; s < 4; ++s) {
+  for (int s = 0; s < 4 && link < code.degree(); ++s) {
     if (around[s] < 0) continue;
-    yarns.neighbour_px[s] = neighbour_px[s];
-    if (link < code.degree()) {
-      const recon::PaletteColour& dye = codebook_->palette[code.link_colours[link++]];
-      out.expected.push_back({kSides[s], dye.name, recon::LinearBgrToSrgb(dye.linear_bgr)});
-    }
+    const recon::PaletteColour& dye = codebook_->palette[code.link_colours[link++]];
+    out.expected.push_back({kSides[s], dye.name, recon::LinearBgrToSrgb(dye.linear_bgr)});
   }
   const recon::IdentityCheck check =
       recon::CheckIdentity(image, *codebook_, knot, px, yarns, identity_);

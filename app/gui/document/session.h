@@ -95,11 +95,10 @@ class Session {
   int ApplyTrackRun(const TrackRun& run);
 
   // The colour check of a label of `knot` at `px` in (camera, t) (netlab label's,
-  // label_identity.h): the link colours its code expects and what the yarns there say.
-  // `neighbour_px`: its labeled grid neighbours' pixels, slots right, down, left, up (their
-  // directions say which yarn is which link; KnotNeighbours gives them). Any thread (the frame
-  // comes from the cache, decoded there if need be): call it off the GUI thread. nullopt without
-  // a colouring or a readable frame.
+  // label_identity.h): the link colours its code expects and what the yarns there say. `yarns`:
+  // recon::AcceptedNeighbourYarns of the labels (which yarn is which link, as the engine reads
+  // them). Any thread (the frame comes from the cache, decoded there if need be): call it off the
+  // GUI thread. nullopt without a colouring or a readable frame.
   struct KnotColours {
     struct Link {
       std::string side;  // "right", "down", "left", "up": towards which grid neighbour
@@ -111,12 +110,9 @@ class Session {
     std::string why;              // the check's line for the reviewer
     std::vector<int> knots_read;  // the knots the colours fit (one: identified)
   };
-  using Neighbours = std::array<std::optional<Eigen::Vector2d>, 4>;
   std::optional<KnotColours> CheckKnotColours(int camera, int t, int knot,
                                               const Eigen::Vector2d& px,
-                                              const Neighbours& neighbour_px) const;
-  // The labeled grid neighbours of `knot` in (camera, t) as CheckKnotColours wants them.
-  Neighbours KnotNeighbours(int camera, int t, int knot) const;
+                                              const recon::YarnDirections& yarns) const;
 
   // The knot's point from the accepted labels of frame t (two views or more), with the
   // reprojection residual per view.
