@@ -394,38 +394,44 @@ void MainWindow::SetFrame(int t) {
     frame_box_->setValue(session_->frame_number(t));
   }
   timeline_->SetCurrent(t);
-  RefreshOverlays();
-  RequestFrame();
+  RequestFrame();  // the overlays follow with the image
   RefreshStatus();
 }
 
 void MainWindow::RequestFrame() {
-  // Decoded off the GUI thread; a newer request makes this one's answer stale.
+  // Decoded, reduced to each view's size and toned off the GUI thread; a newer request makes this
+  // one's answer stale.
   frame_shown_ = false;
   const long request = ++request_;
   const int t = frame_, level = half_ ? 1 : 0;
   Session* session = session_.get();
   if (loader_.isRunning()) return;  // OnFrameLoaded asks again for the newest frame
-  loader_.setFuture(QtConcurrent::run([session, request, t, level]() {
+  std::array<double, 4> fit{};  // screen pixels per full-resolution pixel, per view
+  for (int c = 0; c < session->cameras() && c < 4; ++c)
+    fit[c] = views_[c]->FitScreenPerImage(session->rig_camera(c).intrinsics.width);
+  const cv::Mat tone = ToneTable(gain_, 0, gamma_);
+  loader_.setFuture(QtConcurrent::run([session, request, t, level, fit, tone]() {
     Loaded loaded;
     loaded.request = request;
     loaded.t = t;
     for (int c = 0; c < session->cameras() && c < 4; ++c) {
       std::string error;
       const auto image = session->cache().Get(c, session->frame_number(t), level, &error);
-      if (image)
-        loaded.images[c] = *image;
-      else
+      if (image) {
+        const double full_width = session->rig_camera(c).intrinsics.width;
+        loaded.frames[c] = MakeViewFrame(*image, fit[c] * full_width / image->cols, tone);
+      } else {
         loaded.problems[c] = QString("frame %1 cannot be read:\n%2")
                                  .arg(session->frame_number(t))
                                  .arg(QString::fromStdString(error));
+      }
     }
     return loaded;
   }));
 }
 
 void MainWindow::OnFrameLoaded() {
-  const Loaded loaded = loader_.result();
+  Loaded loaded = loader_.result();
   if (!session_) return;
   if (loaded.request != request_ || loaded.t != frame_) {  // the person moved on
     --request_;
@@ -434,9 +440,12 @@ void MainWindow::OnFrameLoaded() {
   }
   for (int c = 0; c < session_->cameras() && c < 4; ++c) {
     const calib::CameraIntrinsics& in = session_->rig_camera(c).intrinsics;
-    views_[c]->SetFrame(loaded.images[c], in.width, in.height, loaded.problems[c]);
+    views_[c]->SetFrame(std::move(loaded.frames[c]), in.width, in.height, loaded.problems[c]);
   }
+  // The frame's labels with its image, in the same paint: never one frame's labels over another
+  // frame's image.
   frame_shown_ = true;
+  RefreshOverlays();
 }
 
 bool MainWindow::WaitForFrame(int timeout_ms) {
@@ -449,7 +458,9 @@ bool MainWindow::WaitForFrame(int timeout_ms) {
 }
 
 void MainWindow::RefreshOverlays() {
-  if (!session_ || frame_ < 0) return;
+  // While a frame loads, the views keep the last frame's image and labels (OnFrameLoaded draws
+  // the new ones together).
+  if (!session_ || frame_ < 0 || !frame_shown_) return;
   const LabelDocument& doc = session_->document();
   const Project& p = session_->project();
   const recon::PointEstimate point = session_->Triangulate(frame_, knot_);

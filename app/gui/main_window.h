@@ -15,6 +15,7 @@
 #include <optional>
 #include <vector>
 
+#include "app/gui/camera_view.h"
 #include "app/gui/document/review_model.h"
 #include "app/gui/document/session.h"
 
@@ -173,7 +174,7 @@ class MainWindow : public QMainWindow {
   struct Loaded {
     long request = 0;
     int t = 0;
-    std::array<cv::Mat, 4> images;
+    std::array<ViewFrame, 4> frames;
     std::array<QString, 4> problems;
   };
   long request_ = 0;
