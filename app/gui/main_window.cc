@@ -266,6 +266,7 @@ void MainWindow::BuildActions() {
   go->addSeparator();
   AddAction(go, "Next review item", "Space", &MainWindow::NextReviewItem);
   AddAction(go, "Previous review item", "Shift+Space", &MainWindow::PreviousReviewItem);
+  AddAction(go, "First review item (earliest frame)", "Ctrl+Home", &MainWindow::FirstReviewItem);
   AddAction(go, "Next knot", ".", &MainWindow::NextKnot);
   AddAction(go, "Previous knot", ",", &MainWindow::PreviousKnot);
 
@@ -772,7 +773,18 @@ void MainWindow::NextReview(bool backwards) {
     return;
   }
   const LabelKey here{camera_, frame_, knot_};
-  const int row = backwards ? review_model_->Previous(here) : review_model_->Next(here);
+  ShowReviewRow(backwards ? review_model_->Previous(here) : review_model_->Next(here));
+}
+
+void MainWindow::FirstReviewItem() {
+  if (!session_ || !review_model_ || review_model_->rowCount() == 0) {
+    statusBar()->showMessage("Nothing to review", 3000);
+    return;
+  }
+  ShowReviewRow(0);
+}
+
+void MainWindow::ShowReviewRow(int row) {
   const auto [c, t, k] = review_model_->items()[row];
   SetFrame(t);
   SetCamera(c);

@@ -70,6 +70,8 @@ class MainWindow : public QMainWindow {
   bool busy() const { return tracker_.isRunning(); }
   // The review queue: the next / previous item (frame, camera maximised, knot selected, zoomed).
   void NextReview(bool backwards = false);
+  // The queue's first item: the earliest frame with a label for review.
+  void FirstReviewItem();
 
  protected:
   void closeEvent(QCloseEvent* event) override;
@@ -84,6 +86,8 @@ class MainWindow : public QMainWindow {
   void OnFrameLoaded();
   void RefreshOverlays();
   void RefreshStatus();
+  // Goes to row `row` of the review model: its frame, its camera maximised, the knot selected.
+  void ShowReviewRow(int row);
   // The selected knot's colour check in the current camera, on a worker; OnColoursRead shows it.
   void RequestColours();
   void OnColoursRead();

@@ -141,8 +141,8 @@ TEST_F(MainWindowTest, AScriptedSessionLabelsAsTheEngineDoesWithNoWrongLabel) {
         engine->FindPathFromCorners(0);
         break;
       case Action::kTrack:
-        engine->ApplyTrackRun(engine->Track(engine->document().labels(), 0, kLastFrame, nullptr, {},
-                                            MainWindow::kMaxReviewPerFrame));
+        engine->ApplyTrackRun(engine->Track(engine->document().labels(), a.t, kLastFrame, nullptr,
+                                            {}, MainWindow::kMaxReviewPerFrame));
         break;
     }
   const recon::LabelSet& direct = engine->document().labels();

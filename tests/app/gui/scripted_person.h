@@ -3,9 +3,9 @@
 // window's test and bench_gui): seeds the four corners of frame 0 in every camera (a Find Node
 // click each, zoomed in; a Shift+click where Find Node finds none or several), runs Find Path
 // from the corners (Ctrl+P), clicks every visible knot of frame 0 still without an accepted label
-// (as the corners), runs a tracking run to the last frame (T), then walks the review queue
-// (Space): a label within 1 px of the truth accepted (A), a hidden knot's deleted (D), any other
-// fixed with a Find Node click at the true place (and a Shift+click if that stays in doubt).
+// (as the corners), runs a tracking run to the last frame (T), then reviews a frame at a time: the
+// items of the earliest frame in the queue (Ctrl+Home, Space), each fixed (FixReviewItem), then
+// tracking again from there (T), until nothing is left for review.
 
 #include <Eigen/Core>
 #include <QCoreApplication>
@@ -53,10 +53,39 @@ inline void PickKnot(MainWindow* w, int knot) {
 }
 
 struct ScriptedSession {
-  std::vector<Action> actions;  // what the person did that changes labels
-  bool finished = false;        // the tracking run ended
-  int review_items = 0;         // review items the person went through
+  std::vector<Action> actions;  // what the person did that changes labels, and the tracking runs
+  bool finished = false;        // every tracking run ended
+  int review_items = 0;         // review items the person went to (Ctrl+Home or Space)
 };
+
+// Tracks forwards from the current frame (T) and waits for the run; false when it did not end.
+inline bool TrackForwards(MainWindow* w, ScriptedSession* out) {
+  const int from = w->frame();
+  QTest::keyClick(w, Qt::Key_T);
+  const bool ended = QTest::qWaitFor([&] { return !w->busy(); }, 600000);
+  out->actions.push_back({Action::kTrack, 0, from, 0, Eigen::Vector2d::Zero()});
+  return ended;
+}
+
+// Fixes the review item the window shows (its camera, frame and knot), whose true label is
+// `truth`: a hidden knot's label deleted (D), one within 1 px of the truth accepted (A), any
+// other fixed with a Find Node click at the true place (and a Shift+click if that stays in doubt).
+inline void FixReviewItem(MainWindow* w, const recon::Label& truth, ScriptedSession* out) {
+  Session* s = w->session();
+  const int c = w->camera(), t = w->frame(), k = w->knot();
+  if (!truth.present()) {
+    QTest::keyClick(w, Qt::Key_D);
+    out->actions.push_back({Action::kDelete, c, t, k, Eigen::Vector2d::Zero()});
+  } else if ((s->document().at(c, t, k).px - truth.px).norm() < 1.0) {
+    QTest::keyClick(w, Qt::Key_A);
+    out->actions.push_back({Action::kAccept, c, t, k, Eigen::Vector2d::Zero()});
+  } else {
+    out->actions.push_back({Action::kFindNode, c, t, k, ClickAt(w->view(c), truth.px)});
+    if (s->document().at(c, t, k).state != recon::LabelState::kAccepted)
+      out->actions.push_back(
+          {Action::kPlace, c, t, k, ClickAt(w->view(c), truth.px, Qt::ShiftModifier)});
+  }
+}
 
 // Plays the session on an open window whose recording `truth` (labels_true.h5) describes.
 inline ScriptedSession PlayScriptedSession(MainWindow* w, const recon::LabelSet& truth,
@@ -97,27 +126,30 @@ inline ScriptedSession PlayScriptedSession(MainWindow* w, const recon::LabelSet&
       QTest::keyClick(w, Qt::Key_F, Qt::ControlModifier);
     }
   // 3. Track to the last frame.
-  QTest::keyClick(w, Qt::Key_T);
-  out.finished = QTest::qWaitFor([&] { return !w->busy(); }, 600000);
-  out.actions.push_back({Action::kTrack, 0, 0, 0, Eigen::Vector2d::Zero()});
-  // 4. The review queue.
-  for (; out.review_items < max_review_items && !s->document().ReviewItems().empty();
-       ++out.review_items) {
-    QTest::keyClick(w, Qt::Key_Space);
-    const int c = w->camera(), t = w->frame(), k = w->knot();
-    const recon::Label& truth_label = want(c, t, k);
-    if (!truth_label.present()) {
-      QTest::keyClick(w, Qt::Key_D);
-      out.actions.push_back({Action::kDelete, c, t, k, Eigen::Vector2d::Zero()});
-    } else if ((s->document().at(c, t, k).px - truth_label.px).norm() < 1.0) {
-      QTest::keyClick(w, Qt::Key_A);
-      out.actions.push_back({Action::kAccept, c, t, k, Eigen::Vector2d::Zero()});
-    } else {
-      out.actions.push_back({Action::kFindNode, c, t, k, ClickAt(w->view(c), truth_label.px)});
-      if (s->document().at(c, t, k).state != recon::LabelState::kAccepted)
-        out.actions.push_back(
-            {Action::kPlace, c, t, k, ClickAt(w->view(c), truth_label.px, Qt::ShiftModifier)});
+  out.finished = TrackForwards(w, &out);
+  // 4. The review queue, a frame at a time (docs/gui.md, the workflow): the queue's first item
+  // (Ctrl+Home: the earliest frame with one), Space through the other items of that frame, each
+  // fixed; then tracking again from that frame (T), which replaces the labels tracked from those
+  // items while they were in doubt and carries on where a run stopped. Until the queue is empty
+  // after a run that reached the last frame.
+  const int last = s->frames() - 1;
+  while (out.finished && out.review_items < max_review_items) {
+    auto items = [&] { return s->document().ReviewItems(); };
+    if (items().empty() && w->frame() == last) break;  // a run ends on the frame it reached
+    if (!items().empty()) {
+      QTest::keyClick(w, Qt::Key_Home, Qt::ControlModifier);
+      const int round = w->frame();
+      for (;;) {
+        ++out.review_items;
+        FixReviewItem(w, want(w->camera(), w->frame(), w->knot()), &out);
+        const auto left = items();
+        if (left.empty() || out.review_items >= max_review_items ||
+            std::get<1>(left.front()) != round)  // the frame is done (the view shows no diamond)
+          break;
+        QTest::keyClick(w, Qt::Key_Space);
+      }
     }
+    out.finished = TrackForwards(w, &out);
   }
   return out;
 }
