@@ -170,8 +170,8 @@ int main(int argc, char** argv) {
     const ScriptedSession session = PlayScriptedSession(&w, truth, 1 << 30);
     const double wall_s = timer.nsecsElapsed() * 1e-9;
     // Person actions: the labeling ones, plus the keys that start Find Path and each run (counted
-    // in actions), plus one key (Ctrl+Home or Space) per review item.
-    const int actions = static_cast<int>(session.actions.size()) + session.review_items;
+    // in actions), plus the keys that only went to a review item (Ctrl+Home, Space).
+    const int actions = static_cast<int>(session.actions.size()) + session.navigation;
     std::array<int, 6> kinds{};
     for (const Action& a : session.actions) ++kinds[a.kind];
     long knot_frames = 0;
@@ -204,10 +204,10 @@ int main(int argc, char** argv) {
         session.finished ? "" : " (the tracking run did not end)");
     std::printf(
         "   actions: %d Find Node clicks, %d by hand (Shift+click), %d deletes, %d accepts, %d "
-        "Find Path, %d tracking runs, %d review items gone to\n",
+        "Find Path, %d tracking runs, %d keys to go to a review item; %d review items fixed\n",
         kinds[Action::kFindNode], kinds[Action::kPlace], kinds[Action::kDelete],
         kinds[Action::kAccept], kinds[Action::kFindPath], kinds[Action::kTrack],
-        session.review_items);
+        session.navigation, session.review_items);
     std::printf(
         "   left: %ld accepted labels right, %ld wrong, %ld visible knot-frames unlabeled "
         "(the script walks the review queue only; it does not click unlabeled knots), %zu "

@@ -267,6 +267,11 @@ void MainWindow::BuildActions() {
   AddAction(go, "Next review item", "Space", &MainWindow::NextReviewItem);
   AddAction(go, "Previous review item", "Shift+Space", &MainWindow::PreviousReviewItem);
   AddAction(go, "First review item (earliest frame)", "Ctrl+Home", &MainWindow::FirstReviewItem);
+  advance_ = go->addAction("Advance to the frame's next review item after a fix");
+  advance_->setCheckable(true);
+  advance_->setChecked(true);
+  advance_->setToolTip(
+      "After A, D, or a click that fixes a review item, go to the next item of the same frame");
   AddAction(go, "Next knot", ".", &MainWindow::NextKnot);
   AddAction(go, "Previous knot", ",", &MainWindow::PreviousKnot);
 
@@ -623,11 +628,14 @@ void MainWindow::SetKnot(int knot) {
 }
 
 void MainWindow::OnClick(int camera, const Eigen::Vector2d& px, Qt::KeyboardModifiers modifiers) {
-  if (!session_ || tracker_.isRunning()) return;
+  if (!session_ || busy()) return;
   SetCamera(camera);
+  const LabelKey key{camera, frame_, knot_};
+  const bool was_review = UnderReview(camera, frame_, knot_);
   if (modifiers & Qt::ShiftModifier) {  // exactly where clicked: the person's own label
     session_->PlaceLabel(camera, frame_, knot_, px, "Place " + KnotName(knot_).toStdString());
     statusBar()->showMessage(QString("Placed knot %1 by hand").arg(KnotName(knot_)), 4000);
+    AdvanceAfterFix(key, was_review);
     return;
   }
   const recon::FindNodeResult r =
@@ -644,6 +652,7 @@ void MainWindow::OnClick(int camera, const Eigen::Vector2d& px, Qt::KeyboardModi
                                                      camera, frame_, knot_))
                                            : "found and accepted"),
           6000);
+      if (!review) AdvanceAfterFix(key, was_review);
       break;
     }
     case recon::FindNodeStatus::kNone:
@@ -663,7 +672,7 @@ void MainWindow::OnClick(int camera, const Eigen::Vector2d& px, Qt::KeyboardModi
 }
 
 void MainWindow::OnDrag(int camera, int knot, const Eigen::Vector2d& px) {
-  if (!session_ || tracker_.isRunning()) return;
+  if (!session_ || busy()) return;
   session_->PlaceLabel(camera, frame_, knot, px, "Move " + KnotName(knot).toStdString());
 }
 
@@ -740,11 +749,11 @@ void MainWindow::Save() {
 }
 
 void MainWindow::Undo() {
-  if (session_ && !tracker_.isRunning()) session_->document().undo_stack()->undo();
+  if (session_ && !busy()) session_->document().undo_stack()->undo();
 }
 
 void MainWindow::Redo() {
-  if (session_ && !tracker_.isRunning()) session_->document().undo_stack()->redo();
+  if (session_ && !busy()) session_->document().undo_stack()->redo();
 }
 
 void MainWindow::LastFrame() {
@@ -802,15 +811,35 @@ void MainWindow::ShowReviewRow(int row) {
 }
 
 void MainWindow::AcceptSelected() {
-  if (session_ && !tracker_.isRunning()) session_->AcceptLabel(camera_, frame_, knot_);
+  if (!session_ || busy()) return;
+  const bool was_review = UnderReview(camera_, frame_, knot_);
+  session_->AcceptLabel(camera_, frame_, knot_);
+  AdvanceAfterFix({camera_, frame_, knot_}, was_review);
 }
 
 void MainWindow::DeleteSelected() {
-  if (session_ && !tracker_.isRunning()) session_->DeleteLabel(camera_, frame_, knot_);
+  if (!session_ || busy()) return;
+  const bool was_review = UnderReview(camera_, frame_, knot_);
+  session_->DeleteLabel(camera_, frame_, knot_);
+  AdvanceAfterFix({camera_, frame_, knot_}, was_review);
+}
+
+bool MainWindow::UnderReview(int camera, int t, int knot) const {
+  const recon::Label& l = session_->document().at(camera, t, knot);
+  return l.present() && l.state == recon::LabelState::kNeedsReview;
+}
+
+void MainWindow::AdvanceAfterFix(const LabelKey& key, bool was_review) {
+  const auto [c, t, k] = key;
+  if (!was_review || !advance_->isChecked() || UnderReview(c, t, k) ||
+      review_model_->rowCount() == 0)
+    return;
+  const int row = review_model_->Next(key);
+  if (std::get<1>(review_model_->items()[row]) == t) ShowReviewRow(row);
 }
 
 void MainWindow::Nudge(double dx, double dy) {
-  if (!session_ || tracker_.isRunning()) return;
+  if (!session_ || busy()) return;
   const recon::Label& l = session_->document().at(camera_, frame_, knot_);
   if (!l.present()) return;
   // Half a pixel when a pixel is a screen pixel or larger; scaled up when zoomed out, so a nudge
@@ -821,7 +850,7 @@ void MainWindow::Nudge(double dx, double dy) {
 }
 
 void MainWindow::FindPathCorners() {
-  if (!session_ || tracker_.isRunning()) return;
+  if (!session_ || busy()) return;
   const recon::EngineCounts n = session_->FindPathFromCorners(frame_);
   statusBar()->showMessage(QString("Find Path from the corners and Fill Grid: %1 accepted, %2 "
                                    "for review")
@@ -831,7 +860,7 @@ void MainWindow::FindPathCorners() {
 }
 
 void MainWindow::FindPathToPrevious() {
-  if (!session_ || tracker_.isRunning() || previous_knot_ < 0) return;
+  if (!session_ || busy() || previous_knot_ < 0) return;
   const std::string why = session_->FindPathBetween(camera_, frame_, previous_knot_, knot_);
   statusBar()->showMessage(
       why.empty()
@@ -841,7 +870,7 @@ void MainWindow::FindPathToPrevious() {
 }
 
 void MainWindow::FillGridHere() {
-  if (!session_ || tracker_.isRunning()) return;
+  if (!session_ || busy()) return;
   const recon::EngineCounts n = session_->FillGrid(frame_);
   statusBar()->showMessage(QString("Epipolar check and Fill Grid: %1 accepted, %2 for review")
                                .arg(n.accepted)
@@ -861,11 +890,11 @@ void MainWindow::TrackToFrame() {
       this, "Track to frame", "Track up to frame number:",
       session_->frame_number(std::min(frame_ + 30, session_->frames() - 1)),
       session_->frame_number(0), session_->frame_number(session_->frames() - 1), 1, &ok);
-  if (ok) TrackTo(f - session_->frame_number(0));
+  if (ok) TrackTo(f - session_->frame_number(0), false, -1);  // the range asked for, in one run
 }
 
-void MainWindow::TrackTo(int to, bool wait) {
-  if (!session_ || tracker_.isRunning() || to == frame_) return;
+void MainWindow::TrackTo(int to, bool wait, int max_review) {
+  if (!session_ || busy() || to == frame_) return;
   // A snapshot on the GUI thread; the run never touches the document.
   const int from = frame_;
   cancel_ = false;
@@ -889,6 +918,7 @@ void MainWindow::TrackTo(int to, bool wait) {
   };
   disconnect(&tracker_, nullptr, this, nullptr);
   connect(&tracker_, &QFutureWatcher<Session::TrackRun>::finished, this, [this, bar] {
+    tracking_ = false;
     if (bar) bar->close();
     // The closed progress dialog may leave no window active (Qt's offscreen platform does):
     // the keys would go nowhere.
@@ -901,20 +931,26 @@ void MainWindow::TrackTo(int to, bool wait) {
         QString("Tracked to frame %1: %2 labels%3")
             .arg(session_->frame_number(run.last_done))
             .arg(changed)
-            .arg(run.cancelled ? " (cancelled)"
-                 : run.stopped_for_review
-                     ? QString(" (stopped: over %1 labels for review in one frame)")
-                           .arg(kMaxReviewPerFrame)
-                     : QString()),
+            .arg(run.cancelled            ? " (cancelled)"
+                 : run.stopped_for_review ? QString(" (stopped: labels for review in this frame)")
+                                          : QString()),
         10000);
     SetFrame(run.last_done);
+    // Stopped where the person is needed: that frame's first review item.
+    if (run.stopped_for_review)
+      for (int row = 0; row < review_model_->rowCount(); ++row)
+        if (std::get<1>(review_model_->items()[row]) == run.last_done) {
+          ShowReviewRow(row);
+          break;
+        }
   });
+  tracking_ = true;
   tracker_.setFuture(QtConcurrent::run(
-      [session, snapshot = session_->document().labels(), from, to, report, this]() {
-        return session->Track(snapshot, from, to, &cancel_, report, kMaxReviewPerFrame);
+      [session, snapshot = session_->document().labels(), from, to, report, max_review, this]() {
+        return session->Track(snapshot, from, to, &cancel_, report, max_review);
       }));
   if (wait) {
-    while (tracker_.isRunning()) QCoreApplication::processEvents(QEventLoop::AllEvents, 20);
+    while (busy()) QCoreApplication::processEvents(QEventLoop::AllEvents, 20);
     QCoreApplication::processEvents();
   }
 }

@@ -39,8 +39,10 @@ class MainWindow : public QMainWindow {
   MainWindow();
   ~MainWindow() override;
 
-  // A tracking run stops after a frame with more labels than this kept for review.
-  static constexpr int kMaxReviewPerFrame = 20;
+  // T's tracking run stops after a frame with more labels than this kept for review: at the
+  // first frame that needs the person, whose first review item it then shows (a run that went on
+  // would carry every doubtful label into the frames after it, each needing a look or a re-run).
+  static constexpr int kMaxReviewPerFrame = 0;
 
   // Opens a project (asks about a journal left by a crash unless `ask` is false, then recovers
   // nothing). False, with a dialog naming the file and the reason, when it cannot be opened.
@@ -65,9 +67,11 @@ class MainWindow : public QMainWindow {
   // `timeout_ms`.
   bool WaitForFrame(int timeout_ms = 20000);
   // Tracks from the current frame to `to` (worker thread, progress dialog); waits when `wait`.
-  void TrackTo(int to, bool wait = false);
-  // Whether a tracking run is under way (the views take no edits meanwhile).
-  bool busy() const { return tracker_.isRunning(); }
+  // Stops after a frame with more than `max_review` labels for review (negative: no limit).
+  void TrackTo(int to, bool wait = false, int max_review = kMaxReviewPerFrame);
+  // Whether a tracking run is under way, until its result is applied (the views take no edits
+  // meanwhile).
+  bool busy() const { return tracking_; }
   // The review queue: the next / previous item (frame, camera maximised, knot selected, zoomed).
   void NextReview(bool backwards = false);
   // The queue's first item: the earliest frame with a label for review.
@@ -88,6 +92,10 @@ class MainWindow : public QMainWindow {
   void RefreshStatus();
   // Goes to row `row` of the review model: its frame, its camera maximised, the knot selected.
   void ShowReviewRow(int row);
+  // After the person fixed the review item `key` (accepted, deleted, placed or found again and
+  // no longer in doubt): the next item of the same frame, when "Advance after a fix" is on.
+  void AdvanceAfterFix(const LabelKey& key, bool was_review);
+  bool UnderReview(int camera, int t, int knot) const;
   // The selected knot's colour check in the current camera, on a worker; OnColoursRead shows it.
   void RequestColours();
   void OnColoursRead();
@@ -167,6 +175,7 @@ class MainWindow : public QMainWindow {
   QLabel* status_knot_ = nullptr;
   QTimer* play_timer_ = nullptr;
   std::vector<QAction*> actions_;
+  QAction* advance_ = nullptr;  // Go > Advance to the frame's next review item after a fix
   QMenu* recent_menu_ = nullptr;
 
   int frame_ = 0, camera_ = 0, knot_ = 0, previous_knot_ = -1;
@@ -199,6 +208,7 @@ class MainWindow : public QMainWindow {
   QFutureWatcher<ColoursRead> colours_;
   // The tracking run on a worker.
   QFutureWatcher<Session::TrackRun> tracker_;
+  bool tracking_ = false;  // from the run's start until its result is applied
   std::atomic<bool> cancel_{false};
 };
 

@@ -196,7 +196,7 @@ Session::TrackRun Session::Track(recon::LabelSet snapshot, int from, int to,
       for (int k = 0; k < store.labels().knots(); ++k)
         review += store.at(c, t, k).present() &&
                   store.at(c, t, k).state == recon::LabelState::kNeedsReview;
-    if (max_review > 0 && review > max_review) {
+    if (max_review >= 0 && review > max_review) {
       run.stopped_for_review = true;
       return false;
     }

@@ -80,8 +80,9 @@ class Session {
 
   // A tracking run from labeled row `from` towards `to` on `snapshot` (document().labels(),
   // copied on the GUI thread); runs on any thread and never touches the document. Stops when
-  // `cancel` is set, or after a frame with more than max_review labels kept for review (0: no
-  // limit). progress(done, total) is called from the running thread.
+  // `cancel` is set, or after a frame with more than max_review labels kept for review (0: the
+  // first frame with one; negative: no limit). progress(done, total) is called from the running
+  // thread.
   struct TrackRun {
     int from = 0, to = 0, last_done = 0;
     bool cancelled = false, stopped_for_review = false;
@@ -90,7 +91,7 @@ class Session {
   };
   TrackRun Track(recon::LabelSet snapshot, int from, int to, const std::atomic<bool>* cancel,
                  const std::function<void(int done, int total)>& progress = {},
-                 int max_review = 0) const;
+                 int max_review = -1) const;
   // Applies a run as one undo step (GUI thread). Returns the labels changed.
   int ApplyTrackRun(const TrackRun& run);
 

@@ -151,8 +151,15 @@ TEST_F(MainWindowTest, AScriptedSessionLabelsAsTheEngineDoesWithNoWrongLabel) {
     for (int t = 0; t < saved.frames(); ++t)
       for (int k = 0; k < saved.knots(); ++k) {
         const recon::Label &a = saved.at(c, t, k), &b = direct.at(c, t, k);
-        differ += a.present() != b.present() || a.state != b.state || a.source != b.source ||
-                  (a.present() && (a.px - b.px).norm() > 1e-9);
+        const bool different = a.present() != b.present() || a.state != b.state ||
+                               a.source != b.source ||
+                               (a.present() && (a.px - b.px).norm() > 1e-9);
+        if (different && ++differ <= 5)
+          ADD_FAILURE() << "camera " << c << " frame " << t << " knot " << k << ": window "
+                        << (a.present() ? "present" : "absent") << " state "
+                        << int(a.state) << " source " << int(a.source) << ", engine "
+                        << (b.present() ? "present" : "absent") << " state " << int(b.state)
+                        << " source " << int(b.source);
       }
   EXPECT_EQ(differ, 0);
   // Every step is undoable: undoing all of them empties the labels.

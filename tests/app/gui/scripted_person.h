@@ -3,9 +3,9 @@
 // window's test and bench_gui): seeds the four corners of frame 0 in every camera (a Find Node
 // click each, zoomed in; a Shift+click where Find Node finds none or several), runs Find Path
 // from the corners (Ctrl+P), clicks every visible knot of frame 0 still without an accepted label
-// (as the corners), runs a tracking run to the last frame (T), then reviews a frame at a time: the
-// items of the earliest frame in the queue (Ctrl+Home, Space), each fixed (FixReviewItem), then
-// tracking again from there (T), until nothing is left for review.
+// (as the corners), tracks (T: a run stops at the first frame with a label for review), fixes that
+// frame's review items (FixReviewItem; the window moves on to the next by itself), tracks on, and
+// so on to the last frame with nothing left for review.
 
 #include <Eigen/Core>
 #include <QCoreApplication>
@@ -31,9 +31,10 @@ struct Action {
 inline Eigen::Vector2d ClickAt(CameraView* view, const Eigen::Vector2d& px,
                                Qt::KeyboardModifiers modifiers = {}) {
   const QPoint point = view->ToWidget(px).toPoint();
+  const Eigen::Vector2d at = view->ToImage(QPointF(point));  // before: the click may re-zoom it
   QTest::mouseMove(view, point);
   QTest::mouseClick(view, Qt::LeftButton, modifiers, point);
-  return view->ToImage(QPointF(point));
+  return at;
 }
 
 // Zooms the view in at image pixel px with wheel events (as a person does before a click).
@@ -55,7 +56,8 @@ inline void PickKnot(MainWindow* w, int knot) {
 struct ScriptedSession {
   std::vector<Action> actions;  // what the person did that changes labels, and the tracking runs
   bool finished = false;        // every tracking run ended
-  int review_items = 0;         // review items the person went to (Ctrl+Home or Space)
+  int review_items = 0;         // review items the person fixed
+  int navigation = 0;           // keys that only went to an item (Ctrl+Home, Space)
 };
 
 // Tracks forwards from the current frame (T) and waits for the run; false when it did not end.
@@ -127,17 +129,24 @@ inline ScriptedSession PlayScriptedSession(MainWindow* w, const recon::LabelSet&
     }
   // 3. Track to the last frame.
   out.finished = TrackForwards(w, &out);
-  // 4. The review queue, a frame at a time (docs/gui.md, the workflow): the queue's first item
-  // (Ctrl+Home: the earliest frame with one), Space through the other items of that frame, each
-  // fixed; then tracking again from that frame (T), which replaces the labels tracked from those
-  // items while they were in doubt and carries on where a run stopped. Until the queue is empty
-  // after a run that reached the last frame.
+  // 4. The review queue, a frame at a time (docs/gui.md, the workflow). A run stops at the first
+  // frame with a label for review and shows its first item; after each fix the window goes on
+  // to the frame's next item by itself. The person fixes them, then tracks on from there (T),
+  // which also replaces what a run carried from a label in doubt. Items the runs left elsewhere
+  // are reached from the queue's first one (Ctrl+Home; Space when the window did not move on).
   const int last = s->frames() - 1;
+  auto items = [&] { return s->document().ReviewItems(); };
+  auto on_item = [&] {
+    const recon::Label& l = s->document().at(w->camera(), w->frame(), w->knot());
+    return l.present() && l.state == recon::LabelState::kNeedsReview;
+  };
   while (out.finished && out.review_items < max_review_items) {
-    auto items = [&] { return s->document().ReviewItems(); };
     if (items().empty() && w->frame() == last) break;  // a run ends on the frame it reached
     if (!items().empty()) {
-      QTest::keyClick(w, Qt::Key_Home, Qt::ControlModifier);
+      if (!on_item()) {
+        QTest::keyClick(w, Qt::Key_Home, Qt::ControlModifier);
+        ++out.navigation;
+      }
       const int round = w->frame();
       for (;;) {
         ++out.review_items;
@@ -146,7 +155,10 @@ inline ScriptedSession PlayScriptedSession(MainWindow* w, const recon::LabelSet&
         if (left.empty() || out.review_items >= max_review_items ||
             std::get<1>(left.front()) != round)  // the frame is done (the view shows no diamond)
           break;
-        QTest::keyClick(w, Qt::Key_Space);
+        if (!on_item()) {
+          QTest::keyClick(w, Qt::Key_Space);
+          ++out.navigation;
+        }
       }
     }
     out.finished = TrackForwards(w, &out);
