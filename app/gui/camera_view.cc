@@ -168,6 +168,13 @@ void CameraView::DrawOverlay(QPainter& painter) const {
     painter.drawLine(p + QPointF(-7, 0), p + QPointF(7, 0));
     painter.drawLine(p + QPointF(0, -7), p + QPointF(0, 7));
   }
+  if (overlay_.expected) {  // a missing knot: a dashed ring around where it is expected
+    const QPointF p = ToWidget(*overlay_.expected);
+    painter.setPen(QPen(QColor(255, 80, 255), 2.0, Qt::DashLine));
+    painter.setBrush(Qt::NoBrush);
+    const double r = std::clamp(scale_ * 8.0, 12.0, 40.0);
+    painter.drawEllipse(p, r, r);
+  }
   if (cursor_inside_ && !pan_from_ && dragging_ < 0) {  // the brush
     painter.setPen(QPen(QColor(255, 255, 255, 150), 1.0, Qt::DotLine));
     painter.setBrush(Qt::NoBrush);

@@ -29,6 +29,9 @@ struct ViewOverlay {
   int selected_knot = -1;
   std::vector<std::vector<Eigen::Vector2d>> epipolar;  // curves from the other cameras' labels
   std::optional<Eigen::Vector2d> reprojected;          // the selected knot's triangulated point
+  // The selected knot missing in this view (no label, two other cameras see it): where they put
+  // it, drawn as a ring so it is found when zoomed out.
+  std::optional<Eigen::Vector2d> expected;
   std::vector<Eigen::Vector2d> candidates;             // Find Node's when it found several
   QString caption;                                     // camera, frame, residual
 };

@@ -30,6 +30,7 @@ namespace netlab::gui {
 
 class CameraView;
 class Timeline;
+struct ViewOverlay;
 
 class MainWindow : public QMainWindow {
   Q_OBJECT
@@ -143,6 +144,16 @@ class MainWindow : public QMainWindow {
   void BrushLarger();
   void BrushSmaller();
   void ShowShortcuts();
+
+  // Missing knots (the review queue's second kind) and hidden marks.
+  void ConnectMissing();      // the review model and the timeline follow the session's list
+  void OnMissingChanged();
+  void ShowMissingItem(int row);  // the status bar for a missing item of the queue
+  // The selected knot when it has no label in camera c: where the other cameras put it (a
+  // magenta ring), or that the person marked it hidden, into c's overlay.
+  void MarkExpected(int c, ViewOverlay* overlay) const;
+  void HideSelected();        // D with no label selected: a hidden mark here
+  void HideSelectedOnwards(); // Shift+D: here and in the following frames it is missing in
 
   std::unique_ptr<Session> session_;
   std::unique_ptr<ReviewModel> review_model_;

@@ -5,7 +5,10 @@
 // from the corners (Ctrl+P), clicks every visible knot of frame 0 still without an accepted label
 // (as the corners), runs a tracking run to the last frame (T), then walks the review queue
 // (Space): a label within 1 px of the truth accepted (A), a hidden knot's deleted (D), any other
-// fixed with a Find Node click at the true place (and a Shift+click if that stays in doubt).
+// fixed with a Find Node click at the true place (and a Shift+click if that stays in doubt); a
+// missing knot (no label) is labeled the same way, or marked hidden where the truth has none: in
+// every following frame it is missing in (Shift+D) when the truth has none there either, else
+// here (D).
 
 #include <Eigen/Core>
 #include <QCoreApplication>
@@ -21,7 +24,7 @@ namespace netlab::gui {
 
 // One action of the person, to replay on the engine without a window.
 struct Action {
-  enum Kind { kFindNode, kPlace, kDelete, kAccept, kFindPath, kTrack } kind;
+  enum Kind { kFindNode, kPlace, kDelete, kAccept, kFindPath, kTrack, kHide, kHideRun } kind;
   int camera = 0, t = 0, knot = 0;
   Eigen::Vector2d px = Eigen::Vector2d::Zero();
 };
@@ -107,8 +110,17 @@ inline ScriptedSession PlayScriptedSession(MainWindow* w, const recon::LabelSet&
     const int c = w->camera(), t = w->frame(), k = w->knot();
     const recon::Label& truth_label = want(c, t, k);
     if (!truth_label.present()) {
-      QTest::keyClick(w, Qt::Key_D);
-      out.actions.push_back({Action::kDelete, c, t, k, Eigen::Vector2d::Zero()});
+      const bool labeled = s->document().at(c, t, k).present();
+      bool run_hidden = !labeled;  // hidden in every frame it is missing in from here
+      for (int u : s->missing().RunFrom(c, t, k)) run_hidden = run_hidden && !want(c, u, k).present();
+      if (run_hidden) {
+        QTest::keyClick(w, Qt::Key_D, Qt::ShiftModifier);
+        out.actions.push_back({Action::kHideRun, c, t, k, Eigen::Vector2d::Zero()});
+      } else {
+        QTest::keyClick(w, Qt::Key_D);  // a label deleted; a missing knot marked hidden
+        out.actions.push_back(
+            {labeled ? Action::kDelete : Action::kHide, c, t, k, Eigen::Vector2d::Zero()});
+      }
     } else if ((s->document().at(c, t, k).px - truth_label.px).norm() < 1.0) {
       QTest::keyClick(w, Qt::Key_A);
       out.actions.push_back({Action::kAccept, c, t, k, Eigen::Vector2d::Zero()});
