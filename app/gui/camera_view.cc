@@ -73,6 +73,7 @@ void CameraView::Fit() {
   scale_ = std::min(width() / double(full_width_), height() / double(full_height_));
   offset_ = QPointF((width() - full_width_ * scale_) / 2, (height() - full_height_ * scale_) / 2);
   fitted_ = true;
+  zoomed_on_.reset();
   update();
 }
 
@@ -81,6 +82,7 @@ void CameraView::ZoomTo(const Eigen::Vector2d& px, double pixels_across) {
   offset_ =
       QPointF(width() / 2.0 - (px.x() + 0.5) * scale_, height() / 2.0 - (px.y() + 0.5) * scale_);
   fitted_ = true;
+  zoomed_on_ = std::make_pair(px, pixels_across);
   update();
 }
 
@@ -183,7 +185,11 @@ void CameraView::DrawOverlay(QPainter& painter) const {
 }
 
 void CameraView::resizeEvent(QResizeEvent*) {
-  if (fitted_) Fit();
+  // A view zoomed onto a knot stays on it (a view shown alone is resized after the zoom).
+  if (zoomed_on_)
+    ZoomTo(zoomed_on_->first, zoomed_on_->second);
+  else if (fitted_)
+    Fit();
 }
 
 void CameraView::wheelEvent(QWheelEvent* event) {
@@ -196,6 +202,7 @@ void CameraView::wheelEvent(QWheelEvent* event) {
   const QPointF at = event->position();
   const Eigen::Vector2d px = ToImage(at);
   scale_ = std::clamp(scale_ * std::pow(1.25, steps), 0.02, 64.0);
+  zoomed_on_.reset();
   offset_ = at - QPointF((px.x() + 0.5) * scale_, (px.y() + 0.5) * scale_);
   update();
 }
@@ -226,6 +233,7 @@ void CameraView::mouseMoveEvent(QMouseEvent* event) {
   cursor_inside_ = true;
   if (pan_from_) {
     offset_ += event->position() - *pan_from_;
+    zoomed_on_.reset();
     pan_from_ = event->position();
   } else if (dragging_ >= 0) {
     drag_px_ = ToImage(event->position());

@@ -12,6 +12,7 @@
 #include <QWidget>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <utility>
 #include <vector>
 
 namespace netlab::gui {
@@ -101,6 +102,8 @@ class CameraView : public QWidget {
   double scale_ = 1.0;
   QPointF offset_;
   bool fitted_ = false;
+  // The knot pixel and span of the last ZoomTo, until the person zooms or pans: kept on resize.
+  std::optional<std::pair<Eigen::Vector2d, double>> zoomed_on_;
   // Interaction.
   std::optional<QPointF> pan_from_;
   int dragging_ = -1;  // the knot being dragged

@@ -367,6 +367,12 @@ TEST_F(MainWindowTest, SpaceReachesAMissingKnotAndAFindNodeClickLabelsIt) {
   }
   ASSERT_TRUE(w.view(c)->overlay().expected.has_value());
   EXPECT_LT((*w.view(c)->overlay().expected - where).norm(), 0.5);
+  // Zoomed onto it (80 image pixels across), also once the view alone is laid out anew.
+  QCoreApplication::processEvents();
+  const QPointF centre(w.view(c)->width() / 2.0, w.view(c)->height() / 2.0);
+  const QPointF at = w.view(c)->ToWidget(*w.view(c)->overlay().expected);
+  EXPECT_LT(std::hypot(at.x() - centre.x(), at.y() - centre.y()), 2.0);
+  EXPECT_NEAR(w.view(c)->scale(), std::min(w.view(c)->width(), w.view(c)->height()) / 80.0, 1e-9);
   EXPECT_TRUE(w.view(c)->overlay().reprojected.has_value());
   EXPECT_TRUE(w.statusBar()->currentMessage().contains("no label; seen in"))
       << w.statusBar()->currentMessage().toStdString();
