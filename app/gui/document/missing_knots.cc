@@ -1,7 +1,6 @@
 #include "app/gui/document/missing_knots.h"
 
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <optional>
 #include <stdexcept>
