@@ -121,6 +121,7 @@ void CameraView::Fit() {
   scale_ = std::min(width() / double(full_width_), height() / double(full_height_));
   offset_ = QPointF((width() - full_width_ * scale_) / 2, (height() - full_height_ * scale_) / 2);
   fitted_ = true;
+  zoomed_on_.reset();
   update();
 }
 
@@ -129,6 +130,7 @@ void CameraView::ZoomTo(const Eigen::Vector2d& px, double pixels_across) {
   offset_ =
       QPointF(width() / 2.0 - (px.x() + 0.5) * scale_, height() / 2.0 - (px.y() + 0.5) * scale_);
   fitted_ = true;
+  zoomed_on_ = std::make_pair(px, pixels_across);
   update();
 }
 
@@ -237,6 +239,13 @@ void CameraView::DrawOverlay(QPainter& painter) const {
     painter.drawLine(p + QPointF(-7, 0), p + QPointF(7, 0));
     painter.drawLine(p + QPointF(0, -7), p + QPointF(0, 7));
   }
+  if (overlay_.expected) {  // a missing knot: a dashed ring around where it is expected
+    const QPointF p = ToWidget(*overlay_.expected);
+    painter.setPen(QPen(QColor(255, 80, 255), 2.0, Qt::DashLine));
+    painter.setBrush(Qt::NoBrush);
+    const double r = std::clamp(scale_ * 8.0, 12.0, 40.0);
+    painter.drawEllipse(p, r, r);
+  }
   if (cursor_inside_ && !pan_from_ && dragging_ < 0) {  // the brush
     painter.setPen(QPen(QColor(255, 255, 255, 150), 1.0, Qt::DotLine));
     painter.setBrush(Qt::NoBrush);
@@ -245,7 +254,11 @@ void CameraView::DrawOverlay(QPainter& painter) const {
 }
 
 void CameraView::resizeEvent(QResizeEvent*) {
-  if (fitted_) Fit();
+  // A view zoomed onto a knot stays on it (a view shown alone is resized after the zoom).
+  if (zoomed_on_)
+    ZoomTo(zoomed_on_->first, zoomed_on_->second);
+  else if (fitted_)
+    Fit();
   // A larger view (maximised) needs a finer reduced copy: made once here, not at every paint.
   if (has_image() &&
       Reduction(frame_.image.cols, FitScreenPerImage(frame_.image.cols)) != frame_.reduction)
@@ -262,6 +275,7 @@ void CameraView::wheelEvent(QWheelEvent* event) {
   const QPointF at = event->position();
   const Eigen::Vector2d px = ToImage(at);
   scale_ = std::clamp(scale_ * std::pow(1.25, steps), 0.02, 64.0);
+  zoomed_on_.reset();
   offset_ = at - QPointF((px.x() + 0.5) * scale_, (px.y() + 0.5) * scale_);
   update();
 }
@@ -292,6 +306,7 @@ void CameraView::mouseMoveEvent(QMouseEvent* event) {
   cursor_inside_ = true;
   if (pan_from_) {
     offset_ += event->position() - *pan_from_;
+    zoomed_on_.reset();
     pan_from_ = event->position();
   } else if (dragging_ >= 0) {
     drag_px_ = ToImage(event->position());

@@ -12,6 +12,7 @@
 #include <QWidget>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <utility>
 #include <vector>
 
 namespace netlab::gui {
@@ -49,6 +50,9 @@ struct ViewOverlay {
   int selected_knot = -1;
   std::vector<std::vector<Eigen::Vector2d>> epipolar;  // curves from the other cameras' labels
   std::optional<Eigen::Vector2d> reprojected;          // the selected knot's triangulated point
+  // The selected knot missing in this view (no label, two other cameras see it): where they put
+  // it, drawn as a ring so it is found when zoomed out.
+  std::optional<Eigen::Vector2d> expected;
   std::vector<Eigen::Vector2d> candidates;             // Find Node's when it found several
   QString caption;                                     // camera, frame, residual
 };
@@ -126,6 +130,8 @@ class CameraView : public QWidget {
   double scale_ = 1.0;
   QPointF offset_;
   bool fitted_ = false;
+  // The knot pixel and span of the last ZoomTo, until the person zooms or pans: kept on resize.
+  std::optional<std::pair<Eigen::Vector2d, double>> zoomed_on_;
   // Interaction.
   std::optional<QPointF> pan_from_;
   int dragging_ = -1;  // the knot being dragged

@@ -1,4 +1,4 @@
-// netlab gui [PROJECT.yaml [--frame N] [--screenshot OUT.png]]
+// netlab gui [PROJECT.yaml [--frame N] [--review N] [--screenshot OUT.png]]
 // netlab gui EXPERIMENT.yaml --rig RIG --labels LABELS [--coloring C] [--knots RxC] [--project P]
 #include "app/gui/gui_command.h"
 
@@ -18,7 +18,7 @@ namespace netlab::gui {
 namespace {
 
 constexpr char kHelp[] =
-    "usage: netlab gui [PROJECT.yaml] [--frame N] [--screenshot OUT.png]\n"
+    "usage: netlab gui [PROJECT.yaml] [--frame N] [--review N] [--screenshot OUT.png]\n"
     "       netlab gui EXPERIMENT.yaml --rig rig.yaml --labels labels.h5 [--coloring C.yaml]\n"
     "                  [--knots RxC] [--project project.yaml]\n\n"
     "The labeling workstation (docs/gui.md): four synchronized camera views, Find Node, Find\n"
@@ -30,6 +30,8 @@ constexpr char kHelp[] =
     "                              project.yaml beside the labels file) and opens it\n\n"
     "options:\n"
     "  --frame N           open at frame number N\n"
+    "  --review N          open at the N-th item of the review queue (as Space N times: its\n"
+    "                      frame, its camera maximised, zoomed on the knot)\n"
     "  --screenshot FILE   draw the frame with its overlays, save the window as PNG and exit\n"
     "                      (works without a display)\n"
     "  --rig, --labels, --coloring FILE, --knots RxC (without a colouring), --project FILE\n\n"
@@ -48,10 +50,11 @@ bool HasDisplay() {
 
 int RunGui(const std::vector<std::string>& args) {
   std::string project_path, screenshot;
-  int frame = -1;
+  int frame = -1, review = 0;
   try {
     const app::CommandLine cl(
-        args, {"help"}, {"frame", "screenshot", "rig", "labels", "coloring", "knots", "project"});
+        args, {"help"},
+        {"frame", "review", "screenshot", "rig", "labels", "coloring", "knots", "project"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -60,6 +63,7 @@ int RunGui(const std::vector<std::string>& args) {
       throw app::UsageError("expected at most one project or experiment file");
     screenshot = cl.Option("screenshot").value_or("");
     frame = cl.IntOption("frame", -1, 0, 100000000);
+    review = cl.IntOption("review", 0, 1, 10000);
     if (!cl.positional().empty()) {
       const std::string& file = cl.positional()[0];
       if (IsProjectFile(file)) {
@@ -104,6 +108,7 @@ int RunGui(const std::vector<std::string>& args) {
   if (!project_path.empty()) {
     if (!window.OpenProject(QString::fromStdString(project_path), screenshot.empty())) return 1;
     if (frame >= 0) window.SetFrame(frame - window.session()->frame_number(0));
+    for (int i = 0; i < review; ++i) window.NextReview();
   }
   if (!screenshot.empty()) {
     window.resize(1600, 1000);

@@ -277,6 +277,8 @@ void MainWindow::BuildActions() {
 
   AddAction(edit, "Accept label", "A", &MainWindow::AcceptSelected);
   AddAction(edit, "Delete label", "Delete;D", &MainWindow::DeleteSelected);
+  AddAction(edit, "Mark hidden here and in the following frames", "Shift+D",
+            &MainWindow::HideSelectedOnwards);
   AddAction(edit, "Nudge left 0.5 px", "Ctrl+Left", &MainWindow::NudgeLeft);
   AddAction(edit, "Nudge right 0.5 px", "Ctrl+Right", &MainWindow::NudgeRight);
   AddAction(edit, "Nudge up 0.5 px", "Ctrl+Up", &MainWindow::NudgeUp);
@@ -376,6 +378,7 @@ bool MainWindow::OpenProject(const QString& path, bool ask) {
   frame_box_->setRange(session_->frame_number(0), session_->frame_number(session_->frames() - 1));
   timeline_->SetRange(session_->frames());
   timeline_->SetReviewFrames(session_->document().ReviewFrames());
+  ConnectMissing();
   for (int c = 0; c < 4; ++c) views_[c]->setVisible(c < session_->cameras());
   candidates_.assign(session_->cameras(), {});
   Settings::AddRecentProject(QFileInfo(path).absoluteFilePath());
@@ -501,6 +504,7 @@ void MainWindow::RefreshOverlays() {
                     .arg(QString::fromStdString(session_->camera_names()[c]))
                     .arg(session_->frame_number(frame_))
                     .arg(KnotName(knot_), residual);
+    MarkExpected(c, &o);
     views_[c]->SetOverlay(std::move(o));
   }
 }
@@ -631,7 +635,7 @@ void MainWindow::OnClick(int camera, const Eigen::Vector2d& px, Qt::KeyboardModi
   if (!session_ || busy()) return;
   SetCamera(camera);
   const LabelKey key{camera, frame_, knot_};
-  const bool was_review = UnderReview(camera, frame_, knot_);
+  const bool was_review = InQueue(camera, frame_, knot_);  // a review item or a missing knot
   if (modifiers & Qt::ShiftModifier) {  // exactly where clicked: the person's own label
     session_->PlaceLabel(camera, frame_, knot_, px, "Place " + KnotName(knot_).toStdString());
     statusBar()->showMessage(QString("Placed knot %1 by hand").arg(KnotName(knot_)), 4000);
@@ -802,6 +806,10 @@ void MainWindow::ShowReviewRow(int row) {
   ZoomOnKnot();
   const QModelIndex index = review_proxy_->mapFromSource(review_model_->index(row, 0));
   review_table_->selectRow(index.row());
+  if (review_model_->IsMissing(row)) {
+    ShowMissingItem(row);
+    return;
+  }
   statusBar()->showMessage(
       QString("Review %1 of %2: %3 — A accepts, a click fixes with Find Node, D deletes")
           .arg(row + 1)
@@ -812,16 +820,19 @@ void MainWindow::ShowReviewRow(int row) {
 
 void MainWindow::AcceptSelected() {
   if (!session_ || busy()) return;
-  const bool was_review = UnderReview(camera_, frame_, knot_);
+  const bool was_review = InQueue(camera_, frame_, knot_);
   session_->AcceptLabel(camera_, frame_, knot_);
   AdvanceAfterFix({camera_, frame_, knot_}, was_review);
 }
 
 void MainWindow::DeleteSelected() {
   if (!session_ || busy()) return;
-  const bool was_review = UnderReview(camera_, frame_, knot_);
-  session_->DeleteLabel(camera_, frame_, knot_);
-  AdvanceAfterFix({camera_, frame_, knot_}, was_review);
+  const bool was_queued = InQueue(camera_, frame_, knot_);
+  if (!session_->document().at(camera_, frame_, knot_).present())
+    HideSelected();  // no label here: the person says the knot is not visible
+  else
+    session_->DeleteLabel(camera_, frame_, knot_);
+  AdvanceAfterFix({camera_, frame_, knot_}, was_queued);
 }
 
 bool MainWindow::UnderReview(int camera, int t, int knot) const {
@@ -829,9 +840,13 @@ bool MainWindow::UnderReview(int camera, int t, int knot) const {
   return l.present() && l.state == recon::LabelState::kNeedsReview;
 }
 
-void MainWindow::AdvanceAfterFix(const LabelKey& key, bool was_review) {
+bool MainWindow::InQueue(int camera, int t, int knot) const {
+  return UnderReview(camera, t, knot) || session_->missing().Find(camera, t, knot);
+}
+
+void MainWindow::AdvanceAfterFix(const LabelKey& key, bool was_queued) {
   const auto [c, t, k] = key;
-  if (!was_review || !advance_->isChecked() || UnderReview(c, t, k) ||
+  if (!was_queued || !advance_->isChecked() || InQueue(c, t, k) ||
       review_model_->rowCount() == 0)
     return;
   const int row = review_model_->Next(key);
@@ -1090,6 +1105,75 @@ void MainWindow::closeEvent(QCloseEvent* event) {
     event->accept();
   else
     event->ignore();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Missing knots (the review queue's second kind) and hidden marks.
+
+void MainWindow::ConnectMissing() {
+  review_model_->SetMissing(&session_->missing());
+  connect(&session_->missing(), &MissingKnots::changed, this, &MainWindow::OnMissingChanged);
+  OnMissingChanged();
+}
+
+void MainWindow::OnMissingChanged() {
+  timeline_->SetMissingFrames(session_->missing().Frames());
+}
+
+void MainWindow::ShowMissingItem(int row) {
+  const auto [c, t, k] = review_model_->items()[row];
+  statusBar()->showMessage(
+      QString("Missing %1 of %2: %3 — click: label it · D: hidden here · Shift+D: and onwards")
+          .arg(row + 1)
+          .arg(review_model_->rowCount())
+          .arg(QString::fromStdString(session_->missing().Reason(c, t, k))),
+      15000);
+}
+
+void MainWindow::MarkExpected(int c, ViewOverlay* overlay) const {
+  const recon::Label& l = session_->document().at(c, frame_, knot_);
+  if (l.hidden()) {
+    overlay->caption += " · marked hidden here";
+  } else if (const MissingKnot* m = session_->missing().Find(c, frame_, knot_)) {
+    overlay->expected = m->expected_px;
+    overlay->caption += " · no label: expected in the magenta ring";
+  }
+}
+
+void MainWindow::HideSelected() {
+  if (!session_ || busy()) return;
+  const QString where = QString("knot %1 in %2, frame %3")
+                            .arg(KnotName(knot_))
+                            .arg(QString::fromStdString(session_->camera_names()[camera_]))
+                            .arg(session_->frame_number(frame_));
+  if (session_->document().at(camera_, frame_, knot_).hidden()) {
+    statusBar()->showMessage(where + " is already marked hidden; a click labels it", 6000);
+    return;
+  }
+  session_->MarkHidden(camera_, frame_, knot_);
+  statusBar()->showMessage(
+      "Marked " + where + " hidden: the tools will not label it there (Ctrl+Z undoes)", 8000);
+}
+
+void MainWindow::HideSelectedOnwards() {
+  if (!session_ || busy()) return;
+  if (!session_->missing().Find(camera_, frame_, knot_)) {
+    statusBar()->showMessage(
+        QString("Shift+D marks a missing knot hidden through the frames it is missing in; knot "
+                "%1 is not missing in %2 here (D marks this frame only)")
+            .arg(KnotName(knot_), QString::fromStdString(session_->camera_names()[camera_])),
+        8000);
+    return;
+  }
+  const int last = session_->MarkHiddenRun(camera_, frame_, knot_);
+  statusBar()->showMessage(
+      QString("Marked knot %1 hidden in %2, frames %3-%4 (%5 frames): the tools will not label "
+              "it there (Ctrl+Z undoes)")
+          .arg(KnotName(knot_), QString::fromStdString(session_->camera_names()[camera_]))
+          .arg(session_->frame_number(frame_))
+          .arg(session_->frame_number(last))
+          .arg(last - frame_ + 1),
+      10000);
 }
 
 }  // namespace netlab::gui

@@ -31,6 +31,7 @@ namespace netlab::gui {
 
 class CameraView;
 class Timeline;
+struct ViewOverlay;
 
 class MainWindow : public QMainWindow {
   Q_OBJECT
@@ -92,10 +93,13 @@ class MainWindow : public QMainWindow {
   void RefreshStatus();
   // Goes to row `row` of the review model: its frame, its camera maximised, the knot selected.
   void ShowReviewRow(int row);
-  // After the person fixed the review item `key` (accepted, deleted, placed or found again and
-  // no longer in doubt): the next item of the same frame, when "Advance after a fix" is on.
-  void AdvanceAfterFix(const LabelKey& key, bool was_review);
+  // After the person fixed the queue's item `key` (accepted, deleted, hidden, placed or found
+  // again and no longer in doubt): the next item of the same frame, when "Advance after a fix"
+  // is on.
+  void AdvanceAfterFix(const LabelKey& key, bool was_queued);
   bool UnderReview(int camera, int t, int knot) const;
+  // In the review queue: a label for review or a missing knot.
+  bool InQueue(int camera, int t, int knot) const;
   // The selected knot's colour check in the current camera, on a worker; OnColoursRead shows it.
   void RequestColours();
   void OnColoursRead();
@@ -156,6 +160,16 @@ class MainWindow : public QMainWindow {
   void BrushLarger();
   void BrushSmaller();
   void ShowShortcuts();
+
+  // Missing knots (the review queue's second kind) and hidden marks.
+  void ConnectMissing();      // the review model and the timeline follow the session's list
+  void OnMissingChanged();
+  void ShowMissingItem(int row);  // the status bar for a missing item of the queue
+  // The selected knot when it has no label in camera c: where the other cameras put it (a
+  // magenta ring), or that the person marked it hidden, into c's overlay.
+  void MarkExpected(int c, ViewOverlay* overlay) const;
+  void HideSelected();        // D with no label selected: a hidden mark here
+  void HideSelectedOnwards(); // Shift+D: here and in the following frames it is missing in
 
   std::unique_ptr<Session> session_;
   std::unique_ptr<ReviewModel> review_model_;

@@ -9,7 +9,9 @@ namespace netlab::gui {
 
 Timeline::Timeline(QWidget* parent) : QWidget(parent) {
   setMinimumHeight(24);
-  setToolTip("Frames; red marks: labels kept for review. Click or drag to go to a frame.");
+  setToolTip(
+      "Frames; red marks (above): labels kept for review; magenta marks (below): knots with no "
+      "label that other cameras see. Click or drag to go to a frame.");
 }
 
 double Timeline::XOf(int t) const {
@@ -30,6 +32,8 @@ void Timeline::paintEvent(QPaintEvent*) {
   p.fillRect(QRectF(XOf(0), mid - 3, XOf(frames_ - 1) - XOf(0), 6), QColor(110, 110, 110));
   p.setPen(QColor(230, 60, 50));
   for (int t : review_) p.drawLine(QPointF(XOf(t), 2), QPointF(XOf(t), mid - 4));
+  p.setPen(QColor(220, 70, 220));
+  for (int t : missing_) p.drawLine(QPointF(XOf(t), mid + 4), QPointF(XOf(t), height() - 2));
   p.setPen(QPen(QColor(60, 140, 255), 3));
   p.drawLine(QPointF(XOf(current_), 2), QPointF(XOf(current_), height() - 2));
 }

@@ -26,6 +26,10 @@ Label Made(const Eigen::Vector2d& px, LabelSource source, double confidence, boo
   return l;
 }
 
+// Whether a tool may put a label where `l` is: no label there, and no hidden mark (the person
+// said the knot is not visible there; only the person's own click replaces that).
+bool Free(const Label& l) { return !l.present() && !l.hidden(); }
+
 
 double Median(std::vector<double> v) {
   if (v.empty()) return 0.0;
@@ -209,7 +213,9 @@ void LabelEngine::FindFarSides(int camera, int t, const cv::Mat& image,
   };
   for (int k = 0; k < rows * cols; ++k) {
     const int r = k / cols, c = k % cols;
-    if ((r != far_row && c != far_col) || (r == far_row && c == far_col) || px(k)) continue;
+    if ((r != far_row && c != far_col) || (r == far_row && c == far_col) || px(k) ||
+        set.at(camera, t, k).hidden())
+      continue;
     // A brush of a third of a link: the nearest other knot is two thirds away, or more.
     const Eigen::Vector2d p = predict(r, c);
     const double link_px = std::min((predict(r, c + 1) - p).norm(), (predict(r + 1, c) - p).norm());
@@ -253,7 +259,7 @@ EngineCounts LabelEngine::LabelFirstFrame(int t) {
                                std::pair(corners[1], corners[3])}) {
       const FindPathResult r = path(a, b);
       for (size_t i = 0; i < r.knots.size(); ++i)
-        if (!set.at(camera, t, r.knots[i]).present()) {
+        if (Free(set.at(camera, t, r.knots[i]))) {
           edits.push_back({camera, t, r.knots[i],
                            Made(r.junctions[i].px, LabelSource::kFindPath,
                                 r.junctions[i].confidence, true)});
@@ -286,7 +292,7 @@ EngineCounts LabelEngine::LabelFirstFrame(int t) {
     for (int row = 1; row + 1 < rows; ++row)
       for (int col = 1; col + 1 < cols; ++col) {
         const int k = row * cols + col;
-        if (set.at(camera, t, k).present()) continue;
+        if (!Free(set.at(camera, t, k))) continue;
         const auto a = by_row.find(k), b = by_column.find(k);
         if (a == by_row.end() && b == by_column.end()) continue;
         const bool both = a != by_row.end() && b != by_column.end();
@@ -328,7 +334,7 @@ namespace {
 // there was tracked from one under review while `from` has since been accepted (a person checked
 // the origin: its track is followed again, with tracking's own checks; nothing else is replaced).
 bool Trackable(const Label& to, const Label& from) {
-  if (!to.present()) return true;
+  if (Free(to)) return true;
   return from.accepted() && to.state == LabelState::kNeedsReview &&
          to.source == LabelSource::kTracked;
 }
@@ -676,7 +682,7 @@ void LabelEngine::SearchCamera(FrameCheck* f, int c, std::vector<LabelEdit>* edi
   if (image.empty()) return;
   const FillView view{c, image, image.size(), o_.detector.ring_radius_px + 2.0};
   for (int k = 0; k < f->knots; ++k) {
-    if (set.at(c, f->t, k).accepted()) continue;
+    if (set.at(c, f->t, k).accepted() || set.at(c, f->t, k).hidden()) continue;
     // (a) The knot's own triangulated point, where it has one.
     if (f->geometry && f->point[k]) {
       if (const std::optional<LabelEdit> e = SearchAtProjection(f, view, k)) edits->push_back(*e);

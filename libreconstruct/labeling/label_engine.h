@@ -11,6 +11,10 @@
 // its checks agree; otherwise it is kept for review with the reason (reasons(), per camera,
 // frame and knot) — never guessed silently.
 //
+// A hidden mark (LabelState::kHidden: the person said the knot is not visible in that camera and
+// frame) is the person's word: Find Path, Fill Grid and tracking never put a label over it; only
+// the person's brush (FindNodeAt) does.
+//
 // Cross-camera checks (CrossCheck) need the rig, with the store's cameras in it:
 //   * Epipolar consistency: every knot with accepted labels in two or more cameras is
 //     triangulated (triangulation.h, consensus over pairs of views); a view it leaves out as an

@@ -26,7 +26,7 @@ namespace {
 
 constexpr char kLabelsFormat[] = "netlab-labels";
 constexpr int kLastSource = static_cast<int>(LabelSource::kImported);
-constexpr int kLastState = static_cast<int>(LabelState::kNeedsReview);
+constexpr int kLastState = static_cast<int>(LabelState::kHidden);
 
 std::string Shape(const std::vector<hsize_t>& dims) {
   std::string shape;
@@ -73,6 +73,9 @@ void CheckConsistent(const LabelSet& labels) {
         fail("camera '" + labels.cameras[c] + "', row " + std::to_string(i / labels.knots()) +
              ", knot " + std::to_string(i % labels.knots()) +
              ": source, state or confidence out of range");
+      if (label.hidden() && !(std::isnan(label.px.x()) && std::isnan(label.px.y())))
+        fail("camera '" + labels.cameras[c] + "', row " + std::to_string(i / labels.knots()) +
+             ", knot " + std::to_string(i % labels.knots()) + ": a hidden mark has a position");
     }
   }
 }
@@ -293,6 +296,11 @@ LabelSet ReadLabelsFile(const std::string& path, hid_t f) {
       if (!(confidence[i] >= 0.0f && confidence[i] <= 1.0f))
         fail(prefix + "confidence: " + Number(confidence[i]) + where(i) +
              " is outside 0..1");
+      // A hidden mark says the knot is not seen: a position with it contradicts it.
+      if (state[i] == static_cast<uint8_t>(LabelState::kHidden) &&
+          !(std::isnan(position[2 * i]) && std::isnan(position[2 * i + 1])))
+        fail(prefix + "state: 3 (hidden)" + where(i) + " has a position in " + prefix +
+             "position_px (a hidden mark has none: NaN)");
       camera[i].px = Eigen::Vector2d(position[2 * i], position[2 * i + 1]);
       camera[i].source = static_cast<LabelSource>(source[i]);
       camera[i].confidence = confidence[i];

@@ -10,7 +10,7 @@
 //   /cameras/<name>/position_px       [T,K,2]  float64  px; NaN where unlabeled
 //   /cameras/<name>/source            [T,K]    uint8    LabelSource
 //   /cameras/<name>/confidence        [T,K]    float32  0..1
-//   /cameras/<name>/state             [T,K]    uint8    LabelState
+//   /cameras/<name>/state             [T,K]    uint8    LabelState (3, hidden: no position)
 //   /review_reasons                   scalar   string   optional: why labels are under review,
 //                                                       a line "camera<TAB>t<TAB>knot<TAB>reason"
 //                                                       each (camera index, frame row, knot)
@@ -49,7 +49,11 @@ enum class LabelSource : uint8_t {
   kImported = 7,  // read from xypts.csv or another tool
 };
 
-enum class LabelState : uint8_t { kNone = 0, kAccepted = 1, kNeedsReview = 2 };
+// kHidden is not a label but the person's word that the knot cannot be seen in that camera and
+// frame (behind the target, out of view, behind the net): its position is NaN (not present()),
+// the tools never put a label over it, and the review queue does not ask for it. Files written
+// before it existed hold states 0..2 only and read as before; an older reader refuses a 3 by name.
+enum class LabelState : uint8_t { kNone = 0, kAccepted = 1, kNeedsReview = 2, kHidden = 3 };
 
 struct Label {
   Eigen::Vector2d px{std::numeric_limits<double>::quiet_NaN(),
@@ -60,6 +64,15 @@ struct Label {
 
   bool present() const { return std::isfinite(px.x()) && std::isfinite(px.y()); }
   bool accepted() const { return present() && state == LabelState::kAccepted; }
+  bool hidden() const { return state == LabelState::kHidden; }
+  // The person's mark "not visible here" (source: person).
+  static Label Hidden() {
+    Label l;
+    l.source = LabelSource::kManual;
+    l.confidence = 1.0f;
+    l.state = LabelState::kHidden;
+    return l;
+  }
 };
 
 // Per (camera, frame row, knot): why a label is under review (the labeling tools' reasons).

@@ -38,14 +38,50 @@ QString SourceName(recon::LabelSource source) {
 ReviewModel::ReviewModel(const LabelDocument* document, std::vector<int> frame_numbers,
                          QObject* parent)
     : QAbstractTableModel(parent), document_(document), frame_numbers_(std::move(frame_numbers)) {
-  items_ = document_->ReviewItems();
+  Gather();
   connect(document_, &LabelDocument::labelsChanged, this, &ReviewModel::Refresh);
 }
 
 void ReviewModel::Refresh() {
   beginResetModel();
-  items_ = document_->ReviewItems();
+  Gather();
   endResetModel();
+}
+
+void ReviewModel::Gather() {
+  items_ = document_->ReviewItems();
+  is_missing_.assign(items_.size(), false);
+  if (!missing_) return;
+  // Both kinds in the queue's order (a knot is never both: a missing one has no label).
+  const std::vector<LabelKey> missing = missing_->Items();
+  std::vector<LabelKey> merged;
+  std::vector<bool> kinds;
+  merged.reserve(items_.size() + missing.size());
+  size_t i = 0, j = 0;
+  while (i < items_.size() || j < missing.size()) {
+    const bool take_missing =
+        i == items_.size() || (j < missing.size() && QueueOrder(missing[j], items_[i]));
+    merged.push_back(take_missing ? missing[j++] : items_[i++]);
+    kinds.push_back(take_missing);
+  }
+  items_ = std::move(merged);
+  is_missing_ = std::move(kinds);
+}
+
+void ReviewModel::SetMissing(const MissingKnots* missing) {
+  if (missing_) disconnect(missing_, nullptr, this, nullptr);
+  missing_ = missing;
+  // MissingKnots::changed follows every labelsChanged of the document: one refresh per edit.
+  disconnect(document_, &LabelDocument::labelsChanged, this, &ReviewModel::Refresh);
+  if (missing_)
+    connect(missing_, &MissingKnots::changed, this, &ReviewModel::Refresh);
+  else
+    connect(document_, &LabelDocument::labelsChanged, this, &ReviewModel::Refresh);
+  Refresh();
+}
+
+bool ReviewModel::IsMissing(int row) const {
+  return row >= 0 && row < static_cast<int>(is_missing_.size()) && is_missing_[row];
 }
 
 int ReviewModel::rowCount(const QModelIndex& parent) const {
@@ -58,6 +94,7 @@ int ReviewModel::columnCount(const QModelIndex& parent) const {
 
 double ReviewModel::Severity(const LabelKey& key) const {
   const auto& [c, t, k] = key;
+  if (!document_->at(c, t, k).present()) return 1.0;  // a missing knot: no label at all
   return 1.0 - std::clamp(static_cast<double>(document_->at(c, t, k).confidence), 0.0, 1.0);
 }
 
@@ -69,7 +106,11 @@ QVariant ReviewModel::data(const QModelIndex& index, int role) const {
   if (role == kCameraRole) return c;
   if (role == kFrameRowRole) return t;
   if (role == kKnotRole) return k;
-  if (role == Qt::ToolTipRole) return QString::fromStdString(document_->Reason(c, t, k));
+  const bool missing = IsMissing(index.row());
+  if (role == kMissingRole) return missing;
+  const std::string why =
+      missing ? missing_->Reason(c, t, k) : document_->Reason(c, t, k);
+  if (role == Qt::ToolTipRole) return QString::fromStdString(why);
   if (role != Qt::DisplayRole && role != Qt::EditRole) return {};
   // EditRole gives sortable values (numbers), DisplayRole the text.
   const bool sort = role == Qt::EditRole;
@@ -82,14 +123,12 @@ QVariant ReviewModel::data(const QModelIndex& index, int role) const {
       if (sort) return k;
       return QString("(%1, %2)").arg(k / set.cols).arg(k % set.cols);
     case kSource:
-      return SourceName(document_->at(c, t, k).source);
+      return missing ? QString("missing") : SourceName(document_->at(c, t, k).source);
     case kSeverity:
       if (sort) return Severity(key);
       return QString::number(Severity(key), 'f', 2);
-    case kReason: {
-      const std::string why = document_->Reason(c, t, k);
+    case kReason:
       return QString::fromStdString(why.empty() ? "kept for review (no reason recorded)" : why);
-    }
   }
   return {};
 }

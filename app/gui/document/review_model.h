@@ -1,14 +1,18 @@
 #pragma once
-// The review queue as a table model (model/view: one row per label kept for review, never a
-// widget per row): camera, frame, knot, where the label came from, its severity and the reason.
-// Rows follow LabelDocument::ReviewItems (frame, then camera, then knot); a view sorts them
-// through a QSortFilterProxyModel. The model follows the document's changes by itself.
+// The review queue as a table model (model/view: one row per item, never a widget per row):
+// camera, frame, knot, where the label came from, its severity and the reason. Two kinds of
+// item: labels kept for review (LabelDocument::ReviewItems), and, once SetMissing is given,
+// missing knots (missing_knots.h: no label where two other cameras see the knot; the source
+// column says "missing"). Rows are in the queue's order (frame, then camera, then knot, both
+// kinds together); a view sorts them through a QSortFilterProxyModel. The model follows the
+// document's changes by itself.
 
 #include <QAbstractTableModel>
 #include <string>
 #include <vector>
 
 #include "app/gui/document/label_document.h"
+#include "app/gui/document/missing_knots.h"
 
 namespace netlab::gui {
 
@@ -18,7 +22,7 @@ class ReviewModel : public QAbstractTableModel {
  public:
   enum Column { kCamera, kFrame, kKnot, kSource, kSeverity, kReason, kColumns };
   // Roles beyond Qt's: the label's address, for a view that jumps to it.
-  enum Role { kCameraRole = Qt::UserRole + 1, kFrameRowRole, kKnotRole };
+  enum Role { kCameraRole = Qt::UserRole + 1, kFrameRowRole, kKnotRole, kMissingRole };
 
   // `frame_numbers[t]`: the recording's frame number of frame row t (shown in the table).
   ReviewModel(const LabelDocument* document, std::vector<int> frame_numbers,
@@ -34,16 +38,27 @@ class ReviewModel : public QAbstractTableModel {
   // The row of the item after / before `key` in the queue's order (wrapping); -1 when empty.
   int Next(const LabelKey& key) const;
   int Previous(const LabelKey& key) const;
-  // 0 (sure) .. 1 (doubtful): one minus the label's confidence.
+  // 0 (sure) .. 1 (doubtful): one minus the label's confidence (a missing knot: 1, no label).
   double Severity(const LabelKey& key) const;
+
+  // Lists `missing`'s knots too, and follows its changes (null: review items only). `missing`
+  // must be over this model's document and outlive the model or the next SetMissing.
+  void SetMissing(const MissingKnots* missing);
+  // Whether row `row` is a missing knot (not a label under review).
+  bool IsMissing(int row) const;
 
  public slots:
   void Refresh();
 
  private:
+  // Review items and missing knots, merged in the queue's order.
+  void Gather();
+
   const LabelDocument* document_;
   std::vector<int> frame_numbers_;
   std::vector<LabelKey> items_;
+  const MissingKnots* missing_ = nullptr;
+  std::vector<bool> is_missing_;  // per row of items_
 };
 
 // The name of a label's source as the window shows it ("person", "Find Node", ...).

@@ -85,11 +85,13 @@ std::unique_ptr<Session> Session::Open(const Project& project,
   s->cache_ = std::make_unique<recon::FrameCache>(*s->sequence_, cache_options);
   s->document_ = std::make_unique<LabelDocument>(
       OpenLabels(project, s->camera_names_, s->frame_numbers_), project.labels);
+  s->missing_ = std::make_unique<MissingKnots>(s->document_.get(), &s->rig_, s->rig_index_);
   return s;
 }
 
 Session::~Session() {
   engine_.reset();  // it points into the document's store
+  missing_.reset();
 }
 
 cv::Mat Session::Image(int camera, int t, std::string* error) const {
@@ -284,6 +286,24 @@ std::vector<std::vector<Eigen::Vector2d>> Session::EpipolarCurve(int from,
   }
   if (pieces.back().empty()) pieces.pop_back();
   return pieces;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hidden marks.
+
+int Session::MarkHidden(int camera, int t, int knot) {
+  return document_->Apply("Mark hidden", {{camera, t, knot, recon::Label::Hidden()}});
+}
+
+int Session::MarkHiddenRun(int camera, int t, int knot) {
+  const std::vector<int> run = missing_->RunFrom(camera, t, knot);
+  if (run.empty()) return -1;
+  std::vector<recon::LabelEdit> edits;
+  for (int u : run) edits.push_back({camera, u, knot, recon::Label::Hidden()});
+  document_->Apply("Mark hidden in frames " + std::to_string(frame_numbers_[run.front()]) + "-" +
+                       std::to_string(frame_numbers_[run.back()]),
+                   edits);
+  return run.back();
 }
 
 }  // namespace netlab::gui

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "app/gui/document/label_document.h"
+#include "app/gui/document/missing_knots.h"
 #include "app/gui/document/project.h"
 #include "calibration/rig.h"
 #include "libreconstruct/geometry/triangulation.h"
@@ -124,6 +125,17 @@ class Session {
   std::vector<std::vector<Eigen::Vector2d>> EpipolarCurve(int from, const Eigen::Vector2d& px,
                                                           int to) const;
 
+  // Missing knots (missing_knots.h): visible knots with no label in a camera where two or more
+  // others have accepted labels; kept up to date with the document.
+  const MissingKnots& missing() const { return *missing_; }
+  // The person's word that `knot` is not visible in (camera, t): a hidden mark in place of
+  // whatever is there, one undo step; the tools never label over it. Returns the labels changed.
+  int MarkHidden(int camera, int t, int knot);
+  // The same in t and every following frame row in which (camera, knot) is missing without a
+  // break (MissingKnots::RunFrom), as one undo step. Returns the last frame row marked (-1:
+  // none, the knot is not missing in t).
+  int MarkHiddenRun(int camera, int t, int knot);
+
  private:
   Session() = default;
   std::unique_ptr<recon::LabelEngine> MakeEngine(recon::LabelStore* store) const;
@@ -141,6 +153,7 @@ class Session {
   recon::LabelEngineOptions engine_options_;
   std::unique_ptr<LabelDocument> document_;
   std::unique_ptr<recon::LabelEngine> engine_;  // over the document's store (GUI thread)
+  std::unique_ptr<MissingKnots> missing_;       // over the document (destroyed before it)
 };
 
 }  // namespace netlab::gui

@@ -155,6 +155,63 @@ TEST_F(LabelDocumentTest, TheJournalRecoversEveryEditSinceTheLastSave) {
   EXPECT_TRUE(LabelDocument::HasJournal(path_));
 }
 
+// A hidden mark (the person's "not visible here") is one undo step, is saved and read back, and
+// a crash before the save loses none: the journal recovers it, distinct from an absent label.
+TEST_F(LabelDocumentTest, AHiddenMarkUndoesAndSurvivesTheSaveAndTheJournal) {
+  {
+    LabelDocument doc(Empty(), path_);
+    doc.Apply("Place", {{0, 1, 2, At(5, 6)}, {1, 3, 0, At(7, 8)}});
+    doc.Apply("Mark hidden", {{0, 1, 2, recon::Label::Hidden()}});
+    EXPECT_TRUE(doc.at(0, 1, 2).hidden());
+    doc.undo_stack()->undo();
+    EXPECT_EQ(doc.at(0, 1, 2).px, Eigen::Vector2d(5, 6));
+    doc.undo_stack()->redo();
+    EXPECT_TRUE(doc.at(0, 1, 2).hidden());
+    doc.Save();
+    // After the save, more marks; the session ends without saving them.
+    doc.Apply("Mark hidden", {{1, 3, 0, recon::Label::Hidden()}, {1, 4, 4, recon::Label::Hidden()}});
+  }
+  const recon::LabelSet saved = recon::ReadLabels(path_);
+  EXPECT_TRUE(saved.at(0, 1, 2).hidden());
+  EXPECT_FALSE(saved.at(0, 1, 2).present());
+  EXPECT_TRUE(saved.at(1, 3, 0).present());  // the file has the saved state only
+  LabelDocument reopened(saved, path_);
+  EXPECT_EQ(reopened.Recover(), 2);
+  EXPECT_TRUE(reopened.at(0, 1, 2).hidden());
+  EXPECT_TRUE(reopened.at(1, 3, 0).hidden());
+  EXPECT_TRUE(reopened.at(1, 4, 4).hidden());
+  EXPECT_FALSE(reopened.at(1, 4, 3).hidden());
+  reopened.undo_stack()->undo();
+  EXPECT_TRUE(reopened.at(1, 3, 0).present());
+}
+
+// A journal line with a hidden mark at a position, or a state no label has, is damage, named by
+// line.
+TEST_F(LabelDocumentTest, AJournalLineNoLabelCanHaveIsRefusedByLine) {
+  {
+    LabelDocument doc(Empty(), path_);
+    doc.Apply("Mark hidden", {{0, 1, 2, recon::Label::Hidden()}});
+  }
+  std::string text;
+  {
+    std::ifstream in(LabelDocument::JournalPath(path_));
+    text.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  ASSERT_NE(text.find("0 1 2 nan nan 1 1 3\n"), std::string::npos) << text;
+  for (const char* bad : {"0 1 2 4.5 nan 1 1 3", "0 1 2 nan nan 1 1 9"}) {
+    std::string broken = text;
+    broken.replace(broken.find("0 1 2 nan nan 1 1 3"), 19, bad);
+    std::ofstream(LabelDocument::JournalPath(path_)) << broken;
+    LabelDocument reopened(Empty(), path_);
+    try {
+      reopened.Recover();
+      ADD_FAILURE() << "recovered " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(":3:"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST_F(LabelDocumentTest, AJournalCutShortByACrashRecoversItsCompleteSteps) {
   {
     LabelDocument doc(Empty(), path_);

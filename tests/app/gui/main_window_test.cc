@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <QAction>
 #include <QApplication>
 #include <QDockWidget>
 #include <QLabel>
@@ -26,6 +27,7 @@
 
 #include "app/gui/camera_view.h"
 #include "app/gui/document/project.h"
+#include "app/gui/timeline.h"
 #include "tests/app/cli/run_netlab.h"
 #include "tests/app/cli/small_shot.h"
 #include "tests/app/gui/scripted_person.h"
@@ -99,7 +101,11 @@ TEST_F(MainWindowTest, AScriptedSessionLabelsAsTheEngineDoesWithNoWrongLabel) {
   const ScriptedSession session = PlayScriptedSession(&w, truth);
   ASSERT_TRUE(session.finished) << "the tracking run did not end";
   const std::vector<Action>& actions = session.actions;
-  EXPECT_TRUE(s->document().ReviewItems().empty()) << "review items left";
+  EXPECT_TRUE(s->document().ReviewItems().empty())
+      << s->document().ReviewItems().size() << " review items and " << s->missing().size()
+      << " missing knots left after " << session.review_items << " items walked";
+  std::printf("scripted session: %d queue items walked, %zu actions; %d missing knots left\n",
+              session.review_items, actions.size(), s->missing().size());
   QTest::keyClick(&w, Qt::Key_S, Qt::ControlModifier);
   ASSERT_FALSE(s->document().modified()) << w.statusBar()->currentMessage().toStdString();
   const recon::LabelSet saved = recon::ReadLabels(s->project().labels);
@@ -143,6 +149,12 @@ TEST_F(MainWindowTest, AScriptedSessionLabelsAsTheEngineDoesWithNoWrongLabel) {
       case Action::kTrack:
         engine->ApplyTrackRun(engine->Track(engine->document().labels(), a.t, kLastFrame, nullptr,
                                             {}, MainWindow::kMaxReviewPerFrame));
+        break;
+      case Action::kHide:
+        engine->MarkHidden(a.camera, a.t, a.knot);
+        break;
+      case Action::kHideRun:
+        engine->MarkHiddenRun(a.camera, a.t, a.knot);
         break;
     }
   const recon::LabelSet& direct = engine->document().labels();
@@ -292,6 +304,203 @@ TEST_F(MainWindowTest, F1ListsEveryActionWithItsKeys) {
   EXPECT_GE(actions, 40);
   EXPECT_EQ(rows, actions + 4);  // and the four mouse gestures
   EXPECT_EQ(first_keys, QKeySequence("Ctrl+S").toString(QKeySequence::NativeText));
+}
+
+// A knot of frame `t` that every camera sees well inside its picture, with its four neighbours
+// (an inner knot): deleting one camera's label of it leaves a knot the other three place.
+int KnotSeenByAll(const recon::LabelSet& truth, int t) {
+  for (int k = 0; k < truth.knots(); ++k) {
+    const int row = k / truth.cols, col = k % truth.cols;
+    if (row == 0 || col == 0 || row + 1 == truth.rows || col + 1 == truth.cols) continue;
+    bool seen = true;
+    for (int c = 0; c < static_cast<int>(truth.cameras.size()); ++c)
+      seen = seen && truth.at(c, t, k).present() && truth.at(c, t, k).px.minCoeff() > 60;
+    if (seen) return k;
+  }
+  return -1;
+}
+
+// Presses Space until the window is at (camera, t, knot); false when the queue has gone round.
+bool SpaceTo(MainWindow* w, int camera, int t, int knot) {
+  for (int i = 0; i <= w->review_table()->model()->rowCount(); ++i) {
+    QTest::keyClick(w, Qt::Key_Space);
+    if (w->camera() == camera && w->frame() == t && w->knot() == knot) return true;
+  }
+  return false;
+}
+
+// A person deletes one camera's label of a knot the other three cameras see (clicks it, Delete):
+// the knot is listed as missing, Space reaches it (its frame, its camera alone, zoomed, the
+// expected place drawn and said), and a Find Node click at the true place labels it there,
+// accepted; it leaves the queue and the timeline's marks.
+TEST_F(MainWindowTest, SpaceReachesAMissingKnotAndAFindNodeClickLabelsIt) {
+  const recon::LabelSet truth = Truth();
+  const std::string project = MakeProjectFile("missing", (Dir() / "shot/labels_true.h5").string());
+  MainWindow w;
+  w.resize(1400, 1000);
+  w.show();
+  ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), false));
+  ASSERT_TRUE(w.WaitForFrame());
+  w.activateWindow();
+  ASSERT_TRUE(QTest::qWaitForWindowActive(&w));
+  Session* s = w.session();
+  const int t = 12, c = 1, k = KnotSeenByAll(truth, t);
+  ASSERT_GE(k, 0);
+  const int tc = truth.FindCamera(s->camera_names()[c]);
+  const Eigen::Vector2d where = truth.at(tc, t, k).px;
+  // The label deleted with real events: the frame, a click on the label, Delete.
+  w.SetFrame(t);
+  ASSERT_TRUE(w.WaitForFrame());
+  ASSERT_EQ(s->missing().Find(c, t, k), nullptr);
+  QTest::mouseClick(w.view(c), Qt::LeftButton, Qt::NoModifier,
+                    w.view(c)->ToWidget(s->document().at(c, t, k).px).toPoint());
+  ASSERT_EQ(w.knot(), k);
+  ASSERT_EQ(w.camera(), c);
+  QTest::keyClick(&w, Qt::Key_Delete);
+  ASSERT_FALSE(s->document().at(c, t, k).present());
+  const MissingKnot* m = s->missing().Find(c, t, k);
+  ASSERT_NE(m, nullptr) << "not listed as missing";
+  EXPECT_LT((m->expected_px - where).norm(), 0.5);
+  const auto* timeline = w.findChild<Timeline*>();
+  ASSERT_NE(timeline, nullptr);
+  EXPECT_TRUE(timeline->missing_frames().count(t));
+  // Space reaches it: its camera alone, the ring at the expected place, the reason said.
+  w.SetFrame(0);
+  ASSERT_TRUE(SpaceTo(&w, c, t, k)) << "Space never reached the missing knot";
+  EXPECT_TRUE(w.view(c)->isVisible());
+  for (int other = 0; other < s->cameras(); ++other) {
+    if (other != c) {
+      EXPECT_FALSE(w.view(other)->isVisible()) << other;
+    }
+  }
+  ASSERT_TRUE(w.view(c)->overlay().expected.has_value());
+  EXPECT_LT((*w.view(c)->overlay().expected - where).norm(), 0.5);
+  // Zoomed onto it (80 image pixels across), also once the view alone is laid out anew.
+  QCoreApplication::processEvents();
+  const QPointF centre(w.view(c)->width() / 2.0, w.view(c)->height() / 2.0);
+  const QPointF at = w.view(c)->ToWidget(*w.view(c)->overlay().expected);
+  EXPECT_LT(std::hypot(at.x() - centre.x(), at.y() - centre.y()), 2.0);
+  EXPECT_NEAR(w.view(c)->scale(), std::min(w.view(c)->width(), w.view(c)->height()) / 80.0, 1e-9);
+  EXPECT_TRUE(w.view(c)->overlay().reprojected.has_value());
+  EXPECT_TRUE(w.statusBar()->currentMessage().contains("no label; seen in"))
+      << w.statusBar()->currentMessage().toStdString();
+  ASSERT_TRUE(w.WaitForFrame());
+  w.grab().save((Dir() / "missing.png").string().c_str());
+  // A Find Node click at the true place: labeled, accepted, off the queue.
+  ClickAt(w.view(c), where);
+  const recon::Label& l = s->document().at(c, t, k);
+  ASSERT_TRUE(l.present()) << w.statusBar()->currentMessage().toStdString();
+  EXPECT_EQ(l.state, recon::LabelState::kAccepted) << s->document().Reason(c, t, k);
+  EXPECT_LT((l.px - where).norm(), 0.5);
+  EXPECT_EQ(s->missing().Find(c, t, k), nullptr);
+  const QAbstractItemModel* queue = w.review_table()->model();
+  for (int row = 0; row < queue->rowCount(); ++row) {
+    const QModelIndex i = queue->index(row, 0);
+    EXPECT_FALSE(i.data(ReviewModel::kCameraRole).toInt() == c &&
+                 i.data(ReviewModel::kFrameRowRole).toInt() == t &&
+                 i.data(ReviewModel::kKnotRole).toInt() == k)
+        << "still in the queue";
+  }
+}
+
+// D on a missing knot (no label selected) marks it hidden, one undo step, and it leaves the
+// queue; Ctrl+Z lists it again. Shift+D marks it hidden through the frames it is missing in,
+// one step, and stops where the camera has a label again.
+TEST_F(MainWindowTest, DMarksAMissingKnotHiddenAndShiftDTheFramesAfterIt) {
+  const recon::LabelSet truth = Truth();
+  const std::string project = MakeProjectFile("hidden", (Dir() / "shot/labels_true.h5").string());
+  MainWindow w;
+  w.resize(1400, 1000);
+  w.show();
+  ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), false));
+  ASSERT_TRUE(w.WaitForFrame());
+  w.activateWindow();
+  ASSERT_TRUE(QTest::qWaitForWindowActive(&w));
+  Session* s = w.session();
+  const int t = 20, c = 2, k = KnotSeenByAll(truth, t);
+  ASSERT_GE(k, 0);
+  ASSERT_GE(KnotSeenByAll(truth, t + 3), 0);
+  for (int u = t; u < t + 3; ++u) s->DeleteLabel(c, u, k);  // lost in frames t .. t + 2
+  ASSERT_EQ(s->missing().RunFrom(c, t, k), (std::vector<int>{t, t + 1, t + 2}));
+  // D: hidden in frame t only.
+  ASSERT_TRUE(SpaceTo(&w, c, t, k));
+  const int steps = s->document().undo_stack()->count();
+  QTest::keyClick(&w, Qt::Key_D);
+  EXPECT_TRUE(s->document().at(c, t, k).hidden());
+  EXPECT_EQ(s->document().undo_stack()->count(), steps + 1);
+  EXPECT_EQ(s->missing().Find(c, t, k), nullptr);
+  EXPECT_NE(s->missing().Find(c, t + 1, k), nullptr);
+  // The window may have gone on to the frame's next item (Go > Advance…): back to the knot.
+  EXPECT_EQ(w.frame(), t);
+  w.SetCamera(c);
+  w.SetKnot(k);
+  ASSERT_TRUE(w.WaitForFrame());  // the overlays are drawn with the frame's image
+  EXPECT_TRUE(w.view(c)->overlay().caption.contains("marked hidden"))
+      << w.view(c)->overlay().caption.toStdString();
+  QTest::keyClick(&w, Qt::Key_Z, Qt::ControlModifier);
+  EXPECT_FALSE(s->document().at(c, t, k).hidden());
+  EXPECT_NE(s->missing().Find(c, t, k), nullptr);
+  // Shift+D: hidden in t, t + 1 and t + 2, one step; frame t + 3 keeps its label.
+  QTest::keyClick(&w, Qt::Key_D, Qt::ShiftModifier);
+  for (int u = t; u < t + 3; ++u) EXPECT_TRUE(s->document().at(c, u, k).hidden()) << u;
+  EXPECT_TRUE(s->document().at(c, t + 3, k).present());
+  EXPECT_EQ(s->document().undo_stack()->count(), steps + 1);
+  EXPECT_TRUE(s->missing().RunFrom(c, t, k).empty());
+  // The tools leave the marks: Fill Grid in frame t + 1 does not label the knot there.
+  QTest::keyClick(&w, Qt::Key_F);
+  ASSERT_EQ(w.frame(), t + 1);
+  QTest::keyClick(&w, Qt::Key_G);
+  EXPECT_TRUE(s->document().at(c, t + 1, k).hidden());
+}
+
+// After a fix of an item of the queue (here D on a missing knot) the window goes on to the next
+// item of the same frame by itself; after the frame's last item it stays; with Go > Advance…
+// off it never moves.
+TEST_F(MainWindowTest, AfterAFixTheWindowGoesOnToTheFramesNextItem) {
+  const recon::LabelSet truth = Truth();
+  const std::string project = MakeProjectFile("advance", (Dir() / "shot/labels_true.h5").string());
+  MainWindow w;
+  w.resize(1400, 1000);
+  w.show();
+  ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), false));
+  ASSERT_TRUE(w.WaitForFrame());
+  w.activateWindow();
+  ASSERT_TRUE(QTest::qWaitForWindowActive(&w));
+  Session* s = w.session();
+  const int t = 12, k = KnotSeenByAll(truth, t);
+  ASSERT_GE(k, 0);
+  // The knot lost in cameras 0 and 1 (cameras 2 and 3 still place it): two missing items.
+  s->DeleteLabel(0, t, k);
+  s->DeleteLabel(1, t, k);
+  ASSERT_NE(s->missing().Find(0, t, k), nullptr);
+  ASSERT_NE(s->missing().Find(1, t, k), nullptr);
+  // Only these two in frame t: the others the queue lists there (the target hides them) hidden.
+  for (const LabelKey& key : s->missing().Items())
+    if (std::get<1>(key) == t && std::get<2>(key) != k)
+      s->MarkHidden(std::get<0>(key), t, std::get<2>(key));
+  ASSERT_TRUE(SpaceTo(&w, 0, t, k));
+  QTest::keyClick(&w, Qt::Key_D);  // hidden in camera 0: on to camera 1
+  EXPECT_TRUE(s->document().at(0, t, k).hidden());
+  EXPECT_EQ(w.frame(), t);
+  EXPECT_EQ(w.camera(), 1);
+  EXPECT_EQ(w.knot(), k);
+  QTest::keyClick(&w, Qt::Key_D);  // the frame's last item: the window stays
+  EXPECT_TRUE(s->document().at(1, t, k).hidden());
+  EXPECT_EQ(w.frame(), t);
+  EXPECT_EQ(w.camera(), 1);
+  // Advance off: undo both, D on camera 0's item leaves the window there.
+  QTest::keyClick(&w, Qt::Key_Z, Qt::ControlModifier);
+  QTest::keyClick(&w, Qt::Key_Z, Qt::ControlModifier);
+  QAction* advance = nullptr;
+  for (QAction* a : w.findChildren<QAction*>())
+    if (a->text().startsWith("Advance")) advance = a;
+  ASSERT_NE(advance, nullptr);
+  advance->trigger();
+  ASSERT_FALSE(advance->isChecked());
+  ASSERT_TRUE(SpaceTo(&w, 0, t, k));
+  QTest::keyClick(&w, Qt::Key_D);
+  EXPECT_TRUE(s->document().at(0, t, k).hidden());
+  EXPECT_EQ(w.camera(), 0);
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
-// The review queue's model under QAbstractItemModelTester while labels come and go, and its walk
-// order (Space / Shift+Space in the window).
+// The review queue's model under QAbstractItemModelTester while labels come and go, with and
+// without missing knots, and its walk order (Space / Shift+Space in the window).
 
 #include "app/gui/document/review_model.h"
 
@@ -8,6 +8,8 @@
 #include <QAbstractItemModelTester>
 #include <QCoreApplication>
 #include <QSortFilterProxyModel>
+
+#include "app/gui/document/missing_knots.h"
 
 namespace netlab::gui {
 namespace {
@@ -69,6 +71,76 @@ TEST(ReviewModel, NextAndPreviousWalkTheQueueInOrderAndWrap) {
   EXPECT_EQ(walked, (std::vector<LabelKey>{{0, 0, 2}, {1, 0, 3}, {0, 2, 1}, {0, 0, 2}}));
   EXPECT_EQ(model.items()[model.Previous({0, 0, 2})], (LabelKey{0, 2, 1}));
   EXPECT_EQ(model.items()[model.Previous({0, 2, 1})], (LabelKey{1, 0, 3}));
+}
+
+// Both kinds in one queue: a 2 x 2 net 1.5 m before three cameras, labeled exactly in a and b;
+// camera c has a doubtful label of knot 1 in frame row 0 and nothing else. Its other knots are
+// missing there (a and b agree on them); the model lists both kinds in the queue's order, says
+// "missing" in the source column, sorts them with the rest and follows every edit, under the
+// model tester.
+TEST(ReviewModel, ListsMissingKnotsWithTheLabelsUnderReview) {
+  calib::Rig rig;
+  rig.cameras = {calib::LookAtCamera("a", {-1.5, 0.0, 0.0}, {0, 0, 0}, 16.0, 5.5, 1024),
+                 calib::LookAtCamera("b", {-1.4, 0.55, 0.1}, {0, 0, 0}, 16.0, 5.5, 1024),
+                 calib::LookAtCamera("c", {-1.35, -0.45, -0.3}, {0, 0, 0}, 16.0, 5.5, 1024)};
+  auto truth = [&](int c, int k) {
+    return rig.cameras[c].ProjectWorld(Eigen::Vector3d(0.0, (k % 2) * 0.1, (k / 2) * 0.1));
+  };
+  recon::LabelSet labels = recon::LabelSet::Empty(2, 2, {"a", "b", "c"}, {7});
+  for (int c = 0; c < 2; ++c)
+    for (int k = 0; k < 4; ++k) {
+      labels.at(c, 0, k) = Review(0, 1.0f);
+      labels.at(c, 0, k).px = truth(c, k);
+      labels.at(c, 0, k).state = recon::LabelState::kAccepted;
+    }
+  labels.at(2, 0, 1) = Review(0, 0.7f);
+  labels.at(2, 0, 1).px = truth(2, 1) + Eigen::Vector2d(3, 0);
+  LabelDocument doc(labels, "/nonexistent/labels.h5");
+  const MissingKnots missing(&doc, &rig, {0, 1, 2});
+  ReviewModel model(&doc, {7});
+  QAbstractItemModelTester tester(&model, QAbstractItemModelTester::FailureReportingMode::Fatal);
+  QSortFilterProxyModel proxy;
+  proxy.setSourceModel(&model);
+  proxy.setSortRole(Qt::EditRole);
+  QAbstractItemModelTester proxy_tester(&proxy,
+                                        QAbstractItemModelTester::FailureReportingMode::Fatal);
+  EXPECT_EQ(model.rowCount(), 1);  // review items only until SetMissing
+  model.SetMissing(&missing);
+  // c: knot 0 missing, 1 under review, 2 and 3 missing.
+  ASSERT_EQ(model.items(), (std::vector<LabelKey>{{2, 0, 0}, {2, 0, 1}, {2, 0, 2}, {2, 0, 3}}));
+  EXPECT_TRUE(model.IsMissing(0));
+  EXPECT_FALSE(model.IsMissing(1));
+  EXPECT_EQ(model.index(0, ReviewModel::kSource).data().toString(), "missing");
+  EXPECT_EQ(model.index(1, ReviewModel::kSource).data().toString(), "tracked");
+  EXPECT_TRUE(model.index(2, 0).data(ReviewModel::kMissingRole).toBool());
+  EXPECT_TRUE(model.index(2, ReviewModel::kReason)
+                  .data()
+                  .toString()
+                  .startsWith("no label; seen in a, b; expected near ("));
+  EXPECT_EQ(model.index(2, ReviewModel::kReason).data(Qt::ToolTipRole),
+            model.index(2, ReviewModel::kReason).data());
+  EXPECT_DOUBLE_EQ(model.index(0, ReviewModel::kSeverity).data(Qt::EditRole).toDouble(), 1.0);
+  // Sorted by source: "missing" rows before "tracked".
+  proxy.sort(ReviewModel::kSource, Qt::AscendingOrder);
+  EXPECT_EQ(proxy.index(0, ReviewModel::kSource).data().toString(), "missing");
+  EXPECT_EQ(proxy.index(3, ReviewModel::kSource).data().toString(), "tracked");
+  // The walk takes both kinds in the queue's order.
+  EXPECT_EQ(model.Next({2, 0, 0}), 1);
+  EXPECT_EQ(model.Next({2, 0, 1}), 2);
+  EXPECT_EQ(model.Previous({2, 0, 0}), 3);
+  // Labeled, marked hidden: off the queue; the doubtful label accepted: off too.
+  recon::Label placed = labels.at(0, 0, 0);
+  placed.px = truth(2, 0);
+  doc.Apply("Find Node", {{2, 0, 0, placed}});
+  doc.Apply("Mark hidden", {{2, 0, 3, recon::Label::Hidden()}});
+  EXPECT_EQ(model.items(), (std::vector<LabelKey>{{2, 0, 1}, {2, 0, 2}}));
+  doc.Apply("Accept", {{2, 0, 1, placed}});
+  EXPECT_EQ(model.items(), (std::vector<LabelKey>{{2, 0, 2}}));
+  doc.undo_stack()->undo();
+  doc.undo_stack()->undo();
+  EXPECT_EQ(model.rowCount(), 3);
+  model.SetMissing(nullptr);
+  EXPECT_EQ(model.items(), (std::vector<LabelKey>{{2, 0, 1}}));
 }
 
 }  // namespace

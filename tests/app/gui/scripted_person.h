@@ -4,13 +4,18 @@
 // click each, zoomed in; a Shift+click where Find Node finds none or several), runs Find Path
 // from the corners (Ctrl+P), clicks every visible knot of frame 0 still without an accepted label
 // (as the corners), tracks (T: a run stops at the first frame with a label for review), fixes that
-// frame's review items (FixReviewItem; the window moves on to the next by itself), tracks on, and
-// so on to the last frame with nothing left for review.
+// frame's items in the review queue (FixReviewItem; the window moves on to the next by itself),
+// tracks on, and so on to the last frame with nothing left in the queue. A missing knot (no label
+// where the other cameras see it) is labeled like a review item, or marked hidden where the truth
+// has none: in every following frame it is missing in (Shift+D) when the truth has none there
+// either, else here (D).
 
 #include <Eigen/Core>
 #include <QCoreApplication>
 #include <QTest>
 #include <QWheelEvent>
+#include <algorithm>
+#include <tuple>
 #include <vector>
 
 #include "app/gui/camera_view.h"
@@ -21,7 +26,7 @@ namespace netlab::gui {
 
 // One action of the person, to replay on the engine without a window.
 struct Action {
-  enum Kind { kFindNode, kPlace, kDelete, kAccept, kFindPath, kTrack } kind;
+  enum Kind { kFindNode, kPlace, kDelete, kAccept, kFindPath, kTrack, kHide, kHideRun } kind;
   int camera = 0, t = 0, knot = 0;
   Eigen::Vector2d px = Eigen::Vector2d::Zero();
 };
@@ -69,24 +74,43 @@ inline bool TrackForwards(MainWindow* w, ScriptedSession* out) {
   return ended;
 }
 
-// Fixes the review item the window shows (its camera, frame and knot), whose true label is
-// `truth`: a hidden knot's label deleted (D), one within 1 px of the truth accepted (A), any
-// other fixed with a Find Node click at the true place (and a Shift+click if that stays in doubt).
-inline void FixReviewItem(MainWindow* w, const recon::Label& truth, ScriptedSession* out) {
+// Fixes the queue's item the window shows (its camera, frame and knot: a label for review or a
+// missing knot), whose true label is `truth`: where the knot is hidden, a label deleted (D), a
+// missing knot marked hidden (D; Shift+D when the truth has it hidden in every following frame
+// it is missing in); a label within 1 px of the truth accepted (A); anything else fixed with a
+// Find Node click at the true place (and a Shift+click if that stays in doubt). Returns whether
+// it left a label (which tracking on from here carries forwards).
+inline bool FixReviewItem(MainWindow* w, const recon::LabelSet& truth_set, ScriptedSession* out) {
   Session* s = w->session();
   const int c = w->camera(), t = w->frame(), k = w->knot();
+  auto want = [&](int u) -> const recon::Label& {
+    return truth_set.at(truth_set.FindCamera(s->camera_names()[c]), u, k);
+  };
+  const recon::Label& truth = want(t);
   if (!truth.present()) {
-    QTest::keyClick(w, Qt::Key_D);
-    out->actions.push_back({Action::kDelete, c, t, k, Eigen::Vector2d::Zero()});
-  } else if ((s->document().at(c, t, k).px - truth.px).norm() < 1.0) {
+    const bool labeled = s->document().at(c, t, k).present();
+    bool run_hidden = !labeled;  // hidden in every frame it is missing in from here
+    for (int u : s->missing().RunFrom(c, t, k)) run_hidden = run_hidden && !want(u).present();
+    if (run_hidden) {
+      QTest::keyClick(w, Qt::Key_D, Qt::ShiftModifier);
+      out->actions.push_back({Action::kHideRun, c, t, k, Eigen::Vector2d::Zero()});
+    } else {
+      QTest::keyClick(w, Qt::Key_D);  // a label deleted; a missing knot marked hidden
+      out->actions.push_back(
+          {labeled ? Action::kDelete : Action::kHide, c, t, k, Eigen::Vector2d::Zero()});
+    }
+    return false;
+  }
+  if ((s->document().at(c, t, k).px - truth.px).norm() < 1.0) {
     QTest::keyClick(w, Qt::Key_A);
     out->actions.push_back({Action::kAccept, c, t, k, Eigen::Vector2d::Zero()});
-  } else {
-    out->actions.push_back({Action::kFindNode, c, t, k, ClickAt(w->view(c), truth.px)});
-    if (s->document().at(c, t, k).state != recon::LabelState::kAccepted)
-      out->actions.push_back(
-          {Action::kPlace, c, t, k, ClickAt(w->view(c), truth.px, Qt::ShiftModifier)});
+    return true;
   }
+  out->actions.push_back({Action::kFindNode, c, t, k, ClickAt(w->view(c), truth.px)});
+  if (s->document().at(c, t, k).state != recon::LabelState::kAccepted)
+    out->actions.push_back(
+        {Action::kPlace, c, t, k, ClickAt(w->view(c), truth.px, Qt::ShiftModifier)});
+  return true;
 }
 
 // Plays the session on an open window whose recording `truth` (labels_true.h5) describes.
@@ -127,41 +151,56 @@ inline ScriptedSession PlayScriptedSession(MainWindow* w, const recon::LabelSet&
             {Action::kPlace, c, 0, k, ClickAt(w->view(c), want(c, 0, k).px, Qt::ShiftModifier)});
       QTest::keyClick(w, Qt::Key_F, Qt::ControlModifier);
     }
-  // 3. Track to the last frame.
-  out.finished = TrackForwards(w, &out);
-  // 4. The review queue, a frame at a time (docs/gui.md, the workflow). A run stops at the first
+  // 3. Tracking and the review queue, a frame at a time (docs/gui.md, the workflow). A run stops at the first
   // frame with a label for review and shows its first item; after each fix the window goes on
   // to the frame's next item by itself. The person fixes them, then tracks on from there (T),
-  // which also replaces what a run carried from a label in doubt. Items the runs left elsewhere
-  // are reached from the queue's first one (Ctrl+Home; Space when the window did not move on).
+  // which carries the labels forwards and replaces what a run carried from a label in doubt.
+  // Items the runs left elsewhere (missing knots) are reached from the queue's first one
+  // (Ctrl+Home; Space when the window did not move on). Tracking on after a frame where only
+  // hidden marks were set would change nothing: the person does not.
   const int last = s->frames() - 1;
-  auto items = [&] { return s->document().ReviewItems(); };
-  auto on_item = [&] {
-    const recon::Label& l = s->document().at(w->camera(), w->frame(), w->knot());
-    return l.present() && l.state == recon::LabelState::kNeedsReview;
+  auto items = [&] {  // the queue, in its order
+    std::vector<LabelKey> all = s->document().ReviewItems(), missing = s->missing().Items();
+    all.insert(all.end(), missing.begin(), missing.end());
+    std::sort(all.begin(), all.end(), [](const LabelKey& a, const LabelKey& b) {
+      return std::tie(std::get<1>(a), std::get<0>(a), std::get<2>(a)) <
+             std::tie(std::get<1>(b), std::get<0>(b), std::get<2>(b));
+    });
+    return all;
   };
+  auto on_item = [&] {
+    const int c = w->camera(), t = w->frame(), k = w->knot();
+    const recon::Label& l = s->document().at(c, t, k);
+    return (l.present() && l.state == recon::LabelState::kNeedsReview) ||
+           s->missing().Find(c, t, k) != nullptr;
+  };
+  bool track_on = true;
+  int run_end = last;  // the frame the last run reached (a run stops on a frame with an item)
+  out.finished = true;
   while (out.finished && out.review_items < max_review_items) {
-    if (items().empty() && w->frame() == last) break;  // a run ends on the frame it reached
-    if (!items().empty()) {
+    if (track_on) {
+      out.finished = TrackForwards(w, &out);
+      run_end = w->frame();
+    }
+    if (items().empty()) break;  // so the last run reached the last frame
+    if (!on_item()) {
+      QTest::keyClick(w, Qt::Key_Home, Qt::ControlModifier);
+      ++out.navigation;
+    }
+    const int round = w->frame();
+    track_on = run_end != last;  // a run that stopped goes on from here
+    for (;;) {
+      ++out.review_items;
+      track_on = FixReviewItem(w, truth, &out) || track_on;
+      const auto left = items();
+      if (left.empty() || out.review_items >= max_review_items ||
+          std::get<1>(left.front()) != round)  // the frame is done (the view shows no mark)
+        break;
       if (!on_item()) {
-        QTest::keyClick(w, Qt::Key_Home, Qt::ControlModifier);
+        QTest::keyClick(w, Qt::Key_Space);
         ++out.navigation;
       }
-      const int round = w->frame();
-      for (;;) {
-        ++out.review_items;
-        FixReviewItem(w, want(w->camera(), w->frame(), w->knot()), &out);
-        const auto left = items();
-        if (left.empty() || out.review_items >= max_review_items ||
-            std::get<1>(left.front()) != round)  // the frame is done (the view shows no diamond)
-          break;
-        if (!on_item()) {
-          QTest::keyClick(w, Qt::Key_Space);
-          ++out.navigation;
-        }
-      }
     }
-    out.finished = TrackForwards(w, &out);
   }
   return out;
 }

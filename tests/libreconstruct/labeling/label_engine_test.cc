@@ -401,6 +401,57 @@ TEST(LabelEngine, FindNodeOnAnotherKnotIsKeptForReview) {
   EXPECT_FALSE(engine.reasons().count({0, 0, 12}));
 }
 
+// A hidden mark is the person's word that the knot is not visible there: Find Path, Fill Grid
+// and tracking label every other knot, and leave it as it is (each knot visible in the pictures,
+// so each tool would label it otherwise); the person's brush still labels it.
+TEST(LabelEngine, TheToolsLeaveAHiddenMarkAlone) {
+  const Shot shot = Render(2);
+  const int corners[4] = {0, kCols - 1, (kRows - 1) * kCols, kKnots - 1};
+  // Find Path from the corners: inner knot 12 and side knot 2 hidden in camera a.
+  LabelSet seeds = Empty(shot);
+  for (int c = 0; c < 3; ++c)
+    for (int k : corners) seeds.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
+  seeds.at(0, 0, 12) = Label::Hidden();
+  seeds.at(0, 0, 2) = Label::Hidden();
+  LabelStore paths(std::move(seeds));
+  LabelEngine path_engine(&paths, &shot.rig, Images(shot));
+  path_engine.LabelFirstFrame(0);
+  EXPECT_TRUE(paths.at(0, 0, 12).hidden());
+  EXPECT_TRUE(paths.at(0, 0, 2).hidden());
+  // Column 2's path starts at knot 2: in camera a its knots 7 and 17, found along their rows
+  // only, are kept for review; every other knot is accepted.
+  EXPECT_EQ(paths.at(0, 0, 7).state, LabelState::kNeedsReview);
+  EXPECT_EQ(paths.at(0, 0, 17).state, LabelState::kNeedsReview);
+  EXPECT_EQ(CheckAccepted(shot, paths, 0), 3 * kKnots - 4);
+  // Fill Grid from the border: knot 12 hidden in camera c, seen by a and b.
+  LabelSet border = Empty(shot);
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < kKnots; ++k)
+      if (IsBorder(k)) border.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
+  border.at(2, 0, 12) = Label::Hidden();
+  LabelStore filled(std::move(border));
+  LabelEngine fill_engine(&filled, &shot.rig, Images(shot));
+  fill_engine.CrossCheck(0);
+  EXPECT_TRUE(filled.at(2, 0, 12).hidden());
+  EXPECT_TRUE(filled.at(0, 0, 12).accepted());
+  EXPECT_EQ(CheckAccepted(shot, filled, 0), 3 * kKnots - 1);
+  // Tracking from frame 0 (every knot labeled) into frame 1, knot 6 hidden there in camera b;
+  // then its check and Fill Grid.
+  LabelSet all = Empty(shot);
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < kKnots; ++k) all.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
+  all.at(1, 1, 6) = Label::Hidden();
+  LabelStore tracked(std::move(all));
+  LabelEngine track_engine(&tracked, &shot.rig, Images(shot));
+  track_engine.TrackFrames(0, 1);
+  EXPECT_TRUE(tracked.at(1, 1, 6).hidden());
+  EXPECT_EQ(CheckAccepted(shot, tracked, 1), 3 * kKnots - 1);
+  // The person's brush on it: labeled.
+  ASSERT_EQ(track_engine.FindNodeAt(1, 1, 6, shot.Truth(1, 1, 6), 6.0).status,
+            FindNodeStatus::kFound);
+  EXPECT_TRUE(tracked.at(1, 1, 6).accepted());
+}
+
 TEST(LabelEngine, RejectsARigWithoutTheCameras) {
   const Shot shot = Render(1);
   LabelSet labels = Empty(shot);

@@ -45,6 +45,26 @@ TEST(LabelStore, EveryStepUndoesAndRedoesAsOne) {
   EXPECT_FALSE(store.Redo());
 }
 
+// A hidden mark differs from an absent label (its state), so marking, unmarking and replacing a
+// label by one are steps that undo and redo like any other.
+TEST(LabelStore, AHiddenMarkIsAStepThatUndoesAndRedoes) {
+  LabelStore store = Fresh();
+  store.Apply("label", {{0, 2, 1, Manual(5, 6)}});
+  EXPECT_EQ(store.Apply("Mark hidden", {{0, 2, 1, Label::Hidden()}, {1, 2, 1, Label::Hidden()}}),
+            2);
+  EXPECT_TRUE(store.at(0, 2, 1).hidden());
+  EXPECT_FALSE(store.at(0, 2, 1).present());
+  EXPECT_EQ(store.Apply("again", {{1, 2, 1, Label::Hidden()}}), 0);  // no change: no step
+  EXPECT_EQ(store.Apply("unmark", {{1, 2, 1, Label{}}}), 1);          // absent is not hidden
+  store.Undo();
+  EXPECT_TRUE(store.at(1, 2, 1).hidden());
+  store.Undo();
+  EXPECT_EQ(store.at(0, 2, 1).px, Eigen::Vector2d(5, 6));
+  EXPECT_FALSE(store.at(1, 2, 1).hidden());
+  store.Redo();
+  EXPECT_TRUE(store.at(0, 2, 1).hidden());
+}
+
 TEST(LabelStore, AStepEditingOneLabelTwiceUndoesToTheFirstState) {
   LabelStore store = Fresh();
   store.Apply("first", {{0, 0, 0, Manual(1, 1)}});

@@ -170,6 +170,36 @@ TEST(LabelsFile, RoundTripKeepsEveryFieldExactly) {
   EXPECT_TRUE(std::isnan(read.at(0, 0, 0).px.x()));
 }
 
+// The person's "not visible here" (LabelState::kHidden, no position) survives a save: a file
+// without hidden marks reads as before (the test above), one with them keeps them exactly.
+TEST(LabelsFile, HiddenMarksRoundTripWithoutAPosition) {
+  ScratchDir dir("labels");
+  LabelSet written = Example();
+  written.at(0, 1, 5) = Label::Hidden();  // over a present label
+  written.at(1, 0, 0) = Label::Hidden();  // over an absent one
+  WriteLabels(dir / "labels.h5", written);
+  const LabelSet read = ReadLabels(dir / "labels.h5");
+  EXPECT_TRUE(SameLabels(read, written));
+  EXPECT_TRUE(read.at(0, 1, 5).hidden());
+  EXPECT_FALSE(read.at(0, 1, 5).present());
+  EXPECT_TRUE(read.at(1, 0, 0).hidden());
+  EXPECT_EQ(read.CountPresent(), written.CountPresent());
+}
+
+// A hidden mark with a position contradicts itself: refused by name, on reading and on writing.
+TEST(LabelsFile, AHiddenMarkWithAPositionIsNamed) {
+  ScratchDir dir("labels");
+  const std::string path = dir / "labels.h5";
+  // Row 2, knot 7 (flat index 31) of cam_right holds a position in Example().
+  WriteLabels(path, Example());
+  EditFile(path, [](hid_t f) { SetByte(f, "/cameras/cam_right/state", 31, 3); });
+  EXPECT_TRUE(Mentions(ErrorOf([&] { ReadLabels(path); }),
+                       {"/cameras/cam_right/state", "hidden", "row 2, knot 7", "position_px"}));
+  LabelSet set = Example();
+  set.at(0, 2, 7).state = LabelState::kHidden;
+  EXPECT_THROW(WriteLabels(dir / "other.h5", set), std::invalid_argument);
+}
+
 TEST(LabelsFile, ReviewReasonsRoundTripAsOneLineEach) {
   ScratchDir dir("labels");
   LabelSet written = Example();
@@ -343,9 +373,9 @@ TEST(LabelsFile, OutOfRangeValuesAreNamed) {
                        {"/cameras/cam_left/source", "8", "row 2, knot 7", "LabelSource"}));
 
   WriteLabels(path, Example());
-  EditFile(path, [](hid_t f) { SetByte(f, "/cameras/cam_right/state", 31, 3); });
+  EditFile(path, [](hid_t f) { SetByte(f, "/cameras/cam_right/state", 31, 4); });
   EXPECT_TRUE(Mentions(ErrorOf([&] { ReadLabels(path); }),
-                       {"/cameras/cam_right/state", "3", "row 2, knot 7", "LabelState"}));
+                       {"/cameras/cam_right/state", "4", "row 2, knot 7", "LabelState"}));
 
   WriteLabels(path, Example());
   EditFile(path, [](hid_t f) {
@@ -408,6 +438,16 @@ TEST(XyPts, HasTheDltdv8Layout) {
             "pt2_cam2_Y\n"
             "NaN,NaN,NaN,NaN,NaN,NaN,0.10000000000000001,-2.5\n"
             "9.9999999999999995e-08,12345.678,NaN,NaN,NaN,NaN,NaN,NaN\n");
+}
+
+// xypts.csv has no hidden marks: a hidden knot is written as NaN, like an absent one.
+TEST(XyPts, AHiddenMarkIsWrittenAsAbsent) {
+  ScratchDir dir("labels");
+  LabelSet set = LabelSet::Empty(1, 2, {"a"}, {0});
+  set.at(0, 0, 0) = Label::Hidden();
+  set.at(0, 0, 1).px = Eigen::Vector2d(1.5, 2.0);
+  WriteXyPts(dir / "xypts.csv", set);
+  EXPECT_EQ(ReadText(dir / "xypts.csv"), "pt1_cam1_X,pt1_cam1_Y,pt2_cam1_X,pt2_cam1_Y\nNaN,NaN,1.5,2\n");
 }
 
 TEST(XyPts, RowIIsFrameI) {
