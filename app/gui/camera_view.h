@@ -1,7 +1,8 @@
 #pragma once
 // One camera's view: its frame at the current index with the labels drawn over it. Zoom at the
 // cursor (wheel), pan (drag with the middle or right button), fit (double click with the middle
-// button, or the window's key); the brush radius with Ctrl+wheel; brightness, contrast and gamma
+// button, or the window's key; a fitted view fits again when resized, a zoomed one keeps its
+// zoom); the brush radius with Ctrl+wheel; brightness, contrast and gamma
 // through a lookup table. The view only draws and forwards: a click, Shift+click, a drag of a label
 // and the cursor's pixel go out as signals in image pixels (OpenCV's convention: the centre of the
 // top-left pixel is (0, 0)); the window decides what they do.
@@ -10,6 +11,7 @@
 #include <QImage>
 #include <QPointF>
 #include <QWidget>
+#include <cmath>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <vector>
@@ -30,6 +32,20 @@ struct ViewOverlay {
   std::vector<std::vector<Eigen::Vector2d>> epipolar;  // curves from the other cameras' labels
   std::optional<Eigen::Vector2d> reprojected;          // the selected knot's triangulated point
   std::vector<Eigen::Vector2d> candidates;             // Find Node's when it found several
+  // A pending Fill Grid preview: what accepting it would do here, drawn dashed (not labels yet).
+  struct Ghost {
+    enum Kind {
+      kNew,       // a label where there is none: a dashed circle (accepted) or diamond (review)
+      kToReview,  // an accepted label the check would turn to review: a dashed diamond round it
+      kChanged,   // a label that would move or change state: dashed, with a line from the old one
+      kRemoved,   // a label that would be removed: a dashed cross
+    } kind = kNew;
+    int knot = -1;
+    Eigen::Vector2d px;  // where the label would be (the label's own place for kToReview)
+    Eigen::Vector2d from = Eigen::Vector2d::Constant(NAN);  // kChanged: where it is now
+    bool review = false;  // the label would be kept for review
+  };
+  std::vector<Ghost> ghosts;
   QString caption;                                     // camera, frame, residual
 };
 
@@ -37,6 +53,10 @@ class CameraView : public QWidget {
   Q_OBJECT
 
  public:
+  // The colour of a Fill Grid preview's ghost marks (dashed, over a dark outline): a pink no
+  // label has.
+  static constexpr QRgb kGhostColour = 0xffff46aa;
+
   explicit CameraView(int camera, QWidget* parent = nullptr);
 
   int camera() const { return camera_; }
@@ -83,6 +103,7 @@ class CameraView : public QWidget {
  private:
   void RebuildImage();
   void DrawOverlay(QPainter& painter) const;
+  void DrawGhosts(QPainter& painter) const;
 
   int camera_;
   cv::Mat frame_;  // as given
@@ -98,6 +119,9 @@ class CameraView : public QWidget {
   double scale_ = 1.0;
   QPointF offset_;
   bool fitted_ = false;
+  // Whether the view shows the whole image (Fit): a resize fits it again. Zoomed or panned, a
+  // resize keeps the scale and the image pixel at the view's centre.
+  bool fit_mode_ = true;
   // Interaction.
   std::optional<QPointF> pan_from_;
   int dragging_ = -1;  // the knot being dragged
