@@ -37,7 +37,8 @@ struct ViewOverlay {
     enum Kind {
       kNew,       // a label where there is none: a dashed circle (accepted) or diamond (review)
       kToReview,  // an accepted label the check would turn to review: a dashed diamond round it
-      kChanged,   // a label that would move or change state: dashed, with a line from the old one
+      kChanged,   // a label that would move or change state (one under review accepted, say):
+                  // dashed at its new place, with a line from where it is
       kRemoved,   // a label that would be removed: a dashed cross
     } kind = kNew;
     int knot = -1;

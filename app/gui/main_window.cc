@@ -1058,6 +1058,7 @@ void MainWindow::BuildPreviewBanner() {
   row->setContentsMargins(8, 3, 4, 3);
   preview_text_ = new QLabel;
   preview_text_->setTextFormat(Qt::RichText);
+  preview_text_->setWordWrap(true);
   row->addWidget(preview_text_, 1);
   // Buttons for the mouse; they take no focus, so Enter and Esc stay the window's.
   for (QAction* action : {accept_preview_, discard_preview_}) {
@@ -1136,10 +1137,16 @@ void MainWindow::ShowPreviewBanner() {
                .arg(p.added)
                .arg(p.added == 1 ? "" : "s")
                .arg(p.added_review);
+  if (p.confirmed > 0)
+    parts << QString("%1 label%2 under review accepted")
+                 .arg(p.confirmed)
+                 .arg(p.confirmed == 1 ? "" : "s");
   if (p.to_review > 0)
     parts << QString("%1 label%2 to review").arg(p.to_review).arg(p.to_review == 1 ? "" : "s");
+  if (p.moved > 0)
+    parts << QString("%1 label%2 moved").arg(p.moved).arg(p.moved == 1 ? "" : "s");
   if (p.changed > 0)
-    parts << QString("%1 label%2 changed").arg(p.changed).arg(p.changed == 1 ? "" : "s");
+    parts << QString("%1 other change%2").arg(p.changed).arg(p.changed == 1 ? "" : "s");
   const QString text =
       QString("<b>Fill Grid preview, frame %1:</b> %2 — dashed pink marks, not labels yet. "
               "<b>%3</b> accepts (one undo step), <b>%4</b> discards")
@@ -1157,11 +1164,13 @@ void MainWindow::AcceptPreview() {
   DropPreview({});
   const int changed = session_->ApplyFillGridPreview(preview);
   statusBar()->showMessage(
-      QString("Fill Grid, frame %1: %2 labels set (%3 new, %4 of them for review; %5 to review)")
+      QString("Fill Grid, frame %1: %2 labels set (%3 new, %4 of them for review; %5 under "
+              "review accepted; %6 to review)")
           .arg(session_->frame_number(preview.t))
           .arg(changed)
           .arg(preview.added)
           .arg(preview.added_review)
+          .arg(preview.confirmed)
           .arg(preview.to_review),
       8000);
 }

@@ -209,6 +209,11 @@ Session::FillGridPreview Session::PreviewFillGrid(recon::LabelSet snapshot, int 
         } else if (was.accepted() && now.present() && now.px == was.px &&
                    now.state == recon::LabelState::kNeedsReview) {
           ++preview.to_review;
+        } else if (was.present() && was.state == recon::LabelState::kNeedsReview &&
+                   now.accepted()) {
+          ++preview.confirmed;
+        } else if (was.accepted() && now.accepted()) {
+          ++preview.moved;
         } else {
           ++preview.changed;
         }

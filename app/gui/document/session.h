@@ -93,7 +93,9 @@ class Session {
     int added = 0;         // labels where there was none
     int added_review = 0;  // ... of them kept for review
     int to_review = 0;     // accepted labels the checks turn to review
-    int changed = 0;       // other labels changed (a doubtful one accepted or moved, or removed)
+    int confirmed = 0;     // labels under review accepted (at the junction the check found)
+  int moved = 0;         // accepted labels moved (flagged, then found again elsewhere)
+  int changed = 0;       // any other change (a label removed, say)
     bool empty() const { return edits.empty(); }
   };
   FillGridPreview PreviewFillGrid(recon::LabelSet snapshot, int t) const;
@@ -101,6 +103,9 @@ class Session {
   // thread). The caller makes sure the labels have not changed since its snapshot. Returns the
   // labels changed.
   int ApplyFillGridPreview(const FillGridPreview& preview);
+  // The net's link length the GUI thread's engine judges with (m): the project's mesh, else its
+  // estimate from the first cross-checked frame (or an applied preview's); 0 until then.
+  double link_length_m() const { return link_length_m_; }
 
   // A tracking run from labeled row `from` towards `to` on `snapshot` (document().labels(),
   // copied on the GUI thread); runs on any thread and never touches the document. Stops when
