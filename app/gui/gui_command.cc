@@ -36,7 +36,7 @@ constexpr char kHelp[] =
     "                      (works without a display)\n"
     "  --keys KEYS         with --screenshot: first press these keys of the window, separated\n"
     "                      by ';' (e.g. \"G\": a Fill Grid preview; \"M;E\"), and wait for what\n"
-    "                      they start\n"
+    "                      they start (not keys that open a dialog: F1, Ctrl+G, Ctrl+T, ...)\n"
     "  --rig, --labels, --coloring FILE, --knots RxC (without a colouring), --project FILE\n\n"
     "Keys: F1 in the window lists them all. exit status: 0, 1 bad input, 2 usage error.\n";
 

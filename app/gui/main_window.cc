@@ -7,9 +7,9 @@
 #include <QDialog>
 #include <QDockWidget>
 #include <QElapsedTimer>
-#include <QFrame>
 #include <QFileDialog>
 #include <QFileInfo>
+#include <QFrame>
 #include <QGridLayout>
 #include <QHBoxLayout>
 #include <QHeaderView>
@@ -395,7 +395,7 @@ void MainWindow::SetFrame(int t) {
   if (!session_) return;
   t = std::clamp(t, 0, session_->frames() - 1);
   if (t == frame_) return;
-  DropPreview("the frame changed");
+  DropPreview("discarded: the frame changed");
   const int direction = frame_ < 0 ? 0 : (t > frame_ ? 1 : -1);
   frame_ = t;
   for (auto& c : candidates_) c.clear();
@@ -588,7 +588,7 @@ void MainWindow::OnColoursRead() {
 }
 
 void MainWindow::OnLabelsChanged(const QList<int>& frames) {
-  DropPreview("the labels changed");
+  DropPreview("discarded: the labels changed");
   timeline_->SetReviewFrames(session_->document().ReviewFrames());
   if (frames.contains(frame_)) {
     RefreshOverlays();
@@ -852,7 +852,7 @@ void MainWindow::TrackToFrame() {
 
 void MainWindow::TrackTo(int to, bool wait) {
   if (!session_ || tracker_.isRunning() || to == frame_) return;
-  DropPreview("a tracking run started");
+  DropPreview("discarded: a tracking run started");
   // A snapshot on the GUI thread; the run never touches the document.
   const int from = frame_;
   cancel_ = false;

@@ -163,8 +163,8 @@ class MainWindow : public QMainWindow {
   void OnPreviewReady();
   void AcceptPreview();
   void DiscardPreview() { DropPreview("discarded"); }
-  // Forgets a pending or computing preview (nothing when there is none); `why` goes to the status
-  // bar unless empty.
+  // Forgets a pending or computing preview (nothing when there is none); the status bar then says
+  // "Fill Grid preview <why>" ("discarded: the frame changed"), unless `why` is empty.
   void DropPreview(const QString& why);
   void ShowPreviewBanner();
   // What accepting the preview would do in camera c, as the view draws it.

@@ -24,12 +24,14 @@
 #include <future>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <string>
 #include <vector>
 
 #include "app/gui/camera_view.h"
 #include "app/gui/document/project.h"
+#include "app/gui/shortcut_editor.h"
 #include "tests/app/cli/run_netlab.h"
 #include "tests/app/cli/small_shot.h"
 #include "tests/app/gui/scripted_person.h"
@@ -484,10 +486,10 @@ TEST_F(FillGridPreviewTest, GPreviewsAndEnterAppliesWhatFillGridGivesAsOneStep) 
   QTest::keyClick(&w, Qt::Key_Return);
   EXPECT_EQ(undo->index(), index);
   std::printf("Fill Grid preview on the small shot: %zu edits (%d new, %d of them for review; %d "
-              "under review accepted; %d to review; %d changed); %d labels under review in frame "
-              "0 once applied\n",
+              "under review accepted; %d to review; %d moved; %d other); %d labels under review "
+              "in frame 0 once applied\n",
               shown.edits.size(), shown.added, shown.added_review, shown.confirmed,
-              shown.to_review, shown.changed, review);
+              shown.to_review, shown.moved, shown.changed, review);
 }
 
 // Esc discards a preview; so do a label edit, a frame change, an undo and a tracking run, even
@@ -512,6 +514,7 @@ TEST_F(FillGridPreviewTest, EscAnEditAFrameChangeOrAnUndoDiscardThePreview) {
   EXPECT_GT(Ghosts(), 0);
   QTest::keyClick(&w, Qt::Key_Escape);
   expect_none_pending("Esc");
+  EXPECT_EQ(w.statusBar()->currentMessage(), "Fill Grid preview discarded");
   QTest::keyClick(&w, Qt::Key_Return);
   EXPECT_EQ(DifferentLabels(s->document().labels(), start), 0);
   EXPECT_EQ(undo->index(), index);
@@ -545,6 +548,7 @@ TEST_F(FillGridPreviewTest, EscAnEditAFrameChangeOrAnUndoDiscardThePreview) {
   QTest::keyClick(&w, Qt::Key_B);
   ASSERT_EQ(w.frame(), 0);
   expect_none_pending("a frame change");
+  EXPECT_EQ(w.statusBar()->currentMessage(), "Fill Grid preview discarded: the frame changed");
   QTest::keyClick(&w, Qt::Key_Return);
   EXPECT_EQ(DifferentLabels(s->document().labels(), start), 0);
   EXPECT_EQ(undo->index(), index);
@@ -597,8 +601,9 @@ TEST_F(MainWindowTest, AFillGridPreviewWithNothingToAddLeavesNothingPending) {
 
 // The session without a window: PreviewFillGrid (on another thread) leaves the document as it
 // was and says what FillGrid would do; applied, it gives FillGrid's labels and reasons on a
-// second session of the same start, as one undo step that undo takes back.
-TEST_F(MainWindowTest, PreviewFillGridChangesNothingAndAppliesAsFillGridDoes) {
+// second session of the same start, as one undo step that undo takes back. It judges with the
+// session's link length, and hands over its own to a session without one.
+TEST_F(MainWindowTest, PreviewFillGridAppliesAsFillGridDoesWithTheSessionsLinkLength) {
   // Frame 0 of the true labels with every third inner knot taken out, and one label 6 px off.
   recon::LabelSet start = Truth();
   int removed = 0;
@@ -618,7 +623,8 @@ TEST_F(MainWindowTest, PreviewFillGridChangesNothingAndAppliesAsFillGridDoes) {
   auto direct = Session::Open(LoadProject(MakeProjectFile("preview_direct", file)));
   const recon::LabelSet before = previewed->document().labels();
 
-  // The preview, on another thread.
+  // The preview, on another thread (the frames decoded first in both sessions, for the timing).
+  for (int c = 0; c < previewed->cameras(); ++c) previewed->Image(c, 0), direct->Image(c, 0);
   QElapsedTimer timer;
   timer.start();
   const Session::FillGridPreview preview =
@@ -656,42 +662,123 @@ TEST_F(MainWindowTest, PreviewFillGridChangesNothingAndAppliesAsFillGridDoes) {
   // Undo: the start again.
   previewed->document().undo_stack()->undo();
   EXPECT_EQ(DifferentLabels(previewed->document().labels(), before), 0);
-  std::printf("PreviewFillGrid: %zu edits in %.0f ms; FillGrid %.0f ms (%d labels removed)\n",
+  std::printf("PreviewFillGrid: %zu edits in %.0f ms (the process's first engine run, warm-up "
+              "included); FillGrid %.0f ms (%d labels removed)\n",
               preview.edits.size(), preview_ms, direct_ms, removed);
+
+  // The link length: a preview judges with the one the session's engine already has (estimated
+  // on another frame), not an estimate of its own; a preview applied to a session without one
+  // gives it the preview's estimate. Either way the next Fill Grid judges as after FillGrid.
+  {
+    // The true labels, each moved by up to 0.3 px (the exact ones give 0.1 m in every frame).
+    recon::LabelSet noisy = Truth();
+    for (int c = 0; c < static_cast<int>(noisy.cameras.size()); ++c)
+      for (int t = 0; t < noisy.frames(); ++t)
+        for (int k = 0; k < noisy.knots(); ++k)
+          noisy.at(c, t, k).px += 0.3 * Eigen::Vector2d(std::sin(7.1 * (c + 3 * t + 11 * k)),
+                                                         std::cos(5.3 * (2 * c + t + 7 * k)));
+    const std::string truth = (Dir() / "link_noisy.h5").string();
+    recon::WriteLabels(truth, noisy);
+    auto estimated = Session::Open(LoadProject(MakeProjectFile("link_estimated", truth)));
+    auto fresh = Session::Open(LoadProject(MakeProjectFile("link_fresh", truth)));
+    ASSERT_EQ(estimated->project().mesh_m, 0.0);  // estimated by the engine
+    EXPECT_EQ(estimated->link_length_m(), 0.0);
+    estimated->FillGrid(0);
+    const double frame0 = estimated->link_length_m();
+    ASSERT_GT(frame0, 0.0);
+    // Frame 20 alone estimates another length (other labels, other noise).
+    const recon::LabelSet labels = fresh->document().labels();
+    const double frame20 = fresh->PreviewFillGrid(labels, 20).link_length_m;
+    ASSERT_GT(frame20, 0.0);
+    ASSERT_NE(frame20, frame0);
+    EXPECT_EQ(estimated->PreviewFillGrid(labels, 20).link_length_m, frame0);
+    // Applied, a preview hands its estimate to a session that has none.
+    EXPECT_EQ(fresh->link_length_m(), 0.0);
+    fresh->ApplyFillGridPreview(fresh->PreviewFillGrid(labels, 20));
+    EXPECT_EQ(fresh->link_length_m(), frame20);
+    std::printf("link length: %.9f m from frame 0, %.9f m from frame 20\n", frame0, frame20);
+  }
 }
 
 
-// A preview judges with the link length the session's engine already has (estimated on another
-// frame), not an estimate of its own; a preview applied to a session without one gives it the
-// preview's estimate. Either way the next Fill Grid judges as it would have after FillGrid.
-TEST_F(MainWindowTest, APreviewUsesAndHandsOverTheSessionsLinkLength) {
-  // The true labels, each moved by up to 0.3 px (the exact ones give 0.1 m in every frame).
-  recon::LabelSet noisy = Truth();
-  for (int c = 0; c < static_cast<int>(noisy.cameras.size()); ++c)
-    for (int t = 0; t < noisy.frames(); ++t)
-      for (int k = 0; k < noisy.knots(); ++k)
-        noisy.at(c, t, k).px += 0.3 * Eigen::Vector2d(std::sin(7.1 * (c + 3 * t + 11 * k)),
-                                                       std::cos(5.3 * (2 * c + t + 7 * k)));
-  const std::string truth = (Dir() / "link_noisy.h5").string();
-  recon::WriteLabels(truth, noisy);
-  auto estimated = Session::Open(LoadProject(MakeProjectFile("link_estimated", truth)));
-  auto fresh = Session::Open(LoadProject(MakeProjectFile("link_fresh", truth)));
-  ASSERT_EQ(estimated->project().mesh_m, 0.0);  // estimated by the engine
-  EXPECT_EQ(estimated->link_length_m(), 0.0);
-  estimated->FillGrid(0);
-  const double frame0 = estimated->link_length_m();
-  ASSERT_GT(frame0, 0.0);
-  // Frame 20 alone estimates another length (other labels, other noise).
-  const recon::LabelSet labels = fresh->document().labels();
-  const double frame20 = fresh->PreviewFillGrid(labels, 20).link_length_m;
-  ASSERT_GT(frame20, 0.0);
-  ASSERT_NE(frame20, frame0);
-  EXPECT_EQ(estimated->PreviewFillGrid(labels, 20).link_length_m, frame0);
-  // Applied, a preview hands its estimate to a session that has none.
-  EXPECT_EQ(fresh->link_length_m(), 0.0);
-  fresh->ApplyFillGridPreview(fresh->PreviewFillGrid(labels, 20));
-  EXPECT_EQ(fresh->link_length_m(), frame20);
-  std::printf("link length: %.9f m from frame 0, %.9f m from frame 20\n", frame0, frame20);
+
+// netlab gui --keys G --screenshot: the screenshot shows the preview's ghosts (pink below the
+// bar, where a screenshot without it has none); an unknown key, or --keys without a screenshot,
+// is named.
+TEST_F(MainWindowTest, TheScreenshotCanPressGFirstAndNamesAKeyNoActionHas) {
+  recon::LabelSet start = Truth();
+  for (int c = 0; c < static_cast<int>(start.cameras.size()); ++c)
+    for (int k = 0; k < start.knots(); ++k)
+      if (k % start.cols > 0 && k % start.cols + 1 < start.cols && k / start.cols % 2 == 1)
+        start.at(c, 0, k) = recon::Label{};
+  const std::string file = (Dir() / "keys_start.h5").string();
+  recon::WriteLabels(file, start);
+  const std::string project = MakeProjectFile("keys_cli", file);
+  const auto pink_below_bar = [](const std::string& png) {
+    const QImage image(QString::fromStdString(png));
+    const QColor pink = QColor::fromRgb(CameraView::kGhostColour);
+    int n = 0;
+    for (int y = 150; y < image.height(); ++y)
+      for (int x = 0; x < image.width(); ++x) {
+        const QColor c = image.pixelColor(x, y);
+        n += std::abs(c.red() - pink.red()) < 30 && std::abs(c.green() - pink.green()) < 30 &&
+             std::abs(c.blue() - pink.blue()) < 30;
+      }
+    return n;
+  };
+  const std::string plain = (Dir() / "keys_plain.png").string();
+  const std::string preview = (Dir() / "keys_preview.png").string();
+  const auto without = RunNetlab("gui " + project + " --screenshot " + plain);
+  ASSERT_EQ(without.status, 0) << without.err;
+  const auto with = RunNetlab("gui " + project + " --keys G --screenshot " + preview);
+  ASSERT_EQ(with.status, 0) << with.err;
+  EXPECT_EQ(pink_below_bar(plain), 0);
+  EXPECT_GT(pink_below_bar(preview), 100);
+  const auto unknown = RunNetlab("gui " + project + " --keys Ctrl+Alt+F12 --screenshot " + plain);
+  EXPECT_EQ(unknown.status, 2);
+  EXPECT_NE(unknown.err.find("no action of the window has the key 'Ctrl+Alt+F12'"),
+            std::string::npos)
+      << unknown.err;
+  const auto alone = RunNetlab("gui " + project + " --keys G");
+  EXPECT_EQ(alone.status, 2);
+  EXPECT_NE(alone.err.find("--keys needs --screenshot"), std::string::npos) << alone.err;
+}
+
+// The preview's two actions are in F1's cheat sheet with their keys, and in the shortcut editor
+// (changeable as the others), where their defaults clash with no other action's.
+// (No project: the actions are there from the start, so no shot is rendered for this test.)
+TEST(FillGridPreviewKeys, AreInTheCheatSheetAndTheShortcutEditor) {
+  MainWindow w;
+  w.resize(1400, 1000);
+  w.show();
+  w.activateWindow();
+  ASSERT_TRUE(QTest::qWaitForWindowActive(&w));
+  std::map<QString, QString> listed;
+  QTimer::singleShot(200, [&] {
+    QWidget* dialog = QApplication::activeModalWidget();
+    if (dialog == nullptr) return;
+    if (const auto* table = dialog->findChild<QTableWidget*>())
+      for (int r = 0; r < table->rowCount(); ++r)
+        listed[table->item(r, 0)->text()] = table->item(r, 1)->text();
+    dialog->close();
+  });
+  QTest::keyClick(&w, Qt::Key_F1);
+  const auto native = [](const char* keys) {
+    return QKeySequence(keys).toString(QKeySequence::NativeText);
+  };
+  EXPECT_EQ(listed["Accept Fill Grid preview"], native("Return") + "  or  " + native("Enter"));
+  EXPECT_EQ(listed["Discard preview"], native("Esc"));
+  EXPECT_EQ(listed["Fill Grid in this frame"], native("G"));
+  const QList<QAction*> all = w.actions();
+  ShortcutEditor editor({all.begin(), all.end()});
+  const int accept = editor.RowOf("Accept Fill Grid preview");
+  const int discard = editor.RowOf("Discard preview");
+  ASSERT_GE(accept, 0);
+  ASSERT_GE(discard, 0);
+  EXPECT_EQ(editor.DefaultKeys(accept),
+            (QList<QKeySequence>{QKeySequence(Qt::Key_Return), QKeySequence(Qt::Key_Enter)}));
+  EXPECT_EQ(editor.DefaultKeys(discard), QList<QKeySequence>{QKeySequence(Qt::Key_Escape)});
+  EXPECT_TRUE(editor.Conflicts().isEmpty()) << editor.Conflicts().join("; ").toStdString();
 }
 
 }  // namespace
