@@ -508,10 +508,21 @@ TEST_F(FillGridPreviewTest, EscAnEditAFrameChangeOrAnUndoDiscardThePreview) {
     EXPECT_EQ(Ghosts(), 0) << after;
   };
 
-  // Esc.
+  // Esc. (A zoomed view keeps its zoom and centre when the bar above the views appears.)
+  CameraView* zoomed = w.view(1);
+  ZoomAt(zoomed, zoomed->ToImage(QPointF(zoomed->width() / 2.0, zoomed->height() / 2.0)), 4);
+  const double scale = zoomed->scale();
+  const Eigen::Vector2d centre =
+      zoomed->ToImage(QPointF(zoomed->width() / 2.0, zoomed->height() / 2.0));
+  const int height = zoomed->height();
   ASSERT_TRUE(PressGAndWait());
   ASSERT_NE(w.fill_grid_preview(), nullptr);
   EXPECT_GT(Ghosts(), 0);
+  EXPECT_LT(zoomed->height(), height);  // the bar took its room
+  EXPECT_EQ(zoomed->scale(), scale);
+  EXPECT_LT((zoomed->ToImage(QPointF(zoomed->width() / 2.0, zoomed->height() / 2.0)) - centre)
+                .norm(),
+            1.0);
   QTest::keyClick(&w, Qt::Key_Escape);
   expect_none_pending("Esc");
   EXPECT_EQ(w.statusBar()->currentMessage(), "Fill Grid preview discarded");
