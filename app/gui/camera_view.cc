@@ -1,6 +1,7 @@
 #include "app/gui/camera_view.h"
 
 #include <QMouseEvent>
+#include <QResizeEvent>
 #include <QPainter>
 #include <QPainterPath>
 #include <QWheelEvent>
@@ -122,6 +123,7 @@ void CameraView::Fit() {
   offset_ = QPointF((width() - full_width_ * scale_) / 2, (height() - full_height_ * scale_) / 2);
   fitted_ = true;
   zoomed_on_.reset();
+  fit_mode_ = true;
   update();
 }
 
@@ -131,6 +133,7 @@ void CameraView::ZoomTo(const Eigen::Vector2d& px, double pixels_across) {
       QPointF(width() / 2.0 - (px.x() + 0.5) * scale_, height() / 2.0 - (px.y() + 0.5) * scale_);
   fitted_ = true;
   zoomed_on_ = std::make_pair(px, pixels_across);
+  fit_mode_ = false;
   update();
 }
 
@@ -227,6 +230,7 @@ void CameraView::DrawOverlay(QPainter& painter) const {
       }
     }
   }
+  DrawGhosts(painter);
   painter.setPen(QPen(QColor(255, 60, 60), 1.5));
   for (const Eigen::Vector2d& c : overlay_.candidates) {  // several junctions: none taken
     const QPointF p = ToWidget(c);
@@ -253,12 +257,59 @@ void CameraView::DrawOverlay(QPainter& painter) const {
   }
 }
 
-void CameraView::resizeEvent(QResizeEvent*) {
-  // A view zoomed onto a knot stays on it (a view shown alone is resized after the zoom).
-  if (zoomed_on_)
-    ZoomTo(zoomed_on_->first, zoomed_on_->second);
-  else if (fitted_)
-    Fit();
+void CameraView::DrawGhosts(QPainter& painter) const {
+  if (overlay_.ghosts.empty()) return;
+  // Larger than a label's mark, so a ghost round a label (kToReview) rings it.
+  const double r = std::clamp(scale_ * 3.0, 3.0, 9.0) + 3.0;
+  const auto diamond = [](const QPointF& p, double d) {
+    return QPolygonF({p + QPointF(0, -d), p + QPointF(d, 0), p + QPointF(0, d), p + QPointF(-d, 0)});
+  };
+  // Each mark twice: a dark outline under a dashed pink line, visible on any yarn or background.
+  QPen outline(QColor(0, 0, 0, 170), 3.5);
+  QPen dashed(QColor::fromRgb(kGhostColour), 1.8, Qt::CustomDashLine);
+  dashed.setDashPattern({2.5, 1.5});
+  painter.setBrush(Qt::NoBrush);
+  for (const QPen& pen : {outline, dashed}) {
+    painter.setPen(pen);
+    for (const ViewOverlay::Ghost& g : overlay_.ghosts) {
+      const QPointF p = ToWidget(g.px);
+      switch (g.kind) {
+        case ViewOverlay::Ghost::kNew:
+        case ViewOverlay::Ghost::kChanged:
+          if (g.kind == ViewOverlay::Ghost::kChanged && g.from.allFinite())
+            painter.drawLine(ToWidget(g.from), p);
+          if (g.review)
+            painter.drawPolygon(diamond(p, r + 1));
+          else
+            painter.drawEllipse(p, r, r);
+          break;
+        case ViewOverlay::Ghost::kToReview:
+          painter.drawPolygon(diamond(p, r + 3));
+          break;
+        case ViewOverlay::Ghost::kRemoved:
+          painter.drawLine(p + QPointF(-r, -r), p + QPointF(r, r));
+          painter.drawLine(p + QPointF(-r, r), p + QPointF(r, -r));
+          break;
+      }
+    }
+  }
+}
+
+void CameraView::resizeEvent(QResizeEvent* event) {
+  if (fitted_) {
+    // A view zoomed onto a knot stays on it (a view shown alone is resized after the zoom); a
+    // fitted view fits again; one the person zoomed or panned keeps its scale and the pixel at
+    // its centre (a bar shown above the views does not lose the person's zoom).
+    if (zoomed_on_) {
+      ZoomTo(zoomed_on_->first, zoomed_on_->second);
+    } else if (fit_mode_ || !event->oldSize().isValid()) {
+      Fit();
+    } else {
+      const QSize grown = event->size() - event->oldSize();
+      offset_ += QPointF(grown.width() / 2.0, grown.height() / 2.0);
+      update();
+    }
+  }
   // A larger view (maximised) needs a finer reduced copy: made once here, not at every paint.
   if (has_image() &&
       Reduction(frame_.image.cols, FitScreenPerImage(frame_.image.cols)) != frame_.reduction)
@@ -276,6 +327,7 @@ void CameraView::wheelEvent(QWheelEvent* event) {
   const Eigen::Vector2d px = ToImage(at);
   scale_ = std::clamp(scale_ * std::pow(1.25, steps), 0.02, 64.0);
   zoomed_on_.reset();
+  fit_mode_ = false;
   offset_ = at - QPointF((px.x() + 0.5) * scale_, (px.y() + 0.5) * scale_);
   update();
 }
@@ -307,6 +359,7 @@ void CameraView::mouseMoveEvent(QMouseEvent* event) {
   if (pan_from_) {
     offset_ += event->position() - *pan_from_;
     zoomed_on_.reset();
+    fit_mode_ = false;
     pan_from_ = event->position();
   } else if (dragging_ >= 0) {
     drag_px_ = ToImage(event->position());

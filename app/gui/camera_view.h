@@ -1,7 +1,8 @@
 #pragma once
 // One camera's view: its frame at the current index with the labels drawn over it. Zoom at the
 // cursor (wheel), pan (drag with the middle or right button), fit (double click with the middle
-// button, or the window's key); the brush radius with Ctrl+wheel; brightness, contrast and gamma
+// button, or the window's key; a fitted view fits again when resized, a zoomed one keeps its
+// zoom); the brush radius with Ctrl+wheel; brightness, contrast and gamma
 // through a lookup table. The view only draws and forwards: a click, Shift+click, a drag of a label
 // and the cursor's pixel go out as signals in image pixels (OpenCV's convention: the centre of the
 // top-left pixel is (0, 0)); the window decides what they do.
@@ -10,6 +11,7 @@
 #include <QImage>
 #include <QPointF>
 #include <QWidget>
+#include <cmath>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <utility>
@@ -54,6 +56,21 @@ struct ViewOverlay {
   // it, drawn as a ring so it is found when zoomed out.
   std::optional<Eigen::Vector2d> expected;
   std::vector<Eigen::Vector2d> candidates;             // Find Node's when it found several
+  // A pending Fill Grid preview: what accepting it would do here, drawn dashed (not labels yet).
+  struct Ghost {
+    enum Kind {
+      kNew,       // a label where there is none: a dashed circle (accepted) or diamond (review)
+      kToReview,  // an accepted label the check would turn to review: a dashed diamond round it
+      kChanged,   // a label that would move or change state (one under review accepted, say):
+                  // dashed at its new place, with a line from where it is
+      kRemoved,   // a label that would be removed: a dashed cross
+    } kind = kNew;
+    int knot = -1;
+    Eigen::Vector2d px;  // where the label would be (the label's own place for kToReview)
+    Eigen::Vector2d from = Eigen::Vector2d::Constant(NAN);  // kChanged: where it is now
+    bool review = false;  // the label would be kept for review
+  };
+  std::vector<Ghost> ghosts;
   QString caption;                                     // camera, frame, residual
 };
 
@@ -61,6 +78,10 @@ class CameraView : public QWidget {
   Q_OBJECT
 
  public:
+  // The colour of a Fill Grid preview's ghost marks (dashed, over a dark outline): a pink no
+  // label has.
+  static constexpr QRgb kGhostColour = 0xffff46aa;
+
   explicit CameraView(int camera, QWidget* parent = nullptr);
 
   int camera() const { return camera_; }
@@ -116,6 +137,7 @@ class CameraView : public QWidget {
   // visible part of the image itself.
   void DrawFrame(QPainter& painter) const;
   void DrawOverlay(QPainter& painter) const;
+  void DrawGhosts(QPainter& painter) const;
 
   int camera_;
   ViewFrame frame_;
@@ -132,6 +154,9 @@ class CameraView : public QWidget {
   bool fitted_ = false;
   // The knot pixel and span of the last ZoomTo, until the person zooms or pans: kept on resize.
   std::optional<std::pair<Eigen::Vector2d, double>> zoomed_on_;
+  // Whether the view shows the whole image (Fit): a resize fits it again. Zoomed or panned, a
+  // resize keeps the scale and the image pixel at the view's centre.
+  bool fit_mode_ = true;
   // Interaction.
   std::optional<QPointF> pan_from_;
   int dragging_ = -1;  // the knot being dragged

@@ -1,7 +1,8 @@
-// netlab gui [PROJECT.yaml [--frame N] [--review N] [--screenshot OUT.png]]
+// netlab gui [PROJECT.yaml [--frame N] [--review N] [--screenshot OUT.png [--keys KEYS]]]
 // netlab gui EXPERIMENT.yaml --rig RIG --labels LABELS [--coloring C] [--knots RxC] [--project P]
 #include "app/gui/gui_command.h"
 
+#include <QAction>
 #include <QApplication>
 #include <QFileInfo>
 #include <cstdio>
@@ -12,13 +13,14 @@
 #include "app/cli/command_line.h"
 #include "app/gui/document/project.h"
 #include "app/gui/main_window.h"
+#include "app/gui/settings.h"
 #include "common/yaml_util.h"
 
 namespace netlab::gui {
 namespace {
 
 constexpr char kHelp[] =
-    "usage: netlab gui [PROJECT.yaml] [--frame N] [--review N] [--screenshot OUT.png]\n"
+    "usage: netlab gui [PROJECT.yaml] [--frame N] [--review N] [--screenshot OUT.png [--keys KEYS]]\n"
     "       netlab gui EXPERIMENT.yaml --rig rig.yaml --labels labels.h5 [--coloring C.yaml]\n"
     "                  [--knots RxC] [--project project.yaml]\n\n"
     "The labeling workstation (docs/gui.md): four synchronized camera views, Find Node, Find\n"
@@ -34,6 +36,9 @@ constexpr char kHelp[] =
     "                      frame, its camera maximised, zoomed on the knot)\n"
     "  --screenshot FILE   draw the frame with its overlays, save the window as PNG and exit\n"
     "                      (works without a display)\n"
+    "  --keys KEYS         with --screenshot: first press these keys of the window, separated\n"
+    "                      by ';' (e.g. \"G\": a Fill Grid preview; \"M;E\"), and wait for what\n"
+    "                      they start (not keys that open a dialog: F1, Ctrl+G, Ctrl+T, ...)\n"
     "  --rig, --labels, --coloring FILE, --knots RxC (without a colouring), --project FILE\n\n"
     "Keys: F1 in the window lists them all. exit status: 0, 1 bad input, 2 usage error.\n";
 
@@ -46,15 +51,37 @@ bool HasDisplay() {
   return std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY") || std::getenv("QT_QPA_PLATFORM");
 }
 
+// Triggers the window's actions bound to `keys` (Settings::ParseKeys: "G", "M;E"), one after
+// the other, each once the work of the one before is done. False, saying which, for a key no
+// action has.
+bool PressKeys(MainWindow* window, const std::string& keys) {
+  for (const QKeySequence& key : Settings::ParseKeys(QString::fromStdString(keys))) {
+    QAction* bound = nullptr;
+    for (QAction* a : window->actions())
+      if (a->shortcuts().contains(key)) bound = a;
+    if (bound == nullptr) {
+      std::fprintf(stderr, "netlab gui: --keys: no action of the window has the key '%s'\n",
+                   key.toString().toStdString().c_str());
+      return false;
+    }
+    bound->trigger();
+    if (!window->WaitForIdle())
+      std::fprintf(stderr, "netlab gui: '%s' did not finish in time\n",
+                   key.toString().toStdString().c_str());
+  }
+  return true;
+}
+
 }  // namespace
 
 int RunGui(const std::vector<std::string>& args) {
-  std::string project_path, screenshot;
+  std::string project_path, screenshot, keys;
   int frame = -1, review = 0;
   try {
     const app::CommandLine cl(
         args, {"help"},
-        {"frame", "review", "screenshot", "rig", "labels", "coloring", "knots", "project"});
+        {"frame", "review", "screenshot", "keys", "rig", "labels", "coloring", "knots",
+         "project"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -62,6 +89,8 @@ int RunGui(const std::vector<std::string>& args) {
     if (cl.positional().size() > 1)
       throw app::UsageError("expected at most one project or experiment file");
     screenshot = cl.Option("screenshot").value_or("");
+    keys = cl.Option("keys").value_or("");
+    if (!keys.empty() && screenshot.empty()) throw app::UsageError("--keys needs --screenshot");
     frame = cl.IntOption("frame", -1, 0, 100000000);
     review = cl.IntOption("review", 0, 1, 10000);
     if (!cl.positional().empty()) {
@@ -115,6 +144,7 @@ int RunGui(const std::vector<std::string>& args) {
     window.show();
     if (!window.WaitForFrame())
       std::fprintf(stderr, "netlab gui: the frame did not load in time\n");
+    if (!PressKeys(&window, keys)) return 2;
     if (!window.grab().save(QString::fromStdString(screenshot))) {
       std::fprintf(stderr, "netlab gui: cannot write %s\n", screenshot.c_str());
       return 1;

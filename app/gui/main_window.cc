@@ -9,6 +9,7 @@
 #include <QElapsedTimer>
 #include <QFileDialog>
 #include <QFileInfo>
+#include <QFrame>
 #include <QGridLayout>
 #include <QHBoxLayout>
 #include <QHeaderView>
@@ -24,6 +25,7 @@
 #include <QStatusBar>
 #include <QTableView>
 #include <QTableWidget>
+#include <QTextDocumentFragment>
 #include <QTimer>
 #include <QToolBar>
 #include <QUndoStack>
@@ -70,6 +72,7 @@ MainWindow::MainWindow() {
   BuildWelcome();
   BuildWorkspace();
   BuildActions();
+  BuildPreviewBanner();
   stack_->setCurrentWidget(welcome_);
   play_timer_ = new QTimer(this);
   play_timer_->setInterval(33);
@@ -88,6 +91,7 @@ MainWindow::~MainWindow() {
   tracker_.waitForFinished();
   loader_.waitForFinished();
   colours_.waitForFinished();
+  previewer_.waitForFinished();
   review_table_->setModel(nullptr);
 }
 
@@ -288,6 +292,10 @@ void MainWindow::BuildActions() {
   AddAction(tools, "Find Path from the corners", "Ctrl+P", &MainWindow::FindPathCorners);
   AddAction(tools, "Find Path to the previous knot", "Shift+P", &MainWindow::FindPathToPrevious);
   AddAction(tools, "Fill Grid in this frame", "G", &MainWindow::FillGridHere);
+  // The preview's answers: enabled only while one is pending (BuildPreviewBanner).
+  accept_preview_ =
+      AddAction(tools, "Accept Fill Grid preview", "Return;Enter", &MainWindow::AcceptPreview);
+  discard_preview_ = AddAction(tools, "Discard preview", "Esc", &MainWindow::DiscardPreview);
   AddAction(tools, "Track forwards", "T", &MainWindow::TrackForward);
   AddAction(tools, "Track backwards", "Shift+T", &MainWindow::TrackBackward);
   AddAction(tools, "Track to frame…", "Ctrl+T", &MainWindow::TrackToFrame);
@@ -350,6 +358,8 @@ bool MainWindow::OpenProject(const QString& path, bool ask) {
   review_model_.reset();
   loader_.waitForFinished();  // the workers read the session being replaced
   colours_.waitForFinished();
+  previewer_.waitForFinished();
+  DropPreview({});
   session_ = std::move(session);
   review_model_ = std::make_unique<ReviewModel>(&session_->document(), session_->frame_numbers());
   review_proxy_ = new QSortFilterProxyModel(review_model_.get());
@@ -394,6 +404,7 @@ void MainWindow::SetFrame(int t) {
   if (!session_) return;
   t = std::clamp(t, 0, session_->frames() - 1);
   if (t == frame_) return;
+  DropPreview("discarded: the frame changed");
   const int direction = frame_ < 0 ? 0 : (t > frame_ ? 1 : -1);
   frame_ = t;
   for (auto& c : candidates_) c.clear();
@@ -500,6 +511,7 @@ void MainWindow::RefreshOverlays() {
                        .arg((doc.at(c, frame_, knot_).px - *o.reprojected).norm(), 0, 'f', 2);
     }
     o.candidates = candidates_[c];
+    o.ghosts = PreviewGhosts(c);
     o.caption = QString("%1 · frame %2 · knot %3%4")
                     .arg(QString::fromStdString(session_->camera_names()[c]))
                     .arg(session_->frame_number(frame_))
@@ -597,6 +609,7 @@ void MainWindow::OnColoursRead() {
 }
 
 void MainWindow::OnLabelsChanged(const QList<int>& frames) {
+  DropPreview("discarded: the labels changed");
   timeline_->SetReviewFrames(session_->document().ReviewFrames());
   if (frames.contains(frame_)) {
     RefreshOverlays();
@@ -885,12 +898,8 @@ void MainWindow::FindPathToPrevious() {
 }
 
 void MainWindow::FillGridHere() {
-  if (!session_ || busy()) return;
-  const recon::EngineCounts n = session_->FillGrid(frame_);
-  statusBar()->showMessage(QString("Epipolar check and Fill Grid: %1 accepted, %2 for review")
-                               .arg(n.accepted)
-                               .arg(n.review),
-                           8000);
+  // A preview first (OnPreviewReady shows it; Enter applies it).
+  if (session_ && !busy()) StartPreview();
 }
 
 void MainWindow::TrackForward() {
@@ -910,6 +919,7 @@ void MainWindow::TrackToFrame() {
 
 void MainWindow::TrackTo(int to, bool wait, int max_review) {
   if (!session_ || busy() || to == frame_) return;
+  DropPreview("discarded: a tracking run started");
   // A snapshot on the GUI thread; the run never touches the document.
   const int from = frame_;
   cancel_ = false;
@@ -1174,6 +1184,186 @@ void MainWindow::HideSelectedOnwards() {
           .arg(session_->frame_number(last))
           .arg(last - frame_ + 1),
       10000);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The Fill Grid preview (G): what the epipolar check and Fill Grid would change, computed on a
+// worker from a snapshot, drawn as ghosts with a banner; Enter applies it, Esc discards it.
+
+void MainWindow::BuildPreviewBanner() {
+  // A bar above the views, in the pink of the ghosts: what is pending and how to answer it.
+  auto* banner = new QFrame;
+  banner->setObjectName("preview_banner");
+  banner->setStyleSheet(QString("#preview_banner { background: #4a1838; border: 2px solid %1; "
+                                "border-radius: 3px; } #preview_banner QLabel { color: white; }")
+                            .arg(QColor::fromRgb(CameraView::kGhostColour).name()));
+  auto* row = new QHBoxLayout(banner);
+  row->setContentsMargins(8, 3, 4, 3);
+  preview_text_ = new QLabel;
+  preview_text_->setTextFormat(Qt::RichText);
+  preview_text_->setWordWrap(true);
+  row->addWidget(preview_text_, 1);
+  // Buttons for the mouse; they take no focus, so Enter and Esc stay the window's.
+  for (QAction* action : {accept_preview_, discard_preview_}) {
+    auto* button = new QPushButton(action == accept_preview_ ? "Accept" : "Discard");
+    button->setFocusPolicy(Qt::NoFocus);
+    connect(button, &QPushButton::clicked, action, &QAction::trigger);
+    row->addWidget(button);
+  }
+  banner->hide();
+  preview_banner_ = banner;
+  qobject_cast<QVBoxLayout*>(workspace_->layout())->insertWidget(0, banner);
+  accept_preview_->setEnabled(false);
+  discard_preview_->setEnabled(false);
+  connect(&previewer_, &QFutureWatcher<PreviewRun>::finished, this, &MainWindow::OnPreviewReady);
+}
+
+void MainWindow::StartPreview() {
+  // A new request replaces any other; one still running is asked again when it ends.
+  DropPreview({});
+  ++preview_request_;
+  preview_frame_ = frame_;
+  preview_text_->setText(QString("<b>Fill Grid preview, frame %1:</b> searching…")
+                             .arg(session_->frame_number(frame_)));
+  preview_banner_->show();
+  discard_preview_->setEnabled(true);
+  if (previewer_.isRunning())
+    preview_again_ = true;
+  else
+    LaunchPreview();
+}
+
+void MainWindow::LaunchPreview() {
+  // The snapshot on the GUI thread; the worker never touches the document.
+  const Session* session = session_.get();
+  previewer_.setFuture(QtConcurrent::run(
+      [session, snapshot = session_->document().labels(), t = preview_frame_,
+       request = preview_request_] {
+        return PreviewRun{request, session->PreviewFillGrid(snapshot, t)};
+      }));
+}
+
+void MainWindow::OnPreviewReady() {
+  if (preview_again_ && preview_frame_ >= 0) {  // an older one ended: compute the wanted one
+    preview_again_ = false;
+    LaunchPreview();
+    return;
+  }
+  const PreviewRun run = previewer_.result();
+  if (!session_ || run.request != preview_request_ || preview_frame_ < 0) return;  // dropped
+  if (run.preview.empty()) {
+    const int frame = preview_frame_;
+    DropPreview({});
+    statusBar()->showMessage(QString("Fill Grid, frame %1: nothing to add or change; no preview "
+                                     "pending")
+                                 .arg(session_->frame_number(frame)),
+                             8000);
+    return;
+  }
+  preview_ = run.preview;
+  accept_preview_->setEnabled(true);
+  ShowPreviewBanner();
+  RefreshOverlays();
+}
+
+void MainWindow::ShowPreviewBanner() {
+  const Session::FillGridPreview& p = *preview_;
+  // The first key of an action, as the keyboard names it (Qt's "Return" is the Enter key).
+  const auto keys = [](const QAction* a) {
+    if (a->shortcuts().isEmpty()) return QString("(no key)");
+    const QKeySequence& k = a->shortcuts().first();
+    return k == QKeySequence(Qt::Key_Return) ? QString("Enter")
+                                             : k.toString(QKeySequence::NativeText);
+  };
+  QStringList parts;
+  parts << QString("%1 new label%2 (%3 for review)")
+               .arg(p.added)
+               .arg(p.added == 1 ? "" : "s")
+               .arg(p.added_review);
+  if (p.confirmed > 0)
+    parts << QString("%1 label%2 under review accepted")
+                 .arg(p.confirmed)
+                 .arg(p.confirmed == 1 ? "" : "s");
+  if (p.to_review > 0)
+    parts << QString("%1 label%2 to review").arg(p.to_review).arg(p.to_review == 1 ? "" : "s");
+  if (p.moved > 0)
+    parts << QString("%1 label%2 moved").arg(p.moved).arg(p.moved == 1 ? "" : "s");
+  if (p.changed > 0)
+    parts << QString("%1 other change%2").arg(p.changed).arg(p.changed == 1 ? "" : "s");
+  const QString text =
+      QString("<b>Fill Grid preview, frame %1:</b> %2 — dashed pink marks, not labels yet. "
+              "<b>%3</b> accepts (one undo step), <b>%4</b> discards")
+          .arg(session_->frame_number(p.t))
+          .arg(parts.join(", "), keys(accept_preview_), keys(discard_preview_));
+  preview_text_->setText(text);
+  preview_banner_->show();
+  statusBar()->showMessage(QTextDocumentFragment::fromHtml(text).toPlainText(), 8000);
+}
+
+void MainWindow::AcceptPreview() {
+  if (!session_ || !preview_ || busy()) return;
+  // Dropped before it is applied: the change it makes must not discard it a second time.
+  const Session::FillGridPreview preview = std::move(*preview_);
+  DropPreview({});
+  const int changed = session_->ApplyFillGridPreview(preview);
+  statusBar()->showMessage(
+      QString("Fill Grid, frame %1: %2 labels set (%3 new, %4 of them for review; %5 under "
+              "review accepted; %6 to review)")
+          .arg(session_->frame_number(preview.t))
+          .arg(changed)
+          .arg(preview.added)
+          .arg(preview.added_review)
+          .arg(preview.confirmed)
+          .arg(preview.to_review),
+      8000);
+}
+
+void MainWindow::DropPreview(const QString& why) {
+  if (preview_frame_ < 0) return;
+  ++preview_request_;  // a result still on its way is dropped
+  preview_frame_ = -1;
+  preview_again_ = false;
+  preview_.reset();
+  preview_banner_->hide();
+  accept_preview_->setEnabled(false);
+  discard_preview_->setEnabled(false);
+  RefreshOverlays();
+  if (!why.isEmpty()) statusBar()->showMessage("Fill Grid preview " + why, 6000);
+}
+
+std::vector<ViewOverlay::Ghost> MainWindow::PreviewGhosts(int c) const {
+  std::vector<ViewOverlay::Ghost> ghosts;
+  if (!preview_ || preview_->t != frame_) return ghosts;
+  for (const recon::LabelEdit& e : preview_->edits) {
+    if (e.camera != c || e.t != frame_) continue;
+    const recon::Label& now = session_->document().at(c, e.t, e.knot);
+    ViewOverlay::Ghost g;
+    g.knot = e.knot;
+    g.px = e.label.present() ? e.label.px : now.px;
+    g.review = e.label.state == recon::LabelState::kNeedsReview;
+    if (!e.label.present())
+      g.kind = ViewOverlay::Ghost::kRemoved;
+    else if (!now.present())
+      g.kind = ViewOverlay::Ghost::kNew;
+    else if (now.accepted() && g.review && now.px == e.label.px)
+      g.kind = ViewOverlay::Ghost::kToReview;
+    else
+      g.kind = ViewOverlay::Ghost::kChanged, g.from = now.px;
+    ghosts.push_back(g);
+  }
+  return ghosts;
+}
+
+bool MainWindow::WaitForIdle(int timeout_ms) {
+  QElapsedTimer timer;
+  timer.start();
+  const auto idle = [this] {
+    return frame_shown_ && !previewing() && !previewer_.isRunning() && !busy();
+  };
+  while (!idle() && timer.elapsed() < timeout_ms)
+    QCoreApplication::processEvents(QEventLoop::AllEvents, 20);
+  QCoreApplication::processEvents();
+  return idle();
 }
 
 }  // namespace netlab::gui

@@ -78,6 +78,18 @@ class MainWindow : public QMainWindow {
   // The queue's first item: the earliest frame with a label for review.
   void FirstReviewItem();
 
+  // The Fill Grid preview (G): computed on a worker from a snapshot of the labels, drawn as ghost
+  // marks with a banner, applied by Enter as one undo step "Fill Grid" or discarded by Esc. Any
+  // change of the labels, of the frame, or a tracking run discards it: a preview of other labels
+  // is never applied. The pending one (null: none), and whether one is being computed.
+  const Session::FillGridPreview* fill_grid_preview() const {
+    return preview_ ? &*preview_ : nullptr;
+  }
+  bool previewing() const { return preview_frame_ >= 0 && !preview_; }
+  // Waits (processing events) until the frame is drawn and no preview or tracking run is under
+  // way; false after `timeout_ms`.
+  bool WaitForIdle(int timeout_ms = 60000);
+
  protected:
   void closeEvent(QCloseEvent* event) override;
 
@@ -160,6 +172,19 @@ class MainWindow : public QMainWindow {
   void BrushLarger();
   void BrushSmaller();
   void ShowShortcuts();
+  // The Fill Grid preview (G, Enter, Esc; see fill_grid_preview()).
+  void BuildPreviewBanner();
+  void StartPreview();
+  void LaunchPreview();
+  void OnPreviewReady();
+  void AcceptPreview();
+  void DiscardPreview() { DropPreview("discarded"); }
+  // Forgets a pending or computing preview (nothing when there is none); the status bar then says
+  // "Fill Grid preview <why>" ("discarded: the frame changed"), unless `why` is empty.
+  void DropPreview(const QString& why);
+  void ShowPreviewBanner();
+  // What accepting the preview would do in camera c, as the view draws it.
+  std::vector<ViewOverlay::Ghost> PreviewGhosts(int c) const;
 
   // Missing knots (the review queue's second kind) and hidden marks.
   void ConnectMissing();      // the review model and the timeline follow the session's list
@@ -224,6 +249,21 @@ class MainWindow : public QMainWindow {
   QFutureWatcher<Session::TrackRun> tracker_;
   bool tracking_ = false;  // from the run's start until its result is applied
   std::atomic<bool> cancel_{false};
+  // The Fill Grid preview: the request that is wanted (bumped by every new one and every
+  // discard: a late answer of another is dropped), its frame (-1: none wanted), the answer.
+  struct PreviewRun {
+    long request = 0;
+    Session::FillGridPreview preview;
+  };
+  QFutureWatcher<PreviewRun> previewer_;
+  long preview_request_ = 0;
+  int preview_frame_ = -1;
+  bool preview_again_ = false;  // wanted anew while an older one was still running
+  std::optional<Session::FillGridPreview> preview_;
+  QWidget* preview_banner_ = nullptr;
+  QLabel* preview_text_ = nullptr;
+  QAction* accept_preview_ = nullptr;   // enabled only while a preview is pending, so that
+  QAction* discard_preview_ = nullptr;  // Enter and Esc keep their meaning elsewhere
 };
 
 }  // namespace netlab::gui

@@ -162,6 +162,12 @@ class LabelEngine {
 
   const ReviewReasons& reasons() const { return reasons_; }
   double link_length_m() const { return link_length_m_; }
+  // Takes `m` (> 0) as the net's link length when none is set or estimated yet: one another
+  // engine estimated on a copy of the same labels (the GUI's Fill Grid preview), so that both
+  // judge the next frames alike. Otherwise does nothing.
+  void AdoptLinkLength(double m) {
+    if (link_length_m_ <= 0.0 && m > 0.0) link_length_m_ = m;
+  }
 
  private:
   const cv::Mat& Image(int camera, int t);

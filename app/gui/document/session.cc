@@ -47,6 +47,13 @@ recon::LabelSet OpenLabels(const Project& p, const std::vector<std::string>& cam
   return empty;
 }
 
+// Whether two labels are the same (as LabelStore::Apply compares them: NaN equals NaN).
+bool SameLabel(const recon::Label& a, const recon::Label& b) {
+  const auto same = [](double x, double y) { return x == y || (std::isnan(x) && std::isnan(y)); };
+  return same(a.px.x(), b.px.x()) && same(a.px.y(), b.px.y()) && a.source == b.source &&
+         a.confidence == b.confidence && a.state == b.state;
+}
+
 }  // namespace
 
 std::unique_ptr<Session> Session::Open(const Project& project,
@@ -168,13 +175,60 @@ recon::EngineCounts Session::FindPathFromCorners(int t) {
   const recon::EngineCounts checked = engine().CrossCheck(t);
   counts.accepted += checked.accepted, counts.review += checked.review;
   document_->MergeReasons(engine().reasons());
+  NoteLinkLength();
   return counts;
 }
 
 recon::EngineCounts Session::FillGrid(int t) {
   const recon::EngineCounts counts = engine().CrossCheck(t);
   document_->MergeReasons(engine().reasons());
+  NoteLinkLength();
   return counts;
+}
+
+Session::FillGridPreview Session::PreviewFillGrid(recon::LabelSet snapshot, int t) const {
+  FillGridPreview preview;
+  preview.t = t;
+  // The same check on a copy, by an engine that knows what the GUI thread's knows of the net.
+  recon::LabelStore store(snapshot);
+  const std::unique_ptr<recon::LabelEngine> engine = MakeEngine(&store);
+  engine->AdoptLinkLength(link_length_m_.load());
+  engine->CrossCheck(t);
+  preview.reasons = engine->reasons();
+  preview.link_length_m = engine->link_length_m();
+  // Every label it changed (every row: the check touches row t only, but nothing relies on it).
+  const recon::LabelSet& after = store.labels();
+  for (int c = 0; c < cameras(); ++c)
+    for (int f = 0; f < after.frames(); ++f)
+      for (int k = 0; k < after.knots(); ++k) {
+        const recon::Label &was = snapshot.at(c, f, k), &now = after.at(c, f, k);
+        if (SameLabel(was, now)) continue;
+        preview.edits.push_back({c, f, k, now});
+        // Counted by what the person is asked to look at.
+        if (!was.present() && now.present()) {
+          ++preview.added;
+          preview.added_review += now.state == recon::LabelState::kNeedsReview;
+        } else if (was.accepted() && now.present() && now.px == was.px &&
+                   now.state == recon::LabelState::kNeedsReview) {
+          ++preview.to_review;
+        } else if (was.present() && was.state == recon::LabelState::kNeedsReview &&
+                   now.accepted()) {
+          ++preview.confirmed;
+        } else if (was.accepted() && now.accepted()) {
+          ++preview.moved;
+        } else {
+          ++preview.changed;
+        }
+      }
+  return preview;
+}
+
+int Session::ApplyFillGridPreview(const FillGridPreview& preview) {
+  // The reasons first: the review queue reads them when the labels change.
+  document_->MergeReasons(preview.reasons);
+  engine().AdoptLinkLength(preview.link_length_m);
+  NoteLinkLength();
+  return document_->Apply("Fill Grid", preview.edits);
 }
 
 Session::TrackRun Session::Track(recon::LabelSet snapshot, int from, int to,

@@ -7,6 +7,8 @@
 //   session->FindNode(camera, t, knot, click_px, 6.0);           // one undo step
 //   auto run = session->Track(session->document().labels(), t, t + 30, &cancel);  // any thread
 //   session->ApplyTrackRun(run);                                 // GUI thread: one undo step
+//   auto preview = session->PreviewFillGrid(session->document().labels(), t);  // any thread
+//   session->ApplyFillGridPreview(preview);                      // GUI thread: one undo step
 //
 // Frame rows t = 0 .. frames() - 1 are the recording's frames first_frame() + t.
 
@@ -78,6 +80,33 @@ class Session {
   recon::EngineCounts FindPathFromCorners(int t);
   // The epipolar check and Fill Grid in frame t.
   recon::EngineCounts FillGrid(int t);
+
+  // What FillGrid(t) would change, computed on `snapshot` (document().labels(), copied on the GUI
+  // thread) by an engine of its own: any thread, never touches the document. It starts from the
+  // link length the GUI thread's engine has (the project's mesh, or its estimate once made), so
+  // that applying it (ApplyFillGridPreview) gives exactly the labels FillGrid(t) gives.
+  struct FillGridPreview {
+    int t = 0;
+    // The labels that differ from the snapshot's, as the check and Fill Grid leave them.
+    std::vector<recon::LabelEdit> edits;
+    recon::ReviewReasons reasons;  // why labels are kept for review (the engine's, this run)
+    double link_length_m = 0.0;    // the link length the run used or estimated (m; 0: none)
+    int added = 0;         // labels where there was none
+    int added_review = 0;  // ... of them kept for review
+    int to_review = 0;     // accepted labels the checks turn to review
+    int confirmed = 0;     // labels under review accepted (at the junction the check found)
+  int moved = 0;         // accepted labels moved (flagged, then found again elsewhere)
+  int changed = 0;       // any other change (a label removed, say)
+    bool empty() const { return edits.empty(); }
+  };
+  FillGridPreview PreviewFillGrid(recon::LabelSet snapshot, int t) const;
+  // Applies a preview as one undo step "Fill Grid", its reasons merged into the document (GUI
+  // thread). The caller makes sure the labels have not changed since its snapshot. Returns the
+  // labels changed.
+  int ApplyFillGridPreview(const FillGridPreview& preview);
+  // The net's link length the GUI thread's engine judges with (m): the project's mesh, else its
+  // estimate from the first cross-checked frame (or an applied preview's); 0 until then.
+  double link_length_m() const { return link_length_m_; }
 
   // A tracking run from labeled row `from` towards `to` on `snapshot` (document().labels(),
   // copied on the GUI thread); runs on any thread and never touches the document. Stops when
@@ -154,6 +183,10 @@ class Session {
   std::unique_ptr<LabelDocument> document_;
   std::unique_ptr<recon::LabelEngine> engine_;  // over the document's store (GUI thread)
   std::unique_ptr<MissingKnots> missing_;       // over the document (destroyed before it)
+  // engine_'s link length (m; 0: not known yet), for the previews on other threads: set on the
+  // GUI thread after each of its cross-checks (the only step that estimates it).
+  std::atomic<double> link_length_m_{0.0};
+  void NoteLinkLength() { link_length_m_ = engine().link_length_m(); }
 };
 
 }  // namespace netlab::gui

@@ -11,22 +11,29 @@
 #include <QAction>
 #include <QApplication>
 #include <QDockWidget>
+#include <QElapsedTimer>
 #include <QLabel>
 #include <QStatusBar>
 #include <QTableView>
 #include <QTableWidget>
-#include <QTimer>
 #include <QTest>
+#include <QTimer>
+#include <QUndoStack>
 #include <QWheelEvent>
+
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <future>
+#include <map>
 #include <set>
 #include <string>
 #include <vector>
 
 #include "app/gui/camera_view.h"
 #include "app/gui/document/project.h"
+#include "app/gui/shortcut_editor.h"
 #include "app/gui/timeline.h"
 #include "tests/app/cli/run_netlab.h"
 #include "tests/app/cli/small_shot.h"
@@ -501,6 +508,505 @@ TEST_F(MainWindowTest, AfterAFixTheWindowGoesOnToTheFramesNextItem) {
   QTest::keyClick(&w, Qt::Key_D);
   EXPECT_TRUE(s->document().at(0, t, k).hidden());
   EXPECT_EQ(w.camera(), 0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The Fill Grid preview (G, Enter, Esc).
+
+// Labels that differ between two sets of one shape (presence, state, source, confidence, pixel).
+int DifferentLabels(const recon::LabelSet& a, const recon::LabelSet& b) {
+  int differ = 0;
+  for (int c = 0; c < static_cast<int>(a.cameras.size()); ++c)
+    for (int t = 0; t < a.frames(); ++t)
+      for (int k = 0; k < a.knots(); ++k) {
+        const recon::Label &x = a.at(c, t, k), &y = b.at(c, t, k);
+        differ += x.present() != y.present() || x.state != y.state || x.source != y.source ||
+                  x.confidence != y.confidence || (x.present() && x.px != y.px);
+      }
+  return differ;
+}
+
+// Whether a pixel of the ghosts' pink is within `radius` widget pixels of `centre` in `image`.
+bool GhostPinkNear(const QImage& image, const QPoint& centre, int radius) {
+  const QColor pink = QColor::fromRgb(CameraView::kGhostColour);
+  for (int dy = -radius; dy <= radius; ++dy)
+    for (int dx = -radius; dx <= radius; ++dx) {
+      const QPoint p = centre + QPoint(dx, dy);
+      if (!image.rect().contains(p)) continue;
+      const QColor c = image.pixelColor(p);
+      if (std::abs(c.red() - pink.red()) < 40 && std::abs(c.green() - pink.green()) < 45 &&
+          std::abs(c.blue() - pink.blue()) < 45)
+        return true;
+    }
+  return false;
+}
+
+class FillGridPreviewTest : public MainWindowTest {
+ protected:
+  // A window on a new project: the corners of frame 0 seeded with Find Node clicks (as the
+  // scripted person does), Find Path from them (Ctrl+P), and the epipolar check and Fill Grid
+  // that Find Path ends with taken back (Ctrl+Z), so that frame 0 has knots left to fill.
+  void Open(const std::string& name) {
+    window_ = std::make_unique<MainWindow>();
+    MainWindow& w = *window_;
+    w.resize(1400, 1000);
+    w.show();
+    ASSERT_TRUE(w.OpenProject(QString::fromStdString(MakeProjectFile(name)), false));
+    ASSERT_TRUE(w.WaitForFrame());
+    w.activateWindow();
+    ASSERT_TRUE(QTest::qWaitForWindowActive(&w));
+    const recon::LabelSet truth = Truth();
+    Session* s = w.session();
+    const int rows = s->project().rows, cols = s->project().cols;
+    for (int c = 0; c < s->cameras(); ++c)
+      for (int k : {0, cols - 1, (rows - 1) * cols, rows * cols - 1}) {
+        const recon::Label& want = truth.at(truth.FindCamera(s->camera_names()[c]), 0, k);
+        if (!want.present()) continue;
+        PickKnot(&w, k);
+        ZoomAt(w.view(c), want.px, 8);
+        actions_.push_back({Action::kFindNode, c, 0, k, ClickAt(w.view(c), want.px)});
+        if (!s->document().at(c, 0, k).present())
+          actions_.push_back({Action::kPlace, c, 0, k, ClickAt(w.view(c), want.px, Qt::ShiftModifier)});
+        QTest::keyClick(&w, Qt::Key_F, Qt::ControlModifier);
+      }
+    QTest::keyClick(&w, Qt::Key_P, Qt::ControlModifier);
+    QUndoStack* undo = s->document().undo_stack();
+    while (undo->undoText().startsWith("Fill Grid") || undo->undoText().startsWith("epipolar")) {
+      QTest::keyClick(&w, Qt::Key_Z, Qt::ControlModifier);
+      ++undone_;
+    }
+    ASSERT_GT(undone_, 0) << "Find Path ended without a check step";
+  }
+  // The same actions on the engine of a second project, without a window.
+  std::unique_ptr<Session> Replay(const std::string& name) {
+    auto engine = Session::Open(LoadProject(MakeProjectFile(name)));
+    for (const Action& a : actions_)
+      if (a.kind == Action::kFindNode)
+        engine->FindNode(a.camera, a.t, a.knot, a.px, 6.0);
+      else
+        engine->PlaceLabel(a.camera, a.t, a.knot, a.px);
+    engine->FindPathFromCorners(0);
+    for (int i = 0; i < undone_; ++i) engine->document().undo_stack()->undo();
+    return engine;
+  }
+  // Presses G and waits for the preview's answer.
+  bool PressGAndWait() {
+    QTest::keyClick(window_.get(), Qt::Key_G);
+    return window_->WaitForIdle(120000);
+  }
+  // Picks the knot and camera of an edit (the knot picker, then a click would label it).
+  void SetKnotOf(const recon::LabelEdit& e) {
+    PickKnot(window_.get(), e.knot);
+    window_->SetCamera(e.camera);
+  }
+  QWidget* Banner() const { return window_->findChild<QWidget*>("preview_banner"); }
+  QString BannerText() const {
+    const auto* label = Banner()->findChild<QLabel*>();
+    return label ? label->text() : QString();
+  }
+  int Ghosts() const {
+    int n = 0;
+    for (int c = 0; c < window_->session()->cameras(); ++c)
+      n += static_cast<int>(window_->view(c)->overlay().ghosts.size());
+    return n;
+  }
+
+  std::unique_ptr<MainWindow> window_;
+  std::vector<Action> actions_;
+  int undone_ = 0;  // check steps taken back after Find Path
+};
+
+// G changes nothing: the candidates are drawn as ghosts (in the overlay and in the pixels) under a
+// banner. Enter applies them as one undo step, giving the labels Session::FillGrid gives on the
+// same start, and Ctrl+Z takes exactly that step back.
+TEST_F(FillGridPreviewTest, GPreviewsAndEnterAppliesWhatFillGridGivesAsOneStep) {
+  ASSERT_NO_FATAL_FAILURE(Open("preview_accept"));
+  MainWindow& w = *window_;
+  Session* s = w.session();
+  QUndoStack* undo = s->document().undo_stack();
+  const recon::LabelSet start = s->document().labels();
+  const int steps = undo->count(), index = undo->index();
+  std::vector<QImage> plain;
+  for (int c = 0; c < s->cameras(); ++c) plain.push_back(w.view(c)->grab().toImage());
+
+  // G: a preview, and no change.
+  ASSERT_TRUE(PressGAndWait());
+  const Session::FillGridPreview* preview = w.fill_grid_preview();
+  ASSERT_NE(preview, nullptr) << w.statusBar()->currentMessage().toStdString();
+  EXPECT_EQ(DifferentLabels(s->document().labels(), start), 0);
+  EXPECT_EQ(undo->count(), steps);
+  EXPECT_EQ(undo->index(), index);
+  EXPECT_GT(preview->added, 0);
+  EXPECT_EQ(preview->added + preview->to_review + preview->confirmed + preview->moved +
+                preview->changed,
+            static_cast<int>(preview->edits.size()));
+  EXPECT_TRUE(Banner()->isVisible());
+  EXPECT_TRUE(BannerText().contains(QString("Fill Grid preview, frame %1:").arg(s->frame_number(0))))
+      << BannerText().toStdString();
+  EXPECT_TRUE(BannerText().contains(QString("%1 new labels").arg(preview->added)));
+  EXPECT_TRUE(BannerText().contains("<b>Enter</b> accepts")) << BannerText().toStdString();
+  EXPECT_TRUE(BannerText().contains("<b>Esc</b> discards")) << BannerText().toStdString();
+  // Every edit is a ghost in its camera's view, drawn in pink where the frame had none.
+  int ghosts = 0, checked = 0, pink_before = 0, pink_after = 0;
+  for (int c = 0; c < s->cameras(); ++c) {
+    const std::vector<ViewOverlay::Ghost>& g = w.view(c)->overlay().ghosts;
+    int edits = 0;
+    for (const recon::LabelEdit& e : preview->edits) edits += e.camera == c;
+    EXPECT_EQ(static_cast<int>(g.size()), edits) << c;
+    ghosts += static_cast<int>(g.size());
+    const QImage shot = w.view(c)->grab().toImage();
+    for (const ViewOverlay::Ghost& ghost : g) {
+      if (ghost.kind != ViewOverlay::Ghost::kNew) continue;
+      const recon::LabelEdit* e = nullptr;
+      for (const recon::LabelEdit& edit : preview->edits)
+        if (edit.camera == c && edit.knot == ghost.knot) e = &edit;
+      ASSERT_NE(e, nullptr);
+      EXPECT_EQ(ghost.px, e->label.px);
+      EXPECT_EQ(ghost.review, e->label.state == recon::LabelState::kNeedsReview);
+      const QPoint at = w.view(c)->ToWidget(ghost.px).toPoint();
+      ++checked;
+      pink_before += GhostPinkNear(plain[c], at, 12);
+      pink_after += GhostPinkNear(shot, at, 12);
+    }
+    if (c == 0) shot.save((Dir() / "fill_grid_preview.png").string().c_str());
+  }
+  EXPECT_EQ(ghosts, static_cast<int>(preview->edits.size()));
+  EXPECT_GT(checked, 0);
+  EXPECT_EQ(pink_before, 0);
+  EXPECT_EQ(pink_after, checked);
+  w.grab().save((Dir() / "fill_grid_preview_window.png").string().c_str());
+
+  // Enter: what Session::FillGrid gives on a second project after the same actions.
+  const Session::FillGridPreview shown = *preview;
+  QTest::keyClick(&w, Qt::Key_Return);
+  EXPECT_EQ(w.fill_grid_preview(), nullptr);
+  EXPECT_FALSE(Banner()->isVisible());
+  EXPECT_EQ(Ghosts(), 0);
+  EXPECT_EQ(undo->count(), index + 1);
+  EXPECT_EQ(undo->undoText(), "Fill Grid");
+  EXPECT_EQ(DifferentLabels(s->document().labels(), start), static_cast<int>(shown.edits.size()));
+  const std::unique_ptr<Session> engine = Replay("preview_accept_engine");
+  ASSERT_EQ(DifferentLabels(engine->document().labels(), start), 0) << "the replay differs";
+  engine->FillGrid(0);
+  EXPECT_EQ(DifferentLabels(s->document().labels(), engine->document().labels()), 0);
+  int review = 0;
+  for (const auto& [c, t, k] : s->document().ReviewItems()) {
+    if (t != 0) continue;
+    ++review;
+    EXPECT_EQ(s->document().Reason(c, t, k), engine->document().Reason(c, t, k)) << c << " " << k;
+    EXPECT_NE(s->document().Reason(c, t, k), "") << c << " " << k;
+  }
+  // Ctrl+Z takes back exactly that step, and Enter then does nothing.
+  QTest::keyClick(&w, Qt::Key_Z, Qt::ControlModifier);
+  EXPECT_EQ(DifferentLabels(s->document().labels(), start), 0);
+  EXPECT_EQ(undo->index(), index);
+  QTest::keyClick(&w, Qt::Key_Return);
+  EXPECT_EQ(undo->index(), index);
+  std::printf("Fill Grid preview on the small shot: %zu edits (%d new, %d of them for review; %d "
+              "under review accepted; %d to review; %d moved; %d other); %d labels under review "
+              "in frame 0 once applied\n",
+              shown.edits.size(), shown.added, shown.added_review, shown.confirmed,
+              shown.to_review, shown.moved, shown.changed, review);
+}
+
+// Esc discards a preview; so do a label edit, a frame change, an undo and a tracking run, even
+// while the preview is still being computed: Enter afterwards changes nothing.
+TEST_F(FillGridPreviewTest, EscAnEditAFrameChangeOrAnUndoDiscardThePreview) {
+  ASSERT_NO_FATAL_FAILURE(Open("preview_discard"));
+  MainWindow& w = *window_;
+  Session* s = w.session();
+  QUndoStack* undo = s->document().undo_stack();
+  const recon::LabelSet start = s->document().labels();
+  const int index = undo->index();
+  const auto expect_none_pending = [&](const char* after) {
+    EXPECT_EQ(w.fill_grid_preview(), nullptr) << after;
+    EXPECT_FALSE(w.previewing()) << after;
+    EXPECT_FALSE(Banner()->isVisible()) << after;
+    EXPECT_EQ(Ghosts(), 0) << after;
+  };
+
+  // Esc. (A zoomed view keeps its zoom and centre when the bar above the views appears.)
+  CameraView* zoomed = w.view(1);
+  ZoomAt(zoomed, zoomed->ToImage(QPointF(zoomed->width() / 2.0, zoomed->height() / 2.0)), 4);
+  const double scale = zoomed->scale();
+  const Eigen::Vector2d centre =
+      zoomed->ToImage(QPointF(zoomed->width() / 2.0, zoomed->height() / 2.0));
+  const int height = zoomed->height();
+  ASSERT_TRUE(PressGAndWait());
+  ASSERT_NE(w.fill_grid_preview(), nullptr);
+  EXPECT_GT(Ghosts(), 0);
+  EXPECT_LT(zoomed->height(), height);  // the bar took its room
+  EXPECT_EQ(zoomed->scale(), scale);
+  EXPECT_LT((zoomed->ToImage(QPointF(zoomed->width() / 2.0, zoomed->height() / 2.0)) - centre)
+                .norm(),
+            1.0);
+  QTest::keyClick(&w, Qt::Key_Escape);
+  expect_none_pending("Esc");
+  EXPECT_EQ(w.statusBar()->currentMessage(), "Fill Grid preview discarded");
+  QTest::keyClick(&w, Qt::Key_Return);
+  EXPECT_EQ(DifferentLabels(s->document().labels(), start), 0);
+  EXPECT_EQ(undo->index(), index);
+
+  // A label placed by hand (Shift+click) while a preview is pending.
+  ASSERT_TRUE(PressGAndWait());
+  ASSERT_NE(w.fill_grid_preview(), nullptr);
+  const recon::LabelEdit first = w.fill_grid_preview()->edits.front();
+  SetKnotOf(first);
+  ClickAt(w.view(first.camera), first.label.px + Eigen::Vector2d(0.5, 0.5), Qt::ShiftModifier);
+  EXPECT_EQ(undo->index(), index + 1);
+  expect_none_pending("an edit");
+  const recon::LabelSet edited = s->document().labels();
+  QTest::keyClick(&w, Qt::Key_Return);
+  EXPECT_EQ(DifferentLabels(s->document().labels(), edited), 0);
+  EXPECT_EQ(undo->index(), index + 1);
+
+  // An undo (of that edit).
+  ASSERT_TRUE(PressGAndWait());
+  ASSERT_NE(w.fill_grid_preview(), nullptr);
+  QTest::keyClick(&w, Qt::Key_Z, Qt::ControlModifier);
+  expect_none_pending("an undo");
+  QTest::keyClick(&w, Qt::Key_Return);
+  EXPECT_EQ(DifferentLabels(s->document().labels(), start), 0);
+  EXPECT_EQ(undo->index(), index);
+
+  // A frame change, there and back.
+  ASSERT_TRUE(PressGAndWait());
+  ASSERT_NE(w.fill_grid_preview(), nullptr);
+  QTest::keyClick(&w, Qt::Key_F);
+  QTest::keyClick(&w, Qt::Key_B);
+  ASSERT_EQ(w.frame(), 0);
+  expect_none_pending("a frame change");
+  EXPECT_EQ(w.statusBar()->currentMessage(), "Fill Grid preview discarded: the frame changed");
+  QTest::keyClick(&w, Qt::Key_Return);
+  EXPECT_EQ(DifferentLabels(s->document().labels(), start), 0);
+  EXPECT_EQ(undo->index(), index);
+
+  // A frame change while the preview is still computed: its answer is dropped.
+  QTest::keyClick(&w, Qt::Key_G);
+  EXPECT_TRUE(w.previewing());
+  EXPECT_TRUE(Banner()->isVisible());
+  QTest::keyClick(&w, Qt::Key_F);
+  ASSERT_TRUE(w.WaitForIdle(120000));
+  expect_none_pending("a frame change during the computation");
+  QTest::keyClick(&w, Qt::Key_B);
+  QTest::keyClick(&w, Qt::Key_Return);
+  EXPECT_EQ(DifferentLabels(s->document().labels(), start), 0);
+  EXPECT_EQ(undo->index(), index);
+
+  // A tracking run (one frame).
+  ASSERT_TRUE(PressGAndWait());
+  ASSERT_NE(w.fill_grid_preview(), nullptr);
+  w.TrackTo(1, true);
+  expect_none_pending("a tracking run");
+  const int tracked = undo->index();
+  EXPECT_EQ(tracked, index + 1);
+  QTest::keyClick(&w, Qt::Key_Return);
+  EXPECT_EQ(undo->index(), tracked);
+}
+
+// A preview with nothing to add says so and leaves nothing pending (frame 0 labeled with the
+// shot's true labels: every visible knot is there).
+TEST_F(MainWindowTest, AFillGridPreviewWithNothingToAddLeavesNothingPending) {
+  const std::string project =
+      MakeProjectFile("preview_nothing", (Dir() / "shot/labels_true.h5").string());
+  MainWindow w;
+  w.resize(1400, 1000);
+  w.show();
+  ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), false));
+  ASSERT_TRUE(w.WaitForFrame());
+  w.activateWindow();
+  ASSERT_TRUE(QTest::qWaitForWindowActive(&w));
+  const int index = w.session()->document().undo_stack()->index();
+  QTest::keyClick(&w, Qt::Key_G);
+  ASSERT_TRUE(w.WaitForIdle(120000));
+  EXPECT_EQ(w.fill_grid_preview(), nullptr);
+  EXPECT_FALSE(w.findChild<QWidget*>("preview_banner")->isVisible());
+  EXPECT_TRUE(w.statusBar()->currentMessage().contains("nothing to add or change"))
+      << w.statusBar()->currentMessage().toStdString();
+  QTest::keyClick(&w, Qt::Key_Return);
+  EXPECT_EQ(w.session()->document().undo_stack()->index(), index);
+}
+
+// The session without a window: PreviewFillGrid (on another thread) leaves the document as it
+// was and says what FillGrid would do; applied, it gives FillGrid's labels and reasons on a
+// second session of the same start, as one undo step that undo takes back. It judges with the
+// session's link length, and hands over its own to a session without one.
+TEST_F(MainWindowTest, PreviewFillGridAppliesAsFillGridDoesWithTheSessionsLinkLength) {
+  // Frame 0 of the true labels with every third inner knot taken out, and one label 6 px off.
+  recon::LabelSet start = Truth();
+  int removed = 0;
+  for (int c = 0; c < static_cast<int>(start.cameras.size()); ++c)
+    for (int k = 0; k < start.knots(); ++k) {
+      const int row = k / start.cols, col = k % start.cols;
+      if (row > 0 && col > 0 && row + 1 < start.rows && col + 1 < start.cols &&
+          (row + col) % 3 == 0 && start.at(c, 0, k).present())
+        start.at(c, 0, k) = recon::Label{}, ++removed;
+    }
+  const int moved_knot = start.cols + 1;  // (1, 1): (1 + 1) % 3 != 0, kept
+  ASSERT_TRUE(start.at(0, 0, moved_knot).present());
+  start.at(0, 0, moved_knot).px += Eigen::Vector2d(6.0, 0.0);
+  const std::string file = (Dir() / "preview_start.h5").string();
+  recon::WriteLabels(file, start);
+  auto previewed = Session::Open(LoadProject(MakeProjectFile("preview_session", file)));
+  auto direct = Session::Open(LoadProject(MakeProjectFile("preview_direct", file)));
+  const recon::LabelSet before = previewed->document().labels();
+
+  // The preview, on another thread (the frames decoded first in both sessions, for the timing).
+  for (int c = 0; c < previewed->cameras(); ++c) previewed->Image(c, 0), direct->Image(c, 0);
+  QElapsedTimer timer;
+  timer.start();
+  const Session::FillGridPreview preview =
+      std::async(std::launch::async, [&] { return previewed->PreviewFillGrid(before, 0); }).get();
+  const double preview_ms = timer.elapsed();
+  EXPECT_EQ(DifferentLabels(previewed->document().labels(), before), 0);
+  EXPECT_EQ(previewed->document().undo_stack()->count(), 0);
+  EXPECT_EQ(preview.t, 0);
+  EXPECT_GT(preview.added, removed / 2);
+  EXPECT_LE(preview.added, removed);
+  EXPECT_EQ(preview.added + preview.to_review + preview.confirmed + preview.moved +
+                preview.changed,
+            static_cast<int>(preview.edits.size()));
+  bool moved_judged = false;  // the label 6 px off is flagged or put right
+  for (const recon::LabelEdit& e : preview.edits) {
+    EXPECT_EQ(e.t, 0);
+    if (e.camera == 0 && e.knot == moved_knot)
+      moved_judged = e.label.state == recon::LabelState::kNeedsReview ||
+                     (e.label.px - Truth().at(0, 0, moved_knot).px).norm() < 1.0;
+  }
+  EXPECT_TRUE(moved_judged);
+
+  // Applied: FillGrid's labels and reasons, one step.
+  timer.restart();
+  direct->FillGrid(0);
+  const double direct_ms = timer.elapsed();
+  EXPECT_EQ(previewed->ApplyFillGridPreview(preview), static_cast<int>(preview.edits.size()));
+  EXPECT_EQ(previewed->document().undo_stack()->count(), 1);
+  EXPECT_EQ(previewed->document().undo_stack()->undoText(), "Fill Grid");
+  EXPECT_EQ(DifferentLabels(previewed->document().labels(), direct->document().labels()), 0);
+  const std::vector<LabelKey> review = direct->document().ReviewItems();
+  EXPECT_EQ(previewed->document().ReviewItems(), review);
+  for (const auto& [c, t, k] : review)
+    EXPECT_EQ(previewed->document().Reason(c, t, k), direct->document().Reason(c, t, k));
+  // Undo: the start again.
+  previewed->document().undo_stack()->undo();
+  EXPECT_EQ(DifferentLabels(previewed->document().labels(), before), 0);
+  std::printf("PreviewFillGrid: %zu edits in %.0f ms (the process's first engine run, warm-up "
+              "included); FillGrid %.0f ms (%d labels removed)\n",
+              preview.edits.size(), preview_ms, direct_ms, removed);
+
+  // The link length: a preview judges with the one the session's engine already has (estimated
+  // on another frame), not an estimate of its own; a preview applied to a session without one
+  // gives it the preview's estimate. Either way the next Fill Grid judges as after FillGrid.
+  {
+    // The true labels, each moved by up to 0.3 px (the exact ones give 0.1 m in every frame).
+    recon::LabelSet noisy = Truth();
+    for (int c = 0; c < static_cast<int>(noisy.cameras.size()); ++c)
+      for (int t = 0; t < noisy.frames(); ++t)
+        for (int k = 0; k < noisy.knots(); ++k)
+          noisy.at(c, t, k).px += 0.3 * Eigen::Vector2d(std::sin(7.1 * (c + 3 * t + 11 * k)),
+                                                         std::cos(5.3 * (2 * c + t + 7 * k)));
+    const std::string truth = (Dir() / "link_noisy.h5").string();
+    recon::WriteLabels(truth, noisy);
+    auto estimated = Session::Open(LoadProject(MakeProjectFile("link_estimated", truth)));
+    auto fresh = Session::Open(LoadProject(MakeProjectFile("link_fresh", truth)));
+    ASSERT_EQ(estimated->project().mesh_m, 0.0);  // estimated by the engine
+    EXPECT_EQ(estimated->link_length_m(), 0.0);
+    estimated->FillGrid(0);
+    const double frame0 = estimated->link_length_m();
+    ASSERT_GT(frame0, 0.0);
+    // Frame 20 alone estimates another length (other labels, other noise).
+    const recon::LabelSet labels = fresh->document().labels();
+    const double frame20 = fresh->PreviewFillGrid(labels, 20).link_length_m;
+    ASSERT_GT(frame20, 0.0);
+    ASSERT_NE(frame20, frame0);
+    EXPECT_EQ(estimated->PreviewFillGrid(labels, 20).link_length_m, frame0);
+    // Applied, a preview hands its estimate to a session that has none.
+    EXPECT_EQ(fresh->link_length_m(), 0.0);
+    fresh->ApplyFillGridPreview(fresh->PreviewFillGrid(labels, 20));
+    EXPECT_EQ(fresh->link_length_m(), frame20);
+    std::printf("link length: %.9f m from frame 0, %.9f m from frame 20\n", frame0, frame20);
+  }
+}
+
+
+
+// netlab gui --keys G --screenshot: the screenshot shows the preview's ghosts (pink below the
+// bar, where a screenshot without it has none); an unknown key, or --keys without a screenshot,
+// is named.
+TEST_F(MainWindowTest, TheScreenshotCanPressGFirstAndNamesAKeyNoActionHas) {
+  recon::LabelSet start = Truth();
+  for (int c = 0; c < static_cast<int>(start.cameras.size()); ++c)
+    for (int k = 0; k < start.knots(); ++k)
+      if (k % start.cols > 0 && k % start.cols + 1 < start.cols && k / start.cols % 2 == 1)
+        start.at(c, 0, k) = recon::Label{};
+  const std::string file = (Dir() / "keys_start.h5").string();
+  recon::WriteLabels(file, start);
+  const std::string project = MakeProjectFile("keys_cli", file);
+  const auto pink_below_bar = [](const std::string& png) {
+    const QImage image(QString::fromStdString(png));
+    const QColor pink = QColor::fromRgb(CameraView::kGhostColour);
+    int n = 0;
+    for (int y = 150; y < image.height(); ++y)
+      for (int x = 0; x < image.width(); ++x) {
+        const QColor c = image.pixelColor(x, y);
+        n += std::abs(c.red() - pink.red()) < 30 && std::abs(c.green() - pink.green()) < 30 &&
+             std::abs(c.blue() - pink.blue()) < 30;
+      }
+    return n;
+  };
+  const std::string plain = (Dir() / "keys_plain.png").string();
+  const std::string preview = (Dir() / "keys_preview.png").string();
+  const auto without = RunNetlab("gui " + project + " --screenshot " + plain);
+  ASSERT_EQ(without.status, 0) << without.err;
+  const auto with = RunNetlab("gui " + project + " --keys G --screenshot " + preview);
+  ASSERT_EQ(with.status, 0) << with.err;
+  EXPECT_EQ(pink_below_bar(plain), 0);
+  EXPECT_GT(pink_below_bar(preview), 100);
+  const auto unknown = RunNetlab("gui " + project + " --keys Ctrl+Alt+F12 --screenshot " + plain);
+  EXPECT_EQ(unknown.status, 2);
+  EXPECT_NE(unknown.err.find("no action of the window has the key 'Ctrl+Alt+F12'"),
+            std::string::npos)
+      << unknown.err;
+  const auto alone = RunNetlab("gui " + project + " --keys G");
+  EXPECT_EQ(alone.status, 2);
+  EXPECT_NE(alone.err.find("--keys needs --screenshot"), std::string::npos) << alone.err;
+}
+
+// The preview's two actions are in F1's cheat sheet with their keys, and in the shortcut editor
+// (changeable as the others), where their defaults clash with no other action's.
+// (No project: the actions are there from the start, so no shot is rendered for this test.)
+TEST(FillGridPreviewKeys, AreInTheCheatSheetAndTheShortcutEditor) {
+  MainWindow w;
+  w.resize(1400, 1000);
+  w.show();
+  w.activateWindow();
+  ASSERT_TRUE(QTest::qWaitForWindowActive(&w));
+  std::map<QString, QString> listed;
+  QTimer::singleShot(200, [&] {
+    QWidget* dialog = QApplication::activeModalWidget();
+    if (dialog == nullptr) return;
+    if (const auto* table = dialog->findChild<QTableWidget*>())
+      for (int r = 0; r < table->rowCount(); ++r)
+        listed[table->item(r, 0)->text()] = table->item(r, 1)->text();
+    dialog->close();
+  });
+  QTest::keyClick(&w, Qt::Key_F1);
+  const auto native = [](const char* keys) {
+    return QKeySequence(keys).toString(QKeySequence::NativeText);
+  };
+  EXPECT_EQ(listed["Accept Fill Grid preview"], native("Return") + "  or  " + native("Enter"));
+  EXPECT_EQ(listed["Discard preview"], native("Esc"));
+  EXPECT_EQ(listed["Fill Grid in this frame"], native("G"));
+  const QList<QAction*> all = w.actions();
+  ShortcutEditor editor({all.begin(), all.end()});
+  const int accept = editor.RowOf("Accept Fill Grid preview");
+  const int discard = editor.RowOf("Discard preview");
+  ASSERT_GE(accept, 0);
+  ASSERT_GE(discard, 0);
+  EXPECT_EQ(editor.DefaultKeys(accept),
+            (QList<QKeySequence>{QKeySequence(Qt::Key_Return), QKeySequence(Qt::Key_Enter)}));
+  EXPECT_EQ(editor.DefaultKeys(discard), QList<QKeySequence>{QKeySequence(Qt::Key_Escape)});
+  EXPECT_TRUE(editor.Conflicts().isEmpty()) << editor.Conflicts().join("; ").toStdString();
 }
 
 }  // namespace
