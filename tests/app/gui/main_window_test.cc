@@ -960,8 +960,12 @@ TEST_F(MainWindowTest, TheScreenshotCanPressGFirstAndNamesAKeyNoActionHas) {
   ASSERT_EQ(without.status, 0) << without.err;
   const auto with = RunNetlab("gui " + project + " --keys G --screenshot " + preview);
   ASSERT_EQ(with.status, 0) << with.err;
-  EXPECT_EQ(pink_below_bar(plain), 0);
-  EXPECT_GT(pink_below_bar(preview), 100);
+  // Without a preview no ghost: at most a few antialiased edge pixels of the magenta marks
+  // (a missing knot's ring, the reprojected cross, the timeline's marks) blend into the pink's
+  // tolerance.
+  const int plain_pink = pink_below_bar(plain);
+  EXPECT_LE(plain_pink, 5);
+  EXPECT_GT(pink_below_bar(preview), 100 + plain_pink);
   const auto unknown = RunNetlab("gui " + project + " --keys Ctrl+Alt+F12 --screenshot " + plain);
   EXPECT_EQ(unknown.status, 2);
   EXPECT_NE(unknown.err.find("no action of the window has the key 'Ctrl+Alt+F12'"),
