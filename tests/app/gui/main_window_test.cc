@@ -59,6 +59,17 @@ const fs::path& Dir() {
   return dir;
 }
 
+// Shows `w` (1400 x 1000), opens `project` in it, waits for its first frame to be drawn and for
+// it to be the active window (so that its keys reach it).
+void OpenShown(MainWindow& w, const std::string& project) {
+  w.resize(1400, 1000);
+  w.show();
+  ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), false));
+  ASSERT_TRUE(w.WaitForFrame());
+  w.activateWindow();
+  ASSERT_TRUE(QTest::qWaitForWindowActive(&w));
+}
+
 class MainWindowTest : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -100,10 +111,7 @@ TEST_F(MainWindowTest, AScriptedSessionLabelsAsTheEngineDoesWithNoWrongLabel) {
   const recon::LabelSet truth = Truth();
   const std::string project = MakeProjectFile("session");
   MainWindow w;
-  w.resize(1400, 1000);
-  w.show();
-  ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), false));
-  ASSERT_TRUE(w.WaitForFrame());
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, project));
   Session* s = w.session();
   const ScriptedSession session = PlayScriptedSession(&w, truth);
   ASSERT_TRUE(session.finished) << "the tracking run did not end";
@@ -190,10 +198,7 @@ TEST_F(MainWindowTest, TheScreenshotDrawsTheOverlaysWhereTheLabelsAre) {
   const std::string project =
       MakeProjectFile("screenshot", (Dir() / "shot/labels_true.h5").string());
   MainWindow w;
-  w.resize(1400, 1000);
-  w.show();
-  ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), false));
-  ASSERT_TRUE(w.WaitForFrame());
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, project));
   const QImage shot = w.grab().toImage();
   shot.save((Dir() / "screenshot.png").string().c_str());
   // Not blank: the frame's pixels vary.
@@ -228,10 +233,7 @@ TEST_F(MainWindowTest, TheScreenshotDrawsTheOverlaysWhereTheLabelsAre) {
 TEST_F(MainWindowTest, TheColoursPanelSaysWhatTheSelectedKnotsYarnsSay) {
   const std::string project = MakeProjectFile("colours", (Dir() / "shot/labels_true.h5").string());
   MainWindow w;
-  w.resize(1400, 1000);
-  w.show();
-  ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), false));
-  ASSERT_TRUE(w.WaitForFrame());
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, project));
   auto* dock = w.findChild<QDockWidget*>("colours_dock");
   ASSERT_NE(dock, nullptr);
   auto* panel = qobject_cast<QLabel*>(dock->widget());
@@ -344,12 +346,7 @@ TEST_F(MainWindowTest, SpaceReachesAMissingKnotAndAFindNodeClickLabelsIt) {
   const recon::LabelSet truth = Truth();
   const std::string project = MakeProjectFile("missing", (Dir() / "shot/labels_true.h5").string());
   MainWindow w;
-  w.resize(1400, 1000);
-  w.show();
-  ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), false));
-  ASSERT_TRUE(w.WaitForFrame());
-  w.activateWindow();
-  ASSERT_TRUE(QTest::qWaitForWindowActive(&w));
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, project));
   Session* s = w.session();
   const int t = 12, c = 1, k = KnotSeenByAll(truth, t);
   ASSERT_GE(k, 0);
@@ -417,12 +414,7 @@ TEST_F(MainWindowTest, DMarksAMissingKnotHiddenAndShiftDTheFramesAfterIt) {
   const recon::LabelSet truth = Truth();
   const std::string project = MakeProjectFile("hidden", (Dir() / "shot/labels_true.h5").string());
   MainWindow w;
-  w.resize(1400, 1000);
-  w.show();
-  ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), false));
-  ASSERT_TRUE(w.WaitForFrame());
-  w.activateWindow();
-  ASSERT_TRUE(QTest::qWaitForWindowActive(&w));
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, project));
   Session* s = w.session();
   const int t = 20, c = 2, k = KnotSeenByAll(truth, t);
   ASSERT_GE(k, 0);
@@ -467,12 +459,7 @@ TEST_F(MainWindowTest, AfterAFixTheWindowGoesOnToTheFramesNextItem) {
   const recon::LabelSet truth = Truth();
   const std::string project = MakeProjectFile("advance", (Dir() / "shot/labels_true.h5").string());
   MainWindow w;
-  w.resize(1400, 1000);
-  w.show();
-  ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), false));
-  ASSERT_TRUE(w.WaitForFrame());
-  w.activateWindow();
-  ASSERT_TRUE(QTest::qWaitForWindowActive(&w));
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, project));
   Session* s = w.session();
   const int t = 12, k = KnotSeenByAll(truth, t);
   ASSERT_GE(k, 0);
@@ -549,12 +536,7 @@ class FillGridPreviewTest : public MainWindowTest {
   void Open(const std::string& name) {
     window_ = std::make_unique<MainWindow>();
     MainWindow& w = *window_;
-    w.resize(1400, 1000);
-    w.show();
-    ASSERT_TRUE(w.OpenProject(QString::fromStdString(MakeProjectFile(name)), false));
-    ASSERT_TRUE(w.WaitForFrame());
-    w.activateWindow();
-    ASSERT_TRUE(QTest::qWaitForWindowActive(&w));
+    ASSERT_NO_FATAL_FAILURE(OpenShown(w, MakeProjectFile(name)));
     const recon::LabelSet truth = Truth();
     Session* s = w.session();
     const int rows = s->project().rows, cols = s->project().cols;
@@ -810,12 +792,7 @@ TEST_F(MainWindowTest, AFillGridPreviewWithNothingToAddLeavesNothingPending) {
   const std::string project =
       MakeProjectFile("preview_nothing", (Dir() / "shot/labels_true.h5").string());
   MainWindow w;
-  w.resize(1400, 1000);
-  w.show();
-  ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), false));
-  ASSERT_TRUE(w.WaitForFrame());
-  w.activateWindow();
-  ASSERT_TRUE(QTest::qWaitForWindowActive(&w));
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, project));
   const int index = w.session()->document().undo_stack()->index();
   QTest::keyClick(&w, Qt::Key_G);
   ASSERT_TRUE(w.WaitForIdle(120000));
