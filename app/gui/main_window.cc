@@ -812,6 +812,7 @@ void MainWindow::FirstReviewItem() {
 
 void MainWindow::ShowReviewRow(int row) {
   const auto [c, t, k] = review_model_->items()[row];
+  reviewing_ = LabelKey{c, t, k};
   SetFrame(t);
   SetCamera(c);
   SetKnot(k);
@@ -859,7 +860,9 @@ bool MainWindow::InQueue(int camera, int t, int knot) const {
 
 void MainWindow::AdvanceAfterFix(const LabelKey& key, bool was_queued) {
   const auto [c, t, k] = key;
-  if (!was_queued || !advance_->isChecked() || InQueue(c, t, k) ||
+  // Only an item the window took the person to (Space, Ctrl+Home, a run's stop): a knot the
+  // person labels on their own (a corner they seed) does not move the window.
+  if (!was_queued || reviewing_ != key || !advance_->isChecked() || InQueue(c, t, k) ||
       review_model_->rowCount() == 0)
     return;
   const int row = review_model_->Next(key);

@@ -215,6 +215,7 @@ class MainWindow : public QMainWindow {
   QTimer* play_timer_ = nullptr;
   std::vector<QAction*> actions_;
   QAction* advance_ = nullptr;  // Go > Advance to the frame's next review item after a fix
+  std::optional<LabelKey> reviewing_;  // the queue's item the window last took the person to
   QMenu* recent_menu_ = nullptr;
 
   int frame_ = 0, camera_ = 0, knot_ = 0, previous_knot_ = -1;

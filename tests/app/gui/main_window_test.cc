@@ -717,7 +717,9 @@ TEST_F(FillGridPreviewTest, EscAnEditAFrameChangeOrAnUndoDiscardThePreview) {
   ASSERT_TRUE(PressGAndWait());
   ASSERT_NE(w.fill_grid_preview(), nullptr);
   EXPECT_GT(Ghosts(), 0);
-  EXPECT_LT(zoomed->height(), height);  // the bar took its room
+  // The bar takes its room once the layout has run (a posted event: wait for it).
+  EXPECT_TRUE(QTest::qWaitFor([&] { return zoomed->height() < height; }, 5000))
+      << "the view kept its height " << height << " under the bar";
   EXPECT_EQ(zoomed->scale(), scale);
   EXPECT_LT((zoomed->ToImage(QPointF(zoomed->width() / 2.0, zoomed->height() / 2.0)) - centre)
                 .norm(),
