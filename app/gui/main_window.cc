@@ -36,6 +36,7 @@
 #include <exception>
 
 #include "app/gui/camera_view.h"
+#include "app/gui/knot_grid.h"
 #include "app/gui/settings.h"
 #include "app/gui/shortcut_editor.h"
 #include "app/gui/timeline.h"
@@ -170,7 +171,7 @@ void MainWindow::BuildWorkspace() {
   picker->addWidget(col_box_);
   picker->addWidget(
       new QLabel("   click: Find Node in the brush · Shift+click: exactly here · "
-                 "drag a label: move it · F1: all keys"));
+                 "I: which knot is this? · drag a label: move it · F1: all keys"));
   auto picked = [this] {
     SetKnot(row_box_->value() * session_->project().cols + col_box_->value());
   };
@@ -179,6 +180,18 @@ void MainWindow::BuildWorkspace() {
   });
   connect(col_box_, &QSpinBox::valueChanged, this, [this, picked] {
     if (session_) picked();
+  });
+
+  // The knot picker's grid: the knots and their labels in the current view; I rings the knots
+  // the colours of the junction under the cursor fit.
+  auto* grid_dock = new QDockWidget("Net grid: click the knot to label", this);
+  grid_dock->setObjectName("knot_grid_dock");
+  knot_grid_ = new KnotGrid;
+  grid_dock->setWidget(knot_grid_);
+  connect(knot_grid_, &KnotGrid::knotPicked, this, [this](int k) {
+    SetKnot(k);
+    statusBar()->showMessage(QString("Knot %1 picked: click it in a view to label it").arg(KnotName(k)),
+                             4000);
   });
 
   // The review queue.
@@ -203,6 +216,7 @@ void MainWindow::BuildWorkspace() {
   colours_label_->setMargin(6);
   colours_dock->setWidget(colours_label_);
   addDockWidget(Qt::RightDockWidgetArea, colours_dock);
+  addDockWidget(Qt::RightDockWidgetArea, grid_dock);
   colours_timer_ = new QTimer(this);
   colours_timer_->setSingleShot(true);
   colours_timer_->setInterval(150);
@@ -291,6 +305,8 @@ void MainWindow::BuildActions() {
   QMenu* tools = menuBar()->addMenu("&Tools");
   AddAction(tools, "Find Path from the corners", "Ctrl+P", &MainWindow::FindPathCorners);
   AddAction(tools, "Find Path to the previous knot", "Shift+P", &MainWindow::FindPathToPrevious);
+  AddAction(tools, "Identify the knot under the cursor by its colours", "I",
+            &MainWindow::IdentifyAtCursor);
   AddAction(tools, "Fill Grid in this frame", "G", &MainWindow::FillGridHere);
   // The preview's answers: enabled only while one is pending (BuildPreviewBanner).
   accept_preview_ =
@@ -385,6 +401,8 @@ bool MainWindow::OpenProject(const QString& path, bool ask) {
   const Project& p = session_->project();
   row_box_->setRange(0, p.rows - 1);
   col_box_->setRange(0, p.cols - 1);
+  knot_grid_->SetNet(p.rows, p.cols);
+  hint_camera_ = cursor_camera_ = -1;
   frame_box_->setRange(session_->frame_number(0), session_->frame_number(session_->frames() - 1));
   timeline_->SetRange(session_->frames());
   timeline_->SetReviewFrames(session_->document().ReviewFrames());
@@ -408,6 +426,7 @@ void MainWindow::SetFrame(int t) {
   const int direction = frame_ < 0 ? 0 : (t > frame_ ? 1 : -1);
   frame_ = t;
   for (auto& c : candidates_) c.clear();
+  ClearHint();
   session_->cache().SetPlayhead(session_->frame_number(t), direction, half_ ? 1 : 0);
   {
     const QSignalBlocker block(frame_box_);
@@ -519,6 +538,60 @@ void MainWindow::RefreshOverlays() {
     MarkExpected(c, &o);
     views_[c]->SetOverlay(std::move(o));
   }
+  RefreshKnotGrid();
+}
+
+void MainWindow::RefreshKnotGrid() {
+  if (!session_ || frame_ < 0) return;
+  const LabelDocument& doc = session_->document();
+  std::vector<KnotGrid::Cell> cells(session_->project().knots());
+  for (int k = 0; k < static_cast<int>(cells.size()); ++k) {
+    const recon::Label& l = doc.at(camera_, frame_, k);
+    if (l.state == recon::LabelState::kHidden)
+      cells[k].hidden = true;
+    else if (l.present())
+      cells[k].label = LabelColour(l);
+  }
+  knot_grid_->SetCells(std::move(cells));
+  knot_grid_->SetSelected(knot_);
+}
+
+void MainWindow::ClearHint() {
+  if (hint_camera_ < 0) return;
+  hint_camera_ = -1;
+  knot_grid_->SetOffered({}, false);
+}
+
+void MainWindow::IdentifyAtCursor() {
+  if (!session_ || busy()) return;
+  if (cursor_camera_ < 0 || cursor_camera_ >= session_->cameras()) {
+    statusBar()->showMessage("Identify: point the brush at a junction in a view, then press I",
+                             6000);
+    return;
+  }
+  const int c = cursor_camera_;
+  SetCamera(c);
+  const Session::JunctionHint hint =
+      session_->IdentifyJunction(c, frame_, cursor_px_, views_[c]->brush_radius());
+  const bool identified = hint.reading.status == recon::IdentifyStatus::kIdentified;
+  knot_grid_->SetOffered(hint.reading.knots, identified);
+  hint_camera_ = c;
+  const QString why = QString::fromStdString(hint.reading.why);
+  QString message;
+  if (!hint.found) {
+    message = "Identify: " + why;
+  } else if (identified) {
+    SetKnot(hint.reading.knots.front());
+    message = QString("Identify: the colours say knot %1 (picked; click the junction to label it) — %2")
+                  .arg(KnotName(knot_), why);
+  } else if (!hint.reading.knots.empty()) {
+    message = QString("Identify: %1 knots possible, ringed in the Net grid: pick one there — %2")
+                  .arg(hint.reading.knots.size())
+                  .arg(why);
+  } else {
+    message = "Identify: the colours fit no free knot — " + why;
+  }
+  statusBar()->showMessage(message, 15000);
 }
 
 void MainWindow::RefreshStatus() {
@@ -626,7 +699,9 @@ QString MainWindow::KnotName(int knot) const {
 
 void MainWindow::SetCamera(int c) {
   if (!session_ || c < 0 || c >= session_->cameras()) return;
+  if (c != hint_camera_) ClearHint();
   camera_ = c;
+  RefreshKnotGrid();
   RefreshStatus();
 }
 
@@ -640,6 +715,7 @@ void MainWindow::SetKnot(int knot) {
     row_box_->setValue(knot / session_->project().cols);
     col_box_->setValue(knot % session_->project().cols);
   }
+  knot_grid_->SetSelected(knot);
   RefreshOverlays();
   RefreshStatus();
 }
@@ -699,6 +775,8 @@ void MainWindow::OnSelect(int camera, int knot) {
 }
 
 void MainWindow::OnCursor(int camera, const Eigen::Vector2d& px, const QString& value) {
+  cursor_camera_ = camera;
+  cursor_px_ = px;
   status_cursor_->setText(
       QString("%1 · x %2 y %3 %4")
           .arg(QString::fromStdString(session_ ? session_->camera_names()[camera] : ""))
@@ -881,13 +959,8 @@ void MainWindow::Nudge(double dx, double dy) {
 }
 
 void MainWindow::FindPathCorners() {
-  if (!session_ || busy()) return;
-  const recon::EngineCounts n = session_->FindPathFromCorners(frame_);
-  statusBar()->showMessage(QString("Find Path from the corners and Fill Grid: %1 accepted, %2 "
-                                   "for review")
-                               .arg(n.accepted)
-                               .arg(n.review),
-                           8000);
+  // On a worker, shown as a preview like G's: Enter applies it (two undo steps), Esc discards.
+  if (session_ && !busy()) StartPreview(true);
 }
 
 void MainWindow::FindPathToPrevious() {
@@ -1221,13 +1294,22 @@ void MainWindow::BuildPreviewBanner() {
   connect(&previewer_, &QFutureWatcher<PreviewRun>::finished, this, &MainWindow::OnPreviewReady);
 }
 
-void MainWindow::StartPreview() {
+QString MainWindow::PreviewName() const {
+  return preview_corners_ ? "Find Path and Fill Grid preview" : "Fill Grid preview";
+}
+
+void MainWindow::StartPreview(bool from_corners) {
   // A new request replaces any other; one still running is asked again when it ends.
   DropPreview({});
   ++preview_request_;
   preview_frame_ = frame_;
-  preview_text_->setText(QString("<b>Fill Grid preview, frame %1:</b> searching…")
-                             .arg(session_->frame_number(frame_)));
+  preview_corners_ = from_corners;
+  preview_text_->setText(QString("<b>%1, frame %2:</b> %3…")
+                             .arg(PreviewName())
+                             .arg(session_->frame_number(frame_))
+                             .arg(from_corners ? "Find Path from the seeded corners, then the "
+                                                 "epipolar check and Fill Grid"
+                                               : "searching"));
   preview_banner_->show();
   discard_preview_->setEnabled(true);
   if (previewer_.isRunning())
@@ -1241,8 +1323,8 @@ void MainWindow::LaunchPreview() {
   const Session* session = session_.get();
   previewer_.setFuture(QtConcurrent::run(
       [session, snapshot = session_->document().labels(), t = preview_frame_,
-       request = preview_request_] {
-        return PreviewRun{request, session->PreviewFillGrid(snapshot, t)};
+       request = preview_request_, corners = preview_corners_] {
+        return PreviewRun{request, session->PreviewFillGrid(snapshot, t, corners)};
       }));
 }
 
@@ -1257,10 +1339,14 @@ void MainWindow::OnPreviewReady() {
   if (run.preview.empty()) {
     const int frame = preview_frame_;
     DropPreview({});
-    statusBar()->showMessage(QString("Fill Grid, frame %1: nothing to add or change; no preview "
-                                     "pending")
-                                 .arg(session_->frame_number(frame)),
-                             8000);
+    statusBar()->showMessage(
+        run.preview.from_corners
+            ? QString("Find Path from the corners, frame %1: nothing found; seed three or four "
+                      "corners in a camera first (pick the knot, click it)")
+                  .arg(session_->frame_number(frame))
+            : QString("Fill Grid, frame %1: nothing to add or change; no preview pending")
+                  .arg(session_->frame_number(frame)),
+        8000);
     return;
   }
   preview_ = run.preview;
@@ -1294,10 +1380,13 @@ void MainWindow::ShowPreviewBanner() {
   if (p.changed > 0)
     parts << QString("%1 other change%2").arg(p.changed).arg(p.changed == 1 ? "" : "s");
   const QString text =
-      QString("<b>Fill Grid preview, frame %1:</b> %2 — dashed pink marks, not labels yet. "
-              "<b>%3</b> accepts (one undo step), <b>%4</b> discards")
+      QString("<b>%1, frame %2:</b> %3 — dashed pink marks, not labels yet. "
+              "<b>%4</b> accepts (%5), <b>%6</b> discards")
+          .arg(PreviewName())
           .arg(session_->frame_number(p.t))
-          .arg(parts.join(", "), keys(accept_preview_), keys(discard_preview_));
+          .arg(parts.join(", "), keys(accept_preview_),
+               p.from_corners ? "two undo steps: Find Path, Fill Grid" : "one undo step",
+               keys(discard_preview_));
   preview_text_->setText(text);
   preview_banner_->show();
   statusBar()->showMessage(QTextDocumentFragment::fromHtml(text).toPlainText(), 8000);
@@ -1310,8 +1399,9 @@ void MainWindow::AcceptPreview() {
   DropPreview({});
   const int changed = session_->ApplyFillGridPreview(preview);
   statusBar()->showMessage(
-      QString("Fill Grid, frame %1: %2 labels set (%3 new, %4 of them for review; %5 under "
-              "review accepted; %6 to review)")
+      QString("%1, frame %2: %3 labels set (%4 new, %5 of them for review; %6 under "
+              "review accepted; %7 to review)")
+          .arg(preview.from_corners ? "Find Path from the corners and Fill Grid" : "Fill Grid")
           .arg(session_->frame_number(preview.t))
           .arg(changed)
           .arg(preview.added)
@@ -1331,7 +1421,7 @@ void MainWindow::DropPreview(const QString& why) {
   accept_preview_->setEnabled(false);
   discard_preview_->setEnabled(false);
   RefreshOverlays();
-  if (!why.isEmpty()) statusBar()->showMessage("Fill Grid preview " + why, 6000);
+  if (!why.isEmpty()) statusBar()->showMessage(PreviewName() + " " + why, 6000);
 }
 
 std::vector<ViewOverlay::Ghost> MainWindow::PreviewGhosts(int c) const {

@@ -30,6 +30,7 @@ class QGridLayout;
 namespace netlab::gui {
 
 class CameraView;
+class KnotGrid;
 class Timeline;
 struct ViewOverlay;
 
@@ -59,6 +60,7 @@ class MainWindow : public QMainWindow {
   void SetKnot(int knot);
   CameraView* view(int c) const { return views_[c]; }
   QTableView* review_table() const { return review_table_; }
+  KnotGrid* knot_grid() const { return knot_grid_; }
   // Half-resolution display (faster decode and paint at 2048^2).
   void SetHalfResolution(bool half);
   // Shows one camera alone (-1: all four).
@@ -174,7 +176,9 @@ class MainWindow : public QMainWindow {
   void ShowShortcuts();
   // The Fill Grid preview (G, Enter, Esc; see fill_grid_preview()).
   void BuildPreviewBanner();
-  void StartPreview();
+  // from_corners: Find Path from the corners first (Ctrl+P), applied as its own step.
+  void StartPreview(bool from_corners = false);
+  QString PreviewName() const;  // "Fill Grid preview" or "Find Path and Fill Grid preview"
   void LaunchPreview();
   void OnPreviewReady();
   void AcceptPreview();
@@ -196,6 +200,12 @@ class MainWindow : public QMainWindow {
   void HideSelected();        // D with no label selected: a hidden mark here
   void HideSelectedOnwards(); // Shift+D: here and in the following frames it is missing in
 
+  // The knot picker's grid dock and its colour hint (I: which knot is the junction under the
+  // cursor; the knots its colours fit are ringed in the grid until the frame or camera changes).
+  void RefreshKnotGrid();
+  void IdentifyAtCursor();
+  void ClearHint();
+
   std::unique_ptr<Session> session_;
   std::unique_ptr<ReviewModel> review_model_;
   QSortFilterProxyModel* review_proxy_ = nullptr;
@@ -209,6 +219,10 @@ class MainWindow : public QMainWindow {
   QSpinBox* frame_box_ = nullptr;
   QSpinBox* row_box_ = nullptr;
   QSpinBox* col_box_ = nullptr;
+  KnotGrid* knot_grid_ = nullptr;
+  int cursor_camera_ = -1;  // the view and pixel the mouse was last over (I reads there)
+  Eigen::Vector2d cursor_px_ = Eigen::Vector2d::Zero();
+  int hint_camera_ = -1;    // the view of the grid's colour hint (-1: none shown)
   QLabel* status_frame_ = nullptr;
   QLabel* status_cursor_ = nullptr;
   QLabel* status_knot_ = nullptr;
@@ -259,6 +273,7 @@ class MainWindow : public QMainWindow {
   QFutureWatcher<PreviewRun> previewer_;
   long preview_request_ = 0;
   int preview_frame_ = -1;
+  bool preview_corners_ = false;  // the wanted one runs Find Path from the corners first
   bool preview_again_ = false;  // wanted anew while an older one was still running
   std::optional<Session::FillGridPreview> preview_;
   QWidget* preview_banner_ = nullptr;

@@ -450,4 +450,91 @@ IdentityCheck CheckIdentity(const cv::Mat& bgr8, const KnotCodebook& codebook, i
   return result;
 }
 
+JunctionReading ReadJunctionIdentity(const cv::Mat& bgr8, const KnotCodebook& codebook,
+                                     const Eigen::Vector2d& px,
+                                     const std::vector<double>& branch_angles_rad, double link_px,
+                                     const IdentityCheckOptions& options,
+                                     const std::vector<int>& exclude) {
+  // The arguments, checked as CheckIdentity's (at knot 0: the codebook's shape).
+  LabeledKnot junction = CheckArguments(bgr8, codebook, 0, px, options);
+  junction.name = "the junction";
+  const YarnsToRead to_read = BranchYarns(branch_angles_rad);
+  const int n = static_cast<int>(to_read.dirs.size());
+  JunctionReading result;
+  result.yarns = n;
+
+  // How far along the yarns to read (nothing when a solid covers the junction).
+  const double link = link_px > 0 && std::isfinite(link_px)
+                          ? link_px
+                          : std::numeric_limits<double>::infinity();
+  const std::optional<IdentifyOptions> reading =
+      ReadingRange(bgr8, px, link, junction, options, &result.why);
+  if (!reading) return result;
+  const KnotIdentification id = IdentifyKnot(bgr8, px, to_read.dirs, *reading, codebook);
+  if (static_cast<int>(id.yarns.size()) != n) {
+    result.why = id.reasons.empty() ? "colours not read" : id.reasons.front();
+    return result;
+  }
+
+  // Each yarn's plausible dyes (all of them when it is not read).
+  const IdentifyOptions& o = options.identify;
+  std::vector<int> every(codebook.palette.size());
+  for (size_t i = 0; i < every.size(); ++i) every[i] = static_cast<int>(i);
+  std::vector<std::vector<int>> plausible(n);
+  std::string readings;
+  for (int y = 0; y < n; ++y) {
+    const YarnReading& r = id.yarns[y];
+    const bool read = r.best >= 0 && r.best_delta_e <= o.max_delta_e && !r.plausible.empty();
+    plausible[y] = read ? r.plausible : every;
+    result.yarns_certain += read && r.plausible.size() == 1;
+    readings += (readings.empty() ? "" : ", ") + to_read.names[y] + " " +
+                ReadingName(r, codebook, read, o.min_samples);
+  }
+
+  // Every knot the readings fit, minus those excluded.
+  int fitting = 0;
+  for (int k = 0; k < static_cast<int>(codebook.knots.size()); ++k) {
+    const CodebookKnot& knot = codebook.knots[k];
+    const bool cyclic = codebook.rule == CodeRule::kCyclic && n == knot.degree();
+    const bool fits = cyclic ? codebook.FitsSomeReading(k, plausible)
+                             : FitsDistinctLinks(knot.link_colours, plausible);
+    if (!fits) continue;
+    ++fitting;
+    if (Contains(exclude, k))
+      ++result.excluded;
+    else
+      result.knots.push_back(k);
+  }
+  const int needed = std::min(options.min_certain_yarns, n);
+  char counts[160];
+  std::snprintf(counts, sizeof(counts), " (%d of %d yarns read with certainty; %d knot(s) fit",
+                result.yarns_certain, n, fitting);
+  std::string tail = counts;
+  if (result.excluded > 0) tail += ", " + std::to_string(result.excluded) + " labeled elsewhere";
+  tail += ")";
+  if (result.knots.empty()) {
+    result.status = IdentifyStatus::kUnknown;
+    result.why = readings + ": no knot of the net fits" + tail;
+  } else if (result.knots.size() == 1 && result.yarns_certain >= needed) {
+    result.status = IdentifyStatus::kIdentified;
+    const CodebookKnot& k = codebook.knots[result.knots[0]];
+    result.why = readings + ": only " + KnotName(k.row, k.col) + " fits" + tail;
+  } else if (result.knots.size() == 1) {
+    result.status = IdentifyStatus::kAmbiguous;
+    const CodebookKnot& k = codebook.knots[result.knots[0]];
+    result.why = readings + ": only " + KnotName(k.row, k.col) +
+                 " fits, but too few yarns are read with certainty to be sure" + tail;
+  } else {
+    result.status = IdentifyStatus::kAmbiguous;
+    std::string some;
+    for (size_t i = 0; i < result.knots.size() && i < 4; ++i) {
+      const CodebookKnot& k = codebook.knots[result.knots[i]];
+      some += " " + KnotName(k.row, k.col);
+    }
+    if (result.knots.size() > 4) some += " ...";
+    result.why = readings + ": " + std::to_string(result.knots.size()) + " knots fit" + some + tail;
+  }
+  return result;
+}
+
 }  // namespace netlab::recon

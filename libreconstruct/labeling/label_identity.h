@@ -113,4 +113,33 @@ IdentityCheck CheckIdentity(const cv::Mat& bgr8, const KnotCodebook& codebook, i
                             const Eigen::Vector2d& px, const YarnDirections& yarns,
                             const IdentityCheckOptions& options = {});
 
+// What the colours of an unlabeled junction say about which knot it is: the knot picker's hint
+// when the person seeds a knot. The junction's yarns leave it along the detector's branches
+// (`branch_angles_rad`, 2..4, any order; their links unknown); each is read out to
+// options.link_fraction of `link_px` (the net's link length in this image; <= 0: unknown, the
+// reading stops at identify.outer_radius_px), from beyond any solid at the junction. A knot fits
+// when its links and the yarns pair up one to one with each link's dye plausible for its yarn (a
+// spurious branch or a missed one allowed), and in cyclic order under the cyclic rule with as
+// many yarns as links. Knots in `exclude` (labeled elsewhere in this view) are not offered.
+//
+// Offered, never applied: kIdentified only when exactly one knot fits and at least
+// options.min_certain_yarns yarns (all of them at a junction with fewer) are read with one
+// plausible dye; kAmbiguous lists every knot that fits; kUnknown says why nothing was read.
+struct JunctionReading {
+  IdentifyStatus status = IdentifyStatus::kUnknown;
+  std::vector<int> knots;  // codebook indices, row-major (the net's knot numbers)
+  int yarns = 0;           // yarns looked at
+  int yarns_certain = 0;   // read with one plausible dye
+  int excluded = 0;        // knots that fit but were excluded
+  std::string why;         // one line for the person: the yarns read and what they fit
+};
+
+// Throws std::invalid_argument on a frame that is not CV_8UC3, a non-finite px, branch angles
+// outside 2..4 or not finite, invalid options, or a codebook that is not a whole net.
+JunctionReading ReadJunctionIdentity(const cv::Mat& bgr8, const KnotCodebook& codebook,
+                                     const Eigen::Vector2d& px,
+                                     const std::vector<double>& branch_angles_rad, double link_px,
+                                     const IdentityCheckOptions& options = {},
+                                     const std::vector<int>& exclude = {});
+
 }  // namespace netlab::recon

@@ -186,40 +186,55 @@ recon::EngineCounts Session::FillGrid(int t) {
   return counts;
 }
 
-Session::FillGridPreview Session::PreviewFillGrid(recon::LabelSet snapshot, int t) const {
+Session::FillGridPreview Session::PreviewFillGrid(recon::LabelSet snapshot, int t,
+                                                  bool from_corners) const {
   FillGridPreview preview;
   preview.t = t;
-  // The same check on a copy, by an engine that knows what the GUI thread's knows of the net.
+  preview.from_corners = from_corners;
+  // Every label that differs between two sets (every row: the tools touch row t only, but
+  // nothing relies on it).
+  const auto diff = [this](const recon::LabelSet& before, const recon::LabelSet& after) {
+    std::vector<recon::LabelEdit> edits;
+    for (int c = 0; c < cameras(); ++c)
+      for (int f = 0; f < after.frames(); ++f)
+        for (int k = 0; k < after.knots(); ++k)
+          if (!SameLabel(before.at(c, f, k), after.at(c, f, k)))
+            edits.push_back({c, f, k, after.at(c, f, k)});
+    return edits;
+  };
+  // The same tools on a copy, by an engine that knows what the GUI thread's knows of the net.
   recon::LabelStore store(snapshot);
   const std::unique_ptr<recon::LabelEngine> engine = MakeEngine(&store);
   engine->AdoptLinkLength(link_length_m_.load());
-  engine->CrossCheck(t);
+  if (from_corners) {
+    engine->LabelFirstFrame(t);
+    preview.path_edits = diff(snapshot, store.labels());
+    const recon::LabelSet path = store.labels();
+    engine->CrossCheck(t);
+    preview.check_edits = diff(path, store.labels());
+  } else {
+    engine->CrossCheck(t);
+  }
   preview.reasons = engine->reasons();
   preview.link_length_m = engine->link_length_m();
-  // Every label it changed (every row: the check touches row t only, but nothing relies on it).
-  const recon::LabelSet& after = store.labels();
-  for (int c = 0; c < cameras(); ++c)
-    for (int f = 0; f < after.frames(); ++f)
-      for (int k = 0; k < after.knots(); ++k) {
-        const recon::Label &was = snapshot.at(c, f, k), &now = after.at(c, f, k);
-        if (SameLabel(was, now)) continue;
-        preview.edits.push_back({c, f, k, now});
-        // Counted by what the person is asked to look at.
-        if (!was.present() && now.present()) {
-          ++preview.added;
-          preview.added_review += now.state == recon::LabelState::kNeedsReview;
-        } else if (was.accepted() && now.present() && now.px == was.px &&
-                   now.state == recon::LabelState::kNeedsReview) {
-          ++preview.to_review;
-        } else if (was.present() && was.state == recon::LabelState::kNeedsReview &&
-                   now.accepted()) {
-          ++preview.confirmed;
-        } else if (was.accepted() && now.accepted()) {
-          ++preview.moved;
-        } else {
-          ++preview.changed;
-        }
-      }
+  preview.edits = diff(snapshot, store.labels());
+  // Counted by what the person is asked to look at.
+  for (const recon::LabelEdit& e : preview.edits) {
+    const recon::Label &was = snapshot.at(e.camera, e.t, e.knot), &now = e.label;
+    if (!was.present() && now.present()) {
+      ++preview.added;
+      preview.added_review += now.state == recon::LabelState::kNeedsReview;
+    } else if (was.accepted() && now.present() && now.px == was.px &&
+               now.state == recon::LabelState::kNeedsReview) {
+      ++preview.to_review;
+    } else if (was.present() && was.state == recon::LabelState::kNeedsReview && now.accepted()) {
+      ++preview.confirmed;
+    } else if (was.accepted() && now.accepted()) {
+      ++preview.moved;
+    } else {
+      ++preview.changed;
+    }
+  }
   return preview;
 }
 
@@ -228,7 +243,9 @@ int Session::ApplyFillGridPreview(const FillGridPreview& preview) {
   document_->MergeReasons(preview.reasons);
   engine().AdoptLinkLength(preview.link_length_m);
   NoteLinkLength();
-  return document_->Apply("Fill Grid", preview.edits);
+  if (!preview.from_corners) return document_->Apply("Fill Grid", preview.edits);
+  return document_->Apply("Find Path from the corners", preview.path_edits) +
+         document_->Apply("Fill Grid", preview.check_edits);
 }
 
 Session::TrackRun Session::Track(recon::LabelSet snapshot, int from, int to,
@@ -299,6 +316,96 @@ std::optional<Session::KnotColours> Session::CheckKnotColours(
   out.why = check.why;
   out.knots_read = check.knots_read;
   return out;
+}
+
+double Session::LinkLengthPx(int camera, int t) const {
+  const recon::LabelSet& labels = document_->labels();
+  auto median_in = [&](int row) {
+    std::vector<double> lengths;
+    for (int k = 0; k < project_.knots(); ++k) {
+      const recon::Label& a = labels.at(camera, row, k);
+      if (!a.accepted()) continue;
+      const std::array<int, 4> around = recon::GridSlots(project_.rows, project_.cols, k);
+      for (int s = 0; s < 2; ++s) {  // right and down: each link once
+        if (around[s] < 0 || !labels.at(camera, row, around[s]).accepted()) continue;
+        lengths.push_back((labels.at(camera, row, around[s]).px - a.px).norm());
+      }
+    }
+    if (lengths.empty()) return 0.0;
+    std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
+    return lengths[lengths.size() / 2];
+  };
+  for (int d = 0; d < frames(); ++d)
+    for (int row : {t - d, t + d}) {
+      if (row < 0 || row >= frames() || (d == 0 && row != t)) continue;
+      if (const double m = median_in(row); m > 0) return m;
+    }
+  return 0.0;
+}
+
+Session::JunctionHint Session::IdentifyJunction(int camera, int t, const Eigen::Vector2d& centre,
+                                                double radius_px, double link_px) const {
+  JunctionHint hint;
+  if (!codebook_) {
+    hint.reading.why = "the project has no colouring: the colours cannot identify a knot";
+    return hint;
+  }
+  std::string error;
+  const cv::Mat image = Image(camera, t, &error);
+  if (image.empty() || image.type() != CV_8UC3) {
+    hint.reading.why = "frame not readable: " + error;
+    return hint;
+  }
+  const recon::FindNodeResult found =
+      recon::FindNode(image, centre, radius_px, engine_options_.detector);
+  if (found.status != recon::FindNodeStatus::kFound) {
+    hint.reading.why = found.status == recon::FindNodeStatus::kSeveral
+                           ? "several junctions in the brush: point at one"
+                           : "no junction in the brush" + (found.why.empty() ? "" : ": " + found.why);
+    return hint;
+  }
+  hint.found = true;
+  hint.px = found.knot.px;
+  hint.corner_mass = found.knot.solid;
+  hint.link_px = link_px < 0 ? LinkLengthPx(camera, t) : link_px;
+  // Knots labeled elsewhere in this view are not this one.
+  std::vector<int> exclude;
+  const recon::LabelSet& labels = document_->labels();
+  for (int k = 0; k < project_.knots(); ++k) {
+    const recon::Label& l = labels.at(camera, t, k);
+    if (l.accepted() && (l.px - hint.px).norm() > radius_px) exclude.push_back(k);
+  }
+  const int n = static_cast<int>(found.knot.branch_angles_rad.size());
+  if (n >= 2 && n <= 4)
+    hint.reading = recon::ReadJunctionIdentity(image, *codebook_, hint.px,
+                                               found.knot.branch_angles_rad, hint.link_px,
+                                               identity_, exclude);
+  else
+    hint.reading.why = std::to_string(n) + " yarns leave the junction: its colours are not read";
+  if (hint.corner_mass) {
+    // A corner mass is one of the four corners: keep those the colours allow (all four when they
+    // say nothing).
+    const int rows = project_.rows, cols = project_.cols;
+    const std::array<int, 4> corners = {0, cols - 1, (rows - 1) * cols, rows * cols - 1};
+    std::vector<int> offered;
+    const bool read = hint.reading.status != recon::IdentifyStatus::kUnknown;
+    for (int k : corners)
+      if (std::find(exclude.begin(), exclude.end(), k) == exclude.end() &&
+          (!read || std::find(hint.reading.knots.begin(), hint.reading.knots.end(), k) !=
+                        hint.reading.knots.end()))
+        offered.push_back(k);
+    const bool sure = offered.size() == 1 && read &&
+                      hint.reading.yarns_certain >= std::min(identity_.min_certain_yarns, 2);
+    hint.reading.knots = offered;
+    hint.reading.status = offered.empty() ? recon::IdentifyStatus::kUnknown
+                          : sure          ? recon::IdentifyStatus::kIdentified
+                                          : recon::IdentifyStatus::kAmbiguous;
+    hint.reading.why = "a corner mass: " +
+                       (offered.empty() ? std::string("every corner is labeled elsewhere")
+                                        : std::to_string(offered.size()) + " corner(s) possible") +
+                       "; colours: " + hint.reading.why;
+  }
+  return hint;
 }
 
 recon::PointEstimate Session::Triangulate(int t, int knot) const {

@@ -81,12 +81,16 @@ class Session {
   // The epipolar check and Fill Grid in frame t.
   recon::EngineCounts FillGrid(int t);
 
-  // What FillGrid(t) would change, computed on `snapshot` (document().labels(), copied on the GUI
+  // What FillGrid(t) (from_corners: FindPathFromCorners(t)) would change, computed on `snapshot` (document().labels(), copied on the GUI
   // thread) by an engine of its own: any thread, never touches the document. It starts from the
   // link length the GUI thread's engine has (the project's mesh, or its estimate once made), so
   // that applying it (ApplyFillGridPreview) gives exactly the labels FillGrid(t) gives.
   struct FillGridPreview {
     int t = 0;
+    // Find Path from the corners first (Ctrl+P): applied as two steps, "Find Path from the
+    // corners" (path_edits) and "Fill Grid" (check_edits), as FindPathFromCorners makes them.
+    bool from_corners = false;
+    std::vector<recon::LabelEdit> path_edits, check_edits;
     // The labels that differ from the snapshot's, as the check and Fill Grid leave them.
     std::vector<recon::LabelEdit> edits;
     recon::ReviewReasons reasons;  // why labels are kept for review (the engine's, this run)
@@ -99,7 +103,7 @@ class Session {
   int changed = 0;       // any other change (a label removed, say)
     bool empty() const { return edits.empty(); }
   };
-  FillGridPreview PreviewFillGrid(recon::LabelSet snapshot, int t) const;
+  FillGridPreview PreviewFillGrid(recon::LabelSet snapshot, int t, bool from_corners = false) const;
   // Applies a preview as one undo step "Fill Grid", its reasons merged into the document (GUI
   // thread). The caller makes sure the labels have not changed since its snapshot. Returns the
   // labels changed.
@@ -144,6 +148,25 @@ class Session {
   std::optional<KnotColours> CheckKnotColours(int camera, int t, int knot,
                                               const Eigen::Vector2d& px,
                                               const recon::YarnDirections& yarns) const;
+
+  // The knot picker's hint: which knot the junction inside the brush (centre, radius in px) of
+  // (camera, t) is, from its yarn colours (recon::ReadJunctionIdentity). Knots with an accepted
+  // label elsewhere in this view (farther than the brush) are not offered; a corner mass offers
+  // the net's corners that fit. Nothing is labeled: the person picks. GUI thread (a few ms once
+  // the frame is cached).
+  struct JunctionHint {
+    bool found = false;          // Find Node found one junction (or corner mass) in the brush
+    Eigen::Vector2d px = Eigen::Vector2d::Zero();  // where
+    bool corner_mass = false;
+    double link_px = 0.0;        // the link length the yarns were read against (0: unknown)
+    recon::JunctionReading reading;  // reading.why also says why nothing was found
+  };
+  // `link_px` < 0: the link length from the labels (LinkLengthPx); else the one given (0: unknown).
+  JunctionHint IdentifyJunction(int camera, int t, const Eigen::Vector2d& centre, double radius_px,
+                                double link_px = -1) const;
+  // The median image length (px) of the net's links whose both ends have accepted labels in
+  // (camera, t), else in the nearest frame row of that camera that has some; 0 when none.
+  double LinkLengthPx(int camera, int t) const;
 
   // The knot's point from the accepted labels of frame t (two views or more), with the
   // reprojection residual per view.

@@ -136,7 +136,10 @@ inline ScriptedSession PlayScriptedSession(MainWindow* w, const recon::LabelSet&
     }
   // 2. Find Path from the corners; then every visible knot of frame 0 that is not accepted in a
   // camera, clicked there (Find Node, zoomed in; Shift+click where it cannot decide).
+  // Ctrl+P previews on a worker; Enter applies it.
   QTest::keyClick(w, Qt::Key_P, Qt::ControlModifier);
+  w->WaitForIdle(120000);
+  if (w->fill_grid_preview()) QTest::keyClick(w, Qt::Key_Return);
   out.actions.push_back({Action::kFindPath, 0, 0, 0, Eigen::Vector2d::Zero()});
   for (int c = 0; c < s->cameras(); ++c)
     for (int k = 0; k < rows * cols; ++k) {
