@@ -149,6 +149,7 @@ int CameraView::LabelNear(const QPointF& point, double radius_widget) const {
 }
 
 void CameraView::paintEvent(QPaintEvent*) {
+  ++paints_;
   QPainter painter(this);
   painter.fillRect(rect(), QColor(24, 24, 24));
   if (has_image()) {

@@ -114,6 +114,8 @@ class CameraView : public QWidget {
   // The label within `radius_widget` widget pixels of the point, nearest first (-1 if none).
   int LabelNear(const QPointF& point, double radius_widget = 8.0) const;
   bool has_image() const { return !frame_.image.empty(); }
+  // Paints so far (a benchmark times a frame change until every view has painted it).
+  long paints() const { return paints_; }
 
  signals:
   void clicked(int camera, Eigen::Vector2d px, Qt::KeyboardModifiers modifiers);
@@ -148,6 +150,7 @@ class CameraView : public QWidget {
   bool show_labels_ = true, show_links_ = true, show_epipolar_ = true;
   double gain_ = 1.0, tone_offset_ = 0.0, gamma_ = 1.0;
   double brush_radius_ = 6.0;
+  long paints_ = 0;
   // View transform: widget = (image + 0.5) * scale_ + offset_ (image in full-resolution px).
   double scale_ = 1.0;
   QPointF offset_;

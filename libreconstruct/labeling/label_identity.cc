@@ -482,13 +482,20 @@ JunctionReading ReadJunctionIdentity(const cv::Mat& bgr8, const KnotCodebook& co
   for (size_t i = 0; i < every.size(); ++i) every[i] = static_cast<int>(i);
   std::vector<std::vector<int>> plausible(n);
   std::string readings;
+  int read_yarns = 0;
   for (int y = 0; y < n; ++y) {
     const YarnReading& r = id.yarns[y];
     const bool read = r.best >= 0 && r.best_delta_e <= o.max_delta_e && !r.plausible.empty();
+    read_yarns += read;
     plausible[y] = read ? r.plausible : every;
     result.yarns_certain += read && r.plausible.size() == 1;
     readings += (readings.empty() ? "" : ", ") + to_read.names[y] + " " +
                 ReadingName(r, codebook, read, o.min_samples);
+  }
+
+  if (read_yarns == 0) {  // every knot would fit: say so instead of offering the whole net
+    result.why = "no yarn colour read (" + readings + ")";
+    return result;
   }
 
   // Every knot the readings fit, minus those excluded.

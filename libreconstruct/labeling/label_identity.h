@@ -124,7 +124,8 @@ IdentityCheck CheckIdentity(const cv::Mat& bgr8, const KnotCodebook& codebook, i
 //
 // Offered, never applied: kIdentified only when exactly one knot fits and at least
 // options.min_certain_yarns yarns (all of them at a junction with fewer) are read with one
-// plausible dye; kAmbiguous lists every knot that fits; kUnknown says why nothing was read.
+// plausible dye; kAmbiguous lists every knot that fits; kUnknown says why nothing was read (no
+// yarn's colour read at all is kUnknown too: the whole net would fit).
 struct JunctionReading {
   IdentifyStatus status = IdentifyStatus::kUnknown;
   std::vector<int> knots;  // codebook indices, row-major (the net's knot numbers)
