@@ -80,6 +80,7 @@ void CameraView::SetFrame(const cv::Mat& bgr, int full_width, int full_height,
 void CameraView::SetFrame(ViewFrame frame, int full_width, int full_height,
                           const QString& problem) {
   frame_ = std::move(frame);
+  zoomed_part_ = QImage();
   problem_ = problem;
   if (full_width > 0) full_width_ = full_width, full_height_ = full_height;
   if (!fitted_ && full_width_ > 0) Fit();
@@ -107,6 +108,7 @@ void CameraView::SetTone(double gain, double offset, double gamma) {
 void CameraView::RebuildImage() {
   // The reduced copy is small: toning it again on the GUI thread is cheap.
   frame_.display = DisplayImage(frame_.reduced, tone_);
+  zoomed_part_ = QImage();
 }
 
 QPointF CameraView::ToWidget(const Eigen::Vector2d& px) const {
@@ -190,7 +192,12 @@ void CameraView::DrawFrame(QPainter& painter) const {
   const int x1 = std::clamp(static_cast<int>(std::ceil(b.x())) + 1, 0, image.cols);
   const int y1 = std::clamp(static_cast<int>(std::ceil(b.y())) + 1, 0, image.rows);
   if (x1 <= x0 || y1 <= y0) return;
-  const QImage part = DisplayImage(image(cv::Rect(x0, y0, x1 - x0, y1 - y0)), tone_);
+  const cv::Rect visible(x0, y0, x1 - x0, y1 - y0);
+  if (zoomed_part_.isNull() || visible != zoomed_rect_) {
+    zoomed_part_ = DisplayImage(image(visible), tone_);
+    zoomed_rect_ = visible;
+  }
+  const QImage& part = zoomed_part_;
   const QRectF target(offset_.x() + x0 * s * scale_, offset_.y() + y0 * s * scale_,
                       (x1 - x0) * s * scale_, (y1 - y0) * s * scale_);
   painter.setRenderHint(QPainter::SmoothPixmapTransform, screen_per_image < 1.0);

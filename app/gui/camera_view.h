@@ -143,6 +143,10 @@ class CameraView : public QWidget {
 
   int camera_;
   ViewFrame frame_;
+  // Zoomed in: the visible pixels as converted for the last paint, kept while the frame, the tone
+  // and the visible rectangle stay (a mouse move repaints the brush, not the image).
+  mutable QImage zoomed_part_;
+  mutable cv::Rect zoomed_rect_;
   cv::Mat tone_;   // ToneTable of the tone below
   int full_width_ = 0, full_height_ = 0;
   QString problem_;

@@ -90,6 +90,27 @@ TEST(CameraView, TheToneCurveAppliesZoomedOutAndZoomedIn) {
   EXPECT_EQ(ShownAt(view, {990, 1003}), QColor(255, 0, 0));
 }
 
+// Zoomed in, the converted pixels are kept between paints (a mouse move repaints the brush):
+// a new tone, a new frame or a pan must still show at once.
+TEST(CameraView, ZoomedInAToneAFrameOrAPanChangeWhatIsShownAtOnce) {
+  CameraView view(0);
+  view.resize(400, 400);
+  view.show();
+  view.SetFrame(TestFrame(), 2048, 2048);
+  view.ZoomTo({1003.5, 1003.5}, 40);
+  EXPECT_EQ(ShownAt(view, {1003, 1003}), QColor(0, 200, 0));
+  EXPECT_EQ(ShownAt(view, {1003, 1003}), QColor(0, 200, 0));  // painted again, unchanged
+  view.SetTone(2.0, 0.0, 1.0);
+  EXPECT_EQ(ShownAt(view, {1003, 1003}), QColor(0, 255, 0));
+  view.SetTone(1.0, 0.0, 1.0);
+  cv::Mat blue = TestFrame();
+  blue(cv::Rect(1000, 1000, 8, 8)).setTo(cv::Scalar(200, 0, 0));
+  view.SetFrame(blue, 2048, 2048);
+  EXPECT_EQ(ShownAt(view, {1003, 1003}), QColor(0, 0, 200));
+  view.ZoomTo({1900.5, 1003.5}, 40);  // over the blue half
+  EXPECT_EQ(ShownAt(view, {1900, 1003}), QColor(0, 0, 200));
+}
+
 }  // namespace
 }  // namespace netlab::gui
 

@@ -12,6 +12,8 @@
 
 #include <Eigen/Core>
 #include <QCoreApplication>
+#include <QSortFilterProxyModel>
+#include <QTableView>
 #include <QTest>
 #include <QWheelEvent>
 #include <algorithm>
@@ -162,15 +164,14 @@ inline ScriptedSession PlayScriptedSession(MainWindow* w, const recon::LabelSet&
   // (Ctrl+Home; Space when the window did not move on). Tracking on after a frame where only
   // hidden marks were set would change nothing: the person does not.
   const int last = s->frames() - 1;
-  auto items = [&] {  // the queue, in its order
-    std::vector<LabelKey> all = s->document().ReviewItems(), missing = s->missing().Items();
-    all.insert(all.end(), missing.begin(), missing.end());
-    std::sort(all.begin(), all.end(), [](const LabelKey& a, const LabelKey& b) {
-      return std::tie(std::get<1>(a), std::get<0>(a), std::get<2>(a)) <
-             std::tie(std::get<1>(b), std::get<0>(b), std::get<2>(b));
-    });
-    return all;
-  };
+  // The queue in the order Space and Ctrl+Home walk it: the window's ReviewModel (the source of
+  // its review table's sorting proxy).
+  const auto* proxy = qobject_cast<const QSortFilterProxyModel*>(w->review_table()->model());
+  const auto* queue = proxy ? qobject_cast<const ReviewModel*>(proxy->sourceModel()) : nullptr;
+  if (!queue) {
+    out.finished = false;
+    return out;
+  }
   auto on_item = [&] {
     const int c = w->camera(), t = w->frame(), k = w->knot();
     const recon::Label& l = s->document().at(c, t, k);
@@ -185,7 +186,7 @@ inline ScriptedSession PlayScriptedSession(MainWindow* w, const recon::LabelSet&
       out.finished = TrackForwards(w, &out);
       run_end = w->frame();
     }
-    if (items().empty()) break;  // so the last run reached the last frame
+    if (queue->items().empty()) break;  // so the last run reached the last frame
     if (!on_item()) {
       QTest::keyClick(w, Qt::Key_Home, Qt::ControlModifier);
       ++out.navigation;
@@ -195,7 +196,7 @@ inline ScriptedSession PlayScriptedSession(MainWindow* w, const recon::LabelSet&
     for (;;) {
       ++out.review_items;
       track_on = FixReviewItem(w, truth, &out) || track_on;
-      const auto left = items();
+      const std::vector<LabelKey>& left = queue->items();
       if (left.empty() || out.review_items >= max_review_items ||
           std::get<1>(left.front()) != round)  // the frame is done (the view shows no mark)
         break;
