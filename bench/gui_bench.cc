@@ -222,14 +222,16 @@ int main(int argc, char** argv) {
         actions > 0 ? 1000.0 * wall_s / actions : 0.0,
         session.finished ? "" : " (the tracking run did not end)");
     std::printf(
-        "   actions: %d Find Node clicks, %d by hand (Shift+click), %d deletes, %d accepts, %d "
-        "Find Path, %d tracking runs, %d keys to go to a review item; %d review items fixed\n",
+        "   actions: %d Find Node clicks, %d by hand (Shift+click), %d deletes, %d hidden marks "
+        "(D), %d hidden runs (Shift+D), %d accepts, %d Find Path, %d tracking runs, %d keys to go "
+        "to a review item; %d review items fixed\n",
         kinds[Action::kFindNode], kinds[Action::kPlace], kinds[Action::kDelete],
-        kinds[Action::kAccept], kinds[Action::kFindPath], kinds[Action::kTrack],
-        session.navigation, session.review_items);
+        kinds[Action::kHide], kinds[Action::kHideRun], kinds[Action::kAccept],
+        kinds[Action::kFindPath], kinds[Action::kTrack], session.navigation, session.review_items);
     std::printf(
         "   left: %ld accepted labels right, %ld wrong, %ld visible knot-frames unlabeled "
-        "(the script walks the review queue only; it does not click unlabeled knots), %zu "
+        "(the script walks the review queue: knots seen by fewer than two other cameras are not "
+        "in it), %zu "
         "labels still for review\n",
         right, wrong, unlabeled, w.session()->document().ReviewItems().size());
   }

@@ -21,6 +21,7 @@
 // colours.
 
 #include <algorithm>
+#include <functional>
 #include <array>
 #include <chrono>
 #include <cstdio>
@@ -247,7 +248,11 @@ struct ScriptedUser {
 };
 
 // The errors of the accepted labels at the end (the first ten wrong ones named on stderr).
-void TallyErrors(const Shot& shot, const recon::LabelStore& store, std::vector<Tally>* tally) {
+// `image(c, t)`: the frame, for the diagnosis of the first wrong labels (what the detector finds
+// at the true place: a junction placed off is the detector's, another junction taken is the
+// search's).
+void TallyErrors(const Shot& shot, const recon::LabelStore& store, std::vector<Tally>* tally,
+                 const std::function<cv::Mat(int, int)>& image) {
   for (int c = 0; c < shot.n_cam(); ++c)
     for (int t = 0; t < shot.n_t(); ++t)
       for (int k = 0; k < shot.knots; ++k) {
@@ -262,6 +267,31 @@ void TallyErrors(const Shot& shot, const recon::LabelStore& store, std::vector<T
                          shot.cameras[c].c_str(), shot.frames[t], k, k / shot.cols, k % shot.cols,
                          SourceName(l.source),
                          e < 0 ? "the knot is hidden" : (std::to_string(e) + " px off").c_str());
+          if (e > 0 && y.wrong <= 10) {
+            const recon::FindNodeResult r = recon::FindNode(image(c, t), truth_l.px, 6.0);
+            const Eigen::Vector2d off = l.px - truth_l.px;
+            std::fprintf(stderr, "  label - truth (%.2f, %.2f); Find Node at the truth: %s", off.x(),
+                         off.y(),
+                         r.status == recon::FindNodeStatus::kFound   ? "found"
+                         : r.status == recon::FindNodeStatus::kNone  ? "none"
+                                                                     : "several");
+            if (r.status == recon::FindNodeStatus::kFound)
+              std::fprintf(stderr, " %.2f px from the truth, %.2f px from the label, %d branches, "
+                                   "fit rms %.2f px, confidence %.2f",
+                           (r.knot.px - truth_l.px).norm(), (r.knot.px - l.px).norm(),
+                           r.knot.branches, r.knot.fit_rms_px, r.knot.confidence);
+            // And with rings half as far out (6 px): a link that bends within the default rings
+            // (Net B's far pair: ~25 px links) moves the junction the detector finds.
+            recon::KnotDetectorOptions near;
+            near.ring_radius_px = 6.0;
+            near.fit_from_px = 3.0;
+            const recon::FindNodeResult r2 = recon::FindNode(image(c, t), truth_l.px, 6.0, near);
+            if (r2.status == recon::FindNodeStatus::kFound)
+              std::fprintf(stderr, " | near rings: %.2f px from the truth (%.2f, %.2f)",
+                           (r2.knot.px - truth_l.px).norm(), r2.knot.px.x() - truth_l.px.x(),
+                           r2.knot.px.y() - truth_l.px.y());
+            std::fprintf(stderr, "\n");
+          }
           if (e < 0) continue;
         }
         if (e > 1.0) ++y.over_1px;
@@ -356,7 +386,10 @@ int main(int argc, char** argv) {
       }
       t0 = Clock::now();
     });
-    TallyErrors(shot, store, &tally);
+    TallyErrors(shot, store, &tally, [&](int c, int t) {
+      std::string error;
+      return sequence.ReadDisplay(shot.sequence_camera[c], shot.frames[t], 0, &error);
+    });
 
     const Tally all = PrintTables(o, shot, tally);
     std::printf("\nengine %.1f s (of which frame reading %.1f s): %.0f knot-frames/s; the "

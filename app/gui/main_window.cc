@@ -901,6 +901,7 @@ void MainWindow::FirstReviewItem() {
 void MainWindow::ShowReviewRow(int row) {
   const auto [c, t, k] = review_model_->items()[row];
   reviewing_ = LabelKey{c, t, k};
+  reviewing_missing_ = review_model_->IsMissing(row);
   SetFrame(t);
   SetCamera(c);
   SetKnot(k);
@@ -953,8 +954,23 @@ void MainWindow::AdvanceAfterFix(const LabelKey& key, bool was_queued) {
   if (!was_queued || reviewing_ != key || !advance_->isChecked() || InQueue(c, t, k) ||
       review_model_->rowCount() == 0)
     return;
-  const int row = review_model_->Next(key);
-  if (std::get<1>(review_model_->items()[row]) == t) ShowReviewRow(row);
+  // The frame's next label for review first; its missing knots (mostly the target's shadow,
+  // marked hidden a run at a time with Shift+D once tracking is done) only after a missing knot.
+  const std::vector<LabelKey>& items = review_model_->items();
+  const int start = review_model_->Next(key), n = static_cast<int>(items.size());
+  int label_row = -1, missing_row = -1;
+  for (int i = 0; i < n && label_row < 0; ++i) {
+    const int row = (start + i) % n;
+    if (std::get<1>(items[row]) != t) continue;
+    if (!review_model_->IsMissing(row))
+      label_row = row;
+    else if (missing_row < 0)
+      missing_row = row;
+  }
+  if (label_row >= 0)
+    ShowReviewRow(label_row);
+  else if (reviewing_missing_ && missing_row >= 0)
+    ShowReviewRow(missing_row);
 }
 
 void MainWindow::Nudge(double dx, double dy) {

@@ -108,8 +108,8 @@ class MainWindow : public QMainWindow {
   // Goes to row `row` of the review model: its frame, its camera maximised, the knot selected.
   void ShowReviewRow(int row);
   // After the person fixed the queue's item `key` (accepted, deleted, hidden, placed or found
-  // again and no longer in doubt): the next item of the same frame, when "Advance after a fix"
-  // is on.
+  // again and no longer in doubt): the same frame's next label for review, when "Advance after a
+  // fix" is on; its next missing knot only after a missing knot.
   void AdvanceAfterFix(const LabelKey& key, bool was_queued);
   bool UnderReview(int camera, int t, int knot) const;
   // In the review queue: a label for review or a missing knot.
@@ -230,6 +230,7 @@ class MainWindow : public QMainWindow {
   std::vector<QAction*> actions_;
   QAction* advance_ = nullptr;  // Go > Advance to the frame's next review item after a fix
   std::optional<LabelKey> reviewing_;  // the queue's item the window last took the person to
+  bool reviewing_missing_ = false;     // ... a missing knot (else a label for review)
   QMenu* recent_menu_ = nullptr;
 
   int frame_ = 0, camera_ = 0, knot_ = 0, previous_knot_ = -1;

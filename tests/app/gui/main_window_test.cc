@@ -574,6 +574,24 @@ TEST_F(MainWindowTest, AfterAFixTheWindowGoesOnToTheFramesNextItem) {
   QTest::keyClick(&w, Qt::Key_D);
   EXPECT_TRUE(s->document().at(0, t, k).hidden());
   EXPECT_EQ(w.camera(), 0);
+
+  // After a label for review, the frame's missing knots wait (they are done a run at a time once
+  // tracking is over): with camera 1's item missing and another knot's label in camera 0 for
+  // review (before it in the queue), A on that label leaves the window there.
+  advance->trigger();
+  ASSERT_TRUE(advance->isChecked());
+  const int other = KnotSeenByAll(truth, t, k + 1);
+  ASSERT_GE(other, 0);
+  recon::Label doubt = s->document().at(0, t, other);
+  ASSERT_TRUE(doubt.present());
+  doubt.state = recon::LabelState::kNeedsReview;
+  s->document().Apply("doubt", {{0, t, other, doubt}});
+  ASSERT_NE(s->missing().Find(1, t, k), nullptr);
+  ASSERT_TRUE(SpaceTo(&w, 0, t, other));
+  QTest::keyClick(&w, Qt::Key_A);
+  EXPECT_TRUE(s->document().at(0, t, other).accepted());
+  EXPECT_EQ(w.camera(), 0);
+  EXPECT_EQ(w.knot(), other);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -156,55 +156,65 @@ inline ScriptedSession PlayScriptedSession(MainWindow* w, const recon::LabelSet&
             {Action::kPlace, c, 0, k, ClickAt(w->view(c), want(c, 0, k).px, Qt::ShiftModifier)});
       QTest::keyClick(w, Qt::Key_F, Qt::ControlModifier);
     }
-  // 3. Tracking and the review queue, a frame at a time (docs/gui.md, the workflow). A run stops at the first
-  // frame with a label for review and shows its first item; after each fix the window goes on
-  // to the frame's next item by itself. The person fixes them, then tracks on from there (T),
-  // which carries the labels forwards and replaces what a run carried from a label in doubt.
-  // Items the runs left elsewhere (missing knots) are reached from the queue's first one
-  // (Ctrl+Home; Space when the window did not move on). Tracking on after a frame where only
-  // hidden marks were set would change nothing: the person does not.
+  // 3. Tracking and the review queue, a frame at a time (docs/gui.md, the workflow). A run stops
+  // at the first frame with a label for review and shows its first item; after each fix the
+  // window goes on to the frame's next item by itself. The person fixes the frame's labels for
+  // review, then tracks on from there (T), which carries the labels forwards and replaces what a
+  // run carried from a label in doubt. Missing knots wait until the runs reach the last frame:
+  // the target hides the same knots for many frames, and Shift+D then marks a whole run of them
+  // hidden at once. Then the queue is walked from its first item (Ctrl+Home; Space when the
+  // window did not move on); a fixed label for review is tracked on from.
   const int last = s->frames() - 1;
   // The queue in the order Space and Ctrl+Home walk it: the window's ReviewModel (the source of
   // its review table's sorting proxy).
   const auto* proxy = qobject_cast<const QSortFilterProxyModel*>(w->review_table()->model());
   const auto* queue = proxy ? qobject_cast<const ReviewModel*>(proxy->sourceModel()) : nullptr;
-  if (!queue) {
-    out.finished = false;
-    return out;
-  }
+  if (!queue) return out;
+  auto review_label = [&](int c, int t, int k) {
+    const recon::Label& l = s->document().at(c, t, k);
+    return l.present() && l.state == recon::LabelState::kNeedsReview;
+  };
   auto on_item = [&] {
     const int c = w->camera(), t = w->frame(), k = w->knot();
-    const recon::Label& l = s->document().at(c, t, k);
-    return (l.present() && l.state == recon::LabelState::kNeedsReview) ||
-           s->missing().Find(c, t, k) != nullptr;
+    return review_label(c, t, k) || s->missing().Find(c, t, k) != nullptr;
+  };
+  auto labels_for_review_in = [&](int t) {
+    for (const auto& [c, u, k] : queue->items())
+      if (u == t && review_label(c, u, k)) return true;
+    return false;
   };
   bool track_on = true;
-  int run_end = last;  // the frame the last run reached (a run stops on a frame with an item)
   out.finished = true;
   while (out.finished && out.review_items < max_review_items) {
     if (track_on) {
       out.finished = TrackForwards(w, &out);
-      run_end = w->frame();
+      if (!out.finished) break;
     }
-    if (queue->items().empty()) break;  // so the last run reached the last frame
+    const int round = w->frame();
+    if (round != last && labels_for_review_in(round)) {
+      // A run that stopped: this frame's labels for review (missing knots left for later).
+      for (int guard = 0; labels_for_review_in(round) && out.review_items < max_review_items &&
+                          guard <= static_cast<int>(queue->items().size());) {
+        if (!review_label(w->camera(), w->frame(), w->knot())) {
+          QTest::keyClick(w, Qt::Key_Space);
+          ++out.navigation;
+          ++guard;
+          continue;
+        }
+        ++out.review_items;
+        FixReviewItem(w, truth, &out);
+      }
+      track_on = true;
+      continue;
+    }
+    // The runs reached the last frame: the queue from its first item.
+    if (queue->items().empty()) break;
     if (!on_item()) {
       QTest::keyClick(w, Qt::Key_Home, Qt::ControlModifier);
       ++out.navigation;
     }
-    const int round = w->frame();
-    track_on = run_end != last;  // a run that stopped goes on from here
-    for (;;) {
-      ++out.review_items;
-      track_on = FixReviewItem(w, truth, &out) || track_on;
-      const std::vector<LabelKey>& left = queue->items();
-      if (left.empty() || out.review_items >= max_review_items ||
-          std::get<1>(left.front()) != round)  // the frame is done (the view shows no mark)
-        break;
-      if (!on_item()) {
-        QTest::keyClick(w, Qt::Key_Space);
-        ++out.navigation;
-      }
-    }
+    ++out.review_items;
+    track_on = FixReviewItem(w, truth, &out) && w->frame() != last;
   }
   return out;
 }
