@@ -34,6 +34,9 @@
 #include <string>
 #include <vector>
 
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
 #include "calibration/rig.h"
 #include "libreconstruct/coloring/net_coloring.h"
 #include "libreconstruct/labeling/label_engine.h"
@@ -291,10 +294,40 @@ void TallyErrors(const Shot& shot, const recon::LabelStore& store, std::vector<T
                            (r2.knot.px - truth_l.px).norm(), r2.knot.px.x() - truth_l.px.x(),
                            r2.knot.px.y() - truth_l.px.y());
             std::fprintf(stderr, "\n");
+            if (const char* dir = std::getenv("NETLAB_WRONG_CROPS")) {  // a look at the place
+              const cv::Mat img = image(c, t);
+              const cv::Rect box =
+                  cv::Rect(static_cast<int>(truth_l.px.x()) - 30, static_cast<int>(truth_l.px.y()) - 30, 61, 61) &
+                  cv::Rect(0, 0, img.cols, img.rows);
+              cv::Mat crop;
+              cv::resize(img(box), crop, cv::Size(), 8, 8, cv::INTER_NEAREST);
+              const auto mark = [&](const Eigen::Vector2d& q, const cv::Scalar& colour) {
+                cv::circle(crop, cv::Point(static_cast<int>((q.x() - box.x + 0.5) * 8),
+                                           static_cast<int>((q.y() - box.y + 0.5) * 8)),
+                           6, colour, 2);
+              };
+              mark(truth_l.px, cv::Scalar(0, 255, 0));
+              mark(l.px, cv::Scalar(0, 0, 255));
+              cv::imwrite(std::string(dir) + "/wrong_" + shot.cameras[c] + "_" +
+                              std::to_string(shot.frames[t]) + "_" + std::to_string(k) + ".png",
+                          crop);
+            }
           }
           if (e < 0) continue;
         }
         if (e > 1.0) ++y.over_1px;
+        if (e > 1.0 && e <= 2.0 && std::getenv("NETLAB_SHOW_OVER_1PX")) {
+          const recon::FindNodeResult r = recon::FindNode(image(c, t), truth_l.px, 6.0);
+          std::fprintf(stderr, "over 1 px: %s frame %d knot %d %s: %.2f px (%.2f, %.2f)%s\n",
+                       shot.cameras[c].c_str(), shot.frames[t], k, SourceName(l.source), e,
+                       l.px.x() - truth_l.px.x(), l.px.y() - truth_l.px.y(),
+                       r.status == recon::FindNodeStatus::kFound
+                           ? (", Find Node at the truth " +
+                              std::to_string((r.knot.px - truth_l.px).norm()) + " px off, " +
+                              std::to_string(r.knot.branches) + " branches")
+                                 .c_str()
+                           : ", Find Node at the truth: not found");
+        }
         y.error.push_back(e);
         y.error_by_source[SourceName(l.source)].push_back(e);
       }
@@ -317,6 +350,21 @@ Tally PrintTables(const BenchOptions& o, const Shot& shot, const std::vector<Tal
   std::printf("Scripted user on %s, frames %d:%d (%d), %dx%d knots, Find Node radius %.0f px\n\n",
               o.shot.c_str(), shot.frames.front(), shot.frames.back(), shot.n_t(), shot.rows,
               shot.cols, o.radius);
+  // How long a link is in each image (the detector's rings are 9 to 18 px out).
+  std::printf("true link length in the image, px (5th percentile / median):");
+  for (int c = 0; c < shot.n_cam(); ++c) {
+    std::vector<double> px;
+    for (int t = 0; t < shot.n_t(); ++t)
+      for (int k = 0; k < shot.knots; ++k) {
+        const recon::Label& a = shot.Truth(c, t, k);
+        for (const int n : {k % shot.cols + 1 < shot.cols ? k + 1 : -1,
+                            k + shot.cols < shot.knots ? k + shot.cols : -1})
+          if (n >= 0 && a.present() && shot.Truth(c, t, n).present())
+            px.push_back((shot.Truth(c, t, n).px - a.px).norm());
+      }
+    std::printf(" %s %.1f / %.1f", shot.cameras[c].c_str(), Quantile(px, 0.05), Quantile(px, 0.5));
+  }
+  std::printf("\n\n");
   std::printf("| camera | knot-frames | actions (seed / Find Node / manual / delete) | actions "
               "per knot-frame | wrong accepted | > 1 px | engine: accepted / review | "
               "median px | p99 px |\n|---|---|---|---|---|---|---|---|---|\n");

@@ -64,6 +64,13 @@ struct KnotDetectorOptions {
   double fit_from_px = 5.0;       // along each branch from here (clear of the knot's bump) to
                                   // 2 ring_radius_px
   double fit_half_width_px = 3.0; // samples this far either side of the branch line, px
+  // The check of each refined junction on the yarns' first pixels: its branches found again on
+  // rings half as far out as near_fit_to_px and fitted from near_fit_from_px to near_fit_to_px
+  // (0: off). Where that settles more than bend_px away, the yarns bend within the strip above
+  // and the near fit is the junction.
+  double near_fit_from_px = 3.0;
+  double near_fit_to_px = 12.0;
+  double bend_px = 1.5;
   double yarn_blur_px = 0.5;      // Gaussian blur of the yarn's edges in the model (pixel
                                   // footprint, lens, motion), px
   int background_window_px = 11;  // median window of the local background (odd, >> a yarn)
@@ -124,9 +131,12 @@ class KnotDetector {
   // The junction at a point from the rings alone: position from the lines through the branch
   // peaks.
   std::optional<Junction> ExamineRings(const Eigen::Vector2d& px) const;
+  std::optional<Junction> ExamineRings(const Eigen::Vector2d& px, double ring_radius_px) const;
   // A junction's position refined by fitting the yarn model to each branch; nullopt when too
   // few branches fit, or the fitted lines do not meet in one point near the rings' junction.
   std::optional<Junction> Refine(const Junction& j) const;
+  // Refine over the strip `from` to `to` px along each branch.
+  std::optional<Junction> RefineOver(const Junction& j, double from, double to) const;
   // The solids among the blobs (CV_8U), their centres from the outline in `level` (CV_32F, the
   // distance of each pixel's colour from the region's median colour); sets masked_ and solids_.
   void FindSolids(const cv::Mat& blobs, const cv::Mat& level);

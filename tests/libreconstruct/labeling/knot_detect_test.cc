@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <random>
 
 #include "libreconstruct/recording/bayer.h"
@@ -138,6 +139,49 @@ TEST(FindNode, CountsADimYarnAtAKnot) {
       EXPECT_EQ(found.knot.branches, 4) << r << "," << c;
       EXPECT_LT((found.knot.px - net.Pixel(r, c)).norm(), 0.2) << r << "," << c;
     }
+}
+
+// Sagging links (a slack knotless net, Net B's far pair): straight for ~12 px from the knot,
+// then 2.7 px to the side. Fitted over the default strip (5 to 18 px) the yarns' lines miss the
+// knot by up to 1.8 px; the check on the yarns' first pixels takes over where the two disagree by
+// more than bend_px (1.5 px), so no knot is placed farther off than that.
+TEST(FindNode, FindsTheKnotWhereItsLinksBendNearIt) {
+  RenderNetOptions o;
+  o.tilt_deg = 15.0;
+  o.seed = 11;
+  o.bend_fraction = 0.06;  // ~12 px of a ~190 px link
+  o.bend_m = 0.0014;       // ~2.7 px
+  const NetImage net = RenderNet(o);
+  KnotDetectorOptions plain;
+  plain.near_fit_to_px = 0.0;  // the check off
+  const double cap = KnotDetectorOptions{}.bend_px;
+  double worst = 0.0, worst_plain = 0.0;
+  int taken_over = 0;
+  for (int r = 0; r < kRows; ++r)
+    for (int c = 0; c < kCols; ++c) {
+      if (IsCorner(r, c)) continue;  // corner masses are not drawn here
+      const Eigen::Vector2d truth = net.Pixel(r, c);
+      const FindNodeResult found = FindNode(net.image, truth, 6);
+      const FindNodeResult off = FindNode(net.image, truth, 6, plain);
+      ASSERT_EQ(found.status, FindNodeStatus::kFound) << r << "," << c << ": " << found.why;
+      ASSERT_EQ(off.status, FindNodeStatus::kFound) << r << "," << c << ": " << off.why;
+      const double e = (found.knot.px - truth).norm(), e_plain = (off.knot.px - truth).norm();
+      worst = std::max(worst, e);
+      worst_plain = std::max(worst_plain, e_plain);
+      if (e_plain > cap) {
+        ++taken_over;
+        EXPECT_LT(e, 0.2) << r << "," << c << ": the near fit is the knot";
+      } else {
+        EXPECT_NEAR(e, e_plain, 1e-9) << r << "," << c;
+      }
+    }
+  // Measured: worst 1.36 px with the check (4 knots taken over, then within 0.05 px), 1.78 px
+  // without.
+  std::printf("sagging links: worst %.2f px with the check (%d taken over), %.2f px without\n",
+              worst, taken_over, worst_plain);
+  EXPECT_GT(worst_plain, cap);  // the case is hard
+  EXPECT_GT(taken_over, 0);
+  EXPECT_LT(worst, cap);
 }
 
 TEST(FindNode, FindsNoJunctionOnThePlainYarnsOfADemosaicedFrame) {

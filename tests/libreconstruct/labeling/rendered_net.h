@@ -57,6 +57,11 @@ struct RenderNetOptions {
   double knot_radius_m = 0.0;   // grey balls at the knots (netlab render: 1.5 yarn diameters)
   double corner_radius_m = 0.0; // grey corner masses at the four corners
   bool bayer = false;           // an RGGB mosaic (sensor noise), demosaiced bilinearly
+  // Buckled links (a slack knotless net): each link straight from its knots for bend_fraction of
+  // its length, then shifted sideways by bend_m in the net's plane (all to one side: a sag).
+  double bend_fraction = 0.0;
+  double bend_m = 0.0;
+  bool bend_alternate = false;  // every second link to the other side
 };
 
 // A 4 x 4 net of 1 mm yarns in front of a 16 mm camera (2909 px focal length), turned and
@@ -90,6 +95,13 @@ inline NetImage RenderNet(const RenderNetOptions& o) {
       if (m == std::pair(a, b)) return;
     ThreadPolyline t;
     t.points = {net.knots[a], net.knots[b]};
+    if (o.bend_m > 0.0) {
+      const Eigen::Vector3d along = net.knots[b] - net.knots[a];
+      const Eigen::Vector3d side =
+          (o.bend_alternate && n % 2 ? -1.0 : 1.0) * along.cross(turn * Eigen::Vector3d::UnitX()).normalized();
+      t.points = {net.knots[a], net.knots[a] + o.bend_fraction * along + o.bend_m * side,
+                  net.knots[b] - o.bend_fraction * along + o.bend_m * side, net.knots[b]};
+    }
     t.radius = 0.0005;
     t.colour = o.dyes[n++ % o.dyes.size()];
     for (const auto& d : o.dim)
