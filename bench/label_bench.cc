@@ -84,7 +84,9 @@ const char* SourceName(recon::LabelSource s) {
 void Usage() {
   std::fprintf(stderr,
                "usage: bench_label --shot DIR [--coloring FILE] [--frames A:B] "
-               "[--cameras cam0,cam1,...] [--radius PX] [--seed N]\n"
+               "[--cameras cam0,cam1,...] [--radius PX] [--seed N] [--detector]\n"
+               "--detector: no engine, no script; Find Node at every visible knot's true place\n"
+               "  (the brush of --radius, and tracking's 3 px snap), its answers per camera\n"
                "DIR: `netlab render` output, e.g.\n"
                "  netlab simulate scenarios/net_a_0.5.yaml --duration 1.15 --out sim.h5\n"
                "  netlab color-net --knots 11x11 --out coloring.yaml\n"
@@ -97,6 +99,7 @@ struct BenchOptions {
   double radius = 6.0;        // Find Node's brush, px
   uint64_t seed = 1;          // of the clicks' error
   std::vector<std::string> only;  // cameras; empty: all
+  bool detector_only = false;     // --detector: the knot detector alone at every true knot
 };
 
 // The command line; false on a usage error.
@@ -114,6 +117,8 @@ bool ParseArgs(int argc, char** argv, BenchOptions* o) {
       o->radius = std::atof(argv[++i]);
     } else if (a == "--seed" && more) {
       o->seed = std::strtoull(argv[++i], nullptr, 10);
+    } else if (a == "--detector") {
+      o->detector_only = true;
     } else if (a == "--cameras" && more) {
       std::stringstream ss(argv[++i]);
       for (std::string name; std::getline(ss, name, ',');) o->only.push_back(name);
@@ -197,6 +202,9 @@ struct ScriptedUser {
   std::uniform_real_distribution<double> click{-0.5, 0.5};
   // Find Node results kept for review, by the check that doubted them: (count, > 1 px off).
   std::map<std::string, std::pair<int, int>> doubts{};
+  // Why the person had to act on a visible knot: no label, or the engine's reason for review
+  // (its words up to the first number or bracket), with how many of those labels were > 1 px off.
+  std::map<std::string, std::pair<int, int>> causes{};
 
   // Every knot of frame row t in every camera: the engine's labels counted, and corrected.
   void PlayFrame(int t) {
@@ -225,6 +233,24 @@ struct ScriptedUser {
     ++y.knot_frames;
     if (l.accepted()) return;
     ++y.find_node;
+    {
+      std::string cause = "no label";
+      if (l.present()) {
+        const auto why = engine.reasons().find({c, t, k});
+        cause = why == engine.reasons().end() ? "review, no reason" : why->second;
+        const size_t cut = cause.find_first_of("(0123456789");
+        if (cut != std::string::npos && !std::getenv("NETLAB_FULL_CAUSES"))
+          cause = cause.substr(0, cut);
+      } else if (std::getenv("NETLAB_FULL_CAUSES")) {
+        const int r = k / shot.cols, col = k % shot.cols;
+        const bool border = r == 0 || col == 0 || r == shot.rows - 1 || col == shot.cols - 1;
+        cause += std::string(t == 0 ? " (first frame" : " (later frame") +
+                 (border ? ", border)" : ", inner)") +
+                 (t > 0 && store.at(c, t - 1, k).accepted() ? " accepted before" : "");
+      }
+      auto& [n, n_off] = causes[cause];
+      ++n, n_off += l.present() && (l.px - truth_l.px).norm() > 1.0;
+    }
     const recon::FindNodeResult r = engine.FindNodeAt(c, t, k, truth_l.px, radius);
     // Found and accepted: done. Found but in doubt (its yarns or the other cameras
     // disagree), or not found: the person clicks the knot.
@@ -249,6 +275,24 @@ struct ScriptedUser {
     edits->push_back({c, t, k, m});
   }
 };
+
+// A 61 x 61 px crop of `img` around `truth` (green) with `label` (red), 8 times enlarged, to `path`.
+void SaveCrop(const cv::Mat& img, const Eigen::Vector2d& truth, const Eigen::Vector2d& label,
+              const std::string& path) {
+  const cv::Rect box = cv::Rect(static_cast<int>(truth.x()) - 30, static_cast<int>(truth.y()) - 30,
+                                61, 61) &
+                       cv::Rect(0, 0, img.cols, img.rows);
+  cv::Mat crop;
+  cv::resize(img(box), crop, cv::Size(), 8, 8, cv::INTER_NEAREST);
+  const auto mark = [&](const Eigen::Vector2d& q, const cv::Scalar& colour) {
+    cv::circle(crop, cv::Point(static_cast<int>((q.x() - box.x + 0.5) * 8),
+                               static_cast<int>((q.y() - box.y + 0.5) * 8)),
+               6, colour, 2);
+  };
+  mark(truth, cv::Scalar(0, 255, 0));
+  if (label.allFinite()) mark(label, cv::Scalar(0, 0, 255));
+  cv::imwrite(path, crop);
+}
 
 // The errors of the accepted labels at the end (the first ten wrong ones named on stderr).
 // `image(c, t)`: the frame, for the diagnosis of the first wrong labels (what the detector finds
@@ -294,24 +338,10 @@ void TallyErrors(const Shot& shot, const recon::LabelStore& store, std::vector<T
                            (r2.knot.px - truth_l.px).norm(), r2.knot.px.x() - truth_l.px.x(),
                            r2.knot.px.y() - truth_l.px.y());
             std::fprintf(stderr, "\n");
-            if (const char* dir = std::getenv("NETLAB_WRONG_CROPS")) {  // a look at the place
-              const cv::Mat img = image(c, t);
-              const cv::Rect box =
-                  cv::Rect(static_cast<int>(truth_l.px.x()) - 30, static_cast<int>(truth_l.px.y()) - 30, 61, 61) &
-                  cv::Rect(0, 0, img.cols, img.rows);
-              cv::Mat crop;
-              cv::resize(img(box), crop, cv::Size(), 8, 8, cv::INTER_NEAREST);
-              const auto mark = [&](const Eigen::Vector2d& q, const cv::Scalar& colour) {
-                cv::circle(crop, cv::Point(static_cast<int>((q.x() - box.x + 0.5) * 8),
-                                           static_cast<int>((q.y() - box.y + 0.5) * 8)),
-                           6, colour, 2);
-              };
-              mark(truth_l.px, cv::Scalar(0, 255, 0));
-              mark(l.px, cv::Scalar(0, 0, 255));
-              cv::imwrite(std::string(dir) + "/wrong_" + shot.cameras[c] + "_" +
-                              std::to_string(shot.frames[t]) + "_" + std::to_string(k) + ".png",
-                          crop);
-            }
+            if (const char* dir = std::getenv("NETLAB_WRONG_CROPS"))  // a look at the place
+              SaveCrop(image(c, t), truth_l.px, l.px,
+                       std::string(dir) + "/wrong_" + shot.cameras[c] + "_" +
+                           std::to_string(shot.frames[t]) + "_" + std::to_string(k) + ".png");
           }
           if (e < 0) continue;
         }
@@ -388,6 +418,74 @@ Tally PrintTables(const BenchOptions& o, const Shot& shot, const std::vector<Tal
   return all;
 }
 
+// --detector: what Find Node answers at every visible knot's true place, per camera, with the
+// person's brush (--radius) and with tracking's snap (3 px, the knot's degree required):
+// found (and how far off), found with another number of yarns, several, none (and whether the
+// rings alone found it: then the yarn fit refused it).
+void BenchDetector(const Shot& shot, const BenchOptions& o,
+                   const std::function<cv::Mat(int, int)>& image) {
+  std::printf("Find Node at the true knots of %s, frames %d:%d\n\n", o.shot.c_str(),
+              shot.frames.front(), shot.frames.back());
+  std::printf("| camera | brush | knots | found | other degree | several | none (rings found) | "
+              "median px | p99 px | > 1 px | > 2 px | without the lone yarn's checks: found, > 1 px, > 2 px |\n"
+              "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  recon::KnotDetectorOptions rings_only, unchecked;
+  rings_only.fit_yarns = false;
+  unchecked.lone_bend_px = 0.0;
+  unchecked.lone_agree_px = 0.0;
+  for (int c = 0; c < shot.n_cam(); ++c)
+    for (const double radius : {o.radius, 3.0}) {
+      int64_t n = 0, found = 0, degree = 0, several = 0, none = 0, rings = 0, over1 = 0, over2 = 0;
+      int64_t u_found = 0, u_over1 = 0, u_over2 = 0;
+      std::vector<double> err;
+      for (int t = 0; t < shot.n_t(); ++t) {
+        const cv::Mat img = image(c, t);
+        for (int k = 0; k < shot.knots; ++k) {
+          const recon::Label& truth_l = shot.Truth(c, t, k);
+          if (!truth_l.present()) continue;
+          ++n;
+          const int r = k / shot.cols, col = k % shot.cols;
+          const int want = (r > 0) + (r + 1 < shot.rows) + (col > 0) + (col + 1 < shot.cols);
+          const recon::FindNodeResult f = recon::FindNode(img, truth_l.px, radius);
+          const recon::FindNodeResult u = recon::FindNode(img, truth_l.px, radius, unchecked);
+          if (u.status == recon::FindNodeStatus::kFound) {
+            const double e = (u.knot.px - truth_l.px).norm();
+            ++u_found, u_over1 += e > 1.0, u_over2 += e > 2.0;
+          }
+          const char* dir = std::getenv("NETLAB_WRONG_CROPS");
+          const std::string crop = dir ? std::string(dir) + "/" + shot.cameras[c] + "_" +
+                                             std::to_string(shot.frames[t]) + "_" +
+                                             std::to_string(k) : "";
+          if (f.status == recon::FindNodeStatus::kSeveral) {
+            ++several;
+          } else if (f.status == recon::FindNodeStatus::kNone) {
+            ++none;
+            if (dir && radius == 3.0)
+              SaveCrop(img, truth_l.px, Eigen::Vector2d::Constant(NAN), crop + "_none.png");
+            rings += recon::FindNode(img, truth_l.px, radius, rings_only).status ==
+                     recon::FindNodeStatus::kFound;
+          } else {
+            ++found;
+            degree += !f.knot.solid && f.knot.branches != want;
+            if (dir && radius == 3.0 && !f.knot.solid && f.knot.branches != want)
+              SaveCrop(img, truth_l.px, f.knot.px,
+                       crop + "_has" + std::to_string(f.knot.branches) + ".png");
+            const double e = (f.knot.px - truth_l.px).norm();
+            err.push_back(e);
+            over1 += e > 1.0, over2 += e > 2.0;
+            if (dir && radius == 3.0 && e > 2.0) SaveCrop(img, truth_l.px, f.knot.px, crop + "_off.png");
+          }
+        }
+      }
+      std::printf("| %s | %.0f px | %lld | %lld | %lld | %lld | %lld (%lld) | %.3f | %.3f | %lld | "
+                  "%lld | %lld, %lld, %lld |\n",
+                  shot.cameras[c].c_str(), radius, (long long)n, (long long)found,
+                  (long long)degree, (long long)several, (long long)none, (long long)rings,
+                  Quantile(err, 0.5), Quantile(err, 0.99), (long long)over1, (long long)over2,
+                  (long long)u_found, (long long)u_over1, (long long)u_over2);
+    }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -398,6 +496,13 @@ int main(int argc, char** argv) {
     const calib::Rig rig = calib::ReadRig(o.shot + "/rig_true.yaml");
     const Shot shot = SelectShot(recon::ReadLabels(o.shot + "/labels_true.h5"), sequence, &o);
     const int n_t = shot.n_t();
+    if (o.detector_only) {
+      BenchDetector(shot, o, [&](int c, int t) {
+        std::string error;
+        return sequence.ReadDisplay(shot.sequence_camera[c], shot.frames[t], 0, &error);
+      });
+      return 0;
+    }
 
     // The person seeds the corners; the engine reads the shot's frames (timed).
     std::vector<Tally> tally(shot.n_cam());
@@ -444,6 +549,9 @@ int main(int argc, char** argv) {
                 "script's Find Node calls %.1f s; link length %.4f m\n",
                 engine_s, read_s, engine_s > 0 ? all.knot_frames / engine_s : 0.0, user_s,
                 engine.link_length_m());
+    std::printf("\nwhy the person acted on a visible knot (count; labels > 1 px off):\n");
+    for (const auto& [cause, n] : user.causes)
+      std::printf("  %6d  %5d  %s\n", n.first, n.second, cause.c_str());
     for (const auto& [check, n] : user.doubts)
       std::printf("Find Node kept for review by %s: %d (%d of them > 1 px off)\n", check.c_str(),
                   n.first, n.second);

@@ -754,17 +754,54 @@ std::optional<Junction> KnotDetector::ExamineRings(const Eigen::Vector2d& px,
   return j;
 }
 
+namespace {
+
+// Whether one of the junction's yarns alone places it along the others: two yarns, or three of
+// which two are one straight yarn (an edge knot).
+bool HasLoneYarn(const Junction& j, double straight_angle_deg) {
+  const std::vector<double>& a = j.branch_angles_rad;
+  if (a.size() == 2) return true;
+  if (a.size() != 3) return false;
+  for (size_t i = 0; i < 3; ++i)
+    for (size_t k = i + 1; k < 3; ++k)
+      if (AngleBetween(a[i], a[k]) > straight_angle_deg * M_PI / 180) return true;
+  return false;
+}
+
+}  // namespace
+
 std::optional<Junction> KnotDetector::Refine(const Junction& j) const {
   if (!o_.fit_yarns) return j;
   const std::optional<Junction> out = RefineOver(j, o_.fit_from_px, 2.0 * o_.ring_radius_px);
-  if (!out || !(o_.near_fit_to_px > 0.0)) return out;
+  if (!(o_.near_fit_to_px > 0.0)) return out;
+  if (!out) {
+    // The strip fits no line through the junction (a yarn turned within it): the near fit alone,
+    // on the same yarns.
+    const std::optional<Junction> rings = ExamineRings(j.px, 0.5 * o_.near_fit_to_px);
+    if (!rings || rings->branches != j.branches) return std::nullopt;
+    std::optional<Junction> near = RefineOver(*rings, o_.near_fit_from_px, o_.near_fit_to_px);
+    if (near) near->contrast = j.contrast;
+    return near;
+  }
   // Checked against the yarns' first few pixels: a slack link buckles, and where it turns within
   // the strip (the knotless Net B's links, ~12 px from the knot in the far pair) the line fitted
   // over the whole strip misses the knot by up to 3.5 px along its normal, with a good fit. Near
   // the knot the yarns are straight: where the near fit settles elsewhere, it is the junction.
   const std::optional<Junction> rings = ExamineRings(out->px, 0.5 * o_.near_fit_to_px);
+  bool near_bends = false;
   const std::optional<Junction> near =
-      rings ? RefineOver(*rings, o_.near_fit_from_px, o_.near_fit_to_px) : std::nullopt;
+      rings ? RefineOver(*rings, o_.near_fit_from_px, o_.near_fit_to_px, &near_bends)
+            : std::nullopt;
+  // A lone yarn that bends even within the near strip (it leaves the knot turned, then runs
+  // aside): the strip's fit, which took it for straight, placed the junction along the others
+  // by about its offset.
+  if (near_bends && rings->branches == out->branches) return std::nullopt;
+  // Nor may the two fits of such a junction disagree by much: the lone yarn is all that places
+  // it along the others, and the fits see it bend.
+  if (near && near->branches == out->branches && HasLoneYarn(*out, o_.straight_angle_deg) &&
+      o_.lone_agree_px > 0.0 && (near->px - out->px).norm() > o_.lone_agree_px &&
+      (near->px - out->px).norm() <= o_.bend_px)
+    return std::nullopt;
   // The same yarns (a knot ball's rim, near enough for the small rings, adds branches).
   if (near && near->branches == out->branches && (near->px - out->px).norm() > o_.bend_px) {
     Junction bent = *near;
@@ -775,7 +812,45 @@ std::optional<Junction> KnotDetector::Refine(const Junction& j) const {
   return out;
 }
 
-std::optional<Junction> KnotDetector::RefineOver(const Junction& j, double from, double to) const {
+namespace {
+
+// Whether a yarn that alone fixes a junction's place along the others (the inner yarn of an edge
+// knot, whose other two are one straight line; either yarn of a two-yarn junction) bends within
+// its strip: fitted on the strip's near half and on its far half, its line's offset at the
+// junction differs by more than max_px. Such a yarn's line, fitted over the strip, misses the
+// junction along the straight yarn by about that much, and nothing else checks it (a knotless
+// edge knot whose slack inner link turns within the strip was placed 2-5 px along the edge, with
+// the fitted lines meeting well). `lines`: the fitted lines, of branches `fitted`; `samples`:
+// each branch's samples (u from the strip's middle; the junction at u = -middle).
+bool LoneYarnBends(const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>& lines,
+                   const std::vector<int>& fitted,
+                   const std::vector<std::vector<YarnSample>>& samples, double middle,
+                   const std::vector<double>& half_widths, int channels, double blur,
+                   double max_px) {
+  if (!(max_px > 0.0)) return false;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    // Lone: the other lines do not fix a point.
+    Eigen::Matrix2d geometry = Eigen::Matrix2d::Zero();
+    for (size_t o = 0; o < lines.size(); ++o)
+      if (o != i) geometry += Eigen::Matrix2d::Identity() - lines[o].second * lines[o].second.transpose();
+    const Eigen::JacobiSVD<Eigen::Matrix2d> svd(geometry);
+    if (svd.singularValues()[1] > 0.05 * svd.singularValues()[0]) continue;
+    const int b = fitted[i];
+    std::vector<YarnSample> near, far;
+    for (const YarnSample& s : samples[b]) (s.u < 0.0 ? near : far).push_back(s);
+    const YarnFit a = FitYarn(near, channels, blur, true, half_widths[b], -middle);
+    const YarnFit z = FitYarn(far, channels, blur, true, half_widths[b], -middle);
+    if (a.ok && z.ok && a.snr >= 3.0 && z.snr >= 3.0 && std::abs(a.rho - z.rho) > max_px)
+      return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+std::optional<Junction> KnotDetector::RefineOver(const Junction& j, double from, double to,
+                                                 bool* lone_bends) const {
+  if (lone_bends) *lone_bends = false;
   const int channels = diff_.channels();
   const BayerPattern pattern = static_cast<BayerPattern>(pattern_);
   const double middle = 0.5 * (from + to);
@@ -784,12 +859,15 @@ std::optional<Junction> KnotDetector::RefineOver(const Junction& j, double from,
   std::vector<double> half_widths(angles.size(), 0.5);
   Eigen::Vector2d centre = j.px;
   Junction out = j;
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> lines;
+  std::vector<int> fitted;
+  std::vector<std::vector<YarnSample>> branch_samples(angles.size());
   // Fitted from the rings' lines (searching across them), then again from the fitted lines
   // through the new centre, until it settles.
   for (int pass = 0; pass < 3; ++pass) {
-    std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> lines;
+    lines.clear();
+    fitted.clear();
     std::vector<double> weights;
-    std::vector<int> fitted;
     for (size_t b = 0; b < angles.size(); ++b) {
       const Eigen::Vector2d d(std::cos(angles[b]), std::sin(angles[b])), n(-d.y(), d.x());
       // The samples of this branch: in its strip, nearer (in angle) to it than to any other
@@ -821,6 +899,7 @@ std::optional<Junction> KnotDetector::RefineOver(const Junction& j, double from,
         }
       const YarnFit fit =
           FitYarn(samples, channels, o_.yarn_blur_px, pass == 0, half_widths[b], -middle);
+      branch_samples[b] = std::move(samples);
       // A branch counts when its yarn fits well (a clear signal, a line known to a fraction of
       // a pixel) and stays near the rings' line along the strip.
       if (!fit.ok || fit.snr < 3.0 || fit.sigma_rho > 0.3 ||
@@ -852,6 +931,11 @@ std::optional<Junction> KnotDetector::RefineOver(const Junction& j, double from,
   }
   // The fitted yarns must meet in one point.
   if (out.fit_rms_px > 0.5) return std::nullopt;
+  if (LoneYarnBends(lines, fitted, branch_samples, middle, half_widths, channels, o_.yarn_blur_px,
+                    o_.lone_bend_px)) {
+    if (lone_bends) *lone_bends = true;
+    return std::nullopt;
+  }
   out.confidence = std::clamp((out.contrast - 1.0) / 2.0, 0.0, 1.0) *
                    std::exp(-0.5 * (out.fit_rms_px / 0.5) * (out.fit_rms_px / 0.5));
   return out;

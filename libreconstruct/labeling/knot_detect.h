@@ -27,6 +27,15 @@
 // image is pulled towards those rows by up to half a pixel (measured on a rendered shot: median
 // 0.3-0.45 px off); the model, fitted where each sample was taken, is not (0.06-0.08 px).
 //
+// Slack links (the knotless Net B): a link may turn a few pixels from its junction, and a line
+// fitted past the turn misses the junction. Each junction is fitted again on the yarns' first
+// pixels (near_fit_*): where that settles elsewhere, or where the default strip fits no line,
+// the near fit is the junction. A yarn that alone places the junction along the others (an edge
+// knot's inner yarn: the other two are one straight yarn) is checked besides, since nothing else
+// is: its strip's two halves must give the same line, and the default and near fits the same
+// place; otherwise the junction is refused rather than placed along the edge (lone_bend_px,
+// lone_agree_px).
+//
 // Solids: a compact blob several yarn widths across, a corner mass, is no yarn: its rim is
 // masked from the ridges and its centre is a circle fitted to its sub-pixel outline. A corner
 // knot sits inside its corner mass: Find Node returns the solid's centre (Junction::solid) when
@@ -71,6 +80,14 @@ struct KnotDetectorOptions {
   double near_fit_from_px = 3.0;
   double near_fit_to_px = 12.0;
   double bend_px = 1.5;
+  // A yarn that alone fixes the junction's place along the others (an edge knot's inner yarn)
+  // is fitted on each half of its strip too; where the two lines' offsets at the junction differ
+  // by more than this (px), the yarn bends and the junction is refused (0: not checked); where
+  // it bends within the near strip, the junction is refused whatever the default strip says.
+  double lone_bend_px = 0.7;
+  // A junction with such a yarn is refused where its near fit and its default fit disagree by
+  // more than this, px (but not by more than bend_px: then the near fit is taken).
+  double lone_agree_px = 0.7;
   double yarn_blur_px = 0.5;      // Gaussian blur of the yarn's edges in the model (pixel
                                   // footprint, lens, motion), px
   int background_window_px = 11;  // median window of the local background (odd, >> a yarn)
@@ -135,8 +152,10 @@ class KnotDetector {
   // A junction's position refined by fitting the yarn model to each branch; nullopt when too
   // few branches fit, or the fitted lines do not meet in one point near the rings' junction.
   std::optional<Junction> Refine(const Junction& j) const;
-  // Refine over the strip `from` to `to` px along each branch.
-  std::optional<Junction> RefineOver(const Junction& j, double from, double to) const;
+  // Refine over the strip `from` to `to` px along each branch; *lone_bends (when given) is set
+  // when the junction was refused because a yarn that alone places it bends (lone_bend_px).
+  std::optional<Junction> RefineOver(const Junction& j, double from, double to,
+                                     bool* lone_bends = nullptr) const;
   // The solids among the blobs (CV_8U), their centres from the outline in `level` (CV_32F, the
   // distance of each pixel's colour from the region's median colour); sets masked_ and solids_.
   void FindSolids(const cv::Mat& blobs, const cv::Mat& level);

@@ -42,6 +42,7 @@ struct KnotTracking {
 
   void Flow(const cv::Mat& from);
   bool Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot* t) const;
+  bool YarnsPointAtNeighbours(size_t i, const Junction& j) const;
   void SnapTrustedFlow();
   void PredictFromNeighbours();
   void CheckRelativeMotion();
@@ -95,10 +96,44 @@ bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot*
   }
   t->px = near[0].px;
   t->confidence = near[0].confidence;
-  if (near[0].branches != degree) {
+  // One yarn short (a dim dye, a yarn that fades against the target) is the knot when each
+  // yarn found leads to one of its own neighbours.
+  const bool one_short = options.max_yarn_angle_deg > 0 && degree >= 3 &&
+                         near[0].branches == degree - 1 && YarnsPointAtNeighbours(i, near[0]);
+  if (near[0].branches != degree && !one_short) {
     t->why = "the junction there has " + std::to_string(near[0].branches) + " yarns, the knot " +
              std::to_string(degree);
     return false;
+  }
+  return true;
+}
+
+// Whether every yarn of junction `j` (knot i's, in `to`) leaves towards a different grid
+// neighbour of the knot labeled in `from`, within max_yarn_angle_deg (between frames a mesh
+// turns by a degree or two). A neighbour not labeled gives no direction: its yarn cannot be
+// told from another.
+bool KnotTracking::YarnsPointAtNeighbours(size_t i, const Junction& j) const {
+  const auto& [k, px] = knots[i];
+  const int r = k / cols, c = k % cols;
+  std::vector<double> towards;
+  for (const auto& [dr, dc] : {std::pair(0, -1), std::pair(0, 1), std::pair(-1, 0), std::pair(1, 0)}) {
+    if (r + dr < 0 || r + dr >= rows || c + dc < 0 || c + dc >= cols) continue;
+    const auto it = index.find((r + dr) * cols + c + dc);
+    if (it == index.end()) continue;
+    const Eigen::Vector2d d = knots[it->second].second - px;
+    towards.push_back(std::atan2(d.y(), d.x()));
+  }
+  std::vector<bool> taken(towards.size(), false);
+  const double limit = options.max_yarn_angle_deg * M_PI / 180.0;
+  for (const double a : j.branch_angles_rad) {
+    int best = -1;
+    double best_off = limit;
+    for (size_t n = 0; n < towards.size(); ++n) {
+      const double off = std::abs(std::remainder(a - towards[n], 2.0 * M_PI));
+      if (!taken[n] && off <= best_off) best = static_cast<int>(n), best_off = off;
+    }
+    if (best < 0) return false;
+    taken[best] = true;
   }
   return true;
 }

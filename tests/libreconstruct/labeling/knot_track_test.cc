@@ -129,5 +129,38 @@ TEST(TrackKnots, AKnotThatMovedOtherwiseThanItsNeighboursIsLeftForReview) {
   EXPECT_LT((unchecked[5].px - b.Pixel(1, 1)).norm(), 0.1);
 }
 
+// In the next frame the link between knots (1,1) and (1,2) is gone (a dim dye fading into the
+// background): each of the two inner knots shows three yarns. Each yarn leads to one of the
+// knot's labeled neighbours, so both are accepted, where they are. Without a direction for every
+// yarn found (a neighbour not labeled) or with the rule off, they are left for review.
+TEST(TrackKnots, AcceptsAKnotOneYarnShortWhoseYarnsLeadToItsNeighbours) {
+  RenderNetOptions o;
+  o.tilt_deg = 15.0;
+  o.noise_grey = 2.0;
+  o.seed = 12;
+  const NetImage a = RenderNet(o);
+  o.seed = 13;
+  o.offset = Eigen::Vector3d(0.0, 0.004, -0.002);
+  o.missing = {{5, 6}};
+  const NetImage b = RenderNet(o);
+  const std::vector<TrackedKnot> tracked = TrackKnots(a.image, b.image, AllKnots(a), kRows, kCols);
+  for (const TrackedKnot& t : tracked) {
+    EXPECT_TRUE(t.accepted) << "knot " << t.knot << ": " << t.why;
+    EXPECT_LT((t.px - b.Pixel(t.knot / kCols, t.knot % kCols)).norm(), 0.1) << "knot " << t.knot;
+  }
+  // Knot (2,1) not labeled in the first frame: knot (1,1)'s yarn down leads nowhere known.
+  std::vector<std::pair<int, Eigen::Vector2d>> without;
+  for (const auto& k : AllKnots(a))
+    if (k.first != 9) without.push_back(k);
+  const std::vector<TrackedKnot> partial = TrackKnots(a.image, b.image, without, kRows, kCols);
+  EXPECT_FALSE(partial[5].accepted);
+  EXPECT_NE(partial[5].why.find("has 3 yarns, the knot 4"), std::string::npos) << partial[5].why;
+  TrackOptions strict;
+  strict.max_yarn_angle_deg = 0.0;
+  const std::vector<TrackedKnot> off = TrackKnots(a.image, b.image, AllKnots(a), kRows, kCols, strict);
+  EXPECT_FALSE(off[5].accepted);
+  EXPECT_FALSE(off[6].accepted);
+}
+
 }  // namespace
 }  // namespace netlab::recon
