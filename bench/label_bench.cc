@@ -1,7 +1,7 @@
 // The labeling engine against a scripted user, on a rendered shot with its truth.
 //
 //   bench_label --shot DIR [--coloring FILE] [--frames A:B] [--cameras cam0,cam1] [--radius PX]
-//               [--seed N]
+//               [--seed N] [--detector]
 //
 // DIR is the output of `netlab render` (experiment.yaml, rig_true.yaml, labels_true.h5). The
 // script plays the person: it seeds the four corners of the first frame in every camera that
@@ -16,9 +16,15 @@
 // Printed per camera and in all: knot-frames (visible knots x frames), actions (per kind),
 // actions per knot-frame, wrong accepted labels (hidden knot, or > 2 px from the truth: the
 // knots are >= 20 px apart), labels the engine left for review, the error of the accepted
-// labels (median, 99th percentile, by source), and the engine's throughput. With --coloring (the
-// colouring the shot was rendered with) the engine also checks every label against the yarn
-// colours.
+// labels (median, 99th percentile, by source), the engine's throughput, and why the person had
+// to act on a visible knot (no label, or the engine's reason for review; NETLAB_FULL_CAUSES=1:
+// the whole reason, and whether a missing label was in the first frame, on the border). With
+// --coloring (the colouring the shot was rendered with) the engine also checks every label
+// against the yarn colours. NETLAB_WRONG_CROPS=DIR writes a crop of each wrong label there.
+//
+// --detector: no engine and no script; Find Node at every visible knot's true place (the brush
+// of --radius, and tracking's 3 px snap), what it answers per camera, with and without the
+// checks on a junction's lone yarn.
 
 #include <algorithm>
 #include <functional>
@@ -276,7 +282,8 @@ struct ScriptedUser {
   }
 };
 
-// A 61 x 61 px crop of `img` around `truth` (green) with `label` (red), 8 times enlarged, to `path`.
+// A 61 x 61 px crop of `img` around `truth` (green) with `label` (red), 8 times enlarged, to
+// `path`.
 void SaveCrop(const cv::Mat& img, const Eigen::Vector2d& truth, const Eigen::Vector2d& label,
               const std::string& path) {
   const cv::Rect box = cv::Rect(static_cast<int>(truth.x()) - 30, static_cast<int>(truth.y()) - 30,
@@ -427,8 +434,8 @@ void BenchDetector(const Shot& shot, const BenchOptions& o,
   std::printf("Find Node at the true knots of %s, frames %d:%d\n\n", o.shot.c_str(),
               shot.frames.front(), shot.frames.back());
   std::printf("| camera | brush | knots | found | other degree | several | none (rings found) | "
-              "median px | p99 px | > 1 px | > 2 px | without the lone yarn's checks: found, > 1 px, > 2 px |\n"
-              "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+              "median px | p99 px | > 1 px | > 2 px | without the lone yarn checks: found, "
+              "> 1 px, > 2 px |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   recon::KnotDetectorOptions rings_only, unchecked;
   rings_only.fit_yarns = false;
   unchecked.lone_bend_px = 0.0;
@@ -473,7 +480,12 @@ void BenchDetector(const Shot& shot, const BenchOptions& o,
             const double e = (f.knot.px - truth_l.px).norm();
             err.push_back(e);
             over1 += e > 1.0, over2 += e > 2.0;
-            if (dir && radius == 3.0 && e > 2.0) SaveCrop(img, truth_l.px, f.knot.px, crop + "_off.png");
+            if (e > 2.0 && radius == 3.0) {
+              std::fprintf(stderr, "over 2 px: %s frame %d knot %d at (%.2f, %.2f), found "
+                           "(%.2f, %.2f)\n", shot.cameras[c].c_str(), shot.frames[t], k,
+                           truth_l.px.x(), truth_l.px.y(), f.knot.px.x(), f.knot.px.y());
+              if (dir) SaveCrop(img, truth_l.px, f.knot.px, crop + "_off.png");
+            }
           }
         }
       }

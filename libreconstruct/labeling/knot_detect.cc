@@ -832,7 +832,8 @@ bool LoneYarnBends(const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>
     // Lone: the other lines do not fix a point.
     Eigen::Matrix2d geometry = Eigen::Matrix2d::Zero();
     for (size_t o = 0; o < lines.size(); ++o)
-      if (o != i) geometry += Eigen::Matrix2d::Identity() - lines[o].second * lines[o].second.transpose();
+      if (o != i)
+        geometry += Eigen::Matrix2d::Identity() - lines[o].second * lines[o].second.transpose();
     const Eigen::JacobiSVD<Eigen::Matrix2d> svd(geometry);
     if (svd.singularValues()[1] > 0.05 * svd.singularValues()[0]) continue;
     const int b = fitted[i];

@@ -116,7 +116,8 @@ bool KnotTracking::YarnsPointAtNeighbours(size_t i, const Junction& j) const {
   const auto& [k, px] = knots[i];
   const int r = k / cols, c = k % cols;
   std::vector<double> towards;
-  for (const auto& [dr, dc] : {std::pair(0, -1), std::pair(0, 1), std::pair(-1, 0), std::pair(1, 0)}) {
+  for (const auto& [dr, dc] :
+       {std::pair(0, -1), std::pair(0, 1), std::pair(-1, 0), std::pair(1, 0)}) {
     if (r + dr < 0 || r + dr >= rows || c + dc < 0 || c + dc >= cols) continue;
     const auto it = index.find((r + dr) * cols + c + dc);
     if (it == index.end()) continue;

@@ -157,7 +157,8 @@ TEST(TrackKnots, AcceptsAKnotOneYarnShortWhoseYarnsLeadToItsNeighbours) {
   EXPECT_NE(partial[5].why.find("has 3 yarns, the knot 4"), std::string::npos) << partial[5].why;
   TrackOptions strict;
   strict.max_yarn_angle_deg = 0.0;
-  const std::vector<TrackedKnot> off = TrackKnots(a.image, b.image, AllKnots(a), kRows, kCols, strict);
+  const std::vector<TrackedKnot> off =
+      TrackKnots(a.image, b.image, AllKnots(a), kRows, kCols, strict);
   EXPECT_FALSE(off[5].accepted);
   EXPECT_FALSE(off[6].accepted);
 }
