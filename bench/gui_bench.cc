@@ -191,7 +191,7 @@ int main(int argc, char** argv) {
     // Person actions: the labeling ones, plus the keys that start Find Path and each run (counted
     // in actions), plus the keys that only went to a review item (Ctrl+Home, Space).
     const int actions = static_cast<int>(session.actions.size()) + session.navigation;
-    std::array<int, 6> kinds{};
+    std::array<int, Action::kKinds> kinds{};
     for (const Action& a : session.actions) ++kinds[a.kind];
     long knot_frames = 0;
     for (int c = 0; c < static_cast<int>(truth.cameras.size()); ++c)

@@ -179,9 +179,11 @@ TEST_F(Architecture, CMakeTargetsListTheDocumentedDependencies) {
             << "docs/architecture.md";
       }
     }
-  for (const Layer& layer : layers_)
-    if (layer.target != "netlab")  // the executable, not a netlab_add_library
+  for (const Layer& layer : layers_) {
+    if (layer.target != "netlab") {  // the executable, not a netlab_add_library
       EXPECT_TRUE(seen.count(layer.target)) << layer.target << " is documented but never built";
+    }
+  }
 }
 
 }  // namespace

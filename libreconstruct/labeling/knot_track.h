@@ -52,7 +52,7 @@ struct TrackOptions {
   // A junction one yarn short of the knot's degree (an inner knot with three yarns, an edge
   // knot with two; a dim dye fading into the background) is the knot when each of its yarns
   // leaves within this angle of the direction to a different labeled grid neighbour; 0: the
-  // degree must be met. On the knotless Net B (30 frames) a quarter of the person's fixes were
+  // degree must be met. On the knotless Net B (20 frames) a quarter of the person's fixes were
   // such junctions, every one of them within 1 px of the truth.
   double max_yarn_angle_deg = 15.0;
   KnotDetectorOptions detector;

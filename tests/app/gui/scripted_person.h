@@ -29,6 +29,7 @@ namespace netlab::gui {
 // One action of the person, to replay on the engine without a window.
 struct Action {
   enum Kind { kFindNode, kPlace, kDelete, kAccept, kFindPath, kTrack, kHide, kHideRun } kind;
+  static constexpr int kKinds = kHideRun + 1;  // how many kinds there are
   int camera = 0, t = 0, knot = 0;
   Eigen::Vector2d px = Eigen::Vector2d::Zero();
 };
