@@ -221,6 +221,22 @@ struct ScriptedUser {
     }
   }
 
+  // Why the person acts on visible knot k of camera c, frame row t (for `causes`).
+  std::string Cause(int c, int t, int k) const {
+    const bool full = std::getenv("NETLAB_FULL_CAUSES") != nullptr;
+    if (store.at(c, t, k).present()) {
+      const auto why = engine.reasons().find({c, t, k});
+      const std::string cause = why == engine.reasons().end() ? "review, no reason" : why->second;
+      return full ? cause : cause.substr(0, cause.find_first_of("(0123456789"));
+    }
+    if (!full) return "no label";
+    const int r = k / shot.cols, col = k % shot.cols;
+    const bool border = r == 0 || col == 0 || r == shot.rows - 1 || col == shot.cols - 1;
+    return std::string("no label") + (t == 0 ? " (first frame" : " (later frame") +
+           (border ? ", border)" : ", inner)") +
+           (t > 0 && store.at(c, t - 1, k).accepted() ? " accepted before" : "");
+  }
+
   // A hidden knot's label under review deleted; a visible knot without an accepted label given
   // one by Find Node at its true position, else by a click.
   void PlayKnot(int c, int t, int k, std::vector<recon::LabelEdit>* edits) {
@@ -239,24 +255,8 @@ struct ScriptedUser {
     ++y.knot_frames;
     if (l.accepted()) return;
     ++y.find_node;
-    {
-      std::string cause = "no label";
-      if (l.present()) {
-        const auto why = engine.reasons().find({c, t, k});
-        cause = why == engine.reasons().end() ? "review, no reason" : why->second;
-        const size_t cut = cause.find_first_of("(0123456789");
-        if (cut != std::string::npos && !std::getenv("NETLAB_FULL_CAUSES"))
-          cause = cause.substr(0, cut);
-      } else if (std::getenv("NETLAB_FULL_CAUSES")) {
-        const int r = k / shot.cols, col = k % shot.cols;
-        const bool border = r == 0 || col == 0 || r == shot.rows - 1 || col == shot.cols - 1;
-        cause += std::string(t == 0 ? " (first frame" : " (later frame") +
-                 (border ? ", border)" : ", inner)") +
-                 (t > 0 && store.at(c, t - 1, k).accepted() ? " accepted before" : "");
-      }
-      auto& [n, n_off] = causes[cause];
-      ++n, n_off += l.present() && (l.px - truth_l.px).norm() > 1.0;
-    }
+    auto& [n, n_off] = causes[Cause(c, t, k)];
+    ++n, n_off += l.present() && (l.px - truth_l.px).norm() > 1.0;
     const recon::FindNodeResult r = engine.FindNodeAt(c, t, k, truth_l.px, radius);
     // Found and accepted: done. Found but in doubt (its yarns or the other cameras
     // disagree), or not found: the person clicks the knot.
@@ -508,13 +508,12 @@ int main(int argc, char** argv) {
     const calib::Rig rig = calib::ReadRig(o.shot + "/rig_true.yaml");
     const Shot shot = SelectShot(recon::ReadLabels(o.shot + "/labels_true.h5"), sequence, &o);
     const int n_t = shot.n_t();
-    if (o.detector_only) {
-      BenchDetector(shot, o, [&](int c, int t) {
-        std::string error;
-        return sequence.ReadDisplay(shot.sequence_camera[c], shot.frames[t], 0, &error);
-      });
-      return 0;
-    }
+    // Camera c's frame at row t, as the window shows it.
+    const auto read_frame = [&](int c, int t) {
+      std::string error;
+      return sequence.ReadDisplay(shot.sequence_camera[c], shot.frames[t], 0, &error);
+    };
+    if (o.detector_only) return BenchDetector(shot, o, read_frame), 0;
 
     // The person seeds the corners; the engine reads the shot's frames (timed).
     std::vector<Tally> tally(shot.n_cam());
@@ -522,8 +521,7 @@ int main(int argc, char** argv) {
     double read_s = 0.0;
     recon::LabelEngine engine(&store, &rig, [&](int c, int t) {
       const auto t0 = Clock::now();
-      std::string error;
-      cv::Mat image = sequence.ReadDisplay(shot.sequence_camera[c], shot.frames[t], 0, &error);
+      cv::Mat image = read_frame(c, t);
       read_s += Since(t0);
       return image;
     });
@@ -551,10 +549,7 @@ int main(int argc, char** argv) {
       }
       t0 = Clock::now();
     });
-    TallyErrors(shot, store, &tally, [&](int c, int t) {
-      std::string error;
-      return sequence.ReadDisplay(shot.sequence_camera[c], shot.frames[t], 0, &error);
-    });
+    TallyErrors(shot, store, &tally, read_frame);
 
     const Tally all = PrintTables(o, shot, tally);
     std::printf("\nengine %.1f s (of which frame reading %.1f s): %.0f knot-frames/s; the "

@@ -774,24 +774,25 @@ std::optional<Junction> KnotDetector::Refine(const Junction& j) const {
   if (!o_.fit_yarns) return j;
   const std::optional<Junction> out = RefineOver(j, o_.fit_from_px, 2.0 * o_.ring_radius_px);
   if (!(o_.near_fit_to_px > 0.0)) return out;
+  // Fitted again on the yarns' first few pixels, where the default strip settled (or, where it
+  // fitted no line through the junction, a yarn turned within it, where the rings put it).
+  const std::optional<Junction> rings =
+      ExamineRings(out ? out->px : j.px, 0.5 * o_.near_fit_to_px);
+  bool near_bends = false;
+  std::optional<Junction> near =
+      rings ? RefineOver(*rings, o_.near_fit_from_px, o_.near_fit_to_px, &near_bends)
+            : std::nullopt;
   if (!out) {
-    // The strip fits no line through the junction (a yarn turned within it): the near fit alone,
-    // on the same yarns.
-    const std::optional<Junction> rings = ExamineRings(j.px, 0.5 * o_.near_fit_to_px);
+    // The near fit alone, on the same yarns.
     if (!rings || rings->branches != j.branches) return std::nullopt;
-    std::optional<Junction> near = RefineOver(*rings, o_.near_fit_from_px, o_.near_fit_to_px);
     if (near) near->contrast = j.contrast;
     return near;
   }
-  // Checked against the yarns' first few pixels: a slack link buckles, and where it turns within
-  // the strip (the knotless Net B's links, ~12 px from the knot in the far pair) the line fitted
-  // over the whole strip misses the knot by up to 3.5 px along its normal, with a good fit. Near
-  // the knot the yarns are straight: where the near fit settles elsewhere, it is the junction.
-  const std::optional<Junction> rings = ExamineRings(out->px, 0.5 * o_.near_fit_to_px);
-  bool near_bends = false;
-  const std::optional<Junction> near =
-      rings ? RefineOver(*rings, o_.near_fit_from_px, o_.near_fit_to_px, &near_bends)
-            : std::nullopt;
+  // A slack link buckles, and where it turns within the strip (the knotless Net B's links, ~12 px
+  // from the knot in the far pair) the line fitted over the whole strip misses the knot by up to
+  // 3.5 px along its normal, with a good fit. Near the knot the yarns are straight: where the
+  // near fit settles elsewhere, it is the junction.
+  //
   // A lone yarn that bends even within the near strip (it leaves the knot turned, then runs
   // aside): the strip's fit, which took it for straight, placed the junction along the others
   // by about its offset.
