@@ -132,6 +132,7 @@ struct YarnFit {
   double half_width = 0.0;  // px
   double snr = 0.0;         // |area| / residual RMS
   double sigma_rho = 0.0;   // standard error of rho, px (from the residuals)
+  Eigen::VectorXd params;   // rho, kappa (at the strip's middle), h, area_c, offset_c
 };
 
 // The least-squares areas and offsets of each channel for a fixed line and width (the model is
@@ -268,6 +269,7 @@ YarnFit FitYarn(const std::vector<YarnSample>& samples, int channels, double blu
   const double var = cov(0, 0) + 2 * u_knot * cov(0, 1) + u_knot * u_knot * cov(1, 1);
   fit.sigma_rho = std::sqrt(std::max(0.0, var) * current / dof);
   fit.rho = p(0) + p(1) * u_knot;
+  fit.params = p;
   fit.kappa = p(1);
   fit.half_width = p(2);
   fit.snr = p.segment(3, channels).norm() / std::max(std::sqrt(current / samples.size()), 1e-9);
@@ -275,6 +277,57 @@ YarnFit FitYarn(const std::vector<YarnSample>& samples, int channels, double blu
   // need not).
   fit.ok = (converged || last_step < 1e-2) && p.allFinite() && std::isfinite(fit.sigma_rho);
   return fit;
+}
+
+// Whether a second yarn runs beside a fitted one: parallel to it, at least `gap` px off its
+// centre line and within `across` px of the branch line, where the strongest such yarn (by how
+// much it lowers the residuals) lowers them by more than `significance` times their variance
+// per sample and has at least `fraction` of the fitted yarn's area (the norm over the
+// channels). Two yarns that close (a fold of the net seen edge-on, another part of the net
+// behind) are one ridge to the rings, and the fit takes one of them: the junction is not known
+// across them (the bunched Net B at 0.8 m/s had three placed 2-2.5 px off this way; on a
+// normal frame about one branch in 2000 has such a yarn).
+bool YarnBeside(const std::vector<YarnSample>& samples, int channels, double blur,
+                const YarnFit& fit, double gap, double across, double significance,
+                double fraction) {
+  if (!fit.ok || fit.params.size() != 3 + 2 * channels) return false;
+  const Eigen::VectorXd& p = fit.params;
+  std::vector<double> residual(samples.size());
+  double ss = 0.0;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const YarnSample& s = samples[i];
+    residual[i] = s.value - p(3 + channels + s.channel) -
+                  p(3 + s.channel) * StripValue(s.v - p(0) - p(1) * s.u, p(2), blur);
+    ss += residual[i] * residual[i];
+  }
+  const double variance = ss / std::max<double>(1.0, samples.size() - p.size());
+  const double area = p.segment(3, channels).norm();
+  if (!(area > 0.0) || !(variance > 0.0)) return false;
+  // A yarn lighter than what is behind it (or darker, on a light target): the second one too.
+  const double bright = p.segment(3, channels).sum() >= 0.0 ? 1.0 : -1.0;
+  double strongest_drop = 0.0, its_area = 0.0;
+  std::vector<double> gr(channels), gg(channels);
+  for (double rho = -across; rho <= across + 1e-9; rho += 0.25) {
+    if (std::abs(rho - p(0)) < gap) continue;
+    std::fill(gr.begin(), gr.end(), 0.0);
+    std::fill(gg.begin(), gg.end(), 0.0);
+    for (size_t i = 0; i < samples.size(); ++i) {
+      const YarnSample& s = samples[i];
+      const double g = StripValue(s.v - rho - p(1) * s.u, p(2), blur);
+      gr[s.channel] += g * residual[i];
+      gg[s.channel] += g * g;
+    }
+    // Each channel's area of the second yarn by least squares on the residuals, and how much
+    // it lowers them.
+    double drop = 0.0, second = 0.0;
+    for (int c = 0; c < channels; ++c) {
+      if (!(gg[c] > 0.0) || gr[c] * bright <= 0.0) continue;
+      drop += gr[c] * gr[c] / gg[c];
+      second += (gr[c] / gg[c]) * (gr[c] / gg[c]);
+    }
+    if (drop > strongest_drop) strongest_drop = drop, its_area = std::sqrt(second);
+  }
+  return strongest_drop > significance * variance && its_area >= fraction * area;
 }
 
 }  // namespace
@@ -623,7 +676,8 @@ namespace {
 // `weights` is empty): false when they are about parallel. *rms: the RMS distance of the
 // point from the lines.
 bool Intersect(const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>& lines,
-               const std::vector<double>& weights, Eigen::Vector2d* point, double* rms) {
+               const std::vector<double>& weights, Eigen::Vector2d* point, double* rms,
+               double* sigma = nullptr) {
   Eigen::Matrix2d a = Eigen::Matrix2d::Zero(), geometry = Eigen::Matrix2d::Zero();
   Eigen::Vector2d b = Eigen::Vector2d::Zero();
   for (size_t i = 0; i < lines.size(); ++i) {
@@ -639,6 +693,10 @@ bool Intersect(const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>& l
   const Eigen::JacobiSVD<Eigen::Matrix2d> svd(geometry);
   if (!(svd.singularValues()[1] > 0.05 * svd.singularValues()[0])) return false;
   *point = a.ldlt().solve(b);
+  if (sigma) {
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(a);
+    *sigma = 1.0 / std::sqrt(std::max(eig.eigenvalues()[0], 1e-12));
+  }
   double ss = 0.0;
   for (const auto& [q, d] : lines) {
     const Eigen::Vector2d off = *point - q;
@@ -804,7 +862,11 @@ std::optional<Junction> KnotDetector::Refine(const Junction& j) const {
       (near->px - out->px).norm() <= o_.bend_px)
     return std::nullopt;
   // The same yarns (a knot ball's rim, near enough for the small rings, adds branches).
-  if (near && near->branches == out->branches && (near->px - out->px).norm() > o_.bend_px) {
+  // Only a near fit of every yarn, which places the junction well, overrules the default: on
+  // its few pixels a dim yarn of one dye (seen by every second pixel of a mosaic) can take a
+  // wrong turn and still fit.
+  if (near && near->branches == out->branches && (near->px - out->px).norm() > o_.bend_px &&
+      near->fitted_branches == near->branches && near->sigma_px <= o_.near_sigma_px) {
     Junction bent = *near;
     bent.contrast = out->contrast;
     bent.confidence = std::min(out->confidence, near->confidence);
@@ -864,6 +926,8 @@ std::optional<Junction> KnotDetector::RefineOver(const Junction& j, double from,
   std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> lines;
   std::vector<int> fitted;
   std::vector<std::vector<YarnSample>> branch_samples(angles.size());
+  std::vector<YarnFit> branch_fits(angles.size());
+  double last_move = 0.0;
   // Fitted from the rings' lines (searching across them), then again from the fitted lines
   // through the new centre, until it settles.
   for (int pass = 0; pass < 3; ++pass) {
@@ -902,6 +966,7 @@ std::optional<Junction> KnotDetector::RefineOver(const Junction& j, double from,
       const YarnFit fit =
           FitYarn(samples, channels, o_.yarn_blur_px, pass == 0, half_widths[b], -middle);
       branch_samples[b] = std::move(samples);
+      branch_fits[b] = fit;
       // A branch counts when its yarn fits well (a clear signal, a line known to a fraction of
       // a pixel) and stays near the rings' line along the strip.
       if (!fit.ok || fit.snr < 3.0 || fit.sigma_rho > 0.3 ||
@@ -917,20 +982,26 @@ std::optional<Junction> KnotDetector::RefineOver(const Junction& j, double from,
     // target), and the lines left must cross: three at least, which then check each other (two
     // lines always meet: an edge knot whose dim yarn was left out was once put 2 px off).
     Eigen::Vector2d next;
-    double rms = 0.0;
+    double rms = 0.0, sigma = 0.0;
     if (lines.size() < std::min<size_t>(angles.size(), 3) || lines.size() + 1 < angles.size() ||
-        !Intersect(lines, weights, &next, &rms) ||
+        !Intersect(lines, weights, &next, &rms, &sigma) ||
         (next - j.px).norm() > 0.5 * o_.ring_radius_px)
       return std::nullopt;
     const bool settled = (next - centre).norm() < 0.01;
+    last_move = (next - centre).norm();
     centre = next;
     out.px = next;
     out.fit_rms_px = rms;
+    out.sigma_px = sigma;
+    out.fitted_branches = static_cast<int>(lines.size());
     for (size_t i = 0; i < lines.size(); ++i)
       angles[fitted[i]] = std::atan2(lines[i].second.y(), lines[i].second.x());
     out.branch_angles_rad = angles;
     if (settled) break;
   }
+  // A fit that still moved on its last pass has not found the junction (Net B's crossings,
+  // whose links each turn at the knot, can walk it from line to line).
+  if (last_move > o_.settle_px) return std::nullopt;
   // The fitted yarns must meet in one point.
   if (out.fit_rms_px > 0.5) return std::nullopt;
   if (LoneYarnBends(lines, fitted, branch_samples, middle, half_widths, channels, o_.yarn_blur_px,
@@ -938,6 +1009,12 @@ std::optional<Junction> KnotDetector::RefineOver(const Junction& j, double from,
     if (lone_bends) *lone_bends = true;
     return std::nullopt;
   }
+  // And none may have another yarn beside it.
+  if (o_.beside_significance > 0.0)
+    for (int b : fitted)
+      if (YarnBeside(branch_samples[b], channels, o_.yarn_blur_px, branch_fits[b], o_.beside_gap_px,
+                     across, o_.beside_significance, o_.beside_fraction))
+        return std::nullopt;
   out.confidence = std::clamp((out.contrast - 1.0) / 2.0, 0.0, 1.0) *
                    std::exp(-0.5 * (out.fit_rms_px / 0.5) * (out.fit_rms_px / 0.5));
   return out;

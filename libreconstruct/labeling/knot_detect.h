@@ -34,7 +34,12 @@
 // knot's inner yarn: the other two are one straight yarn) is checked besides, since nothing else
 // is: its strip's two halves must give the same line, and the default and near fits the same
 // place; otherwise the junction is refused rather than placed along the edge (lone_bend_px,
-// lone_agree_px).
+// lone_agree_px). The near fit overrules the default only where it fitted every yarn and places
+// the junction well (near_sigma_px), and no fit counts that has not settled (settle_px).
+//
+// Yarns beside yarns: where the net bunches, a fold seen edge-on or another part of the net
+// behind runs within 2-3 px of a junction's yarn; the rings see one ridge and the fit takes one
+// of the two. Such a junction is refused (beside_*).
 //
 // Solids: a compact blob several yarn widths across, a corner mass, is no yarn: its rim is
 // masked from the ridges and its centre is a circle fitted to its sub-pixel outline. A corner
@@ -88,6 +93,19 @@ struct KnotDetectorOptions {
   // A junction with such a yarn is refused where its near fit and its default fit disagree by
   // more than this, px (but not by more than bend_px: then the near fit is taken).
   double lone_agree_px = 0.7;
+  // The near fit overrules the default only when it fitted every yarn and places the junction
+  // to this (px, the largest standard deviation from its lines' offsets): a dim yarn of one dye
+  // on its few pixels once took a 15 degree wrong turn and moved a right junction 2.2 px.
+  double near_sigma_px = 0.15;
+  // A fit whose junction still moves this much (px) on its last pass has not settled: refused.
+  double settle_px = 0.1;
+  // A yarn with a second one beside it (parallel, from beside_gap_px to fit_half_width_px off
+  // its line) is not a junction's: refused where the second lowers the yarn's residuals by more
+  // than beside_significance times their variance with at least beside_fraction of its area
+  // (0: not checked).
+  double beside_gap_px = 1.5;
+  double beside_significance = 8.0;
+  double beside_fraction = 0.15;
   double yarn_blur_px = 0.5;      // Gaussian blur of the yarn's edges in the model (pixel
                                   // footprint, lens, motion), px
   int background_window_px = 11;  // median window of the local background (odd, >> a yarn)
@@ -105,6 +123,8 @@ struct Junction {
   int branches = 0;
   std::vector<double> branch_angles_rad;  // image angles (atan2(dy, dx)) of the yarns leaving it
   double fit_rms_px = 0.0;   // RMS distance of px from the branch lines
+  int fitted_branches = 0;   // branches whose yarn was fitted (a branch of four may be left out)
+  double sigma_px = 0.0;     // the largest standard deviation of px from the lines' offsets
   double contrast = 0.0;     // weakest branch peak / the peak threshold (> 1)
   double confidence = 0.0;   // 0..1 from contrast and fit
   bool solid = false;        // the centre of a solid (corner mass), not a yarn junction;

@@ -494,6 +494,53 @@ double LargestSampleGap(const std::vector<Eigen::Vector2d>& region) {
   return step;
 }
 
+// A distance for a message: "2.3".
+std::string Px(double px) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f", px);
+  return text;
+}
+
+// The one view of three or more that the others place the knot more than `tolerance` px from,
+// beyond what the labels' noise (`sigma` px in each view) explains there: its index into `obs`
+// and that distance. The check of all the views together cannot see it: a label 2-3 px off
+// pulls the joint point, and its residual stays within the outlier threshold. The others must
+// agree with each other (no outlier among them); where they fix the point poorly (a stereo
+// pair's depth, seen from across), its projection is uncertain and nothing is flagged.
+std::optional<std::pair<int, double>> ViewOffTheOthers(const calib::Rig& rig,
+                                                       const std::vector<Observation>& obs,
+                                                       const TriangulationOptions& topt,
+                                                       double tolerance, double sigma) {
+  if (obs.size() < 3 || !(tolerance > 0.0) || !(sigma > 0.0)) return std::nullopt;
+  std::optional<std::pair<int, double>> worst;
+  for (size_t i = 0; i < obs.size(); ++i) {
+    std::vector<Observation> others;
+    for (size_t o = 0; o < obs.size(); ++o)
+      if (o != i) others.push_back(obs[o]);
+    const PointEstimate e = TriangulatePoint(rig, others, topt);
+    if (!e.valid || !e.outliers.empty()) continue;
+    const calib::Camera& camera = rig.cameras[obs[i].camera];
+    const Eigen::Vector2d q = camera.ProjectWorld(e.position);
+    const Eigen::Vector2d off = q - obs[i].px;
+    if (!q.allFinite() || off.norm() <= tolerance || (worst && off.norm() <= worst->second))
+      continue;
+    // The projection's covariance from the others' point (d pixel / d point by central
+    // differences, 0.1 mm), plus this label's own noise.
+    Eigen::Matrix<double, 2, 3> j;
+    for (int a = 0; a < 3; ++a) {
+      Eigen::Vector3d h = Eigen::Vector3d::Zero();
+      h[a] = 1e-4;
+      j.col(a) = (camera.ProjectWorld(e.position + h) - camera.ProjectWorld(e.position - h)) / 2e-4;
+    }
+    const Eigen::Matrix2d covariance =
+        sigma * sigma * (Eigen::Matrix2d::Identity() + j * e.unit_covariance * j.transpose());
+    // Beyond the 99.9 % ellipse of two degrees of freedom.
+    if (j.allFinite() && off.dot(covariance.ldlt().solve(off)) > 13.8)
+      worst = std::make_pair(static_cast<int>(i), off.norm());
+  }
+  return worst;
+}
+
 // `n` added to `sum`.
 void Add(EngineCounts* sum, const EngineCounts& n) {
   sum->accepted += n.accepted;
@@ -562,12 +609,17 @@ EngineCounts LabelEngine::CrossCheck(int t) {
   // 1. Epipolar consistency of the accepted labels.
   if (f.geometry) total.review += CheckEpipolar(&f);
   // 2. Fill Grid, pass after pass while a pass accepts labels (their points help the next).
+  int filled = 0;
   for (int pass = 0; pass < o_.fill_passes; ++pass) {
     const EngineCounts n = FillGridPass(&f, pass);
     Add(&total, n);
+    filled += n.accepted;
     if (n.accepted == 0) break;
     if (f.geometry) TriangulateAccepted(&f, nullptr);
   }
+  // The labels Fill Grid accepted, checked like the rest (a candidate is accepted where the
+  // cameras agree within the outlier threshold; each one's place is known better only now).
+  if (f.geometry && filled > 0) total.review += CheckEpipolar(&f);
   // 3. The yarn colours.
   if (codebook_) total.review += CheckColours(t);
   return total;
@@ -633,10 +685,15 @@ void LabelEngine::TriangulateAccepted(FrameCheck* f, std::vector<LabelEdit>* fla
     if (!e.valid) {
       for (size_t i = 0; i < from.size(); ++i)
         flag(static_cast<int>(i), "epipolar check: the cameras disagree (" + e.why + ")");
-    } else {
+    } else if (!e.outliers.empty()) {
       for (int i : e.outliers)
-        flag(i, "epipolar check: " + std::to_string(e.residual_px[i]) +
-                    " px off the point the other cameras see");
+        flag(i, "epipolar check: " + Px(e.residual_px[i]) +
+                    " px off the point of all the cameras");
+    } else if (const auto off =
+                   ViewOffTheOthers(*rig_, obs, f->topt, o_.projection_tolerance_px,
+                                    o_.label_sigma_px)) {
+      flag(off->first, "epipolar check: " + Px(off->second) +
+                           " px from where the other cameras put the knot");
     }
   }
 }

@@ -10,6 +10,7 @@
 #include <opencv2/core.hpp>
 
 #include "calibration/rig.h"
+#include "libreconstruct/geometry/triangulation.h"
 #include "libreconstruct/labeling/label_engine.h"
 #include "libreconstruct/twin/render.h"
 
@@ -201,6 +202,43 @@ TEST(LabelEngine, EpipolarCheckFlagsALabelOnAnotherKnotAndFillGridFindsTheRightO
   EXPECT_NE(store.UndoName().find("Fill Grid"), std::string::npos);
   store.Undo();
   EXPECT_NE(store.UndoName().find("epipolar"), std::string::npos);
+}
+
+// A label 2.5 px off its knot (a detector placing a knotless crossing along one of its yarns)
+// pulls the point of all three views towards it, and its residual there stays within the
+// outlier threshold; the two others, which agree with each other, put it 2.5 px off: it is
+// flagged. Labels 0.4 px off are not.
+TEST(LabelEngine, EpipolarCheckFlagsALabelTheOtherCamerasPutOffByMoreThanTheTolerance) {
+  const Shot shot = Render(1);
+  LabelSet labels = Empty(shot);
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < kKnots; ++k)
+      labels.at(c, 0, k) = Accepted(shot.Truth(c, 0, k) + Eigen::Vector2d(0.4 * (c - 1), 0.0));
+  labels.at(1, 0, 7) = Accepted(shot.Truth(1, 0, 7) + Eigen::Vector2d(1.5, -2.0));
+  LabelStore store(labels);
+  LabelEngineOptions options;
+  options.fill_passes = 0;
+  LabelEngine engine(&store, &shot.rig, Images(shot), options);
+  // What the check of all the views together makes of it.
+  std::vector<Observation> views;
+  for (int c = 0; c < 3; ++c) views.push_back({c, labels.at(c, 0, 7).px});
+  TriangulationOptions joint;
+  joint.outlier_threshold_px = options.epipolar_tolerance_px;
+  const PointEstimate e = TriangulatePoint(shot.rig, views, joint);
+  ASSERT_TRUE(e.valid);
+  EXPECT_TRUE(e.outliers.empty());
+  EXPECT_EQ(engine.CrossCheck(0).review, 1);
+  EXPECT_EQ(store.at(1, 0, 7).state, LabelState::kNeedsReview);
+  ASSERT_TRUE(engine.reasons().count({1, 0, 7}));
+  EXPECT_NE(engine.reasons().at({1, 0, 7}).find("px from where the other cameras put the knot"),
+            std::string::npos)
+      << engine.reasons().at({1, 0, 7});
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < kKnots; ++k) {
+      if (c != 1 || k != 7) {
+        EXPECT_TRUE(store.at(c, 0, k).accepted()) << c << " " << k;
+      }
+    }
 }
 
 TEST(LabelEngine, AKnotWhoseYarnsAreMissingIsNotFilled) {
