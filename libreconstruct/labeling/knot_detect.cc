@@ -929,8 +929,10 @@ std::optional<Junction> KnotDetector::RefineOver(const Junction& j, double from,
   std::vector<YarnFit> branch_fits(angles.size());
   double last_move = 0.0;
   // Fitted from the rings' lines (searching across them), then again from the fitted lines
-  // through the new centre, until it settles.
-  for (int pass = 0; pass < 3; ++pass) {
+  // through the new centre, until it settles (most do in two passes; five, so that one started
+  // a few pixels off still settles: with three, settle_px refused 11 more Net A knots in 60
+  // frames, with five 4).
+  for (int pass = 0; pass < 5; ++pass) {
     lines.clear();
     fitted.clear();
     std::vector<double> weights;
