@@ -674,7 +674,8 @@ namespace {
 
 // The least-squares intersection of lines (point, unit direction), each weighted (all 1 when
 // `weights` is empty): false when they are about parallel. *rms: the RMS distance of the
-// point from the lines.
+// point from the lines; *sigma (when given): the point's largest standard deviation, the
+// weights being 1 / the variance of each line's offset.
 bool Intersect(const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>& lines,
                const std::vector<double>& weights, Eigen::Vector2d* point, double* rms,
                double* sigma = nullptr) {
