@@ -76,6 +76,19 @@ bool FitSubset(const calib::Rig& rig, const std::vector<Observation>& obs,
 
 }  // namespace
 
+std::optional<ProjectedPoint> ProjectAgreeingViews(const calib::Rig& rig, int camera,
+                                                   const std::vector<Observation>& views,
+                                                   const TriangulationOptions& options) {
+  const PointEstimate e = TriangulatePoint(rig, views, options);
+  if (!e.valid || !e.outliers.empty()) return std::nullopt;
+  ProjectedPoint p;
+  Eigen::Matrix<double, 2, 3> j;
+  if (!ProjectWorld(rig.cameras[camera], e.position, &p.px, &j) || !p.px.allFinite())
+    return std::nullopt;
+  p.unit_covariance = j * e.unit_covariance * j.transpose();
+  return p;
+}
+
 double ReprojectionResidual(const calib::Rig& rig, const Observation& observation,
                             const Eigen::Vector3d& position) {
   Eigen::Vector2d px;

@@ -17,6 +17,7 @@
 // solution: first order, exact for Gaussian pixel noise of standard deviation sigma in the limit
 // of small noise, and what the Cramer-Rao bound is at the true point.
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -72,6 +73,19 @@ PointEstimate TriangulatePoint(const calib::Rig& rig, const std::vector<Observat
 // unbiased estimate of the point from those views.
 Eigen::Matrix3d PointInformation(const calib::Rig& rig, const std::vector<int>& cameras,
                                  const Eigen::Vector3d& position);
+
+// Where views that agree with each other put a point in another camera: their point (no
+// outlier among them) projected into rig camera `camera`, and that projection's covariance for
+// 1 px of noise per axis in each view (J C J^T, C the point's unit covariance, J the
+// projection's Jacobian). Nullopt where they do not triangulate without an outlier or the
+// point is behind that camera.
+struct ProjectedPoint {
+  Eigen::Vector2d px = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d unit_covariance = Eigen::Matrix2d::Zero();  // px^2 per px^2 of label noise
+};
+std::optional<ProjectedPoint> ProjectAgreeingViews(const calib::Rig& rig, int camera,
+                                                   const std::vector<Observation>& views,
+                                                   const TriangulationOptions& options = {});
 
 // Residual (px) of one observation at `position` (NaN behind the camera).
 double ReprojectionResidual(const calib::Rig& rig, const Observation& observation,

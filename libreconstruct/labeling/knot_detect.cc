@@ -837,13 +837,12 @@ std::optional<Junction> KnotDetector::Refine(const Junction& j) const {
   // fitted no line through the junction, a yarn turned within it, where the rings put it).
   const std::optional<Junction> rings =
       ExamineRings(out ? out->px : j.px, 0.5 * o_.near_fit_to_px);
+  // Without the default's junction, the near fit alone, on the same yarns.
+  if (!rings || (!out && rings->branches != j.branches)) return out;
   bool near_bends = false;
   std::optional<Junction> near =
-      rings ? RefineOver(*rings, o_.near_fit_from_px, o_.near_fit_to_px, &near_bends)
-            : std::nullopt;
+      RefineOver(*rings, o_.near_fit_from_px, o_.near_fit_to_px, &near_bends);
   if (!out) {
-    // The near fit alone, on the same yarns.
-    if (!rings || rings->branches != j.branches) return std::nullopt;
     if (near) near->contrast = j.contrast;
     return near;
   }
@@ -990,8 +989,8 @@ std::optional<Junction> KnotDetector::RefineOver(const Junction& j, double from,
         !Intersect(lines, weights, &next, &rms, &sigma) ||
         (next - j.px).norm() > 0.5 * o_.ring_radius_px)
       return std::nullopt;
-    const bool settled = (next - centre).norm() < 0.01;
     last_move = (next - centre).norm();
+    const bool settled = last_move < 0.01;
     centre = next;
     out.px = next;
     out.fit_rms_px = rms;

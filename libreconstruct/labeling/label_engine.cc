@@ -405,11 +405,12 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
   if (others.size() < 2) return "";
   TriangulationOptions topt;
   topt.outlier_threshold_px = o_.epipolar_tolerance_px;
-  const PointEstimate e = TriangulatePoint(*rig_, others, topt);
-  if (!e.valid || !e.outliers.empty()) return "";  // the others do not agree: nothing to go by
-  const Eigen::Vector2d q = rig_->cameras[RigIndex(camera)].ProjectWorld(e.position);
-  const double off = (q - j.px).norm();
-  if (!q.allFinite() || off <= o_.projection_tolerance_px) return "";
+  // Where the others do not agree there is nothing to go by.
+  const std::optional<ProjectedPoint> q =
+      ProjectAgreeingViews(*rig_, RigIndex(camera), others, topt);
+  if (!q) return "";
+  const double off = (q->px - j.px).norm();
+  if (off <= o_.projection_tolerance_px) return "";
   char why[112];
   std::snprintf(why, sizeof why, "%.1f px from where the other cameras' labels put the knot", off);
   return why;
@@ -517,25 +518,15 @@ std::optional<std::pair<int, double>> ViewOffTheOthers(const calib::Rig& rig,
     std::vector<Observation> others;
     for (size_t o = 0; o < obs.size(); ++o)
       if (o != i) others.push_back(obs[o]);
-    const PointEstimate e = TriangulatePoint(rig, others, topt);
-    if (!e.valid || !e.outliers.empty()) continue;
-    const calib::Camera& camera = rig.cameras[obs[i].camera];
-    const Eigen::Vector2d q = camera.ProjectWorld(e.position);
-    const Eigen::Vector2d off = q - obs[i].px;
-    if (!q.allFinite() || off.norm() <= tolerance || (worst && off.norm() <= worst->second))
-      continue;
-    // The projection's covariance from the others' point (d pixel / d point by central
-    // differences, 0.1 mm), plus this label's own noise.
-    Eigen::Matrix<double, 2, 3> j;
-    for (int a = 0; a < 3; ++a) {
-      Eigen::Vector3d h = Eigen::Vector3d::Zero();
-      h[a] = 1e-4;
-      j.col(a) = (camera.ProjectWorld(e.position + h) - camera.ProjectWorld(e.position - h)) / 2e-4;
-    }
+    const std::optional<ProjectedPoint> q = ProjectAgreeingViews(rig, obs[i].camera, others, topt);
+    if (!q) continue;
+    const Eigen::Vector2d off = q->px - obs[i].px;
+    if (off.norm() <= tolerance || (worst && off.norm() <= worst->second)) continue;
+    // The projection's covariance plus this label's own noise; beyond the 99.9 % ellipse of two
+    // degrees of freedom.
     const Eigen::Matrix2d covariance =
-        sigma * sigma * (Eigen::Matrix2d::Identity() + j * e.unit_covariance * j.transpose());
-    // Beyond the 99.9 % ellipse of two degrees of freedom.
-    if (j.allFinite() && off.dot(covariance.ldlt().solve(off)) > 13.8)
+        sigma * sigma * (Eigen::Matrix2d::Identity() + q->unit_covariance);
+    if (off.dot(covariance.ldlt().solve(off)) > 13.8)
       worst = std::make_pair(static_cast<int>(i), off.norm());
   }
   return worst;

@@ -74,11 +74,11 @@ struct LabelEngineOptions {
   // epipolar check flags a label of three views or more that the other views place farther
   // than this from the knot, beyond what label_sigma_px explains there.
   double projection_tolerance_px = 1.5;
+  // ... and no other knot's label or projection may be within this (px).
+  double exclusion_px = 6.0;
   // The labels' noise in each view, px (per axis; the bench's tracked labels: median 0.07 px,
   // 99th percentile 0.4 px; kept above them for the rig's own error).
   double label_sigma_px = 0.3;
-  // ... and no other knot's label or projection may be within this (px).
-  double exclusion_px = 6.0;
   // Fill Grid: a junction is the knot only when its yarns leave towards the knot's neighbours
   // (each within this angle, deg) and their number is the knot's degree.
   double branch_tolerance_deg = 10.0;
