@@ -24,7 +24,9 @@
 //
 // --detector: no engine and no script; Find Node at every visible knot's true place (the brush
 // of --radius, and tracking's 3 px snap), what it answers per camera, with and without the
-// checks on a junction's lone yarn.
+// checks on a junction's lone yarn. With NETLAB_STEP=1, each three-yarn junction found at the
+// snap radius on stderr: its distance from the truth, from where its colour changes
+// (Junction::colour_step), and that place's from the truth (-1: not told).
 
 #include <algorithm>
 #include <functional>
@@ -90,7 +92,9 @@ const char* SourceName(recon::LabelSource s) {
 void Usage() {
   std::fprintf(stderr,
                "usage: bench_label --shot DIR [--coloring FILE] [--frames A:B] "
-               "[--cameras cam0,cam1,...] [--radius PX] [--seed N] [--detector]\n"
+               "[--cameras cam0,cam1,...] [--radius PX] [--seed N] [--knotless] [--detector]\n"
+               "--knotless: the net has no knot balls (Net B): an edge knot is where its straight\n"
+               "  links' colours change (LabelEngineOptions::edge_colour_step_px)\n"
                "--detector: no engine, no script; Find Node at every visible knot's true place\n"
                "  (the brush of --radius, and tracking's 3 px snap), its answers per camera\n"
                "DIR: `netlab render` output, e.g.\n"
@@ -106,6 +110,7 @@ struct BenchOptions {
   uint64_t seed = 1;          // of the clicks' error
   std::vector<std::string> only;  // cameras; empty: all
   bool detector_only = false;     // --detector: the knot detector alone at every true knot
+  bool knotless = false;          // --knotless
 };
 
 // The command line; false on a usage error.
@@ -125,6 +130,8 @@ bool ParseArgs(int argc, char** argv, BenchOptions* o) {
       o->seed = std::strtoull(argv[++i], nullptr, 10);
     } else if (a == "--detector") {
       o->detector_only = true;
+    } else if (a == "--knotless") {
+      o->knotless = true;
     } else if (a == "--cameras" && more) {
       std::stringstream ss(argv[++i]);
       for (std::string name; std::getline(ss, name, ',');) o->only.push_back(name);
@@ -479,6 +486,13 @@ void BenchDetector(const Shot& shot, const BenchOptions& o,
                        crop + "_has" + std::to_string(f.knot.branches) + ".png");
             const double e = (f.knot.px - truth_l.px).norm();
             err.push_back(e);
+            if (radius == 3.0 && std::getenv("NETLAB_STEP") && f.knot.branches == 3)
+              std::fprintf(stderr, "step: %s frame %d knot %d junction %.2f apart %.2f step %.2f\n",
+                           shot.cameras[c].c_str(), shot.frames[t], k, e,
+                           f.knot.colour_step.allFinite() ? (f.knot.colour_step - f.knot.px).norm() : -1.0,
+                           f.knot.colour_step.allFinite()
+                               ? (f.knot.colour_step - truth_l.px).norm()
+                               : -1.0);
             over1 += e > 1.0, over2 += e > 2.0;
             if (e > 2.0 && radius == 3.0) {
               std::fprintf(stderr, "over 2 px: %s frame %d knot %d at (%.2f, %.2f), found "
@@ -519,12 +533,17 @@ int main(int argc, char** argv) {
     std::vector<Tally> tally(shot.n_cam());
     recon::LabelStore store(SeedCorners(shot, &tally));
     double read_s = 0.0;
-    recon::LabelEngine engine(&store, &rig, [&](int c, int t) {
-      const auto t0 = Clock::now();
-      cv::Mat image = read_frame(c, t);
-      read_s += Since(t0);
-      return image;
-    });
+    recon::LabelEngineOptions engine_options;
+    if (o.knotless) engine_options.edge_colour_step_px = 1.0;
+    recon::LabelEngine engine(
+        &store, &rig,
+        [&](int c, int t) {
+          const auto t0 = Clock::now();
+          cv::Mat image = read_frame(c, t);
+          read_s += Since(t0);
+          return image;
+        },
+        engine_options);
     if (!o.coloring_path.empty()) {
       std::vector<std::array<int, 3>> dyes;
       const recon::NetColoring coloring = recon::ReadColoring(o.coloring_path, &dyes);

@@ -30,7 +30,7 @@ namespace {
 constexpr char kHelp[] =
     "usage: netlab label EXPERIMENT.yaml --rig rig.yaml --coloring coloring.yaml --seed SEEDS\n"
     "                    --out labels.h5 [--xypts xypts.csv] [--frames A:B] [--mesh M]\n"
-    "                    [--illumination F] [--no-colour-check] [--json]\n\n"
+    "                    [--knotless] [--illumination F] [--no-colour-check] [--json]\n\n"
     "Runs the automatic part of the labeling from seed labels (docs/labeling.md):\n"
     "  1. first frame, each camera with four corner knots seeded, or three (one hidden): Find\n"
     "     Path along the sides, then along every row and every column (an inner knot is\n"
@@ -51,6 +51,8 @@ constexpr char kHelp[] =
     "  --frames A:B        frames A to B inclusive (default: the whole recording)\n"
     "  --mesh M            link length in m, knot to knot (default: estimated from the first\n"
     "                      frame's triangulated knots)\n"
+    "  --knotless          the net has no knot balls (Net B): an edge knot Fill Grid or Find\n"
+    "                      Node finds must lie where its straight links' colours change\n"
     "  --illumination F    how brightly the yarns are lit, for the colour check: a white dye\n"
     "                      reads F of sensor white (default 0.85, netlab render's)\n"
     "  --no-colour-check   skip the colour check (frames of another colouring, or none)\n"
@@ -213,7 +215,7 @@ void PrintJson(const LabelJob& job, const LabelReport& r) {
 
 int RunLabel(const std::vector<std::string>& args) {
   return RunGuarded("label", [&] {
-    const CommandLine cl(args, {"json", "quiet", "help", "no-colour-check"},
+    const CommandLine cl(args, {"json", "quiet", "help", "no-colour-check", "knotless"},
                          {"rig", "coloring", "seed", "out", "frames", "mesh", "xypts", "illumination"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
@@ -242,6 +244,7 @@ int RunLabel(const std::vector<std::string>& args) {
     // The engine over the experiment's frames (the first unreadable one noted per camera).
     recon::LabelEngineOptions options;
     if (cl.Option("mesh")) options.link_length_m = cl.DoubleOption("mesh", 0.1, 1e-4, 10.0);
+    if (cl.Flag("knotless")) options.edge_colour_step_px = 1.0;
     std::vector<std::string> notes(job.cameras.size());
     recon::LabelEngine engine(
         &store, &rig,

@@ -707,10 +707,13 @@ SequenceResult ReconstructSequence(const calib::Rig& rig, const LabelSet& labels
 
 std::vector<std::string> SequenceWarnings(const SequenceResult& result) {
   std::vector<std::string> warnings;
-  if (result.sigma_estimated && 4.0 * result.sigma_px > result.outlier_threshold_px)
-    warnings.push_back("the labelling noise (" + std::to_string(result.sigma_px) +
+  if (result.sigma_estimated && 4.0 * result.sigma_px > result.outlier_threshold_px) {
+    char sigma[32];
+    std::snprintf(sigma, sizeof sigma, "%.2f", result.sigma_px);
+    warnings.push_back(std::string("the labelling noise (") + sigma +
                        " px) is more than a quarter of --outlier-px: good labels are being "
                        "rejected; raise --outlier-px to ~5x the noise");
+  }
   if (result.prior_disagreements > 0)
     warnings.push_back(std::to_string(result.prior_disagreements) +
                        " points seen by three or more cameras are pulled beyond the outlier "

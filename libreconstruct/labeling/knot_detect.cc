@@ -282,8 +282,8 @@ YarnFit FitYarn(const std::vector<YarnSample>& samples, int channels, double blu
 // Whether a second yarn runs beside a fitted one: parallel to it, at least `gap` px off its
 // centre line and within `across` px of the branch line, where the strongest such yarn (by how
 // much it lowers the residuals) lowers them by more than `significance` times their variance
-// per sample and has at least `fraction` of the fitted yarn's area (the norm over the
-// channels). Two yarns that close (a fold of the net seen edge-on, another part of the net
+// per sample, has at least `fraction` of the fitted yarn's area (the norm over the channels)
+// and does a fifth of that in each half of the strip. Two yarns that close (a fold of the net seen edge-on, another part of the net
 // behind) are one ridge to the rings, and the fit takes one of them: the junction is not known
 // across them (the bunched Net B at 0.8 m/s had three placed 2-2.5 px off this way; on a
 // normal frame about one branch in 2000 has such a yarn).
@@ -305,8 +305,13 @@ bool YarnBeside(const std::vector<YarnSample>& samples, int channels, double blu
   if (!(area > 0.0) || !(variance > 0.0)) return false;
   // A yarn lighter than what is behind it (or darker, on a light target): the second one too.
   const double bright = p.segment(3, channels).sum() >= 0.0 ? 1.0 : -1.0;
-  double strongest_drop = 0.0, its_area = 0.0;
-  std::vector<double> gr(channels), gg(channels);
+  // The strip's two halves (near the junction, far from it): a yarn beside runs along both and
+  // lowers the residuals of each; the rim of a knot ball lies in the near half only.
+  double u_min = samples[0].u, u_max = samples[0].u;
+  for (const YarnSample& s : samples) u_min = std::min(u_min, s.u), u_max = std::max(u_max, s.u);
+  const double u_mid = 0.5 * (u_min + u_max);
+  double strongest_drop = 0.0, its_area = 0.0, its_weaker_half = 0.0;
+  std::vector<double> gr(2 * channels), gg(2 * channels);
   for (double rho = -across; rho <= across + 1e-9; rho += 0.25) {
     if (std::abs(rho - p(0)) < gap) continue;
     std::fill(gr.begin(), gr.end(), 0.0);
@@ -314,20 +319,28 @@ bool YarnBeside(const std::vector<YarnSample>& samples, int channels, double blu
     for (size_t i = 0; i < samples.size(); ++i) {
       const YarnSample& s = samples[i];
       const double g = StripValue(s.v - rho - p(1) * s.u, p(2), blur);
-      gr[s.channel] += g * residual[i];
-      gg[s.channel] += g * g;
+      const int at = (s.u < u_mid ? 0 : channels) + s.channel;
+      gr[at] += g * residual[i];
+      gg[at] += g * g;
     }
     // Each channel's area of the second yarn by least squares on the residuals, and how much
-    // it lowers them.
-    double drop = 0.0, second = 0.0;
+    // it lowers them, in all and in each half.
+    double drop = 0.0, half_drop[2] = {0.0, 0.0}, second = 0.0;
     for (int c = 0; c < channels; ++c) {
-      if (!(gg[c] > 0.0) || gr[c] * bright <= 0.0) continue;
-      drop += gr[c] * gr[c] / gg[c];
-      second += (gr[c] / gg[c]) * (gr[c] / gg[c]);
+      const double r = gr[c] + gr[channels + c], q = gg[c] + gg[channels + c];
+      if (!(q > 0.0) || r * bright <= 0.0) continue;
+      const double a = r / q;
+      drop += r * a;
+      for (int h = 0; h < 2; ++h)
+        half_drop[h] += 2.0 * a * gr[h * channels + c] - a * a * gg[h * channels + c];
+      second += a * a;
     }
-    if (drop > strongest_drop) strongest_drop = drop, its_area = std::sqrt(second);
+    if (drop > strongest_drop)
+      strongest_drop = drop, its_area = std::sqrt(second),
+      its_weaker_half = std::min(half_drop[0], half_drop[1]);
   }
-  return strongest_drop > significance * variance && its_area >= fraction * area;
+  return strongest_drop > significance * variance && its_area >= fraction * area &&
+         its_weaker_half >= 0.2 * strongest_drop;
 }
 
 }  // namespace
@@ -1017,9 +1030,84 @@ std::optional<Junction> KnotDetector::RefineOver(const Junction& j, double from,
       if (YarnBeside(branch_samples[b], channels, o_.yarn_blur_px, branch_fits[b], o_.beside_gap_px,
                      across, o_.beside_significance, o_.beside_fraction))
         return std::nullopt;
+  // An edge junction: where its straight pair's colour changes.
+  if (angles.size() == 3 && lines.size() == 3)
+    for (int i = 0; i < 3; ++i)
+      for (int k = i + 1; k < 3; ++k)
+        if (AngleBetween(angles[fitted[i]], angles[fitted[k]]) >
+            o_.straight_angle_deg * M_PI / 180) {
+          const int l = 3 - i - k;
+          const double step =
+              ColourStep(out.px, lines[i], lines[k], lines[l], branch_fits[fitted[i]].params,
+                         branch_fits[fitted[k]].params, branch_fits[fitted[l]].params);
+          out.colour_step =
+              out.px + step * (lines[k].second - lines[i].second).normalized();
+        }
   out.confidence = std::clamp((out.contrast - 1.0) / 2.0, 0.0, 1.0) *
                    std::exp(-0.5 * (out.fit_rms_px / 0.5) * (out.fit_rms_px / 0.5));
   return out;
+}
+
+double KnotDetector::ColourStep(const Eigen::Vector2d& px, const Line& a, const Line& b,
+                                const Line& l, const Eigen::VectorXd& pa,
+                                const Eigen::VectorXd& pb, const Eigen::VectorXd& pl) const {
+  const int channels = diff_.channels();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const Eigen::VectorXd ca = pa.segment(3, channels), cb = pb.segment(3, channels);
+  if (!(ca.norm() > 0.0) || !(cb.norm() > 0.0) ||
+      (ca.normalized() - cb.normalized()).norm() < 0.5)
+    return nan;
+  const Eigen::VectorXd offset =
+      (pa.segment(3 + channels, channels) + pb.segment(3 + channels, channels) +
+       pl.segment(3 + channels, channels)) / 3.0;
+  const Eigen::VectorXd cl = pl.segment(3, channels);
+  const double blur = o_.yarn_blur_px;
+  const Eigen::Vector2d e = (b.second - a.second).normalized();  // along the pair, towards b
+  auto normal = [](const Line& line) { return Eigen::Vector2d(-line.second.y(), line.second.x()); };
+  const Eigen::Vector2d na = normal(a), nb = normal(b), nl = normal(l);
+  const BayerPattern pattern = static_cast<BayerPattern>(pattern_);
+  // The samples within 8 px of the junction: each one's place along the pair, each yarn's
+  // strip value there (the lone yarn's ending at the junction), channel and value.
+  struct Sample {
+    double t, sa, sb, sl;
+    int channel;
+    double value;
+  };
+  std::vector<Sample> samples;
+  constexpr double kReach = 8.0;
+  const auto cdf = [&](double x) { return 0.5 * std::erfc(-x / (std::sqrt(2.0) * blur)); };
+  for (int y = static_cast<int>(std::floor(px.y() - kReach)) - roi_.y;
+       y <= static_cast<int>(std::ceil(px.y() + kReach)) - roi_.y; ++y)
+    for (int x = static_cast<int>(std::floor(px.x() - kReach)) - roi_.x;
+         x <= static_cast<int>(std::ceil(px.x() + kReach)) - roi_.x; ++x) {
+      if (x < 0 || y < 0 || x >= diff_.cols || y >= diff_.rows || masked_.at<uchar>(y, x)) continue;
+      const Eigen::Vector2d q(x + roi_.x, y + roi_.y);
+      if ((q - px).norm() > kReach) continue;
+      const double va = (q - a.first).dot(na), vb = (q - b.first).dot(nb),
+                   vl = (q - l.first).dot(nl);
+      const double sa = StripValue(va, pa(2), blur), sb = StripValue(vb, pb(2), blur),
+                   sl = StripValue(vl, pl(2), blur) * cdf((q - px).dot(l.second));
+      const double t = (q - px).dot(e);
+      if (pattern != BayerPattern::kNone) {
+        const int c = BayerColor(pattern, y, x);
+        samples.push_back({t, sa, sb, sl, c, diff_.ptr<float>(y)[3 * x + c]});
+      } else {
+        for (int c = 0; c < channels; ++c)
+          samples.push_back({t, sa, sb, sl, c, diff_.ptr<float>(y)[channels * x + c]});
+      }
+    }
+  double best = std::numeric_limits<double>::infinity(), best_s = nan;
+  for (double s = -6.0; s <= 6.0 + 1e-9; s += 0.1) {
+    double sse = 0.0;
+    for (const Sample& m : samples) {
+      const double w = cdf(m.t - s);
+      const double model = offset(m.channel) + (1.0 - w) * ca(m.channel) * m.sa +
+                           w * cb(m.channel) * m.sb + cl(m.channel) * m.sl;
+      sse += (m.value - model) * (m.value - model);
+    }
+    if (sse < best) best = sse, best_s = s;
+  }
+  return best_s;
 }
 
 std::optional<Junction> KnotDetector::Examine(const Eigen::Vector2d& px) const {

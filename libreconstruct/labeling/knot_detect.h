@@ -49,6 +49,7 @@
 // Find Node (the circular brush): every junction inside the brush, refined and merged; exactly
 // one is returned as found, none or several (with the candidates) are said so — never a guess.
 
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -126,6 +127,10 @@ struct Junction {
   int fitted_branches = 0;   // branches whose yarn was fitted (a branch of four may be left out)
   double sigma_px = 0.0;     // the largest standard deviation of px from the lines' offsets
   double contrast = 0.0;     // weakest branch peak / the peak threshold (> 1)
+  // An edge junction (three yarns, two of them one straight line): where on that line the
+  // colour changes from one link's dye to the other's; NaN where the two links' colours are
+  // too alike to tell, or not an edge junction.
+  Eigen::Vector2d colour_step = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
   double confidence = 0.0;   // 0..1 from contrast and fit
   bool solid = false;        // the centre of a solid (corner mass), not a yarn junction;
                              // branches: the yarns leaving it, fit_rms_px: its outline's RMS
@@ -176,6 +181,13 @@ class KnotDetector {
   // when the junction was refused because a yarn that alone places it bends (lone_bend_px).
   std::optional<Junction> RefineOver(const Junction& j, double from, double to,
                                      bool* lone_bends = nullptr) const;
+  // ColourStep: the colour step along a straight pair of fitted yarns `a`, `b` (lines: a point
+  // and the direction away from the junction `px`; fits: their colours), with the lone yarn `l`
+  // ending at px; NaN where a's and b's colours are too alike.
+  using Line = std::pair<Eigen::Vector2d, Eigen::Vector2d>;
+  double ColourStep(const Eigen::Vector2d& px, const Line& a, const Line& b, const Line& l,
+                    const Eigen::VectorXd& pa, const Eigen::VectorXd& pb,
+                    const Eigen::VectorXd& pl) const;
   // The solids among the blobs (CV_8U), their centres from the outline in `level` (CV_32F, the
   // distance of each pixel's colour from the region's median colour); sets masked_ and solids_.
   void FindSolids(const cv::Mat& blobs, const cv::Mat& level);

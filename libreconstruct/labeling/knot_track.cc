@@ -86,8 +86,12 @@ bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot*
       FindNode(to, predicted, options.snap_radius_px, options.detector).candidates;
   t->px = predicted;
   if (near.empty()) {
-    if (t->why.empty())
-      t->why = "no junction within " + std::to_string(options.snap_radius_px) + " px of the flow";
+    if (t->why.empty()) {
+      char why[64];
+      std::snprintf(why, sizeof why, "no junction within %.1f px of the flow",
+                    options.snap_radius_px);
+      t->why = why;
+    }
     return false;
   }
   if (near.size() > 1) {

@@ -389,8 +389,21 @@ FindNodeResult LabelEngine::FindNodeAt(int camera, int t, int knot, const Eigen:
   return r;
 }
 
+bool LabelEngine::EdgeColourAgrees(const Junction& j) const {
+  return !(o_.edge_colour_step_px > 0.0) || !j.colour_step.allFinite() ||
+         (j.colour_step - j.px).norm() <= o_.edge_colour_step_px;
+}
+
 std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junction& j) const {
   const LabelSet& set = store_->labels();
+  // A knotless edge knot is where its straight links' colours change.
+  if (!EdgeColourAgrees(j)) {
+    char why[120];
+    std::snprintf(why, sizeof why,
+                  "the colours of its straight yarns change %.1f px from the junction",
+                  (j.colour_step - j.px).norm());
+    return why;
+  }
   // Its yarns against its accepted neighbours in this view.
   const NeighbourSlots slots = Slots(camera, t, knot, {});
   if (KnownLinkAngles(j.px, slots).size() >= 2 &&
@@ -756,6 +769,7 @@ std::optional<LabelEdit> LabelEngine::SearchAtProjection(FrameCheck* f, const Fi
   const FindNodeResult r = FindNode(view.image, q, o_.projection_tolerance_px + 1.5, o_.detector);
   if (r.status == FindNodeStatus::kFound &&
       (r.knot.px - q).norm() <= o_.projection_tolerance_px && !TakenNear(*f, c, k, r.knot.px) &&
+      EdgeColourAgrees(r.knot) &&
       BranchesMatchLinks(r.knot, Slots(c, f->t, k, f->point), o_.branch_tolerance_deg))
     return LabelEdit{c, f->t, k,
                      Made(r.knot.px, LabelSource::kFillGrid, r.knot.confidence, true)};
@@ -854,7 +868,7 @@ std::optional<LabelEngine::FillCandidate> LabelEngine::SearchRegion(
       bool merged = false;
       for (const Junction& n : near)
         merged = merged || (n.px - j->px).norm() < o_.detector.merge_px;
-      if (!merged && !TakenNear(*f, c, k, j->px) &&
+      if (!merged && !TakenNear(*f, c, k, j->px) && EdgeColourAgrees(*j) &&
           BranchesMatchLinks(*j, Slots(c, f->t, k, f->point), o_.branch_tolerance_deg))
         near.push_back(*j);
     }
@@ -871,6 +885,7 @@ std::optional<LabelEngine::FillCandidate> LabelEngine::SearchImageGrid(FrameChec
   if (!g || !view.Inside(g->px) || f->Repeat(c, k, g->px)) return std::nullopt;
   const FindNodeResult r = FindNode(view.image, g->px, 0.3 * g->spacing, o_.detector);
   if (r.status == FindNodeStatus::kFound && !TakenNear(*f, c, k, r.knot.px) &&
+      EdgeColourAgrees(r.knot) &&
       BranchesMatchLinks(r.knot, Slots(c, f->t, k, f->point), o_.branch_tolerance_deg))
     return FillCandidate{c, r.knot.px, r.knot.confidence,
                          "the image grid of its labeled neighbours"};

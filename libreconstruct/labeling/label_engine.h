@@ -34,6 +34,8 @@
 //     triangulate consistently to a point at link length (within link_tolerance) from its
 //     triangulated neighbours, and their yarns leave towards the knot's neighbours (as many as
 //     its degree); otherwise they stay for review.
+//     For a knotless net (edge_colour_step_px), an edge knot's junction must also lie where the
+//     colour of its straight pair of links changes.
 // Colour check (SetCodebook): a label whose yarn colours contradict its knot's is flagged.
 // Without a rig (or with one camera) CrossCheck does the image-space part only, for review.
 
@@ -83,6 +85,11 @@ struct LabelEngineOptions {
   // (each within this angle, deg) and their number is the knot's degree.
   double branch_tolerance_deg = 10.0;
   int fill_passes = 4;
+  // Knotless nets (no knot ball: each link's dye ends at the junction): a junction Fill Grid or
+  // Find Node finds for an edge knot is doubted where the colour of its straight pair of links
+  // changes farther than this from it (px, Junction::colour_step). 0: off, for knotted nets,
+  // whose knot ball moves the change 1-2.5 px.
+  double edge_colour_step_px = 0.0;
 };
 
 // Per camera, frame and knot: why a label needs review (absent: it does not, or there is none):
@@ -191,6 +198,9 @@ class LabelEngine {
   // GridSlots of the store's net.
   std::array<int, 4> SlotKnots(int knot) const;
   std::vector<int> Neighbours(int knot) const;  // those there are, in that order
+  // Whether an edge junction's colour changes where it is (edge_colour_step_px); true where
+  // that is not checked or cannot be told.
+  bool EdgeColourAgrees(const Junction& j) const;
   // Why a junction Find Node found for `knot` in (camera, t) is doubtful; empty when it is not.
   std::string FoundNodeDoubt(int camera, int t, int knot, const Junction& j) const;
   // The image positions of a knot's neighbours in (camera, t), right, down, left, up: accepted

@@ -50,10 +50,11 @@ Project LoadProject(const std::string& path) {
   }
   if (root.Has("net")) {
     const YamlMap net = root.Map("net");
-    net.AllowOnly({"rows", "cols", "mesh"});
+    net.AllowOnly({"rows", "cols", "mesh", "knotless"});
     p.rows = net.Int("rows");
     p.cols = net.Int("cols");
     p.mesh_m = net.Positive("mesh", 0.0, true);
+    p.knotless = net.Bool("knotless", false);
     if (p.rows < 2 || p.cols < 2 || p.rows > 1000 || p.cols > 1000)
       throw InputError(net.Where("rows") + ": the net needs 2..1000 rows and columns (got " +
                        std::to_string(p.rows) + "x" + std::to_string(p.cols) + ")");
@@ -81,6 +82,7 @@ void SaveProject(const Project& project, const std::string& path) {
   out << YAML::Key << "rows" << YAML::Value << project.rows;
   out << YAML::Key << "cols" << YAML::Value << project.cols;
   if (project.mesh_m > 0) out << YAML::Key << "mesh" << YAML::Value << project.mesh_m;
+  if (project.knotless) out << YAML::Key << "knotless" << YAML::Value << true;
   out << YAML::EndMap;
   out << YAML::Key << "illumination" << YAML::Value << project.illumination;
   out << YAML::EndMap;

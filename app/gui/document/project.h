@@ -8,7 +8,8 @@
 //   rig: rig.yaml                       # the calibrated rig; its cameras include the experiment's
 //   coloring: coloring.yaml             # optional: the yarn colours (netlab color-net)
 //   labels: labels.h5                   # created on the first save when it does not exist
-//   net: {rows: 11, cols: 11, mesh: 0.1}  # the grid; mesh (m, knot to knot) optional
+//   net: {rows: 11, cols: 11, mesh: 0.1}  # the grid; mesh (m, knot to knot) optional; and
+//                                       # knotless: true for a net without knot balls (Net B)
 //   illumination: 0.85                  # optional: how brightly the yarns are lit, for the colour
 //                                       # check (a white dye reads this of sensor white; netlab
 //                                       # label's --illumination, default netlab render's 0.85)
@@ -28,6 +29,7 @@ struct Project {
   std::string labels;
   int rows = 0, cols = 0;  // the net's knots
   double mesh_m = 0.0;     // link length, m; 0: estimated by the engine
+  bool knotless = false;   // no knot balls: an edge knot is where its links' colours change
   double illumination = 0.85;  // the colour check's exposure (netlab label --illumination)
 
   int knots() const { return rows * cols; }

@@ -89,6 +89,7 @@ std::unique_ptr<Session> Session::Open(const Project& project,
     s->identity_.identify.bayer = s->sequence_->experiment().cameras.front().bayer;
   }
   s->engine_options_.link_length_m = project.mesh_m;
+  if (project.knotless) s->engine_options_.edge_colour_step_px = 1.0;
   s->cache_ = std::make_unique<recon::FrameCache>(*s->sequence_, cache_options);
   s->document_ = std::make_unique<LabelDocument>(
       OpenLabels(project, s->camera_names_, s->frame_numbers_), project.labels);

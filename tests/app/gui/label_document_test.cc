@@ -2,6 +2,7 @@
 // that recovers every edit since the last save, and a save that never loses the previous file.
 
 #include "app/gui/document/label_document.h"
+#include "app/gui/document/project.h"
 
 #include <gtest/gtest.h>
 
@@ -269,6 +270,38 @@ TEST_F(LabelDocumentTest, AFailedSaveLeavesThePreviousFileAndTheJournal) {
   const recon::LabelSet on_disk = recon::ReadLabels(path_);
   EXPECT_TRUE(on_disk.at(0, 0, 0).present());
   EXPECT_FALSE(on_disk.at(0, 0, 1).present());
+}
+
+// The project file keeps whether the net is knotless (Net B: no knot balls) through a save and a
+// load; a value that is no yes or no is refused by name and line.
+TEST(ProjectFile, KeepsAKnotlessNetAndRefusesAnUnclearOne) {
+  const fs::path dir = fs::temp_directory_path() / "netlab_project_knotless";
+  fs::create_directories(dir);
+  Project p;
+  p.experiment = (dir / "shot/experiment.yaml").string();
+  p.rig = (dir / "rig.yaml").string();
+  p.labels = (dir / "labels.h5").string();
+  p.rows = 17, p.cols = 17;
+  p.knotless = true;
+  const std::string path = (dir / "project.yaml").string();
+  SaveProject(p, path);
+  EXPECT_TRUE(LoadProject(path).knotless);
+  p.knotless = false;
+  SaveProject(p, path);
+  EXPECT_FALSE(LoadProject(path).knotless);
+  {
+    std::ofstream out(path);
+    out << "netlab_project: 1\nexperiment: shot/experiment.yaml\nrig: rig.yaml\n"
+           "labels: labels.h5\nnet: {rows: 17, cols: 17, knotless: perhaps}\n";
+  }
+  try {
+    LoadProject(path);
+    FAIL() << "an unclear knotless was taken";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("knotless"), std::string::npos) << e.what();
+    std::printf("%s\n", e.what());
+  }
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -339,7 +339,7 @@ TEST(SequenceWarnings, NameTheNoiseThePriorAndTheUntriangulatedInThatOrder) {
   const std::vector<std::string> w = SequenceWarnings(r);
   ASSERT_EQ(w.size(), 3u);
   EXPECT_EQ(w[0],
-            "the labelling noise (0.500000 px) is more than a quarter of --outlier-px: good labels "
+            "the labelling noise (0.50 px) is more than a quarter of --outlier-px: good labels "
             "are being rejected; raise --outlier-px to ~5x the noise");
   EXPECT_EQ(w[1],
             "3 points seen by three or more cameras are pulled beyond the outlier threshold by the "

@@ -4,6 +4,8 @@
 
 #include <cstdio>
 #include <random>
+#include <tuple>
+#include <vector>
 
 #include <opencv2/imgproc.hpp>
 
@@ -242,34 +244,41 @@ TEST(FindNode, FindsTheKnotWhereItsLinksTurnSharplyNearIt) {
   EXPECT_LT(worst, 0.5);
 }
 
-// A T junction of 1 px yarns (red across, green from below) drawn 8 times larger and shrunk,
-// on black; with `beside`, a dimmer blue yarn runs across it `beside` px above the red one
-// (another part of the net behind, a fold seen edge-on).
-cv::Mat TJunction(const Eigen::Vector2d& at, double beside) {
+// 1 px yarns, each (from, to, BGR colour 0..1) in a 64 x 64 image, drawn in order 8 times
+// larger on black and shrunk.
+using Yarn = std::tuple<Eigen::Vector2d, Eigen::Vector2d, cv::Scalar>;
+cv::Mat DrawYarns(const std::vector<Yarn>& yarns) {
   constexpr int kScale = 8, kSize = 64;
   cv::Mat big(kSize * kScale, kSize * kScale, CV_32FC3, cv::Scalar::all(0));
-  auto line = [&](Eigen::Vector2d a, Eigen::Vector2d b, const cv::Scalar& colour) {
-    // cv::line's fixed point: 3 fractional bits, on the 8 times larger image.
-    auto point = [&](const Eigen::Vector2d& q) {
-      return cv::Point(static_cast<int>(std::lround((q.x() + 0.5) * kScale * 8 - 0.5 * 8)),
-                       static_cast<int>(std::lround((q.y() + 0.5) * kScale * 8 - 0.5 * 8)));
-    };
-    cv::line(big, point(a), point(b), colour, kScale, cv::LINE_AA, 3);
+  // cv::line's fixed point: 3 fractional bits, on the 8 times larger image.
+  auto point = [&](const Eigen::Vector2d& q) {
+    return cv::Point(static_cast<int>(std::lround((q.x() + 0.5) * kScale * 8 - 0.5 * 8)),
+                     static_cast<int>(std::lround((q.y() + 0.5) * kScale * 8 - 0.5 * 8)));
   };
-  // Through `at`, turned a little off the pixel axes.
-  const Eigen::Vector2d across(1.0, 0.01), down(-0.05, 1.0);
-  line(at - at.x() * across, at + (kSize - 1 - at.x()) * across, cv::Scalar(0.05, 0.05, 0.8));
-  line(at, at + (kSize - 1 - at.y()) * down, cv::Scalar(0.05, 0.7, 0.05));
-  if (beside > 0.0) {
-    const Eigen::Vector2d above = at - Eigen::Vector2d(0.0, beside);
-    line(above - at.x() * across, above + (kSize - 1 - at.x()) * across,
-         cv::Scalar(0.5, 0.05, 0.05));
-  }
+  for (const auto& [a, b, colour] : yarns)
+    cv::line(big, point(a), point(b), colour, kScale, cv::LINE_AA, 3);
   cv::Mat small;
   cv::resize(big, small, cv::Size(kSize, kSize), 0, 0, cv::INTER_AREA);
   cv::Mat eight;
   small.convertTo(eight, CV_8UC3, 255.0);
   return eight;
+}
+
+// Through a junction at `at`, turned a little off the pixel axes: the straight yarn across and
+// the inner yarn from below, to the image's edges (64 px).
+const Eigen::Vector2d kAcross(1.0, 0.01), kDown(-0.05, 1.0);
+Eigen::Vector2d LeftEnd(const Eigen::Vector2d& at) { return at - at.x() * kAcross; }
+Eigen::Vector2d RightEnd(const Eigen::Vector2d& at) { return at + (63 - at.x()) * kAcross; }
+Eigen::Vector2d BottomEnd(const Eigen::Vector2d& at) { return at + (63 - at.y()) * kDown; }
+
+// A T junction (red across, green from below); with `beside`, a dimmer blue yarn runs across it
+// `beside` px above the red one (another part of the net behind, a fold seen edge-on).
+cv::Mat TJunction(const Eigen::Vector2d& at, double beside) {
+  std::vector<Yarn> yarns = {{LeftEnd(at), RightEnd(at), cv::Scalar(0.05, 0.05, 0.8)},
+                             {at, BottomEnd(at), cv::Scalar(0.05, 0.7, 0.05)}};
+  const Eigen::Vector2d above = at - Eigen::Vector2d(0.0, beside);
+  if (beside > 0.0) yarns.emplace_back(LeftEnd(above), RightEnd(above), cv::Scalar(0.5, 0.05, 0.05));
+  return DrawYarns(yarns);
 }
 
 // A junction with a second yarn beside one of its own is not known across the two: the rings
@@ -296,6 +305,37 @@ TEST(FindNode, RefusesAJunctionWithAnotherYarnBesideItsOwn) {
                 f.status == FindNodeStatus::kFound ? "found" : "not found");
     EXPECT_NE(f.status, FindNodeStatus::kFound) << beside << " px";
   }
+}
+
+// An edge junction of a knotless net, as TJunction: the straight yarn red to the left and blue
+// to the right of where its colour changes (`change` px right of the junction), the inner yarn
+// green from below.
+cv::Mat EdgeJunction(const Eigen::Vector2d& at, double change, bool same_colour = false) {
+  const Eigen::Vector2d step = at + change * kAcross;
+  const cv::Scalar red(0.05, 0.05, 0.8), blue(0.8, 0.1, 0.05);
+  return DrawYarns({{LeftEnd(at), step, red},
+                    {step, RightEnd(at), same_colour ? red : blue},
+                    {at, BottomEnd(at), cv::Scalar(0.05, 0.7, 0.05)}});
+}
+
+// Where the colour of an edge junction's straight pair changes: at the junction of a knotless
+// net, 2 px beside it where it changes there (to half a yarn's width: the blue line, drawn last,
+// covers the red one's round end; told 0.0, 1.6 and -2.3 px); not told where the two links have
+// one colour.
+TEST(FindNode, TellsWhereTheColourOfAnEdgeJunctionsStraightYarnChanges) {
+  const Eigen::Vector2d at(31.3, 30.6);
+  for (const double change : {0.0, 2.0, -2.0}) {
+    const FindNodeResult r = FindNode(EdgeJunction(at, change), at, 6);
+    ASSERT_EQ(r.status, FindNodeStatus::kFound) << change;
+    EXPECT_LT((r.knot.px - at).norm(), 0.3) << change;
+    ASSERT_TRUE(r.knot.colour_step.allFinite()) << change;
+    const double along = (r.knot.colour_step - r.knot.px).dot(kAcross.normalized());
+    std::printf("colour changes %.1f px from the junction: told %.2f px\n", change, along);
+    EXPECT_NEAR(along, change, 0.5) << change;
+  }
+  const FindNodeResult one = FindNode(EdgeJunction(at, 0.0, true), at, 6);
+  ASSERT_EQ(one.status, FindNodeStatus::kFound);
+  EXPECT_FALSE(one.knot.colour_step.allFinite());
 }
 
 TEST(FindNode, FindsNoJunctionOnThePlainYarnsOfADemosaicedFrame) {

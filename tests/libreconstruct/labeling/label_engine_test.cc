@@ -4,10 +4,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <vector>
 
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "calibration/rig.h"
 #include "libreconstruct/geometry/triangulation.h"
@@ -437,6 +439,53 @@ TEST(LabelEngine, FindNodeOnAnotherKnotIsKeptForReview) {
             FindNodeStatus::kFound);
   EXPECT_EQ(store.at(0, 0, 12).state, LabelState::kAccepted);
   EXPECT_FALSE(engine.reasons().count({0, 0, 12}));
+}
+
+// Knot 2, on the edge, in camera a with its left link's colour painted 2.5 px on into its right
+// link: the junction stays where it is, but the colour of the straight pair changes 2.5 px from
+// it. Of a knotless net (edge_colour_step_px), Find Node keeps it for review with the reason;
+// otherwise (a knot ball moves the change) accepts it.
+TEST(LabelEngine, FindNodeDoubtsAKnotlessEdgeKnotWhereItsColourDoesNotChange) {
+  Shot shot = Render(1);
+  const Eigen::Vector2d knot = shot.Truth(0, 0, 2);
+  const Eigen::Vector2d left = 0.5 * (shot.Truth(0, 0, 1) + knot);
+  const Eigen::Vector2d along = (shot.Truth(0, 0, 3) - knot).normalized();
+  cv::Mat& image = shot.images[0][0];
+  // As rendered, the colour changes at the junction.
+  const FindNodeResult as_rendered = FindNode(image, knot, 6.0);
+  ASSERT_EQ(as_rendered.status, FindNodeStatus::kFound);
+  ASSERT_TRUE(as_rendered.knot.colour_step.allFinite());
+  EXPECT_LT((as_rendered.knot.colour_step - as_rendered.knot.px).norm(), 0.5);
+  const cv::Vec3b colour = image.at<cv::Vec3b>(static_cast<int>(std::lround(left.y())),
+                                               static_cast<int>(std::lround(left.x())));
+  auto point = [](const Eigen::Vector2d& q) {  // cv::line's fixed point, 4 fractional bits
+    return cv::Point(static_cast<int>(std::lround(q.x() * 16)),
+                     static_cast<int>(std::lround(q.y() * 16)));
+  };
+  cv::line(image, point(knot), point(knot + 2.5 * along), cv::Scalar(colour[0], colour[1], colour[2]),
+           2, cv::LINE_AA, 4);
+  for (const double step_px : {1.0, 0.0}) {
+    LabelSet labels = Empty(shot);
+    LabelStore store(std::move(labels));
+    LabelEngineOptions options;
+    options.edge_colour_step_px = step_px;
+    LabelEngine engine(&store, &shot.rig, Images(shot), options);
+    const FindNodeResult r = engine.FindNodeAt(0, 0, 2, knot, 6.0);
+    ASSERT_EQ(r.status, FindNodeStatus::kFound) << r.why;
+    EXPECT_LT((r.knot.px - knot).norm(), 0.5);
+    ASSERT_TRUE(r.knot.colour_step.allFinite());
+    std::printf("the colour changes %.2f px from the junction\n",
+                (r.knot.colour_step - r.knot.px).norm());
+    if (step_px > 0.0) {
+      EXPECT_EQ(store.at(0, 0, 2).state, LabelState::kNeedsReview);
+      ASSERT_TRUE(engine.reasons().count({0, 0, 2}));
+      EXPECT_NE(engine.reasons().at({0, 0, 2}).find("colours of its straight yarns change"),
+                std::string::npos)
+          << engine.reasons().at({0, 0, 2});
+    } else {
+      EXPECT_EQ(store.at(0, 0, 2).state, LabelState::kAccepted);
+    }
+  }
 }
 
 // A hidden mark is the person's word that the knot is not visible there: Find Path, Fill Grid
