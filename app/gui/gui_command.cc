@@ -1,5 +1,6 @@
 // netlab gui [PROJECT.yaml [--frame N] [--review N] [--screenshot OUT.png [--keys KEYS]]]
-// netlab gui EXPERIMENT.yaml --rig RIG --labels LABELS [--coloring C] [--knots RxC] [--project P]
+// netlab gui EXPERIMENT.yaml --rig RIG --labels LABELS [--coloring C] [--knots RxC] [--knotless]
+//            [--project P]
 #include "app/gui/gui_command.h"
 
 #include <QAction>
@@ -22,7 +23,7 @@ namespace {
 constexpr char kHelp[] =
     "usage: netlab gui [PROJECT.yaml] [--frame N] [--review N] [--screenshot OUT.png [--keys KEYS]]\n"
     "       netlab gui EXPERIMENT.yaml --rig rig.yaml --labels labels.h5 [--coloring C.yaml]\n"
-    "                  [--knots RxC] [--project project.yaml]\n\n"
+    "                  [--knots RxC] [--knotless] [--project project.yaml]\n\n"
     "The labeling workstation (docs/gui.md): four synchronized camera views, Find Node, Find\n"
     "Path, Fill Grid and tracking as undoable steps, the review queue, autosave with recovery.\n"
     "  netlab gui                  an empty window: File > Open / New project, recent projects\n"
@@ -39,7 +40,9 @@ constexpr char kHelp[] =
     "  --keys KEYS         with --screenshot: first press these keys of the window, separated\n"
     "                      by ';' (e.g. \"G\": a Fill Grid preview; \"M;E\"), and wait for what\n"
     "                      they start (not keys that open a dialog: F1, Ctrl+G, Ctrl+T, ...)\n"
-    "  --rig, --labels, --coloring FILE, --knots RxC (without a colouring), --project FILE\n\n"
+    "  --rig, --labels, --coloring FILE, --knots RxC (without a colouring), --project FILE\n"
+    "  --knotless          the net has no knot balls (Net B): an edge knot must lie where its\n"
+    "                      straight links' colours change (the project's net: {knotless: true})\n\n"
     "Keys: F1 in the window lists them all. exit status: 0, 1 bad input, 2 usage error.\n";
 
 bool IsProjectFile(const std::string& path) {
@@ -79,7 +82,7 @@ int RunGui(const std::vector<std::string>& args) {
   int frame = -1, review = 0;
   try {
     const app::CommandLine cl(
-        args, {"help"},
+        args, {"help", "knotless"},
         {"frame", "review", "screenshot", "keys", "rig", "labels", "coloring", "knots",
          "project"});
     if (cl.Flag("help")) {
@@ -102,8 +105,9 @@ int RunGui(const std::vector<std::string>& args) {
         int rows = 0, cols = 0;
         if (cl.Option("knots")) cl.Knots("knots", &rows, &cols);
         const std::string labels = cl.Required("labels");
-        const Project project = MakeProject(file, cl.Required("rig"),
-                                            cl.Option("coloring").value_or(""), labels, rows, cols);
+        Project project = MakeProject(file, cl.Required("rig"), cl.Option("coloring").value_or(""),
+                                      labels, rows, cols);
+        project.knotless = cl.Flag("knotless");
         project_path = cl.Option("project").value_or(
             (std::filesystem::absolute(labels).parent_path() / "project.yaml").string());
         SaveProject(project, project_path);

@@ -1062,6 +1062,21 @@ TEST_F(MainWindowTest, TheScreenshotCanPressGFirstAndNamesAKeyNoActionHas) {
   EXPECT_NE(alone.err.find("--keys needs --screenshot"), std::string::npos) << alone.err;
 }
 
+// netlab gui EXPERIMENT.yaml ... --knotless makes the project of a knotless net (Net B), and
+// opens it.
+TEST_F(MainWindowTest, TheCommandLineMakesAKnotlessProject) {
+  const std::string d = Dir().string();
+  const std::string project = d + "/knotless_cli.yaml";
+  fs::remove(d + "/knotless_cli.h5");
+  const auto made = RunNetlab("gui " + d + "/shot/experiment.yaml --rig " + d +
+                              "/shot/rig_true.yaml --coloring " + d + "/coloring.yaml --labels " +
+                              d + "/knotless_cli.h5 --knotless --project " + project +
+                              " --screenshot " + d + "/knotless_cli.png");
+  ASSERT_EQ(made.status, 0) << made.err;
+  EXPECT_TRUE(LoadProject(project).knotless);
+  EXPECT_TRUE(fs::exists(d + "/knotless_cli.png"));
+}
+
 // The preview's two actions are in F1's cheat sheet with their keys, and in the shortcut editor
 // (changeable as the others), where their defaults clash with no other action's.
 // (No project: the actions are there from the start, so no shot is rendered for this test.)
