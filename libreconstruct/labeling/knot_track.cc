@@ -98,15 +98,29 @@ bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot*
     t->why = std::to_string(near.size()) + " junctions within the snap radius";
     return false;
   }
-  t->px = near[0].px;
-  t->confidence = near[0].confidence;
+  const Junction& j = near[0];
+  t->px = j.px;
+  t->confidence = j.confidence;
+  if (j.branches == degree) return true;
   // One yarn short (a dim dye, a yarn that fades against the target) is the knot when each
-  // yarn found leads to one of its own neighbours.
-  const bool one_short = options.max_yarn_angle_deg > 0 && degree >= 3 &&
-                         near[0].branches == degree - 1 && YarnsPointAtNeighbours(i, near[0]);
-  if (near[0].branches != degree && !one_short) {
-    t->why = "the junction there has " + std::to_string(near[0].branches) + " yarns, the knot " +
-             std::to_string(degree);
+  // yarn found leads to one of its own neighbours, and, on a knotless net, where its straight
+  // pair's colour changes.
+  const bool short_one = options.max_yarn_angle_deg > 0 && degree >= 3 &&
+                         j.branches == degree - 1 && YarnsPointAtNeighbours(i, j);
+  char why[128];
+  if (!short_one) {
+    std::snprintf(why, sizeof why, "the junction there has %d yarns, the knot %d", j.branches,
+                  degree);
+    t->why = why;
+    return false;
+  }
+  if (options.edge_colour_step_px > 0.0 && j.colour_step.allFinite() &&
+      (j.colour_step - j.px).norm() > options.edge_colour_step_px) {
+    std::snprintf(why, sizeof why,
+                  "the junction there has %d yarns, and the colours of its straight yarns "
+                  "change %.1f px from it",
+                  j.branches, (j.colour_step - j.px).norm());
+    t->why = why;
     return false;
   }
   return true;

@@ -55,6 +55,11 @@ struct TrackOptions {
   // degree must be met. On the knotless Net B (20 frames) a quarter of the person's fixes were
   // such junctions, every one of them within 1 px of the truth.
   double max_yarn_angle_deg = 15.0;
+  // Knotless nets: such a junction is the knot only where the colour of its straight pair of
+  // yarns changes within this of it (px, Junction::colour_step): its lone yarn alone places it
+  // along the pair, as an edge knot's. 0: not checked (LabelEngine sets it from
+  // edge_colour_step_px).
+  double edge_colour_step_px = 0.0;
   KnotDetectorOptions detector;
 };
 

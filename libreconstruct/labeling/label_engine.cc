@@ -103,6 +103,9 @@ LabelEngine::LabelEngine(LabelStore* store, const calib::Rig* rig, ImageSource i
         throw std::invalid_argument("the rig has no camera '" + set.cameras[c] + "'");
     }
   link_length_m_ = o_.link_length_m;
+  track_options_ = o_.track;
+  if (!(track_options_.edge_colour_step_px > 0.0))
+    track_options_.edge_colour_step_px = o_.edge_colour_step_px;
 }
 
 const cv::Mat& LabelEngine::Image(int camera, int t) {
@@ -358,7 +361,7 @@ EngineCounts LabelEngine::Track(int from, int to) {
     const cv::Mat& b = Image(camera, to);
     if (a.empty() || b.empty()) continue;
     const std::vector<TrackedKnot> tracked =
-        TrackKnots(a, b, knots, set.rows, set.cols, o_.track);
+        TrackKnots(a, b, knots, set.rows, set.cols, track_options_);
     for (size_t i = 0; i < tracked.size(); ++i) {
       const bool accepted = tracked[i].accepted && was_accepted[i];
       edits.push_back({camera, to, tracked[i].knot,

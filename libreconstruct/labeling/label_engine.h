@@ -86,9 +86,9 @@ struct LabelEngineOptions {
   double branch_tolerance_deg = 10.0;
   int fill_passes = 4;
   // Knotless nets (no knot ball: each link's dye ends at the junction): a junction Fill Grid or
-  // Find Node finds for an edge knot is doubted where the colour of its straight pair of links
-  // changes farther than this from it (px, Junction::colour_step). 0: off, for knotted nets,
-  // whose knot ball moves the change 1-2.5 px.
+  // Find Node finds for an edge knot, or tracking for an inner knot one yarn short, is doubted
+  // where the colour of its straight pair of links changes farther than this from it (px,
+  // Junction::colour_step). 0: off, for knotted nets, whose knot ball moves the change 1-2.5 px.
   double edge_colour_step_px = 0.0;
 };
 
@@ -255,6 +255,7 @@ class LabelEngine {
   const calib::Rig* rig_;
   ImageSource images_;
   LabelEngineOptions o_;
+  TrackOptions track_options_;  // o_.track, with edge_colour_step_px's check for a knotless net
   std::vector<int> rig_index_;  // per store camera, its rig index (-1 without a rig)
   std::map<std::pair<int, int>, cv::Mat> cache_;
   ReviewReasons reasons_;

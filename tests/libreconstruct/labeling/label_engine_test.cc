@@ -488,6 +488,51 @@ TEST(LabelEngine, FindNodeDoubtsAKnotlessEdgeKnotWhereItsColourDoesNotChange) {
   }
 }
 
+// Knot 12 without its link to knot 13 (one yarn short: up, down and left), and in camera a's
+// second frame its upper link's colour painted 2.5 px on into its lower one: tracking finds the
+// junction where it is, but the colour of its straight pair changes 2.5 px from it. For a
+// knotless net tracking keeps it for review with the reason; otherwise accepts it.
+TEST(LabelEngine, TrackingDoubtsAKnotlessJunctionOneYarnShortWhereItsColourDoesNotChange) {
+  Shot shot = Render(2, {{12, 13}});
+  const Eigen::Vector2d knot = shot.Truth(0, 1, 12);
+  const Eigen::Vector2d up = 0.5 * (shot.Truth(0, 1, 7) + knot);
+  const Eigen::Vector2d down = (shot.Truth(0, 1, 17) - knot).normalized();
+  cv::Mat& image = shot.images[0][1];
+  const cv::Vec3b colour = image.at<cv::Vec3b>(static_cast<int>(std::lround(up.y())),
+                                               static_cast<int>(std::lround(up.x())));
+  cv::line(image, cv::Point(static_cast<int>(std::lround(knot.x() * 16)),
+                            static_cast<int>(std::lround(knot.y() * 16))),
+           cv::Point(static_cast<int>(std::lround((knot.x() + 2.5 * down.x()) * 16)),
+                     static_cast<int>(std::lround((knot.y() + 2.5 * down.y()) * 16))),
+           cv::Scalar(colour[0], colour[1], colour[2]), 2, cv::LINE_AA, 4);
+  for (const double step_px : {1.0, 0.0}) {
+    LabelSet labels = Empty(shot);
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < kKnots; ++k) labels.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
+    LabelStore store(std::move(labels));
+    LabelEngineOptions options;
+    options.edge_colour_step_px = step_px;
+    LabelEngine engine(&store, &shot.rig, Images(shot), options);
+    engine.Track(0, 1);
+    const Label& l = store.at(0, 1, 12);
+    ASSERT_TRUE(l.present());
+    EXPECT_LT((l.px - knot).norm(), 0.5);
+    if (step_px > 0.0) {
+      EXPECT_EQ(l.state, LabelState::kNeedsReview);
+      ASSERT_TRUE(engine.reasons().count({0, 1, 12}));
+      EXPECT_NE(engine.reasons().at({0, 1, 12}).find("colours of its straight yarns change"),
+                std::string::npos)
+          << engine.reasons().at({0, 1, 12});
+    } else {
+      EXPECT_EQ(l.state, LabelState::kAccepted)
+          << (engine.reasons().count({0, 1, 12}) ? engine.reasons().at({0, 1, 12}) : "");
+    }
+    // Its neighbours, whose colours change where they are, are accepted either way.
+    EXPECT_TRUE(store.at(0, 1, 7).accepted());
+    EXPECT_TRUE(store.at(0, 1, 17).accepted());
+  }
+}
+
 // A hidden mark is the person's word that the knot is not visible there: Find Path, Fill Grid
 // and tracking label every other knot, and leave it as it is (each knot visible in the pictures,
 // so each tool would label it otherwise); the person's brush still labels it.
