@@ -487,12 +487,11 @@ void BenchDetector(const Shot& shot, const BenchOptions& o,
             const double e = (f.knot.px - truth_l.px).norm();
             err.push_back(e);
             if (radius == 3.0 && std::getenv("NETLAB_STEP") && f.knot.branches == 3)
-              std::fprintf(stderr, "step: %s frame %d knot %d junction %.2f apart %.2f step %.2f\n",
-                           shot.cameras[c].c_str(), shot.frames[t], k, e,
-                           f.knot.colour_step.allFinite() ? (f.knot.colour_step - f.knot.px).norm() : -1.0,
-                           f.knot.colour_step.allFinite()
-                               ? (f.knot.colour_step - truth_l.px).norm()
-                               : -1.0);
+              std::fprintf(
+                  stderr, "step: %s frame %d knot %d junction %.2f apart %.2f step %.2f\n",
+                  shot.cameras[c].c_str(), shot.frames[t], k, e,
+                  f.knot.colour_step.allFinite() ? (f.knot.colour_step - f.knot.px).norm() : -1.0,
+                  f.knot.colour_step.allFinite() ? (f.knot.colour_step - truth_l.px).norm() : -1.0);
             over1 += e > 1.0, over2 += e > 2.0;
             if (e > 2.0 && radius == 3.0) {
               std::fprintf(stderr, "over 2 px: %s frame %d knot %d at (%.2f, %.2f), found "

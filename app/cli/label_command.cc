@@ -215,8 +215,9 @@ void PrintJson(const LabelJob& job, const LabelReport& r) {
 
 int RunLabel(const std::vector<std::string>& args) {
   return RunGuarded("label", [&] {
-    const CommandLine cl(args, {"json", "quiet", "help", "no-colour-check", "knotless"},
-                         {"rig", "coloring", "seed", "out", "frames", "mesh", "xypts", "illumination"});
+    const CommandLine cl(
+        args, {"json", "quiet", "help", "no-colour-check", "knotless"},
+        {"rig", "coloring", "seed", "out", "frames", "mesh", "xypts", "illumination"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;

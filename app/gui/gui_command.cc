@@ -83,8 +83,7 @@ int RunGui(const std::vector<std::string>& args) {
   try {
     const app::CommandLine cl(
         args, {"help", "knotless"},
-        {"frame", "review", "screenshot", "keys", "rig", "labels", "coloring", "knots",
-         "project"});
+        {"frame", "review", "screenshot", "keys", "rig", "labels", "coloring", "knots", "project"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;

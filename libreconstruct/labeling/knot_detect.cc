@@ -283,10 +283,10 @@ YarnFit FitYarn(const std::vector<YarnSample>& samples, int channels, double blu
 // centre line and within `across` px of the branch line, where the strongest such yarn (by how
 // much it lowers the residuals) lowers them by more than `significance` times their variance
 // per sample, has at least `fraction` of the fitted yarn's area (the norm over the channels)
-// and does a fifth of that in each half of the strip. Two yarns that close (a fold of the net seen edge-on, another part of the net
-// behind) are one ridge to the rings, and the fit takes one of them: the junction is not known
-// across them (the bunched Net B at 0.8 m/s had three placed 2-2.5 px off this way; on a
-// normal frame about one branch in 2000 has such a yarn).
+// and does a fifth of that in each half of the strip. Two yarns that close (a fold of the net seen
+// edge-on, another part of the net behind) are one ridge to the rings, and the fit takes one of
+// them: the junction is not known across them (the bunched Net B at 0.8 m/s had three placed
+// 2-2.5 px off this way; on a normal frame about one branch in 2000 has such a yarn).
 bool YarnBeside(const std::vector<YarnSample>& samples, int channels, double blur,
                 const YarnFit& fit, double gap, double across, double significance,
                 double fraction) {
@@ -1040,8 +1040,7 @@ std::optional<Junction> KnotDetector::RefineOver(const Junction& j, double from,
           const double step =
               ColourStep(out.px, lines[i], lines[k], lines[l], branch_fits[fitted[i]].params,
                          branch_fits[fitted[k]].params, branch_fits[fitted[l]].params);
-          out.colour_step =
-              out.px + step * (lines[k].second - lines[i].second).normalized();
+          out.colour_step = out.px + step * (lines[k].second - lines[i].second).normalized();
         }
   out.confidence = std::clamp((out.contrast - 1.0) / 2.0, 0.0, 1.0) *
                    std::exp(-0.5 * (out.fit_rms_px / 0.5) * (out.fit_rms_px / 0.5));
@@ -1049,17 +1048,17 @@ std::optional<Junction> KnotDetector::RefineOver(const Junction& j, double from,
 }
 
 double KnotDetector::ColourStep(const Eigen::Vector2d& px, const Line& a, const Line& b,
-                                const Line& l, const Eigen::VectorXd& pa,
-                                const Eigen::VectorXd& pb, const Eigen::VectorXd& pl) const {
+                                const Line& l, const Eigen::VectorXd& pa, const Eigen::VectorXd& pb,
+                                const Eigen::VectorXd& pl) const {
   const int channels = diff_.channels();
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const Eigen::VectorXd ca = pa.segment(3, channels), cb = pb.segment(3, channels);
-  if (!(ca.norm() > 0.0) || !(cb.norm() > 0.0) ||
-      (ca.normalized() - cb.normalized()).norm() < 0.5)
+  if (!(ca.norm() > 0.0) || !(cb.norm() > 0.0) || (ca.normalized() - cb.normalized()).norm() < 0.5)
     return nan;
-  const Eigen::VectorXd offset =
-      (pa.segment(3 + channels, channels) + pb.segment(3 + channels, channels) +
-       pl.segment(3 + channels, channels)) / 3.0;
+  // The background left in the foreground: the three fits' offsets, averaged.
+  const Eigen::VectorXd offset = (pa.segment(3 + channels, channels) +
+                                  pb.segment(3 + channels, channels) +
+                                  pl.segment(3 + channels, channels)) / 3.0;
   const Eigen::VectorXd cl = pl.segment(3, channels);
   const double blur = o_.yarn_blur_px;
   const Eigen::Vector2d e = (b.second - a.second).normalized();  // along the pair, towards b

@@ -770,9 +770,8 @@ std::optional<LabelEdit> LabelEngine::SearchAtProjection(FrameCheck* f, const Fi
   if (!view.Inside(q) || f->Repeat(c, k, q)) return std::nullopt;
   // The brush a little wider than the tolerance: the detector's seeds are 1.5 px apart.
   const FindNodeResult r = FindNode(view.image, q, o_.projection_tolerance_px + 1.5, o_.detector);
-  if (r.status == FindNodeStatus::kFound &&
-      (r.knot.px - q).norm() <= o_.projection_tolerance_px && !TakenNear(*f, c, k, r.knot.px) &&
-      EdgeColourAgrees(r.knot) &&
+  if (r.status == FindNodeStatus::kFound && (r.knot.px - q).norm() <= o_.projection_tolerance_px &&
+      !TakenNear(*f, c, k, r.knot.px) && EdgeColourAgrees(r.knot) &&
       BranchesMatchLinks(r.knot, Slots(c, f->t, k, f->point), o_.branch_tolerance_deg))
     return LabelEdit{c, f->t, k,
                      Made(r.knot.px, LabelSource::kFillGrid, r.knot.confidence, true)};

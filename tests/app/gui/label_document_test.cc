@@ -2,7 +2,6 @@
 // that recovers every edit since the last save, and a save that never loses the previous file.
 
 #include "app/gui/document/label_document.h"
-#include "app/gui/document/project.h"
 
 #include <gtest/gtest.h>
 
@@ -14,6 +13,7 @@
 #include <memory>
 #include <string>
 
+#include "app/gui/document/project.h"
 #include "common/yaml_util.h"
 
 namespace netlab::gui {

@@ -3,11 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <tuple>
 #include <vector>
-
-#include <opencv2/imgproc.hpp>
 
 #include "libreconstruct/recording/bayer.h"
 #include "tests/libreconstruct/labeling/rendered_net.h"
@@ -277,7 +276,8 @@ cv::Mat TJunction(const Eigen::Vector2d& at, double beside) {
   std::vector<Yarn> yarns = {{LeftEnd(at), RightEnd(at), cv::Scalar(0.05, 0.05, 0.8)},
                              {at, BottomEnd(at), cv::Scalar(0.05, 0.7, 0.05)}};
   const Eigen::Vector2d above = at - Eigen::Vector2d(0.0, beside);
-  if (beside > 0.0) yarns.emplace_back(LeftEnd(above), RightEnd(above), cv::Scalar(0.5, 0.05, 0.05));
+  if (beside > 0.0)
+    yarns.emplace_back(LeftEnd(above), RightEnd(above), cv::Scalar(0.5, 0.05, 0.05));
   return DrawYarns(yarns);
 }
 

@@ -447,8 +447,8 @@ TEST(KnotlessNet, TrackingAcceptsNoWrongKnot) {
   EXPECT_GE(tallies.back().accepted, 130);  // at the end
 }
 
-// Another draw of the same slack links, which the lone yarn's checks were made for: in camera b, edge
-// knot (3,0)'s inner yarn (to (3,1)) turns 16-19 degrees for its first 8 px, then runs 2-3 px
+// Another draw of the same slack links, which the lone yarn's checks were made for: in camera b,
+// edge knot (3,0)'s inner yarn (to (3,1)) turns 16-19 degrees for its first 8 px, then runs 2-3 px
 // aside. The detector fits that yarn mostly past the bend (5-18 px) and puts the junction 2.3 px
 // (frame 0) to 2.6 px (frame 3) up the border, along its column's yarn; the near check (3-12 px)
 // also reaches past the bend and settles within 1.5 px of it (0.9-1.9 px from the knot), so it

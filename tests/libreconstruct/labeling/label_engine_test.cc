@@ -462,8 +462,8 @@ TEST(LabelEngine, FindNodeDoubtsAKnotlessEdgeKnotWhereItsColourDoesNotChange) {
     return cv::Point(static_cast<int>(std::lround(q.x() * 16)),
                      static_cast<int>(std::lround(q.y() * 16)));
   };
-  cv::line(image, point(knot), point(knot + 2.5 * along), cv::Scalar(colour[0], colour[1], colour[2]),
-           2, cv::LINE_AA, 4);
+  cv::line(image, point(knot), point(knot + 2.5 * along),
+           cv::Scalar(colour[0], colour[1], colour[2]), 2, cv::LINE_AA, 4);
   for (const double step_px : {1.0, 0.0}) {
     LabelSet labels = Empty(shot);
     LabelStore store(std::move(labels));
@@ -500,8 +500,9 @@ TEST(LabelEngine, TrackingDoubtsAKnotlessJunctionOneYarnShortWhereItsColourDoesN
   cv::Mat& image = shot.images[0][1];
   const cv::Vec3b colour = image.at<cv::Vec3b>(static_cast<int>(std::lround(up.y())),
                                                static_cast<int>(std::lround(up.x())));
-  cv::line(image, cv::Point(static_cast<int>(std::lround(knot.x() * 16)),
-                            static_cast<int>(std::lround(knot.y() * 16))),
+  cv::line(image,
+           cv::Point(static_cast<int>(std::lround(knot.x() * 16)),
+                     static_cast<int>(std::lround(knot.y() * 16))),
            cv::Point(static_cast<int>(std::lround((knot.x() + 2.5 * down.x()) * 16)),
                      static_cast<int>(std::lround((knot.y() + 2.5 * down.y()) * 16))),
            cv::Scalar(colour[0], colour[1], colour[2]), 2, cv::LINE_AA, 4);
