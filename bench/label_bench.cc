@@ -443,7 +443,8 @@ void BenchDetector(const Shot& shot, const BenchOptions& o,
   std::printf("| camera | brush | knots | found | other degree | several | none (rings found) | "
               "median px | p99 px | > 1 px | > 2 px | without the lone yarn checks: found, "
               "> 1 px, > 2 px |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
-  recon::KnotDetectorOptions rings_only, unchecked;
+  recon::KnotDetectorOptions rings_only, unchecked, asked;
+  asked.colour_step = std::getenv("NETLAB_STEP") != nullptr;  // where edge colours change
   rings_only.fit_yarns = false;
   unchecked.lone_bend_px = 0.0;
   unchecked.lone_agree_px = 0.0;
@@ -460,7 +461,7 @@ void BenchDetector(const Shot& shot, const BenchOptions& o,
           ++n;
           const int r = k / shot.cols, col = k % shot.cols;
           const int want = (r > 0) + (r + 1 < shot.rows) + (col > 0) + (col + 1 < shot.cols);
-          const recon::FindNodeResult f = recon::FindNode(img, truth_l.px, radius);
+          const recon::FindNodeResult f = recon::FindNode(img, truth_l.px, radius, asked);
           const recon::FindNodeResult u = recon::FindNode(img, truth_l.px, radius, unchecked);
           if (u.status == recon::FindNodeStatus::kFound) {
             const double e = (u.knot.px - truth_l.px).norm();

@@ -345,6 +345,10 @@ bool YarnBeside(const std::vector<YarnSample>& samples, int channels, double blu
 
 }  // namespace
 
+bool ColourChangesAt(const Junction& j, double max_px) {
+  return !(max_px > 0.0) || !j.colour_step.allFinite() || (j.colour_step - j.px).norm() <= max_px;
+}
+
 double DetectorReach(const KnotDetectorOptions& o) {
   return 2.0 * o.ring_radius_px + 4 * o.ridge_sigma_px + 4;
 }
@@ -1031,7 +1035,7 @@ std::optional<Junction> KnotDetector::RefineOver(const Junction& j, double from,
                      across, o_.beside_significance, o_.beside_fraction))
         return std::nullopt;
   // An edge junction: where its straight pair's colour changes.
-  if (angles.size() == 3 && lines.size() == 3)
+  if (o_.colour_step && angles.size() == 3 && lines.size() == 3)
     for (int i = 0; i < 3; ++i)
       for (int k = i + 1; k < 3; ++k)
         if (AngleBetween(angles[fitted[i]], angles[fitted[k]]) >

@@ -114,8 +114,7 @@ bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot*
     t->why = why;
     return false;
   }
-  if (options.edge_colour_step_px > 0.0 && j.colour_step.allFinite() &&
-      (j.colour_step - j.px).norm() > options.edge_colour_step_px) {
+  if (!ColourChangesAt(j, options.edge_colour_step_px)) {
     std::snprintf(why, sizeof why,
                   "the junction there has %d yarns, and the colours of its straight yarns "
                   "change %.1f px from it",

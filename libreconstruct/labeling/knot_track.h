@@ -58,7 +58,7 @@ struct TrackOptions {
   // Knotless nets: such a junction is the knot only where the colour of its straight pair of
   // yarns changes within this of it (px, Junction::colour_step): its lone yarn alone places it
   // along the pair, as an edge knot's. 0: not checked (LabelEngine sets it from
-  // edge_colour_step_px).
+  // edge_colour_step_px). Needs detector.colour_step.
   double edge_colour_step_px = 0.0;
   KnotDetectorOptions detector;
 };

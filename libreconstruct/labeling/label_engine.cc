@@ -103,9 +103,12 @@ LabelEngine::LabelEngine(LabelStore* store, const calib::Rig* rig, ImageSource i
         throw std::invalid_argument("the rig has no camera '" + set.cameras[c] + "'");
     }
   link_length_m_ = o_.link_length_m;
-  track_options_ = o_.track;
-  if (!(track_options_.edge_colour_step_px > 0.0))
-    track_options_.edge_colour_step_px = o_.edge_colour_step_px;
+  // A knotless net's edge colour check, in every tool's detector and in tracking.
+  if (o_.edge_colour_step_px > 0.0) {
+    o_.detector.colour_step = o_.track.detector.colour_step = true;
+    if (!(o_.track.edge_colour_step_px > 0.0))
+      o_.track.edge_colour_step_px = o_.edge_colour_step_px;
+  }
 }
 
 const cv::Mat& LabelEngine::Image(int camera, int t) {
@@ -361,7 +364,7 @@ EngineCounts LabelEngine::Track(int from, int to) {
     const cv::Mat& b = Image(camera, to);
     if (a.empty() || b.empty()) continue;
     const std::vector<TrackedKnot> tracked =
-        TrackKnots(a, b, knots, set.rows, set.cols, track_options_);
+        TrackKnots(a, b, knots, set.rows, set.cols, o_.track);
     for (size_t i = 0; i < tracked.size(); ++i) {
       const bool accepted = tracked[i].accepted && was_accepted[i];
       edits.push_back({camera, to, tracked[i].knot,
@@ -392,15 +395,10 @@ FindNodeResult LabelEngine::FindNodeAt(int camera, int t, int knot, const Eigen:
   return r;
 }
 
-bool LabelEngine::EdgeColourAgrees(const Junction& j) const {
-  return !(o_.edge_colour_step_px > 0.0) || !j.colour_step.allFinite() ||
-         (j.colour_step - j.px).norm() <= o_.edge_colour_step_px;
-}
-
 std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junction& j) const {
   const LabelSet& set = store_->labels();
   // A knotless edge knot is where its straight links' colours change.
-  if (!EdgeColourAgrees(j)) {
+  if (!ColourChangesAt(j, o_.edge_colour_step_px)) {
     char why[120];
     std::snprintf(why, sizeof why,
                   "the colours of its straight yarns change %.1f px from the junction",
@@ -771,7 +769,7 @@ std::optional<LabelEdit> LabelEngine::SearchAtProjection(FrameCheck* f, const Fi
   // The brush a little wider than the tolerance: the detector's seeds are 1.5 px apart.
   const FindNodeResult r = FindNode(view.image, q, o_.projection_tolerance_px + 1.5, o_.detector);
   if (r.status == FindNodeStatus::kFound && (r.knot.px - q).norm() <= o_.projection_tolerance_px &&
-      !TakenNear(*f, c, k, r.knot.px) && EdgeColourAgrees(r.knot) &&
+      !TakenNear(*f, c, k, r.knot.px) && ColourChangesAt(r.knot, o_.edge_colour_step_px) &&
       BranchesMatchLinks(r.knot, Slots(c, f->t, k, f->point), o_.branch_tolerance_deg))
     return LabelEdit{c, f->t, k,
                      Made(r.knot.px, LabelSource::kFillGrid, r.knot.confidence, true)};
@@ -870,7 +868,7 @@ std::optional<LabelEngine::FillCandidate> LabelEngine::SearchRegion(
       bool merged = false;
       for (const Junction& n : near)
         merged = merged || (n.px - j->px).norm() < o_.detector.merge_px;
-      if (!merged && !TakenNear(*f, c, k, j->px) && EdgeColourAgrees(*j) &&
+      if (!merged && !TakenNear(*f, c, k, j->px) && ColourChangesAt(*j, o_.edge_colour_step_px) &&
           BranchesMatchLinks(*j, Slots(c, f->t, k, f->point), o_.branch_tolerance_deg))
         near.push_back(*j);
     }
@@ -887,7 +885,7 @@ std::optional<LabelEngine::FillCandidate> LabelEngine::SearchImageGrid(FrameChec
   if (!g || !view.Inside(g->px) || f->Repeat(c, k, g->px)) return std::nullopt;
   const FindNodeResult r = FindNode(view.image, g->px, 0.3 * g->spacing, o_.detector);
   if (r.status == FindNodeStatus::kFound && !TakenNear(*f, c, k, r.knot.px) &&
-      EdgeColourAgrees(r.knot) &&
+      ColourChangesAt(r.knot, o_.edge_colour_step_px) &&
       BranchesMatchLinks(r.knot, Slots(c, f->t, k, f->point), o_.branch_tolerance_deg))
     return FillCandidate{c, r.knot.px, r.knot.confidence,
                          "the image grid of its labeled neighbours"};

@@ -88,7 +88,8 @@ struct LabelEngineOptions {
   // Knotless nets (no knot ball: each link's dye ends at the junction): a junction Fill Grid or
   // Find Node finds for an edge knot, or tracking for an inner knot one yarn short, is doubted
   // where the colour of its straight pair of links changes farther than this from it (px,
-  // Junction::colour_step). 0: off, for knotted nets, whose knot ball moves the change 1-2.5 px.
+  // Junction::colour_step; the engine asks its detectors for it). 0: off, for knotted nets,
+  // whose knot ball moves the change 1-2.5 px.
   double edge_colour_step_px = 0.0;
 };
 
@@ -198,9 +199,6 @@ class LabelEngine {
   // GridSlots of the store's net.
   std::array<int, 4> SlotKnots(int knot) const;
   std::vector<int> Neighbours(int knot) const;  // those there are, in that order
-  // Whether an edge junction's colour changes where it is (edge_colour_step_px); true where
-  // that is not checked or cannot be told.
-  bool EdgeColourAgrees(const Junction& j) const;
   // Why a junction Find Node found for `knot` in (camera, t) is doubtful; empty when it is not.
   std::string FoundNodeDoubt(int camera, int t, int knot, const Junction& j) const;
   // The image positions of a knot's neighbours in (camera, t), right, down, left, up: accepted
@@ -255,7 +253,6 @@ class LabelEngine {
   const calib::Rig* rig_;
   ImageSource images_;
   LabelEngineOptions o_;
-  TrackOptions track_options_;  // o_.track, with edge_colour_step_px's check for a knotless net
   std::vector<int> rig_index_;  // per store camera, its rig index (-1 without a rig)
   std::map<std::pair<int, int>, cv::Mat> cache_;
   ReviewReasons reasons_;

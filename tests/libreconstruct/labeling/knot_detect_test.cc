@@ -321,11 +321,13 @@ cv::Mat EdgeJunction(const Eigen::Vector2d& at, double change, bool same_colour 
 // Where the colour of an edge junction's straight pair changes: at the junction of a knotless
 // net, 2 px beside it where it changes there (to half a yarn's width: the blue line, drawn last,
 // covers the red one's round end; told 0.0, 1.6 and -2.3 px); not told where the two links have
-// one colour.
+// one colour. Only when asked (KnotDetectorOptions::colour_step).
 TEST(FindNode, TellsWhereTheColourOfAnEdgeJunctionsStraightYarnChanges) {
   const Eigen::Vector2d at(31.3, 30.6);
+  KnotDetectorOptions told;
+  told.colour_step = true;
   for (const double change : {0.0, 2.0, -2.0}) {
-    const FindNodeResult r = FindNode(EdgeJunction(at, change), at, 6);
+    const FindNodeResult r = FindNode(EdgeJunction(at, change), at, 6, told);
     ASSERT_EQ(r.status, FindNodeStatus::kFound) << change;
     EXPECT_LT((r.knot.px - at).norm(), 0.3) << change;
     ASSERT_TRUE(r.knot.colour_step.allFinite()) << change;
@@ -333,9 +335,12 @@ TEST(FindNode, TellsWhereTheColourOfAnEdgeJunctionsStraightYarnChanges) {
     std::printf("colour changes %.1f px from the junction: told %.2f px\n", change, along);
     EXPECT_NEAR(along, change, 0.5) << change;
   }
-  const FindNodeResult one = FindNode(EdgeJunction(at, 0.0, true), at, 6);
+  const FindNodeResult one = FindNode(EdgeJunction(at, 0.0, true), at, 6, told);
   ASSERT_EQ(one.status, FindNodeStatus::kFound);
   EXPECT_FALSE(one.knot.colour_step.allFinite());
+  const FindNodeResult unasked = FindNode(EdgeJunction(at, 2.0), at, 6);
+  ASSERT_EQ(unasked.status, FindNodeStatus::kFound);
+  EXPECT_FALSE(unasked.knot.colour_step.allFinite());
 }
 
 TEST(FindNode, FindsNoJunctionOnThePlainYarnsOfADemosaicedFrame) {
