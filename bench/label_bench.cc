@@ -85,6 +85,7 @@ const char* SourceName(recon::LabelSource s) {
     case recon::LabelSource::kTracked: return "tracked";
     case recon::LabelSource::kColour: return "colour";
     case recon::LabelSource::kImported: return "seed";
+    case recon::LabelSource::kProjected: return "projected";
     default: return "other";
   }
 }
@@ -218,6 +219,8 @@ struct ScriptedUser {
   // Why the person had to act on a visible knot: no label, or the engine's reason for review
   // (its words up to the first number or bracket), with how many of those labels were > 1 px off.
   std::map<std::string, std::pair<int, int>> causes{};
+  // NETLAB_ACTIONS_CSV=FILE: one row per visible knot the person acted on (for analysis).
+  std::FILE* actions_csv = nullptr;
 
   // Every knot of frame row t in every camera: the engine's labels counted, and corrected.
   void PlayFrame(int t) {
@@ -264,7 +267,18 @@ struct ScriptedUser {
     ++y.find_node;
     auto& [n, n_off] = causes[Cause(c, t, k)];
     ++n, n_off += l.present() && (l.px - truth_l.px).norm() > 1.0;
+    std::string before =
+        engine.reasons().count({c, t, k}) ? engine.reasons().at({c, t, k}) : "";
     const recon::FindNodeResult r = engine.FindNodeAt(c, t, k, truth_l.px, radius);
+    if (actions_csv) {
+      std::replace(before.begin(), before.end(), ',', ';');
+      std::fprintf(actions_csv, "%s,%d,%d,%d,%d,%d,%.3f,%d,%.3f,%d,%s\n", shot.cameras[c].c_str(),
+                   shot.frames[t], k, k / shot.cols, k % shot.cols, l.present() ? 1 : 0,
+                   l.present() ? (l.px - truth_l.px).norm() : -1.0, static_cast<int>(r.status),
+                   r.status == recon::FindNodeStatus::kFound ? (r.knot.px - truth_l.px).norm()
+                                                             : -1.0,
+                   store.at(c, t, k).accepted() ? 1 : 0, before.c_str());
+    }
     // Found and accepted: done. Found but in doubt (its yarns or the other cameras
     // disagree), or not found: the person clicks the knot.
     if (r.status == recon::FindNodeStatus::kFound &&
@@ -553,6 +567,12 @@ int main(int argc, char** argv) {
     }
     // The engine frame by frame, the person after each frame.
     ScriptedUser user{shot, engine, store, o.radius, tally, std::mt19937_64(o.seed)};
+    if (const char* path = std::getenv("NETLAB_ACTIONS_CSV")) {
+      user.actions_csv = std::fopen(path, "w");
+      if (!user.actions_csv) throw std::runtime_error(std::string("cannot write ") + path);
+      std::fprintf(user.actions_csv, "camera,frame,knot,row,col,had_label,label_px_off,"
+                   "find_node,found_px_off,accepted_after,cause\n");
+    }
     double engine_s = 0.0, user_s = 0.0;
     auto t0 = Clock::now();
     engine.LabelFrames(0, n_t - 1, [&](int t) {

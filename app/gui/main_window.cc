@@ -72,6 +72,8 @@ QColor LabelColour(const recon::Label& l) {
       return QColor(255, 240, 80);
     case recon::LabelSource::kTracked:
       return QColor(60, 220, 60);
+    case recon::LabelSource::kProjected:  // placed from the other cameras: violet
+      return QColor(200, 150, 255);
     default:
       return QColor(200, 200, 255);
   }
@@ -748,13 +750,12 @@ void MainWindow::OnClick(int camera, const Eigen::Vector2d& px, Qt::KeyboardModi
     case recon::FindNodeStatus::kFound: {
       const bool review =
           session_->document().at(camera, frame_, knot_).state == recon::LabelState::kNeedsReview;
-      statusBar()->showMessage(
-          QString("Find Node: knot %1 %2")
-              .arg(KnotName(knot_), review ? "found, kept for review: " +
-                                                 QString::fromStdString(session_->document().Reason(
-                                                     camera, frame_, knot_))
-                                           : "found and accepted"),
-          6000);
+      const QString how = r.projected ? "accepted: " + QString::fromStdString(r.why)
+                          : review    ? "found, kept for review: " +
+                                         QString::fromStdString(
+                                             session_->document().Reason(camera, frame_, knot_))
+                                      : "found and accepted";
+      statusBar()->showMessage(QString("Find Node: knot %1 %2").arg(KnotName(knot_), how), 6000);
       if (!review) AdvanceAfterFix(key, was_review);
       break;
     }

@@ -726,6 +726,26 @@ bool Intersect(const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>& l
 
 }  // namespace
 
+int KnotDetector::YarnsAlong(const Eigen::Vector2d& px, const std::vector<double>& angles,
+                             double tolerance_rad) const {
+  if (ridge_.empty() || angles.empty()) return 0;
+  const int n_rings = std::max(2, o_.rings_count);
+  const int quorum = std::max(2, n_rings - 1);
+  std::vector<int> seen(angles.size(), 0);
+  for (int i = 0; i < n_rings; ++i) {
+    const double radius = o_.ring_radius_px * (1.0 + static_cast<double>(i) / (n_rings - 1));
+    const std::vector<double> peaks = Peaks(SampleRing(px, radius), nullptr);
+    for (size_t a = 0; a < angles.size(); ++a)
+      for (double p : peaks)
+        if (AngleBetween(p, angles[a]) <= tolerance_rad) {
+          ++seen[a];
+          break;
+        }
+  }
+  return static_cast<int>(std::count_if(seen.begin(), seen.end(),
+                                        [&](int s) { return s >= quorum; }));
+}
+
 std::optional<Junction> KnotDetector::ExamineRings(const Eigen::Vector2d& px) const {
   return ExamineRings(px, o_.ring_radius_px);
 }

@@ -155,6 +155,12 @@ class KnotDetector {
   // branches (counted on a ring just outside it), solid = true.
   std::vector<Junction> SolidsInCircle(const Eigen::Vector2d& centre, double radius) const;
 
+  // How many of the image angles (rad) a yarn leaves `px` along: a branch peak within
+  // tolerance_rad of the angle on every ring but one (the rings of Examine). For a place known
+  // otherwise (the other cameras'), where no junction is found: whether its yarns are there.
+  int YarnsAlong(const Eigen::Vector2d& px, const std::vector<double>& angles,
+                 double tolerance_rad) const;
+
   const cv::Mat& ridge() const { return ridge_; }  // CV_32F, the ROI
   double peak_threshold() const { return threshold_; }
   // The Bayer pattern (BayerPattern, bayer.h; at the ROI's top-left pixel) the image was
@@ -230,6 +236,9 @@ struct FindNodeResult {
   Junction knot;                     // when found
   std::vector<Junction> candidates;  // when several (and the one found)
   std::string why;                   // when not found
+  // Found by the other cameras, not in this image (LabelEngine::FindNodeAt): `knot` is where
+  // their labels put the knot (no junction: branches 0).
+  bool projected = false;
 };
 
 // The knot inside the brush (centre, radius in px) of `image`: the one yarn junction there, or

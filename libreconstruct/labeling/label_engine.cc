@@ -9,7 +9,9 @@
 #include <optional>
 #include <stdexcept>
 
+#include <Eigen/Eigenvalues>
 #include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "libreconstruct/geometry/triangulation.h"
@@ -30,6 +32,22 @@ Label Made(const Eigen::Vector2d& px, LabelSource source, double confidence, boo
 // said the knot is not visible there; only the person's own click replaces that).
 bool Free(const Label& l) { return !l.present() && !l.hidden(); }
 
+std::optional<std::pair<int, double>> ViewOffTheOthers(const calib::Rig& rig,
+                                                       const std::vector<Observation>& obs,
+                                                       const TriangulationOptions& topt,
+                                                       double tolerance, double sigma);
+
+// Whether a label is an observation of its own: accepted, and not placed from the other
+// cameras' labels (LabelSource::kProjected), which would only repeat them.
+bool Observed(const Label& l) { return l.accepted() && l.source != LabelSource::kProjected; }
+
+
+// A distance in px as the messages print it (one decimal).
+std::string Px(double px) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f", px);
+  return text;
+}
 
 double Median(std::vector<double> v) {
   if (v.empty()) return 0.0;
@@ -387,12 +405,103 @@ FindNodeResult LabelEngine::FindNodeAt(int camera, int t, int knot, const Eigen:
     return r;
   }
   FindNodeResult r = FindNode(image, centre, radius_px, o_.detector);
-  if (r.status != FindNodeStatus::kFound) return r;
-  const std::string doubt = FoundNodeDoubt(camera, t, knot, r.knot);
-  Commit("Find Node", {{camera, t, knot, Made(r.knot.px, LabelSource::kFindNode,
-                                              r.knot.confidence, doubt.empty())}});
-  if (!doubt.empty()) Note(camera, t, knot, "Find Node: " + doubt);
+  // Where the other cameras fix the knot, in the brush: it decides between several junctions,
+  // and places the knot where the image shows none, or one they put elsewhere.
+  std::optional<Eigen::Vector2d> others = OthersPlace(camera, t, knot);
+  if (others && (*others - centre).norm() > radius_px + o_.projection_tolerance_px)
+    others.reset();
+  const auto agrees = [&](const Junction& j) {
+    return others && (j.px - *others).norm() <= o_.projection_tolerance_px;
+  };
+  if (r.status == FindNodeStatus::kSeveral && others) {
+    const auto near = std::count_if(r.candidates.begin(), r.candidates.end(), agrees);
+    if (near == 1) {
+      r.knot = *std::find_if(r.candidates.begin(), r.candidates.end(), agrees);
+      r.status = FindNodeStatus::kFound;
+      r.why.clear();
+    }
+  }
+  if (r.status == FindNodeStatus::kFound && !(others && !agrees(r.knot))) {
+    // The junction, where the other cameras agree with it (their word outweighs the doubts of
+    // its yarns), else judged by its yarns and the other cameras' labels.
+    const std::string doubt = agrees(r.knot) ? "" : FoundNodeDoubt(camera, t, knot, r.knot);
+    Commit("Find Node", {{camera, t, knot, Made(r.knot.px, LabelSource::kFindNode,
+                                                r.knot.confidence, doubt.empty())}});
+    if (!doubt.empty()) Note(camera, t, knot, "Find Node: " + doubt);
+    return r;
+  }
+  if (!others || LabelNear(camera, t, knot, *others)) return r;
+  // No junction, or one the other cameras put elsewhere: the knot where they put it.
+  Junction placed;
+  placed.px = *others;
+  placed.confidence = 0.5;
+  r.why = r.status == FindNodeStatus::kFound
+              ? "the junction in the brush is " + Px((r.knot.px - *others).norm()) +
+                    " px from where the other cameras' labels put the knot; placed there"
+              : "no junction in the brush; placed where the other cameras' labels put the knot";
+  r.status = FindNodeStatus::kFound;
+  r.knot = placed;
+  r.projected = true;
+  Commit("Find Node", {{camera, t, knot, Made(placed.px, LabelSource::kProjected, 0.5, true)}});
   return r;
+}
+
+std::optional<Eigen::Vector2d> LabelEngine::OthersPlace(int camera, int t, int knot) const {
+  if (!rig_ || !(o_.place_sigma_px > 0.0)) return std::nullopt;
+  const LabelSet& set = store_->labels();
+  std::vector<Observation> others;
+  for (int o = 0; o < static_cast<int>(set.cameras.size()); ++o)
+    if (o != camera && Observed(set.at(o, t, knot)))
+      others.push_back({RigIndex(o), set.at(o, t, knot).px});
+  if (others.size() < 2) return std::nullopt;
+  TriangulationOptions topt;
+  topt.outlier_threshold_px = o_.epipolar_tolerance_px;
+  // They must agree closely: two views, each a little off across their epipolar lines, show
+  // it in their residuals only (a label 3.6 px off once left 1.8 px in each, within the
+  // epipolar tolerance); three or more, each view against the others too.
+  const PointEstimate e = TriangulatePoint(*rig_, others, topt);
+  if (!e.valid || !e.outliers.empty()) return std::nullopt;
+  for (double r : e.residual_px)
+    if (!(r <= o_.place_residual_px)) return std::nullopt;
+  if (ViewOffTheOthers(*rig_, others, topt, o_.projection_tolerance_px, o_.label_sigma_px))
+    return std::nullopt;
+  const std::optional<ProjectedPoint> q =
+      ProjectAgreeingViews(*rig_, RigIndex(camera), others, topt);
+  if (!q || !q->px.allFinite()) return std::nullopt;
+  // The projection's standard deviation along its worst axis.
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(q->unit_covariance);
+  const double sigma = o_.label_sigma_px * std::sqrt(std::max(0.0, eig.eigenvalues()[1]));
+  if (!(sigma <= o_.place_sigma_px)) return std::nullopt;
+  return q->px;
+}
+
+bool LabelEngine::MovedWithNeighbours(int camera, int t, int knot,
+                                      const Eigen::Vector2d& px) const {
+  const LabelSet& set = store_->labels();
+  for (const int s : {t - 1, t + 1}) {
+    if (s < 0 || s >= set.frames() || !set.at(camera, s, knot).accepted()) continue;
+    // The mean motion of its neighbours accepted in both rows.
+    Eigen::Vector2d motion = Eigen::Vector2d::Zero();
+    int n = 0;
+    for (const int j : Neighbours(knot))
+      if (set.at(camera, s, j).accepted() && set.at(camera, t, j).accepted()) {
+        motion += set.at(camera, t, j).px - set.at(camera, s, j).px;
+        ++n;
+      }
+    if (n < 2) continue;
+    const Eigen::Vector2d expected = set.at(camera, s, knot).px + motion / n;
+    return (px - expected).norm() <= o_.place_motion_px;
+  }
+  return false;
+}
+
+bool LabelEngine::LabelNear(int camera, int t, int knot, const Eigen::Vector2d& px) const {
+  const LabelSet& set = store_->labels();
+  for (int j = 0; j < set.knots(); ++j) {
+    const Label& l = set.at(camera, t, j);
+    if (j != knot && l.accepted() && (l.px - px).norm() < o_.exclusion_px) return true;
+  }
+  return false;
 }
 
 std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junction& j) const {
@@ -414,7 +523,7 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
   if (!rig_) return "";
   std::vector<Observation> others;
   for (int c = 0; c < static_cast<int>(set.cameras.size()); ++c)
-    if (c != camera && set.at(c, t, knot).accepted())
+    if (c != camera && Observed(set.at(c, t, knot)))
       others.push_back({RigIndex(c), set.at(c, t, knot).px});
   if (others.size() < 2) return "";
   TriangulationOptions topt;
@@ -510,10 +619,53 @@ double LargestSampleGap(const std::vector<Eigen::Vector2d>& region) {
 }
 
 // A distance for a message: "2.3".
-std::string Px(double px) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.1f", px);
-  return text;
+// The median colour of a region of `image` (per channel, 0..1 of the image's range).
+std::vector<double> MedianColour(const cv::Mat& image, const cv::Rect& box) {
+  const int channels = image.channels();
+  std::vector<double> m(channels, 0.0);
+  const cv::Rect r = box & cv::Rect(0, 0, image.cols, image.rows);
+  if (r.area() == 0) return m;
+  const double range = image.depth() == CV_16U ? 65535.0 : image.depth() == CV_8U ? 255.0 : 1.0;
+  cv::Mat values;
+  image(r).clone().convertTo(values, CV_64F, 1.0 / range);
+  values = values.reshape(1, r.area());  // a row per pixel, a column per channel
+  std::vector<double> v(values.rows);
+  for (int ch = 0; ch < channels; ++ch) {
+    for (int i = 0; i < values.rows; ++i) v[i] = values.at<double>(i, ch);
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    m[ch] = v[v.size() / 2];
+  }
+  return m;
+}
+
+// The scene's background colour: the median of a sparse grid of the frame's pixels (yarns
+// cover little of a frame).
+std::vector<double> SceneBackground(const cv::Mat& image) {
+  if (image.empty()) return {};
+  cv::Mat sparse;
+  cv::resize(image, sparse, cv::Size(std::max(1, image.cols / 16), std::max(1, image.rows / 16)),
+             0, 0, cv::INTER_NEAREST);
+  return MedianColour(sparse, cv::Rect(0, 0, sparse.cols, sparse.rows));
+}
+
+// Whether `px` lies on the scene's background `scene`: the median colour within `reach` of it,
+// and of the places `reach` to each side, is within `tolerance` (0..1 of the image's range) of
+// it. Over the target or another body it is not, and a knot there may be behind it.
+bool OnSceneBackground(const cv::Mat& image, const std::vector<double>& scene,
+                       const Eigen::Vector2d& px, double reach, double tolerance) {
+  if (image.empty() || static_cast<int>(scene.size()) != image.channels()) return false;
+  const int r = static_cast<int>(std::ceil(reach));
+  for (const Eigen::Vector2d& d : {Eigen::Vector2d(0, 0), Eigen::Vector2d(reach, 0),
+                                   Eigen::Vector2d(-reach, 0), Eigen::Vector2d(0, reach),
+                                   Eigen::Vector2d(0, -reach)}) {
+    const Eigen::Vector2d at = px + d;
+    const std::vector<double> m = MedianColour(
+        image, cv::Rect(static_cast<int>(at.x()) - r, static_cast<int>(at.y()) - r, 2 * r + 1,
+                        2 * r + 1));
+    for (size_t ch = 0; ch < m.size(); ++ch)
+      if (std::abs(m[ch] - scene[ch]) > tolerance) return false;
+  }
+  return true;
 }
 
 // The one view of three or more that the others place the knot more than `tolerance` px from,
@@ -565,6 +717,8 @@ struct LabelEngine::FrameCheck {
   std::vector<std::optional<Eigen::Vector3d>> point, clean;
   // The triangulated points as each camera sees them (NaN where there is none), this pass.
   std::vector<std::vector<Eigen::Vector2d>> projected;
+  // Each camera's scene background (SceneBackground), where it was needed.
+  std::map<int, std::vector<double>> background;
   // What each search looked at, so a later pass does not repeat a search that found nothing.
   std::map<std::pair<int, int>, Eigen::Vector2d> searched;
 
@@ -671,7 +825,7 @@ void LabelEngine::TriangulateAccepted(FrameCheck* f, std::vector<LabelEdit>* fla
     std::vector<Observation> obs;
     std::vector<int> from;
     for (int c = 0; c < f->cameras; ++c)
-      if (set.at(c, t, k).accepted()) {
+      if (Observed(set.at(c, t, k))) {
         obs.push_back({RigIndex(c), set.at(c, t, k).px});
         from.push_back(c);
       }
@@ -773,7 +927,38 @@ std::optional<LabelEdit> LabelEngine::SearchAtProjection(FrameCheck* f, const Fi
       BranchesMatchLinks(r.knot, Slots(c, f->t, k, f->point), o_.branch_tolerance_deg))
     return LabelEdit{c, f->t, k,
                      Made(r.knot.px, LabelSource::kFillGrid, r.knot.confidence, true)};
-  return std::nullopt;
+  return PlaceAtProjection(f, view, k);
+}
+
+std::optional<LabelEdit> LabelEngine::PlaceAtProjection(FrameCheck* f, const FillView& view,
+                                                        int k) {
+  const int c = view.camera, t = f->t;
+  const NeighbourSlots slots = Slots(c, t, k, f->point);
+  if (std::count(slots.present.begin(), slots.present.end(), true) < 3) return std::nullopt;
+  // Where the other cameras' own labels fix the knot.
+  const std::optional<Eigen::Vector2d> q = OthersPlace(c, t, k);
+  if (!q || !view.Inside(*q) || TakenNear(*f, c, k, *q)) return std::nullopt;
+  // Its yarns there, along at least two of its links.
+  const std::vector<double> links = KnownLinkAngles(*q, slots);
+  if (links.size() < 2) return std::nullopt;
+  const double reach = std::ceil(DetectorReach(o_.detector)) + 2.0;
+  const cv::Rect roi(static_cast<int>(q->x() - reach), static_cast<int>(q->y() - reach),
+                     static_cast<int>(2 * reach) + 1, static_cast<int>(2 * reach) + 1);
+  const KnotDetector detector(view.image, roi, o_.detector);
+  const int yarns = detector.YarnsAlong(*q, links, o_.branch_tolerance_deg * M_PI / 180.0);
+  if (yarns < 2) return std::nullopt;
+  // Over the target or another body, a knot may be behind it: there every one of its links
+  // must be seen leaving it (at least three).
+  auto scene = f->background.find(c);
+  if (scene == f->background.end())
+    scene = f->background.emplace(c, SceneBackground(view.image)).first;
+  const bool over_body = !OnSceneBackground(view.image, scene->second, *q,
+                                            o_.background_reach_px, o_.background_tolerance);
+  if (over_body && (yarns < 3 || yarns < static_cast<int>(links.size()))) return std::nullopt;
+  // And it moved from its label in the frame before as its neighbours did (a check no
+  // other camera's label enters).
+  if (!MovedWithNeighbours(c, t, k, *q)) return std::nullopt;
+  return LabelEdit{c, t, k, Made(*q, LabelSource::kProjected, 0.5, true)};
 }
 
 std::vector<Eigen::Vector2d> LabelEngine::LinkSphereRegion(const FrameCheck& f,
@@ -928,7 +1113,7 @@ bool LabelEngine::ConfirmCandidates(const FrameCheck& f, int k,
   // The knot's accepted labels, then its candidates, triangulated together.
   std::vector<Observation> obs;
   for (int c = 0; c < f.cameras; ++c)
-    if (set.at(c, f.t, k).accepted()) obs.push_back({RigIndex(c), set.at(c, f.t, k).px});
+    if (Observed(set.at(c, f.t, k))) obs.push_back({RigIndex(c), set.at(c, f.t, k).px});
   const size_t first = obs.size();
   for (const auto& cand : list) obs.push_back({RigIndex(cand.camera), cand.px});
   if (obs.size() < 2) return false;

@@ -91,6 +91,24 @@ struct LabelEngineOptions {
   // Junction::colour_step; the engine asks its detectors for it). 0: off, for knotted nets,
   // whose knot ball moves the change 1-2.5 px.
   double edge_colour_step_px = 0.0;
+  // Fill Grid, where no junction is found at a knot's projection (a folded net, a yarn beside
+  // the knot's own, a dim dye): the projection itself is the label (LabelSource::kProjected)
+  // when the labels of two or more other cameras, consistent, fix it there to place_sigma_px
+  // (the projection's standard deviation along its worst axis for label_sigma_px of noise in
+  // each view), the knot's yarns leave that place along at least two of its links, it lies on
+  // the scene's own background (not on the target or another body, which could hide it), and
+  // no other knot is within exclusion_px. Corners are left to their masses. 0: off.
+  double place_sigma_px = 0.35;
+  // ... and where each of those views lies within this of their point (px).
+  double place_residual_px = 0.5;
+  // Fill Grid places it so only where, besides, the knot's label in the frame before moved as
+  // its neighbours did to within this (px; the net moves nearly evenly over a mesh).
+  double place_motion_px = 1.5;
+  // The scene's background at a place: the median colour of the pixels within this of it
+  // (and of the places this far to each side) differs from the whole frame's median by at
+  // most background_tolerance (0..1 of the image's range).
+  double background_reach_px = 10.0;
+  double background_tolerance = 0.08;
 };
 
 // Per camera, frame and knot: why a label needs review (absent: it does not, or there is none):
@@ -169,7 +187,10 @@ class LabelEngine {
   // but some may be hidden (two at least seen), when two or more links' directions are known;
   // and it must lie within projection_tolerance_px of where two or more other cameras' accepted
   // labels of the knot, consistent among themselves, put it (as Fill Grid's own projection).
-  // Returns the detector's result.
+  // Where the brush finds no junction, or one the other cameras put elsewhere, and the labels
+  // of two or more other cameras fix the knot within the brush (place_sigma_px), the label is
+  // placed there (LabelSource::kProjected): the person's brush says the knot is seen.
+  // Returns the detector's result (projected: placed from the other cameras).
   FindNodeResult FindNodeAt(int camera, int t, int knot, const Eigen::Vector2d& centre,
                             double radius_px);
 
@@ -201,6 +222,15 @@ class LabelEngine {
   std::vector<int> Neighbours(int knot) const;  // those there are, in that order
   // Why a junction Find Node found for `knot` in (camera, t) is doubtful; empty when it is not.
   std::string FoundNodeDoubt(int camera, int t, int knot, const Junction& j) const;
+  // Where the accepted labels of two or more other cameras (not themselves projected) put a
+  // knot in (camera, t), when they agree and fix it to place_sigma_px; nullopt otherwise.
+  std::optional<Eigen::Vector2d> OthersPlace(int camera, int t, int knot) const;
+  // Whether `px` in (camera, t) is where the knot's accepted label of an adjacent frame row
+  // (t - 1, else t + 1) moved as its neighbours accepted in both rows did on average, within
+  // place_motion_px (two such neighbours at least; false where there are none).
+  bool MovedWithNeighbours(int camera, int t, int knot, const Eigen::Vector2d& px) const;
+  // Whether another knot's accepted label in (camera, t) is within exclusion_px of `px`.
+  bool LabelNear(int camera, int t, int knot, const Eigen::Vector2d& px) const;
   // The image positions of a knot's neighbours in (camera, t), right, down, left, up: accepted
   // labels, else the projections of their triangulated points.
   NeighbourSlots Slots(
@@ -225,8 +255,11 @@ class LabelEngine {
   // accepted label (a) appended to `edits`, a candidate (b, c) to `candidates`.
   void SearchCamera(FrameCheck* f, int camera, std::vector<LabelEdit>* edits,
                     FillCandidates* candidates);
-  // (a) At the projection of the knot's triangulated point: an accepted label when found there.
+  // (a) At the projection of the knot's triangulated point: an accepted label when found there,
+  // else the projection itself where the other cameras fix it well and its yarns are there
+  // (place_sigma_px).
   std::optional<LabelEdit> SearchAtProjection(FrameCheck* f, const FillView& view, int knot);
+  std::optional<LabelEdit> PlaceAtProjection(FrameCheck* f, const FillView& view, int knot);
   // (b) The projected samples of the lens where spheres of link length around the knot's
   // triangulated neighbours meet (`how` says so); empty when they do not fix it.
   std::vector<Eigen::Vector2d> LinkSphereRegion(const FrameCheck& f, const FillView& view,

@@ -25,7 +25,7 @@ namespace netlab::recon {
 namespace {
 
 constexpr char kLabelsFormat[] = "netlab-labels";
-constexpr int kLastSource = static_cast<int>(LabelSource::kImported);
+constexpr int kLastSource = static_cast<int>(LabelSource::kProjected);
 constexpr int kLastState = static_cast<int>(LabelState::kHidden);
 
 std::string Shape(const std::vector<hsize_t>& dims) {

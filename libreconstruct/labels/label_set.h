@@ -47,6 +47,10 @@ enum class LabelSource : uint8_t {
   kTracked = 5,
   kColour = 6,    // identified by yarn colours
   kImported = 7,  // read from xypts.csv or another tool
+  // Placed where the knot's labels in two or more other cameras put it, with its yarns seen
+  // there but no junction found (Fill Grid): derived from those labels, so the triangulation
+  // of the knot leaves it out.
+  kProjected = 8,
 };
 
 // kHidden is not a label but the person's word that the knot cannot be seen in that camera and

@@ -205,7 +205,7 @@ int LabelDocument::Recover() {
       label.confidence = std::stof(confidence);
       label.state = static_cast<recon::LabelState>(state);
       // A source, state or hidden mark no label can have: the journal is damaged.
-      if (source < 0 || source > static_cast<int>(recon::LabelSource::kImported) || state < 0 ||
+      if (source < 0 || source > static_cast<int>(recon::LabelSource::kProjected) || state < 0 ||
           state > static_cast<int>(recon::LabelState::kHidden) ||
           (label.hidden() && !(std::isnan(label.px.x()) && std::isnan(label.px.y()))))
         throw InputError(path + ":" + std::to_string(line_no) +

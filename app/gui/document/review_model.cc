@@ -31,6 +31,8 @@ QString SourceName(recon::LabelSource source) {
       return "colour";
     case recon::LabelSource::kImported:
       return "imported";
+    case recon::LabelSource::kProjected:
+      return "other cameras";
   }
   return "?";
 }

@@ -45,7 +45,7 @@ LabelSet Example(const std::vector<int>& frame_index = {10, 11, 12, 13, 14}) {
         if (i % 5 == 0) continue;
         Label& label = set.at(c, t, k);
         label.px = Eigen::Vector2d(px(rng), px(rng));
-        label.source = static_cast<LabelSource>(i % 8);
+        label.source = static_cast<LabelSource>(i % 9);  // every source, kProjected too
         label.state = static_cast<LabelState>(i % 3);
         label.confidence = static_cast<float>(i % 11) / 10.0f;
       }
@@ -368,9 +368,10 @@ TEST(LabelsFile, OutOfRangeValuesAreNamed) {
   const std::string path = dir / "labels.h5";
   // Row 2, knot 7: flat index 2 * 12 + 7.
   WriteLabels(path, Example());
-  EditFile(path, [](hid_t f) { SetByte(f, "/cameras/cam_left/source", 31, 8); });
+  // 9: one past the last source (kProjected).
+  EditFile(path, [](hid_t f) { SetByte(f, "/cameras/cam_left/source", 31, 9); });
   EXPECT_TRUE(Mentions(ErrorOf([&] { ReadLabels(path); }),
-                       {"/cameras/cam_left/source", "8", "row 2, knot 7", "LabelSource"}));
+                       {"/cameras/cam_left/source", "9", "row 2, knot 7", "LabelSource"}));
 
   WriteLabels(path, Example());
   EditFile(path, [](hid_t f) { SetByte(f, "/cameras/cam_right/state", 31, 4); });
