@@ -69,6 +69,10 @@ struct TrackedKnot {
   bool accepted = false;
   double confidence = 0.0;
   std::string why;                      // when not accepted
+  // Its junction has one yarn fewer than the knot's degree: accepted only where its accepted
+  // neighbours' motion could check it (a junction in a fold, a yarn beside its own, passes
+  // the yarn-direction test 2-3 px off).
+  bool one_yarn_short = false;
 };
 
 // `knots`: (knot index, position in `from`). Images: the same camera's consecutive frames, BGR or

@@ -323,6 +323,7 @@ EngineCounts LabelEngine::LabelFirstFrame(int t) {
         const bool agree = both && (a->second - b->second).norm() < o_.row_column_agreement_px;
         const Eigen::Vector2d where = a != by_row.end() ? a->second : b->second;
         edits.push_back({camera, t, k, Made(where, LabelSource::kFindPath, confidence[k], agree)});
+        if (!both) one_path_.insert({camera, t, k});
         if (!agree)
           Note(camera, t, k,
                both ? "Find Path: its row and its column put it " +
@@ -350,6 +351,78 @@ EngineCounts LabelEngine::LabelFirstFrame(int t) {
     }
   }
   return Commit("Find Path (frame row " + std::to_string(t) + ")", edits);
+}
+
+EngineCounts LabelEngine::FillByPaths(int t) {
+  const LabelSet& set = store_->labels();
+  const int rows = set.rows, cols = set.cols;
+  std::vector<LabelEdit> edits;
+  for (int camera = 0; camera < static_cast<int>(set.cameras.size()); ++camera) {
+    const cv::Mat& image = Image(camera, t);
+    if (image.empty()) continue;
+    // Each knot between two accepted ones of its row (by_row) or column (by_column): the
+    // junction its path took.
+    std::map<int, Junction> by_row, by_column;
+    auto follow = [&](const std::vector<int>& line, std::map<int, Junction>* found) {
+      int last = -1;  // index in `line` of the last accepted knot
+      for (int i = 0; i < static_cast<int>(line.size()); ++i) {
+        const Label& l = set.at(camera, t, line[i]);
+        if (l.hidden()) {
+          last = -1;
+          continue;
+        }
+        if (!l.accepted()) continue;
+        if (last >= 0 && i - last >= 2) {
+          const FindPathResult r = FindPath(image, cols, line[last], set.at(camera, t, line[last]).px,
+                                            line[i], l.px, o_.detector);
+          for (size_t n = 0; n < r.knots.size(); ++n) (*found)[r.knots[n]] = r.junctions[n];
+        }
+        last = i;
+      }
+    };
+    for (int r = 0; r < rows; ++r) {
+      std::vector<int> line;
+      for (int c = 0; c < cols; ++c) line.push_back(r * cols + c);
+      follow(line, &by_row);
+    }
+    for (int c = 0; c < cols; ++c) {
+      std::vector<int> line;
+      for (int r = 0; r < rows; ++r) line.push_back(r * cols + c);
+      follow(line, &by_column);
+    }
+    // The knots found: accepted where row and column agree and the junction's yarns leave
+    // towards its neighbours (the accepted ones and those found here).
+    std::map<int, Eigen::Vector2d> found_px;
+    for (const auto* m : {&by_row, &by_column})
+      for (const auto& [k, j] : *m) found_px.emplace(k, j.px);
+    for (const auto& [k, where] : found_px) {
+      const Label& l = set.at(camera, t, k);
+      if (l.accepted() || l.hidden()) continue;
+      const auto a = by_row.find(k), b = by_column.find(k);
+      const bool both = a != by_row.end() && b != by_column.end();
+      const Junction& j = a != by_row.end() ? a->second : b->second;
+      NeighbourSlots slots;
+      const std::array<int, 4> slot_knot = SlotKnots(k);
+      for (int s = 0; s < 4; ++s) {
+        const int n = slot_knot[s];
+        slots.present[s] = n >= 0;
+        if (n < 0) continue;
+        if (set.at(camera, t, n).accepted()) slots.px[s] = set.at(camera, t, n).px;
+        else if (found_px.count(n)) slots.px[s] = found_px.at(n);
+      }
+      const bool agree = both && (a->second.px - b->second.px).norm() < o_.row_column_agreement_px &&
+                         BranchesMatchLinks(j, slots, o_.branch_tolerance_deg) &&
+                         ColourChangesAt(j, o_.edge_colour_step_px);
+      if (agree) {
+        edits.push_back({camera, t, k, Made(j.px, LabelSource::kFindPath, j.confidence, true)});
+      } else if (!l.present() && !both) {
+        edits.push_back({camera, t, k, Made(j.px, LabelSource::kFindPath, j.confidence, false)});
+        one_path_.insert({camera, t, k});
+        Note(camera, t, k, "Find Path: found along its row or its column only");
+      }
+    }
+  }
+  return Commit("Find Path between labeled knots (frame row " + std::to_string(t) + ")", edits);
 }
 
 namespace {
@@ -475,8 +548,8 @@ std::optional<Eigen::Vector2d> LabelEngine::OthersPlace(int camera, int t, int k
   return q->px;
 }
 
-bool LabelEngine::MovedWithNeighbours(int camera, int t, int knot,
-                                      const Eigen::Vector2d& px) const {
+std::optional<double> LabelEngine::MotionOff(int camera, int t, int knot,
+                                             const Eigen::Vector2d& px) const {
   const LabelSet& set = store_->labels();
   for (const int s : {t - 1, t + 1}) {
     if (s < 0 || s >= set.frames() || !set.at(camera, s, knot).accepted()) continue;
@@ -490,9 +563,9 @@ bool LabelEngine::MovedWithNeighbours(int camera, int t, int knot,
       }
     if (n < 2) continue;
     const Eigen::Vector2d expected = set.at(camera, s, knot).px + motion / n;
-    return (px - expected).norm() <= o_.place_motion_px;
+    return (px - expected).norm();
   }
-  return false;
+  return std::nullopt;
 }
 
 bool LabelEngine::LabelNear(int camera, int t, int knot, const Eigen::Vector2d& px) const {
@@ -512,6 +585,15 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
     std::snprintf(why, sizeof why,
                   "the colours of its straight yarns change %.1f px from the junction",
                   (j.colour_step - j.px).norm());
+    return why;
+  }
+  // Its motion since the adjacent frame against its neighbours' (a junction of another layer
+  // of a folded net, 3.6 px from the knot, had yarns along the knot's own).
+  if (const std::optional<double> moved = MotionOff(camera, t, knot, j.px);
+      moved && *moved > o_.place_motion_px) {
+    char why[96];
+    std::snprintf(why, sizeof why, "it moved %.1f px otherwise than its neighbours since the "
+                  "frame before", *moved);
     return why;
   }
   // Its yarns against its accepted neighbours in this view.
@@ -790,6 +872,9 @@ LabelingSummary LabelEngine::LabelFrames(int first, int last, const FrameDone& a
   // The first frame row from its seeds, then the cameras cross-checked and the gaps filled.
   Add(&summary.first_frame, LabelFirstFrame(first));
   Add(&summary.cross_checked, CrossCheck(first));
+  const EngineCounts between = FillByPaths(first);
+  Add(&summary.first_frame, between);
+  if (between.accepted > 0) Add(&summary.cross_checked, CrossCheck(first));
   summary.frames = 1;
   if (after_frame) after_frame(first);
   // Each later row tracked from the one before.
@@ -898,7 +983,15 @@ void LabelEngine::SearchCamera(FrameCheck* f, int c, std::vector<LabelEdit>* edi
   if (image.empty()) return;
   const FillView view{c, image, image.size(), o_.detector.ring_radius_px + 2.0};
   for (int k = 0; k < f->knots; ++k) {
-    if (set.at(c, f->t, k).accepted() || set.at(c, f->t, k).hidden()) continue;
+    const Label& l = set.at(c, f->t, k);
+    if (l.accepted() || l.hidden()) continue;
+    // A junction Find Path took along the knot's row or column alone (the other path crossed
+    // knots the target hides): a candidate, accepted where other cameras confirm it.
+    if (l.source == LabelSource::kFindPath && f->geometry && one_path_.count({c, f->t, k}))
+      if (const std::optional<FillCandidate> found = PathCandidate(f, view, k)) {
+        (*candidates)[k].push_back(*found);
+        continue;
+      }
     // (a) The knot's own triangulated point, where it has one.
     if (f->geometry && f->point[k]) {
       if (const std::optional<LabelEdit> e = SearchAtProjection(f, view, k)) edits->push_back(*e);
@@ -913,6 +1006,30 @@ void LabelEngine::SearchCamera(FrameCheck* f, int c, std::vector<LabelEdit>* edi
                        : SearchRegion(f, view, k, std::move(region), how);
     if (found) (*candidates)[k].push_back(*found);
   }
+}
+
+std::optional<LabelEngine::FillCandidate> LabelEngine::PathCandidate(FrameCheck* f,
+                                                                     const FillView& view,
+                                                                     int k) {
+  const int c = view.camera;
+  const Eigen::Vector2d at = store_->labels().at(c, f->t, k).px;
+  if (!view.Inside(at) || f->Repeat(c, k, at)) return std::nullopt;
+  // Its junction again, judged by its yarns as Fill Grid's own candidates are; its neighbours'
+  // directions from their labels of the paths too (those along the same row are also found
+  // along one path only).
+  NeighbourSlots slots = Slots(c, f->t, k, f->point);
+  const std::array<int, 4> slot_knot = SlotKnots(k);
+  for (int s = 0; s < 4; ++s) {
+    if (slot_knot[s] < 0 || slots.px[s]) continue;
+    const Label& n = store_->labels().at(c, f->t, slot_knot[s]);
+    if (n.present() && n.source == LabelSource::kFindPath) slots.px[s] = n.px;
+  }
+  const FindNodeResult r = FindNode(view.image, at, 1.0, o_.detector);
+  if (r.status == FindNodeStatus::kFound && (r.knot.px - at).norm() <= 0.5 &&
+      !TakenNear(*f, c, k, r.knot.px) && ColourChangesAt(r.knot, o_.edge_colour_step_px) &&
+      BranchesMatchLinks(r.knot, slots, o_.branch_tolerance_deg))
+    return FillCandidate{c, r.knot.px, r.knot.confidence, "Find Path along its row or column"};
+  return std::nullopt;
 }
 
 std::optional<LabelEdit> LabelEngine::SearchAtProjection(FrameCheck* f, const FillView& view,
@@ -957,7 +1074,8 @@ std::optional<LabelEdit> LabelEngine::PlaceAtProjection(FrameCheck* f, const Fil
   if (over_body && (yarns < 3 || yarns < static_cast<int>(links.size()))) return std::nullopt;
   // And it moved from its label in the frame before as its neighbours did (a check no
   // other camera's label enters).
-  if (!MovedWithNeighbours(c, t, k, *q)) return std::nullopt;
+  const std::optional<double> moved = MotionOff(c, t, k, *q);
+  if (!moved || *moved > o_.place_motion_px) return std::nullopt;
   return LabelEdit{c, t, k, Made(*q, LabelSource::kProjected, 0.5, true)};
 }
 

@@ -43,6 +43,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -157,13 +158,22 @@ class LabelEngine {
   // corner's two sides are found first where the grid of the other two sides puts them (a
   // corner behind the target). Returns the labels set.
   EngineCounts LabelFirstFrame(int t);
+  // Find Path between accepted knots of frame row t, in every camera: each run of knots of a row
+  // or a column without an accepted label between two accepted ones is followed along its yarn;
+  // a knot found along both its row and its column, in agreement (row_column_agreement_px),
+  // with its yarns towards its neighbours, is accepted; found along one of them only, it is
+  // kept for review, a candidate the other cameras may confirm (CrossCheck). For the cameras
+  // that see too few corners to start from (the near pair in the first frame: the net is
+  // larger than their view), once Fill Grid has given them knots around the gaps.
+  EngineCounts FillByPaths(int t);
   // Tracks every label of frame `from` into frame `to` (an adjacent frame) where `to` has none,
   // and where `to` has a label tracked from one under review that has since been accepted.
   EngineCounts Track(int from, int to);
   // Epipolar consistency and Fill Grid in frame t (see above); then the colour check, when set.
   EngineCounts CrossCheck(int t);
   // The automatic labeling of frame rows first to last (inclusive): LabelFirstFrame(first) and
-  // CrossCheck(first), then for each later row t Track(t - 1, t) and CrossCheck(t).
+  // CrossCheck(first) (and FillByPaths(first) with CrossCheck again where it accepted labels),
+  // then for each later row t Track(t - 1, t) and CrossCheck(t).
   // `after_frame(t)`, when set, is called as soon as row t is done: a caller may report progress,
   // or edit row t (a person's corrections) before the next row is tracked from it.
   using FrameDone = std::function<void(int t)>;
@@ -194,6 +204,9 @@ class LabelEngine {
   FindNodeResult FindNodeAt(int camera, int t, int knot, const Eigen::Vector2d& centre,
                             double radius_px);
 
+  // Where the accepted labels of two or more other cameras (not themselves projected) put a
+  // knot in (camera, t), when they agree and fix it to place_sigma_px; nullopt otherwise.
+  std::optional<Eigen::Vector2d> OthersPlace(int camera, int t, int knot) const;
   const ReviewReasons& reasons() const { return reasons_; }
   double link_length_m() const { return link_length_m_; }
   // Takes `m` (> 0) as the net's link length when none is set or estimated yet: one another
@@ -222,13 +235,10 @@ class LabelEngine {
   std::vector<int> Neighbours(int knot) const;  // those there are, in that order
   // Why a junction Find Node found for `knot` in (camera, t) is doubtful; empty when it is not.
   std::string FoundNodeDoubt(int camera, int t, int knot, const Junction& j) const;
-  // Where the accepted labels of two or more other cameras (not themselves projected) put a
-  // knot in (camera, t), when they agree and fix it to place_sigma_px; nullopt otherwise.
-  std::optional<Eigen::Vector2d> OthersPlace(int camera, int t, int knot) const;
-  // Whether `px` in (camera, t) is where the knot's accepted label of an adjacent frame row
-  // (t - 1, else t + 1) moved as its neighbours accepted in both rows did on average, within
-  // place_motion_px (two such neighbours at least; false where there are none).
-  bool MovedWithNeighbours(int camera, int t, int knot, const Eigen::Vector2d& px) const;
+  // How far `px` in (camera, t) is from where the knot's accepted label of an adjacent frame
+  // row (t - 1, else t + 1) moved as its neighbours accepted in both rows did on average (px);
+  // nullopt where there is no such label or fewer than two such neighbours.
+  std::optional<double> MotionOff(int camera, int t, int knot, const Eigen::Vector2d& px) const;
   // Whether another knot's accepted label in (camera, t) is within exclusion_px of `px`.
   bool LabelNear(int camera, int t, int knot, const Eigen::Vector2d& px) const;
   // The image positions of a knot's neighbours in (camera, t), right, down, left, up: accepted
@@ -255,6 +265,9 @@ class LabelEngine {
   // accepted label (a) appended to `edits`, a candidate (b, c) to `candidates`.
   void SearchCamera(FrameCheck* f, int camera, std::vector<LabelEdit>* edits,
                     FillCandidates* candidates);
+  // A knot Find Path found along its row or its column only, kept for review: its junction as
+  // a candidate, where its yarns lead to its neighbours.
+  std::optional<FillCandidate> PathCandidate(FrameCheck* f, const FillView& view, int knot);
   // (a) At the projection of the knot's triangulated point: an accepted label when found there,
   // else the projection itself where the other cameras fix it well and its yarns are there
   // (place_sigma_px).
@@ -289,6 +302,8 @@ class LabelEngine {
   std::vector<int> rig_index_;  // per store camera, its rig index (-1 without a rig)
   std::map<std::pair<int, int>, cv::Mat> cache_;
   ReviewReasons reasons_;
+  // (camera, frame row, knot) that Find Path found along its row or its column alone.
+  std::set<std::tuple<int, int, int>> one_path_;
   double link_length_m_ = 0.0;
   std::optional<KnotCodebook> codebook_;
   IdentityCheckOptions identity_;

@@ -163,5 +163,34 @@ TEST(TrackKnots, AcceptsAKnotOneYarnShortWhoseYarnsLeadToItsNeighbours) {
   EXPECT_FALSE(off[6].accepted);
 }
 
+// The same two knots one yarn short, but none of their neighbours can be tracked (each lost two
+// of its yarns): the directions of their yarns still lead to the neighbours' labels in the first
+// frame, but no accepted neighbour moved with them to check the junction's place. In a folded
+// net such junctions (a yarn beside the knot's own, another layer's crossing) were accepted
+// 2.1-2.7 px off: they are left for review.
+TEST(TrackKnots, AKnotOneYarnShortWithoutAcceptedNeighboursIsLeftForReview) {
+  RenderNetOptions o;
+  o.tilt_deg = 15.0;
+  o.noise_grey = 2.0;
+  o.seed = 12;
+  const NetImage a = RenderNet(o);
+  o.seed = 13;
+  o.offset = Eigen::Vector3d(0.0, 0.004, -0.002);
+  // (1,1)-(1,2) gone; knots 1, 2, 4, 7, 9 and 10 around them two yarns short each.
+  o.missing = {{5, 6},  {0, 1},  {1, 2},  {2, 3},  {0, 4},   {4, 8},
+               {3, 7},  {7, 11}, {8, 9},  {9, 13}, {10, 11}, {10, 14}};
+  const NetImage b = RenderNet(o);
+  const std::vector<TrackedKnot> tracked = TrackKnots(a.image, b.image, AllKnots(a), kRows, kCols);
+  for (const int k : {1, 2, 4, 7, 9, 10}) EXPECT_FALSE(tracked[k].accepted) << "knot " << k;
+  for (const int k : {5, 6}) {
+    EXPECT_TRUE(tracked[k].one_yarn_short) << "knot " << k << ": " << tracked[k].why;
+    EXPECT_FALSE(tracked[k].accepted) << "knot " << k;
+  }
+  // Knot (1,2)'s flow held (knot (1,1)'s did not, and its neighbours' motion could not
+  // predict it): its junction passed every other test.
+  EXPECT_NE(tracked[6].why.find("no accepted neighbour moved with it"), std::string::npos)
+      << tracked[6].why;
+}
+
 }  // namespace
 }  // namespace netlab::recon
