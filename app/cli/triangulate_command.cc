@@ -220,6 +220,7 @@ void PrintJson(const TriangulateArgs& a, const Outcome& o) {
   json.Key("untriangulated").Int(r.candidates - r.triangulated);
   json.Key("single_view").Int(r.single_view);
   json.Key("unreviewed_skipped").Int(r.unreviewed_skipped);
+  json.Key("projected_skipped").Int(r.projected_skipped);
   json.Key("reprojection_rms_px").Number(r.reprojection_rms_px);
   json.Key("outliers").Int(static_cast<int64_t>(r.outliers.size()));
   json.Key("sigma_px").Number(r.sigma_px);

@@ -226,7 +226,8 @@ std::vector<int> SequenceSolver::GridNeighbours(int k) const {
   return out;
 }
 
-// Every label present into its knot-frame's observations; unreviewed ones only if asked for.
+// Every label present into its knot-frame's observations; unreviewed ones only if asked for;
+// none placed from the other views (LabelSource::kProjected).
 void SequenceSolver::Gather(SequenceResult* result) {
   for (int t = 0; t < t_; ++t)
     for (int k = 0; k < k_; ++k)
@@ -235,6 +236,10 @@ void SequenceSolver::Gather(SequenceResult* result) {
         if (!l.present()) continue;
         if (l.state == LabelState::kNeedsReview && !o_.use_unreviewed) {
           ++result->unreviewed_skipped;
+          continue;
+        }
+        if (l.source == LabelSource::kProjected) {
+          ++result->projected_skipped;
           continue;
         }
         cells_[Cell(t, k)].observations.push_back({camera_of_label_[c], l.px});

@@ -98,6 +98,9 @@ struct SequenceResult {
                               // line cannot be seen in them (the smoothness prior can)
   int64_t single_view = 0;    // knot-frames with exactly one view (left out)
   int64_t unreviewed_skipped = 0;
+  // Labels placed from the other cameras' (LabelSource::kProjected): they repeat those views,
+  // and are left out.
+  int64_t projected_skipped = 0;
   double reprojection_rms_px = 0.0;  // over every inlier observation
   double sigma_px = 0.0;             // used for the covariances
   bool sigma_estimated = false;

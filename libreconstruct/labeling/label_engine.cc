@@ -37,6 +37,8 @@ std::optional<std::pair<int, double>> ViewOffTheOthers(const calib::Rig& rig,
                                                        const TriangulationOptions& topt,
                                                        double tolerance, double sigma);
 
+void Add(EngineCounts* sum, const EngineCounts& n);
+
 // Whether a label is an observation of its own: accepted, and not placed from the other
 // cameras' labels (LabelSource::kProjected), which would only repeat them.
 bool Observed(const Label& l) { return l.accepted() && l.source != LabelSource::kProjected; }
@@ -423,6 +425,12 @@ EngineCounts LabelEngine::FillByPaths(int t) {
     }
   }
   return Commit("Find Path between labeled knots (frame row " + std::to_string(t) + ")", edits);
+}
+
+EngineCounts LabelEngine::FillByPathsAndCheck(int t) {
+  EngineCounts counts = FillByPaths(t);
+  if (counts.accepted > 0) Add(&counts, CrossCheck(t));
+  return counts;
 }
 
 namespace {
@@ -872,9 +880,7 @@ LabelingSummary LabelEngine::LabelFrames(int first, int last, const FrameDone& a
   // The first frame row from its seeds, then the cameras cross-checked and the gaps filled.
   Add(&summary.first_frame, LabelFirstFrame(first));
   Add(&summary.cross_checked, CrossCheck(first));
-  const EngineCounts between = FillByPaths(first);
-  Add(&summary.first_frame, between);
-  if (between.accepted > 0) Add(&summary.cross_checked, CrossCheck(first));
+  Add(&summary.first_frame, FillByPathsAndCheck(first));
   summary.frames = 1;
   if (after_frame) after_frame(first);
   // Each later row tracked from the one before.

@@ -166,6 +166,8 @@ class LabelEngine {
   // that see too few corners to start from (the near pair in the first frame: the net is
   // larger than their view), once Fill Grid has given them knots around the gaps.
   EngineCounts FillByPaths(int t);
+  // FillByPaths(t), then CrossCheck(t) again where it accepted labels: what both set.
+  EngineCounts FillByPathsAndCheck(int t);
   // Tracks every label of frame `from` into frame `to` (an adjacent frame) where `to` has none,
   // and where `to` has a label tracked from one under review that has since been accepted.
   EngineCounts Track(int from, int to);

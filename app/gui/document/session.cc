@@ -173,8 +173,8 @@ std::string Session::FindPathBetween(int camera, int t, int knot_a, int knot_b) 
 recon::EngineCounts Session::FindPathFromCorners(int t) {
   // One step each (Find Path, then the check): undo takes back the check first.
   recon::EngineCounts counts = engine().LabelFirstFrame(t);
-  const recon::EngineCounts checked = engine().CrossCheck(t);
-  counts.accepted += checked.accepted, counts.review += checked.review;
+  for (const recon::EngineCounts& more : {engine().CrossCheck(t), engine().FillByPathsAndCheck(t)})
+    counts.accepted += more.accepted, counts.review += more.review;
   document_->MergeReasons(engine().reasons());
   NoteLinkLength();
   return counts;
@@ -212,6 +212,7 @@ Session::FillGridPreview Session::PreviewFillGrid(recon::LabelSet snapshot, int 
     preview.path_edits = diff(snapshot, store.labels());
     const recon::LabelSet path = store.labels();
     engine->CrossCheck(t);
+    engine->FillByPathsAndCheck(t);  // the cameras that saw too few corners, from Fill Grid's
     preview.check_edits = diff(path, store.labels());
   } else {
     engine->CrossCheck(t);

@@ -123,6 +123,14 @@ TEST(ReconstructSequence, OneViewLeavesAKnotUntriangulatedAndUnknownCamerasAreNa
   EXPECT_EQ(r.unreviewed_skipped, 1);
   EXPECT_EQ(r.triangulated, kFrames * kRows * kCols - 1);
 
+  // A knot seen by cameras 0 and 1, with labels placed from theirs in 2 and 3: two views, not
+  // four (those labels repeat the two), and they are counted apart.
+  for (int c = 2; c < 4; ++c) labels.at(c, 4, 7).source = LabelSource::kProjected;
+  const SequenceResult placed = ReconstructSequence(rig, labels, o);
+  EXPECT_EQ(placed.projected_skipped, 2);
+  EXPECT_EQ(placed.two_view, r.two_view + 1);
+  EXPECT_EQ(placed.triangulated, r.triangulated);
+
   labels.cameras[1] = "cam7";
   try {
     ReconstructSequence(rig, labels, o);
