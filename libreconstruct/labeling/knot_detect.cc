@@ -726,6 +726,18 @@ bool Intersect(const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>>& l
 
 }  // namespace
 
+bool KnotDetector::NearBackgroundEdge(const Eigen::Vector2d& px, double radius) const {
+  if (masked_.empty()) return false;
+  const int r = static_cast<int>(std::ceil(radius));
+  const int cx = static_cast<int>(std::lround(px.x())) - roi_.x;
+  const int cy = static_cast<int>(std::lround(px.y())) - roi_.y;
+  for (int y = std::max(0, cy - r); y <= std::min(masked_.rows - 1, cy + r); ++y)
+    for (int x = std::max(0, cx - r); x <= std::min(masked_.cols - 1, cx + r); ++x)
+      if (masked_.at<uchar>(y, x) == kEdge && (x - cx) * (x - cx) + (y - cy) * (y - cy) <= r * r)
+        return true;
+  return false;
+}
+
 int KnotDetector::YarnsAlong(const Eigen::Vector2d& px, const std::vector<double>& angles,
                              double tolerance_rad) const {
   if (ridge_.empty() || angles.empty()) return 0;
@@ -1203,14 +1215,23 @@ std::vector<Junction> KnotDetector::SolidsInCircle(const Eigen::Vector2d& centre
   return found;
 }
 
-FindNodeResult FindNode(const cv::Mat& image, const Eigen::Vector2d& centre, double radius,
+cv::Rect FindNodeRegion(const Eigen::Vector2d& centre, double radius,
                         const KnotDetectorOptions& options) {
   const int margin = static_cast<int>(std::ceil(DetectorReach(options)));
-  const cv::Rect roi(static_cast<int>(std::floor(centre.x() - radius)) - margin,
-                     static_cast<int>(std::floor(centre.y() - radius)) - margin,
-                     static_cast<int>(2 * radius) + 2 * margin + 2,
-                     static_cast<int>(2 * radius) + 2 * margin + 2);
-  const KnotDetector detector(image, roi, options);
+  return cv::Rect(static_cast<int>(std::floor(centre.x() - radius)) - margin,
+                  static_cast<int>(std::floor(centre.y() - radius)) - margin,
+                  static_cast<int>(2 * radius) + 2 * margin + 2,
+                  static_cast<int>(2 * radius) + 2 * margin + 2);
+}
+
+FindNodeResult FindNode(const cv::Mat& image, const Eigen::Vector2d& centre, double radius,
+                        const KnotDetectorOptions& options) {
+  return FindNode(KnotDetector(image, FindNodeRegion(centre, radius, options), options), centre,
+                  radius);
+}
+
+FindNodeResult FindNode(const KnotDetector& detector, const Eigen::Vector2d& centre,
+                        double radius) {
   FindNodeResult result;
   result.candidates = detector.FindInCircle(centre, radius);
   if (result.candidates.empty()) result.candidates = detector.SolidsInCircle(centre, radius);

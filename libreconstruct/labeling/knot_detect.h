@@ -161,6 +161,10 @@ class KnotDetector {
   int YarnsAlong(const Eigen::Vector2d& px, const std::vector<double>& angles,
                  double tolerance_rad) const;
 
+  // Whether an edge of the background (the target's outline: KnotDetectorOptions::
+  // background_edge) passes within `radius` px of `px`: a knot there may be just behind it.
+  bool NearBackgroundEdge(const Eigen::Vector2d& px, double radius) const;
+
   const cv::Mat& ridge() const { return ridge_; }  // CV_32F, the ROI
   double peak_threshold() const { return threshold_; }
   // The Bayer pattern (BayerPattern, bayer.h; at the ROI's top-left pixel) the image was
@@ -246,6 +250,11 @@ struct FindNodeResult {
 // About 2 ms for a 6 px brush (a 68 x 68 px region; 4.7 ms at most on a rendered shot).
 FindNodeResult FindNode(const cv::Mat& image, const Eigen::Vector2d& centre, double radius,
                         const KnotDetectorOptions& options = {});
+// The same with a detector built by the caller (FindNodeRegion: its ROI around the brush).
+FindNodeResult FindNode(const KnotDetector& detector, const Eigen::Vector2d& centre,
+                        double radius);
+cv::Rect FindNodeRegion(const Eigen::Vector2d& centre, double radius,
+                        const KnotDetectorOptions& options);
 
 // Find Path: the knots strictly between two labeled knots of one row or column, found by
 // following the yarn (the cheapest path on 1 / ridge strength from one knot to the other) and

@@ -39,6 +39,7 @@ struct KnotTracking {
   std::vector<bool> trusted{};      // per knot: its flow passed the forward-backward check
   std::map<int, size_t> index{};    // a knot's index in `knots`
   std::vector<TrackedKnot> out{};   // per knot of `knots`
+  std::map<int, KnownMotion> known{};  // knots not tracked whose motion is known
 
   void Flow(const cv::Mat& from);
   bool Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot* t) const;
@@ -82,10 +83,13 @@ void KnotTracking::Flow(const cv::Mat& from) {
 bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot* t) const {
   const int k = knots[i].first, r = k / cols, c = k % cols;
   const int degree = (r > 0) + (r + 1 < rows) + (c > 0) + (c + 1 < cols);
+  const KnotDetector detector(to, FindNodeRegion(predicted, options.snap_radius_px, options.detector),
+                              options.detector);
   const std::vector<Junction> near =
-      FindNode(to, predicted, options.snap_radius_px, options.detector).candidates;
+      FindNode(detector, predicted, options.snap_radius_px).candidates;
   t->px = predicted;
   t->one_yarn_short = false;
+  t->branch_angles_rad.clear();
   if (near.empty()) {
     if (t->why.empty()) {
       char why[64];
@@ -102,6 +106,17 @@ bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot*
   const Junction& j = near[0];
   t->px = j.px;
   t->confidence = j.confidence;
+  t->branch_angles_rad = j.solid ? std::vector<double>{} : j.branch_angles_rad;
+  // At the edge of a body behind the net (the target's outline), the edge and a yarn make a
+  // junction too, and a knot just behind the edge shows the yarns on this side only: there
+  // the junction must have the knot's degree, each yarn leading to one of its neighbours.
+  if (options.body_edge_px > 0.0 && !j.solid &&
+      detector.NearBackgroundEdge(j.px, options.body_edge_px) &&
+      (j.branches != degree || !YarnsPointAtNeighbours(i, j))) {
+    t->why = "at the edge of the target, a yarn short or with a yarn that leads to no "
+             "neighbour (it may be behind the target)";
+    return false;
+  }
   if (j.branches == degree) return true;
   // One yarn short (a dim dye, a yarn that fades against the target) is the knot when each
   // yarn found leads to one of its own neighbours, and, on a knotless net, where its straight
@@ -138,9 +153,11 @@ bool KnotTracking::YarnsPointAtNeighbours(size_t i, const Junction& j) const {
   for (const auto& [dr, dc] :
        {std::pair(0, -1), std::pair(0, 1), std::pair(-1, 0), std::pair(1, 0)}) {
     if (r + dr < 0 || r + dr >= rows || c + dc < 0 || c + dc >= cols) continue;
-    const auto it = index.find((r + dr) * cols + c + dc);
-    if (it == index.end()) continue;
-    const Eigen::Vector2d d = knots[it->second].second - px;
+    const int n = (r + dr) * cols + c + dc;
+    const auto it = index.find(n);
+    const auto kn = known.find(n);
+    if (it == index.end() && kn == known.end()) continue;
+    const Eigen::Vector2d d = (it != index.end() ? knots[it->second].second : kn->second.from) - px;
     towards.push_back(std::atan2(d.y(), d.x()));
   }
   std::vector<bool> taken(towards.size(), false);
@@ -184,7 +201,14 @@ void KnotTracking::PredictFromNeighbours() {
       for (int n : {k - 1, k + 1, k - cols, k + cols}) {
         if (n < 0 || n >= rows * cols || (std::abs(n - k) == 1 && n / cols != r)) continue;
         const auto it = index.find(n);
-        if (it == index.end()) continue;
+        if (it == index.end()) {
+          const auto kn = known.find(n);
+          if (kn != known.end()) {
+            moves.push_back(kn->second.to - kn->second.from);
+            confirmed.push_back(moves.back());
+          }
+          continue;
+        }
         const size_t j = it->second;
         if (out[j].accepted) {
           moves.push_back(out[j].px - knots[j].second);
@@ -236,7 +260,12 @@ void KnotTracking::CheckRelativeMotion() {
   auto motion = [&](int r, int c) -> std::optional<Eigen::Vector2d> {
     if (r < 0 || c < 0 || r >= rows || c >= cols) return std::nullopt;
     const auto it = index.find(r * cols + c);
-    if (it == index.end() || !accepted[it->second]) return std::nullopt;
+    if (it == index.end()) {
+      const auto kn = known.find(r * cols + c);
+      if (kn == known.end()) return std::nullopt;
+      return kn->second.to - kn->second.from;
+    }
+    if (!accepted[it->second]) return std::nullopt;
     return out[it->second].px - knots[it->second].second;
   };
   for (size_t i = 0; i < out.size(); ++i) {
@@ -265,7 +294,19 @@ void KnotTracking::CheckRelativeMotion() {
       out[i].why = "the junction there has a yarn too few, and no accepted neighbour moved with it";
       continue;
     }
-    if (expected.empty()) continue;
+    // With nothing to check its motion, a junction's yarns must each lead to one of the knot's
+    // neighbours: another layer's yarn crossing the row 2 px from the knot made a junction of
+    // the knot's degree in a fold (Net B at 0.8 m/s).
+    if (expected.empty()) {
+      Junction j;
+      j.branch_angles_rad = out[i].branch_angles_rad;
+      if (!j.branch_angles_rad.empty() && !YarnsPointAtNeighbours(i, j)) {
+        out[i].accepted = false;
+        out[i].why = "no accepted neighbour moved with it, and a yarn of its junction leads to "
+                     "no neighbour";
+      }
+      continue;
+    }
     const Eigen::Vector2d own = out[i].px - knots[i].second;
     double off = std::numeric_limits<double>::infinity();
     for (const auto& e : expected) off = std::min(off, (own - e).norm());
@@ -277,8 +318,14 @@ void KnotTracking::CheckRelativeMotion() {
   }
 }
 
-// Two knots on one junction: neither is trusted.
+// Two knots on one junction: neither is trusted; nor a knot on another's known place.
 void KnotTracking::RejectSharedJunctions() {
+  for (TrackedKnot& t : out)
+    for (const auto& [k, m] : known)
+      if (t.accepted && (t.px - m.to).norm() < options.snap_radius_px) {
+        t.accepted = false;
+        t.why = "another knot's label is there";
+      }
   for (size_t i = 0; i < out.size(); ++i)
     for (size_t j = i + 1; j < out.size(); ++j)
       if ((out[i].px - out[j].px).norm() < options.snap_radius_px) {
@@ -293,9 +340,11 @@ void KnotTracking::RejectSharedJunctions() {
 
 std::vector<TrackedKnot> TrackKnots(const cv::Mat& from, const cv::Mat& to,
                                     const std::vector<std::pair<int, Eigen::Vector2d>>& knots,
-                                    int rows, int cols, const TrackOptions& options) {
+                                    int rows, int cols, const TrackOptions& options,
+                                    const std::vector<KnownMotion>& known) {
   if (knots.empty()) return {};
   KnotTracking tracking{to, knots, rows, cols, options};
+  for (const KnownMotion& m : known) tracking.known[m.knot] = m;
   tracking.out.resize(knots.size());
   // The flow, forwards and back.
   tracking.Flow(from);

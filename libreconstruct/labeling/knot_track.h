@@ -60,6 +60,13 @@ struct TrackOptions {
   // along the pair, as an edge knot's. 0: not checked (LabelEngine sets it from
   // edge_colour_step_px). Needs detector.colour_step.
   double edge_colour_step_px = 0.0;
+  // A junction within this of the edge of a body behind the net (the target's outline,
+  // KnotDetector::NearBackgroundEdge) is accepted only where it has the knot's degree and each
+  // of its yarns leads to a different neighbour (max_yarn_angle_deg): the knot may have just
+  // passed behind the body, its yarns on this side making a junction at the edge (on Net B at
+  // 0.8 m/s a knot 1 px behind the box's edge was tracked onto such a junction, one yarn
+  // short). 0: not checked.
+  double body_edge_px = 2.0;
   KnotDetectorOptions detector;
 };
 
@@ -73,12 +80,23 @@ struct TrackedKnot {
   // neighbours' motion could check it (a junction in a fold, a yarn beside its own, passes
   // the yarn-direction test 2-3 px off).
   bool one_yarn_short = false;
+  // The yarns of the junction it was snapped to (image angles, rad; Junction::branch_angles_rad).
+  std::vector<double> branch_angles_rad;
+};
+
+// A knot not tracked but labeled in both frames (accepted there: a person's fix, a label kept
+// from an earlier run): its motion is known, and it counts as an accepted neighbour.
+struct KnownMotion {
+  int knot = 0;
+  Eigen::Vector2d from = Eigen::Vector2d::Zero(), to = Eigen::Vector2d::Zero();
 };
 
 // `knots`: (knot index, position in `from`). Images: the same camera's consecutive frames, BGR or
-// grey, 8 or 16 bit.
+// grey, 8 or 16 bit. `known`: other knots whose motion is known (not tracked; their motion
+// enters the neighbours' checks and predictions, their place in `from` the yarn directions).
 std::vector<TrackedKnot> TrackKnots(const cv::Mat& from, const cv::Mat& to,
                                     const std::vector<std::pair<int, Eigen::Vector2d>>& knots,
-                                    int rows, int cols, const TrackOptions& options = {});
+                                    int rows, int cols, const TrackOptions& options = {},
+                                    const std::vector<KnownMotion>& known = {});
 
 }  // namespace netlab::recon

@@ -452,9 +452,15 @@ EngineCounts LabelEngine::Track(int from, int to) {
   for (int camera = 0; camera < static_cast<int>(set.cameras.size()); ++camera) {
     std::vector<std::pair<int, Eigen::Vector2d>> knots;
     std::vector<bool> was_accepted;
+    std::vector<KnownMotion> known;  // knots accepted in both frames, not tracked again
     for (int k = 0; k < set.knots(); ++k) {
       const Label& l = set.at(camera, from, k);
-      if (!l.present() || !Trackable(set.at(camera, to, k), l)) continue;
+      if (!l.present()) continue;
+      if (!Trackable(set.at(camera, to, k), l)) {
+        if (l.accepted() && set.at(camera, to, k).accepted())
+          known.push_back({k, l.px, set.at(camera, to, k).px});
+        continue;
+      }
       knots.emplace_back(k, l.px);
       was_accepted.push_back(l.state == LabelState::kAccepted);
     }
@@ -463,7 +469,7 @@ EngineCounts LabelEngine::Track(int from, int to) {
     const cv::Mat& b = Image(camera, to);
     if (a.empty() || b.empty()) continue;
     const std::vector<TrackedKnot> tracked =
-        TrackKnots(a, b, knots, set.rows, set.cols, o_.track);
+        TrackKnots(a, b, knots, set.rows, set.cols, o_.track, known);
     for (size_t i = 0; i < tracked.size(); ++i) {
       const bool accepted = tracked[i].accepted && was_accepted[i];
       edits.push_back({camera, to, tracked[i].knot,
@@ -597,8 +603,8 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
   }
   // Its motion since the adjacent frame against its neighbours' (a junction of another layer
   // of a folded net, 3.6 px from the knot, had yarns along the knot's own).
-  if (const std::optional<double> moved = MotionOff(camera, t, knot, j.px);
-      moved && *moved > o_.place_motion_px) {
+  const std::optional<double> moved = MotionOff(camera, t, knot, j.px);
+  if (moved && *moved > o_.place_motion_px) {
     char why[96];
     std::snprintf(why, sizeof why, "it moved %.1f px otherwise than its neighbours since the "
                   "frame before", *moved);
@@ -610,11 +616,28 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
       !BranchesMatchLinks(j, slots, o_.branch_tolerance_deg, true))
     return "the junction's yarns do not run towards its labeled neighbours";
   // Its place against the point two or more other cameras agree on.
-  if (!rig_) return "";
   std::vector<Observation> others;
-  for (int c = 0; c < static_cast<int>(set.cameras.size()); ++c)
+  for (int c = 0; c < static_cast<int>(set.cameras.size()) && rig_; ++c)
     if (c != camera && Observed(set.at(c, t, knot)))
       others.push_back({RigIndex(c), set.at(c, t, knot).px});
+  // A junction a yarn short of the knot's degree, with neither its motion nor the other
+  // cameras to check its place: in folds, a yarn beside the knot's own or another layer's
+  // crossing made such junctions 2-2.7 px off, their yarns along the knot's links.
+  const int degree = static_cast<int>(std::count(slots.present.begin(), slots.present.end(), true));
+  // Where nothing checks its place, a junction of the knot's degree must have each yarn along
+  // one of its links (another layer's yarn crossing a row 2 px from a knot made one).
+  if (!j.solid && !moved && others.size() < 2) {
+    char why[112];
+    if (j.branches < degree) {
+      std::snprintf(why, sizeof why, "the junction has %d yarns, the knot %d, and nothing checks "
+                    "its place (no motion, no other cameras)", j.branches, degree);
+      return why;
+    }
+    if (KnownLinkAngles(j.px, slots).size() >= 2 &&
+        !BranchesMatchLinks(j, slots, o_.track.max_yarn_angle_deg))
+      return "a yarn of the junction leads to no labeled neighbour, and nothing checks its "
+             "place (no motion, no other cameras)";
+  }
   if (others.size() < 2) return "";
   TriangulationOptions topt;
   topt.outlier_threshold_px = o_.epipolar_tolerance_px;
