@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <opencv2/imgproc.hpp>
+
 #include "tests/libreconstruct/labeling/rendered_net.h"
 
 namespace netlab::recon {
@@ -190,6 +192,72 @@ TEST(TrackKnots, AKnotOneYarnShortWithoutAcceptedNeighboursIsLeftForReview) {
   // predict it): its junction passed every other test.
   EXPECT_NE(tracked[6].why.find("no accepted neighbour moved with it"), std::string::npos)
       << tracked[6].why;
+}
+
+// Knot (1,1) tracked alone, its neighbours labeled in both frames (a person's fixes) and given as
+// known motions: they check it as accepted neighbours would. Moved 1.5 mm besides the net, it is
+// left for review; where it moved with the net, it is accepted. A tracked knot that lands on a
+// known knot's place is not.
+TEST(TrackKnots, KnownNeighbourMotionsCheckAKnotTrackedAlone) {
+  RenderNetOptions o;
+  o.tilt_deg = 15.0;
+  o.noise_grey = 2.0;
+  o.seed = 9;
+  const NetImage a = RenderNet(o);
+  o.seed = 10;
+  o.offset = Eigen::Vector3d(0.0, 0.005, -0.003);
+  const NetImage b = RenderNet(o);
+  o.moved = {{5, Eigen::Vector3d(0.0, 0.0015, 0.0)}};
+  const NetImage moved = RenderNet(o);
+  std::vector<KnownMotion> known;
+  for (const int n : {1, 4, 6, 9, 0, 2, 8, 10})
+    known.push_back({n, a.Pixel(n / kCols, n % kCols), b.Pixel(n / kCols, n % kCols)});
+  const std::vector<std::pair<int, Eigen::Vector2d>> alone = {{5, a.Pixel(1, 1)}};
+  const TrackedKnot with_net = TrackKnots(a.image, b.image, alone, kRows, kCols, {}, known)[0];
+  EXPECT_TRUE(with_net.accepted) << with_net.why;
+  EXPECT_LT((with_net.px - b.Pixel(1, 1)).norm(), 0.1);
+  const TrackedKnot off = TrackKnots(a.image, moved.image, alone, kRows, kCols, {}, known)[0];
+  EXPECT_FALSE(off.accepted);
+  EXPECT_NE(off.why.find("otherwise than its accepted neighbours"), std::string::npos) << off.why;
+  // Knot (1,2) tracked from knot (1,1)'s place: it lands where (1,1) is known to be.
+  const std::vector<std::pair<int, Eigen::Vector2d>> wrong = {{6, a.Pixel(1, 1)}};
+  std::vector<KnownMotion> with_5 = {{5, a.Pixel(1, 1), b.Pixel(1, 1)}};
+  const TrackedKnot taken = TrackKnots(a.image, b.image, wrong, kRows, kCols, {}, with_5)[0];
+  EXPECT_FALSE(taken.accepted);
+}
+
+// Knot (1,1) just behind the edge of a grey body in the next frame: the body covers its yarn to
+// (1,2) from 1 px beside the knot on (a wedge around that yarn, so the others stay in view). The
+// three yarns left make a junction there, each leading to a neighbour, and its neighbours moved
+// with it; but a knot at a body's edge with a yarn missing may be behind the body: left for
+// review. Without the check it is accepted.
+TEST(TrackKnots, AJunctionAYarnShortAtTheEdgeOfABodyIsLeftForReview) {
+  RenderNetOptions o;
+  o.tilt_deg = 15.0;
+  o.noise_grey = 2.0;
+  o.seed = 12;
+  const NetImage a = RenderNet(o);
+  o.seed = 13;
+  o.offset = Eigen::Vector3d(0.0, 0.004, -0.002);
+  NetImage b = RenderNet(o);
+  const Eigen::Vector2d knot = b.Pixel(1, 1);
+  const Eigen::Vector2d u = (b.Pixel(1, 2) - knot).normalized(), v(-u.y(), u.x());
+  auto at = [&](double along, double across) {
+    const Eigen::Vector2d p = knot + along * u + across * v;
+    return cv::Point(cvRound(p.x()), cvRound(p.y()));
+  };
+  const std::vector<cv::Point> wedge = {at(1.5, -8.0), at(1.5, 8.0), at(70.0, 40.0),
+                                        at(70.0, -40.0)};
+  cv::fillConvexPoly(b.image, wedge, cv::Scalar::all(150));
+  const std::vector<TrackedKnot> tracked = TrackKnots(a.image, b.image, AllKnots(a), kRows, kCols);
+  EXPECT_FALSE(tracked[5].accepted);
+  EXPECT_NE(tracked[5].why.find("edge of the target"), std::string::npos) << tracked[5].why;
+  TrackOptions unchecked;
+  unchecked.body_edge_px = 0.0;
+  const std::vector<TrackedKnot> plain =
+      TrackKnots(a.image, b.image, AllKnots(a), kRows, kCols, unchecked);
+  EXPECT_TRUE(plain[5].accepted) << plain[5].why;
+  EXPECT_LT((plain[5].px - knot).norm(), 0.5);
 }
 
 }  // namespace
