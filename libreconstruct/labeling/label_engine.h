@@ -217,6 +217,12 @@ class LabelEngine {
   void AdoptLinkLength(double m) {
     if (link_length_m_ <= 0.0 && m > 0.0) link_length_m_ = m;
   }
+  // (camera, frame row, knot) of the labels Find Path found along their row or column alone:
+  // Fill Grid takes them as candidates that other cameras may confirm.
+  using KnotsInFrames = std::set<std::tuple<int, int, int>>;
+  const KnotsInFrames& one_path() const { return one_path_; }
+  // Takes those of another engine that ran on a copy of the same labels (the GUI's previews).
+  void AdoptOnePath(const KnotsInFrames& more) { one_path_.insert(more.begin(), more.end()); }
 
  private:
   const cv::Mat& Image(int camera, int t);
@@ -304,8 +310,7 @@ class LabelEngine {
   std::vector<int> rig_index_;  // per store camera, its rig index (-1 without a rig)
   std::map<std::pair<int, int>, cv::Mat> cache_;
   ReviewReasons reasons_;
-  // (camera, frame row, knot) that Find Path found along its row or its column alone.
-  std::set<std::tuple<int, int, int>> one_path_;
+  KnotsInFrames one_path_;  // see one_path()
   double link_length_m_ = 0.0;
   std::optional<KnotCodebook> codebook_;
   IdentityCheckOptions identity_;

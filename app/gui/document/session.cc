@@ -111,6 +111,10 @@ std::unique_ptr<recon::LabelEngine> Session::MakeEngine(recon::LabelStore* store
   auto engine = std::make_unique<recon::LabelEngine>(
       store, &rig_, [this](int c, int t) { return Image(c, t); }, engine_options_);
   if (codebook_) engine->SetCodebook(*codebook_, identity_);
+  {
+    const std::lock_guard<std::mutex> lock(one_path_mutex_);
+    engine->AdoptOnePath(one_path_);
+  }
   return engine;
 }
 
@@ -177,6 +181,7 @@ recon::EngineCounts Session::FindPathFromCorners(int t) {
     counts.accepted += more.accepted, counts.review += more.review;
   document_->MergeReasons(engine().reasons());
   NoteLinkLength();
+  NoteOnePath();
   return counts;
 }
 
@@ -219,6 +224,7 @@ Session::FillGridPreview Session::PreviewFillGrid(recon::LabelSet snapshot, int 
   }
   preview.reasons = engine->reasons();
   preview.link_length_m = engine->link_length_m();
+  preview.one_path = engine->one_path();
   preview.edits = diff(snapshot, store.labels());
   // Counted by what the person is asked to look at.
   for (const recon::LabelEdit& e : preview.edits) {
@@ -245,6 +251,8 @@ int Session::ApplyFillGridPreview(const FillGridPreview& preview) {
   document_->MergeReasons(preview.reasons);
   engine().AdoptLinkLength(preview.link_length_m);
   NoteLinkLength();
+  engine().AdoptOnePath(preview.one_path);
+  NoteOnePath();
   if (!preview.from_corners) return document_->Apply("Fill Grid", preview.edits);
   return document_->Apply("Find Path from the corners", preview.path_edits) +
          document_->Apply("Fill Grid", preview.check_edits);

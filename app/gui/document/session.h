@@ -17,6 +17,7 @@
 #include <atomic>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
@@ -95,6 +96,7 @@ class Session {
     std::vector<recon::LabelEdit> edits;
     recon::ReviewReasons reasons;  // why labels are kept for review (the engine's, this run)
     double link_length_m = 0.0;    // the link length the run used or estimated (m; 0: none)
+    recon::LabelEngine::KnotsInFrames one_path;  // its labels found along one path alone
     int added = 0;         // labels where there was none
     int added_review = 0;  // ... of them kept for review
     int to_review = 0;     // accepted labels the checks turn to review
@@ -210,6 +212,14 @@ class Session {
   // GUI thread after each of its cross-checks (the only step that estimates it).
   std::atomic<double> link_length_m_{0.0};
   void NoteLinkLength() { link_length_m_ = engine().link_length_m(); }
+  // engine_'s labels found along one path alone (LabelEngine::one_path), for the engines of the
+  // other threads, which adopt them: set on the GUI thread after each step that finds some.
+  mutable std::mutex one_path_mutex_;
+  recon::LabelEngine::KnotsInFrames one_path_;
+  void NoteOnePath() {
+    const std::lock_guard<std::mutex> lock(one_path_mutex_);
+    one_path_ = engine().one_path();
+  }
 };
 
 }  // namespace netlab::gui
