@@ -104,6 +104,12 @@ bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot*
     return false;
   }
   const Junction& j = near[0];
+  // Only a corner knot sits in a blob (its corner mass); elsewhere a blob is yarns bunched in a
+  // fold (one once took an inner knot 2.7 px off).
+  if (j.solid && degree != 2) {
+    t->why = "a blob there, no yarn junction (the knot has no corner mass)";
+    return false;
+  }
   t->px = j.px;
   t->confidence = j.confidence;
   t->branch_angles_rad = j.solid ? std::vector<double>{} : j.branch_angles_rad;

@@ -492,6 +492,12 @@ FindNodeResult LabelEngine::FindNodeAt(int camera, int t, int knot, const Eigen:
     return r;
   }
   FindNodeResult r = FindNode(image, centre, radius_px, o_.detector);
+  // Only a corner knot sits in a blob (its corner mass); elsewhere a blob is yarns bunched in a
+  // fold (one once gave an inner knot 2.7 px off).
+  if (r.status == FindNodeStatus::kFound && r.knot.solid && Neighbours(knot).size() != 2) {
+    r.status = FindNodeStatus::kNone;
+    r.why = "no yarn junction in the brush, only a blob (the knot has no corner mass)";
+  }
   // Where the other cameras fix the knot, in the brush: it decides between several junctions,
   // and places the knot where the image shows none, or one they put elsewhere.
   std::optional<Eigen::Vector2d> others = OthersPlace(camera, t, knot);
@@ -622,21 +628,24 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
       others.push_back({RigIndex(c), set.at(c, t, knot).px});
   // A junction a yarn short of the knot's degree, with neither its motion nor the other
   // cameras to check its place: in folds, a yarn beside the knot's own or another layer's
-  // crossing made such junctions 2-2.7 px off, their yarns along the knot's links.
+  // crossing made such junctions 2-2.7 px off, their yarns along the knot's links. The other
+  // cameras check it only where they fix the knot (OthersPlace; the caller found they do not):
+  // the far pair alone, whose point projects into a near camera to a pixel or more, once let a
+  // junction 2.7 px off pass within the 1.5 px of their check below.
   const int degree = static_cast<int>(std::count(slots.present.begin(), slots.present.end(), true));
   // Where nothing checks its place, a junction of the knot's degree must have each yarn along
   // one of its links (another layer's yarn crossing a row 2 px from a knot made one).
-  if (!j.solid && !moved && others.size() < 2) {
-    char why[112];
+  if (!j.solid && !moved) {
+    char why[128];
     if (j.branches < degree) {
       std::snprintf(why, sizeof why, "the junction has %d yarns, the knot %d, and nothing checks "
-                    "its place (no motion, no other cameras)", j.branches, degree);
+                    "its place (no motion, no other cameras that fix it)", j.branches, degree);
       return why;
     }
     if (KnownLinkAngles(j.px, slots).size() >= 2 &&
         !BranchesMatchLinks(j, slots, o_.track.max_yarn_angle_deg))
       return "a yarn of the junction leads to no labeled neighbour, and nothing checks its "
-             "place (no motion, no other cameras)";
+             "place (no motion, no other cameras that fix it)";
   }
   if (others.size() < 2) return "";
   TriangulationOptions topt;
@@ -1101,9 +1110,13 @@ std::optional<LabelEdit> LabelEngine::PlaceAtProjection(FrameCheck* f, const Fil
   const bool over_body = !OnSceneBackground(view.image, scene->second, *q,
                                             o_.background_reach_px, o_.background_tolerance);
   if (over_body && (yarns < 3 || yarns < static_cast<int>(links.size()))) return std::nullopt;
-  // And it moved from its label in the frame before as its neighbours did (a check no
-  // other camera's label enters).
-  const std::optional<double> moved = MotionOff(c, t, k, *q);
+  // And it moved from its label in the frame before as its neighbours did, or, where they
+  // were not labeled then, it lies where this camera's tracking took it (the flow's end, or the
+  // junction it found there): checks no other camera's label enters.
+  std::optional<double> moved = MotionOff(c, t, k, *q);
+  const Label& tracked = store_->labels().at(c, t, k);
+  if (!moved && tracked.present() && tracked.source == LabelSource::kTracked)
+    moved = (tracked.px - *q).norm();
   if (!moved || *moved > o_.place_motion_px) return std::nullopt;
   return LabelEdit{c, t, k, Made(*q, LabelSource::kProjected, 0.5, true)};
 }

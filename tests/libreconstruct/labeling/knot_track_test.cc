@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <opencv2/imgproc.hpp>
 
 #include "tests/libreconstruct/labeling/rendered_net.h"
@@ -258,6 +260,34 @@ TEST(TrackKnots, AJunctionAYarnShortAtTheEdgeOfABodyIsLeftForReview) {
       TrackKnots(a.image, b.image, AllKnots(a), kRows, kCols, unchecked);
   EXPECT_TRUE(plain[5].accepted) << plain[5].why;
   EXPECT_LT((plain[5].px - knot).norm(), 0.5);
+}
+
+// In the next frame knot (1,1) is a blob with four yarns leaving it, none of them its own (yarns
+// bunched in a fold): only a corner knot sits in a blob (its corner mass), so the blob is not
+// taken for the knot, though as many yarns leave it as the knot has.
+TEST(TrackKnots, ABlobAtAnInnerKnotIsNotTheKnot) {
+  RenderNetOptions o;
+  o.tilt_deg = 15.0;
+  o.noise_grey = 2.0;
+  o.seed = 14;
+  const NetImage a = RenderNet(o);
+  o.seed = 15;
+  o.offset = Eigen::Vector3d(0.0, 0.004, -0.002);
+  o.missing = {{1, 5}, {4, 5}, {5, 6}, {5, 9}};
+  NetImage b = RenderNet(o);
+  const Eigen::Vector2d knot = b.Pixel(1, 1);
+  const cv::Point centre(cvRound(knot.x()), cvRound(knot.y()));
+  cv::circle(b.image, centre, 8, cv::Scalar::all(200), cv::FILLED, cv::LINE_AA);
+  // A pinwheel: each yarn leaves the blob's rim along its tangent, so no two of them meet.
+  for (int i = 0; i < 4; ++i) {
+    const double a = i * M_PI / 2, ca = std::cos(a), sa = std::sin(a);
+    const cv::Point rim(cvRound(knot.x() + 6 * ca), cvRound(knot.y() + 6 * sa));
+    const cv::Point out(cvRound(rim.x - 30 * sa), cvRound(rim.y + 30 * ca));
+    cv::line(b.image, rim, out, cv::Scalar::all(200), 2, cv::LINE_AA);
+  }
+  const std::vector<TrackedKnot> tracked = TrackKnots(a.image, b.image, AllKnots(a), kRows, kCols);
+  EXPECT_FALSE(tracked[5].accepted);
+  EXPECT_NE(tracked[5].why.find("blob"), std::string::npos) << tracked[5].why;
 }
 
 }  // namespace

@@ -647,8 +647,9 @@ TEST(LabelEngine, FindNodePlacesTheKnotWhereTheOtherCamerasPutItWhenTheImageShow
 // Fill Grid, where the detector finds no junction at a knot's projection (here every fit is
 // refused as unsettled, as in a fold): the knot is placed where cameras b and c put it, since
 // its yarns leave there along its links and it moved as its neighbours did since frame 0. Not
-// where it has no label in frame 0 (no motion to check), and not where a body covers it in
-// camera a (a grey box over the knot: it may be behind it; no yarn leaves there).
+// where it has no label in frame 0 (no motion to check) unless its tracked label is there, and
+// not where a body covers it in camera a (a grey box over the knot: it may be behind it; no
+// yarn leaves there).
 TEST(LabelEngine, FillGridPlacesAKnotItsYarnsAndMotionShowWhereTheOtherCamerasPutIt) {
   LabelEngineOptions options;
   options.link_length_m = kMesh;
@@ -677,6 +678,24 @@ TEST(LabelEngine, FillGridPlacesAKnotItsYarnsAndMotionShowWhereTheOtherCamerasPu
     LabelEngine engine(&store, &shot.rig, Images(shot), options);
     engine.CrossCheck(1);
     EXPECT_FALSE(store.at(0, 1, 12).accepted());
+  }
+  // Without a label in frame 0, tracking's label under review (the flow's end) checks the place
+  // instead: within place_motion_px of it, and not 3 px away.
+  for (const double off : {0.4, 3.0}) {
+    LabelSet labels = labels_for(shot, false);
+    Label tracked = Accepted(shot.Truth(0, 1, 12) + Eigen::Vector2d(off, 0.0));
+    tracked.source = LabelSource::kTracked;
+    tracked.state = LabelState::kNeedsReview;
+    labels.at(0, 1, 12) = tracked;
+    LabelStore store(std::move(labels));
+    LabelEngine engine(&store, &shot.rig, Images(shot), options);
+    engine.CrossCheck(1);
+    const Label& l = store.at(0, 1, 12);
+    EXPECT_EQ(l.accepted(), off < 1.0) << off;
+    if (l.accepted()) {
+      EXPECT_EQ(l.source, LabelSource::kProjected);
+      EXPECT_LT((l.px - shot.Truth(0, 1, 12)).norm(), 0.3);
+    }
   }
   const Eigen::Vector2d at = shot.Truth(0, 1, 12);
   cv::rectangle(shot.images[0][1], cv::Rect(cvRound(at.x()) - 25, cvRound(at.y()) - 25, 50, 50),
@@ -748,6 +767,57 @@ TEST(LabelEngine, FindNodeDoubtsAJunctionAYarnShortThatNothingChecks) {
   ASSERT_EQ(engine.FindNodeAt(0, 0, 12, shot.Truth(0, 0, 12), 6.0).status, FindNodeStatus::kFound);
   EXPECT_TRUE(store.at(0, 0, 12).accepted());
   EXPECT_LT((store.at(0, 0, 12).px - shot.Truth(0, 0, 12)).norm(), 0.3);
+}
+
+// Two other cameras check a junction a yarn short only where they fix the knot (to
+// place_sigma_px): the far pair alone, projected into a near camera, leaves a pixel or more.
+TEST(LabelEngine, FindNodeDoubtsAJunctionAYarnShortTheOtherCamerasDoNotFix) {
+  const Shot shot = Render(1, {{12, 13}});
+  LabelSet labels = Empty(shot);
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < kKnots; ++k)
+      if (c > 0 || k != 12) labels.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
+  LabelStore store(std::move(labels));
+  LabelEngineOptions options;
+  options.place_sigma_px = 0.01;  // no two views fix a point that well
+  LabelEngine engine(&store, &shot.rig, Images(shot), options);
+  ASSERT_FALSE(engine.OthersPlace(0, 0, 12));
+  const FindNodeResult r = engine.FindNodeAt(0, 0, 12, shot.Truth(0, 0, 12), 6.0);
+  ASSERT_EQ(r.status, FindNodeStatus::kFound) << r.why;
+  EXPECT_EQ(r.knot.branches, 3);
+  EXPECT_EQ(store.at(0, 0, 12).state, LabelState::kNeedsReview);
+  ASSERT_TRUE(engine.reasons().count({0, 0, 12}));
+  EXPECT_NE(engine.reasons().at({0, 0, 12}).find("no other cameras that fix it"),
+            std::string::npos)
+      << engine.reasons().at({0, 0, 12});
+}
+
+// A blob where an inner knot's yarns are not seen (yarns bunched in a fold) is no knot: Find
+// Node says so and labels nothing; where two other cameras fix the knot it is placed where they
+// put it.
+TEST(LabelEngine, FindNodeTakesNoBlobForAnInnerKnot) {
+  Shot shot = Render(1, {{7, 12}, {11, 12}, {12, 13}, {12, 17}});
+  const Eigen::Vector2d knot = shot.Truth(0, 0, 12);
+  cv::circle(shot.images[0][0], cv::Point(cvRound(knot.x()), cvRound(knot.y())), 8,
+             cv::Scalar::all(200), cv::FILLED, cv::LINE_AA);
+  {
+    LabelStore store(Empty(shot));
+    LabelEngine engine(&store, &shot.rig, Images(shot));
+    const FindNodeResult r = engine.FindNodeAt(0, 0, 12, knot, 6.0);
+    EXPECT_EQ(r.status, FindNodeStatus::kNone);
+    EXPECT_NE(r.why.find("blob"), std::string::npos) << r.why;
+    EXPECT_FALSE(store.at(0, 0, 12).present());
+  }
+  LabelSet labels = Empty(shot);
+  for (int c = 1; c < 3; ++c)
+    for (int k = 0; k < kKnots; ++k) labels.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
+  LabelStore store(std::move(labels));
+  LabelEngine engine(&store, &shot.rig, Images(shot));
+  const FindNodeResult r = engine.FindNodeAt(0, 0, 12, knot, 6.0);
+  ASSERT_EQ(r.status, FindNodeStatus::kFound) << r.why;
+  EXPECT_TRUE(r.projected);
+  EXPECT_EQ(store.at(0, 0, 12).source, LabelSource::kProjected);
+  EXPECT_LT((store.at(0, 0, 12).px - knot).norm(), 0.5);
 }
 
 TEST(LabelEngine, RejectsARigWithoutTheCameras) {
