@@ -23,6 +23,15 @@ std::vector<std::pair<int, Eigen::Vector2d>> AllKnots(const NetImage& net) {
   return knots;
 }
 
+// The tracking tests' net: turned 15 degrees, 2 grey levels of noise.
+RenderNetOptions Tilted(uint64_t seed) {
+  RenderNetOptions o;
+  o.tilt_deg = 15.0;
+  o.noise_grey = 2.0;
+  o.seed = seed;
+  return o;
+}
+
 // The net moves 2 cm and turns 1.5 degrees between frames (~40 px at the image's scale: a fast
 // frame of the flight).
 TEST(TrackKnots, FollowsEveryKnotToTheNextFrame) {
@@ -106,10 +115,7 @@ TEST(TrackKnots, AcceptsAKnotWithoutFlowOnItsNeighboursCommonMotion) {
 // most 0.6 px), so it is left for review; its neighbours, whose expected motion it enters, stay
 // accepted. Without the check it is accepted where its junction is.
 TEST(TrackKnots, AKnotThatMovedOtherwiseThanItsNeighboursIsLeftForReview) {
-  RenderNetOptions o;
-  o.tilt_deg = 15.0;
-  o.noise_grey = 2.0;
-  o.seed = 9;
+  RenderNetOptions o = Tilted(9);
   const NetImage a = RenderNet(o);
   o.seed = 10;
   o.offset = Eigen::Vector3d(0.0, 0.005, -0.003);
@@ -138,10 +144,7 @@ TEST(TrackKnots, AKnotThatMovedOtherwiseThanItsNeighboursIsLeftForReview) {
 // knot's labeled neighbours, so both are accepted, where they are. Without a direction for every
 // yarn found (a neighbour not labeled) or with the rule off, they are left for review.
 TEST(TrackKnots, AcceptsAKnotOneYarnShortWhoseYarnsLeadToItsNeighbours) {
-  RenderNetOptions o;
-  o.tilt_deg = 15.0;
-  o.noise_grey = 2.0;
-  o.seed = 12;
+  RenderNetOptions o = Tilted(12);
   const NetImage a = RenderNet(o);
   o.seed = 13;
   o.offset = Eigen::Vector3d(0.0, 0.004, -0.002);
@@ -173,10 +176,7 @@ TEST(TrackKnots, AcceptsAKnotOneYarnShortWhoseYarnsLeadToItsNeighbours) {
 // net such junctions (a yarn beside the knot's own, another layer's crossing) were accepted
 // 2.1-2.7 px off: they are left for review.
 TEST(TrackKnots, AKnotOneYarnShortWithoutAcceptedNeighboursIsLeftForReview) {
-  RenderNetOptions o;
-  o.tilt_deg = 15.0;
-  o.noise_grey = 2.0;
-  o.seed = 12;
+  RenderNetOptions o = Tilted(12);
   const NetImage a = RenderNet(o);
   o.seed = 13;
   o.offset = Eigen::Vector3d(0.0, 0.004, -0.002);
@@ -201,10 +201,7 @@ TEST(TrackKnots, AKnotOneYarnShortWithoutAcceptedNeighboursIsLeftForReview) {
 // left for review; where it moved with the net, it is accepted. A tracked knot that lands on a
 // known knot's place is not.
 TEST(TrackKnots, KnownNeighbourMotionsCheckAKnotTrackedAlone) {
-  RenderNetOptions o;
-  o.tilt_deg = 15.0;
-  o.noise_grey = 2.0;
-  o.seed = 9;
+  RenderNetOptions o = Tilted(9);
   const NetImage a = RenderNet(o);
   o.seed = 10;
   o.offset = Eigen::Vector3d(0.0, 0.005, -0.003);
@@ -234,10 +231,7 @@ TEST(TrackKnots, KnownNeighbourMotionsCheckAKnotTrackedAlone) {
 // with it; but a knot at a body's edge with a yarn missing may be behind the body: left for
 // review. Without the check it is accepted.
 TEST(TrackKnots, AJunctionAYarnShortAtTheEdgeOfABodyIsLeftForReview) {
-  RenderNetOptions o;
-  o.tilt_deg = 15.0;
-  o.noise_grey = 2.0;
-  o.seed = 12;
+  RenderNetOptions o = Tilted(12);
   const NetImage a = RenderNet(o);
   o.seed = 13;
   o.offset = Eigen::Vector3d(0.0, 0.004, -0.002);
@@ -266,10 +260,7 @@ TEST(TrackKnots, AJunctionAYarnShortAtTheEdgeOfABodyIsLeftForReview) {
 // bunched in a fold): only a corner knot sits in a blob (its corner mass), so the blob is not
 // taken for the knot, though as many yarns leave it as the knot has.
 TEST(TrackKnots, ABlobAtAnInnerKnotIsNotTheKnot) {
-  RenderNetOptions o;
-  o.tilt_deg = 15.0;
-  o.noise_grey = 2.0;
-  o.seed = 14;
+  RenderNetOptions o = Tilted(14);
   const NetImage a = RenderNet(o);
   o.seed = 15;
   o.offset = Eigen::Vector3d(0.0, 0.004, -0.002);
