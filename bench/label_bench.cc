@@ -1,7 +1,7 @@
 // The labeling engine against a scripted user, on a rendered shot with its truth.
 //
 //   bench_label --shot DIR [--coloring FILE] [--frames A:B] [--cameras cam0,cam1] [--radius PX]
-//               [--seed N] [--detector]
+//               [--seed N] [--detector] [--fill-grid-between]
 //
 // DIR is the output of `netlab render` (experiment.yaml, rig_true.yaml, labels_true.h5). The
 // script plays the person: it seeds the four corners of the first frame in every camera that
@@ -12,6 +12,11 @@
 // the true position off by up to 0.5 px). A label under review on a knot the truth says is
 // hidden is deleted (one action). Accepted labels are never checked by the script: a wrong one
 // stays wrong and is counted.
+//
+// --fill-grid-between: the person works a frame's cameras from the one with the fewest knots to
+// fix, and before each next one presses G (Fill Grid, one action) where the camera before got a
+// label from the person: the labels just given fix knots in the cameras still to do (a placed
+// label, or a junction confirmed), as the workstation's G does.
 //
 // Printed per camera and in all: knot-frames (visible knots x frames), actions (per kind),
 // actions per knot-frame, wrong accepted labels (hidden knot, or > 2 px from the truth: the
@@ -29,6 +34,7 @@
 // (Junction::colour_step), and that place's from the truth (-1: not told).
 
 #include <algorithm>
+#include <numeric>
 #include <functional>
 #include <array>
 #include <chrono>
@@ -69,11 +75,11 @@ double Quantile(std::vector<double> v, double q) {
 }
 
 struct Tally {
-  int64_t knot_frames = 0, seeds = 0, find_node = 0, manual = 0, deletes = 0;
+  int64_t knot_frames = 0, seeds = 0, find_node = 0, manual = 0, deletes = 0, fill_grid = 0;
   int64_t engine_accepted = 0, engine_review = 0, wrong = 0, over_1px = 0;
   std::vector<double> error;
   std::map<std::string, std::vector<double>> error_by_source;
-  int64_t actions() const { return seeds + find_node + manual + deletes; }
+  int64_t actions() const { return seeds + find_node + manual + deletes + fill_grid; }
 };
 
 const char* SourceName(recon::LabelSource s) {
@@ -94,6 +100,9 @@ void Usage() {
   std::fprintf(stderr,
                "usage: bench_label --shot DIR [--coloring FILE] [--frames A:B] "
                "[--cameras cam0,cam1,...] [--radius PX] [--seed N] [--knotless] [--detector]\n"
+               "               [--fill-grid-between]\n"
+               "--fill-grid-between: the person works the cameras from the one with the fewest\n"
+               "  knots to fix, pressing G (Fill Grid, an action) before each next one\n"
                "--knotless: the net has no knot balls (Net B): an edge knot is where its straight\n"
                "  links' colours change (LabelEngineOptions::edge_colour_step_px)\n"
                "--detector: no engine, no script; Find Node at every visible knot's true place\n"
@@ -112,6 +121,7 @@ struct BenchOptions {
   std::vector<std::string> only;  // cameras; empty: all
   bool detector_only = false;     // --detector: the knot detector alone at every true knot
   bool knotless = false;          // --knotless
+  bool fill_grid_between = false; // --fill-grid-between
 };
 
 // The command line; false on a usage error.
@@ -133,6 +143,8 @@ bool ParseArgs(int argc, char** argv, BenchOptions* o) {
       o->detector_only = true;
     } else if (a == "--knotless") {
       o->knotless = true;
+    } else if (a == "--fill-grid-between") {
+      o->fill_grid_between = true;
     } else if (a == "--cameras" && more) {
       std::stringstream ss(argv[++i]);
       for (std::string name; std::getline(ss, name, ',');) o->only.push_back(name);
@@ -221,14 +233,41 @@ struct ScriptedUser {
   std::map<std::string, std::pair<int, int>> causes{};
   // NETLAB_ACTIONS_CSV=FILE: one row per visible knot the person acted on (for analysis).
   std::FILE* actions_csv = nullptr;
+  bool fill_grid_between = false;  // --fill-grid-between
 
   // Every knot of frame row t in every camera: the engine's labels counted, and corrected.
   void PlayFrame(int t) {
-    for (int c = 0; c < shot.n_cam(); ++c) {
+    std::vector<int> order(shot.n_cam());
+    std::iota(order.begin(), order.end(), 0);
+    if (fill_grid_between)
+      std::stable_sort(order.begin(), order.end(),
+                       [&](int a, int b) { return ToFix(a, t) < ToFix(b, t); });
+    bool placed = false;  // the person labeled a knot since the last G
+    for (const int c : order) {
+      if (fill_grid_between && placed && ToFix(c, t) > 0) {
+        ++tally[c].fill_grid;
+        engine.CrossCheck(t);
+        placed = false;
+      }
+      const int64_t brushed = tally[c].find_node;
       std::vector<recon::LabelEdit> edits;
       for (int k = 0; k < shot.knots; ++k) PlayKnot(c, t, k, &edits);
+      // A click or a Find Node (its result a label too, where it found one).
+      for (const recon::LabelEdit& e : edits) placed = placed || e.label.present();
+      placed = placed || tally[c].find_node > brushed;
       if (!edits.empty()) store.Apply("scripted user", edits);
     }
+  }
+
+  // The visible knots of (c, t) without an accepted label, and hidden ones under review: what
+  // the person has to fix there (the workstation shows each camera's count).
+  int ToFix(int c, int t) const {
+    int n = 0;
+    for (int k = 0; k < shot.knots; ++k) {
+      const recon::Label& l = store.at(c, t, k);
+      n += shot.Truth(c, t, k).present() ? !l.accepted() : l.present() && !l.accepted();
+    }
+    return n;
   }
 
   // Why the person acts on visible knot k of camera c, frame row t (for `causes`).
@@ -391,13 +430,14 @@ void TallyErrors(const Shot& shot, const recon::LabelStore& store, std::vector<T
       }
 }
 
-// One row of the table.
-void PrintRow(const std::string& name, const Tally& y) {
-  std::printf("| %s | %lld | %lld (%lld / %lld / %lld / %lld) | %.4f | %lld | %lld | %lld / %lld "
-              "| %.3f | %.3f |\n",
+// One row of the table (with_g: the G presses of --fill-grid-between too).
+void PrintRow(const std::string& name, const Tally& y, bool with_g) {
+  const std::string g = with_g ? " / " + std::to_string(y.fill_grid) : "";
+  std::printf("| %s | %lld | %lld (%lld / %lld / %lld / %lld%s) | %.4f | %lld | %lld | %lld / "
+              "%lld | %.3f | %.3f |\n",
               name.c_str(), (long long)y.knot_frames, (long long)y.actions(),
               (long long)y.seeds, (long long)y.find_node, (long long)y.manual,
-              (long long)y.deletes,
+              (long long)y.deletes, g.c_str(),
               y.knot_frames ? static_cast<double>(y.actions()) / y.knot_frames : 0.0,
               (long long)y.wrong, (long long)y.over_1px, (long long)y.engine_accepted,
               (long long)y.engine_review, Quantile(y.error, 0.5), Quantile(y.error, 0.99));
@@ -423,22 +463,24 @@ Tally PrintTables(const BenchOptions& o, const Shot& shot, const std::vector<Tal
     std::printf(" %s %.1f / %.1f", shot.cameras[c].c_str(), Quantile(px, 0.05), Quantile(px, 0.5));
   }
   std::printf("\n\n");
-  std::printf("| camera | knot-frames | actions (seed / Find Node / manual / delete) | actions "
+  std::printf("| camera | knot-frames | actions (seed / Find Node / manual / delete%s) | actions "
               "per knot-frame | wrong accepted | > 1 px | engine: accepted / review | "
-              "median px | p99 px |\n|---|---|---|---|---|---|---|---|---|\n");
+              "median px | p99 px |\n|---|---|---|---|---|---|---|---|---|\n",
+              o.fill_grid_between ? " / G" : "");
   Tally all;
   for (int c = 0; c < shot.n_cam(); ++c) {
-    PrintRow(shot.cameras[c], tally[c]);
+    PrintRow(shot.cameras[c], tally[c], o.fill_grid_between);
     const Tally& y = tally[c];
     all.knot_frames += y.knot_frames, all.seeds += y.seeds, all.find_node += y.find_node;
     all.manual += y.manual, all.deletes += y.deletes, all.wrong += y.wrong;
+    all.fill_grid += y.fill_grid;
     all.over_1px += y.over_1px;
     all.engine_accepted += y.engine_accepted, all.engine_review += y.engine_review;
     all.error.insert(all.error.end(), y.error.begin(), y.error.end());
     for (const auto& [s, v] : y.error_by_source)
       all.error_by_source[s].insert(all.error_by_source[s].end(), v.begin(), v.end());
   }
-  PrintRow("all", all);
+  PrintRow("all", all, o.fill_grid_between);
   std::printf("\n| source | labels | median px | p99 px | max px |\n|---|---|---|---|---|\n");
   for (const auto& [s, v] : all.error_by_source)
     std::printf("| %s | %zu | %.3f | %.3f | %.3f |\n", s.c_str(), v.size(), Quantile(v, 0.5),
@@ -567,6 +609,7 @@ int main(int argc, char** argv) {
     }
     // The engine frame by frame, the person after each frame.
     ScriptedUser user{shot, engine, store, o.radius, tally, std::mt19937_64(o.seed)};
+    user.fill_grid_between = o.fill_grid_between;
     if (const char* path = std::getenv("NETLAB_ACTIONS_CSV")) {
       user.actions_csv = std::fopen(path, "w");
       if (!user.actions_csv) throw std::runtime_error(std::string("cannot write ") + path);
