@@ -14,9 +14,9 @@
 // stays wrong and is counted.
 //
 // --fill-grid-between: the person works a frame's cameras from the one with the fewest knots to
-// fix, and before each next one presses G (Fill Grid, one action) where the camera before got a
-// label from the person: the labels just given fix knots in the cameras still to do (a placed
-// label, or a junction confirmed), as the workstation's G does.
+// fix, and before each next one presses G and Enter (Fill Grid's preview, accepted: two actions)
+// where the camera before got a label from the person: the labels just given fix knots in the
+// cameras still to do (a placed label, or a junction confirmed), as the workstation's G does.
 //
 // Printed per camera and in all: knot-frames (visible knots x frames), actions (per kind),
 // actions per knot-frame, wrong accepted labels (hidden knot, or > 2 px from the truth: the
@@ -75,7 +75,8 @@ double Quantile(std::vector<double> v, double q) {
 }
 
 struct Tally {
-  int64_t knot_frames = 0, seeds = 0, find_node = 0, manual = 0, deletes = 0, fill_grid = 0;
+  int64_t knot_frames = 0, seeds = 0, find_node = 0, manual = 0, deletes = 0;
+  int64_t fill_grid = 0;  // --fill-grid-between: G and Enter, two actions a press
   int64_t engine_accepted = 0, engine_review = 0, wrong = 0, over_1px = 0;
   std::vector<double> error;
   std::map<std::string, std::vector<double>> error_by_source;
@@ -102,7 +103,7 @@ void Usage() {
                "[--cameras cam0,cam1,...] [--radius PX] [--seed N] [--knotless] [--detector]\n"
                "               [--fill-grid-between]\n"
                "--fill-grid-between: the person works the cameras from the one with the fewest\n"
-               "  knots to fix, pressing G (Fill Grid, an action) before each next one\n"
+               "  knots to fix, pressing G and Enter (Fill Grid: two actions) before each next one\n"
                "--knotless: the net has no knot balls (Net B): an edge knot is where its straight\n"
                "  links' colours change (LabelEngineOptions::edge_colour_step_px)\n"
                "--detector: no engine, no script; Find Node at every visible knot's true place\n"
@@ -245,7 +246,7 @@ struct ScriptedUser {
     bool placed = false;  // the person labeled a knot since the last G
     for (const int c : order) {
       if (fill_grid_between && placed && ToFix(c, t) > 0) {
-        ++tally[c].fill_grid;
+        tally[c].fill_grid += 2;  // G, Enter
         engine.CrossCheck(t);
         placed = false;
       }
@@ -466,7 +467,7 @@ Tally PrintTables(const BenchOptions& o, const Shot& shot, const std::vector<Tal
   std::printf("| camera | knot-frames | actions (seed / Find Node / manual / delete%s) | actions "
               "per knot-frame | wrong accepted | > 1 px | engine: accepted / review | "
               "median px | p99 px |\n|---|---|---|---|---|---|---|---|---|\n",
-              o.fill_grid_between ? " / G" : "");
+              o.fill_grid_between ? " / G, Enter" : "");
   Tally all;
   for (int c = 0; c < shot.n_cam(); ++c) {
     PrintRow(shot.cameras[c], tally[c], o.fill_grid_between);
