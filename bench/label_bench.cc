@@ -34,7 +34,6 @@
 // (Junction::colour_step), and that place's from the truth (-1: not told).
 
 #include <algorithm>
-#include <numeric>
 #include <functional>
 #include <array>
 #include <chrono>
@@ -42,6 +41,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <map>
+#include <numeric>
 #include <random>
 #include <sstream>
 #include <stdexcept>
@@ -103,7 +103,8 @@ void Usage() {
                "[--cameras cam0,cam1,...] [--radius PX] [--seed N] [--knotless] [--detector]\n"
                "               [--fill-grid-between]\n"
                "--fill-grid-between: the person works the cameras from the one with the fewest\n"
-               "  knots to fix, pressing G and Enter (Fill Grid: two actions) before each next one\n"
+               "  knots to fix, pressing G and Enter (Fill Grid: two actions) before each next\n"
+               "  one\n"
                "--knotless: the net has no knot balls (Net B): an edge knot is where its straight\n"
                "  links' colours change (LabelEngineOptions::edge_colour_step_px)\n"
                "--detector: no engine, no script; Find Node at every visible knot's true place\n"
@@ -122,7 +123,7 @@ struct BenchOptions {
   std::vector<std::string> only;  // cameras; empty: all
   bool detector_only = false;     // --detector: the knot detector alone at every true knot
   bool knotless = false;          // --knotless
-  bool fill_grid_between = false; // --fill-grid-between
+  bool fill_grid_between = false;  // --fill-grid-between
 };
 
 // The command line; false on a usage error.

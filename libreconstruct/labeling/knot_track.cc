@@ -83,8 +83,8 @@ void KnotTracking::Flow(const cv::Mat& from) {
 bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot* t) const {
   const int k = knots[i].first, r = k / cols, c = k % cols;
   const int degree = (r > 0) + (r + 1 < rows) + (c > 0) + (c + 1 < cols);
-  const KnotDetector detector(to, FindNodeRegion(predicted, options.snap_radius_px, options.detector),
-                              options.detector);
+  const KnotDetector detector(
+      to, FindNodeRegion(predicted, options.snap_radius_px, options.detector), options.detector);
   const std::vector<Junction> near =
       FindNode(detector, predicted, options.snap_radius_px).candidates;
   t->px = predicted;

@@ -12,7 +12,6 @@
 #include <Eigen/Eigenvalues>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "libreconstruct/geometry/triangulation.h"
 
@@ -42,7 +41,6 @@ void Add(EngineCounts* sum, const EngineCounts& n);
 // Whether a label is an observation of its own: accepted, and not placed from the other
 // cameras' labels (LabelSource::kProjected), which would only repeat them.
 bool Observed(const Label& l) { return l.accepted() && l.source != LabelSource::kProjected; }
-
 
 // A distance in px as the messages print it (one decimal).
 std::string Px(double px) {
@@ -375,8 +373,9 @@ EngineCounts LabelEngine::FillByPaths(int t) {
         }
         if (!l.accepted()) continue;
         if (last >= 0 && i - last >= 2) {
-          const FindPathResult r = FindPath(image, cols, line[last], set.at(camera, t, line[last]).px,
-                                            line[i], l.px, o_.detector);
+          const FindPathResult r =
+              FindPath(image, cols, line[last], set.at(camera, t, line[last]).px, line[i], l.px,
+                       o_.detector);
           for (size_t n = 0; n < r.knots.size(); ++n) (*found)[r.knots[n]] = r.junctions[n];
         }
         last = i;
@@ -409,10 +408,13 @@ EngineCounts LabelEngine::FillByPaths(int t) {
         const int n = slot_knot[s];
         slots.present[s] = n >= 0;
         if (n < 0) continue;
-        if (set.at(camera, t, n).accepted()) slots.px[s] = set.at(camera, t, n).px;
-        else if (found_px.count(n)) slots.px[s] = found_px.at(n);
+        if (set.at(camera, t, n).accepted())
+          slots.px[s] = set.at(camera, t, n).px;
+        else if (found_px.count(n))
+          slots.px[s] = found_px.at(n);
       }
-      const bool agree = both && (a->second.px - b->second.px).norm() < o_.row_column_agreement_px &&
+      const bool agree = both &&
+                         (a->second.px - b->second.px).norm() < o_.row_column_agreement_px &&
                          BranchesMatchLinks(j, slots, o_.branch_tolerance_deg) &&
                          ColourChangesAt(j, o_.edge_colour_step_px);
       if (agree) {
