@@ -14,9 +14,10 @@
 // stays wrong and is counted.
 //
 // --fill-grid-between: the person works a frame's cameras from the one with the fewest knots to
-// fix, and before each next one presses G and Enter (Fill Grid's preview, accepted: two actions)
-// where the camera before got a label from the person: the labels just given fix knots in the
-// cameras still to do (a placed label, or a junction confirmed), as the workstation's G does.
+// fix, and before each next one with a dozen or more to fix presses G and Enter (Fill Grid's
+// preview, accepted: two actions) where the cameras before got labels from the person: the
+// labels just given fix knots in the cameras still to do (a placed label, or a junction
+// confirmed), as the workstation's G does.
 //
 // Printed per camera and in all: knot-frames (visible knots x frames), actions (per kind),
 // actions per knot-frame, wrong accepted labels (hidden knot, or > 2 px from the truth: the
@@ -235,7 +236,8 @@ struct ScriptedUser {
   std::map<std::string, std::pair<int, int>> causes{};
   // NETLAB_ACTIONS_CSV=FILE: one row per visible knot the person acted on (for analysis).
   std::FILE* actions_csv = nullptr;
-  bool fill_grid_between = false;  // --fill-grid-between
+  bool fill_grid_between = false;             // --fill-grid-between
+  static constexpr int kWorthAFillGrid = 12;  // knots to fix in a camera worth G and Enter
 
   // Every knot of frame row t in every camera: the engine's labels counted, and corrected.
   void PlayFrame(int t) {
@@ -246,7 +248,7 @@ struct ScriptedUser {
                        [&](int a, int b) { return ToFix(a, t) < ToFix(b, t); });
     bool placed = false;  // the person labeled a knot since the last G
     for (const int c : order) {
-      if (fill_grid_between && placed && ToFix(c, t) > 0) {
+      if (fill_grid_between && placed && ToFix(c, t) >= kWorthAFillGrid) {
         tally[c].fill_grid += 2;  // G, Enter
         engine.CrossCheck(t);
         placed = false;
