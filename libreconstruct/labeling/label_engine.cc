@@ -566,8 +566,7 @@ std::optional<Eigen::Vector2d> LabelEngine::OthersPlace(int camera, int t, int k
   // The projection's standard deviation along its worst axis.
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(q->unit_covariance);
   const double sigma = o_.label_sigma_px * std::sqrt(std::max(0.0, eig.eigenvalues()[1]));
-  if (!(sigma <= (others.size() >= 3 ? o_.place_sigma3_px : o_.place_sigma_px)))
-    return std::nullopt;
+  if (!(sigma <= o_.place_sigma_px)) return std::nullopt;
   return q->px;
 }
 

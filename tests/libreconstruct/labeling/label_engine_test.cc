@@ -34,18 +34,14 @@ struct Shot {
   }
 };
 
-// `moved`: knots moved besides the net's motion in the last frame (m). `fourth`: a fourth
-// camera, d.
+// `moved`: knots moved besides the net's motion in the last frame (m).
 Shot Render(int frames, const std::vector<std::pair<int, int>>& hidden_links = {},
-            const std::vector<std::pair<int, Eigen::Vector3d>>& moved = {}, bool fourth = false) {
+            const std::vector<std::pair<int, Eigen::Vector3d>>& moved = {}) {
   Shot shot;
   shot.rig.cameras = {
       calib::LookAtCamera("a", {-1.5, 0.0, 0.0}, {0, 0, 0}, 16.0, 5.5, 1024),
       calib::LookAtCamera("b", {-1.4, 0.55, 0.1}, {0, 0, 0}, 16.0, 5.5, 1024),
       calib::LookAtCamera("c", {-1.35, -0.45, -0.3}, {0, 0, 0}, 16.0, 5.5, 1024)};
-  if (fourth)
-    shot.rig.cameras.push_back(
-        calib::LookAtCamera("d", {-1.3, 0.2, 0.5}, {0, 0, 0}, 16.0, 5.5, 1024));
   const Eigen::Matrix3d turn = (Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()) *
                                 Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()))
                                    .toRotationMatrix();
@@ -794,32 +790,6 @@ TEST(LabelEngine, FindNodeDoubtsAJunctionAYarnShortTheOtherCamerasDoNotFix) {
   EXPECT_NE(engine.reasons().at({0, 0, 12}).find("no other cameras that fix it"),
             std::string::npos)
       << engine.reasons().at({0, 0, 12});
-}
-
-// Two views cannot see a label off along their epipolar line; three hold each against the
-// others: so two place a knot only within place_sigma_px, three within place_sigma3_px.
-TEST(LabelEngine, TheOtherCamerasPlaceAKnotWithinTheirBoundForTwoViewsOrThree) {
-  const Shot shot = Render(1, {}, {}, true);
-  LabelSet labels = Empty(shot);
-  for (int c = 1; c < 4; ++c)
-    for (int k = 0; k < kKnots; ++k) labels.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
-  LabelEngineOptions options;
-  options.place_sigma_px = 0.01;  // no two views fix a point that well
-  options.place_sigma3_px = 1.0;
-  {
-    LabelStore store(labels);
-    LabelEngine engine(&store, &shot.rig, Images(shot), options);
-    const std::optional<Eigen::Vector2d> q = engine.OthersPlace(0, 0, 12);
-    ASSERT_TRUE(q);
-    EXPECT_LT((*q - shot.Truth(0, 0, 12)).norm(), 0.2);
-  }
-  labels.at(3, 0, 12) = Label{};
-  LabelStore store(std::move(labels));
-  LabelEngine engine(&store, &shot.rig, Images(shot), options);
-  EXPECT_FALSE(engine.OthersPlace(0, 0, 12));
-  options.place_sigma_px = 1.0;
-  LabelEngine lenient(&store, &shot.rig, Images(shot), options);
-  EXPECT_TRUE(lenient.OthersPlace(0, 0, 12));
 }
 
 // A blob where an inner knot's yarns are not seen (yarns bunched in a fold) is no knot: Find
