@@ -518,8 +518,11 @@ void MainWindow::RefreshOverlays() {
   for (int c = 0; c < session_->cameras() && c < 4; ++c) {
     ViewOverlay o;
     o.selected_knot = knot_;
+    int to_fix = 0;  // labels under review and missing knots: which camera to work first
     for (int k = 0; k < p.knots(); ++k) {
       const recon::Label& l = doc.at(c, frame_, k);
+      to_fix += (l.present() && l.state == recon::LabelState::kNeedsReview) ||
+                session_->missing().Find(c, frame_, k) != nullptr;
       if (!l.present()) continue;
       o.labels.push_back({k, l.px, LabelColour(l), l.state == recon::LabelState::kNeedsReview});
       // Links to the right and down neighbours that are labeled.
@@ -543,9 +546,10 @@ void MainWindow::RefreshOverlays() {
     }
     o.candidates = candidates_[c];
     o.ghosts = PreviewGhosts(c);
-    o.caption = QString("%1 · frame %2 · knot %3%4")
+    o.caption = QString("%1 · frame %2 · %3 · knot %4%5")
                     .arg(QString::fromStdString(session_->camera_names()[c]))
                     .arg(session_->frame_number(frame_))
+                    .arg(to_fix > 0 ? QString("%1 to fix").arg(to_fix) : QString("nothing to fix"))
                     .arg(KnotName(knot_), residual);
     MarkExpected(c, &o);
     views_[c]->SetOverlay(std::move(o));

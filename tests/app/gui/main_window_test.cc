@@ -802,6 +802,44 @@ TEST_F(FillGridPreviewTest, GPreviewsAndEnterAppliesWhatFillGridGivesAsOneStep) 
 
 // Esc discards a preview; so do a label edit, a frame change, an undo and a tracking run, even
 // while the preview is still being computed: Enter afterwards changes nothing.
+// Each view's caption says how many knots it has to fix in the frame (labels under review and
+// missing knots), so that the person can work the camera with the fewest first; accepting a
+// label takes one off.
+TEST_F(FillGridPreviewTest, EachViewSaysHowManyKnotsItHasToFix) {
+  ASSERT_NO_FATAL_FAILURE(Open("to_fix"));
+  MainWindow& w = *window_;
+  Session* s = w.session();
+  const auto to_fix = [&](int c) {
+    int n = 0;
+    for (int k = 0; k < s->project().knots(); ++k) {
+      const recon::Label& l = s->document().at(c, 0, k);
+      n += (l.present() && l.state == recon::LabelState::kNeedsReview) ||
+           s->missing().Find(c, 0, k) != nullptr;
+    }
+    return n;
+  };
+  const auto says = [&](int n) {
+    const QString frame = QString("frame %1 · ").arg(s->frame_number(0));
+    return frame + (n > 0 ? QString("%1 to fix · ").arg(n) : QString("nothing to fix · "));
+  };
+  int review_camera = -1, review_knot = -1;
+  for (int c = 0; c < s->cameras(); ++c) {
+    EXPECT_TRUE(w.view(c)->overlay().caption.contains(says(to_fix(c))))
+        << c << ": " << w.view(c)->overlay().caption.toStdString();
+    for (int k = 0; k < s->project().knots() && review_knot < 0; ++k)
+      if (s->document().at(c, 0, k).present() &&
+          s->document().at(c, 0, k).state == recon::LabelState::kNeedsReview)
+        review_camera = c, review_knot = k;
+  }
+  ASSERT_GE(review_knot, 0) << "Find Path left nothing for review";
+  const int before = to_fix(review_camera);
+  s->AcceptLabel(review_camera, 0, review_knot);
+  QCoreApplication::processEvents();
+  EXPECT_EQ(to_fix(review_camera), before - 1);
+  EXPECT_TRUE(w.view(review_camera)->overlay().caption.contains(says(before - 1)))
+      << w.view(review_camera)->overlay().caption.toStdString();
+}
+
 TEST_F(FillGridPreviewTest, EscAnEditAFrameChangeOrAnUndoDiscardThePreview) {
   ASSERT_NO_FATAL_FAILURE(Open("preview_discard"));
   MainWindow& w = *window_;
