@@ -521,8 +521,9 @@ void MainWindow::RefreshOverlays() {
     int to_fix = 0;  // labels under review and missing knots: which camera to work first
     for (int k = 0; k < p.knots(); ++k) {
       const recon::Label& l = doc.at(c, frame_, k);
-      to_fix += (l.present() && l.state == recon::LabelState::kNeedsReview) ||
-                session_->missing().Find(c, frame_, k) != nullptr;
+      // (a missing knot has no label: its row's list is searched only for those)
+      to_fix += l.present() ? l.state == recon::LabelState::kNeedsReview
+                            : session_->missing().Find(c, frame_, k) != nullptr;
       if (!l.present()) continue;
       o.labels.push_back({k, l.px, LabelColour(l), l.state == recon::LabelState::kNeedsReview});
       // Links to the right and down neighbours that are labeled.

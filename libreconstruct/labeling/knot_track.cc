@@ -43,7 +43,7 @@ struct KnotTracking {
 
   void Flow(const cv::Mat& from);
   bool Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot* t) const;
-  bool YarnsPointAtNeighbours(size_t i, const Junction& j) const;
+  bool YarnsPointAtNeighbours(size_t i, const std::vector<double>& branch_angles_rad) const;
   void SnapTrustedFlow();
   void PredictFromNeighbours();
   void CheckRelativeMotion();
@@ -118,7 +118,7 @@ bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot*
   // the junction must have the knot's degree, each yarn leading to one of its neighbours.
   if (options.body_edge_px > 0.0 && !j.solid &&
       detector.NearBackgroundEdge(j.px, options.body_edge_px) &&
-      (j.branches != degree || !YarnsPointAtNeighbours(i, j))) {
+      (j.branches != degree || !YarnsPointAtNeighbours(i, j.branch_angles_rad))) {
     t->why = "at the edge of the target, a yarn short or with a yarn that leads to no "
              "neighbour (it may be behind the target)";
     return false;
@@ -128,7 +128,7 @@ bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot*
   // yarn found leads to one of its own neighbours, and, on a knotless net, where its straight
   // pair's colour changes.
   const bool short_one = options.max_yarn_angle_deg > 0 && degree >= 3 &&
-                         j.branches == degree - 1 && YarnsPointAtNeighbours(i, j);
+                         j.branches == degree - 1 && YarnsPointAtNeighbours(i, j.branch_angles_rad);
   char why[128];
   if (!short_one) {
     std::snprintf(why, sizeof why, "the junction there has %d yarns, the knot %d", j.branches,
@@ -152,7 +152,8 @@ bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot*
 // neighbour of the knot labeled in `from`, within max_yarn_angle_deg (between frames a mesh
 // turns by a degree or two). A neighbour not labeled gives no direction: its yarn cannot be
 // told from another.
-bool KnotTracking::YarnsPointAtNeighbours(size_t i, const Junction& j) const {
+bool KnotTracking::YarnsPointAtNeighbours(size_t i,
+                                          const std::vector<double>& branch_angles_rad) const {
   const auto& [k, px] = knots[i];
   const int r = k / cols, c = k % cols;
   std::vector<double> towards;
@@ -168,7 +169,7 @@ bool KnotTracking::YarnsPointAtNeighbours(size_t i, const Junction& j) const {
   }
   std::vector<bool> taken(towards.size(), false);
   const double limit = options.max_yarn_angle_deg * M_PI / 180.0;
-  for (const double a : j.branch_angles_rad) {
+  for (const double a : branch_angles_rad) {
     int best = -1;
     double best_off = limit;
     for (size_t n = 0; n < towards.size(); ++n) {
@@ -304,9 +305,8 @@ void KnotTracking::CheckRelativeMotion() {
     // neighbours: another layer's yarn crossing the row 2 px from the knot made a junction of
     // the knot's degree in a fold (Net B at 0.8 m/s).
     if (expected.empty()) {
-      Junction j;
-      j.branch_angles_rad = out[i].branch_angles_rad;
-      if (!j.branch_angles_rad.empty() && !YarnsPointAtNeighbours(i, j)) {
+      const std::vector<double>& yarns = out[i].branch_angles_rad;
+      if (!yarns.empty() && !YarnsPointAtNeighbours(i, yarns)) {
         out[i].accepted = false;
         out[i].why = "no accepted neighbour moved with it, and a yarn of its junction leads to "
                      "no neighbour";
