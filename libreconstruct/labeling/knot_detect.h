@@ -161,6 +161,14 @@ class KnotDetector {
   int YarnsAlong(const Eigen::Vector2d& px, const std::vector<double>& angles,
                  double tolerance_rad) const;
 
+  // The junction near `px` whose yarns leave along `angles` (image angles, rad: the knot's links,
+  // known from its neighbours): each yarn fitted as Examine fits them, on a strip from `from_px`
+  // to from_px + near_fit_to_px along it; all but one of four must fit, their lines meeting in
+  // one point at 25 degrees or more. Its branches are the yarns fitted; nullopt when too few fit
+  // or they do not meet. FitAlongLinks chooses the strip.
+  std::optional<Junction> FitAlong(const Eigen::Vector2d& px, const std::vector<double>& angles,
+                                   double from_px) const;
+
   // Whether an edge of the background (the target's outline: KnotDetectorOptions::
   // background_edge) passes within `radius` px of `px`: a knot there may be just behind it.
   bool NearBackgroundEdge(const Eigen::Vector2d& px, double radius) const;
@@ -228,6 +236,17 @@ class KnotDetector {
 // Whether a junction lies where the colour of its straight pair changes, within max_px of it:
 // true where that is not checked (max_px <= 0) or cannot be told (no Junction::colour_step).
 bool ColourChangesAt(const Junction& j, double max_px);
+
+// The knot near `px` where the rings find none because its crossing is too acute for them: in
+// a fold the mesh is seen sheared (links 25-40 degrees apart in the image) with another layer's
+// yarns beside, and the inner ring sees two yarns as one while the outer ones cross the other
+// layer. Its yarns fitted along `links` (image vectors from the knot to its neighbours, as they
+// last lay; KnotDetector::FitAlong on a detector built over the strips' reach), from where the
+// closest two are `gap_px` apart: nullopt where two links are within 5 degrees of each other
+// (the strips would start 57 px out, past most neighbours) or the yarns do not fit there.
+std::optional<Junction> FitAlongLinks(const cv::Mat& image, const Eigen::Vector2d& px,
+                                      const std::vector<Eigen::Vector2d>& links, double gap_px,
+                                      const KnotDetectorOptions& options);
 
 // How far from a point the detector reads (px): its outer ring and the ridge filter's support.
 // A KnotDetector's ROI needs this margin around the points it examines.

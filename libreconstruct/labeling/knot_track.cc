@@ -43,6 +43,8 @@ struct KnotTracking {
 
   void Flow(const cv::Mat& from);
   bool Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot* t) const;
+  std::vector<Eigen::Vector2d> Links(size_t i) const;
+  std::optional<Junction> FitAlongLinks(size_t i, const Eigen::Vector2d& predicted) const;
   bool YarnsPointAtNeighbours(size_t i, const std::vector<double>& branch_angles_rad) const;
   void SnapTrustedFlow();
   void PredictFromNeighbours();
@@ -85,8 +87,9 @@ bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot*
   const int degree = (r > 0) + (r + 1 < rows) + (c > 0) + (c + 1 < cols);
   const KnotDetector detector(
       to, FindNodeRegion(predicted, options.snap_radius_px, options.detector), options.detector);
-  const std::vector<Junction> near =
-      FindNode(detector, predicted, options.snap_radius_px).candidates;
+  std::vector<Junction> near = FindNode(detector, predicted, options.snap_radius_px).candidates;
+  if (near.empty())
+    if (const std::optional<Junction> j = FitAlongLinks(i, predicted)) near.push_back(*j);
   t->px = predicted;
   t->one_yarn_short = false;
   t->branch_angles_rad.clear();
@@ -148,15 +151,12 @@ bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot*
   return true;
 }
 
-// Whether every yarn of junction `j` (knot i's, in `to`) leaves towards a different grid
-// neighbour of the knot labeled in `from`, within max_yarn_angle_deg (between frames a mesh
-// turns by a degree or two). A neighbour not labeled gives no direction: its yarn cannot be
-// told from another.
-bool KnotTracking::YarnsPointAtNeighbours(size_t i,
-                                          const std::vector<double>& branch_angles_rad) const {
+// The image vectors from knot i to each of its grid neighbours, as they lay in `from`; a
+// neighbour not labeled there gives none.
+std::vector<Eigen::Vector2d> KnotTracking::Links(size_t i) const {
   const auto& [k, px] = knots[i];
   const int r = k / cols, c = k % cols;
-  std::vector<double> towards;
+  std::vector<Eigen::Vector2d> towards;
   for (const auto& [dr, dc] :
        {std::pair(0, -1), std::pair(0, 1), std::pair(-1, 0), std::pair(1, 0)}) {
     if (r + dr < 0 || r + dr >= rows || c + dc < 0 || c + dc >= cols) continue;
@@ -164,9 +164,34 @@ bool KnotTracking::YarnsPointAtNeighbours(size_t i,
     const auto it = index.find(n);
     const auto kn = known.find(n);
     if (it == index.end() && kn == known.end()) continue;
-    const Eigen::Vector2d d = (it != index.end() ? knots[it->second].second : kn->second.from) - px;
-    towards.push_back(std::atan2(d.y(), d.x()));
+    towards.push_back((it != index.end() ? knots[it->second].second : kn->second.from) - px);
   }
+  return towards;
+}
+
+// Knot i's yarns fitted along its links near `predicted`, where every one of its neighbours
+// was labeled in `from` (between frames a mesh turns by a degree or two); within the snap
+// radius, or nullopt.
+std::optional<Junction> KnotTracking::FitAlongLinks(size_t i,
+                                                    const Eigen::Vector2d& predicted) const {
+  const int k = knots[i].first, r = k / cols, c = k % cols;
+  const int degree = (r > 0) + (r + 1 < rows) + (c > 0) + (c + 1 < cols);
+  const std::vector<Eigen::Vector2d> links = Links(i);
+  if (static_cast<int>(links.size()) != degree) return std::nullopt;
+  const std::optional<Junction> j =
+      recon::FitAlongLinks(to, predicted, links, options.fit_along_gap_px, options.detector);
+  if (!j || (j->px - predicted).norm() > options.snap_radius_px) return std::nullopt;
+  return j;
+}
+
+// Whether every yarn of junction `j` (knot i's, in `to`) leaves towards a different grid
+// neighbour of the knot labeled in `from`, within max_yarn_angle_deg (between frames a mesh
+// turns by a degree or two). A neighbour not labeled gives no direction: its yarn cannot be
+// told from another.
+bool KnotTracking::YarnsPointAtNeighbours(size_t i,
+                                          const std::vector<double>& branch_angles_rad) const {
+  std::vector<double> towards;
+  for (const Eigen::Vector2d& d : Links(i)) towards.push_back(std::atan2(d.y(), d.x()));
   std::vector<bool> taken(towards.size(), false);
   const double limit = options.max_yarn_angle_deg * M_PI / 180.0;
   for (const double a : branch_angles_rad) {

@@ -6,7 +6,9 @@
 // is snapped with the knot detector at the flow's end; it is accepted when a junction of the
 // knot's degree (2 corner, 3 edge, 4 inner; a corner's junction is its corner mass, see
 // FindNode; or one yarn short, each yarn leading to one of the knot's neighbours) is the only
-// one within snap_radius_px there. A knot without trusted flow is
+// one within snap_radius_px there; where the rings find none, the yarns are fitted along the
+// knot's links as they ran in the frame before (KnotDetector::FitAlong: the mesh seen sheared
+// in a fold). A knot without trusted flow is
 // predicted from its grid neighbours' motion (an occluded knot moves with the net: accepted
 // neighbours' junctions, else their flow) and snapped there alike, in rounds as neighbours get
 // accepted; it is accepted when, besides, at least two accepted neighbours move as one (within
@@ -67,6 +69,12 @@ struct TrackOptions {
   // 0.8 m/s a knot 1 px behind the box's edge was tracked onto such a junction, one yarn
   // short). 0: not checked.
   double body_edge_px = 2.0;
+  // Where the detector's rings find no junction at the flow's end, the knot's yarns fitted along
+  // its links' directions in the frame before (all of its neighbours labeled there), from
+  // where the closest two are this far apart (px; KnotDetector::FitAlong). On Net B at
+  // 0.8 m/s, where the net folds, the rings find no junction at a third to a half of the knots
+  // whose links meet at less than 30 degrees in the image. 0: not tried.
+  double fit_along_gap_px = 5.0;
   KnotDetectorOptions detector;
 };
 

@@ -271,7 +271,7 @@ TEST(TrackKnots, ABlobAtAnInnerKnotIsNotTheKnot) {
   cv::circle(b.image, centre, 8, cv::Scalar::all(200), cv::FILLED, cv::LINE_AA);
   // A pinwheel: each yarn leaves the blob's rim along its tangent, so no two of them meet.
   for (int i = 0; i < 4; ++i) {
-    const double a = i * M_PI / 2, ca = std::cos(a), sa = std::sin(a);
+    const double angle = i * M_PI / 2, ca = std::cos(angle), sa = std::sin(angle);
     const cv::Point rim(cvRound(knot.x() + 6 * ca), cvRound(knot.y() + 6 * sa));
     const cv::Point out(cvRound(rim.x - 30 * sa), cvRound(rim.y + 30 * ca));
     cv::line(b.image, rim, out, cv::Scalar::all(200), 2, cv::LINE_AA);
@@ -279,6 +279,92 @@ TEST(TrackKnots, ABlobAtAnInnerKnotIsNotTheKnot) {
   const std::vector<TrackedKnot> tracked = TrackKnots(a.image, b.image, AllKnots(a), kRows, kCols);
   EXPECT_FALSE(tracked[5].accepted);
   EXPECT_NE(tracked[5].why.find("blob"), std::string::npos) << tracked[5].why;
+}
+
+// Where a net folds, its mesh is seen sheared and another layer's yarns run close beside a
+// knot's own. Here the mesh is turned 45 degrees in its plane, then 72 away from the camera (its
+// links meet at 33-36 degrees in the image), with a yarn 11 px beside each inner knot's row.
+RenderNetOptions Sheared(uint64_t seed) {
+  RenderNetOptions o = Tilted(seed);
+  o.in_plane_deg = 45.0;
+  o.tilt_deg = 72.0;
+  return o;
+}
+
+// The inner knots' image angles towards their four neighbours (left, right, up, down).
+std::vector<double> LinkAngles(const NetImage& net, int k) {
+  std::vector<double> angles;
+  for (const auto& [dr, dc] :
+       {std::pair(0, -1), std::pair(0, 1), std::pair(-1, 0), std::pair(1, 0)}) {
+    const Eigen::Vector2d d =
+        net.Pixel(k / kCols + dr, k % kCols + dc) - net.Pixel(k / kCols, k % kCols);
+    angles.push_back(std::atan2(d.y(), d.x()));
+  }
+  return angles;
+}
+
+// The other layer: a yarn along each inner knot's row, 11 px to its side.
+void AddLayerBeside(NetImage* net) {
+  for (const int k : {5, 6, 9, 10}) {
+    const Eigen::Vector2d knot = net->Pixel(k / kCols, k % kCols);
+    const Eigen::Vector2d row = (net->Pixel(k / kCols, k % kCols + 1) - knot).normalized();
+    const Eigen::Vector2d p = knot + 11.0 * Eigen::Vector2d(-row.y(), row.x());
+    cv::line(net->image, cv::Point(cvRound(p.x() - 60 * row.x()), cvRound(p.y() - 60 * row.y())),
+             cv::Point(cvRound(p.x() + 60 * row.x()), cvRound(p.y() + 60 * row.y())),
+             cv::Scalar(200, 200, 60), 2, cv::LINE_AA);
+  }
+}
+
+// There the detector's rings, which cross the other layer's yarn, find no junction; the knot's
+// yarns fitted along its links as they ran in the frame before place it.
+TEST(TrackKnots, FitsTheYarnsAlongTheLinksWhereAFoldHidesTheJunction) {
+  NetImage a = RenderNet(Sheared(16));
+  RenderNetOptions o = Sheared(17);
+  o.offset = Eigen::Vector3d(0.0, 0.003, -0.002);
+  NetImage b = RenderNet(o);
+  AddLayerBeside(&a);
+  AddLayerBeside(&b);
+  const int inner[] = {5, 6, 9, 10};
+  for (const int k : inner) {
+    const std::vector<double> links = LinkAngles(b, k);
+    const double angle = std::abs(std::remainder(links[1] - links[3], M_PI)) * 180 / M_PI;
+    EXPECT_LT(angle, 40.0) << "knot " << k << ": the mesh is not sheared enough for the test";
+    EXPECT_TRUE(FindNode(b.image, b.Pixel(k / kCols, k % kCols), 3.0).candidates.empty())
+        << "knot " << k << ": the rings find a junction; the test needs none";
+  }
+  const std::vector<TrackedKnot> tracked = TrackKnots(a.image, b.image, AllKnots(a), kRows, kCols);
+  TrackOptions rings_only;
+  rings_only.fit_along_gap_px = 0.0;
+  const std::vector<TrackedKnot> plain =
+      TrackKnots(a.image, b.image, AllKnots(a), kRows, kCols, rings_only);
+  for (const int k : inner) {
+    EXPECT_TRUE(tracked[k].accepted) << "knot " << k << ": " << tracked[k].why;
+    EXPECT_LT((tracked[k].px - b.Pixel(k / kCols, k % kCols)).norm(), 0.5) << "knot " << k;
+    EXPECT_FALSE(plain[k].accepted) << "knot " << k;
+    EXPECT_NE(plain[k].why.find("no junction"), std::string::npos) << plain[k].why;
+  }
+}
+
+// The yarns are fitted only along the directions given: along the knot's links it is found
+// from a pixel off; along directions the yarns do not take (a neighbour's label from another
+// knot), or midway along a link (one yarn), nothing is.
+TEST(FitAlongLinks, FindsTheJunctionAlongItsLinksOnly) {
+  NetImage net = RenderNet(Sheared(18));
+  AddLayerBeside(&net);
+  const Eigen::Vector2d knot = net.Pixel(1, 1);
+  std::vector<Eigen::Vector2d> links;
+  for (const double a : LinkAngles(net, 5)) links.emplace_back(std::cos(a), std::sin(a));
+  const std::optional<Junction> j =
+      FitAlongLinks(net.image, knot + Eigen::Vector2d(1.0, -1.0), links, 5.0, {});
+  ASSERT_TRUE(j.has_value());
+  EXPECT_GE(j->branches, 3);  // all but one of four (the other layer may spoil one strip's fit)
+  EXPECT_LT((j->px - knot).norm(), 0.3);
+  const Eigen::Rotation2Dd turn(40.0 * M_PI / 180.0);
+  std::vector<Eigen::Vector2d> turned;
+  for (const Eigen::Vector2d& d : links) turned.push_back(turn * d);
+  EXPECT_FALSE(FitAlongLinks(net.image, knot, turned, 5.0, {}).has_value());
+  EXPECT_FALSE(
+      FitAlongLinks(net.image, 0.5 * (knot + net.Pixel(1, 2)), links, 5.0, {}).has_value());
 }
 
 }  // namespace

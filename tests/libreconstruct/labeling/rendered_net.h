@@ -44,6 +44,9 @@ inline std::vector<Colour> NetADyes() {
 
 struct RenderNetOptions {
   double tilt_deg = 0.0;   // turn about the vertical, besides a fixed 20 degree roll
+  // A turn of the net about its own normal first: with tilt_deg, its links meet at acute angles
+  // in the image (a mesh seen sheared, as where a net folds).
+  double in_plane_deg = 0.0;
   double noise_grey = 0.0; // Gaussian noise, grey levels of the 8-bit image
   uint64_t seed = 1;
   std::vector<std::pair<int, int>> missing;  // links (knot a, knot b) left out of the picture
@@ -81,7 +84,8 @@ inline NetImage RenderNet(const RenderNetOptions& o) {
   const Eigen::Matrix3d turn =
       (Eigen::AngleAxisd(0.35, Eigen::Vector3d::UnitX()) *
        Eigen::AngleAxisd(o.tilt_deg * M_PI / 180, Eigen::Vector3d::UnitZ()))
-          .toRotationMatrix();
+          .toRotationMatrix() *
+      Eigen::AngleAxisd(o.in_plane_deg * M_PI / 180, Eigen::Vector3d::UnitX()).toRotationMatrix();
   for (int r = 0; r < kRows; ++r)
     for (int c = 0; c < kCols; ++c)
       net.knots.push_back(o.offset +
