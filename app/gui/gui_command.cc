@@ -148,6 +148,9 @@ int RunGui(const std::vector<std::string>& args) {
     if (!window.WaitForFrame())
       std::fprintf(stderr, "netlab gui: the frame did not load in time\n");
     if (!PressKeys(&window, keys)) return 2;
+    // The layouts their results changed, settled as a person would see them (the preview
+    // banner's second line was cut off in the screenshot, not in the window).
+    QCoreApplication::processEvents();
     if (!window.grab().save(QString::fromStdString(screenshot))) {
       std::fprintf(stderr, "netlab gui: cannot write %s\n", screenshot.c_str());
       return 1;

@@ -291,7 +291,7 @@ RenderNetOptions Sheared(uint64_t seed) {
   return o;
 }
 
-// The inner knots' image angles towards their four neighbours (left, right, up, down).
+// Inner knot k's image angles towards its four neighbours (left, right, up, down).
 std::vector<double> LinkAngles(const NetImage& net, int k) {
   std::vector<double> angles;
   for (const auto& [dr, dc] :
