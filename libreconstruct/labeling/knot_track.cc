@@ -44,7 +44,8 @@ struct KnotTracking {
   void Flow(const cv::Mat& from);
   bool Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot* t) const;
   std::vector<Eigen::Vector2d> Links(size_t i) const;
-  std::optional<Junction> FitAlongLinks(size_t i, const Eigen::Vector2d& predicted) const;
+  std::optional<Junction> FitAlongLinks(size_t i, int degree,
+                                        const Eigen::Vector2d& predicted) const;
   bool YarnsPointAtNeighbours(size_t i, const std::vector<double>& branch_angles_rad) const;
   void SnapTrustedFlow();
   void PredictFromNeighbours();
@@ -89,7 +90,7 @@ bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot*
       to, FindNodeRegion(predicted, options.snap_radius_px, options.detector), options.detector);
   std::vector<Junction> near = FindNode(detector, predicted, options.snap_radius_px).candidates;
   if (near.empty())
-    if (const std::optional<Junction> j = FitAlongLinks(i, predicted)) near.push_back(*j);
+    if (const std::optional<Junction> j = FitAlongLinks(i, degree, predicted)) near.push_back(*j);
   t->px = predicted;
   t->one_yarn_short = false;
   t->branch_angles_rad.clear();
@@ -169,13 +170,11 @@ std::vector<Eigen::Vector2d> KnotTracking::Links(size_t i) const {
   return towards;
 }
 
-// Knot i's yarns fitted along its links near `predicted`, where every one of its neighbours
-// was labeled in `from` (between frames a mesh turns by a degree or two); within the snap
-// radius, or nullopt.
-std::optional<Junction> KnotTracking::FitAlongLinks(size_t i,
+// Knot i's yarns fitted along its links near `predicted`, where every one of its `degree`
+// neighbours was labeled in `from` (between frames a mesh turns by a degree or two); within the
+// snap radius, or nullopt.
+std::optional<Junction> KnotTracking::FitAlongLinks(size_t i, int degree,
                                                     const Eigen::Vector2d& predicted) const {
-  const int k = knots[i].first, r = k / cols, c = k % cols;
-  const int degree = (r > 0) + (r + 1 < rows) + (c > 0) + (c + 1 < cols);
   const std::vector<Eigen::Vector2d> links = Links(i);
   if (static_cast<int>(links.size()) != degree) return std::nullopt;
   const std::optional<Junction> j =
