@@ -14,28 +14,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// Pixel of a world point and its Jacobian (px / m); false behind the camera.
-bool ProjectWorld(const calib::Camera& camera, const Eigen::Vector3d& p_in_world,
-                  Eigen::Vector2d* pixel, Eigen::Matrix<double, 2, 3>* wrt_world) {
-  const Eigen::Matrix3d r = camera.cam_from_world.RotationMatrix();
-  const Eigen::Vector3d p = r * p_in_world + camera.cam_from_world.translation;
-  // Derivatives with respect to the camera-frame point only: three jet components instead of
-  // the fifteen of calib::ProjectWithJacobian (intrinsics are constants here).
-  using Jet = ceres::Jet<double, 3>;
-  const auto params = camera.intrinsics.ToParameters();
-  Jet k[calib::kNumIntrinsics], point[3], out[2];
-  for (int i = 0; i < calib::kNumIntrinsics; ++i) k[i] = Jet(params[i]);
-  for (int i = 0; i < 3; ++i) point[i] = Jet(p[i], i);
-  if (!calib::ProjectPoint(k, point, out)) return false;
-  Eigen::Matrix<double, 2, 3> wrt_cam;
-  for (int row = 0; row < 2; ++row) {
-    (*pixel)[row] = out[row].a;
-    wrt_cam.row(row) = out[row].v.transpose();
-  }
-  if (wrt_world) *wrt_world = wrt_cam * r;
-  return true;
-}
-
 // Huber's rho of a squared residual norm s, and its weight rho'(s).
 double HuberRho(double s, double h) { return s <= h * h ? s : 2.0 * h * std::sqrt(s) - h * h; }
 double HuberWeight(double s, double h) { return s <= h * h ? 1.0 : h / std::sqrt(s); }
@@ -46,7 +24,7 @@ double RobustCost(const calib::Rig& rig, const std::vector<Observation>& obs, do
   double cost = 0.0;
   for (const Observation& o : obs) {
     Eigen::Vector2d px;
-    if (!ProjectWorld(rig.cameras[o.camera], position, &px, nullptr))
+    if (!PixelAndJacobian(rig.cameras[o.camera], position, &px, nullptr))
       return std::numeric_limits<double>::infinity();
     cost += HuberRho((px - o.px).squaredNorm(), huber_px);
   }
@@ -76,23 +54,50 @@ bool FitSubset(const calib::Rig& rig, const std::vector<Observation>& obs,
 
 }  // namespace
 
+bool PixelAndJacobian(const calib::Camera& camera, const Eigen::Vector3d& p_in_world,
+                      Eigen::Vector2d* pixel, Eigen::Matrix<double, 2, 3>* wrt_world) {
+  const Eigen::Matrix3d r = camera.cam_from_world.RotationMatrix();
+  const Eigen::Vector3d p = r * p_in_world + camera.cam_from_world.translation;
+  // Derivatives with respect to the camera-frame point only: three jet components instead of
+  // the fifteen of calib::ProjectWithJacobian (intrinsics are constants here).
+  using Jet = ceres::Jet<double, 3>;
+  const auto params = camera.intrinsics.ToParameters();
+  Jet k[calib::kNumIntrinsics], point[3], out[2];
+  for (int i = 0; i < calib::kNumIntrinsics; ++i) k[i] = Jet(params[i]);
+  for (int i = 0; i < 3; ++i) point[i] = Jet(p[i], i);
+  if (!calib::ProjectPoint(k, point, out)) return false;
+  Eigen::Matrix<double, 2, 3> wrt_cam;
+  for (int row = 0; row < 2; ++row) {
+    (*pixel)[row] = out[row].a;
+    wrt_cam.row(row) = out[row].v.transpose();
+  }
+  if (wrt_world) *wrt_world = wrt_cam * r;
+  return true;
+}
+
 std::optional<ProjectedPoint> ProjectAgreeingViews(const calib::Rig& rig, int camera,
                                                    const std::vector<Observation>& views,
                                                    const TriangulationOptions& options) {
   const PointEstimate e = TriangulatePoint(rig, views, options);
-  if (!e.valid || !e.outliers.empty()) return std::nullopt;
+  if (!e.outliers.empty()) return std::nullopt;
+  return ProjectEstimate(rig, camera, e);
+}
+
+std::optional<ProjectedPoint> ProjectEstimate(const calib::Rig& rig, int camera,
+                                              const PointEstimate& estimate) {
+  if (!estimate.valid) return std::nullopt;
   ProjectedPoint p;
   Eigen::Matrix<double, 2, 3> j;
-  if (!ProjectWorld(rig.cameras[camera], e.position, &p.px, &j) || !p.px.allFinite())
+  if (!PixelAndJacobian(rig.cameras[camera], estimate.position, &p.px, &j) || !p.px.allFinite())
     return std::nullopt;
-  p.unit_covariance = j * e.unit_covariance * j.transpose();
+  p.unit_covariance = j * estimate.unit_covariance * j.transpose();
   return p;
 }
 
 double ReprojectionResidual(const calib::Rig& rig, const Observation& observation,
                             const Eigen::Vector3d& position) {
   Eigen::Vector2d px;
-  if (!ProjectWorld(rig.cameras[observation.camera], position, &px, nullptr)) return kNaN;
+  if (!PixelAndJacobian(rig.cameras[observation.camera], position, &px, nullptr)) return kNaN;
   return (px - observation.px).norm();
 }
 
@@ -139,7 +144,7 @@ bool RefinePoint(const calib::Rig& rig, const std::vector<Observation>& observat
     for (const Observation& o : observations) {
       Eigen::Vector2d px;
       Eigen::Matrix<double, 2, 3> j;
-      if (!ProjectWorld(rig.cameras[o.camera], p, &px, &j)) return false;
+      if (!PixelAndJacobian(rig.cameras[o.camera], p, &px, &j)) return false;
       const Eigen::Vector2d r = px - o.px;
       const double w = HuberWeight(r.squaredNorm(), h);
       jtj += w * j.transpose() * j;
@@ -181,7 +186,7 @@ Eigen::Matrix3d PointInformation(const calib::Rig& rig, const std::vector<int>& 
   for (int c : cameras) {
     Eigen::Vector2d px;
     Eigen::Matrix<double, 2, 3> j;
-    if (ProjectWorld(rig.cameras[c], position, &px, &j)) info += j.transpose() * j;
+    if (PixelAndJacobian(rig.cameras[c], position, &px, &j)) info += j.transpose() * j;
   }
   return info;
 }

@@ -87,6 +87,17 @@ std::optional<ProjectedPoint> ProjectAgreeingViews(const calib::Rig& rig, int ca
                                                    const std::vector<Observation>& views,
                                                    const TriangulationOptions& options = {});
 
+// A point's projection into rig camera `camera`, with that projection's covariance for 1 px of
+// noise per axis in each view (J C J^T, C the estimate's unit covariance); nullopt where the
+// estimate is not valid or the point is behind that camera.
+std::optional<ProjectedPoint> ProjectEstimate(const calib::Rig& rig, int camera,
+                                              const PointEstimate& estimate);
+
+// The pixel of a world point in `camera` and, when asked, its Jacobian (px / m); false behind
+// the camera.
+bool PixelAndJacobian(const calib::Camera& camera, const Eigen::Vector3d& p_in_world,
+                      Eigen::Vector2d* pixel, Eigen::Matrix<double, 2, 3>* wrt_world);
+
 // Residual (px) of one observation at `position` (NaN behind the camera).
 double ReprojectionResidual(const calib::Rig& rig, const Observation& observation,
                             const Eigen::Vector3d& position);

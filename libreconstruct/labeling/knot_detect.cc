@@ -739,7 +739,8 @@ bool KnotDetector::NearBackgroundEdge(const Eigen::Vector2d& px, double radius) 
 }
 
 int KnotDetector::YarnsAlong(const Eigen::Vector2d& px, const std::vector<double>& angles,
-                             double tolerance_rad) const {
+                             double tolerance_rad, std::vector<bool>* seen_along) const {
+  if (seen_along) seen_along->assign(angles.size(), false);
   if (ridge_.empty() || angles.empty()) return 0;
   const int n_rings = std::max(2, o_.rings_count);
   const int quorum = std::max(2, n_rings - 1);
@@ -754,6 +755,8 @@ int KnotDetector::YarnsAlong(const Eigen::Vector2d& px, const std::vector<double
           break;
         }
   }
+  if (seen_along)
+    for (size_t a = 0; a < angles.size(); ++a) (*seen_along)[a] = seen[a] >= quorum;
   return static_cast<int>(std::count_if(seen.begin(), seen.end(),
                                         [&](int s) { return s >= quorum; }));
 }

@@ -158,8 +158,9 @@ class KnotDetector {
   // How many of the image angles (rad) a yarn leaves `px` along: a branch peak within
   // tolerance_rad of the angle on every ring but one (the rings of Examine). For a place known
   // otherwise (the other cameras'), where no junction is found: whether its yarns are there.
-  int YarnsAlong(const Eigen::Vector2d& px, const std::vector<double>& angles,
-                 double tolerance_rad) const;
+  // `seen`, when given: per angle, whether a yarn leaves along it.
+  int YarnsAlong(const Eigen::Vector2d& px, const std::vector<double>& angles, double tolerance_rad,
+                 std::vector<bool>* seen = nullptr) const;
 
   // The junction near `px` whose yarns leave along `angles` (image angles, rad: the knot's links,
   // known from its neighbours): each yarn fitted as Examine fits them, on a strip from `from_px`

@@ -13,6 +13,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "libreconstruct/geometry/point_motion.h"
 #include "libreconstruct/geometry/triangulation.h"
 
 namespace netlab::recon {
@@ -41,6 +42,23 @@ void Add(EngineCounts* sum, const EngineCounts& n);
 // Whether a label is an observation of its own: accepted, and not placed from the other
 // cameras' labels (LabelSource::kProjected), which would only repeat them.
 bool Observed(const Label& l) { return l.accepted() && l.source != LabelSource::kProjected; }
+
+// A projection's standard deviation along its worst axis for `sigma` px of noise in each view.
+double WorstSigma(const ProjectedPoint& q, double sigma) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(q.unit_covariance);
+  return sigma * std::sqrt(std::max(0.0, eig.eigenvalues()[1]));
+}
+
+// Find Node's junction is checked against the knot's path where that fixes it to this (px).
+constexpr double kPathCheckSigmaPx = 1.0;
+
+// The 99.9 % quantile of chi^2 with `dof` degrees of freedom (Wilson and Hilferty's cube-root
+// normal approximation: within 1 % from 2 degrees of freedom on).
+double Chi2Quantile999(int dof) {
+  const double k = dof, z = 3.0902;  // the normal's 99.9 % quantile
+  const double c = 1.0 - 2.0 / (9.0 * k) + z * std::sqrt(2.0 / (9.0 * k));
+  return k * c * c * c;
+}
 
 // A distance in px as the messages print it (one decimal).
 std::string Px(double px) {
@@ -502,7 +520,8 @@ FindNodeResult LabelEngine::FindNodeAt(int camera, int t, int knot, const Eigen:
   }
   // Where the other cameras fix the knot, in the brush: it decides between several junctions,
   // and places the knot where the image shows none, or one they put elsewhere.
-  std::optional<Eigen::Vector2d> others = OthersPlace(camera, t, knot);
+  bool by_motion = false;
+  std::optional<Eigen::Vector2d> others = OthersPlace(camera, t, knot, &by_motion);
   if (others && (*others - centre).norm() > radius_px + o_.projection_tolerance_px)
     others.reset();
   const auto agrees = [&](const Junction& j) {
@@ -530,10 +549,12 @@ FindNodeResult LabelEngine::FindNodeAt(int camera, int t, int knot, const Eigen:
   Junction placed;
   placed.px = *others;
   placed.confidence = 0.5;
+  const std::string where =
+      by_motion ? "the other cameras' labels and its motion" : "the other cameras' labels";
   r.why = r.status == FindNodeStatus::kFound
               ? "the junction in the brush is " + Px((r.knot.px - *others).norm()) +
-                    " px from where the other cameras' labels put the knot; placed there"
-              : "no junction in the brush; placed where the other cameras' labels put the knot";
+                    " px from where " + where + " put the knot; placed there"
+              : "no junction in the brush; placed where " + where + " put the knot";
   r.status = FindNodeStatus::kFound;
   r.knot = placed;
   r.projected = true;
@@ -541,33 +562,73 @@ FindNodeResult LabelEngine::FindNodeAt(int camera, int t, int knot, const Eigen:
   return r;
 }
 
-std::optional<Eigen::Vector2d> LabelEngine::OthersPlace(int camera, int t, int knot) const {
+std::optional<Eigen::Vector2d> LabelEngine::OthersPlace(int camera, int t, int knot,
+                                                        bool* by_motion) const {
+  if (by_motion) *by_motion = false;
   if (!rig_ || !(o_.place_sigma_px > 0.0)) return std::nullopt;
   const LabelSet& set = store_->labels();
   std::vector<Observation> others;
   for (int o = 0; o < static_cast<int>(set.cameras.size()); ++o)
     if (o != camera && Observed(set.at(o, t, knot)))
       others.push_back({RigIndex(o), set.at(o, t, knot).px});
-  if (others.size() < 2) return std::nullopt;
+  if (others.empty()) return std::nullopt;
   TriangulationOptions topt;
   topt.outlier_threshold_px = o_.epipolar_tolerance_px;
-  // They must agree closely: two views, each a little off across their epipolar lines, show
-  // it in their residuals only (a label 3.6 px off once left 1.8 px in each, within the
-  // epipolar tolerance); three or more, each view against the others too.
-  const PointEstimate e = TriangulatePoint(*rig_, others, topt);
-  if (!e.valid || !e.outliers.empty()) return std::nullopt;
-  for (double r : e.residual_px)
-    if (!(r <= o_.place_residual_px)) return std::nullopt;
-  if (ViewOffTheOthers(*rig_, others, topt, o_.projection_tolerance_px, o_.label_sigma_px))
-    return std::nullopt;
-  const std::optional<ProjectedPoint> q =
-      ProjectAgreeingViews(*rig_, RigIndex(camera), others, topt);
-  if (!q || !q->px.allFinite()) return std::nullopt;
-  // The projection's standard deviation along its worst axis.
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(q->unit_covariance);
-  const double sigma = o_.label_sigma_px * std::sqrt(std::max(0.0, eig.eigenvalues()[1]));
-  if (!(sigma <= o_.place_sigma_px)) return std::nullopt;
+  if (others.size() >= 2) {
+    // They must agree closely: two views, each a little off across their epipolar lines, show
+    // it in their residuals only (a label 3.6 px off once left 1.8 px in each, within the
+    // epipolar tolerance); three or more, each view against the others too.
+    const PointEstimate e = TriangulatePoint(*rig_, others, topt);
+    if (!e.valid || !e.outliers.empty()) return std::nullopt;
+    for (double r : e.residual_px)
+      if (!(r <= o_.place_residual_px)) return std::nullopt;
+    if (ViewOffTheOthers(*rig_, others, topt, o_.projection_tolerance_px, o_.label_sigma_px))
+      return std::nullopt;
+    const std::optional<ProjectedPoint> q = ProjectEstimate(*rig_, RigIndex(camera), e);
+    if (!q) return std::nullopt;
+    if (WorstSigma(*q, o_.label_sigma_px) <= o_.place_sigma_px) return q->px;
+  }
+  // The views do not fix it alone: with the knot's motion.
+  const std::optional<PointEstimate> e = MotionPoint(camera, t, knot);
+  if (!e) return std::nullopt;
+  const std::optional<ProjectedPoint> q = ProjectEstimate(*rig_, RigIndex(camera), *e);
+  if (!q || !(WorstSigma(*q, o_.label_sigma_px) <= o_.place_sigma_px)) return std::nullopt;
+  if (by_motion) *by_motion = true;
   return q->px;
+}
+
+std::optional<PointEstimate> LabelEngine::MotionPoint(int camera, int t, int knot) const {
+  if (!rig_ || o_.motion_frames < 1) return std::nullopt;
+  const LabelSet& set = store_->labels();
+  // The knot's own labels (no placed ones) of every camera in frame row s (of the other cameras
+  // in t itself).
+  const auto views_in = [&](int s, std::vector<TimedObservation>* views) {
+    const size_t before = views->size();
+    for (int c = 0; c < static_cast<int>(set.cameras.size()); ++c)
+      if ((s != t || c != camera) && Observed(set.at(c, s, knot)))
+        views->push_back({static_cast<double>(s), {RigIndex(c), set.at(c, s, knot).px}});
+    return views->size() > before;
+  };
+  std::vector<TimedObservation> now;
+  if (!views_in(t, &now)) return std::nullopt;
+  const double sigma2 = o_.label_sigma_px * o_.label_sigma_px;
+  // The frame rows before t (else after: tracking backwards), the adjacent one among them.
+  for (const int step : {-1, 1}) {
+    std::vector<TimedObservation> views = now;
+    for (int i = 1; i <= o_.motion_frames; ++i) {
+      const int s = t + step * i;
+      if (s < 0 || s >= set.frames() || (!views_in(s, &views) && i == 1)) break;
+    }
+    if (views.size() == now.size()) continue;
+    const PointEstimate e = FitConstantVelocity(*rig_, views, t);
+    if (!e.valid) continue;
+    // Every view on the path, and all of them as the labels' noise explains.
+    const bool close = std::all_of(e.residual_px.begin(), e.residual_px.end(),
+                                   [&](double r) { return r <= o_.place_residual_px; });
+    const int dof = 2 * static_cast<int>(views.size()) - 6;
+    if (close && dof > 0 && e.sum_squares_px2 / sigma2 <= Chi2Quantile999(dof)) return e;
+  }
+  return std::nullopt;
 }
 
 std::optional<double> LabelEngine::MotionOff(int camera, int t, int knot,
@@ -586,6 +647,24 @@ std::optional<double> LabelEngine::MotionOff(int camera, int t, int knot,
     if (n < 2) continue;
     const Eigen::Vector2d expected = set.at(camera, s, knot).px + motion / n;
     return (px - expected).norm();
+  }
+  return std::nullopt;
+}
+
+std::optional<double> LabelEngine::VelocityOff(int camera, int t, int knot,
+                                               const Eigen::Vector2d& px) const {
+  const LabelSet& set = store_->labels();
+  for (const int step : {-1, 1}) {
+    // Its accepted labels in the frame rows t - step, t - 2 step (and t - 3 step).
+    std::vector<Eigen::Vector2d> p;
+    for (int i = 1; i <= 3; ++i) {
+      const int s = t + step * i;
+      if (s < 0 || s >= set.frames() || !set.at(camera, s, knot).accepted()) break;
+      p.push_back(set.at(camera, s, knot).px);
+    }
+    // A straight line at constant velocity through them (least squares), at t.
+    if (p.size() == 2) return (px - (2.0 * p[0] - p[1])).norm();
+    if (p.size() == 3) return (px - (4.0 * p[0] + p[1] - 2.0 * p[2]) / 3.0).norm();
   }
   return std::nullopt;
 }
@@ -649,7 +728,24 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
       return "a yarn of the junction leads to no labeled neighbour, and nothing checks its "
              "place (no motion, no other cameras that fix it)";
   }
-  if (others.size() < 2) return "";
+  // One other camera or none: its path over the adjacent frames with that view (MotionPoint),
+  // where it fixes the knot to a pixel (a check needs less than a placement): in a fold a
+  // junction of another layer 2.1 px from the knot moved 1.4 px otherwise than the knot's
+  // neighbours, within place_motion_px, and 1.6 px from where its path put it.
+  if (others.size() < 2) {
+    const std::optional<PointEstimate> path = MotionPoint(camera, t, knot);
+    const std::optional<ProjectedPoint> p =
+        path ? ProjectEstimate(*rig_, RigIndex(camera), *path) : std::nullopt;
+    if (!p || !(WorstSigma(*p, o_.label_sigma_px) <= kPathCheckSigmaPx)) return "";
+    const double off = (p->px - j.px).norm();
+    if (off <= o_.projection_tolerance_px) return "";
+    char why[120];
+    std::snprintf(why, sizeof why,
+                  "%.1f px from where its motion and the other cameras' labels "
+                  "put the knot",
+                  off);
+    return why;
+  }
   TriangulationOptions topt;
   topt.outlier_threshold_px = o_.epipolar_tolerance_px;
   // Where the others do not agree there is nothing to go by.
@@ -1032,11 +1128,17 @@ void LabelEngine::SearchCamera(FrameCheck* f, int c, std::vector<LabelEdit>* edi
         (*candidates)[k].push_back(*found);
         continue;
       }
-    // (a) The knot's own triangulated point, where it has one.
+    // (a) The knot's own triangulated point, where it has one; else, seen by one other camera,
+    // placed where that view and its motion put it.
     if (f->geometry && f->point[k]) {
       if (const std::optional<LabelEdit> e = SearchAtProjection(f, view, k)) edits->push_back(*e);
       continue;
     }
+    if (f->geometry)
+      if (const std::optional<LabelEdit> e = PlaceAtProjection(f, view, k)) {
+        edits->push_back(*e);
+        continue;
+      }
     // (b) Spheres of link length around triangulated neighbours; (c) else the image-space grid
     // in this camera.
     std::string how;
@@ -1102,7 +1204,8 @@ std::optional<LabelEdit> LabelEngine::PlaceAtProjection(FrameCheck* f, const Fil
   const cv::Rect roi(static_cast<int>(q->x() - reach), static_cast<int>(q->y() - reach),
                      static_cast<int>(2 * reach) + 1, static_cast<int>(2 * reach) + 1);
   const KnotDetector detector(view.image, roi, o_.detector);
-  const int yarns = detector.YarnsAlong(*q, links, o_.branch_tolerance_deg * M_PI / 180.0);
+  std::vector<bool> seen;
+  const int yarns = detector.YarnsAlong(*q, links, o_.branch_tolerance_deg * M_PI / 180.0, &seen);
   if (yarns < 2) return std::nullopt;
   // Over the target or another body, a knot may be behind it: there every one of its links
   // must be seen leaving it (at least three).
@@ -1111,12 +1214,37 @@ std::optional<LabelEdit> LabelEngine::PlaceAtProjection(FrameCheck* f, const Fil
     scene = f->background.emplace(c, SceneBackground(view.image)).first;
   const bool over_body = !OnSceneBackground(view.image, scene->second, *q,
                                             o_.background_reach_px, o_.background_tolerance);
-  if (over_body && (yarns < 3 || yarns < static_cast<int>(links.size()))) return std::nullopt;
-  // And it moved from its label in the frame before as its neighbours did, or, where they
-  // were not labeled then, it lies where this camera's tracking took it (the flow's end, or the
-  // junction it found there): checks no other camera's label enters.
+  // Over the target or another body, a knot may be behind it: there every one of its links
+  // must be seen leaving it (at least three); or, where this camera saw the knot in an adjacent
+  // frame row (its label there accepted), a yarn must pass through the place (two opposite
+  // links seen). A knot just behind the body's outline shows the yarns of the links that cross
+  // it, two adjacent ones at most; a knot in front of it, draped over the target's edges, often
+  // shows only the yarn across the edge, the one along it lost in the body's own edge. (The first
+  // 60 frames of Net A 0.5 m/s and Net B at both speeds: 77 hidden knots seen the frame before,
+  // each with two adjacent yarns; Net B at 0.8 m/s, frames 140-179: 85 visible ones with only
+  // an opposite pair.)
+  const LabelSet& set = store_->labels();
+  const bool seen_before = (t > 0 && set.at(c, t - 1, k).accepted()) ||
+                           (t + 1 < set.frames() && set.at(c, t + 1, k).accepted());
+  const auto yarn_through = [&] {
+    for (size_t a = 0; a < links.size(); ++a)
+      for (size_t b = a + 1; b < links.size(); ++b)
+        if (seen[a] && seen[b] &&
+            std::abs(std::remainder(links[a] - links[b], 2.0 * M_PI)) >
+                o_.detector.straight_angle_deg * M_PI / 180.0)
+          return true;
+    return false;
+  };
+  const bool every_link = yarns >= 3 && yarns >= static_cast<int>(links.size());
+  if (over_body && !every_link && !(seen_before && yarn_through())) return std::nullopt;
+  // And this camera's own labels agree, a check no other camera's label enters: the knot moved
+  // from its label in an adjacent frame row as its neighbours did, or as it was moving (its
+  // labels in the frame rows before, at constant velocity); where neither is known, it lies
+  // where this camera's tracking took it (the flow's end, or the junction it found there).
   std::optional<double> moved = MotionOff(c, t, k, *q);
-  const Label& tracked = store_->labels().at(c, t, k);
+  const std::optional<double> own = VelocityOff(c, t, k, *q);
+  if (own && (!moved || *own < *moved)) moved = own;
+  const Label& tracked = set.at(c, t, k);
   if (!moved && tracked.present() && tracked.source == LabelSource::kTracked)
     moved = (tracked.px - *q).norm();
   if (!moved || *moved > o_.place_motion_px) return std::nullopt;
@@ -1350,7 +1478,12 @@ int LabelEngine::CheckColours(int t) {
     if (image.empty() || image.type() != CV_8UC3) continue;
     for (int k = 0; k < set.knots(); ++k) {
       const Label& l = set.at(c, t, k);
-      if (!l.accepted() || l.source == LabelSource::kManual || l.source == LabelSource::kImported)
+      // Not the person's clicks, imported seeds, or placed labels: a placed label takes its
+      // identity from the other cameras' labels (each checked in its own view), and where it is
+      // placed, in folds, another layer's yarns cross its own (200 right labels were flagged on
+      // Net B at 0.8 m/s in frames 141-179).
+      if (!l.accepted() || l.source == LabelSource::kManual || l.source == LabelSource::kImported ||
+          l.source == LabelSource::kProjected)
         continue;
       const IdentityCheck check = CheckIdentity(image, *codebook_, k, l.px,
                                                 AcceptedNeighbourYarns(set, c, t, k), identity_);

@@ -52,6 +52,7 @@
 #include <opencv2/core.hpp>
 
 #include "calibration/rig.h"
+#include "libreconstruct/geometry/triangulation.h"
 #include "libreconstruct/labeling/knot_detect.h"
 #include "libreconstruct/labeling/knot_track.h"
 #include "libreconstruct/labeling/label_identity.h"
@@ -106,6 +107,15 @@ struct LabelEngineOptions {
   double place_sigma_px = 0.5;
   // ... and where each of those views lies within this of their point (px).
   double place_residual_px = 0.5;
+  // Where the other cameras' labels alone do not fix the knot (one camera sees it, or two whose
+  // rays meet at a shallow angle), its motion may: a straight path at constant velocity fitted
+  // to those views and to the knot's own labels (no placed ones) of every camera in up to
+  // motion_frames frame rows before (else after; the adjacent one among them) (point_motion.h).
+  // Each view must lie within place_residual_px of the path, and all together within chi^2's
+  // 99.9 % for label_sigma_px per view; then place_sigma_px applies as above. At 179 frames/s
+  // the true places of two frames predict the next within 0.05 px (Net B folding at 0.8 m/s).
+  // 0: off.
+  int motion_frames = 5;
   // Fill Grid places it so only where, besides, the knot's label in the frame before moved as
   // its neighbours did to within this (px; the net moves nearly evenly over a mesh), or, where
   // they were not labeled then, its tracked label (the flow's end) is within this of the place.
@@ -191,10 +201,11 @@ class LabelEngine {
   // person cancelled, or too much needs review). summary.frames counts the rows done.
   using Checkpoint = std::function<bool(int t)>;
   LabelingSummary TrackFrames(int from, int to, const Checkpoint& checkpoint = {});
-  // Checks every accepted label of frame t that a tool made (Find Path, Fill Grid, tracking,
-  // Find Node; not the person's own clicks or imported seeds) against the yarn colours of its
-  // knot (label_identity.h): a confident contradiction turns it to review with the colours read;
-  // the label is never moved or renamed. Returns the labels flagged.
+  // Checks every accepted label of frame t that a tool found (Find Path, Fill Grid, tracking,
+  // Find Node; not the person's own clicks, imported seeds, or labels placed where the other
+  // cameras put the knot: their identity is those cameras' labels') against the yarn colours of
+  // its knot (label_identity.h): a confident contradiction turns it to review with the colours
+  // read; the label is never moved or renamed. Returns the labels flagged.
   int CheckColours(int t);
   // The net's colouring as the cameras see it; CrossCheck then ends with CheckColours.
   void SetCodebook(KnotCodebook codebook, IdentityCheckOptions options = {});
@@ -203,17 +214,24 @@ class LabelEngine {
   // reason): its yarns must run towards its accepted neighbours in that view, as in Fill Grid
   // but some may be hidden (two at least seen), when two or more links' directions are known;
   // and it must lie within projection_tolerance_px of where two or more other cameras' accepted
-  // labels of the knot, consistent among themselves, put it (as Fill Grid's own projection).
-  // Where the brush finds no junction, or one the other cameras put elsewhere, and the labels
-  // of two or more other cameras fix the knot within the brush (place_sigma_px), the label is
-  // placed there (LabelSource::kProjected): the person's brush says the knot is seen.
-  // Returns the detector's result (projected: placed from the other cameras).
+  // labels of the knot, consistent among themselves, put it (as Fill Grid's own projection), or
+  // where fewer, with the knot's path (MotionPoint), put it to a pixel. Where the brush finds no
+  // junction, or one the other cameras put elsewhere, and they fix the knot within the brush
+  // (OthersPlace), the label is placed there (LabelSource::kProjected): the person's brush says
+  // the knot is seen. Returns the detector's result (projected: placed from the other cameras).
   FindNodeResult FindNodeAt(int camera, int t, int knot, const Eigen::Vector2d& centre,
                             double radius_px);
 
   // Where the accepted labels of two or more other cameras (not themselves projected) put a
-  // knot in (camera, t), when they agree and fix it to place_sigma_px; nullopt otherwise.
-  std::optional<Eigen::Vector2d> OthersPlace(int camera, int t, int knot) const;
+  // knot in (camera, t), when they agree and fix it to place_sigma_px; else, with one view or
+  // more, where they and the knot's path (MotionPoint) put it, when it fixes it to
+  // place_sigma_px (*by_motion set); nullopt otherwise.
+  std::optional<Eigen::Vector2d> OthersPlace(int camera, int t, int knot,
+                                             bool* by_motion = nullptr) const;
+  // The knot's point in frame row t from the other cameras' labels there and its own labels in
+  // the adjacent frame rows, on a straight path at constant velocity (LabelEngineOptions::
+  // motion_frames); nullopt where they do not fix it or do not fit such a path.
+  std::optional<PointEstimate> MotionPoint(int camera, int t, int knot) const;
   const ReviewReasons& reasons() const { return reasons_; }
   double link_length_m() const { return link_length_m_; }
   // Takes `m` (> 0) as the net's link length when none is set or estimated yet: one another
@@ -252,6 +270,10 @@ class LabelEngine {
   // row (t - 1, else t + 1) moved as its neighbours accepted in both rows did on average (px);
   // nullopt where there is no such label or fewer than two such neighbours.
   std::optional<double> MotionOff(int camera, int t, int knot, const Eigen::Vector2d& px) const;
+  // How far `px` in (camera, t) is from where the knot's accepted labels in the two or three
+  // frame rows before t (else after), at constant velocity, put it (px); nullopt where there are
+  // fewer than two such labels.
+  std::optional<double> VelocityOff(int camera, int t, int knot, const Eigen::Vector2d& px) const;
   // Whether another knot's accepted label in (camera, t) is within exclusion_px of `px`.
   bool LabelNear(int camera, int t, int knot, const Eigen::Vector2d& px) const;
   // The image positions of a knot's neighbours in (camera, t), right, down, left, up: accepted
