@@ -12,23 +12,18 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 // The path (place at `time`, velocity) from the views' rays, each equation of the linear
-// triangulation (x P3 - P1, y P3 - P2 on undistorted normalised coordinates, scaled to unit
-// norm) written for the place a + (s - time) v.
+// triangulation (RayEquations, scaled to unit norm) written for the place a + (s - time) v.
 bool LinearPath(const calib::Rig& rig, const std::vector<TimedObservation>& views, double time,
                 Vector6d* path) {
   Eigen::Matrix<double, Eigen::Dynamic, 6> a(2 * views.size(), 6);
   Eigen::VectorXd b(2 * views.size());
   int rows = 0;
   for (const TimedObservation& o : views) {
-    const calib::Camera& camera = rig.cameras[o.view.camera];
-    const Eigen::Vector2d xy = calib::UndistortPoint(camera.intrinsics, o.view.px);
-    if (!xy.allFinite()) continue;
-    Eigen::Matrix<double, 3, 4> p;
-    p.leftCols<3>() = camera.cam_from_world.RotationMatrix();
-    p.col(3) = camera.cam_from_world.translation;
+    Eigen::Matrix<double, 2, 4> ray;
+    if (!RayEquations(rig.cameras[o.view.camera], o.view.px, &ray)) continue;
     const double d = o.time - time;
     for (int j = 0; j < 2; ++j) {
-      const Eigen::RowVector4d row = xy[j] * p.row(2) - p.row(j);
+      const Eigen::RowVector4d row = ray.row(j);
       const double norm = row.head<3>().norm();
       if (!(norm > 0)) continue;
       a.row(rows) << row.head<3>() / norm, d * row.head<3>() / norm;

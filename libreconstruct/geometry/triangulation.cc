@@ -101,21 +101,28 @@ double ReprojectionResidual(const calib::Rig& rig, const Observation& observatio
   return (px - observation.px).norm();
 }
 
+bool RayEquations(const calib::Camera& camera, const Eigen::Vector2d& px,
+                  Eigen::Matrix<double, 2, 4>* rows) {
+  const Eigen::Vector2d xy = calib::UndistortPoint(camera.intrinsics, px);
+  if (!xy.allFinite()) return false;
+  Eigen::Matrix<double, 3, 4> p;
+  p.leftCols<3>() = camera.cam_from_world.RotationMatrix();
+  p.col(3) = camera.cam_from_world.translation;
+  for (int j = 0; j < 2; ++j) rows->row(j) = xy[j] * p.row(2) - p.row(j);
+  return true;
+}
+
 bool TriangulateLinear(const calib::Rig& rig, const std::vector<Observation>& observations,
                        Eigen::Vector3d* position) {
-  // Rows x P3 - P1 and y P3 - P2 of each view's [R | t], in normalised undistorted coordinates
-  // (so every view weighs alike whatever its focal length), each scaled to unit norm.
+  // Each view's RayEquations, in normalised undistorted coordinates (so every view weighs alike
+  // whatever its focal length), each scaled to unit norm.
   Eigen::Matrix<double, Eigen::Dynamic, 4> a(2 * observations.size(), 4);
   int rows = 0;
   for (const Observation& o : observations) {
-    const calib::Camera& camera = rig.cameras[o.camera];
-    const Eigen::Vector2d xy = calib::UndistortPoint(camera.intrinsics, o.px);
-    if (!xy.allFinite()) continue;
-    Eigen::Matrix<double, 3, 4> p;
-    p.leftCols<3>() = camera.cam_from_world.RotationMatrix();
-    p.col(3) = camera.cam_from_world.translation;
+    Eigen::Matrix<double, 2, 4> ray;
+    if (!RayEquations(rig.cameras[o.camera], o.px, &ray)) continue;
     for (int j = 0; j < 2; ++j) {
-      const Eigen::RowVector4d row = xy[j] * p.row(2) - p.row(j);
+      const Eigen::RowVector4d row = ray.row(j);
       const double norm = row.norm();
       if (!(norm > 0)) continue;
       a.row(rows++) = row / norm;

@@ -53,7 +53,9 @@ double WorstSigma(const ProjectedPoint& q, double sigma) {
 constexpr double kPathCheckSigmaPx = 1.0;
 
 // The 99.9 % quantile of chi^2 with `dof` degrees of freedom (Wilson and Hilferty's cube-root
-// normal approximation: within 1 % from 2 degrees of freedom on).
+// normal approximation, a little above the exact value: 2.3 % at 2 degrees of freedom, 1.0 % at
+// 6, 0.3 % at 20). The exact one, netsim::Chi2Quantile, is the score's (libnetsim/validation),
+// which labeling may not use.
 double Chi2Quantile999(int dof) {
   const double k = dof, z = 3.0902;  // the normal's 99.9 % quantile
   const double c = 1.0 - 2.0 / (9.0 * k) + z * std::sqrt(2.0 / (9.0 * k));
@@ -566,11 +568,7 @@ std::optional<Eigen::Vector2d> LabelEngine::OthersPlace(int camera, int t, int k
                                                         bool* by_motion) const {
   if (by_motion) *by_motion = false;
   if (!rig_ || !(o_.place_sigma_px > 0.0)) return std::nullopt;
-  const LabelSet& set = store_->labels();
-  std::vector<Observation> others;
-  for (int o = 0; o < static_cast<int>(set.cameras.size()); ++o)
-    if (o != camera && Observed(set.at(o, t, knot)))
-      others.push_back({RigIndex(o), set.at(o, t, knot).px});
+  const std::vector<Observation> others = OtherViews(camera, t, knot);
   if (others.empty()) return std::nullopt;
   TriangulationOptions topt;
   topt.outlier_threshold_px = o_.epipolar_tolerance_px;
@@ -597,17 +595,25 @@ std::optional<Eigen::Vector2d> LabelEngine::OthersPlace(int camera, int t, int k
   return q->px;
 }
 
+std::vector<Observation> LabelEngine::OtherViews(int camera, int t, int knot) const {
+  std::vector<Observation> views;
+  if (!rig_) return views;
+  const LabelSet& set = store_->labels();
+  for (int o = 0; o < static_cast<int>(set.cameras.size()); ++o)
+    if (o != camera && Observed(set.at(o, t, knot)))
+      views.push_back({RigIndex(o), set.at(o, t, knot).px});
+  return views;
+}
+
 std::optional<PointEstimate> LabelEngine::MotionPoint(int camera, int t, int knot) const {
   if (!rig_ || o_.motion_frames < 1) return std::nullopt;
   const LabelSet& set = store_->labels();
   // The knot's own labels (no placed ones) of every camera in frame row s (of the other cameras
   // in t itself).
   const auto views_in = [&](int s, std::vector<TimedObservation>* views) {
-    const size_t before = views->size();
-    for (int c = 0; c < static_cast<int>(set.cameras.size()); ++c)
-      if ((s != t || c != camera) && Observed(set.at(c, s, knot)))
-        views->push_back({static_cast<double>(s), {RigIndex(c), set.at(c, s, knot).px}});
-    return views->size() > before;
+    const std::vector<Observation> in_s = OtherViews(s == t ? camera : -1, s, knot);
+    for (const Observation& v : in_s) views->push_back({static_cast<double>(s), v});
+    return !in_s.empty();
   };
   std::vector<TimedObservation> now;
   if (!views_in(t, &now)) return std::nullopt;
@@ -679,7 +685,6 @@ bool LabelEngine::LabelNear(int camera, int t, int knot, const Eigen::Vector2d& 
 }
 
 std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junction& j) const {
-  const LabelSet& set = store_->labels();
   // A knotless edge knot is where its straight links' colours change.
   if (!ColourChangesAt(j, o_.edge_colour_step_px)) {
     char why[120];
@@ -703,10 +708,7 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
       !BranchesMatchLinks(j, slots, o_.branch_tolerance_deg, true))
     return "the junction's yarns do not run towards its labeled neighbours";
   // Its place against the point two or more other cameras agree on.
-  std::vector<Observation> others;
-  for (int c = 0; c < static_cast<int>(set.cameras.size()) && rig_; ++c)
-    if (c != camera && Observed(set.at(c, t, knot)))
-      others.push_back({RigIndex(c), set.at(c, t, knot).px});
+  const std::vector<Observation> others = OtherViews(camera, t, knot);
   // A junction a yarn short of the knot's degree, with neither its motion nor the other
   // cameras to check its place: in folds, a yarn beside the knot's own or another layer's
   // crossing made such junctions 2-2.7 px off, their yarns along the knot's links. The other

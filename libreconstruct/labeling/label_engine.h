@@ -232,6 +232,9 @@ class LabelEngine {
   // the adjacent frame rows, on a straight path at constant velocity (LabelEngineOptions::
   // motion_frames); nullopt where they do not fix it or do not fit such a path.
   std::optional<PointEstimate> MotionPoint(int camera, int t, int knot) const;
+  // The knot's own labels (not placed ones) of every camera but `camera` (-1: of every camera)
+  // in frame row t, as views of the rig; none without a rig.
+  std::vector<Observation> OtherViews(int camera, int t, int knot) const;
   const ReviewReasons& reasons() const { return reasons_; }
   double link_length_m() const { return link_length_m_; }
   // Takes `m` (> 0) as the net's link length when none is set or estimated yet: one another
