@@ -52,6 +52,7 @@
 #include <opencv2/core.hpp>
 
 #include "calibration/rig.h"
+#include "libreconstruct/geometry/point_motion.h"
 #include "libreconstruct/geometry/triangulation.h"
 #include "libreconstruct/labeling/knot_detect.h"
 #include "libreconstruct/labeling/knot_track.h"
@@ -116,6 +117,11 @@ struct LabelEngineOptions {
   // the true places of two frames predict the next within 0.05 px (Net B folding at 0.8 m/s).
   // 0: off.
   int motion_frames = 5;
+  // ... and where no one of those views moves it by more than this (px in the camera placed):
+  // the path fitted without each view in turn, where the rest still fix it, puts the knot
+  // within this of where all of them do. A view whose small residual hides a large error (the
+  // only view of a near camera, its label 1.7 px off) moves the place when left out.
+  double place_leave_one_out_px = 1.0;
   // Fill Grid places it so only where, besides, the knot's label in the frame before moved as
   // its neighbours did to within this (px; the net moves nearly evenly over a mesh), or, where
   // they were not labeled then, its tracked label (the flow's end) is within this of the place.
@@ -216,9 +222,11 @@ class LabelEngine {
   // and it must lie within projection_tolerance_px of where two or more other cameras' accepted
   // labels of the knot, consistent among themselves, put it (as Fill Grid's own projection), or
   // where fewer, with the knot's path (MotionPoint), put it to a pixel. Where the brush finds no
-  // junction, or one the other cameras put elsewhere, and they fix the knot within the brush
-  // (OthersPlace), the label is placed there (LabelSource::kProjected): the person's brush says
-  // the knot is seen. Returns the detector's result (projected: placed from the other cameras).
+  // junction and they fix the knot within the brush (OthersPlace), the label is placed there
+  // (LabelSource::kProjected): the person's brush says the knot is seen. A junction they put
+  // elsewhere is kept for review (one of the two is wrong, and nothing tells which); several
+  // junctions, none where they put it, are left to the person. Returns the detector's result
+  // (projected: placed from the other cameras).
   FindNodeResult FindNodeAt(int camera, int t, int knot, const Eigen::Vector2d& centre,
                             double radius_px);
 
@@ -273,6 +281,10 @@ class LabelEngine {
   // row (t - 1, else t + 1) moved as its neighbours accepted in both rows did on average (px);
   // nullopt where there is no such label or fewer than two such neighbours.
   std::optional<double> MotionOff(int camera, int t, int knot, const Eigen::Vector2d& px) const;
+  // Whether the path through `views` puts the knot at t in `camera` within
+  // place_leave_one_out_px of `e`'s place however one view is left out (where the rest fix it).
+  bool NoViewMovesIt(int camera, const std::vector<TimedObservation>& views, int t,
+                     const PointEstimate& e) const;
   // How far `px` in (camera, t) is from where the knot's accepted labels in the two or three
   // frame rows before t (else after), at constant velocity, put it (px); nullopt where there are
   // fewer than two such labels.
