@@ -36,8 +36,8 @@ class Parser {
   Parser(std::string origin, std::string base_dir)
       : origin_(std::move(origin)), base_dir_(std::move(base_dir)) {}
 
-  Scenario Parse(const std::string& text) {
-    YamlMap root(LoadYamlString(text, origin_), origin_, "");
+  Scenario Parse(const YAML::Node& tree, const std::string& text) {
+    YamlMap root(tree, origin_, "");
     root.AllowOnly({"name", "description", "duration", "output_interval", "integrator", "gravity",
                     "drag", "rotating_frame", "materials", "rods", "nets", "bodies", "loads",
                     "probes", "store_nodes"});
@@ -385,7 +385,12 @@ Scenario LoadScenario(const std::string& path) {
 
 Scenario ParseScenario(const std::string& text, const std::string& origin,
                        const std::string& base_dir) {
-  return Parser(origin, base_dir).Parse(text);
+  return Parser(origin, base_dir).Parse(LoadYamlString(text, origin), text);
+}
+
+Scenario ParseScenarioTree(const YAML::Node& tree, const std::string& text,
+                           const std::string& origin, const std::string& base_dir) {
+  return Parser(origin, base_dir).Parse(tree, text);
 }
 
 int ResolveNode(const Model& model, const NodeRef& ref) {

@@ -19,6 +19,10 @@
 #include "libnetsim/model/time_series.h"
 #include "libnetsim/simulation/simulation.h"
 
+namespace YAML {
+class Node;
+}
+
 namespace netlab::netsim {
 
 // A node named in a scenario: a rod node (by index, "start" is 0 and "end" the last) or a knot.
@@ -72,6 +76,9 @@ Scenario LoadScenario(const std::string& path);
 // Parses scenario text; `origin` names it in errors, `base_dir` resolves relative file names.
 Scenario ParseScenario(const std::string& text, const std::string& origin,
                        const std::string& base_dir);
+// The same from its YAML tree (scenario_override.h); `text` is stored as the scenario's source.
+Scenario ParseScenarioTree(const YAML::Node& tree, const std::string& text,
+                           const std::string& origin, const std::string& base_dir);
 
 // A scenario turned into a runnable simulation.
 struct BuiltScenario {

@@ -555,8 +555,8 @@ FindNodeResult LabelEngine::FindNodeAt(int camera, int t, int knot, const Eigen:
     // which. Kept for review. (Placed where they put it, Net B's 400 frames at both speeds had
     // 5 such: each placement 1.65-1.97 px off, about as far as the junction from it, one of
     // two views' labels 1.6-1.7 px off along the epipolar line, where no residual shows it.)
-    Commit("Find Node", {{camera, t, knot, Made(r.knot.px, LabelSource::kFindNode,
-                                                r.knot.confidence, false)}});
+    Commit("Find Node",
+           {{camera, t, knot, Made(r.knot.px, LabelSource::kFindNode, r.knot.confidence, false)}});
     Note(camera, t, knot,
          "Find Node: the junction is " + Px((r.knot.px - *others).norm()) + " px from where " +
              where + " put the knot");

@@ -124,6 +124,45 @@ TEST_F(SimulateCommand, BlowUpExitsWithTheErrorAndKeepsThePartialFrames) {
   EXPECT_TRUE(std::filesystem::exists(out + ".partial"));
 }
 
+// --set changes one value of the scenario by its dotted path: the run uses it and the stored
+// scenario says so; a path the scenario does not have, or a value of the wrong kind, is an error
+// naming the override, before anything is written.
+TEST_F(SimulateCommand, SetOverridesOneValueByItsPath) {
+  const std::string scenario = Write("net.yaml", kNet);
+  const std::string out = (dir_ / "set.h5").string();
+  const Result r = Netlab("simulate " + scenario + " --out " + out +
+                          " --set integrator.dt=2e-5 --set 'nets.0.velocity=[0.1, 0, 0]'"
+                          " --set materials.pp.bend_stiffness=1e-4 --json --quiet");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(LastJson(r.out)["dt"].number(), 2e-5);
+  const netlab::netsim::KnotTracks tracks = netlab::netsim::ReadKnotTracks(out);
+  EXPECT_NE(tracks.scenario.find("--set nets.0.velocity=[0.1, 0, 0]"), std::string::npos);
+  EXPECT_NE(tracks.scenario.find("bend_stiffness: 1e-4"), std::string::npos) << tracks.scenario;
+  // The net moved with it: the corner's x advanced 0.1 m/s x 0.02 s.
+  EXPECT_NEAR(tracks.Position(tracks.frames() - 1, 0).x() - tracks.Position(0, 0).x(), 0.002, 2e-4);
+  const std::string bad_out = (dir_ / "bad.h5").string();
+  const Result unknown = Netlab("simulate " + scenario + " --out " + bad_out +
+                                " --set materials.nylon.bend_stiffness=1e-4");
+  EXPECT_EQ(unknown.status, 1);
+  EXPECT_NE(unknown.err.find("--set materials.nylon.bend_stiffness=1e-4: 'materials.nylon' is "
+                             "not in the scenario (materials has: pp)"),
+            std::string::npos)
+      << unknown.err;
+  const Result kind =
+      Netlab("simulate " + scenario + " --out " + bad_out + " --set nets.0.velocity=0.8");
+  EXPECT_EQ(kind.status, 1);
+  // The file leaves the velocity at its default: the scenario's own check names it.
+  EXPECT_NE(kind.err.find("nets[0].velocity: expected a list of numbers (the scenario as changed "
+                          "by --set nets.0.velocity=0.8)"),
+            std::string::npos)
+      << kind.err;
+  const Result usage = Netlab("simulate " + scenario + " --out " + bad_out + " --set velocity");
+  EXPECT_EQ(usage.status, 2);
+  EXPECT_NE(usage.err.find("expected PATH=VALUE"), std::string::npos) << usage.err;
+  EXPECT_FALSE(std::filesystem::exists(bad_out));
+  EXPECT_FALSE(std::filesystem::exists(bad_out + ".partial"));
+}
+
 TEST_F(SimulateCommand, UsageErrorsExitWithStatus2) {
   EXPECT_EQ(Netlab("simulate").status, 2);
   EXPECT_EQ(Netlab("simulate " + Write("net.yaml", kNet)).status, 2);  // no --out

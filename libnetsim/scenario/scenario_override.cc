@@ -1,0 +1,200 @@
+#include "libnetsim/scenario/scenario_override.h"
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "common/yaml_util.h"
+
+namespace netlab::netsim {
+namespace {
+
+std::string Trim(const std::string& s) {
+  const size_t a = s.find_first_not_of(" \t");
+  if (a == std::string::npos) return "";
+  return s.substr(a, s.find_last_not_of(" \t") - a + 1);
+}
+
+std::vector<std::string> Split(const std::string& path) {
+  std::vector<std::string> parts;
+  std::stringstream in(path);
+  for (std::string part; std::getline(in, part, '.');) parts.push_back(part);
+  if (!path.empty() && path.back() == '.') parts.emplace_back();
+  return parts;
+}
+
+// A copy of `n` made of new nodes: no marks, so an error about the value names no line of the
+// file it never came from.
+YAML::Node Fresh(const YAML::Node& n) {
+  switch (n.Type()) {
+    case YAML::NodeType::Scalar:
+      return YAML::Node(n.Scalar());
+    case YAML::NodeType::Sequence: {
+      YAML::Node out(YAML::NodeType::Sequence);
+      for (const YAML::Node& item : n) out.push_back(Fresh(item));
+      return out;
+    }
+    case YAML::NodeType::Map: {
+      YAML::Node out(YAML::NodeType::Map);
+      for (auto it = n.begin(); it != n.end(); ++it) out[it->first.Scalar()] = Fresh(it->second);
+      return out;
+    }
+    default:
+      return YAML::Node(YAML::NodeType::Null);
+  }
+}
+
+bool IsNumber(const YAML::Node& n) {
+  if (!n.IsScalar()) return false;
+  double v;
+  return YAML::convert<double>::decode(n, v);
+}
+
+bool IsBool(const YAML::Node& n) {
+  if (!n.IsScalar()) return false;
+  bool v;
+  return YAML::convert<bool>::decode(n, v);
+}
+
+std::string Keys(const YAML::Node& map) {
+  std::string list;
+  for (auto it = map.begin(); it != map.end(); ++it)
+    list += (list.empty() ? "" : ", ") + it->first.as<std::string>();
+  return list;
+}
+
+std::string Kind(const YAML::Node& n) {
+  if (n.IsSequence())
+    return "a list of " + std::to_string(n.size()) + (n.size() == 1 ? " item" : " items");
+  if (n.IsMap()) return "a section";
+  if (IsNumber(n)) return "a number";
+  if (IsBool(n)) return "true or false";
+  return "'" + n.Scalar() + "'";
+}
+
+}  // namespace
+
+ScenarioOverride ParseOverride(const std::string& arg) {
+  const size_t eq = arg.find('=');
+  ScenarioOverride o;
+  if (eq != std::string::npos) {
+    o.path = Trim(arg.substr(0, eq));
+    o.value = Trim(arg.substr(eq + 1));
+  }
+  if (o.path.empty() || o.value.empty())
+    throw InputError("--set '" + arg +
+                     "': expected PATH=VALUE, e.g. integrator.type=implicit or "
+                     "materials.nylon_1mm.bend_stiffness=2e-4");
+  return o;
+}
+
+void ApplyOverride(const ScenarioOverride& o, const std::string& origin, YAML::Node root) {
+  const std::string where = origin + ": --set " + o.Text() + ": ";
+  const std::vector<std::string> parts = Split(o.path);
+  YAML::Node node;
+  node.reset(root);
+  std::string walked;  // the path so far
+  // The entry of a list by index, or by its name.
+  const auto entry = [&](const YAML::Node& list, const std::string& part) -> YAML::Node {
+    char* end = nullptr;
+    const long i = std::strtol(part.c_str(), &end, 10);
+    if (end != part.c_str() && *end == '\0') {
+      if (i >= 0 && i < static_cast<long>(list.size())) return list[static_cast<size_t>(i)];
+    } else {
+      for (const YAML::Node& item : list)
+        if (item.IsMap() && item["name"] && item["name"].Scalar() == part) return item;
+    }
+    throw InputError(where + "'" + part + "' is not an entry of " + walked + " (" +
+                     std::to_string(list.size()) + (list.size() == 1 ? " entry" : " entries") +
+                     ": an index 0.." + std::to_string(static_cast<long>(list.size()) - 1) +
+                     ", or a name)");
+  };
+  for (size_t p = 0; p < parts.size(); ++p) {
+    const std::string& part = parts[p];
+    if (part.empty()) throw InputError(where + "the path has an empty key");
+    const bool last = p + 1 == parts.size();
+    const std::string here = walked.empty() ? part : walked + "." + part;
+    YAML::Node child;
+    bool found = true;
+    if (node.IsMap()) {
+      const YAML::Node& map = node;
+      if (map[part]) {
+        child.reset(map[part]);
+      } else if (!last && walked.empty()) {
+        // A section the file leaves at its defaults (integrator, drag): the parser checks it.
+        node[part] = YAML::Node(YAML::NodeType::Map);
+        child.reset(node[part]);
+      } else if (!last) {
+        throw InputError(where + "'" + here + "' is not in the scenario (" +
+                         (walked.empty() ? std::string("it has") : walked + " has") + ": " +
+                         Keys(node) + ")");
+      } else {
+        found = false;
+      }
+    } else if (node.IsSequence()) {
+      child.reset(entry(node, part));
+    } else {
+      throw InputError(where + "'" + walked + "' is a value, not a section with keys");
+    }
+    if (!last) {
+      node.reset(child);
+      walked = here;
+      continue;
+    }
+    YAML::Node value;
+    try {
+      value = Fresh(YAML::Load(o.value));
+    } catch (const YAML::Exception& e) {
+      throw InputError(where + "the value is not YAML (" + e.msg + ")");
+    }
+    if (found) {
+      // The kind the scenario has there.
+      if (child.IsMap())
+        throw InputError(where + "'" + here + "' is a section; set one of its keys (" +
+                         Keys(child) + ")");
+      const bool kind_ok = child.IsSequence()
+                               ? value.IsSequence() && value.size() == child.size()
+                               : value.IsScalar() && (!IsNumber(child) || IsNumber(value)) &&
+                                     (!IsBool(child) || IsNumber(child) || IsBool(value));
+      if (!kind_ok)
+        throw InputError(where + "expected " + Kind(child) + " as the scenario has there, got " +
+                         Kind(value));
+      if (node.IsMap()) {
+        node[part] = value;
+      } else {
+        child = value;
+      }
+    } else {
+      node[part] = value;  // a key the file leaves at its default: checked when parsed
+    }
+  }
+}
+
+Scenario LoadScenario(const std::string& path, const std::vector<ScenarioOverride>& overrides) {
+  if (overrides.empty()) return LoadScenario(path);
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open scenario file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  YAML::Node tree = LoadYamlString(buffer.str(), path);
+  if (!tree.IsMap()) return LoadScenario(path);  // the file's own error
+  std::string set;
+  for (const ScenarioOverride& o : overrides) {
+    ApplyOverride(o, path, tree);
+    set += " --set " + o.Text();
+  }
+  YAML::Emitter out;
+  out << tree;
+  const std::string text = "# " + path + " with" + set + "\n" + out.c_str() + "\n";
+  try {
+    Scenario s =
+        ParseScenarioTree(tree, text, path, std::filesystem::path(path).parent_path().string());
+    s.source_path = path;
+    return s;
+  } catch (const InputError& e) {
+    throw InputError(std::string(e.what()) + " (the scenario as changed by" + set + ")");
+  }
+}
+
+}  // namespace netlab::netsim
