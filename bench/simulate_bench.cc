@@ -1,6 +1,7 @@
 // Simulator benchmark: speed against error for the shipped scenarios.
 //
 //   bench_simulate [--quick] [--window SECONDS] [--dir SCENARIO_DIR] [CASE ...]
+//   bench_simulate --threads N [--window SECONDS] [CASE ...]   one thread against N
 //
 // Per case: the default run (automatic dt, rotational inertia scaled) with its segments, dt,
 // steps, wall time, segment-steps/s and real-time factor; its error against a converged reference
@@ -10,7 +11,9 @@
 // nodes of rods shared with the finer rod) and over output frames, in mm. The parabolic-flight
 // cases run for a window (default 1 s) of their flight. The timed run is repeated (--repeat N,
 // default 3) and the fastest kept: wall times on a shared machine vary by +-20 %. Prints a
-// Markdown table.
+// Markdown table. With --threads N: the default run on one thread and on N (the forces' loops
+// split, SimulationOptions::threads), their wall times and whether every tracked point of every
+// frame has the same bits.
 
 #include <chrono>
 #include <cmath>
@@ -36,8 +39,10 @@ struct Trajectory {
 
 // Runs `base` with every rod and link split `refine` times finer, the step scaled by
 // `dt_factor` (1: automatic), and the physical or scaled rotational inertia.
-Trajectory Run(Scenario s, double window, int refine, double dt_factor, bool physical) {
+Trajectory Run(Scenario s, double window, int refine, double dt_factor, bool physical,
+               int threads = 1) {
   s.duration = std::min(s.duration, window);
+  s.simulation.threads = threads;
   for (RodSpec& r : s.rods) r.segments *= refine;
   for (NetSpec& n : s.nets) n.segments_per_link *= refine;
   s.simulation.scale_rotational_inertia = !physical;
@@ -106,6 +111,7 @@ int main(int argc, char** argv) {
   double window = 1.0;
   bool quick = false;
   int repeat = 3;
+  int threads = 0;
   std::vector<std::string> cases;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--quick")) {
@@ -115,6 +121,8 @@ int main(int argc, char** argv) {
       window = std::atof(argv[++i]);
     } else if (!std::strcmp(argv[i], "--repeat") && i + 1 < argc) {
       repeat = std::max(1, std::atoi(argv[++i]));
+    } else if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) {
+      threads = std::max(1, std::atoi(argv[++i]));
     } else if (!std::strcmp(argv[i], "--dir") && i + 1 < argc) {
       dir = argv[++i];
     } else {
@@ -124,6 +132,32 @@ int main(int argc, char** argv) {
   if (cases.empty())
     cases = {"cantilever", "pendulum", "net_capture", "net_a_0.5", "net_a_0.8", "net_b_0.5",
              "net_b_0.8"};
+  const auto fastest = [&](const Scenario& s, double w, int n) {
+    Trajectory run = Run(s, w, 1, 1.0, false, n);
+    for (int r = 1; r < repeat; ++r) {
+      const Trajectory again = Run(s, w, 1, 1.0, false, n);
+      if (again.wall_s < run.wall_s) run = again;
+    }
+    return run;
+  };
+  if (threads > 0) {
+    std::printf(
+        "| case | sim s | segments | wall, 1 thread (s) | wall, %d threads (s) | speed-up |"
+        " x real time, %d threads | same bits |\n|---|---|---|---|---|---|---|---|\n",
+        threads, threads);
+    for (const std::string& case_name : cases) {
+      const Scenario s = LoadScenario(dir + "/" + case_name + ".yaml");
+      const double w = std::min(window, s.duration);
+      const Trajectory one = fastest(s, w, 1), many = fastest(s, w, threads);
+      const Error e = Compare(one, many);
+      const bool same = e.max_mm == 0.0 && one.frames.size() == many.frames.size();
+      std::printf("| %s | %.2f | %d | %.3f | %.3f | %.2f | %.2f | %s |\n", case_name.c_str(),
+                  one.sim_time, one.segments, one.wall_s, many.wall_s, one.wall_s / many.wall_s,
+                  many.sim_time / many.wall_s, same ? "yes" : "NO");
+      std::fflush(stdout);
+    }
+    return 0;
+  }
   std::printf("| case | sim s | segments | dt (s) | steps | wall (s) | M seg-steps/s | x real time |"
               " error vs reference RMS / max (mm) | inertia-scaling error RMS / max (mm) |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
@@ -132,11 +166,7 @@ int main(int argc, char** argv) {
     const Scenario s = LoadScenario(dir + "/" + case_name + ".yaml");
     const bool flight = case_name.rfind("net_", 0) == 0 && case_name != "net_capture";
     const double w = flight ? window : (quick ? std::min(window, s.duration) : s.duration);
-    Trajectory run = Run(s, w, 1, 1.0, false);
-    for (int r = 1; r < repeat; ++r) {
-      const Trajectory again = Run(s, w, 1, 1.0, false);
-      if (again.wall_s < run.wall_s) run = again;
-    }
+    const Trajectory run = fastest(s, w, 1);
     const Trajectory reference = Run(s, w, 2, 0.5, false);  // half l, so a quarter of dt
     const Trajectory physical = Run(s, w, 1, 1.0, true);
     const Error e_ref = Compare(run, reference);

@@ -1,5 +1,7 @@
 #include "libnetsim/forces/bend_twist_force.h"
 
+#include <utility>
+
 #include "libnetsim/model/rotation.h"
 
 namespace netlab::netsim {
@@ -64,9 +66,13 @@ void BendTwistForce::Accumulate(const Model& model, const State& state, double /
   const Quaterniond* q = state.q.data();
   const Vector3d* w = state.w.data();
   Vector3d* tau = out.torque.data();
-  for (const BendPair& p : model.bend_pairs)
-    Joint(q[p.segment_a], q[p.segment_b], w[p.segment_a], w[p.segment_b], p, damped_,
-          tau[p.segment_a], tau[p.segment_b]);
+  if (threads_ > 1) {
+    AccumulateThreaded(model, state, out);
+  } else {
+    for (const BendPair& p : model.bend_pairs)
+      Joint(q[p.segment_a], q[p.segment_b], w[p.segment_a], w[p.segment_b], p, damped_,
+            tau[p.segment_a], tau[p.segment_b]);
+  }
   // Clamped ends: the same with a fixed first frame.
   for (const AnchorJoint& a : model.anchors) {
     const LogResult log = LogMap(a.frame.conjugate() * q[a.segment]);
@@ -74,6 +80,43 @@ void BendTwistForce::Accumulate(const Model& model, const State& state, double /
     if (damped_) g += a.damping.cwiseProduct(ApplyJrInv(log, w[a.segment]));
     g *= a.inv_length;
     tau[a.segment] -= ApplyJlInv(log, g);
+  }
+}
+
+void BendTwistForce::AccumulateThreaded(const Model& model, const State& state,
+                                        ForceBuffers& out) const {
+  const int n = static_cast<int>(model.bend_pairs.size()), segments = model.num_segments();
+  if (joints_of_.start.size() != static_cast<size_t>(segments) + 1) {
+    joints_of_ = Incidence(segments, n, [&](int i) {
+      return std::pair(model.bend_pairs[i].segment_a, model.bend_pairs[i].segment_b);
+    });
+    on_a_.resize(n);
+    on_b_.resize(n);
+  }
+  const Quaterniond* q = state.q.data();
+  const Vector3d* w = state.w.data();
+  Vector3d* tau = out.torque.data();
+#pragma omp parallel num_threads(threads_)
+  {
+#pragma omp for schedule(static)
+    for (int i = 0; i < n; ++i) {
+      const BendPair& p = model.bend_pairs[i];
+      // Joint adds to a and subtracts from b: from zero, the terms themselves (negated on b).
+      on_a_[i].setZero();
+      on_b_[i].setZero();
+      Joint(q[p.segment_a], q[p.segment_b], w[p.segment_a], w[p.segment_b], p, damped_, on_a_[i],
+            on_b_[i]);
+    }
+#pragma omp for schedule(static)
+    for (int j = 0; j < segments; ++j) {
+      double* t = tau[j].data();
+      for (int e = joints_of_.start[j]; e < joints_of_.start[j + 1]; ++e) {
+        const int joint = joints_of_.entries[e] / 2;
+        // On b, Joint's "t -= term" is "t + (0 - term)": the same bits.
+        const double* add = joints_of_.entries[e] % 2 ? on_b_[joint].data() : on_a_[joint].data();
+        for (int k = 0; k < 3; ++k) t[k] += add[k];
+      }
+    }
   }
 }
 

@@ -12,6 +12,8 @@
 // (rotation.h: LogMap and its Jacobians). A rod under an end moment M therefore turns by exactly
 // M l / EI per joint. Clamped ends (Model::anchors) are joints to a fixed frame over half a segment.
 
+#include <vector>
+
 #include "libnetsim/forces/force.h"
 
 namespace netlab::netsim {
@@ -26,9 +28,17 @@ class BendTwistForce final : public Force {
   double Energy(const Model& model, const State& state) const override;
   void AddStiffnessBounds(const Model& model, const State& state,
                           StiffnessBounds& bounds) const override;
+  void SetThreads(int threads) override { threads_ = threads < 1 ? 1 : threads; }
 
  private:
+  void AccumulateThreaded(const Model& model, const State& state, ForceBuffers& out) const;
+
   bool damped_ = false;  // any joint with non-zero damping; if not, the rates are never computed
+  int threads_ = 1;
+  // With threads: each joint's torques on its two segments, and each segment's joints, built
+  // on first use.
+  mutable std::vector<Vector3d> on_a_, on_b_;
+  mutable Incidence joints_of_;
 };
 
 }  // namespace netlab::netsim

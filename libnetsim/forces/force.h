@@ -53,6 +53,34 @@ struct StiffnessBounds {
   }
 };
 
+// Which of `items` (segments, joints), each acting on two places (its ends a and b: nodes,
+// segments), act on each place, in ascending order: a threaded force sums each place's terms in
+// the order its one-thread loop adds them. Entries are item * 2 (as a) or item * 2 + 1 (as b);
+// place p's run from start[p] to start[p + 1].
+struct Incidence {
+  std::vector<int> start;
+  std::vector<int> entries;
+
+  // ends(i) -> {a, b} of item i.
+  template <typename Ends>
+  Incidence(int places, int items, Ends ends) : start(places + 1, 0) {
+    for (int i = 0; i < items; ++i) {
+      const auto [a, b] = ends(i);
+      ++start[a + 1];
+      ++start[b + 1];
+    }
+    for (int p = 0; p < places; ++p) start[p + 1] += start[p];
+    entries.assign(start[places], 0);
+    std::vector<int> next(start.begin(), start.end() - 1);
+    for (int i = 0; i < items; ++i) {
+      const auto [a, b] = ends(i);
+      entries[next[a]++] = 2 * i;
+      entries[next[b]++] = 2 * i + 1;
+    }
+  }
+  Incidence() = default;
+};
+
 // Where a force's stored energy is reported (Energy in simulation.h).
 enum class EnergyKind { kNone, kElastic, kPotential };
 
@@ -76,6 +104,11 @@ class Force {
   // Adds this force's stiffness and damping bounds, linearised about `state`.
   virtual void AddStiffnessBounds(const Model& /*model*/, const State& /*state*/,
                                   StiffnessBounds& /*bounds*/) const {}
+
+  // The threads Accumulate may use (>= 1). A force that splits its loop over them gives the
+  // same bits as with one: each element's terms are computed apart, then summed into each node
+  // or segment in the order one thread adds them. The others ignore it.
+  virtual void SetThreads(int /*threads*/) {}
 };
 
 }  // namespace netlab::netsim

@@ -17,7 +17,9 @@
 // a shear stiffness (N): a transverse force V leaves a shear angle V / kappa. It is chosen per
 // segment by ModelBuilderOptions::coupling_stiffness_ratio.
 
+#include <array>
 #include <optional>
+#include <vector>
 
 #include "libnetsim/forces/drag_force.h"
 #include "libnetsim/forces/force.h"
@@ -38,11 +40,27 @@ class SegmentForce final : public Force {
   double Energy(const Model& model, const State& state) const override;
   void AddStiffnessBounds(const Model& model, const State& state,
                           StiffnessBounds& bounds) const override;
+  void SetThreads(int threads) override { threads_ = threads < 1 ? 1 : threads; }
+
+  // One segment's terms: the force on node b (on a: minus it), the drag on each node, the body
+  // torque's x and y.
+  struct Terms {
+    double f[3];
+    double drag[3];
+    double torque[2];
+  };
 
  private:
+  Terms SegmentTerms(const Model& model, const State& state, int j) const;
+  void AccumulateThreaded(const Model& model, const State& state, ForceBuffers& out) const;
+
   bool stretch_;
   bool coupling_;
   std::optional<DragOptions> drag_;
+  int threads_ = 1;
+  // With threads: each segment's terms, and each node's segments, built on first use.
+  mutable std::vector<Terms> terms_;
+  mutable Incidence segments_of_;
 };
 
 }  // namespace netlab::netsim

@@ -75,7 +75,7 @@ class Parser {
 
   void ParseIntegrator(const YamlMap& m, Scenario* s) {
     m.AllowOnly({"type", "dt", "safety", "rotational_inertia", "coupling_stiffness_ratio",
-                 "contact_frequency_ratio", "kinetic_damping", "max_speed"});
+                 "contact_frequency_ratio", "kinetic_damping", "max_speed", "threads"});
     SimulationOptions& o = s->simulation;
     const std::string type = m.String("type", "explicit");
     if (!ParseIntegratorType(type, &o.integrator))
@@ -100,6 +100,8 @@ class Parser {
     if (o.contact_frequency_ratio > 1.0) m.Fail("contact_frequency_ratio", "must be in (0, 1]");
     o.kinetic_damping = m.Bool("kinetic_damping", false);
     o.max_speed = m.Positive("max_speed", o.max_speed);
+    o.threads = m.Int("threads", o.threads);
+    if (o.threads < 1 || o.threads > 256) m.Fail("threads", "must be in 1..256");
     o.align_interval = 0.0;  // set from output_interval in BuildScenario
   }
 

@@ -38,6 +38,7 @@ bool SimulationOptions::IsValid(std::string* error) const {
   if (!(contact_frequency_ratio > 0.0 && contact_frequency_ratio <= 1.0))
     return fail("contact_frequency_ratio must be in (0, 1]");
   if (!(max_speed > 0.0)) return fail("max_speed must be > 0");
+  if (threads < 1 || threads > 256) return fail("threads must be in 1..256");
   if (kinetic_damping && integrator != IntegratorType::kSymplecticEuler)
     return fail("kinetic_damping needs type explicit (its peak correction is symplectic Euler's)");
   return true;
@@ -56,6 +57,7 @@ Simulation::Simulation(Model model, State state, std::vector<std::unique_ptr<For
   std::vector<const Force*> views;
   ContactForce* contact = nullptr;
   for (const auto& f : forces_) {
+    f->SetThreads(options_.threads);
     views.push_back(f.get());
     if (auto* c = dynamic_cast<ContactForce*>(f.get())) contact = c;
   }
@@ -101,25 +103,33 @@ void Simulation::EvaluateForces() {
 bool Simulation::Kick(double h, double drift) {
   const int n = model_.num_nodes();
   const double limit2 = options_.max_speed * options_.max_speed;
-  int bad_node = -1;
-  for (int i = 0; i < n; ++i) {
-    Vector3d& v = state_.v[i];
-    v += (h * model_.node_inv_mass[i]) * buffers_.force[i];
-    // Written so that a NaN fails the comparison.
-    if (!(v.squaredNorm() <= limit2) && bad_node < 0) bad_node = i;
-    state_.x[i] += drift * v;  // symplectic Euler moves the node with its new velocity
-  }
   const int s = model_.num_segments();
-  int bad_segment = -1;
-  for (int j = 0; j < s; ++j) {
-    const Vector3d& inv_inertia = model_.segment_inv_inertia[j];
-    Vector3d& w = state_.w[j];
-    Vector3d torque = buffers_.torque[j];
-    if (gyroscopic_) torque -= w.cross(model_.segment_inertia[j].cwiseProduct(w));
-    w += h * inv_inertia.cwiseProduct(torque);
-    // More than 1 rad per step is no longer a resolved rotation.
-    if (!(w.squaredNorm() * dt_ * dt_ <= 1.0) && bad_segment < 0) bad_segment = j;
+  // The first bad node and segment (each element on its own: any thread count, the same bits).
+  int bad_node = n, bad_segment = s;
+  const int threads = options_.threads;
+#pragma omp parallel num_threads(threads) if (threads > 1)
+  {
+#pragma omp for schedule(static) reduction(min : bad_node) nowait
+    for (int i = 0; i < n; ++i) {
+      Vector3d& v = state_.v[i];
+      v += (h * model_.node_inv_mass[i]) * buffers_.force[i];
+      // Written so that a NaN fails the comparison.
+      if (!(v.squaredNorm() <= limit2) && i < bad_node) bad_node = i;
+      state_.x[i] += drift * v;  // symplectic Euler moves the node with its new velocity
+    }
+#pragma omp for schedule(static) reduction(min : bad_segment)
+    for (int j = 0; j < s; ++j) {
+      const Vector3d& inv_inertia = model_.segment_inv_inertia[j];
+      Vector3d& w = state_.w[j];
+      Vector3d torque = buffers_.torque[j];
+      if (gyroscopic_) torque -= w.cross(model_.segment_inertia[j].cwiseProduct(w));
+      w += h * inv_inertia.cwiseProduct(torque);
+      // More than 1 rad per step is no longer a resolved rotation.
+      if (!(w.squaredNorm() * dt_ * dt_ <= 1.0) && j < bad_segment) bad_segment = j;
+    }
   }
+  if (bad_node == n) bad_node = -1;
+  if (bad_segment == s) bad_segment = -1;
   if (bad_node < 0 && bad_segment < 0) return true;
 
   Failure failure;
@@ -157,11 +167,16 @@ bool Simulation::Kick(double h, double drift) {
 
 void Simulation::Drift(double h, bool nodes) {
   const int n = model_.num_nodes();
-  if (nodes)
-    for (int i = 0; i < n; ++i) state_.x[i] += h * state_.v[i];
   const int s = model_.num_segments();
-  for (int j = 0; j < s; ++j) {
-    RotateBody(state_.q[j], h * state_.w[j]);
+  const int threads = options_.threads;
+#pragma omp parallel num_threads(threads) if (threads > 1)
+  {
+    if (nodes) {
+#pragma omp for schedule(static) nowait
+      for (int i = 0; i < n; ++i) state_.x[i] += h * state_.v[i];
+    }
+#pragma omp for schedule(static)
+    for (int j = 0; j < s; ++j) RotateBody(state_.q[j], h * state_.w[j]);
   }
   state_.time += h;
 }

@@ -54,6 +54,9 @@ struct SimulationOptions {
   // dynamics: only for statics. Needs the explicit integrator.
   bool kinetic_damping = false;
   double max_speed = 1e3;  // m/s: a node faster than this stops the run as a blow-up
+  // Threads the forces that loop over segments and joints use (Force::SetThreads): the same bits
+  // for any count. Worth it for the large nets only (docs/benchmarks.md).
+  int threads = 1;
 
   // True if the options are usable; otherwise false with the offending field named in *error.
   bool IsValid(std::string* error) const;
