@@ -755,10 +755,11 @@ void MainWindow::OnClick(int camera, const Eigen::Vector2d& px, Qt::KeyboardModi
     case recon::FindNodeStatus::kFound: {
       const bool review =
           session_->document().at(camera, frame_, knot_).state == recon::LabelState::kNeedsReview;
+      // The reason without its own "Find Node: ", which the message already leads with.
+      QString reason = QString::fromStdString(session_->document().Reason(camera, frame_, knot_));
+      if (reason.startsWith("Find Node: ")) reason.remove(0, 11);
       const QString how = r.projected ? "accepted: " + QString::fromStdString(r.why)
-                          : review    ? "found, kept for review: " +
-                                         QString::fromStdString(
-                                             session_->document().Reason(camera, frame_, knot_))
+                          : review    ? "found, kept for review: " + reason
                                       : "found and accepted";
       statusBar()->showMessage(QString("Find Node: knot %1 %2").arg(KnotName(knot_), how), 6000);
       if (!review) AdvanceAfterFix(key, was_review);

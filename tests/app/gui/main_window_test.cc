@@ -36,6 +36,7 @@
 #include "app/gui/knot_grid.h"
 #include "app/gui/shortcut_editor.h"
 #include "app/gui/timeline.h"
+#include "libreconstruct/geometry/triangulation.h"
 #include "tests/app/cli/run_netlab.h"
 #include "tests/app/cli/small_shot.h"
 #include "tests/app/gui/scripted_person.h"
@@ -406,6 +407,60 @@ TEST_F(MainWindowTest, SpaceReachesAMissingKnotAndAFindNodeClickLabelsIt) {
                  i.data(ReviewModel::kKnotRole).toInt() == k)
         << "still in the queue";
   }
+}
+
+// The other three cameras' labels of a knot moved together (one point 2.5 px from the knot in
+// camera b: consistent views, as when one is off along its epipolar line): a Find Node click on
+// the knot's junction in b keeps it for review, and the status bar says why once, without
+// repeating "Find Node:".
+TEST_F(MainWindowTest, AFindNodeClickTheOtherCamerasPutElsewhereIsKeptForReviewAndSaysWhy) {
+  const recon::LabelSet truth = Truth();
+  const std::string project =
+      MakeProjectFile("elsewhere", (Dir() / "shot/labels_true.h5").string());
+  MainWindow w;
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, project));
+  Session* s = w.session();
+  const int t = 12, c = 1, k = KnotSeenByAll(truth, t);
+  ASSERT_GE(k, 0);
+  const auto rig_camera = [&](int camera) -> const calib::Camera& {
+    for (const calib::Camera& cam : s->rig().cameras)
+      if (cam.name == s->camera_names()[camera]) return cam;
+    throw std::runtime_error("no rig camera " + s->camera_names()[camera]);
+  };
+  std::vector<recon::Observation> views;
+  for (int o = 0; o < s->cameras(); ++o)
+    if (o != c) {
+      for (size_t r = 0; r < s->rig().cameras.size(); ++r)
+        if (s->rig().cameras[r].name == s->camera_names()[o])
+          views.push_back({static_cast<int>(r), s->document().at(o, t, k).px});
+    }
+  const recon::PointEstimate point = recon::TriangulatePoint(s->rig(), views, {});
+  ASSERT_TRUE(point.valid);
+  // A point beside the knot, 2.5 px from it in b.
+  const Eigen::Vector2d where = s->document().at(c, t, k).px;
+  const Eigen::Vector3d side =
+      (rig_camera(c).Center() - point.position).cross(Eigen::Vector3d::UnitZ()).normalized();
+  double d = 0.0;
+  while ((rig_camera(c).ProjectWorld(point.position + d * side) - where).norm() < 2.5) d += 1e-5;
+  const Eigen::Vector3d elsewhere = point.position + d * side;
+  w.SetFrame(t);
+  ASSERT_TRUE(w.WaitForFrame());
+  for (int o = 0; o < s->cameras(); ++o)
+    if (o != c) s->PlaceLabel(o, t, k, rig_camera(o).ProjectWorld(elsewhere));
+  s->DeleteLabel(c, t, k);
+  w.SetKnot(k);
+  ClickAt(w.view(c), where);
+  const recon::Label& l = s->document().at(c, t, k);
+  const std::string said = w.statusBar()->currentMessage().toStdString();
+  ASSERT_TRUE(l.present()) << said;
+  EXPECT_EQ(l.state, recon::LabelState::kNeedsReview) << said;
+  EXPECT_LT((l.px - where).norm(), 0.5);
+  EXPECT_NE(said.find("found, kept for review: the junction is"), std::string::npos) << said;
+  EXPECT_NE(said.find("from where the other cameras' labels put the knot"), std::string::npos)
+      << said;
+  EXPECT_EQ(said.find("review: Find Node"), std::string::npos) << said;
+  ASSERT_TRUE(w.WaitForFrame());
+  w.grab().save((Dir() / "elsewhere.png").string().c_str());
 }
 
 // The knot picker: I over a junction rings the knots its colours fit in the grid (the true one
