@@ -374,12 +374,16 @@ class Parser {
 
 }  // namespace
 
-Scenario LoadScenario(const std::string& path) {
+std::string ReadScenarioText(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot open scenario file");
   std::stringstream buffer;
   buffer << in.rdbuf();
-  Scenario s = ParseScenario(buffer.str(), path,
+  return buffer.str();
+}
+
+Scenario LoadScenario(const std::string& path) {
+  Scenario s = ParseScenario(ReadScenarioText(path), path,
                              std::filesystem::path(path).parent_path().string());
   s.source_path = path;
   return s;

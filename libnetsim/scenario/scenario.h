@@ -73,6 +73,8 @@ struct Scenario {
 
 // Reads and checks a scenario file; relative data files are resolved against its folder.
 Scenario LoadScenario(const std::string& path);
+// The text of a scenario file, unchecked; InputError naming it when it cannot be opened.
+std::string ReadScenarioText(const std::string& path);
 // Parses scenario text; `origin` names it in errors, `base_dir` resolves relative file names.
 Scenario ParseScenario(const std::string& text, const std::string& origin,
                        const std::string& base_dir);

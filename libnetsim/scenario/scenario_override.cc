@@ -2,7 +2,6 @@
 
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 
 #include "common/yaml_util.h"
@@ -173,12 +172,10 @@ void ApplyOverride(const ScenarioOverride& o, const std::string& origin, YAML::N
 
 Scenario LoadScenario(const std::string& path, const std::vector<ScenarioOverride>& overrides) {
   if (overrides.empty()) return LoadScenario(path);
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open scenario file");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  YAML::Node tree = LoadYamlString(buffer.str(), path);
-  if (!tree.IsMap()) return LoadScenario(path);  // the file's own error
+  const std::string file_text = ReadScenarioText(path);
+  const std::string base_dir = std::filesystem::path(path).parent_path().string();
+  YAML::Node tree = LoadYamlString(file_text, path);
+  if (!tree.IsMap()) return ParseScenarioTree(tree, file_text, path, base_dir);  // its own error
   std::string set;
   for (const ScenarioOverride& o : overrides) {
     ApplyOverride(o, path, tree);
@@ -188,8 +185,7 @@ Scenario LoadScenario(const std::string& path, const std::vector<ScenarioOverrid
   out << tree;
   const std::string text = "# " + path + " with" + set + "\n" + out.c_str() + "\n";
   try {
-    Scenario s =
-        ParseScenarioTree(tree, text, path, std::filesystem::path(path).parent_path().string());
+    Scenario s = ParseScenarioTree(tree, text, path, base_dir);
     s.source_path = path;
     return s;
   } catch (const InputError& e) {

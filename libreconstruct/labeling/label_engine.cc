@@ -1238,8 +1238,7 @@ std::optional<LabelEdit> LabelEngine::PlaceAtProjection(FrameCheck* f, const Fil
   std::vector<bool> seen;
   const int yarns = detector.YarnsAlong(*q, links, o_.branch_tolerance_deg * M_PI / 180.0, &seen);
   if (yarns < 2) return std::nullopt;
-  // Over the target or another body, a knot may be behind it: there every one of its links
-  // must be seen leaving it (at least three).
+  // Whether it lies over the target or another body (not on the scene's background).
   auto scene = f->background.find(c);
   if (scene == f->background.end())
     scene = f->background.emplace(c, SceneBackground(view.image)).first;

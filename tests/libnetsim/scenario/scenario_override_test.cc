@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/yaml_util.h"
@@ -119,6 +121,27 @@ TEST(ScenarioOverride, BadOverridesAreErrorsNamingThem) {
   }
   // A value with '=' in it is the value's.
   EXPECT_EQ(ParseOverride("name=a=b").value, "a=b");
+}
+
+// A file that is no scenario gives its own error before any override is looked at.
+TEST(ScenarioOverride, TheFilesOwnErrorsComeFirst) {
+  const std::string dir = ::testing::TempDir();
+  const std::string list = dir + "/override_list.yaml", empty = dir + "/override_empty.yaml";
+  std::ofstream(list) << "- a\n- b\n";
+  std::ofstream(empty) << "";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {list, "(root): expected a mapping of keys"},
+      {empty, "file is empty"},
+      {dir + "/override_missing.yaml", "cannot open scenario file"}};
+  for (const auto& [file, fragment] : cases) {
+    try {
+      LoadScenario(file, Sets({"duration=1"}));
+      ADD_FAILURE() << file << ": accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(file), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace
