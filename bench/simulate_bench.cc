@@ -40,8 +40,9 @@ struct Trajectory {
 // Runs `base` with every rod and link split `refine` times finer, the step scaled by
 // `dt_factor` (1: automatic), and the physical or scaled rotational inertia.
 Trajectory Run(Scenario s, double window, int refine, double dt_factor, bool physical,
-               int threads = 1) {
+               int threads = 1, const char* integrator = nullptr) {
   s.duration = std::min(s.duration, window);
+  if (integrator) ParseIntegratorType(integrator, &s.simulation.integrator);
   s.simulation.threads = threads;
   for (RodSpec& r : s.rods) r.segments *= refine;
   for (NetSpec& n : s.nets) n.segments_per_link *= refine;
@@ -112,6 +113,7 @@ int main(int argc, char** argv) {
   bool quick = false;
   int repeat = 3;
   int threads = 0;
+  const char* integrator = nullptr;
   std::vector<std::string> cases;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--quick")) {
@@ -123,6 +125,8 @@ int main(int argc, char** argv) {
       repeat = std::max(1, std::atoi(argv[++i]));
     } else if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) {
       threads = std::max(1, std::atoi(argv[++i]));
+    } else if (!std::strcmp(argv[i], "--integrator") && i + 1 < argc) {
+      integrator = argv[++i];
     } else if (!std::strcmp(argv[i], "--dir") && i + 1 < argc) {
       dir = argv[++i];
     } else {
@@ -133,9 +137,9 @@ int main(int argc, char** argv) {
     cases = {"cantilever", "pendulum", "net_capture", "net_a_0.5", "net_a_0.8", "net_b_0.5",
              "net_b_0.8"};
   const auto fastest = [&](const Scenario& s, double w, int n) {
-    Trajectory run = Run(s, w, 1, 1.0, false, n);
+    Trajectory run = Run(s, w, 1, 1.0, false, n, integrator);
     for (int r = 1; r < repeat; ++r) {
-      const Trajectory again = Run(s, w, 1, 1.0, false, n);
+      const Trajectory again = Run(s, w, 1, 1.0, false, n, integrator);
       if (again.wall_s < run.wall_s) run = again;
     }
     return run;
@@ -167,8 +171,8 @@ int main(int argc, char** argv) {
     const bool flight = case_name.rfind("net_", 0) == 0 && case_name != "net_capture";
     const double w = flight ? window : (quick ? std::min(window, s.duration) : s.duration);
     const Trajectory run = fastest(s, w, 1);
-    const Trajectory reference = Run(s, w, 2, 0.5, false);  // half l, so a quarter of dt
-    const Trajectory physical = Run(s, w, 1, 1.0, true);
+    const Trajectory reference = Run(s, w, 2, 0.5, false, 1, "explicit");  // a quarter of dt
+    const Trajectory physical = Run(s, w, 1, 1.0, true, 1, integrator);
     const Error e_ref = Compare(run, reference);
     const Error e_phys = Compare(run, physical);
     std::printf("| %s | %.2f | %d | %.3g | %ld | %.3f | %.1f | %.2f | %.3f / %.3f | %.4f / %.4f |\n",

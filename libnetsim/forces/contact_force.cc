@@ -142,4 +142,29 @@ void ContactForce::AddStiffnessBounds(const Model& model, const State& /*state*/
   }
 }
 
+void ContactForce::AddStiffnessBoundsNear(const Model& model, const State& state, double horizon,
+                                          StiffnessBounds& bounds) const {
+  const int n = model.num_nodes();
+  for (size_t b = 0; b < bodies_.size(); ++b) {
+    const RigidBody& body = bodies_[b];
+    const Vector3d center = body.center + state.time * body.velocity;
+    const bool bounded = std::isfinite(bounding_radius_[b]);
+    for (int i = 0; i < n; ++i) {
+      if (model.node_inv_mass[i] == 0.0) continue;
+      const double travel = (state.v[i] - body.velocity).norm() * horizon;
+      if (bounded) {
+        const double reach = bounding_radius_[b] + model.node_radius[i] + travel;
+        if ((state.x[i] - center).squaredNorm() > reach * reach) continue;
+      }
+      Vector3d normal;
+      const double gap = body.SignedDistance(state.x[i], state.time, &normal) - model.node_radius[i];
+      if (gap > travel + model.node_radius[i]) continue;
+      const double m = model.node_mass[i];
+      const double k = Stiffness(body, m);
+      bounds.node_stiffness[i] += k;
+      bounds.node_damping[i] += 2.0 * body.damping_ratio * std::sqrt(k * m);
+    }
+  }
+}
+
 }  // namespace netlab::netsim

@@ -28,7 +28,7 @@ SegmentForce::Terms SegmentForce::SegmentTerms(const Model& model, const State& 
     axial += s.stretch_damping * inv_l *
              (tx * (vb[0] - va[0]) + ty * (vb[1] - va[1]) + tz * (vb[2] - va[2]));
   }
-  axial *= stretch_ ? 1.0 : 0.0;
+  axial *= stretch_ && !axial_implicit_ ? 1.0 : 0.0;
 
   // Coupling: transverse force k (d3 - (t . d3) t) on b.
   const double* c = state.q[j].coeffs().data();  // x, y, z, w
@@ -146,8 +146,9 @@ void SegmentForce::AddStiffnessBounds(const Model& model, const State& state,
       // tension, each counted for the node itself and its neighbour.
       const double length = (state.x[s.node_b] - state.x[s.node_a]).norm();
       const double tension = std::abs(s.stretch_stiffness * (length / s.rest_length - 1.0));
-      const double k = 2.0 * (s.stretch_stiffness / s.rest_length + tension / length);
-      const double c = 2.0 * s.stretch_damping / s.rest_length;
+      const double axial = axial_implicit_ ? 0.0 : 1.0;
+      const double k = 2.0 * (axial * s.stretch_stiffness / s.rest_length + tension / length);
+      const double c = 2.0 * axial * s.stretch_damping / s.rest_length;
       bounds.node_stiffness[s.node_a] += k;
       bounds.node_stiffness[s.node_b] += k;
       bounds.node_damping[s.node_a] += c;

@@ -42,6 +42,13 @@ class SegmentForce final : public Force {
                           StiffnessBounds& bounds) const override;
   void SetThreads(int threads) override { threads_ = threads < 1 ? 1 : threads; }
 
+  // Whether this force includes stretching at all, and whether the stepper solves its axial part
+  // (the force EA epsilon + c_s depsilon/dt along t, and its stiffness and damping bounds)
+  // implicitly (simulation/axial_step.h): then Accumulate and AddStiffnessBounds leave it out,
+  // keeping the geometric stiffness of the tension in the bounds.
+  bool stretch() const { return stretch_; }
+  void SetAxialImplicit(bool implicit) { axial_implicit_ = implicit; }
+
   // One segment's terms: the force on node b (on a: minus it), the drag on each node, the body
   // torque's x and y.
   struct Terms {
@@ -56,6 +63,7 @@ class SegmentForce final : public Force {
 
   bool stretch_;
   bool coupling_;
+  bool axial_implicit_ = false;
   std::optional<DragOptions> drag_;
   int threads_ = 1;
   // With threads: each segment's terms, and each node's segments, built on first use.

@@ -79,7 +79,7 @@ class Parser {
     SimulationOptions& o = s->simulation;
     const std::string type = m.String("type", "explicit");
     if (!ParseIntegratorType(type, &o.integrator))
-      m.Fail("type", "unknown integrator '" + type + "' (expected explicit or verlet)");
+      m.Fail("type", "unknown integrator '" + type + "' (expected explicit, verlet or implicit)");
     if (m.Has("dt")) {
       const YAML::Node dt = m.Get("dt");
       if (dt.IsScalar() && dt.as<std::string>() == "auto") {

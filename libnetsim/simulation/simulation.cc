@@ -2,16 +2,27 @@
 #include "libnetsim/simulation/simulation.h"
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
 #include "libnetsim/forces/contact_force.h"
+#include "libnetsim/forces/segment_force.h"
 #include "libnetsim/model/rotation.h"
+#include "libnetsim/simulation/axial_step.h"
 
 namespace netlab::netsim {
 
 std::string IntegratorName(IntegratorType type) {
-  return type == IntegratorType::kVelocityVerlet ? "verlet" : "explicit";
+  switch (type) {
+    case IntegratorType::kVelocityVerlet:
+      return "verlet";
+    case IntegratorType::kImplicit:
+      return "implicit";
+    case IntegratorType::kSymplecticEuler:
+      break;
+  }
+  return "explicit";
 }
 
 bool ParseIntegratorType(const std::string& text, IntegratorType* type) {
@@ -21,6 +32,10 @@ bool ParseIntegratorType(const std::string& text, IntegratorType* type) {
   }
   if (text == "verlet") {
     *type = IntegratorType::kVelocityVerlet;
+    return true;
+  }
+  if (text == "implicit") {
+    *type = IntegratorType::kImplicit;
     return true;
   }
   return false;
@@ -60,11 +75,22 @@ Simulation::Simulation(Model model, State state, std::vector<std::unique_ptr<For
     f->SetThreads(options_.threads);
     views.push_back(f.get());
     if (auto* c = dynamic_cast<ContactForce*>(f.get())) contact = c;
+    if (auto* segment = dynamic_cast<SegmentForce*>(f.get()); segment && segment->stretch())
+      if (options_.integrator == IntegratorType::kImplicit) axial_force_ = segment;
   }
+  contact_ = contact;
   StabilityOptions stability_options;
   stability_options.scale_rotational_inertia = options_.scale_rotational_inertia;
   stability_options.contact_frequency_ratio = options_.contact_frequency_ratio;
   stability_options.fallback_dt = options_.dt;
+  if (axial_force_) {
+    // The contact keeps the stiffness the explicit step gives it (the axial wave's frequency), so
+    // it presses no deeper; its bounds enter step by step, for the nodes about to touch.
+    stability_options.contact_omega_translation =
+        TranslationalFrequency(model_, state_, views, contact);
+    stability_options.contact_in_limit = false;
+    axial_force_->SetAxialImplicit(true);
+  }
   stability_ = PrepareStability(model_, state_, views, contact, stability_options);
 
   if (options_.dt > 0.0) {
@@ -82,7 +108,12 @@ Simulation::Simulation(Model model, State state, std::vector<std::unique_ptr<For
   for (const Vector3d& inertia : model_.segment_inertia)
     if (inertia.maxCoeff() - inertia.minCoeff() > 1e-12 * inertia.maxCoeff()) gyroscopic_ = true;
   buffers_.Resize(model_.num_nodes(), model_.num_segments());
+  if (axial_force_) axial_ = std::make_unique<AxialStep>(model_);
+  step_ = dt_;
 }
+
+Simulation::~Simulation() = default;
+Simulation::Simulation(Simulation&&) noexcept = default;
 
 std::vector<std::string> Simulation::active_forces() const {
   std::vector<std::string> names;
@@ -92,7 +123,7 @@ std::vector<std::string> Simulation::active_forces() const {
 
 void Simulation::EvaluateForces() {
   buffers_.Zero();
-  for (const auto& f : forces_) f->Accumulate(model_, state_, dt_, buffers_);
+  for (const auto& f : forces_) f->Accumulate(model_, state_, step_, buffers_);
   if (buffers_.max_penetration > max_penetration_) {
     max_penetration_ = buffers_.max_penetration;
     max_penetration_node_ = buffers_.max_penetration_node;
@@ -125,7 +156,7 @@ bool Simulation::Kick(double h, double drift) {
       if (gyroscopic_) torque -= w.cross(model_.segment_inertia[j].cwiseProduct(w));
       w += h * inv_inertia.cwiseProduct(torque);
       // More than 1 rad per step is no longer a resolved rotation.
-      if (!(w.squaredNorm() * dt_ * dt_ <= 1.0) && j < bad_segment) bad_segment = j;
+      if (!(w.squaredNorm() * step_ * step_ <= 1.0) && j < bad_segment) bad_segment = j;
     }
   }
   if (bad_node == n) bad_node = -1;
@@ -135,7 +166,7 @@ bool Simulation::Kick(double h, double drift) {
   Failure failure;
   failure.time = state_.time;
   std::ostringstream os;
-  os << "simulation blew up at t = " << state_.time << " s (step " << steps_ << ", dt " << dt_
+  os << "simulation blew up at t = " << state_.time << " s (step " << steps_ << ", dt " << step_
      << " s): ";
   if (bad_node >= 0) {
     const Vector3d& v = state_.v[bad_node];
@@ -189,6 +220,11 @@ bool Simulation::Step() {
     EvaluateForces();
     ok = Kick(dt_, dt_);
     if (ok) Drift(dt_, /*nodes=*/false);
+  } else if (options_.integrator == IntegratorType::kImplicit) {
+    const int substeps = ImplicitSubsteps();
+    ok = true;
+    for (int k = 0; k < substeps && ok; ++k) ok = ImplicitSubstep(dt_ / substeps);
+    step_ = dt_;
   } else {
     if (!forces_current_) EvaluateForces();
     ok = Kick(0.5 * dt_, 0.0);
@@ -201,6 +237,10 @@ bool Simulation::Step() {
   forces_current_ = forces_current_ && options_.integrator == IntegratorType::kVelocityVerlet;
   if (!ok) return false;
   ++steps_;
+  if (options_.integrator != IntegratorType::kImplicit) {
+    ++substeps_total_;
+    max_substeps_ = 1;
+  }
 
   if (options_.kinetic_damping) {
     const double kinetic = KineticEnergy();
@@ -228,6 +268,62 @@ bool Simulation::Step() {
   return true;
 }
 
+int Simulation::ImplicitSubsteps() {
+  // The static bounds hold for the whole run; the tension's string stiffness and the contact of a
+  // node about to touch come and go. Each node whose bounds they raise needs the step that keeps
+  // its margin: safety times its own limit, or, where the step is already above that (a dt the
+  // user chose), the step shrunk by the ratio its limit shrank, so such a dt still blows up.
+  const StiffnessBounds& fixed = stability_.bounds;
+  dynamic_bounds_.node_stiffness = fixed.node_stiffness;
+  dynamic_bounds_.node_damping = fixed.node_damping;
+  if (axial_) {
+    const std::vector<double>& geometric = axial_->geometric_stiffness();
+    for (int i = 0; i < model_.num_nodes(); ++i) dynamic_bounds_.node_stiffness[i] += geometric[i];
+  }
+  if (contact_) contact_->AddStiffnessBoundsNear(model_, state_, dt_, dynamic_bounds_);
+  double ratio = 1.0;
+  for (int i = 0; i < model_.num_nodes(); ++i) {
+    if (model_.node_inv_mass[i] == 0.0) continue;
+    if (dynamic_bounds_.node_stiffness[i] == fixed.node_stiffness[i] &&
+        dynamic_bounds_.node_damping[i] == fixed.node_damping[i])
+      continue;
+    const double h_dynamic = options_.safety * StableStep(dynamic_bounds_.node_stiffness[i],
+                                                          dynamic_bounds_.node_damping[i],
+                                                          model_.node_mass[i]);
+    const double h_static = options_.safety * StableStep(fixed.node_stiffness[i],
+                                                         fixed.node_damping[i],
+                                                         model_.node_mass[i]);
+    ratio = std::max(ratio, std::min(dt_, h_static) / h_dynamic);
+  }
+  constexpr int kMaxSubsteps = 4096;  // beyond it the blow-up check stops the run
+  const int substeps =
+      ratio < kMaxSubsteps ? static_cast<int>(std::ceil(ratio - 1e-9)) : kMaxSubsteps;
+  substeps_total_ += substeps;
+  max_substeps_ = std::max(max_substeps_, substeps);
+  return substeps;
+}
+
+bool Simulation::ImplicitSubstep(double h) {
+  step_ = h;
+  EvaluateForces();
+  if (!Kick(h, 0.0)) return false;
+  if (axial_ && !axial_->Apply(model_, h, state_.x, state_.v)) {
+    Failure failure;
+    failure.time = state_.time;
+    failure.quantity = "tension";
+    std::ostringstream os;
+    os << "simulation blew up at t = " << state_.time << " s (step " << steps_ << ", dt " << h
+       << " s): the implicit stretching step has no finite solution (a node's position or "
+          "velocity is no longer finite); reduce dt or the safety factor (stable estimate "
+       << stability_.dt_limit << " s)";
+    failure.message = os.str();
+    failure_ = failure;
+    return false;
+  }
+  Drift(h, /*nodes=*/true);
+  return true;
+}
+
 bool Simulation::Advance(long steps) {
   for (long k = 0; k < steps; ++k)
     if (!Step()) return false;
@@ -235,8 +331,17 @@ bool Simulation::Advance(long steps) {
 }
 
 bool Simulation::Relax(double max_time, double force_tolerance, double torque_tolerance) {
-  // Kinetic damping with Barnes' correction, which is written for symplectic Euler.
+  // Kinetic damping with Barnes' correction, which is written for symplectic Euler: under the
+  // implicit integrator the force takes stretching back, at the explicit step's limit.
   const SimulationOptions saved = options_;
+  const double saved_dt = dt_;
+  if (axial_force_) {
+    axial_force_->SetAxialImplicit(false);
+    std::vector<const Force*> views;
+    for (const auto& f : forces_) views.push_back(f.get());
+    dt_ = options_.safety * StableStepLimit(model_, state_, views);
+    step_ = dt_;
+  }
   options_.kinetic_damping = true;
   options_.integrator = IntegratorType::kSymplecticEuler;
   last_kinetic_ = 0.0;
@@ -259,6 +364,11 @@ bool Simulation::Relax(double max_time, double force_tolerance, double torque_to
     }
   }
   options_ = saved;
+  if (axial_force_) {
+    axial_force_->SetAxialImplicit(true);
+    dt_ = saved_dt;
+    step_ = dt_;
+  }
   for (Vector3d& v : state_.v) v.setZero();
   for (Vector3d& w : state_.w) w.setZero();
   forces_current_ = false;

@@ -10,6 +10,10 @@
 //             First order; one force evaluation per step.
 //   verlet    velocity Verlet (kick-drift-kick). Second order for conservative forces; damping
 //             forces are evaluated with the half-step velocity, so they keep first order.
+//   implicit  symplectic Euler for every force but stretching, whose axial force and damping
+//             are solved linearly implicitly (axial_step.h): the step is no longer limited by
+//             the axial wave but by the coupling penalty and bending. First order; one force
+//             evaluation and one sparse solve (one unknown per segment) per step.
 // Rotations follow the same schemes with the body-frame Euler equation
 // I dw/dt = tau - w x (I w) and q <- q Exp(w dt).
 //
@@ -28,13 +32,15 @@
 
 namespace netlab::netsim {
 
+class AxialStep;
 class ContactForce;
+class SegmentForce;
 
-enum class IntegratorType { kSymplecticEuler, kVelocityVerlet };
+enum class IntegratorType { kSymplecticEuler, kVelocityVerlet, kImplicit };
 
-// "explicit" / "verlet".
+// "explicit" / "verlet" / "implicit".
 std::string IntegratorName(IntegratorType type);
-// Parses "explicit" (also "symplectic_euler") or "verlet"; false on anything else.
+// Parses "explicit" (also "symplectic_euler"), "verlet" or "implicit"; false on anything else.
 bool ParseIntegratorType(const std::string& text, IntegratorType* type);
 
 struct SimulationOptions {
@@ -84,6 +90,8 @@ class Simulation {
   // when asked). Throws std::invalid_argument on invalid options or an unusable model.
   Simulation(Model model, State state, std::vector<std::unique_ptr<Force>> forces,
              const SimulationOptions& options);
+  ~Simulation();
+  Simulation(Simulation&&) noexcept;
 
   const Model& model() const { return model_; }
   const State& state() const { return state_; }
@@ -107,11 +115,16 @@ class Simulation {
   // segment torque below `torque_tolerance` (N m), or until `max_time` (s) of pseudo-time has
   // passed. True when converged. Velocities are zero afterwards. Kinetic damping needs
   // conservative loads: a dead moment in 3D is not, and needs damped dynamics instead. Steps with
-  // symplectic Euler whatever the integrator option.
+  // symplectic Euler whatever the integrator option; throws std::logic_error with the implicit
+  // integrator, whose forces leave stretching to the stepper.
   bool Relax(double max_time, double force_tolerance, double torque_tolerance);
 
   const std::optional<Failure>& failure() const { return failure_; }
   long steps_taken() const { return steps_; }
+  // The implicit integrator splits a step into substeps while the tension or a contact needs a
+  // smaller one (the others: substeps == steps). Total and largest count per step.
+  long substeps_taken() const { return substeps_total_; }
+  int max_substeps() const { return max_substeps_; }
   Energy ComputeEnergy() const;
 
   // Deepest contact penetration seen so far (m) and its node (-1: no contact yet).
@@ -129,13 +142,24 @@ class Simulation {
   // q <- q Exp(h w) for every segment, and x += h v when `nodes`; advances the time by h.
   void Drift(double h, bool nodes);
   double KineticEnergy() const;
+  // The implicit integrator: substeps the next step needs (>= 1), from the static bounds plus the
+  // tension's geometric stiffness and the contact of the nodes about to touch; one substep of h.
+  int ImplicitSubsteps();
+  bool ImplicitSubstep(double h);
 
   Model model_;
   State state_;
   std::vector<std::unique_ptr<Force>> forces_;
+  std::unique_ptr<AxialStep> axial_;  // the implicit integrator's stretching; else null
+  SegmentForce* axial_force_ = nullptr;  // the force whose stretching axial_ solves
+  ContactForce* contact_ = nullptr;
+  StiffnessBounds dynamic_bounds_;       // scratch of ImplicitSubsteps
   SimulationOptions options_;
   StabilityReport stability_;
   double dt_ = 0.0;
+  double step_ = 0.0;  // the (sub)step being taken, s
+  long substeps_total_ = 0;
+  int max_substeps_ = 0;
   bool gyroscopic_ = false;  // any segment with unequal principal inertias
   bool forces_current_ = false;
   ForceBuffers buffers_;

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 #include "libnetsim/forces/contact_force.h"
 
@@ -13,6 +14,36 @@ double StableStep(double stiffness, double damping, double mass) {
   const double a = 0.5 * damping / mass;
   const double denominator = std::sqrt(omega2 + a * a) + a;
   return denominator > 0.0 ? 2.0 / denominator : std::numeric_limits<double>::infinity();
+}
+
+double TranslationalFrequency(const Model& model, const State& state,
+                              const std::vector<const Force*>& forces, const ContactForce* contact) {
+  StiffnessBounds bounds;
+  bounds.Resize(model.num_nodes(), model.num_segments());
+  for (const Force* force : forces)
+    if (force != contact) force->AddStiffnessBounds(model, state, bounds);
+  double omega2_max = 0.0;
+  for (int i = 0; i < model.num_nodes(); ++i)
+    if (model.node_inv_mass[i] != 0.0)
+      omega2_max = std::max(omega2_max, bounds.node_stiffness[i] / model.node_mass[i]);
+  return std::sqrt(omega2_max);
+}
+
+double StableStepLimit(const Model& model, const State& state,
+                       const std::vector<const Force*>& forces) {
+  StiffnessBounds bounds;
+  bounds.Resize(model.num_nodes(), model.num_segments());
+  for (const Force* force : forces) force->AddStiffnessBounds(model, state, bounds);
+  double limit = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < model.num_nodes(); ++i)
+    if (model.node_inv_mass[i] != 0.0)
+      limit = std::min(limit, StableStep(bounds.node_stiffness[i], bounds.node_damping[i],
+                                         model.node_mass[i]));
+  for (int j = 0; j < model.num_segments(); ++j)
+    if (model.segment_inv_inertia[j].squaredNorm() != 0.0)
+      limit = std::min(limit, StableStep(bounds.segment_stiffness[j], bounds.segment_damping[j],
+                                         model.segment_inertia[j].minCoeff()));
+  return limit;
 }
 
 StabilityReport PrepareStability(Model& model, const State& state,
@@ -45,9 +76,12 @@ StabilityReport PrepareStability(Model& model, const State& state,
             "contact: the model has no elastic stiffness to scale the contact stiffness from; give "
             "each body a `stiffness` or set integrator dt");
     }
-    report.contact_omega = options.contact_frequency_ratio * report.omega_translation;
+    const double omega_t = options.contact_omega_translation > 0.0
+                               ? options.contact_omega_translation
+                               : report.omega_translation;
+    report.contact_omega = options.contact_frequency_ratio * omega_t;
     contact->SetContactFrequency(report.contact_omega);
-    contact->AddStiffnessBounds(model, state, bounds);
+    if (options.contact_in_limit) contact->AddStiffnessBounds(model, state, bounds);
   }
 
   // Rotational inertia scaling.
@@ -90,6 +124,7 @@ StabilityReport PrepareStability(Model& model, const State& state,
       report.limiting_segment = j;
     }
   }
+  report.bounds = std::move(bounds);
   return report;
 }
 

@@ -34,6 +34,12 @@ struct StabilityOptions {
   bool scale_rotational_inertia = true;
   double contact_frequency_ratio = 0.3;  // automatic contact stiffness at omega_c = ratio * omega_T
   double fallback_dt = 0.0;              // s; sets omega_T when the model has no elastic stiffness
+  // When > 0 (rad/s), omega_c = contact_frequency_ratio * this instead of omega_T: the implicit
+  // integrator keeps the contact as stiff as the explicit step would make it.
+  double contact_omega_translation = 0.0;
+  // False: the contact's bounds are left out of dt_limit and the inertia scaling (and out of
+  // node_bounds); the implicit integrator adds them for the nodes about to touch, step by step.
+  bool contact_in_limit = true;
 };
 
 struct StabilityReport {
@@ -43,7 +49,17 @@ struct StabilityReport {
   int limiting_segment = -1;       // a segment's rotation
   double max_inertia_scale = 1.0;  // largest I_scaled / I_physical over segments
   double contact_omega = 0.0;      // rad/s, omega_c given to the contact force (0: none)
+  StiffnessBounds bounds;          // the bounds the limit was taken from
 };
+
+// The stable step (s) of `forces` (all of them, contact included) for `model` as it is (its
+// rotational inertia already scaled or not), without changing anything.
+double StableStepLimit(const Model& model, const State& state,
+                       const std::vector<const Force*>& forces);
+
+// The highest translational frequency bound (rad/s) of `forces` but `contact` at `state`.
+double TranslationalFrequency(const Model& model, const State& state,
+                              const std::vector<const Force*>& forces, const ContactForce* contact);
 
 // Computes the stiffness bounds of `forces` at `state`, configures the contact force (may be
 // null), scales the rotational inertia of `model` when asked, and returns the stability limit.

@@ -19,7 +19,8 @@ namespace netlab::netsim::testing {
 // Every integrator, for the parameterised suites: an integrator added here is tested by all of
 // them.
 inline auto AllIntegrators() {
-  return ::testing::Values(IntegratorType::kSymplecticEuler, IntegratorType::kVelocityVerlet);
+  return ::testing::Values(IntegratorType::kSymplecticEuler, IntegratorType::kVelocityVerlet,
+                           IntegratorType::kImplicit);
 }
 inline std::string IntegratorTestName(const ::testing::TestParamInfo<IntegratorType>& info) {
   return IntegratorName(info.param);

@@ -23,13 +23,15 @@ std::vector<ScenarioOverride> Sets(const std::vector<std::string>& args) {
   return sets;
 }
 
-// The issue's own examples (the integrator's type aside: an implicit one is still to come) on a
-// flight scenario: each value changes, the rest of the scenario is as the file has it.
+// The issue's own examples on a flight scenario: each value changes, the rest of the scenario is
+// as the file has it.
 TEST(ScenarioOverride, ChangesTheNamedValuesAndNothingElse) {
   const Scenario plain = LoadScenario(kFlight);
   const Scenario changed =
-      LoadScenario(kFlight, Sets({"integrator.dt=1e-5", "materials.nylon_1mm.bend_stiffness=2e-4",
+      LoadScenario(kFlight, Sets({"integrator.type=implicit", "integrator.dt=1e-5",
+                                  "materials.nylon_1mm.bend_stiffness=2e-4",
                                   "nets.0.velocity=[0.8,0,0]", "drag.drag_coefficient=1.0"}));
+  EXPECT_EQ(changed.simulation.integrator, IntegratorType::kImplicit);
   EXPECT_EQ(changed.simulation.dt, 1e-5);
   EXPECT_EQ(plain.simulation.dt, 0.0);  // auto in the file
   ASSERT_EQ(changed.materials.size(), 1u);

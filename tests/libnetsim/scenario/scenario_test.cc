@@ -147,8 +147,11 @@ TEST(Scenario, TextWhereANumberBelongsIsNamed) {
 }
 
 TEST(Scenario, UnknownIntegratorIsNamed) {
-  const std::string error = ParseError(Replace(kPendulum, "type: explicit", "type: implicit"));
+  const std::string error = ParseError(Replace(kPendulum, "type: explicit", "type: semi"));
   EXPECT_NE(error.find("integrator.type"), std::string::npos) << error;
+  EXPECT_NE(error.find("unknown integrator 'semi' (expected explicit, verlet or implicit)"),
+            std::string::npos)
+      << error;
 }
 
 TEST(Scenario, MissingGravityFileIsNamed) {
