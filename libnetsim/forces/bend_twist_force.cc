@@ -151,6 +151,34 @@ void BendTwistForce::AddStiffnessBounds(const Model& model, const State& /*state
     bounds.segment_stiffness[a.segment] += a.stiffness.maxCoeff() * a.inv_length;
     bounds.segment_damping[a.segment] += a.damping.maxCoeff() * a.inv_length;
   }
+  if (!frames_follow_) return;
+  // With frames that follow the centreline, a joint turns by phi = g . u for transverse node
+  // displacements u of its three nodes, g = (1/la, -(1/la + 1/lb), 1/lb): the node stiffness
+  // K/l g g^T has row sums K/l |g_i| sum|g| (16 EI/l^3 at a node of a uniform rod, as for a
+  // discrete beam). An anchor joint over half a segment: g = (-1/l, 1/l) with K 2/l.
+  auto add = [&](int node, double k, double c) {
+    bounds.node_stiffness[node] += k;
+    bounds.node_damping[node] += c;
+  };
+  for (const BendPair& p : model.bend_pairs) {
+    const Segment& sa = model.segments[p.segment_a];
+    const Segment& sb = model.segments[p.segment_b];
+    const double ga = sa.inv_rest_length, gb = sb.inv_rest_length, gm = ga + gb;
+    const double sum = 2.0 * gm;
+    const double k = p.stiffness.head<2>().maxCoeff() * p.inv_length * sum;
+    const double c = p.damping.head<2>().maxCoeff() * p.inv_length * sum;
+    add(sa.node_a, k * ga, c * ga);
+    add(sa.node_b, k * gm, c * gm);
+    add(sb.node_b, k * gb, c * gb);
+  }
+  for (const AnchorJoint& a : model.anchors) {
+    const Segment& s = model.segments[a.segment];
+    const double g = s.inv_rest_length;
+    const double k = a.stiffness.head<2>().maxCoeff() * a.inv_length * 2.0 * g * g;
+    const double c = a.damping.head<2>().maxCoeff() * a.inv_length * 2.0 * g * g;
+    add(s.node_a, k, c);
+    add(s.node_b, k, c);
+  }
 }
 
 }  // namespace netlab::netsim

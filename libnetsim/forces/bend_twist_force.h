@@ -29,10 +29,15 @@ class BendTwistForce final : public Force {
   void AddStiffnessBounds(const Model& model, const State& state,
                           StiffnessBounds& bounds) const override;
   void SetThreads(int threads) override { threads_ = threads < 1 ? 1 : threads; }
+  // Under the implicit integrator each segment's frame follows its centreline within the step
+  // (the coupling's torque is implicit), so a joint's bending stiffness acts on the three nodes of
+  // its two segments: AddStiffnessBounds then adds that node stiffness too.
+  void SetFramesFollowCentreline(bool follow) { frames_follow_ = follow; }
 
  private:
   void AccumulateThreaded(const Model& model, const State& state, ForceBuffers& out) const;
 
+  bool frames_follow_ = false;
   bool damped_ = false;  // any joint with non-zero damping; if not, the rates are never computed
   int threads_ = 1;
   // With threads: each joint's torques on its two segments, and each segment's joints, built

@@ -142,8 +142,9 @@ void ContactForce::AddStiffnessBounds(const Model& model, const State& /*state*/
   }
 }
 
-void ContactForce::AddStiffnessBoundsNear(const Model& model, const State& state, double horizon,
-                                          StiffnessBounds& bounds) const {
+double ContactForce::NearContactFrequency(const Model& model, const State& state,
+                                          double horizon) const {
+  double omega2 = 0.0;
   const int n = model.num_nodes();
   for (size_t b = 0; b < bodies_.size(); ++b) {
     const RigidBody& body = bodies_[b];
@@ -159,12 +160,10 @@ void ContactForce::AddStiffnessBoundsNear(const Model& model, const State& state
       Vector3d normal;
       const double gap = body.SignedDistance(state.x[i], state.time, &normal) - model.node_radius[i];
       if (gap > travel + model.node_radius[i]) continue;
-      const double m = model.node_mass[i];
-      const double k = Stiffness(body, m);
-      bounds.node_stiffness[i] += k;
-      bounds.node_damping[i] += 2.0 * body.damping_ratio * std::sqrt(k * m);
+      omega2 = std::max(omega2, Stiffness(body, model.node_mass[i]) * model.node_inv_mass[i]);
     }
   }
+  return std::sqrt(omega2);
 }
 
 }  // namespace netlab::netsim

@@ -58,12 +58,12 @@ class ContactForce final : public Force {
   double Energy(const Model& model, const State& state) const override;
   void AddStiffnessBounds(const Model& model, const State& state,
                           StiffnessBounds& bounds) const override;
-  // The same bounds for only the nodes that touch a body now or may within `horizon` seconds at
-  // their present speed relative to it, with a margin of their own radius: a node resting just
-  // above a body must not drop in and out of the check from step to step (that toggling pumped a
-  // thread on a rising plane unstable). The implicit integrator's step-by-step check.
-  void AddStiffnessBoundsNear(const Model& model, const State& state, double horizon,
-                              StiffnessBounds& bounds) const;
+  // The highest contact frequency sqrt(k / m) (rad/s) of the nodes that touch a body now or may
+  // within `horizon` seconds at their present speed relative to it, with a margin of their own
+  // radius (a node resting just above a body must not drop in and out of the check from step to
+  // step: that toggling pumped a thread on a rising plane unstable); 0 when none. The implicit
+  // integrator's step-by-step check.
+  double NearContactFrequency(const Model& model, const State& state, double horizon) const;
 
  private:
   double Stiffness(const RigidBody& body, double mass) const {

@@ -28,7 +28,7 @@ SegmentForce::Terms SegmentForce::SegmentTerms(const Model& model, const State& 
     axial += s.stretch_damping * inv_l *
              (tx * (vb[0] - va[0]) + ty * (vb[1] - va[1]) + tz * (vb[2] - va[2]));
   }
-  axial *= stretch_ && !axial_implicit_ ? 1.0 : 0.0;
+  axial *= stretch_ && !implicit_ ? 1.0 : 0.0;
 
   // Coupling: transverse force k (d3 - (t . d3) t) on b.
   const double* c = state.q[j].coeffs().data();  // x, y, z, w
@@ -52,8 +52,9 @@ SegmentForce::Terms SegmentForce::SegmentTerms(const Model& model, const State& 
                d1z = 2.0 * (qx * qz - qw * qy);
   const double d2x = 2.0 * (qx * qy - qw * qz), d2y = 1.0 - 2.0 * (qx * qx + qz * qz),
                d2z = 2.0 * (qy * qz + qw * qx);
-  terms.torque[0] = kl * (d2x * tx + d2y * ty + d2z * tz);  // subtracted from torque x
-  terms.torque[1] = kl * (d1x * tx + d1y * ty + d1z * tz);  // added to torque y
+  const double klt = implicit_frames_ ? 0.0 : kl;  // the implicit stepper turns the frame
+  terms.torque[0] = klt * (d2x * tx + d2y * ty + d2z * tz);  // subtracted from torque x
+  terms.torque[1] = klt * (d1x * tx + d1y * ty + d1z * tz);  // added to torque y
   return terms;
 }
 
@@ -146,7 +147,7 @@ void SegmentForce::AddStiffnessBounds(const Model& model, const State& state,
       // tension, each counted for the node itself and its neighbour.
       const double length = (state.x[s.node_b] - state.x[s.node_a]).norm();
       const double tension = std::abs(s.stretch_stiffness * (length / s.rest_length - 1.0));
-      const double axial = axial_implicit_ ? 0.0 : 1.0;
+      const double axial = implicit_ ? 0.0 : 1.0;
       const double k = 2.0 * (axial * s.stretch_stiffness / s.rest_length + tension / length);
       const double c = 2.0 * axial * s.stretch_damping / s.rest_length;
       bounds.node_stiffness[s.node_a] += k;
@@ -154,7 +155,7 @@ void SegmentForce::AddStiffnessBounds(const Model& model, const State& state,
       bounds.node_damping[s.node_a] += c;
       bounds.node_damping[s.node_b] += c;
     }
-    if (coupling_) {
+    if (coupling_ && !implicit_frames_) {
       // Linearised coupling: E = 1/2 kappa l |u/l - psi|^2 (u transverse displacement of b
       // against a, psi the rotation). With psi measured as the displacement l psi every entry is
       // kappa/l: row sums 3 kappa/l for each node and for the rotation (3 kappa l in N m/rad).

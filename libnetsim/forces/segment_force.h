@@ -42,12 +42,18 @@ class SegmentForce final : public Force {
                           StiffnessBounds& bounds) const override;
   void SetThreads(int threads) override { threads_ = threads < 1 ? 1 : threads; }
 
-  // Whether this force includes stretching at all, and whether the stepper solves its axial part
-  // (the force EA epsilon + c_s depsilon/dt along t, and its stiffness and damping bounds)
-  // implicitly (simulation/axial_step.h): then Accumulate and AddStiffnessBounds leave it out,
-  // keeping the geometric stiffness of the tension in the bounds.
+  // Which energies this force includes.
   bool stretch() const { return stretch_; }
-  void SetAxialImplicit(bool implicit) { axial_implicit_ = implicit; }
+  bool coupling() const { return coupling_; }
+  // Under the implicit integrator the stepper solves the axial force (EA epsilon + c_s
+  // depsilon/dt along t; simulation/axial_step.h) and, with `frames`, the coupling's torque
+  // (against the centreline at the end of the step) itself: Accumulate leaves those out, keeping
+  // the coupling's node forces, and AddStiffnessBounds leaves their bounds out (the axial ones
+  // but the geometric stiffness of the tension; with frames, the coupling's).
+  void SetImplicit(bool axial, bool frames) {
+    implicit_ = axial;
+    implicit_frames_ = frames;
+  }
 
   // One segment's terms: the force on node b (on a: minus it), the drag on each node, the body
   // torque's x and y.
@@ -63,7 +69,8 @@ class SegmentForce final : public Force {
 
   bool stretch_;
   bool coupling_;
-  bool axial_implicit_ = false;
+  bool implicit_ = false;
+  bool implicit_frames_ = false;
   std::optional<DragOptions> drag_;
   int threads_ = 1;
   // With threads: each segment's terms, and each node's segments, built on first use.

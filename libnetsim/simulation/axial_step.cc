@@ -60,9 +60,10 @@ bool AxialStep::Apply(const Model& model, double h, const std::vector<Vector3d>&
     const Segment& s = model.segments[segments_[r]];
     const Vector3d& va = v[s.node_a];
     const Vector3d& vb = v[s.node_b];
-    const Vector3d e = (x[s.node_b] - x[s.node_a]) + h * (vb - va);  // predicted
+    const Vector3d e0 = x[s.node_b] - x[s.node_a];
+    const Vector3d e = e0 + h * (vb - va);  // predicted
     const double length = e.norm();
-    const Vector3d t = e / length;
+    const Vector3d t = (e0 + e).normalized();  // the step's midpoint direction
     tangent_[r] = t;
     length_[r] = length;
     const double u = t.dot(vb - va);

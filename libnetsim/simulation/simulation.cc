@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "libnetsim/forces/bend_twist_force.h"
 #include "libnetsim/forces/contact_force.h"
 #include "libnetsim/forces/segment_force.h"
 #include "libnetsim/model/rotation.h"
@@ -54,8 +55,9 @@ bool SimulationOptions::IsValid(std::string* error) const {
     return fail("contact_frequency_ratio must be in (0, 1]");
   if (!(max_speed > 0.0)) return fail("max_speed must be > 0");
   if (threads < 1 || threads > 256) return fail("threads must be in 1..256");
-  if (kinetic_damping && integrator != IntegratorType::kSymplecticEuler)
-    return fail("kinetic_damping needs type explicit (its peak correction is symplectic Euler's)");
+  if (kinetic_damping && integrator == IntegratorType::kVelocityVerlet)
+    return fail("kinetic_damping needs type explicit or implicit (its peak correction is "
+                "symplectic Euler's)");
   return true;
 }
 
@@ -75,21 +77,31 @@ Simulation::Simulation(Model model, State state, std::vector<std::unique_ptr<For
     f->SetThreads(options_.threads);
     views.push_back(f.get());
     if (auto* c = dynamic_cast<ContactForce*>(f.get())) contact = c;
-    if (auto* segment = dynamic_cast<SegmentForce*>(f.get()); segment && segment->stretch())
-      if (options_.integrator == IntegratorType::kImplicit) axial_force_ = segment;
+    if (auto* segment = dynamic_cast<SegmentForce*>(f.get()))
+      if (options_.integrator == IntegratorType::kImplicit) segment_force_ = segment;
   }
   contact_ = contact;
   StabilityOptions stability_options;
   stability_options.scale_rotational_inertia = options_.scale_rotational_inertia;
   stability_options.contact_frequency_ratio = options_.contact_frequency_ratio;
   stability_options.fallback_dt = options_.dt;
-  if (axial_force_) {
+  if (segment_force_) {
     // The contact keeps the stiffness the explicit step gives it (the axial wave's frequency), so
     // it presses no deeper; its bounds enter step by step, for the nodes about to touch.
     stability_options.contact_omega_translation =
         TranslationalFrequency(model_, state_, views, contact);
     stability_options.contact_in_limit = false;
-    axial_force_->SetAxialImplicit(true);
+    // With the physical rotational inertia the frames' own motion is asked for: it stays
+    // explicit, resolved at its own (small) step.
+    implicit_frames_ = segment_force_->coupling() && options_.scale_rotational_inertia;
+    segment_force_->SetImplicit(true, implicit_frames_);
+    stability_options.implicit_frames = implicit_frames_;
+    if (implicit_frames_)
+      for (const auto& f : forces_)
+        if (auto* joints = dynamic_cast<BendTwistForce*>(f.get())) {
+          joints->SetFramesFollowCentreline(true);
+          joints_ = joints;
+        }
   }
   stability_ = PrepareStability(model_, state_, views, contact, stability_options);
 
@@ -108,7 +120,20 @@ Simulation::Simulation(Model model, State state, std::vector<std::unique_ptr<For
   for (const Vector3d& inertia : model_.segment_inertia)
     if (inertia.maxCoeff() - inertia.minCoeff() > 1e-12 * inertia.maxCoeff()) gyroscopic_ = true;
   buffers_.Resize(model_.num_nodes(), model_.num_segments());
-  if (axial_force_) axial_ = std::make_unique<AxialStep>(model_);
+  if (segment_force_ && segment_force_->stretch()) axial_ = std::make_unique<AxialStep>(model_);
+  if (implicit_frames_) {
+    // Each frame's own bending damping coefficient: c_b / l over its joints (2 c_b / l at a clamp).
+    frame_damping_.assign(model_.num_segments(), 0.0);
+    if (joints_) {
+      for (const BendPair& p : model_.bend_pairs) {
+        const double c = p.damping.head<2>().maxCoeff() * p.inv_length;
+        frame_damping_[p.segment_a] += c;
+        frame_damping_[p.segment_b] += c;
+      }
+      for (const AnchorJoint& a : model_.anchors)
+        frame_damping_[a.segment] += a.damping.head<2>().maxCoeff() * a.inv_length;
+    }
+  }
   step_ = dt_;
 }
 
@@ -123,7 +148,8 @@ std::vector<std::string> Simulation::active_forces() const {
 
 void Simulation::EvaluateForces() {
   buffers_.Zero();
-  for (const auto& f : forces_) f->Accumulate(model_, state_, step_, buffers_);
+  for (const auto& f : forces_)
+    if (!(skip_joints_ && f.get() == joints_)) f->Accumulate(model_, state_, step_, buffers_);
   if (buffers_.max_penetration > max_penetration_) {
     max_penetration_ = buffers_.max_penetration;
     max_penetration_node_ = buffers_.max_penetration_node;
@@ -162,7 +188,10 @@ bool Simulation::Kick(double h, double drift) {
   if (bad_node == n) bad_node = -1;
   if (bad_segment == s) bad_segment = -1;
   if (bad_node < 0 && bad_segment < 0) return true;
+  return BlowUp(bad_node, bad_segment);
+}
 
+bool Simulation::BlowUp(int bad_node, int bad_segment) {
   Failure failure;
   failure.time = state_.time;
   std::ostringstream os;
@@ -244,7 +273,11 @@ bool Simulation::Step() {
 
   if (options_.kinetic_damping) {
     const double kinetic = KineticEnergy();
-    if (kinetic < last_kinetic_) {
+    if (kinetic < last_kinetic_ && options_.integrator == IntegratorType::kImplicit) {
+      for (Vector3d& v : state_.v) v.setZero();
+      for (Vector3d& w : state_.w) w.setZero();
+      last_kinetic_ = 0.0;
+    } else if (kinetic < last_kinetic_) {
       // Kinetic damping (Barnes): the kinetic energy peaked about half a step ago, so return
       // the configuration there, x -= 3/2 dt v - 1/2 dt^2 a (likewise the frames), before
       // zeroing the velocities. Without this correction the resets pump the fastest modes: a
@@ -269,31 +302,30 @@ bool Simulation::Step() {
 }
 
 int Simulation::ImplicitSubsteps() {
-  // The static bounds hold for the whole run; the tension's string stiffness and the contact of a
-  // node about to touch come and go. Each node whose bounds they raise needs the step that keeps
-  // its margin: safety times its own limit, or, where the step is already above that (a dt the
-  // user chose), the step shrunk by the ratio its limit shrank, so such a dt still blows up.
-  const StiffnessBounds& fixed = stability_.bounds;
-  dynamic_bounds_.node_stiffness = fixed.node_stiffness;
-  dynamic_bounds_.node_damping = fixed.node_damping;
+  // The static bounds hold for the whole run; the tension's string stiffness and contact come and
+  // go. A node whose tension raises its bounds needs the step that keeps its margin: safety times
+  // its own limit, or, where the step is already above that (a dt the user chose), the step
+  // shrunk by the ratio its limit shrank, so such a dt still blows up. A contact is resolved as
+  // the explicit step resolves it, omega_c h <= 2 safety contact_frequency_ratio (0.54): at the
+  // stability limit instead (0.75 with the critically damped boxes) a thread dropped on a box
+  // bounced back at half its speed where the explicit step lands it dead.
+  double ratio = 1.0;
   if (axial_) {
     const std::vector<double>& geometric = axial_->geometric_stiffness();
-    for (int i = 0; i < model_.num_nodes(); ++i) dynamic_bounds_.node_stiffness[i] += geometric[i];
+    const StiffnessBounds& fixed = stability_.bounds;
+    for (int i = 0; i < model_.num_nodes(); ++i) {
+      if (model_.node_inv_mass[i] == 0.0 || geometric[i] == 0.0) continue;
+      const double m = model_.node_mass[i];
+      const double k = fixed.node_stiffness[i], c = fixed.node_damping[i];
+      const double h_static = options_.safety * StableStep(k, c, m);
+      const double h_tension = options_.safety * StableStep(k + geometric[i], c, m);
+      ratio = std::max(ratio, std::min(dt_, h_static) / h_tension);
+    }
   }
-  if (contact_) contact_->AddStiffnessBoundsNear(model_, state_, dt_, dynamic_bounds_);
-  double ratio = 1.0;
-  for (int i = 0; i < model_.num_nodes(); ++i) {
-    if (model_.node_inv_mass[i] == 0.0) continue;
-    if (dynamic_bounds_.node_stiffness[i] == fixed.node_stiffness[i] &&
-        dynamic_bounds_.node_damping[i] == fixed.node_damping[i])
-      continue;
-    const double h_dynamic = options_.safety * StableStep(dynamic_bounds_.node_stiffness[i],
-                                                          dynamic_bounds_.node_damping[i],
-                                                          model_.node_mass[i]);
-    const double h_static = options_.safety * StableStep(fixed.node_stiffness[i],
-                                                         fixed.node_damping[i],
-                                                         model_.node_mass[i]);
-    ratio = std::max(ratio, std::min(dt_, h_static) / h_dynamic);
+  if (contact_) {
+    const double omega = contact_->NearContactFrequency(model_, state_, dt_);
+    if (omega > 0.0)
+      ratio = std::max(ratio, dt_ * omega / (2.0 * options_.safety * options_.contact_frequency_ratio));
   }
   constexpr int kMaxSubsteps = 4096;  // beyond it the blow-up check stops the run
   const int substeps =
@@ -305,8 +337,23 @@ int Simulation::ImplicitSubsteps() {
 
 bool Simulation::ImplicitSubstep(double h) {
   step_ = h;
+  skip_joints_ = implicit_frames_;  // evaluated below, on the frames turned to the new tangents
   EvaluateForces();
-  if (!Kick(h, 0.0)) return false;
+  skip_joints_ = false;
+  const int n = model_.num_nodes();
+  const int s = model_.num_segments();
+  const double limit2 = options_.max_speed * options_.max_speed;
+  const int threads = options_.threads;
+  // Nodes: the explicit kick, the implicit stretching, the drift.
+  int bad_node = n;
+#pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static) \
+    reduction(min : bad_node)
+  for (int i = 0; i < n; ++i) {
+    Vector3d& v = state_.v[i];
+    v += (h * model_.node_inv_mass[i]) * buffers_.force[i];
+    if (!(v.squaredNorm() <= limit2) && i < bad_node) bad_node = i;
+  }
+  if (bad_node < n) return BlowUp(bad_node, -1);
   if (axial_ && !axial_->Apply(model_, h, state_.x, state_.v)) {
     Failure failure;
     failure.time = state_.time;
@@ -320,7 +367,62 @@ bool Simulation::ImplicitSubstep(double h) {
     failure_ = failure;
     return false;
   }
-  Drift(h, /*nodes=*/true);
+#pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static)
+  for (int i = 0; i < n; ++i) state_.x[i] += h * state_.v[i];
+
+  // Frames: the coupling's torque against the centreline at the end of the step, implicit in the
+  // frame's own turn: with b = R^T t the body-frame tangent, tau_c = kappa l (-b_y, b_x, 0) and
+  // d tau_c / d theta ~ -kappa l b_z on x and y, so I (w+ - w) = h (tau + tau_c - h kappa l b_z w+)
+  // on those axes. The frame then follows its centreline within the step instead of swinging
+  // about it, and the nodes feel bending through the coupling. The bending and twist torques tau
+  // are taken on the frames already turned (by the minimal rotation) to the new tangents: taken
+  // on the old frames, the nodes would feel the bending of the step before, a delayed force that
+  // is unstable at any step (its amplitude grows by ~(omega h)^2 / 2 per step).
+  if (joints_ && implicit_frames_) {
+    turned_.resize(s);
+#pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static)
+    for (int j = 0; j < s; ++j) {
+      const Segment& seg = model_.segments[j];
+      const Vector3d t = (state_.x[seg.node_b] - state_.x[seg.node_a]).normalized();
+      turned_[j] = model_.segment_inv_inertia[j].squaredNorm() == 0.0
+                       ? state_.q[j]
+                       : Quaterniond(MinimalRotation(Director3(state_.q[j]), t) * state_.q[j]);
+    }
+    std::swap(state_.q, turned_);
+    joints_->Accumulate(model_, state_, h, buffers_);
+    std::swap(state_.q, turned_);
+  }
+  int bad_segment = s;
+#pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static) \
+    reduction(min : bad_segment)
+  for (int j = 0; j < s; ++j) {
+    if (model_.segment_inv_inertia[j].squaredNorm() == 0.0) continue;
+    const Vector3d& inertia = model_.segment_inertia[j];
+    Vector3d& w = state_.w[j];
+    Vector3d torque = buffers_.torque[j];
+    if (gyroscopic_ && !implicit_frames_) torque -= w.cross(inertia.cwiseProduct(w));
+    if (implicit_frames_) {
+      const Segment& seg = model_.segments[j];
+      const Vector3d b =
+          state_.q[j].conjugate() * (state_.x[seg.node_b] - state_.x[seg.node_a]).normalized();
+      const double kl = seg.coupling_stiffness * seg.rest_length;
+      const double stiff = h * h * kl * std::max(b.z(), 0.0);
+      torque.x() -= kl * b.y();
+      torque.y() += kl * b.x();
+      // The joints' damping of this frame's own turn, -C w, implicit too: explicit, it overshoots
+      // once h C exceeds twice the frame's (thin) inertia.
+      const double c = h * frame_damping_[j];
+      w.x() = (inertia.x() * w.x() + h * torque.x() + c * w.x()) / (inertia.x() + stiff + c);
+      w.y() = (inertia.y() * w.y() + h * torque.y() + c * w.y()) / (inertia.y() + stiff + c);
+      w.z() += h * torque.z() / inertia.z();
+    } else {
+      w += h * model_.segment_inv_inertia[j].cwiseProduct(torque);
+    }
+    if (!(w.squaredNorm() * h * h <= 1.0) && j < bad_segment) bad_segment = j;
+    RotateBody(state_.q[j], h * w);
+  }
+  if (bad_segment < s) return BlowUp(-1, bad_segment);
+  state_.time += h;
   return true;
 }
 
@@ -331,19 +433,12 @@ bool Simulation::Advance(long steps) {
 }
 
 bool Simulation::Relax(double max_time, double force_tolerance, double torque_tolerance) {
-  // Kinetic damping with Barnes' correction, which is written for symplectic Euler: under the
-  // implicit integrator the force takes stretching back, at the explicit step's limit.
+  // Kinetic damping with Barnes' correction, which is written for symplectic Euler; the implicit
+  // integrator resets the velocities without it (its implicit parts damp the fastest modes).
   const SimulationOptions saved = options_;
-  const double saved_dt = dt_;
-  if (axial_force_) {
-    axial_force_->SetAxialImplicit(false);
-    std::vector<const Force*> views;
-    for (const auto& f : forces_) views.push_back(f.get());
-    dt_ = options_.safety * StableStepLimit(model_, state_, views);
-    step_ = dt_;
-  }
+  if (options_.integrator != IntegratorType::kImplicit)
+    options_.integrator = IntegratorType::kSymplecticEuler;
   options_.kinetic_damping = true;
-  options_.integrator = IntegratorType::kSymplecticEuler;
   last_kinetic_ = 0.0;
   const double t_end = state_.time + max_time;
   bool converged = false;
@@ -351,7 +446,10 @@ bool Simulation::Relax(double max_time, double force_tolerance, double torque_to
   while (state_.time < t_end) {
     if (!Step()) break;
     if (++check % 16 != 0) continue;
+    // The whole force, with the parts the implicit stepper solves itself.
+    if (segment_force_) segment_force_->SetImplicit(false, false);
     EvaluateForces();
+    if (segment_force_) segment_force_->SetImplicit(true, implicit_frames_);
     double f_max = 0.0, tau_max = 0.0;
     for (int i = 0; i < model_.num_nodes(); ++i)
       if (model_.node_inv_mass[i] > 0.0) f_max = std::max(f_max, buffers_.force[i].norm());
@@ -364,11 +462,6 @@ bool Simulation::Relax(double max_time, double force_tolerance, double torque_to
     }
   }
   options_ = saved;
-  if (axial_force_) {
-    axial_force_->SetAxialImplicit(true);
-    dt_ = saved_dt;
-    step_ = dt_;
-  }
   for (Vector3d& v : state_.v) v.setZero();
   for (Vector3d& w : state_.w) w.setZero();
   forces_current_ = false;

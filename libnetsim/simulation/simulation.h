@@ -33,6 +33,7 @@
 namespace netlab::netsim {
 
 class AxialStep;
+class BendTwistForce;
 class ContactForce;
 class SegmentForce;
 
@@ -57,7 +58,7 @@ struct SimulationOptions {
   double contact_frequency_ratio = 0.3;  // contact_force.h
   // Reset all velocities whenever the kinetic energy falls (dynamic relaxation to a static
   // equilibrium, with Barnes' correction of the positions to the energy peak). Changes the
-  // dynamics: only for statics. Needs the explicit integrator.
+  // dynamics: only for statics. Needs the explicit or the implicit integrator.
   bool kinetic_damping = false;
   double max_speed = 1e3;  // m/s: a node faster than this stops the run as a blow-up
   // Threads the forces that loop over segments and joints use (Force::SetThreads): the same bits
@@ -115,8 +116,8 @@ class Simulation {
   // segment torque below `torque_tolerance` (N m), or until `max_time` (s) of pseudo-time has
   // passed. True when converged. Velocities are zero afterwards. Kinetic damping needs
   // conservative loads: a dead moment in 3D is not, and needs damped dynamics instead. Steps with
-  // symplectic Euler whatever the integrator option; throws std::logic_error with the implicit
-  // integrator, whose forces leave stretching to the stepper.
+  // symplectic Euler (or, with the implicit integrator, its own step, resetting the velocities
+  // without the peak correction).
   bool Relax(double max_time, double force_tolerance, double torque_tolerance);
 
   const std::optional<Failure>& failure() const { return failure_; }
@@ -139,6 +140,8 @@ class Simulation {
   // v += h a, then x += drift v (drift 0: velocities only); returns false (and records the
   // failure) on a bad velocity.
   bool Kick(double h, double drift);
+  // Records the failure of a bad node or segment (-1: none) and returns false.
+  bool BlowUp(int bad_node, int bad_segment);
   // q <- q Exp(h w) for every segment, and x += h v when `nodes`; advances the time by h.
   void Drift(double h, bool nodes);
   double KineticEnergy() const;
@@ -151,9 +154,14 @@ class Simulation {
   State state_;
   std::vector<std::unique_ptr<Force>> forces_;
   std::unique_ptr<AxialStep> axial_;  // the implicit integrator's stretching; else null
-  SegmentForce* axial_force_ = nullptr;  // the force whose stretching axial_ solves
+  SegmentForce* segment_force_ = nullptr;  // implicit: the force whose stretching, coupling
+                                           // torque the stepper solves
+  bool implicit_frames_ = false;           // implicit with coupling: frames follow (see .cc)
+  BendTwistForce* joints_ = nullptr;       // implicit frames: evaluated on the turned frames
+  bool skip_joints_ = false;
+  std::vector<Quaterniond> turned_;        // scratch: frames turned to the new tangents
+  std::vector<double> frame_damping_;      // per segment, its joints' bending damping, N m s
   ContactForce* contact_ = nullptr;
-  StiffnessBounds dynamic_bounds_;       // scratch of ImplicitSubsteps
   SimulationOptions options_;
   StabilityReport stability_;
   double dt_ = 0.0;

@@ -93,7 +93,8 @@ StabilityReport PrepareStability(Model& model, const State& state,
       // neither the stiffness nor the damping of the rotation then limits the step.
       const double needed =
           (bounds.segment_stiffness[j] + bounds.segment_damping[j] * omega) / omega2_max;
-      const Vector3d scaled = physical.cwiseMax(needed);
+      Vector3d scaled = physical.cwiseMax(needed);
+      if (options.implicit_frames) scaled.head<2>() = physical.head<2>();
       report.max_inertia_scale =
           std::max(report.max_inertia_scale, scaled.cwiseQuotient(physical).maxCoeff());
       model.segment_inertia[j] = scaled;
@@ -115,7 +116,8 @@ StabilityReport PrepareStability(Model& model, const State& state,
   }
   for (int j = 0; j < model.num_segments(); ++j) {
     if (model.segment_inv_inertia[j].squaredNorm() == 0.0) continue;
-    const double inertia = model.segment_inertia[j].minCoeff();
+    const double inertia = options.implicit_frames ? model.segment_inertia[j].z()
+                                                   : model.segment_inertia[j].minCoeff();
     const double dt =
         StableStep(bounds.segment_stiffness[j], bounds.segment_damping[j], inertia);
     if (dt < report.dt_limit) {

@@ -40,6 +40,10 @@ struct StabilityOptions {
   // False: the contact's bounds are left out of dt_limit and the inertia scaling (and out of
   // node_bounds); the implicit integrator adds them for the nodes about to touch, step by step.
   bool contact_in_limit = true;
+  // True under the implicit integrator: the coupling's torque on the frame's x and y axes is
+  // implicit, which keeps those rotations stable whatever their inertia, so only the twist (z)
+  // inertia is scaled and only the twist limits the step.
+  bool implicit_frames = false;
 };
 
 struct StabilityReport {

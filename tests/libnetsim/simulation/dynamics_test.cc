@@ -35,25 +35,35 @@ class Dynamics : public ::testing::TestWithParam<IntegratorType> {
 };
 
 // The paper's pendulum (30 cm PP yarn, 11 segments, pinned, g along -y), undamped: the total
-// energy of a symplectic integrator oscillates within O(dt) and does not drift.
+// energy of a symplectic integrator oscillates within O(dt) and does not drift. The implicit one
+// is not symplectic: its linearised backward Euler in stretching and in the frames loses energy,
+// first order in dt and never gains it (measured at its own step, 55 times explicit's: 1.2 % of
+// the energy released over 0.5 s; 0.62 % at a quarter of it, 0.25 % at a tenth).
 TEST_P(Dynamics, PendulumConservesEnergyWithoutDamping) {
   auto [model, state] = StraightRod(PpYarn(), 0.3, 11, Fixity::kPinned);
   auto forces = ElasticForces(model);
   forces.push_back(std::make_unique<GravityForce>(Vector3d(0, -9.81, 0)));
   Simulation sim(std::move(model), std::move(state), std::move(forces), Options());
   const double e0 = sim.ComputeEnergy().total();
-  double worst = 0.0, released = 0.0;
+  double worst = 0.0, gained = 0.0, released = 0.0;
   const long steps = std::lround(0.5 / sim.dt());
+  const long every = GetParam() == IntegratorType::kImplicit ? 1 : 50;
   for (long k = 0; k < steps; ++k) {
     ASSERT_TRUE(sim.Step());
-    if (k % 50 == 0) {
+    if (k % every == 0) {
       const Energy e = sim.ComputeEnergy();
       worst = std::max(worst, std::abs(e.total() - e0));
+      gained = std::max(gained, e.total() - e0);
       released = std::max(released, -e.potential);
     }
   }
   ASSERT_GT(released, 1e-6);  // it did fall: ~7e-6 J of 0.5 * m g L
-  EXPECT_LT(worst / released, 0.01);
+  if (GetParam() == IntegratorType::kImplicit) {
+    EXPECT_LT(worst / released, 0.02);
+    EXPECT_LT(gained / released, 1e-4);
+  } else {
+    EXPECT_LT(worst / released, 0.01);
+  }
 }
 
 // Measures the exponential decay rate (1/s) of an oscillating signal from its successive peaks.
@@ -168,7 +178,7 @@ TEST_P(Dynamics, BendDampingDecaysTheFirstCantileverModeAtTheKelvinVoigtRate) {
   double sum = 0.0, window_start = 0.5;
   int count = 0;
   while (sim.state().time < 3.0) {
-    ASSERT_TRUE(sim.Step());
+    ASSERT_TRUE(sim.Step()) << sim.failure()->message;
     if (sim.state().time < 0.5) continue;  // past the first period
     sum += sim.state().x.back().y();
     ++count;
@@ -365,7 +375,11 @@ TEST_P(Dynamics, BlowUpStopsWithTimeNodeAndQuantity) {
   auto forces = ElasticForces(model);
   forces.push_back(std::make_unique<GravityForce>(Vector3d(0, -9.81, 0)));
   SimulationOptions o = Options();
-  o.dt = 5e-4;  // 25x the stability limit
+  {
+    auto [m, s] = StraightRod(PpYarn(), 0.3, 11, Fixity::kPinned);
+    auto f = ElasticForces(m);
+    o.dt = 25.0 * Simulation(std::move(m), std::move(s), std::move(f), o).stability().dt_limit;
+  }
   Simulation sim(std::move(model), std::move(state), std::move(forces), o);
   EXPECT_FALSE(sim.Advance(100000));
   ASSERT_TRUE(sim.failure().has_value());
