@@ -124,14 +124,22 @@ Simulation::Simulation(Model model, State state, std::vector<std::unique_ptr<For
   if (implicit_frames_) {
     // Each frame's own bending damping coefficient: c_b / l over its joints (2 c_b / l at a clamp).
     frame_damping_.assign(model_.num_segments(), 0.0);
+    frame_twist_.assign(model_.num_segments(), 0.0);
+    frame_twist_damping_.assign(model_.num_segments(), 0.0);
     if (joints_) {
       for (const BendPair& p : model_.bend_pairs) {
         const double c = p.damping.head<2>().maxCoeff() * p.inv_length;
-        frame_damping_[p.segment_a] += c;
-        frame_damping_[p.segment_b] += c;
+        for (const int j : {p.segment_a, p.segment_b}) {
+          frame_damping_[j] += c;
+          frame_twist_[j] += p.stiffness.z() * p.inv_length;
+          frame_twist_damping_[j] += p.damping.z() * p.inv_length;
+        }
       }
-      for (const AnchorJoint& a : model_.anchors)
+      for (const AnchorJoint& a : model_.anchors) {
         frame_damping_[a.segment] += a.damping.head<2>().maxCoeff() * a.inv_length;
+        frame_twist_[a.segment] += a.stiffness.z() * a.inv_length;
+        frame_twist_damping_[a.segment] += a.damping.z() * a.inv_length;
+      }
     }
   }
   step_ = dt_;
@@ -414,7 +422,10 @@ bool Simulation::ImplicitSubstep(double h) {
       const double c = h * frame_damping_[j];
       w.x() = (inertia.x() * w.x() + h * torque.x() + c * w.x()) / (inertia.x() + stiff + c);
       w.y() = (inertia.y() * w.y() + h * torque.y() + c * w.y()) / (inertia.y() + stiff + c);
-      w.z() += h * torque.z() / inertia.z();
+      // The twist likewise: its own stiffness and damping implicit (in a curved thread the
+      // twist of a frame that follows its centreline was unstable with them explicit).
+      const double cz = h * frame_twist_damping_[j], kz = h * h * frame_twist_[j];
+      w.z() = (inertia.z() * w.z() + h * torque.z() + cz * w.z()) / (inertia.z() + kz + cz);
     } else {
       w += h * model_.segment_inv_inertia[j].cwiseProduct(torque);
     }

@@ -161,6 +161,8 @@ class Simulation {
   bool skip_joints_ = false;
   std::vector<Quaterniond> turned_;        // scratch: frames turned to the new tangents
   std::vector<double> frame_damping_;      // per segment, its joints' bending damping, N m s
+  std::vector<double> frame_twist_;        // ... their twist stiffness, N m
+  std::vector<double> frame_twist_damping_;  // ... their twist damping, N m s
   ContactForce* contact_ = nullptr;
   SimulationOptions options_;
   StabilityReport stability_;
