@@ -378,15 +378,17 @@ bool Simulation::ImplicitSubstep(double h) {
 #pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static)
   for (int i = 0; i < n; ++i) state_.x[i] += h * state_.v[i];
 
-  // Frames: the coupling's torque against the centreline at the end of the step, implicit in the
-  // frame's own turn: with b = R^T t the body-frame tangent, tau_c = kappa l (-b_y, b_x, 0) and
-  // d tau_c / d theta ~ -kappa l b_z on x and y, so I (w+ - w) = h (tau + tau_c - h kappa l b_z w+)
-  // on those axes. The frame then follows its centreline within the step instead of swinging
-  // about it, and the nodes feel bending through the coupling. The bending and twist torques tau
-  // are taken on the frames already turned (by the minimal rotation) to the new tangents: taken
-  // on the old frames, the nodes would feel the bending of the step before, a delayed force that
-  // is unstable at any step (its amplitude grows by ~(omega h)^2 / 2 per step).
-  if (joints_ && implicit_frames_) {
+  // Frames. Each is first turned by the minimal rotation onto its segment's new tangent (exact:
+  // the frame follows its centreline within the step instead of swinging about it), then by the
+  // small turn w' that balances the bending and twist torques tau there, with the coupling's
+  // restoring torque -kappa l (h w') on x and y implicit in it:
+  //   I (w+ - w) = h (tau - h kappa l w'),  w+ = r / h + w',  r the minimal rotation (body frame).
+  // The nodes then feel bending through the coupling, as a Kirchhoff rod. tau is taken on the
+  // turned frames: on the old ones the nodes would feel the bending of the step before, a delayed
+  // force that is unstable at any step. Linearising the coupling about the old frame instead of
+  // turning it exactly overshot by ~alpha^3 / 3 for a tangent turning by alpha in a step, which
+  // a net snapping straight amplified into a blow-up.
+  if (implicit_frames_) {
     turned_.resize(s);
 #pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static)
     for (int j = 0; j < s; ++j) {
@@ -396,9 +398,11 @@ bool Simulation::ImplicitSubstep(double h) {
                        ? state_.q[j]
                        : Quaterniond(MinimalRotation(Director3(state_.q[j]), t) * state_.q[j]);
     }
-    std::swap(state_.q, turned_);
-    joints_->Accumulate(model_, state_, h, buffers_);
-    std::swap(state_.q, turned_);
+    if (joints_) {
+      std::swap(state_.q, turned_);
+      joints_->Accumulate(model_, state_, h, buffers_);
+      std::swap(state_.q, turned_);
+    }
   }
   int bad_segment = s;
 #pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static) \
@@ -411,24 +415,26 @@ bool Simulation::ImplicitSubstep(double h) {
     if (gyroscopic_ && !implicit_frames_) torque -= w.cross(inertia.cwiseProduct(w));
     if (implicit_frames_) {
       const Segment& seg = model_.segments[j];
-      const Vector3d b =
-          state_.q[j].conjugate() * (state_.x[seg.node_b] - state_.x[seg.node_a]).normalized();
-      const double kl = seg.coupling_stiffness * seg.rest_length;
-      const double stiff = h * h * kl * std::max(b.z(), 0.0);
-      torque.x() -= kl * b.y();
-      torque.y() += kl * b.x();
-      // The joints' damping of this frame's own turn, -C w, implicit too: explicit, it overshoots
-      // once h C exceeds twice the frame's (thin) inertia.
+      const Vector3d r = LogMap(state_.q[j].conjugate() * turned_[j]).phi;
+      const Vector3d w_r = r / h;
+      const double stiff = h * h * seg.coupling_stiffness * seg.rest_length;
+      // The joints' damping of this frame's own turn (tau holds -C w), implicit as well:
+      // explicit, it overshoots once h C exceeds twice the frame's (thin) inertia.
       const double c = h * frame_damping_[j];
-      w.x() = (inertia.x() * w.x() + h * torque.x() + c * w.x()) / (inertia.x() + stiff + c);
-      w.y() = (inertia.y() * w.y() + h * torque.y() + c * w.y()) / (inertia.y() + stiff + c);
+      Vector3d turn;
+      turn.x() = ((inertia.x() + c) * (w.x() - w_r.x()) + h * torque.x()) / (inertia.x() + stiff + c);
+      turn.y() = ((inertia.y() + c) * (w.y() - w_r.y()) + h * torque.y()) / (inertia.y() + stiff + c);
       // The twist likewise: its own stiffness and damping implicit (in a curved thread the
       // twist of a frame that follows its centreline was unstable with them explicit).
       const double cz = h * frame_twist_damping_[j], kz = h * h * frame_twist_[j];
-      w.z() = (inertia.z() * w.z() + h * torque.z() + cz * w.z()) / (inertia.z() + kz + cz);
-    } else {
-      w += h * model_.segment_inv_inertia[j].cwiseProduct(torque);
+      turn.z() = ((inertia.z() + cz) * (w.z() - w_r.z()) + h * torque.z()) / (inertia.z() + kz + cz);
+      w = w_r + turn;
+      if (!(w.squaredNorm() * h * h <= 1.0) && j < bad_segment) bad_segment = j;
+      state_.q[j] = turned_[j];
+      RotateBody(state_.q[j], h * turn);
+      continue;
     }
+    w += h * model_.segment_inv_inertia[j].cwiseProduct(torque);
     if (!(w.squaredNorm() * h * h <= 1.0) && j < bad_segment) bad_segment = j;
     RotateBody(state_.q[j], h * w);
   }
