@@ -82,6 +82,19 @@ std::string ShortName(const std::string& path) {
 // A value with 4 significant digits, for labels.
 std::string Short(double v) { return Num(v, 4); }
 
+// A tick's label: as many significant digits as the step needs to tell neighbours apart
+// (1.00008 and 1.00012, not 1 and 1).
+std::string TickText(double t, double step) {
+  const double top = std::max(std::abs(t), step);
+  const int digits = std::clamp(
+      static_cast<int>(std::floor(std::log10(top)) - std::floor(std::log10(step))) + 1, 1, 12);
+  return Num(t, digits);
+}
+
+double TickStep(const std::vector<double>& ticks) {
+  return ticks.size() > 1 ? ticks[1] - ticks[0] : 1.0;
+}
+
 // The lines of one parameter's plots: each combination of the other parameters' value indices
 // (all of them up to kMaxSeries, else the one at their middle values), the runs along the
 // parameter for each.
@@ -116,7 +129,7 @@ std::vector<Line> LinesAlong(const std::vector<SweepParameter>& parameters, size
     Line line;
     for (size_t o = 0; o < parameters.size(); ++o) {
       if (o == q || parameters[o].count < 2) continue;
-      line.name += (line.name.empty() ? "" : ", ") + ShortName(parameters[o].path) + " = " +
+      line.name += (line.name.empty() ? "" : ", ") + parameters[o].path + " = " +
                    Short(parameters[o].Values()[at[o]]);
     }
     for (int i = 0; i < parameters[q].count; ++i) {
@@ -165,15 +178,17 @@ std::string Plot(const std::string& id, const std::vector<double>& x_values,
   std::ostringstream o;
   o << "<svg id=\"" << id << "\" class=\"plot\" viewBox=\"0 0 " << kWidth << " " << kHeight
     << "\" width=\"" << kWidth << "\" height=\"" << kHeight << "\">\n<g class=\"axes\">\n";
-  for (double t : Ticks(y0, y1, 4))
+  const std::vector<double> y_ticks = Ticks(y0, y1, 4), x_ticks = Ticks(x0, x1, 4);
+  for (double t : y_ticks)
     o << "<line x1=\"" << kLeft << "\" x2=\"" << kWidth - kRight << "\" y1=\"" << Fixed(py(t), 1)
       << "\" y2=\"" << Fixed(py(t), 1) << "\" class=\"grid\"/><text x=\"" << kLeft - 6 << "\" y=\""
-      << Fixed(py(t) + 4, 1) << "\" text-anchor=\"end\">" << Short(t) << "</text>\n";
-  for (double t : Ticks(x0, x1, 4))
+      << Fixed(py(t) + 4, 1) << "\" text-anchor=\"end\">" << TickText(t, TickStep(y_ticks))
+      << "</text>\n";
+  for (double t : x_ticks)
     o << "<line y1=\"" << kTop << "\" y2=\"" << kHeight - kBottom << "\" x1=\"" << Fixed(px(t), 1)
       << "\" x2=\"" << Fixed(px(t), 1) << "\" class=\"grid\"/><text x=\"" << Fixed(px(t), 1)
-      << "\" y=\"" << kHeight - kBottom + 16 << "\" text-anchor=\"middle\">" << Short(t)
-      << "</text>\n";
+      << "\" y=\"" << kHeight - kBottom + 16 << "\" text-anchor=\"middle\">"
+      << TickText(t, TickStep(x_ticks)) << "</text>\n";
   o << "<rect x=\"" << kLeft << "\" y=\"" << kTop << "\" width=\"" << kWidth - kLeft - kRight
     << "\" height=\"" << kHeight - kTop - kBottom << "\" class=\"frame\"/>\n";
   o << "<text x=\"" << (kLeft + kWidth - kRight) / 2 << "\" y=\"" << kHeight - 8
@@ -290,16 +305,15 @@ void WriteSummary(std::ostringstream& o, const std::vector<SweepParameter>& para
     for (double v : p.Values()) values += (values.empty() ? "" : ", ") + Short(v);
     o << Row({"<code>" + Escape(p.path) + "</code>", Short(p.from), Short(p.to), values});
   }
-  o << "</table>\n";
+  o << "</table>\n<p class=\"caption\">Values in the scenario's units at that path "
+       "(docs/scenarios.md); every run is the scenario with one value of each.</p>\n";
 }
 
 void WriteSensitivity(std::ostringstream& o, const std::vector<SweepParameter>& parameters,
                       const std::vector<std::vector<Sensitivity>>& sensitivity) {
   o << "<h2>Sensitivities d ln(output) / d ln(parameter)</h2>\n<table id=\"sensitivity\">";
   std::vector<std::string> head = {"output"};
-  for (const SweepParameter& p : parameters)
-    head.push_back("<code title=\"" + Escape(p.path) + "\">" + Escape(ShortName(p.path)) +
-                   "</code>");
+  for (const SweepParameter& p : parameters) head.push_back("<code>" + Escape(p.path) + "</code>");
   o << Row(head, "th");
   for (size_t out = 0; out < kSweepOutputs.size(); ++out) {
     o << "<tr><td>" << kSweepOutputs[out].title << " (" << kDisplay[out].unit << ")</td>";
@@ -308,7 +322,9 @@ void WriteSensitivity(std::ostringstream& o, const std::vector<SweepParameter>& 
       if (std::isfinite(s.value))
         o << "<td data-value=\"" << Num(s.value) << "\""
           << (std::abs(s.value) >= 0.5 ? " class=\"strong\"" : "") << " title=\"runs " << s.run_low
-          << " and " << s.run_high << "\">" << Fixed(s.value, 3) << "</td>";
+          << " and " << s.run_high << "\">"
+          << (s.value != 0 && std::abs(s.value) < 5e-4 ? Num(s.value, 2) : Fixed(s.value, 3))
+          << "</td>";
       else
         o << "<td data-value=\"nan\" class=\"none\">– (" << Escape(s.why_not) << ")</td>";
     }
@@ -339,11 +355,24 @@ void WritePlots(std::ostringstream& o, const std::vector<SweepParameter>& parame
       o << "</div>\n";
     }
     o << "<div class=\"plots\">";
-    for (size_t out = 0; out < kSweepOutputs.size(); ++out)
+    for (size_t out = 0; out < kSweepOutputs.size(); ++out) {
+      // An output no run has (no contact, no net) gets a sentence, not an empty plot.
+      bool any = false;
+      for (const SweepRun& run : result.runs) {
+        const double v = run.outputs.*kSweepOutputs[out].field;
+        any = any || (run.ok() && std::isfinite(v) && v != 0.0);
+      }
+      if (!any) {
+        o << "<div><h3>" << kSweepOutputs[out].title << "</h3><p class=\"caption\">"
+          << (out == 2 ? "No run touched a body: 0 in every run." : "0 or undefined in every run.")
+          << "</p></div>\n";
+        continue;
+      }
       o << "<div><h3>" << kSweepOutputs[out].title << "</h3>\n"
         << Plot(std::string(kSweepOutputs[out].name) + "-vs-" + std::to_string(q), p.Values(),
-                lines, result.runs, out, ShortName(p.path))
+                lines, result.runs, out, p.path)
         << "</div>\n";
+    }
     o << "</div>\n";
   }
   o << "<p class=\"caption\">One dot per finished run; a red × on the bottom edge marks a run that "
@@ -380,7 +409,7 @@ void WriteRuns(std::ostringstream& o, const std::vector<SweepParameter>& paramet
     std::vector<std::string> cells = {std::to_string(run.index)};
     for (double v : grid[run.index].values) cells.push_back(Short(v));
     for (size_t out = 0; out < kSweepOutputs.size(); ++out)
-      cells.push_back(run.ok() ? Short(run.outputs.*kSweepOutputs[out].field * kDisplay[out].scale)
+      cells.push_back(run.ok() ? Num(run.outputs.*kSweepOutputs[out].field * kDisplay[out].scale, 6)
                                : "–");
     cells.push_back(Fixed(run.summary.wall_s, 2));
     cells.push_back(StatusName(run.status));

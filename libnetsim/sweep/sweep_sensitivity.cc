@@ -50,7 +50,7 @@ std::vector<std::vector<Sensitivity>> ComputeSensitivities(
       if (!std::isfinite(o_lo) || !std::isfinite(o_hi) || !std::isfinite(o_c)) {
         s.why_not = "no value";
       } else if (o_c == 0.0) {
-        s.why_not = "output 0";
+        s.why_not = "0 at the centre";
       } else {
         s.value = (o_hi - o_lo) / (values[hi] - values[lo]) * p / o_c;
       }

@@ -13,7 +13,8 @@
 //   S = (o_hi - o_lo) / (p_hi - p_lo) * p / o
 //
 // For n = 2 that is the difference across the whole range. Undefined (NaN, with the reason) when
-// the parameter has one value, a run it needs failed or lacks the output, or o is 0.
+// the parameter has one value, a run it needs failed or lacks the output, or o is 0 at the
+// centre.
 
 #include <limits>
 #include <string>

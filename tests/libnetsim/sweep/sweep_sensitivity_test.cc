@@ -41,7 +41,7 @@ TEST(Sensitivity, PowerLawsGiveTheirExponent) {
   EXPECT_EQ(table[0][1].run_high, GridIndex(parameters, {1, 2}));
   EXPECT_EQ(table[1][0].value, 0.0);           // a constant output
   EXPECT_TRUE(std::isnan(table[2][0].value));  // 0 at the centre: no log
-  EXPECT_EQ(table[2][0].why_not, "output 0");
+  EXPECT_EQ(table[2][0].why_not, "0 at the centre");
 }
 
 TEST(Sensitivity, UndefinedWithOneValueOrAFailedRun) {
