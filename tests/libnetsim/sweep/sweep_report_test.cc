@@ -50,11 +50,12 @@ TEST(SweepReport, PlotsCarryTheOutputsOfTheirRuns) {
   const size_t plot = html.find("<svg id=\"max_area-vs-0\"");
   ASSERT_NE(plot, std::string::npos);
   const std::string rest = html.substr(plot);
-  EXPECT_EQ(Attribute(rest, "<path data-series=\"drag_coefficient = 0.8\"", "data-runs"), "0 2 4");
-  EXPECT_EQ(Attribute(rest, "<path data-series=\"drag_coefficient = 0.8\"", "data-values"),
+  EXPECT_EQ(Attribute(rest, "<path data-series=\"drag.drag_coefficient = 0.8\"", "data-runs"),
+            "0 2 4");
+  EXPECT_EQ(Attribute(rest, "<path data-series=\"drag.drag_coefficient = 0.8\"", "data-values"),
             "0.9 1 1.1");  // 1e3 p + 0.8
   // Run 5 blew up: no value on its line, listed with its reason.
-  EXPECT_EQ(Attribute(rest, "<path data-series=\"drag_coefficient = 1.2\"", "data-values"),
+  EXPECT_EQ(Attribute(rest, "<path data-series=\"drag.drag_coefficient = 1.2\"", "data-values"),
             "1.3 1.4 nan");
   EXPECT_NE(html.find("run 5 (blew up): blew up at t = 0.01 s: node 3 &lt;speed&gt;"),
             std::string::npos);
