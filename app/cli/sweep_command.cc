@@ -282,7 +282,17 @@ int RunSweep(const std::vector<std::string>& args) {
       progress.Update(done, total, failed);
     };
     options.progress = [&](double done, int total) { progress.Update(done, total, failed); };
-    const netsim::SweepResult result = netsim::RunSweep(scenario_path, sets, options);
+    netsim::SweepResult result;
+    try {
+      result = netsim::RunSweep(scenario_path, sets, options);
+    } catch (const std::exception& e) {
+      // E.g. the disk filled while rank 0 wrote a run: the other ranks would wait for it forever.
+      if (mpi && mpi->size() > 1) {
+        std::fprintf(stderr, "netlab sweep: error: %s\n", e.what());
+        mpi->Abort(1);
+      }
+      throw;
+    }
     if (!root) return 0;
     progress.Break();
 

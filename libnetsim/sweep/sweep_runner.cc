@@ -431,6 +431,15 @@ SweepResult RunSweep(const std::string& scenario_path,
     Pool pool(scenario_path, runs, result.jobs, options.decimate, 0, take_index);
     auto last_progress = Clock::now();
     const int other_ranks = mpi ? mpi->size() - 1 : 0;
+    // A callback that throws (e.g. the file cannot be written) ends the sweep: the threads
+    // finish the runs they have and take no more.
+    struct StopOnThrow {
+      std::atomic<int>& next;
+      int total;
+      ~StopOnThrow() {
+        if (std::uncaught_exceptions() > 0) next.store(total);
+      }
+    } stop{next, total};
     while (done < total || byes < other_ranks) {
       if (mpi) {
         int from = 0, tag = 0;
