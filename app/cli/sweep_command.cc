@@ -83,6 +83,7 @@ class SweepProgress {
       std::fprintf(stderr, "\rsweep [%s%s] %3d%% %d/%d runs, %d failed  ETA %s ",
                    std::string(filled, '#').c_str(), std::string(kWidth - filled, ' ').c_str(),
                    percent, whole, total, failed, eta_text.c_str());
+      on_line_ = true;
     } else {
       if (percent / 10 == last_decile_) return;
       last_decile_ = percent / 10;
@@ -93,7 +94,8 @@ class SweepProgress {
   }
   // Ends the bar's line before other text.
   void Break() {
-    if (enabled_ && tty_) std::fputc('\n', stderr);
+    if (on_line_) std::fputc('\n', stderr);
+    on_line_ = false;
   }
 
  private:
@@ -102,6 +104,7 @@ class SweepProgress {
   Clock::time_point start_;
   double done_ = 0.0;
   int last_decile_ = -1;
+  bool on_line_ = false;  // the bar is drawn and its line not ended
 };
 
 std::string OverridesText(const std::vector<netsim::ScenarioOverride>& overrides, size_t skip) {

@@ -255,7 +255,10 @@ TEST_F(SweepCommand, MpirunSpreadsTheRunsOverTheRanks) {
       RunNetlab("sweep " + scenario_ + vary + " --out " + threads + " --quiet");
   ASSERT_EQ(one.status, 0) << one.err;
   // --oversubscribe: 2 ranks even where mpirun counts fewer slots; root (CI) must say so.
-  const std::string mpirun = std::string(NETLAB_MPIEXEC) + " -np 2 --oversubscribe" +
+  // timeout: a launch that hangs (no shared memory in a container, say) fails the test in 2
+  // minutes instead of holding ctest until its own limit.
+  const std::string mpirun = "timeout 120 " + std::string(NETLAB_MPIEXEC) +
+                             " -np 2 --oversubscribe" +
                              (geteuid() == 0 ? " --allow-run-as-root" : "") + " " + NETLAB_EXE;
   const std::string command = mpirun + " sweep " + scenario_ + vary + " --out " + ranks +
                               " --json --quiet 2>" + Path("mpi_err.txt");
