@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -151,8 +152,9 @@ void PrintJson(const std::string& scenario, const std::vector<netsim::SweepParam
     json.EndArray();
     json.Key("status").String(netsim::StatusName(run.status));
     json.Key("error").String(run.error);
+    // As in the file: no output for a failed run (null), whatever it reached before failing.
     for (const netsim::SweepOutputInfo& info : netsim::kSweepOutputs)
-      json.Key(info.name).Number(run.outputs.*info.field);
+      json.Key(info.name).Number(run.ok() ? run.outputs.*info.field : NAN);
     json.Key("sim_time").Number(run.summary.sim_time);
     json.Key("steps").Int(run.summary.steps);
     json.Key("frames").Int(run.summary.frames);

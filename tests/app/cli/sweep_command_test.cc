@@ -149,7 +149,7 @@ TEST_F(SweepCommand, BlowUpIsReportedAndTheOtherRunsKept) {
   const Json& blown = json["results"].array()[1];
   EXPECT_EQ(blown["status"].string(), "blew up");
   EXPECT_NE(blown["error"].string().find("blew up at t = "), std::string::npos);
-  EXPECT_TRUE(blown["max_area"].is_null() || blown["max_area"].number() >= 0.0);
+  EXPECT_TRUE(blown["max_area"].is_null());  // no output of a failed run, as in the file
   EXPECT_EQ(json["results"].array()[0]["status"].string(), "ok");
   EXPECT_NE(r.err.find("netlab sweep: run 1 (materials.pp.bend_stiffness=10000): simulation "
                        "blew up at t = "),
