@@ -238,6 +238,33 @@ std::string Plot(const std::string& id, const std::vector<double>& x_values,
   return o.str();
 }
 
+// "" when the output varies over the finished runs; else what a reader should be told instead of
+// a flat plot.
+std::string SameInEveryRun(const std::vector<SweepRun>& runs, size_t output) {
+  const auto field = kSweepOutputs[output].field;
+  double lo = INFINITY, hi = -INFINITY;
+  int finite = 0;
+  for (const SweepRun& run : runs) {
+    const double v = run.outputs.*field;
+    if (!run.ok() || !std::isfinite(v)) continue;
+    ++finite;
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  if (finite == 0) return "Undefined in every run (no net, or no run finished).";
+  if (lo != hi) return "";
+  const std::string value = Short(lo * kDisplay[output].scale) + " " + kDisplay[output].unit;
+  if (output == 2 && lo == 0) return "No run touched a body: 0 in every run.";
+  bool first_frame = true;  // the area largest at t = 0 in every finished run
+  for (const SweepRun& run : runs)
+    if (run.ok()) first_frame = first_frame && run.outputs.max_area_time_s == 0.0;
+  if ((output == 0 || output == 1) && first_frame)
+    return value +
+           " in every run: the net is largest in its first frame (it starts spread and "
+           "never opens wider).";
+  return value + " in every run.";
+}
+
 std::string Row(const std::vector<std::string>& cells, const char* tag = "td") {
   std::string s = "<tr>";
   for (const auto& c : cells) s += std::string("<") + tag + ">" + c + "</" + tag + ">";
@@ -356,15 +383,11 @@ void WritePlots(std::ostringstream& o, const std::vector<SweepParameter>& parame
     }
     o << "<div class=\"plots\">";
     for (size_t out = 0; out < kSweepOutputs.size(); ++out) {
-      // An output no run has (no contact, no net) gets a sentence, not an empty plot.
-      bool any = false;
-      for (const SweepRun& run : result.runs) {
-        const double v = run.outputs.*kSweepOutputs[out].field;
-        any = any || (run.ok() && std::isfinite(v) && v != 0.0);
-      }
-      if (!any) {
-        o << "<div><h3>" << kSweepOutputs[out].title << "</h3><p class=\"caption\">"
-          << (out == 2 ? "No run touched a body: 0 in every run." : "0 or undefined in every run.")
+      // An output that is the same in every run (no contact; a net largest in its first frame)
+      // gets a sentence, not a flat line.
+      const std::string same = SameInEveryRun(result.runs, out);
+      if (!same.empty()) {
+        o << "<div><h3>" << kSweepOutputs[out].title << "</h3><p class=\"caption\">" << same
           << "</p></div>\n";
         continue;
       }

@@ -236,7 +236,7 @@ TEST_F(SweepCommand, OutputIsReplacedOnlyWhenComplete) {
     EXPECT_EQ(h5::ReadStringDataset(f.get(), "scenario"), kNet);
   }
   const std::string html = ReadText(Path("sweep.html"));
-  EXPECT_NE(html.find("<svg id=\"max_area-vs-0\""), std::string::npos);
+  EXPECT_NE(html.find("<h2>Against <code>duration</code></h2>"), std::string::npos);
   EXPECT_NE(html.find("<table id=\"sensitivity\">"), std::string::npos);
 }
 

@@ -22,7 +22,7 @@ struct Fixture {
       run.outputs.max_area_m2 = 1e3 * point.values[0] + point.values[1];
       run.outputs.max_area_time_s = 0.1;
       run.outputs.max_penetration_m = 0.002;
-      run.outputs.centroid_drift_m = 0.5;
+      run.outputs.centroid_drift_m = point.values[1];
       result.runs.push_back(run);
     }
     result.runs[5].status = SweepRun::Status::kBlewUp;
@@ -61,6 +61,10 @@ TEST(SweepReport, PlotsCarryTheOutputsOfTheirRuns) {
             std::string::npos);
   EXPECT_NE(html.find("5 of 6 runs finished"), std::string::npos);
   EXPECT_NE(html.find("<svg id=\"centroid_drift-vs-1\""), std::string::npos);
+  // The same in every run: said, not plotted.
+  EXPECT_EQ(html.find("<svg id=\"max_area_time-vs-0\""), std::string::npos);
+  EXPECT_NE(html.find("0.1 s in every run."), std::string::npos);
+  EXPECT_NE(html.find("2 mm in every run."), std::string::npos);
 }
 
 TEST(SweepReport, SensitivityTableHasTheComputedValues) {
