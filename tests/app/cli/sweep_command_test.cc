@@ -155,6 +155,9 @@ TEST_F(SweepCommand, BlowUpIsReportedAndTheOtherRunsKept) {
                        "blew up at t = "),
             std::string::npos)
       << r.err;
+  // Progress on stderr (a line per 10 % where no terminal watches), then the summary.
+  EXPECT_NE(r.err.find("sweep 100% 2/2 runs, 1 failed"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("sweep: 2 runs, 1 failed, in "), std::string::npos) << r.err;
   EXPECT_EQ(ReadInts(out, "runs/status"), (std::vector<int>{0, 1}));
   const std::vector<std::string> errors = ReadLines(out, "runs/errors");
   ASSERT_EQ(errors.size(), 2u);
