@@ -107,8 +107,10 @@ struct SweepResult {
 };
 
 // Runs `scenario_path` once per override set (LoadScenario(path, set), then RunScenario without
-// an output file). Throws only on a programmer error or a lost MPI rank; every failed run is in
-// the result.
+// an output file). Every failed run is in the result; throws only what a callback throws (the
+// threads then finish the runs they have and take no more) or std::invalid_argument for options
+// out of range. Under MPI every rank of the session must call it with the same arguments; a rank
+// that dies ends the launch (mpirun's doing).
 SweepResult RunSweep(const std::string& scenario_path,
                      const std::vector<std::vector<ScenarioOverride>>& runs,
                      const SweepOptions& options);
