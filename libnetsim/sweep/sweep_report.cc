@@ -412,10 +412,15 @@ void WriteRuns(std::ostringstream& o, const std::vector<SweepParameter>& paramet
   const int failed = result.failed();
   if (failed > 0) {
     o << "<h2>Failed runs</h2>\n<div class=\"notes\"><ul>";
-    for (const SweepRun& run : result.runs)
-      if (!run.ok())
-        o << "<li>run " << run.index << " (" << StatusName(run.status) << "): " << Escape(run.error)
-          << "</li>";
+    for (const SweepRun& run : result.runs) {
+      if (run.ok()) continue;
+      // The values it ran with (4 digits; /runs/overrides in sweep.h5 has them exactly).
+      std::string values;
+      for (size_t q = 0; q < parameters.size(); ++q)
+        values += (q ? ", " : "") + parameters[q].path + " = " + Short(grid[run.index].values[q]);
+      o << "<li>run " << run.index << " (" << Escape(values) << "), " << StatusName(run.status)
+        << ": " << Escape(run.error) << "</li>";
+    }
     o << "</ul></div>\n";
   }
   o << "<h2>Every run</h2>\n<table id=\"runs\">";

@@ -57,7 +57,8 @@ TEST(SweepReport, PlotsCarryTheOutputsOfTheirRuns) {
   // Run 5 blew up: no value on its line, listed with its reason.
   EXPECT_EQ(Attribute(rest, "<path data-series=\"drag.drag_coefficient = 1.2\"", "data-values"),
             "1.3 1.4 nan");
-  EXPECT_NE(html.find("run 5 (blew up): blew up at t = 0.01 s: node 3 &lt;speed&gt;"),
+  EXPECT_NE(html.find("run 5 (materials.pp.bend_stiffness = 0.0003, drag.drag_coefficient = "
+                      "1.2), blew up: blew up at t = 0.01 s: node 3 &lt;speed&gt;"),
             std::string::npos);
   EXPECT_NE(html.find("5 of 6 runs finished"), std::string::npos);
   EXPECT_NE(html.find("<svg id=\"centroid_drift-vs-1\""), std::string::npos);
