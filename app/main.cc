@@ -20,6 +20,7 @@ const std::vector<Command>& Commands() {
       {"render", "film a simulated shot with a virtual camera rig, with ground truth", RunRender},
       {"score", "score a simulation against measured knot tracks: error, d2, a verdict", RunScore},
       {"simulate", "run a Cosserat-rod net simulation from a scenario file", RunSimulate},
+      {"sweep", "vary scenario parameters over a grid: runs, sensitivities, a report", RunSweep},
       {"triangulate", "3D knot tracks from 2D labels of calibrated cameras", RunTriangulate},
   };
   return commands;

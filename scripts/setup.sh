@@ -13,6 +13,7 @@ netlab_packages=(
   libeigen3-dev libyaml-cpp-dev libhdf5-dev libgtest-dev
   libceres-dev libopencv-dev libopencv-contrib-dev qt6-base-dev
   hdf5-tools python3 fonts-dejavu-core
+  libopenmpi-dev openmpi-bin
 )
 
 netlab_install_missing() {

@@ -23,6 +23,7 @@ int RunIngest(const std::vector<std::string>& args);
 int RunLabel(const std::vector<std::string>& args);
 int RunRender(const std::vector<std::string>& args);
 int RunScore(const std::vector<std::string>& args);
+int RunSweep(const std::vector<std::string>& args);
 int RunTriangulate(const std::vector<std::string>& args);
 
 }  // namespace netlab::app

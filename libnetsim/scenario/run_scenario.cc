@@ -40,6 +40,7 @@ std::string RunSummary::BriefReport() const {
 
 RunSummary RunScenario(const Scenario& scenario, const RunOptions& options) {
   BuiltScenario built = BuildScenario(scenario);
+  if (options.on_built) options.on_built(built);
   Simulation& sim = *built.simulation;
   const Model& model = sim.model();
 
@@ -72,9 +73,11 @@ RunSummary RunScenario(const Scenario& scenario, const RunOptions& options) {
   }
   std::vector<Vector3d> knots(built.knot_nodes.size()), probes(built.probe_nodes.size());
   auto write_frame = [&] {
-    if (!writer) return;
+    if (!writer && !options.on_frame) return;
     const State& s = sim.state();
     for (size_t k = 0; k < knots.size(); ++k) knots[k] = s.x[built.knot_nodes[k]];
+    if (options.on_frame) options.on_frame(s.time, knots);
+    if (!writer) return;
     for (size_t p = 0; p < probes.size(); ++p) probes[p] = s.x[built.probe_nodes[p]];
     writer->AppendFrame(s.time, s.x, knots, probes);
   };

@@ -16,6 +16,12 @@ struct RunOptions {
   std::string out_path;  // knot-track HDF5 file; empty: write nothing
   // Called about every 2 % of the run with the fraction done (0..1); may be empty.
   std::function<void(double fraction)> progress;
+  // Called at every output frame (the frames the file gets) with the time (s) and the knots'
+  // positions (m, in Model::knots order), e.g. to keep the tracks in memory; may be empty.
+  std::function<void(double time, const std::vector<Vector3d>& knots)> on_frame;
+  // Called once the scenario is built, before the first step (the knots' grid and nets); may be
+  // empty.
+  std::function<void(const BuiltScenario& built)> on_built;
 };
 
 struct RunSummary {
