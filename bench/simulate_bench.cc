@@ -47,7 +47,7 @@ Trajectory Run(Scenario s, double window, int refine, double dt_factor, bool phy
   for (RodSpec& r : s.rods) r.segments *= refine;
   for (NetSpec& n : s.nets) n.segments_per_link *= refine;
   s.simulation.scale_rotational_inertia = !physical;
-  s.simulation.safety *= dt_factor;
+  s.simulation.safety = s.simulation.EffectiveSafety() * dt_factor;
   BuiltScenario built = BuildScenario(s);
   Simulation& sim = *built.simulation;
   const Model& model = sim.model();

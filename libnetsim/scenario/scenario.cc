@@ -88,8 +88,10 @@ class Parser {
         o.dt = m.Positive("dt");
       }
     }
-    o.safety = m.Positive("safety", o.safety);
-    if (o.safety > 1.0) m.Fail("safety", "must be in (0, 1]");
+    if (m.Has("safety")) {
+      o.safety = m.Positive("safety");
+      if (o.safety > 1.0) m.Fail("safety", "must be in (0, 1]");
+    }
     const std::string inertia = m.String("rotational_inertia", "scaled");
     if (inertia != "scaled" && inertia != "physical")
       m.Fail("rotational_inertia", "expected scaled or physical, got '" + inertia + "'");

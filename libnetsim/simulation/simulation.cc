@@ -48,7 +48,7 @@ bool SimulationOptions::IsValid(std::string* error) const {
     return false;
   };
   if (!(dt >= 0.0) || !std::isfinite(dt)) return fail("dt must be > 0 or auto");
-  if (!(safety > 0.0 && safety <= 1.0)) return fail("safety must be in (0, 1]");
+  if (!(safety >= 0.0 && safety <= 1.0)) return fail("safety must be in (0, 1] (0: the default)");
   if (!(align_interval >= 0.0) || !std::isfinite(align_interval))
     return fail("align_interval must be >= 0");
   if (!(contact_frequency_ratio > 0.0 && contact_frequency_ratio <= 1.0))
@@ -111,7 +111,7 @@ Simulation::Simulation(Model model, State state, std::vector<std::unique_ptr<For
     if (!std::isfinite(stability_.dt_limit))
       throw std::invalid_argument(
           "integrator: dt auto needs a model with stiffness or damping; give dt in seconds");
-    dt_ = options_.safety * stability_.dt_limit;
+    dt_ = options_.EffectiveSafety() * stability_.dt_limit;
     if (options_.align_interval > 0.0) {
       const double steps = std::ceil(options_.align_interval / dt_ - 1e-9);
       dt_ = options_.align_interval / steps;
@@ -310,11 +310,12 @@ bool Simulation::Step() {
 }
 
 int Simulation::ImplicitSubsteps() {
+  constexpr double kExplicitSafety = 0.9;  // the explicit step's default
   // The static bounds hold for the whole run; the tension's string stiffness and contact come and
   // go. A node whose tension raises its bounds needs the step that keeps its margin: safety times
   // its own limit, or, where the step is already above that (a dt the user chose), the step
   // shrunk by the ratio its limit shrank, so such a dt still blows up. A contact is resolved as
-  // the explicit step resolves it, omega_c h <= 2 safety contact_frequency_ratio (0.54): at the
+  // the explicit step resolves it, omega_c h <= 2 0.9 contact_frequency_ratio (0.54): at the
   // stability limit instead (0.75 with the critically damped boxes) a thread dropped on a box
   // bounced back at half its speed where the explicit step lands it dead.
   double ratio = 1.0;
@@ -325,15 +326,15 @@ int Simulation::ImplicitSubsteps() {
       if (model_.node_inv_mass[i] == 0.0 || geometric[i] == 0.0) continue;
       const double m = model_.node_mass[i];
       const double k = fixed.node_stiffness[i], c = fixed.node_damping[i];
-      const double h_static = options_.safety * StableStep(k, c, m);
-      const double h_tension = options_.safety * StableStep(k + geometric[i], c, m);
+      const double h_static = options_.EffectiveSafety() * StableStep(k, c, m);
+      const double h_tension = options_.EffectiveSafety() * StableStep(k + geometric[i], c, m);
       ratio = std::max(ratio, std::min(dt_, h_static) / h_tension);
     }
   }
   if (contact_) {
     const double omega = contact_->NearContactFrequency(model_, state_, dt_);
     if (omega > 0.0)
-      ratio = std::max(ratio, dt_ * omega / (2.0 * options_.safety * options_.contact_frequency_ratio));
+      ratio = std::max(ratio, dt_ * omega / (2.0 * kExplicitSafety * options_.contact_frequency_ratio));
   }
   constexpr int kMaxSubsteps = 4096;  // beyond it the blow-up check stops the run
   const int substeps =

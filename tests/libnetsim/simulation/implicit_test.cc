@@ -65,9 +65,12 @@ TEST(Implicit, TakesAStepManyTimesLongerAndFliesTheNetAsTheExplicitStep) {
     net.spread = spread;
     builder.AddNet(net);
     auto [model, state] = std::move(builder).Build();
-    // The corners lead, so the thread is pulled taut and swings.
-    for (int r : {0, 4})
-      for (int c : {0, 4}) state.v[model.KnotNode(0, r, c)] += Vector3d(0.1, 0.02 * (c - 2), 0.02 * (r - 2));
+    // The rim leads and spreads (a smooth field: an impulse on the corners alone would start
+    // waves finer than either step resolves), so the thread is pulled taut and the net cups.
+    for (size_t i = 0; i < state.x.size(); ++i) {
+      const Vector3d& p = state.x[i];
+      state.v[i] += Vector3d(2.0 * (p.y() * p.y() + p.z() * p.z()), 0.3 * p.y(), 0.3 * p.z());
+    }
     DragOptions drag;
     drag.air_density = 1.0;
     drag.drag_coefficient = 1.2;
@@ -86,7 +89,7 @@ TEST(Implicit, TakesAStepManyTimesLongerAndFliesTheNetAsTheExplicitStep) {
   };
   const auto [explicit_knots, explicit_dt, explicit_t] = run(IntegratorType::kSymplecticEuler);
   const auto [implicit_knots, implicit_dt, implicit_t] = run(IntegratorType::kImplicit);
-  EXPECT_GT(implicit_dt / explicit_dt, 20.0);
+  EXPECT_GT(implicit_dt / explicit_dt, 25.0);
   ASSERT_NEAR(implicit_t, explicit_t, 1e-9);
   double sum = 0.0, travel = 0.0;
   for (size_t i = 0; i < explicit_knots.size(); ++i) {
@@ -94,9 +97,10 @@ TEST(Implicit, TakesAStepManyTimesLongerAndFliesTheNetAsTheExplicitStep) {
     travel = std::max(travel, std::abs(explicit_knots[i].x()));
   }
   EXPECT_GT(travel, 0.1);  // it flew
-  // Measured 1.08 mm RMS over the knots after 0.2 s, with the corners whipping the thread taut
-  // (on Net A's flight, 0.12-0.15 mm against the converged reference: docs/benchmarks.md).
-  EXPECT_LT(std::sqrt(sum / explicit_knots.size()), 1.5e-3);
+  // Measured 0.77 mm RMS over the knots after 0.2 s at a 34 times longer step, the net cupping
+  // as its rim pulls the thread taut (on Net A's flight 0.12-0.18 mm over 1 s against the
+  // converged reference: docs/benchmarks.md).
+  EXPECT_LT(std::sqrt(sum / explicit_knots.size()), 1.0e-3);
   // Started with bulging links (spread 0.95), the net snaps straight, a motion that is chaotic
   // (two discretisations part by centimetres, docs/simulator.md): the implicit step stays stable
   // through it. With the frames linearised about their old orientation instead of turned exactly
