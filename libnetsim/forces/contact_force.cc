@@ -158,7 +158,8 @@ double ContactForce::NearContactFrequency(const Model& model, const State& state
         if ((state.x[i] - center).squaredNorm() > reach * reach) continue;
       }
       Vector3d normal;
-      const double gap = body.SignedDistance(state.x[i], state.time, &normal) - model.node_radius[i];
+      const double gap =
+          body.SignedDistance(state.x[i], state.time, &normal) - model.node_radius[i];
       if (gap > travel + model.node_radius[i]) continue;
       omega2 = std::max(omega2, Stiffness(body, model.node_mass[i]) * model.node_inv_mass[i]);
     }

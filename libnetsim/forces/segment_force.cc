@@ -52,7 +52,7 @@ SegmentForce::Terms SegmentForce::SegmentTerms(const Model& model, const State& 
                d1z = 2.0 * (qx * qz - qw * qy);
   const double d2x = 2.0 * (qx * qy - qw * qz), d2y = 1.0 - 2.0 * (qx * qx + qz * qz),
                d2z = 2.0 * (qy * qz + qw * qx);
-  const double klt = implicit_frames_ ? 0.0 : kl;  // the implicit stepper turns the frame
+  const double klt = implicit_frames_ ? 0.0 : kl;            // the implicit stepper turns the frame
   terms.torque[0] = klt * (d2x * tx + d2y * ty + d2z * tz);  // subtracted from torque x
   terms.torque[1] = klt * (d1x * tx + d1y * ty + d1z * tz);  // added to torque y
   return terms;

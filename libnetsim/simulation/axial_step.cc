@@ -69,8 +69,8 @@ bool AxialStep::Apply(const Model& model, double h, const std::vector<Vector3d>&
     const double u = t.dot(vb - va);
     const double stiff = h * s.stretch_stiffness + s.stretch_damping;  // (h EA + c), N s
     rhs_[r] = (s.stretch_stiffness * (length - s.rest_length) + s.stretch_damping * u) / stiff;
-    values[diagonal_[r]] = model.node_inv_mass[s.node_a] + model.node_inv_mass[s.node_b] +
-                           s.rest_length / (h * stiff);
+    values[diagonal_[r]] =
+        model.node_inv_mass[s.node_a] + model.node_inv_mass[s.node_b] + s.rest_length / (h * stiff);
   }
   for (const Term& term : terms_)
     values[term.value] +=

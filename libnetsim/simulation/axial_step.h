@@ -60,8 +60,8 @@ class AxialStep {
     double sign;   // +1 when the node is the same end of both segments, else -1
   };
 
-  std::vector<int> segments_;        // model segment of each row
-  std::vector<int> diagonal_;        // value index of each row's diagonal entry
+  std::vector<int> segments_;  // model segment of each row
+  std::vector<int> diagonal_;  // value index of each row's diagonal entry
   std::vector<Term> terms_;
   Eigen::SparseMatrix<double> matrix_;  // lower triangle
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> solver_;

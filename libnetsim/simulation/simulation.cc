@@ -56,8 +56,9 @@ bool SimulationOptions::IsValid(std::string* error) const {
   if (!(max_speed > 0.0)) return fail("max_speed must be > 0");
   if (threads < 1 || threads > 256) return fail("threads must be in 1..256");
   if (kinetic_damping && integrator == IntegratorType::kVelocityVerlet)
-    return fail("kinetic_damping needs type explicit or implicit (its peak correction is "
-                "symplectic Euler's)");
+    return fail(
+        "kinetic_damping needs type explicit or implicit (its peak correction is "
+        "symplectic Euler's)");
   return true;
 }
 
@@ -334,7 +335,8 @@ int Simulation::ImplicitSubsteps() {
   if (contact_) {
     const double omega = contact_->NearContactFrequency(model_, state_, dt_);
     if (omega > 0.0)
-      ratio = std::max(ratio, dt_ * omega / (2.0 * kExplicitSafety * options_.contact_frequency_ratio));
+      ratio =
+          std::max(ratio, dt_ * omega / (2.0 * kExplicitSafety * options_.contact_frequency_ratio));
   }
   constexpr int kMaxSubsteps = 4096;  // beyond it the blow-up check stops the run
   const int substeps =
@@ -356,7 +358,8 @@ bool Simulation::ImplicitSubstep(double h) {
   // Nodes: the explicit kick, the implicit stretching, the drift.
   int bad_node = n;
 #pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static) \
-    reduction(min : bad_node)
+    reduction(min                                                               \
+              : bad_node)
   for (int i = 0; i < n; ++i) {
     Vector3d& v = state_.v[i];
     v += (h * model_.node_inv_mass[i]) * buffers_.force[i];
@@ -407,7 +410,8 @@ bool Simulation::ImplicitSubstep(double h) {
   }
   int bad_segment = s;
 #pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static) \
-    reduction(min : bad_segment)
+    reduction(min                                                               \
+              : bad_segment)
   for (int j = 0; j < s; ++j) {
     if (model_.segment_inv_inertia[j].squaredNorm() == 0.0) continue;
     const Vector3d& inertia = model_.segment_inertia[j];
@@ -423,12 +427,15 @@ bool Simulation::ImplicitSubstep(double h) {
       // explicit, it overshoots once h C exceeds twice the frame's (thin) inertia.
       const double c = h * frame_damping_[j];
       Vector3d turn;
-      turn.x() = ((inertia.x() + c) * (w.x() - w_r.x()) + h * torque.x()) / (inertia.x() + stiff + c);
-      turn.y() = ((inertia.y() + c) * (w.y() - w_r.y()) + h * torque.y()) / (inertia.y() + stiff + c);
+      turn.x() =
+          ((inertia.x() + c) * (w.x() - w_r.x()) + h * torque.x()) / (inertia.x() + stiff + c);
+      turn.y() =
+          ((inertia.y() + c) * (w.y() - w_r.y()) + h * torque.y()) / (inertia.y() + stiff + c);
       // The twist likewise: its own stiffness and damping implicit (in a curved thread the
       // twist of a frame that follows its centreline was unstable with them explicit).
       const double cz = h * frame_twist_damping_[j], kz = h * h * frame_twist_[j];
-      turn.z() = ((inertia.z() + cz) * (w.z() - w_r.z()) + h * torque.z()) / (inertia.z() + kz + cz);
+      turn.z() =
+          ((inertia.z() + cz) * (w.z() - w_r.z()) + h * torque.z()) / (inertia.z() + kz + cz);
       w = w_r + turn;
       if (!(w.squaredNorm() * h * h <= 1.0) && j < bad_segment) bad_segment = j;
       state_.q[j] = turned_[j];

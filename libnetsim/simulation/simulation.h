@@ -163,15 +163,15 @@ class Simulation {
   Model model_;
   State state_;
   std::vector<std::unique_ptr<Force>> forces_;
-  std::unique_ptr<AxialStep> axial_;  // the implicit integrator's stretching; else null
+  std::unique_ptr<AxialStep> axial_;       // the implicit integrator's stretching; else null
   SegmentForce* segment_force_ = nullptr;  // implicit: the force whose stretching, coupling
                                            // torque the stepper solves
   bool implicit_frames_ = false;           // implicit with coupling: frames follow (see .cc)
   BendTwistForce* joints_ = nullptr;       // implicit frames: evaluated on the turned frames
   bool skip_joints_ = false;
-  std::vector<Quaterniond> turned_;        // scratch: frames turned to the new tangents
-  std::vector<double> frame_damping_;      // per segment, its joints' bending damping, N m s
-  std::vector<double> frame_twist_;        // ... their twist stiffness, N m
+  std::vector<Quaterniond> turned_;          // scratch: frames turned to the new tangents
+  std::vector<double> frame_damping_;        // per segment, its joints' bending damping, N m s
+  std::vector<double> frame_twist_;          // ... their twist stiffness, N m
   std::vector<double> frame_twist_damping_;  // ... their twist damping, N m s
   ContactForce* contact_ = nullptr;
   SimulationOptions options_;
