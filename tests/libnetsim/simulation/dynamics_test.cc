@@ -37,8 +37,8 @@ class Dynamics : public ::testing::TestWithParam<IntegratorType> {
 // The paper's pendulum (30 cm PP yarn, 11 segments, pinned, g along -y), undamped: the total
 // energy of a symplectic integrator oscillates within O(dt) and does not drift. The implicit one
 // is not symplectic: its linearised backward Euler in stretching and in the frames loses energy,
-// first order in dt and never gains it (measured at its own step, 55 times explicit's: 1.2 % of
-// the energy released over 0.5 s; 0.62 % at a quarter of it, 0.25 % at a tenth).
+// first order in dt and never gains it (measured at its own step, 37 times explicit's: 0.88 % of
+// the energy released over 0.5 s; 0.25 % at 1e-4 s).
 TEST_P(Dynamics, PendulumConservesEnergyWithoutDamping) {
   auto [model, state] = StraightRod(PpYarn(), 0.3, 11, Fixity::kPinned);
   auto forces = ElasticForces(model);
