@@ -9,9 +9,16 @@
 #include <stdexcept>
 
 #include "common/files.h"
+#include "common/html.h"
 
 namespace netlab::netsim {
 namespace {
+
+using html::Escape;
+using html::Fixed;
+using html::Num;
+using html::Row;
+using html::Ticks;
 
 // Okabe-Ito: colours that stay apart for colour-blind readers.
 constexpr const char* kColours[6] = {"#0072b2", "#d55e00", "#009e73",
@@ -24,54 +31,6 @@ struct Display {
   const char* unit;
 };
 constexpr Display kDisplay[4] = {{1.0, "m²"}, {1.0, "s"}, {1e3, "mm"}, {1.0, "m"}};
-
-std::string Num(double v, int digits = 9) {
-  if (!std::isfinite(v)) return "nan";
-  char buffer[40];
-  std::snprintf(buffer, sizeof(buffer), "%.*g", digits, v);
-  return buffer;
-}
-
-std::string Fixed(double v, int decimals) {
-  if (!std::isfinite(v)) return "–";
-  char buffer[40];
-  std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, v);
-  return buffer;
-}
-
-std::string Escape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '&':
-        out += "&amp;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
-// Round tick steps: 1, 2 or 5 times a power of ten, about `count` ticks over [lo, hi].
-std::vector<double> Ticks(double lo, double hi, int count = 5) {
-  const double raw = (hi - lo) / count;
-  const double power = std::pow(10.0, std::floor(std::log10(raw)));
-  const double step = raw / power < 1.5 ? power : raw / power < 3.5 ? 2 * power : 5 * power;
-  std::vector<double> ticks;
-  for (double t = std::ceil(lo / step - 1e-9) * step; t <= hi + 1e-9 * step; t += step)
-    ticks.push_back(std::abs(t) < 1e-12 * step ? 0.0 : t);
-  return ticks;
-}
 
 // The last key of a dotted path: what a legend or a column has room for.
 std::string ShortName(const std::string& path) {
@@ -263,12 +222,6 @@ std::string SameInEveryRun(const std::vector<SweepRun>& runs, size_t output) {
            " in every run: the net is largest in its first frame (it starts spread and "
            "never opens wider).";
   return value + " in every run.";
-}
-
-std::string Row(const std::vector<std::string>& cells, const char* tag = "td") {
-  std::string s = "<tr>";
-  for (const auto& c : cells) s += std::string("<") + tag + ">" + c + "</" + tag + ">";
-  return s + "</tr>\n";
 }
 
 void WriteHead(std::ostringstream& o, const std::string& title) {

@@ -9,50 +9,20 @@
 #include <stdexcept>
 
 #include "common/files.h"
+#include "common/html.h"
 
 namespace netlab::netsim {
 namespace {
 
+using html::Escape;
+using html::Fixed;
+using html::Num;
+using html::Row;
+using html::Ticks;
+
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // Colours that stay apart for colour-blind readers (Okabe-Ito).
 constexpr const char* kClassColours[3] = {"#d55e00", "#0072b2", "#009e73"};
-
-std::string Num(double v, int digits = 9) {
-  if (!std::isfinite(v)) return "nan";
-  char buffer[40];
-  std::snprintf(buffer, sizeof(buffer), "%.*g", digits, v);
-  return buffer;
-}
-
-std::string Fixed(double v, int decimals) {
-  if (!std::isfinite(v)) return "–";
-  char buffer[40];
-  std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, v);
-  return buffer;
-}
-
-std::string Escape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '&':
-        out += "&amp;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 std::string Values(const std::vector<double>& v) {
   std::string s;
@@ -61,17 +31,6 @@ std::string Values(const std::vector<double>& v) {
     s += Num(v[i]);
   }
   return s;
-}
-
-// Round tick steps: 1, 2 or 5 times a power of ten, about `count` ticks over [lo, hi].
-std::vector<double> Ticks(double lo, double hi, int count = 5) {
-  const double raw = (hi - lo) / count;
-  const double power = std::pow(10.0, std::floor(std::log10(raw)));
-  const double step = raw / power < 1.5 ? power : raw / power < 3.5 ? 2 * power : 5 * power;
-  std::vector<double> ticks;
-  for (double t = std::ceil(lo / step - 1e-9) * step; t <= hi + 1e-9 * step; t += step)
-    ticks.push_back(std::abs(t) < 1e-12 * step ? 0.0 : t);
-  return ticks;
 }
 
 // A line plot in SVG: axes with round ticks, series as paths broken where a value is NaN.
@@ -296,12 +255,6 @@ std::string Histogram(const ScoreResult& r) {
     << top - 14 << "\" y2=\"" << top - 14 << "\" stroke=\"#000\" stroke-width=\"2\"/><text x=\""
     << lx + 157 << "\" y=\"" << top - 10 << "\">χ²₃: expected if consistent</text>\n</svg>\n";
   return o.str();
-}
-
-std::string Row(const std::vector<std::string>& cells, const char* tag = "td") {
-  std::string s = "<tr>";
-  for (const auto& c : cells) s += std::string("<") + tag + ">" + c + "</" + tag + ">";
-  return s + "</tr>\n";
 }
 
 // The document's head (title, inline style) and the opening of its body.
