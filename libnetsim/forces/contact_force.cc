@@ -79,13 +79,9 @@ void ContactForce::Accumulate(const Model& model, const State& state, double dt,
     // Broad phase: a node farther from the centre than the bounding radius plus its own radius
     // cannot touch; skipped without a square root.
     const Vector3d center = body.center + state.time * body.velocity;
-    const bool bounded = std::isfinite(bounding_radius_[b]);
     for (int i = 0; i < n; ++i) {
       if (model.node_inv_mass[i] == 0.0) continue;  // pinned nodes do not take contact forces
-      if (bounded) {
-        const double reach = bounding_radius_[b] + model.node_radius[i];
-        if ((state.x[i] - center).squaredNorm() > reach * reach) continue;
-      }
+      if (Beyond(b, center, state.x[i], model.node_radius[i])) continue;
       Vector3d normal;
       const double depth =
           model.node_radius[i] - body.SignedDistance(state.x[i], state.time, &normal);
@@ -149,14 +145,10 @@ double ContactForce::NearContactFrequency(const Model& model, const State& state
   for (size_t b = 0; b < bodies_.size(); ++b) {
     const RigidBody& body = bodies_[b];
     const Vector3d center = body.center + state.time * body.velocity;
-    const bool bounded = std::isfinite(bounding_radius_[b]);
     for (int i = 0; i < n; ++i) {
       if (model.node_inv_mass[i] == 0.0) continue;
       const double travel = (state.v[i] - body.velocity).norm() * horizon;
-      if (bounded) {
-        const double reach = bounding_radius_[b] + model.node_radius[i] + travel;
-        if ((state.x[i] - center).squaredNorm() > reach * reach) continue;
-      }
+      if (Beyond(b, center, state.x[i], model.node_radius[i] + travel)) continue;
       Vector3d normal;
       const double gap =
           body.SignedDistance(state.x[i], state.time, &normal) - model.node_radius[i];

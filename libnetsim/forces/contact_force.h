@@ -13,6 +13,7 @@
 // SetContactFrequency). Every node then penetrates at most ~ v / omega_c for an impact speed v,
 // whatever its mass, and the contact never lowers the stable time step by more than the fraction.
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -66,6 +67,12 @@ class ContactForce final : public Force {
   double NearContactFrequency(const Model& model, const State& state, double horizon) const;
 
  private:
+  // Broad phase: true when a point `reach` or more outside body b's bounding sphere (about
+  // `center`) cannot touch it; tested without a square root. Never for a plane.
+  bool Beyond(size_t b, const Vector3d& center, const Vector3d& x, double reach) const {
+    const double r = bounding_radius_[b] + reach;
+    return std::isfinite(r) && (x - center).squaredNorm() > r * r;
+  }
   double Stiffness(const RigidBody& body, double mass) const {
     return body.stiffness > 0.0 ? body.stiffness : mass * contact_omega_ * contact_omega_;
   }

@@ -76,6 +76,23 @@ inline std::pair<Model, State> StraightRod(const Material& material, double leng
   return std::move(builder).Build();
 }
 
+// The paper's net (6 x 6 knots of PP yarn, 20 cm links of 5 segments, 0.5 kg corners) centred
+// `height` above the origin, falling at 5 m/s: the hard contact case.
+inline std::pair<Model, State> PaperNetFalling(double height) {
+  ModelBuilder builder;
+  NetSpec net;
+  net.name = "net";
+  net.material = builder.AddMaterial(PpYarn());
+  net.rows = net.cols = 6;
+  net.mesh = 0.2;
+  net.segments_per_link = 5;
+  net.corner_mass = 0.5;
+  net.center = Vector3d(0, 0, height);
+  net.velocity = Vector3d(0, 0, -5.0);
+  builder.AddNet(net);
+  return std::move(builder).Build();
+}
+
 // Moves every node and turns every frame by random amounts (m, rad).
 inline void Perturb(State& state, double dx, double dtheta, unsigned seed) {
   std::mt19937 rng(seed);

@@ -118,18 +118,7 @@ TEST_P(Contact, ThreadLandsOnTheTopOfABox) {
 // wraps, its tension presses the nodes in, by about as much as the straight segments between
 // nodes already cut into the sphere (measured 0.58 mm against 0.28 + 0.67 mm).
 TEST_P(Contact, NetHittingASphereAt5MetresPerSecondStaysStable) {
-  ModelBuilder builder;
-  NetSpec net;
-  net.name = "net";
-  net.material = builder.AddMaterial(PpYarn());
-  net.rows = net.cols = 6;
-  net.mesh = 0.2;
-  net.segments_per_link = 5;
-  net.corner_mass = 0.5;
-  net.center = Vector3d(0, 0, 0.32);
-  net.velocity = Vector3d(0, 0, -5.0);
-  builder.AddNet(net);
-  auto [model, state] = std::move(builder).Build();
+  auto [model, state] = testing::PaperNetFalling(0.32);
   RigidBody sphere;
   sphere.shape = RigidBody::Shape::kSphere;
   sphere.radius = 0.3;

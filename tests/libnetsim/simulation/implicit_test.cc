@@ -113,18 +113,7 @@ TEST(Implicit, TakesAStepManyTimesLongerAndFliesTheNetAsTheExplicitStep) {
 // Free flight takes whole steps; a contact splits them into substeps that resolve it as the
 // explicit step does (the paper's net onto a sphere, 0.5 kg corners at 5 m/s).
 TEST(Implicit, SplitsTheStepOnlyWhileAContactNeedsIt) {
-  ModelBuilder builder;
-  NetSpec net;
-  net.name = "net";
-  net.material = builder.AddMaterial(testing::PpYarn());
-  net.rows = net.cols = 6;
-  net.mesh = 0.2;
-  net.segments_per_link = 5;
-  net.corner_mass = 0.5;
-  net.center = Vector3d(0, 0, 0.5);
-  net.velocity = Vector3d(0, 0, -5.0);
-  builder.AddNet(net);
-  auto [model, state] = std::move(builder).Build();
+  auto [model, state] = testing::PaperNetFalling(0.5);
   RigidBody sphere;
   sphere.shape = RigidBody::Shape::kSphere;
   sphere.radius = 0.3;
