@@ -277,8 +277,8 @@ TEST_P(Dynamics, RotatingFrameReproducesInertialStraightLine) {
     const Vector3d expected = Eigen::AngleAxisd(-angle, Vector3d::UnitZ()) * inertial;
     // The Coriolis force depends on the velocity, which every integrator treats to first order:
     // the error over the ~0.15 m path is 0.85 dt m/s with a constant Omega and 0.38 dt m/s with
-    // the ramp for explicit and implicit (1.5e-5 m at explicit's 1.7e-5 s step, 1.2e-4 m at
-    // implicit's 1.4e-4 s), 0.56 dt and 0.16 dt for verlet.
+    // the ramp for explicit and implicit (1.5e-5 m at explicit's 1.7e-5 s step; implicit's is
+    // several times longer), 0.56 dt and 0.16 dt for verlet.
     EXPECT_LT((com() - expected).norm(), 1.2 * sim.dt()) << (ramp ? "ramp" : "constant");
   }
 }
