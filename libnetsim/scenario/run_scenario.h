@@ -28,7 +28,7 @@ struct RunSummary {
   std::string scenario;
   bool stable = true;          // false when the run stopped on a NaN or blow-up
   std::string error;           // why it stopped (empty when stable)
-  std::string integrator;      // "explicit" | "verlet"
+  std::string integrator;      // "explicit" | "verlet" | "implicit"
   double dt = 0.0;             // s, the step used
   double dt_limit = 0.0;       // s, estimated stability limit
   double max_inertia_scale = 1.0;  // largest rotational inertia scaling factor

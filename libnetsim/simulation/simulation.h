@@ -143,7 +143,8 @@ class Simulation {
   int max_penetration_node() const { return max_penetration_node_; }
   // Forces of the last evaluation.
   const ForceBuffers& forces() const { return buffers_; }
-  // Evaluates all forces at the current state into forces().
+  // Evaluates all forces at the current state into forces(). Under the implicit integrator these
+  // leave out what the stepper solves itself: the axial force and the coupling's torque.
   void EvaluateForces();
 
  private:
