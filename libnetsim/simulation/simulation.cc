@@ -316,7 +316,7 @@ int Simulation::ImplicitSubsteps() {
   // go. A node whose tension raises its bounds needs the step that keeps its margin: safety times
   // its own limit, or, where the step is already above that (a dt the user chose), the step
   // shrunk by the ratio its limit shrank, so such a dt still blows up. A contact is resolved as
-  // the explicit step resolves it, omega_c h <= 2 0.9 contact_frequency_ratio (0.54): at the
+  // the explicit step resolves it, omega_c h <= 2 x 0.9 x contact_frequency_ratio (0.54): at the
   // stability limit instead (0.75 with the critically damped boxes) a thread dropped on a box
   // bounced back at half its speed where the explicit step lands it dead.
   double ratio = 1.0;
