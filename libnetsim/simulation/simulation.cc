@@ -121,7 +121,16 @@ Simulation::Simulation(Model model, State state, std::vector<std::unique_ptr<For
   for (const Vector3d& inertia : model_.segment_inertia)
     if (inertia.maxCoeff() - inertia.minCoeff() > 1e-12 * inertia.maxCoeff()) gyroscopic_ = true;
   buffers_.Resize(model_.num_nodes(), model_.num_segments());
-  if (segment_force_ && segment_force_->stretch()) axial_ = std::make_unique<AxialStep>(model_);
+  if (segment_force_ && segment_force_->stretch()) {
+    axial_ = std::make_unique<AxialStep>(model_);
+    // Each node's own step under the static bounds, capped at dt (ImplicitSubsteps).
+    node_step_.resize(model_.num_nodes());
+    for (int i = 0; i < model_.num_nodes(); ++i)
+      node_step_[i] = std::min(
+          dt_, options_.EffectiveSafety() * StableStep(stability_.bounds.node_stiffness[i],
+                                                       stability_.bounds.node_damping[i],
+                                                       model_.node_mass[i]));
+  }
   if (implicit_frames_) {
     // Each frame's own bending damping coefficient: c_b / l over its joints (2 c_b / l at a clamp).
     frame_damping_.assign(model_.num_segments(), 0.0);
@@ -325,11 +334,10 @@ int Simulation::ImplicitSubsteps() {
     const StiffnessBounds& fixed = stability_.bounds;
     for (int i = 0; i < model_.num_nodes(); ++i) {
       if (model_.node_inv_mass[i] == 0.0 || geometric[i] == 0.0) continue;
-      const double m = model_.node_mass[i];
-      const double k = fixed.node_stiffness[i], c = fixed.node_damping[i];
-      const double h_static = options_.EffectiveSafety() * StableStep(k, c, m);
-      const double h_tension = options_.EffectiveSafety() * StableStep(k + geometric[i], c, m);
-      ratio = std::max(ratio, std::min(dt_, h_static) / h_tension);
+      const double h_tension =
+          options_.EffectiveSafety() * StableStep(fixed.node_stiffness[i] + geometric[i],
+                                                  fixed.node_damping[i], model_.node_mass[i]);
+      ratio = std::max(ratio, node_step_[i] / h_tension);
     }
   }
   if (contact_) {

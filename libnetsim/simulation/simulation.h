@@ -171,6 +171,7 @@ class Simulation {
   BendTwistForce* joints_ = nullptr;       // implicit frames: evaluated on the turned frames
   bool skip_joints_ = false;
   std::vector<Quaterniond> turned_;          // scratch: frames turned to the new tangents
+  std::vector<double> node_step_;            // implicit: per node, min(dt, its static stable step)
   std::vector<double> frame_damping_;        // per segment, its joints' bending damping, N m s
   std::vector<double> frame_twist_;          // ... their twist stiffness, N m
   std::vector<double> frame_twist_damping_;  // ... their twist damping, N m s

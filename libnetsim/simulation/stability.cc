@@ -30,23 +30,6 @@ double TranslationalFrequency(const Model& model, const State& state,
   return std::sqrt(omega2_max);
 }
 
-double StableStepLimit(const Model& model, const State& state,
-                       const std::vector<const Force*>& forces) {
-  StiffnessBounds bounds;
-  bounds.Resize(model.num_nodes(), model.num_segments());
-  for (const Force* force : forces) force->AddStiffnessBounds(model, state, bounds);
-  double limit = std::numeric_limits<double>::infinity();
-  for (int i = 0; i < model.num_nodes(); ++i)
-    if (model.node_inv_mass[i] != 0.0)
-      limit = std::min(
-          limit, StableStep(bounds.node_stiffness[i], bounds.node_damping[i], model.node_mass[i]));
-  for (int j = 0; j < model.num_segments(); ++j)
-    if (model.segment_inv_inertia[j].squaredNorm() != 0.0)
-      limit = std::min(limit, StableStep(bounds.segment_stiffness[j], bounds.segment_damping[j],
-                                         model.segment_inertia[j].minCoeff()));
-  return limit;
-}
-
 StabilityReport PrepareStability(Model& model, const State& state,
                                  const std::vector<const Force*>& forces, ContactForce* contact,
                                  const StabilityOptions& options) {

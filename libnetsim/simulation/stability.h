@@ -56,11 +56,6 @@ struct StabilityReport {
   StiffnessBounds bounds;          // the bounds the limit was taken from
 };
 
-// The stable step (s) of `forces` (all of them, contact included) for `model` as it is (its
-// rotational inertia already scaled or not), without changing anything.
-double StableStepLimit(const Model& model, const State& state,
-                       const std::vector<const Force*>& forces);
-
 // The highest translational frequency bound (rad/s) of `forces` but `contact` at `state`.
 double TranslationalFrequency(const Model& model, const State& state,
                               const std::vector<const Force*>& forces, const ContactForce* contact);
