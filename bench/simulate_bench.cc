@@ -2,7 +2,8 @@
 //
 //   bench_simulate [--quick] [--window SECONDS] [--dir SCENARIO_DIR] [CASE ...]
 //   bench_simulate --threads N [--window SECONDS] [CASE ...]   one thread against N
-//   bench_simulate --integrator implicit [--no-physical] [CASE ...]   another integrator
+//   bench_simulate --integrator implicit [--no-physical] [--substep-contact] [CASE ...]
+//                                                                    another integrator
 //
 // Per case: the default run (automatic dt, rotational inertia scaled) with its segments, dt,
 // steps, wall time, segment-steps/s and real-time factor; its error against a converged reference
@@ -16,7 +17,9 @@
 // split, SimulationOptions::threads), their wall times and whether every tracked point of every
 // frame has the same bits. With --integrator NAME the timed run and the inertia-scaling run use
 // that integrator (the reference stays explicit); --no-physical leaves the inertia-scaling run
-// out (with implicit it keeps the frames explicit at their tiny step: minutes for Net B).
+// out (with implicit it keeps the frames explicit at their tiny step: minutes for Net B);
+// --substep-contact resolves the implicit integrator's contact by substeps of the whole net
+// (SimulationOptions::implicit_contact = false) instead of implicitly.
 
 #include <chrono>
 #include <cmath>
@@ -118,6 +121,7 @@ int main(int argc, char** argv) {
   int threads = 0;
   const char* integrator = nullptr;
   bool physical_runs = true;
+  bool substep_contact = false;
   std::vector<std::string> cases;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--quick")) {
@@ -129,6 +133,8 @@ int main(int argc, char** argv) {
       repeat = std::max(1, std::atoi(argv[++i]));
     } else if (!std::strcmp(argv[i], "--threads") && i + 1 < argc) {
       threads = std::max(1, std::atoi(argv[++i]));
+    } else if (!std::strcmp(argv[i], "--substep-contact")) {
+      substep_contact = true;
     } else if (!std::strcmp(argv[i], "--no-physical")) {
       physical_runs = false;
     } else if (!std::strcmp(argv[i], "--integrator") && i + 1 < argc) {
@@ -173,7 +179,8 @@ int main(int argc, char** argv) {
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   for (const std::string& case_name : cases) {
     const char* name = case_name.c_str();
-    const Scenario s = LoadScenario(dir + "/" + case_name + ".yaml");
+    Scenario s = LoadScenario(dir + "/" + case_name + ".yaml");
+    s.simulation.implicit_contact = !substep_contact;
     const bool flight = case_name.rfind("net_", 0) == 0 && case_name != "net_capture";
     const double w = flight ? window : (quick ? std::min(window, s.duration) : s.duration);
     const Trajectory run = fastest(s, w, 1);

@@ -47,6 +47,7 @@ void PrintJson(const netsim::RunSummary& s) {
   json.Key("dt").Number(s.dt);
   json.Key("dt_limit").Number(s.dt_limit);
   json.Key("steps").Int(s.steps);
+  json.Key("substeps").Int(s.substeps);
   json.Key("nodes").Int(s.nodes);
   json.Key("segments").Int(s.segments);
   json.Key("knots").Int(s.knots);

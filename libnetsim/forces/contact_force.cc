@@ -159,4 +159,41 @@ double ContactForce::NearContactFrequency(const Model& model, const State& state
   return std::sqrt(omega2);
 }
 
+double ContactForce::ResolveImplicit(const Model& model, int i, const Vector3d& x, double t,
+                                     double h, Vector3d* v) const {
+  double deepest = 0.0;
+  const double m = model.node_mass[i];
+  const double r = model.node_radius[i];
+  for (size_t b = 0; b < bodies_.size(); ++b) {
+    const RigidBody& body = bodies_[b];
+    const Vector3d v_rel = *v - body.velocity;
+    const double travel = v_rel.norm() * h;
+    if (Beyond(b, body.center + t * body.velocity, x, r + travel)) continue;
+    Vector3d normal;
+    const double depth = r - body.SignedDistance(x, t, &normal);
+    if (depth + travel <= 0.0) continue;  // cannot reach the body within the step
+    const double k = Stiffness(body, m);
+    const double c = 2.0 * body.damping_ratio * std::sqrt(k * m);
+    const double vn = v_rel.dot(normal);
+    const double a = h / m;
+    const double vn_end = (vn + a * k * depth) / (1.0 + a * (h * k + c));
+    const double fn = k * (depth - h * vn_end) - c * vn_end;
+    deepest = std::max(deepest, depth);
+    if (fn <= 0.0) continue;
+    deepest = std::max(deepest, depth - h * vn_end);
+    *v += (vn_end - vn) * normal;
+    if (body.friction > 0.0) {
+      const Vector3d vt = v_rel - vn * normal;
+      const double speed = vt.norm();
+      if (speed > 0.0) {
+        double ft = body.friction * fn * speed /
+                    std::sqrt(speed * speed + friction_velocity_ * friction_velocity_);
+        ft = std::min(ft, m * speed / h);
+        *v -= (a * ft / speed) * vt;
+      }
+    }
+  }
+  return deepest;
+}
+
 }  // namespace netlab::netsim

@@ -65,6 +65,17 @@ class ContactForce final : public Force {
   // step: that toggling pumped a thread on a rising plane unstable); 0 when none. The implicit
   // integrator's step-by-step check.
   double NearContactFrequency(const Model& model, const State& state, double horizon) const;
+  // The contact of node i over one step of length h, taken implicitly (the implicit integrator's,
+  // whose step the penalty's frequency would otherwise limit): given the node's position x at
+  // time t and its velocity v after the kick of every other force, for each body it may touch
+  // within the step, the normal force at the end of the step, linearised about the prediction,
+  //   F_n = k (delta - h v+_n) - c v+_n,   v+_n = v_n + (h / m) F_n   (backward Euler),
+  // is applied when it pushes (F_n > 0), then the friction of that force, capped as above. Adds
+  // the impulses to *v; returns the deepest penetration, now or at the end of the step (m).
+  // Without the step's own resolution of the penalty's oscillation, a node lands on a body dead
+  // and rests at the same depth F / k.
+  double ResolveImplicit(const Model& model, int i, const Vector3d& x, double t, double h,
+                         Vector3d* v) const;
 
  private:
   // Broad phase: true when a point `reach` or more outside body b's bounding sphere (about

@@ -22,9 +22,12 @@ std::string RunSummary::BriefReport() const {
   os << "\n";
   os << "  integrator  " << integrator << ", dt " << dt << " s (stability limit " << dt_limit
      << " s, rotational inertia scaled up to x" << max_inertia_scale << ")\n";
-  os << "  run         " << steps << " steps to t = " << sim_time << " s in " << wall_s
-     << " s wall: " << segment_steps_per_s / 1e6 << " M segment-steps/s, " << real_time_factor
-     << " x real time\n";
+  os << "  run         " << steps << " steps";
+  if (substeps > steps)
+    os << " (split into " << substeps << " substeps, up to " << max_substeps
+       << " in a step, where the tension needed them)";
+  os << " to t = " << sim_time << " s in " << wall_s << " s wall: " << segment_steps_per_s / 1e6
+     << " M segment-steps/s, " << real_time_factor << " x real time\n";
   if (!max_penetration_at.empty())
     os << "  contact     from t = " << contact_start_s << " s; deepest penetration "
        << max_penetration * 1e3 << " mm at " << max_penetration_at << "\n";
@@ -101,6 +104,8 @@ RunSummary RunScenario(const Scenario& scenario, const RunOptions& options) {
 
   const State& s = sim.state();
   summary.steps = sim.steps_taken();
+  summary.substeps = sim.substeps_taken();
+  summary.max_substeps = sim.max_substeps();
   summary.sim_time = s.time;
   summary.segment_steps_per_s =
       summary.wall_s > 0.0 ? summary.segments * static_cast<double>(summary.steps) / summary.wall_s

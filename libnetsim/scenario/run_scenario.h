@@ -33,6 +33,10 @@ struct RunSummary {
   double dt_limit = 0.0;       // s, estimated stability limit
   double max_inertia_scale = 1.0;  // largest rotational inertia scaling factor
   long steps = 0;
+  // Steps the implicit integrator split, for the tension (otherwise the same as steps), and the
+  // largest split.
+  long substeps = 0;
+  int max_substeps = 1;
   int nodes = 0;
   int segments = 0;
   int knots = 0;

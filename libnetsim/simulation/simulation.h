@@ -66,6 +66,10 @@ struct SimulationOptions {
   double align_interval = 0.0;
   bool scale_rotational_inertia = true;  // stability.h
   double contact_frequency_ratio = 0.3;  // contact_force.h
+  // Implicit integrator: the contact's penalty is taken implicitly, node by node, within the whole
+  // step; false: the whole net takes the substeps that resolve it as the explicit step does
+  // (slower, for comparison). docs/simulator.md.
+  bool implicit_contact = true;
   // Reset all velocities whenever the kinetic energy falls (dynamic relaxation to a static
   // equilibrium, with Barnes' correction of the positions to the energy peak). Changes the
   // dynamics: only for statics. Needs the explicit or the implicit integrator.
@@ -132,8 +136,9 @@ class Simulation {
 
   const std::optional<Failure>& failure() const { return failure_; }
   long steps_taken() const { return steps_; }
-  // The implicit integrator splits a step into substeps while the tension or a contact needs a
-  // smaller one (the others: substeps == steps). Total and largest count per step.
+  // The implicit integrator splits a step into substeps while the tension (or, without
+  // implicit_contact, a contact) needs a smaller one (the others: substeps == steps). Total and
+  // largest count per step.
   long substeps_taken() const { return substeps_total_; }
   int max_substeps() const { return max_substeps_; }
   Energy ComputeEnergy() const;
@@ -157,9 +162,14 @@ class Simulation {
   void Drift(double h, bool nodes);
   double KineticEnergy() const;
   // The implicit integrator: substeps the next step needs (>= 1), from the static bounds plus the
-  // tension's geometric stiffness and the contact of the nodes about to touch; one substep of h.
+  // tension's geometric stiffness (and, without implicit_contact, the contact of the nodes about
+  // to touch); one substep of h.
   int ImplicitSubsteps();
   bool ImplicitSubstep(double h);
+  // The implicit integrator's first step: the velocities set half a step back (see .cc).
+  void StaggerVelocities();
+  // SimulationOptions::implicit_contact: every node's contact over a substep of length h.
+  void ImplicitContact(double h);
 
   Model model_;
   State state_;
@@ -170,6 +180,7 @@ class Simulation {
   bool implicit_frames_ = false;           // implicit with coupling: frames follow (see .cc)
   BendTwistForce* joints_ = nullptr;       // implicit frames: evaluated on the turned frames
   bool skip_joints_ = false;
+  bool skip_contact_ = false;  // implicit contact: resolved by the stepper, not in the kick
   std::vector<Quaterniond> turned_;          // scratch: frames turned to the new tangents
   std::vector<double> node_step_;            // implicit: per node, min(dt, its static stable step)
   std::vector<double> frame_damping_;        // per segment, its joints' bending damping, N m s
