@@ -5,12 +5,13 @@
 //   bench_simulate --integrator implicit [--no-physical] [--substep-contact] [CASE ...]
 //                                                                    another integrator
 //
-// Per case: the default run (automatic dt, rotational inertia scaled) with its segments, dt,
-// steps, wall time, segment-steps/s and real-time factor; its error against a converged reference
-// (twice the segments per rod or link, and a quarter of the step); and the error the rotational
-// inertia scaling alone makes (same discretisation with the physical cross-section inertia and
-// its much smaller step). Errors are RMS and max over the tracked points (knots of nets, the
-// nodes of rods shared with the finer rod) and over output frames, in mm. The parabolic-flight
+// Per case: the scenario's run (its integrator, automatic dt, rotational inertia scaled) with its
+// segments, dt, steps, wall time, segment-steps/s and real-time factor; its error against a
+// converged reference (twice the segments per rod or link, and a quarter of the step); and the
+// error the rotational inertia scaling alone makes (same discretisation with the physical
+// cross-section inertia and its much smaller step). Errors are RMS and max over the tracked
+// points (knots of nets, the nodes of rods shared with the finer rod) and over output frames, in
+// mm. The parabolic-flight
 // cases run for a window (default 1 s) of their flight. The timed run is repeated (--repeat N,
 // default 3) and the fastest kept: wall times on a shared machine vary by +-20 %. Prints a
 // Markdown table. With --threads N: the default run on one thread and on N (the forces' loops
