@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <new>
+
+#include "common/memory.h"
 
 namespace netlab::app {
 
@@ -32,6 +35,9 @@ CommandLine::CommandLine(const std::vector<std::string>& args,
         if (i + 1 >= args.size()) throw UsageError("--" + name + " needs a value");
         value = args[++i];
       }
+      // An empty value (--out '', a variable that was never set) would run the whole job and
+      // then fail to write, or write nothing: refused before any work.
+      if (value.empty()) throw UsageError("--" + name + " needs a non-empty value");
       values_[name].push_back(value);
     } else {
       throw UsageError("unknown option --" + name);
@@ -136,6 +142,14 @@ int RunGuarded(const char* name, const std::function<int()>& body) {
   } catch (const UsageError& e) {
     std::fprintf(stderr, "netlab %s: %s\n(see netlab %s --help)\n", name, e.what(), name);
     return 2;
+  } catch (const std::bad_alloc&) {
+    // The commands size their jobs before allocating (common/memory.h); this is the last line.
+    const std::optional<double> available = AvailableMemoryBytes();
+    std::fprintf(stderr,
+                 "netlab %s: error: out of memory: the job is larger than this machine can hold "
+                 "(%s available); try a smaller input or option range\n",
+                 name, available ? FormatBytes(*available).c_str() : "unknown");
+    return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "netlab %s: error: %s\n", name, e.what());
     return 1;

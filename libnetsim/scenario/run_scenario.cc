@@ -7,6 +7,7 @@
 #include <memory>
 #include <sstream>
 
+#include "common/yaml_util.h"
 #include "libnetsim/tracks/track_file.h"
 
 namespace netlab::netsim {
@@ -58,6 +59,22 @@ RunSummary RunScenario(const Scenario& scenario, const RunOptions& options) {
   summary.knots = model.num_knots();
   summary.active = sim.active_forces();
 
+  // A step so small that the run could never end (a material 1e300 stiff gave dt = 6.5e-154 s,
+  // and the step count overflowed into a run of 0 steps reported as stable) is refused up front.
+  // 1e13 segment-steps is a week at the 15 M segment-steps/s of one core.
+  const double steps_needed = scenario.duration / sim.dt();
+  if (!(steps_needed * std::max(1, model.num_segments()) <= 1e13)) {
+    std::ostringstream os;
+    os << std::setprecision(3)
+       << (scenario.source_path.empty() ? scenario.name : scenario.source_path) << ": dt "
+       << sim.dt() << " s (stability limit " << sim.stability().dt_limit << " s";
+    if (sim.stability().limiting_node >= 0)
+      os << ", set by " << model.DescribeNode(sim.stability().limiting_node);
+    os << ") would take " << steps_needed << " steps of " << model.num_segments()
+       << " segments to reach duration " << scenario.duration
+       << " s: check the materials' stiffness, damping and linear density (or integrator.dt)";
+    throw InputError(os.str());
+  }
   // Output frames every `steps_per_frame` steps; an automatic dt divides the interval exactly.
   const long steps_per_frame =
       std::max(1L, std::lround(scenario.output_interval / sim.dt()));
