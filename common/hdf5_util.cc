@@ -154,6 +154,19 @@ std::vector<hsize_t> DatasetDims(hid_t loc, const std::string& name) {
 void ReadDataset(hid_t loc, const std::string& name, hid_t type, void* data) {
   Id dataset(H5Dopen2(loc, name.c_str(), H5P_DEFAULT));
   if (!dataset.valid()) Fail(ObjectName(loc) + ": missing dataset " + name);
+  // HDF5 converts between any two numeric types: int32 positions would be read as metres and a
+  // float frame index truncated, without a word. The stored kind must be the one asked for.
+  Id stored(H5Dget_type(dataset.get()));
+  const H5T_class_t stored_class = H5Tget_class(stored.get()), wanted = H5Tget_class(type);
+  if (stored_class != wanted && (stored_class == H5T_FLOAT || stored_class == H5T_INTEGER) &&
+      (wanted == H5T_FLOAT || wanted == H5T_INTEGER)) {
+    const std::string kind = stored_class == H5T_FLOAT
+                                 ? std::to_string(8 * H5Tget_size(stored.get())) + "-bit float"
+                                 : (H5Tget_sign(stored.get()) == H5T_SGN_NONE ? "uint" : "int") +
+                                       std::to_string(8 * H5Tget_size(stored.get()));
+    Fail(ObjectName(dataset.get()) + " is " + kind + ", expected " +
+         (wanted == H5T_FLOAT ? "floating point" : "integers"));
+  }
   Id space(H5Dget_space(dataset.get()));
   if (H5Sget_simple_extent_npoints(space.get()) == 0) return;
   if (H5Dread(dataset.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)

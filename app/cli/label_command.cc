@@ -9,6 +9,7 @@
 #include <iostream>
 #include <map>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -17,6 +18,7 @@
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
 #include "calibration/rig.h"
+#include "common/yaml_util.h"
 #include "libreconstruct/coloring/net_coloring.h"
 #include "libreconstruct/labeling/label_engine.h"
 #include "libreconstruct/labeling/label_store.h"
@@ -113,7 +115,7 @@ void SelectFrames(const CommandLine& cl, const recon::SynchronizedSequence& sequ
 // Empty labels over the job's frames with the seed labels of those frames in; *seeded: how
 // many. Throws when a seed's camera is not in the experiment, or no seed lies in the frames.
 recon::LabelSet SeededLabels(const LabelJob& job, const recon::LabelSet& seeds,
-                             const std::string& seed_path, int64_t* seeded) {
+                             const std::string& seed_path, const calib::Rig& rig, int64_t* seeded) {
   recon::LabelSet initial =
       recon::LabelSet::Empty(job.rows, job.cols, job.cameras, job.frame_index);
   *seeded = 0;
@@ -122,12 +124,26 @@ recon::LabelSet SeededLabels(const LabelJob& job, const recon::LabelSet& seeds,
     if (c < 0)
       throw std::runtime_error(seed_path + ": camera '" + seeds.cameras[sc] +
                                "' is not in the experiment");
+    const calib::CameraIntrinsics* size = nullptr;
+    for (const calib::Camera& camera : rig.cameras)
+      if (camera.name == seeds.cameras[sc]) size = &camera.intrinsics;
     for (int st = 0; st < seeds.frames(); ++st) {
       const int t = seeds.frame_index[st] - job.first;
       if (t < 0 || t >= initial.frames()) continue;
       for (int k = 0; k < job.rows * job.cols; ++k) {
         const recon::Label& l = seeds.at(static_cast<int>(sc), st, k);
         if (!l.present()) continue;
+        // A seed off the image (one at (-1e9, 5) was imported as is) is a broken file, not a
+        // label: the tools would track from it.
+        if (size && size->width > 0 &&
+            !(l.px.x() >= -0.5 && l.px.x() <= size->width - 0.5 && l.px.y() >= -0.5 &&
+              l.px.y() <= size->height - 0.5)) {
+          std::ostringstream os;
+          os << seed_path << ": camera " << seeds.cameras[sc] << ", frame " << seeds.frame_index[st]
+             << ", knot (" << k / job.cols << "," << k % job.cols << "): seed (" << l.px.x() << ", "
+             << l.px.y() << ") is outside the " << size->width << "x" << size->height << " image";
+          throw InputError(os.str());
+        }
         initial.at(c, t, k) = l;
         ++*seeded;
       }
@@ -240,7 +256,7 @@ int RunLabel(const std::vector<std::string>& args) {
     const recon::LabelSet seeds =
         recon::ReadLabelsAny(cl.Required("seed"), job.rows, job.cols, job.cameras);
     LabelReport report;
-    recon::LabelStore store(SeededLabels(job, seeds, cl.Required("seed"), &report.seeded));
+    recon::LabelStore store(SeededLabels(job, seeds, cl.Required("seed"), rig, &report.seeded));
 
     // The engine over the experiment's frames (the first unreadable one noted per camera).
     recon::LabelEngineOptions options;

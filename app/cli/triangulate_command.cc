@@ -1,12 +1,14 @@
 // netlab triangulate --rig rig.yaml --labels LABELS --knots ROWSxCOLS --fps F --out tracks.h5
 //                    [--csv PREFIX] [--ba none|points|rig] [--json]
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <exception>
 #include <iostream>
 #include <mutex>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -14,6 +16,7 @@
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
 #include "calibration/rig.h"
+#include "common/yaml_util.h"
 #include "libnetsim/tracks/track_file.h"
 #include "libreconstruct/geometry/bundle_adjust.h"
 #include "libreconstruct/geometry/track_export.h"
@@ -93,19 +96,46 @@ TriangulateArgs ParseArgs(const CommandLine& cl) {
     throw UsageError("--ba expects none, points or rig, got '" + a.ba + "'");
   options.triangulation.outlier_threshold_px = cl.DoubleOption("outlier-px", 4.0, 0.01, 1e4);
   options.auto_threshold = !cl.Option("outlier-px");
-  options.sigma_px = cl.DoubleOption("sigma-px", 0.0, 0.0, 1e3);
-  options.link_length_m = cl.DoubleOption("link-length", 0.0, 0.0, 100.0);
+  // 0 stands for "estimate" or "off" inside; a value the user gives must be a real one (a
+  // --smooth-sigma 0 silently meant no prior at all).
+  options.sigma_px = cl.DoubleOption("sigma-px", 0.0, 1e-6, 1e3);
+  options.link_length_m = cl.DoubleOption("link-length", 0.0, 1e-6, 100.0);
   options.link_sigma_m = cl.DoubleOption("link-sigma", 0.002, 1e-9, 100.0);
-  options.smoothness_sigma_m = cl.DoubleOption("smooth-sigma", 0.0, 0.0, 100.0);
+  options.smoothness_sigma_m = cl.DoubleOption("smooth-sigma", 0.0, 1e-9, 100.0);
   options.rig_frames = cl.IntOption("rig-frames", 200, 1, 1000000);
-  options.rig_max_center_sigma_mm = cl.DoubleOption("rig-max-sigma-mm", 2.0, 0.0, 1e6);
-  options.rig_max_rotation_sigma_deg = cl.DoubleOption("rig-max-sigma-deg", 0.02, 0.0, 360.0);
+  options.rig_max_center_sigma_mm = cl.DoubleOption("rig-max-sigma-mm", 2.0, 1e-9, 1e6);
+  options.rig_max_rotation_sigma_deg = cl.DoubleOption("rig-max-sigma-deg", 0.02, 1e-9, 360.0);
   options.threads = cl.IntOption("threads", 2, 1, 256);
   options.use_unreviewed = cl.Flag("use-unreviewed");
   if (options.adjustment == recon::Adjustment::kNone &&
       (options.link_length_m > 0 || options.smoothness_sigma_m > 0))
     throw UsageError("the priors (--link-length, --smooth-sigma) need --ba points or rig");
   return a;
+}
+
+// The truth must be the labels' net over the labels' frames: a 6 x 6 truth against 11 x 11 labels
+// matched the first 36 knots by (row, col) and reported "353 mm RMS" instead of refusing.
+void CheckTruthMatches(const netsim::KnotTracks& truth, const TriangulateArgs& a,
+                       const recon::LabelSet& labels) {
+  int rows = 0, cols = 0;
+  for (const auto& [row, col] : truth.grid) {
+    rows = std::max(rows, row + 1);
+    cols = std::max(cols, col + 1);
+  }
+  if (rows != a.rows || cols != a.cols)
+    throw InputError("--truth " + *a.truth_path + ": a " + std::to_string(rows) + "x" +
+                     std::to_string(cols) + " net, the labels (--knots) are " +
+                     std::to_string(a.rows) + "x" + std::to_string(a.cols));
+  if (labels.frames() == 0 || truth.time.empty()) return;
+  const double first = labels.frame_index.front() / a.fps, last = labels.frame_index.back() / a.fps;
+  if (last < truth.time.front() - 0.5 / a.fps || first > truth.time.back() + 0.5 / a.fps) {
+    std::ostringstream os;
+    os << "--truth " << *a.truth_path << ": covers " << truth.time.front() << ".."
+       << truth.time.back() << " s, the labels' frames " << labels.frame_index.front() << ".."
+       << labels.frame_index.back() << " at --fps " << a.fps << " are " << first << ".." << last
+       << " s: no frame in common";
+    throw InputError(os.str());
+  }
 }
 
 // Progress on stderr: a line when a stage starts or reaches the next tenth (called from the
@@ -289,7 +319,10 @@ int RunTriangulate(const std::vector<std::string>& args) {
     for (const auto& c : rig.cameras) names.push_back(c.name);
     const recon::LabelSet labels = recon::ReadLabelsAny(a.labels_path, a.rows, a.cols, names);
     std::optional<netsim::KnotTracks> truth;
-    if (a.truth_path) truth = netsim::ReadKnotTracks(*a.truth_path);
+    if (a.truth_path) {
+      truth = netsim::ReadKnotTracks(*a.truth_path);
+      CheckTruthMatches(*truth, a, labels);
+    }
 
     // The reconstruction, with its progress on stderr.
     ProgressPrinter progress(a.quiet);
@@ -299,6 +332,16 @@ int RunTriangulate(const std::vector<std::string>& args) {
     Outcome o;
     o.frames = labels.frames();
     o.result = recon::ReconstructSequence(rig, labels, a.options);
+    if (o.result.candidates == 0)
+      throw InputError(a.labels_path + ": no knot is labeled in two cameras in any of its " +
+                       std::to_string(labels.frames()) + " frames: nothing to triangulate" +
+                       (a.options.use_unreviewed ? ""
+                                                 : " (labels still marked for review are left "
+                                                   "out without --use-unreviewed)"));
+    if (o.result.triangulated == 0)
+      throw InputError(a.labels_path + ": none of the " + std::to_string(o.result.candidates) +
+                       " knot-frames labeled in two or more cameras could be triangulated (every "
+                       "one rejected as an outlier: do the labels belong to this --rig?)");
 
     // The tracks written, compared with the truth, reported.
     const netsim::KnotTracks tracks =

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <sstream>
 #include <stdexcept>
 
 #include "common/hdf5_util.h"
@@ -180,6 +181,17 @@ KnotTracks ReadKnotTracks(const std::string& path) {
 
   tracks.time.resize(t);
   h5::ReadDataset(f, "/time", H5T_NATIVE_DOUBLE, tracks.time.data());
+  // A time that stands still or runs back (a decreasing /time read as "frames 0:-8") is refused
+  // here, for every reader: render, triangulate --truth, score.
+  for (hsize_t i = 0; i < t; ++i) {
+    if (!std::isfinite(tracks.time[i])) fail("/time[" + std::to_string(i) + "] is not a number");
+    if (i > 0 && !(tracks.time[i] > tracks.time[i - 1])) {
+      std::ostringstream os;
+      os << "/time is not increasing at row " << i << " (" << tracks.time[i - 1] << " s then "
+         << tracks.time[i] << " s)";
+      fail(os.str());
+    }
+  }
   std::vector<int32_t> grid(2 * k);
   h5::ReadDataset(f, "/knots/grid", H5T_NATIVE_INT32, grid.data());
   for (hsize_t i = 0; i < k; ++i) tracks.grid.push_back({grid[2 * i], grid[2 * i + 1]});
@@ -194,6 +206,11 @@ KnotTracks ReadKnotTracks(const std::string& path) {
   h5::ReadDataset(f, "/knots/position", H5T_NATIVE_DOUBLE, tracks.position.data());
   tracks.valid.resize(t * k);
   h5::ReadDataset(f, "/knots/valid", H5T_NATIVE_UINT8, tracks.valid.data());
+  for (hsize_t i = 0; i < t * k; ++i)
+    if (tracks.valid[i] && !tracks.position[i].allFinite())
+      fail("/knots/position is not finite at frame " + std::to_string(i / k) + ", knot (" +
+           std::to_string(tracks.grid[i % k][0]) + "," + std::to_string(tracks.grid[i % k][1]) +
+           "), where /knots/valid is 1");
   if (h5::Exists(f, "/knots/covariance")) {
     expect("/knots/covariance", {t, k, 3, 3});
     tracks.covariance.resize(t * k);
@@ -209,6 +226,12 @@ KnotTracks ReadKnotTracks(const std::string& path) {
     expect("/frame_index", {t});
     std::vector<int32_t> frames(t);
     h5::ReadDataset(f, "/frame_index", H5T_NATIVE_INT32, frames.data());
+    for (hsize_t i = 0; i < t; ++i)
+      if (frames[i] < 0 || (i > 0 && frames[i] <= frames[i - 1]))
+        fail("/frame_index[" + std::to_string(i) + "] = " + std::to_string(frames[i]) +
+             (frames[i] < 0 ? " is negative"
+                            : " is not after [" + std::to_string(i - 1) +
+                                  "] = " + std::to_string(frames[i - 1])));
     tracks.frame_index.assign(frames.begin(), frames.end());
   }
   if (h5::Exists(f, "/outliers")) {

@@ -244,6 +244,13 @@ LabelSet ReadLabelsFile(const std::string& path, hid_t f) {
   const hsize_t t = frame_dims[0], k = static_cast<hsize_t>(labels.knots());
   labels.frame_index.resize(t);
   h5::ReadDataset(f, "/frame_index", H5T_NATIVE_INT, labels.frame_index.data());
+  // Repeated or backward frames gave a /time that stood still or ran back downstream.
+  for (hsize_t i = 0; i < t; ++i)
+    if (labels.frame_index[i] < 0 || (i > 0 && labels.frame_index[i] <= labels.frame_index[i - 1]))
+      fail("/frame_index[" + std::to_string(i) + "] = " + std::to_string(labels.frame_index[i]) +
+           (labels.frame_index[i] < 0 ? " is negative"
+                                      : " is not after [" + std::to_string(i - 1) +
+                                            "] = " + std::to_string(labels.frame_index[i - 1])));
 
   expect("/knots/grid", {k, 2});
   std::vector<int> grid(2 * k);
@@ -301,6 +308,15 @@ LabelSet ReadLabelsFile(const std::string& path, hid_t f) {
           !(std::isnan(position[2 * i]) && std::isnan(position[2 * i + 1])))
         fail(prefix + "state: 3 (hidden)" + where(i) + " has a position in " + prefix +
              "position_px (a hidden mark has none: NaN)");
+      // A label that says where the knot is must give a position: one at (inf, 1e300) was read
+      // as no label and dropped without a word, an all-NaN file triangulated nothing with exit 0.
+      const bool finite = std::isfinite(position[2 * i]) && std::isfinite(position[2 * i + 1]);
+      const bool empty = std::isnan(position[2 * i]) && std::isnan(position[2 * i + 1]);
+      if (!finite && (!empty || (state[i] != static_cast<uint8_t>(LabelState::kHidden) &&
+                                 (source[i] != 0 || state[i] != 0))))
+        fail(prefix + "position_px: (" + Number(position[2 * i]) + ", " +
+             Number(position[2 * i + 1]) + ")" + where(i) +
+             " is not a position (a label's is finite; NaN, NaN only where there is no label)");
       camera[i].px = Eigen::Vector2d(position[2 * i], position[2 * i + 1]);
       camera[i].source = static_cast<LabelSource>(source[i]);
       camera[i].confidence = confidence[i];
