@@ -312,6 +312,12 @@ int RunSweep(const std::vector<std::string>& args) {
     if (!quiet) PrintSummary(parameters, result, sensitivity, out, report);
     if (cl.Flag("json"))
       PrintJson(scenario_path, parameters, grid, result, sensitivity, out, report);
+    // A study of which no run succeeded has no result, even with the file that says why.
+    if (failed == static_cast<int>(result.runs.size()) && failed > 0) {
+      std::fprintf(stderr, "netlab sweep: error: all %d runs failed (each named above; %s holds "
+                   "their errors)\n", failed, out.c_str());
+      return 1;
+    }
     return 0;
   });
 }

@@ -1,0 +1,166 @@
+// The bad-input suite of `netlab triangulate` and `netlab score` (issue 21): each row one kind of
+// bad input, the exit status it must end in and what its message must name
+// (tests/app/cli/bad_input.h). The fixtures (a rig, labels of a 4 x 4 net seen by its four
+// cameras, the net's true tracks) are written at run time, then broken (tests/app/cli/h5_edit.h).
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "calibration/rig.h"
+#include "libnetsim/tracks/track_file.h"
+#include "libreconstruct/labels/label_set.h"
+#include "tests/app/cli/bad_input.h"
+#include "tests/app/cli/h5_edit.h"
+
+namespace netlab::testing {
+namespace {
+
+constexpr int kRows = 4, kCols = 4, kFrames = 12;
+constexpr double kFps = 179.0;
+
+Eigen::Vector3d KnotAt(int t, int k, int cols = kCols) {
+  return {1.0 + 0.5 * t / kFps, (k % cols - 1.5) * 0.1, (k / cols - 1.5) * 0.1};
+}
+
+// The net's tracks over the labels' frames (a `rows` x `cols` net), starting at `t0` s.
+netsim::KnotTracks Truth(int rows, int cols, double t0 = 0.0) {
+  netsim::KnotTracks tracks;
+  for (int k = 0; k < rows * cols; ++k) tracks.grid.push_back({k / cols, k % cols});
+  for (int t = 0; t < kFrames; ++t) {
+    tracks.time.push_back(t0 + t / kFps);
+    for (int k = 0; k < rows * cols; ++k) {
+      tracks.position.push_back(KnotAt(t, k, cols));
+      tracks.valid.push_back(1);
+    }
+  }
+  tracks.source = "test";
+  return tracks;
+}
+
+class BadInputTriangulate : public CommandTest {
+ protected:
+  BadInputTriangulate() : CommandTest("bad_input_triangulate") {}
+  void SetUp() override {
+    CommandTest::SetUp();
+    const calib::Rig rig = calib::PaperRig();
+    calib::WriteRig(Path("rig.yaml"), rig);
+    std::vector<std::string> names;
+    for (const auto& c : rig.cameras) names.push_back(c.name);
+    std::vector<int> frames;
+    for (int t = 0; t < kFrames; ++t) frames.push_back(t);
+    recon::LabelSet labels = recon::LabelSet::Empty(kRows, kCols, names, frames);
+    recon::WriteLabels(Path("empty.h5"), labels);
+    for (int c = 0; c < 4; ++c)
+      for (int t = 0; t < kFrames; ++t)
+        for (int k = 0; k < kRows * kCols; ++k) {
+          recon::Label& l = labels.at(c, t, k);
+          l.px = rig.cameras[c].ProjectWorld(KnotAt(t, k));
+          l.source = recon::LabelSource::kManual;
+          l.confidence = 1.0f;
+          l.state = recon::LabelState::kAccepted;
+        }
+    recon::WriteLabels(Path("labels.h5"), labels);
+    for (const char* name : {"repeated.h5", "negative.h5", "inf.h5", "nan.h5"})
+      std::filesystem::copy_file(Path("labels.h5"), Path(name));
+    PokeH5(Path("repeated.h5"), "/frame_index", 3, 2);
+    PokeH5(Path("negative.h5"), "/frame_index", 0, -5);
+    PokeH5(Path("inf.h5"), "/cameras/cam0/position_px", 0, INFINITY);
+    PokeH5(Path("inf.h5"), "/cameras/cam0/position_px", 1, 1e300);
+    for (const std::string& camera : names)
+      FillH5(Path("nan.h5"), "/cameras/" + camera + "/position_px", NAN);
+
+    netsim::WriteKnotTracks(Path("truth.h5"), Truth(kRows, kCols));
+    netsim::WriteKnotTracks(Path("truth6.h5"), Truth(6, 6));
+    netsim::WriteKnotTracks(Path("truth_late.h5"), Truth(kRows, kCols, 100.0));
+    for (const char* name : {"backwards.h5", "int.h5"})
+      std::filesystem::copy_file(Path("truth.h5"), Path(name));
+    PokeH5(Path("backwards.h5"), "/time", 5, -0.05);
+    RetypeH5ToInt32(Path("int.h5"), "/knots/position");
+    std::ofstream(Path("text.h5")) << "not an HDF5 file\n";
+    const NetlabResult measured = RunNetlab(Base() + "--labels " + Path("labels.h5") +
+                                            " --out " + Path("measured.h5") + " --quiet");
+    ASSERT_EQ(measured.status, 0) << measured.err;
+  }
+  std::string Base() const {
+    return "triangulate --rig " + Path("rig.yaml") + " --knots 4x4 --fps 179 ";
+  }
+};
+
+TEST_F(BadInputTriangulate, EachKindEndsInAClearError) {
+  const std::string base = "triangulate --rig {dir}/rig.yaml --knots 4x4 --fps 179 ";
+  const std::string good = base + "--labels {dir}/labels.h5 ";
+  ExpectBadInputs(
+      {
+          {"missing labels", base + "--labels {dir}/missing.h5 --out {dir}/t.h5", 1,
+           {"{dir}/missing.h5"}},
+          {"labels not HDF5", base + "--labels {dir}/text.h5 --out {dir}/t.h5", 1,
+           {"{dir}/text.h5"}},
+          {"labels of another net", "triangulate --rig {dir}/rig.yaml --knots 5x5 --fps 179 "
+                                    "--labels {dir}/labels.h5 --out {dir}/t.h5", 1,
+           {"{dir}/labels.h5", "4", "5"}},
+          {"a repeated frame", base + "--labels {dir}/repeated.h5 --out {dir}/t.h5", 1,
+           {"{dir}/repeated.h5", "/frame_index[3] = 2 is not after [2] = 2"}},
+          {"a negative frame", base + "--labels {dir}/negative.h5 --out {dir}/t.h5", 1,
+           {"{dir}/negative.h5", "/frame_index[0] = -5 is negative"}},
+          {"a label at infinity", base + "--labels {dir}/inf.h5 --out {dir}/t.h5", 1,
+           {"{dir}/inf.h5", "/cameras/cam0/position_px", "row 0, knot 0", "not a position"}},
+          {"every label NaN", base + "--labels {dir}/nan.h5 --out {dir}/t.h5", 1,
+           {"{dir}/nan.h5", "position_px", "not a position"}},
+          {"no label at all", base + "--labels {dir}/empty.h5 --out {dir}/t.h5", 1,
+           {"{dir}/empty.h5", "no knot is labeled in two cameras", "12 frames"}},
+          {"the truth of another net", good + "--out {dir}/t.h5 --truth {dir}/truth6.h5", 1,
+           {"--truth {dir}/truth6.h5", "a 6x6 net", "4x4"}},
+          {"the truth of other frames", good + "--out {dir}/t.h5 --truth {dir}/truth_late.h5", 1,
+           {"--truth {dir}/truth_late.h5", "no frame in common"}},
+          {"a truth whose time runs back", good + "--out {dir}/t.h5 --truth {dir}/backwards.h5",
+           1, {"{dir}/backwards.h5", "/time is not increasing at row 5"}},
+          {"a truth stored as integers", good + "--out {dir}/t.h5 --truth {dir}/int.h5", 1,
+           {"{dir}/int.h5", "/knots/position is int32, expected floating point"}},
+          {"a prior of 0", good + "--out {dir}/t.h5 --smooth-sigma 0", 2, {"--smooth-sigma"}},
+          {"a noise of 0", good + "--out {dir}/t.h5 --sigma-px 0", 2, {"--sigma-px"}},
+          {"a link length of 0", good + "--out {dir}/t.h5 --link-length 0", 2,
+           {"--link-length"}},
+          {"no --fps", "triangulate --rig {dir}/rig.yaml --knots 4x4 --labels {dir}/labels.h5 "
+                       "--out {dir}/t.h5", 2, {"--fps"}},
+          {"a bad --knots", "triangulate --rig {dir}/rig.yaml --knots 4by4 --fps 179 "
+                            "--labels {dir}/labels.h5 --out {dir}/t.h5", 2, {"--knots"}},
+          {"missing rig", "triangulate --rig {dir}/missing.yaml --knots 4x4 --fps 179 "
+                          "--labels {dir}/labels.h5 --out {dir}/t.h5", 1, {"{dir}/missing.yaml"}},
+          {"empty --out", good + "--out ''", 2, {"--out needs a non-empty value"}},
+          {"--out in a folder that is a file", good + "--out {dir}/rig.yaml/t.h5", 1,
+           {"{dir}/rig.yaml/t.h5"}},
+      },
+      dir_.string());
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "t.h5"));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "t.h5.partial"));
+}
+
+TEST_F(BadInputTriangulate, ScoreEndsInAClearError) {
+  const std::string base = "score --measured {dir}/measured.h5 ";
+  ExpectBadInputs(
+      {
+          {"missing measurement", "score --measured {dir}/missing.h5 --sim {dir}/truth.h5 --out "
+                                  "{dir}/s.h5", 1, {"{dir}/missing.h5"}},
+          {"measurement not HDF5", "score --measured {dir}/text.h5 --sim {dir}/truth.h5 --out "
+                                   "{dir}/s.h5", 1, {"{dir}/text.h5"}},
+          {"a simulation stored as integers", base + "--sim {dir}/int.h5 --out {dir}/s.h5", 1,
+           {"{dir}/int.h5", "/knots/position is int32, expected floating point"}},
+          {"a simulation whose time runs back", base + "--sim {dir}/backwards.h5 --out {dir}/s.h5",
+           1, {"{dir}/backwards.h5", "/time is not increasing at row 5"}},
+          {"an unknown --align", base + "--sim {dir}/truth.h5 --out {dir}/s.h5 --align sideways",
+           2, {"--align"}},
+          {"empty --out", base + "--sim {dir}/truth.h5 --out ''", 2,
+           {"--out needs a non-empty value"}},
+          {"empty --report", base + "--sim {dir}/truth.h5 --out {dir}/s.h5 --report ''", 2,
+           {"--report needs a non-empty value"}},
+      },
+      dir_.string());
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "s.h5"));
+}
+
+}  // namespace
+}  // namespace netlab::testing
