@@ -7,6 +7,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <fstream>
 #include <iomanip>
 #include <mutex>
 #include <numeric>
@@ -22,6 +23,30 @@
 
 namespace netlab::calib {
 namespace {
+
+// A PNG or JPEG cut short (a copy that stopped, a full disk) lacks its end marker. Decoding one
+// makes libpng print "libpng error: Read Error" on stderr ahead of netlab's own message; such a
+// file is named here instead and never decoded. Other files go to the decoder as they are.
+std::string TruncatedImage(const std::string& path) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) return "";
+  const std::streamoff size = in.tellg();
+  auto bytes = [&](std::streamoff at, int n) {
+    std::string b(n, '\0');
+    in.seekg(at);
+    in.read(b.data(), n);
+    return in ? b : std::string();
+  };
+  if (size >= 8 && bytes(0, 8) == "\x89PNG\r\n\x1a\n") {
+    if (size < 20 || bytes(size - 8, 4) != "IEND")
+      return "a truncated PNG (" + std::to_string(size) + " bytes, no IEND chunk at its end)";
+  } else if (size >= 3 && bytes(0, 3) == "\xff\xd8\xff") {
+    if (bytes(size - 2, 2) != "\xff\xd9")
+      return "a truncated JPEG (" + std::to_string(size) + " bytes, no end-of-image marker)";
+  }
+  return "";
+}
+
 
 [[noreturn]] void Fail(const std::string& message) { throw std::runtime_error(message); }
 
@@ -928,10 +953,13 @@ CalibrationInput DetectInImages(const std::vector<std::string>& camera_names,
       if (task >= total) return;
       const int c = task / num_frames, f = task % num_frames;
       const std::string& file = files[c][f];
-      cv::Mat image = cv::imread(file, cv::IMREAD_UNCHANGED);
+      const std::string problem = TruncatedImage(file);
+      cv::Mat image;
+      if (problem.empty()) image = cv::imread(file, cv::IMREAD_UNCHANGED);
       if (image.empty()) {
         std::lock_guard<std::mutex> lock(mutex);
-        if (first_error.empty()) first_error = file + ": unreadable or not an image";
+        if (first_error.empty())
+          first_error = file + ": " + (problem.empty() ? "unreadable or not an image" : problem);
         continue;
       }
       sizes[c][f] = image.size();
