@@ -72,12 +72,14 @@ class FolderReplacement {
     if (dir_.empty() || name == "." || name == ".." || dir_ == "/")
       throw std::runtime_error("'" + dir_ + "': name the output folder itself (it is replaced "
                                "as a whole), not '.', '..' or '/'");
-    std::error_code error;
-    if (fs::exists(fs::symlink_status(dir_, error)) && !fs::is_directory(fs::symlink_status(dir_)))
+    // A status error means "no such path" here (or one under a file: create_directories below
+    // names that).
+    std::error_code ignored, error;
+    const fs::file_status status = fs::symlink_status(dir_, ignored);
+    if (fs::exists(status) && !fs::is_directory(status))
       throw std::runtime_error(dir_ + ": exists and is not a folder; not replaced");
     partial_ = dir_ + ".partial";
-    std::error_code missing;  // also "not a directory" above it: create_directories names that
-    if (fs::exists(fs::symlink_status(partial_, missing))) fs::remove_all(partial_, error);
+    if (fs::exists(fs::symlink_status(partial_, ignored))) fs::remove_all(partial_, error);
     if (error)
       throw std::runtime_error(partial_ + ": cannot remove the stale partial folder: " +
                                error.message());

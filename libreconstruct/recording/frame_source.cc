@@ -80,7 +80,9 @@ bool ParsePgmHeader(const std::string& head, FrameInfo* info, size_t* data_offse
 // The image format a file's first bytes say ("PNM", "PNG", "TIFF", "JPEG", "BMP"), or "" when
 // they say none of these.
 std::string FormatOfContent(const std::string& head) {
-  const auto starts = [&](const char* magic, size_t n) { return head.compare(0, n, magic, n) == 0; };
+  const auto starts = [&](const char* magic, size_t n) {
+    return head.compare(0, n, magic, n) == 0;
+  };
   if (head.size() >= 2 && head[0] == 'P' && head[1] >= '1' && head[1] <= '6') return "PNM";
   if (starts("\x89PNG", 4)) return "PNG";
   if (starts("II*\0", 4) || starts("MM\0*", 4)) return "TIFF";

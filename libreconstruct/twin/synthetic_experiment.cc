@@ -154,7 +154,8 @@ void WriteTextFile(const fs::path& path, const std::string& text) {
 
 // Writes an image (the format from the extension); std::runtime_error naming the file if not.
 void WriteImage(const fs::path& path, const cv::Mat& image) {
-  if (!cv::imwrite(path.string(), image)) throw std::runtime_error(path.string() + ": cannot write");
+  if (!cv::imwrite(path.string(), image))
+    throw std::runtime_error(path.string() + ": cannot write");
 }
 
 // labels_true.h5: the true pixel of every knot where a camera sees it (visibility 0), as the
