@@ -1,10 +1,14 @@
 #pragma once
-// Replacing a file safely: everything netlab writes goes to "<path>.partial" first and is renamed
-// into place when complete, so an interrupted write never destroys what the user had.
+// Replacing a file or a folder safely: everything netlab writes goes to "<path>.partial" first and
+// is renamed into place when complete, so an interrupted or failing write never destroys what the
+// user had and never leaves a half-written output under the output's name.
+
+#include <unistd.h>
 
 #include <filesystem>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 
 namespace netlab {
 
@@ -15,5 +19,98 @@ inline void RenameInto(const std::string& from, const std::string& to) {
   if (error)
     throw std::runtime_error(to + ": cannot rename " + from + " into place: " + error.message());
 }
+
+// Whether `path` is `folder` or lies inside it, symbolic links and ".." resolved (neither needs
+// to exist); false when either cannot be resolved.
+inline bool IsInsideFolder(const std::string& path, const std::string& folder) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  const fs::path f = fs::weakly_canonical(fs::absolute(folder), error);
+  if (error) return false;
+  const fs::path p = fs::weakly_canonical(fs::absolute(path), error);
+  if (error) return false;
+  const fs::path relative = p.lexically_relative(f);
+  return !relative.empty() && *relative.begin() != "..";
+}
+
+// Puts the complete folder `partial` in place of the folder `dir`. A folder cannot be renamed onto
+// a non-empty one, so an existing `dir` is renamed aside to "<dir>.old.<pid>" first, the partial
+// renamed into place, and the old one removed; if the second rename fails the old folder is put
+// back. Throws std::runtime_error naming the folders when `dir` exists but is not a folder or a
+// rename fails.
+inline void ReplaceDirectory(const std::string& partial, const std::string& dir) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  const fs::file_status status = fs::symlink_status(dir, error);
+  if (!fs::exists(status)) return RenameInto(partial, dir);
+  if (!fs::is_directory(status))
+    throw std::runtime_error(dir + ": exists and is not a folder; not replaced");
+  const std::string old = dir + ".old." + std::to_string(getpid());
+  fs::remove_all(old, error);
+  RenameInto(dir, old);
+  fs::rename(partial, dir, error);
+  if (error) {
+    std::error_code ignored;
+    fs::rename(old, dir, ignored);
+    throw std::runtime_error(dir + ": cannot rename " + partial + " into place: " +
+                             error.message() + " (the previous folder is kept)");
+  }
+  // The new folder is in place: a failure to delete the old one loses nothing.
+  fs::remove_all(old, error);
+}
+
+// A folder written whole under "<dir>.partial" and put in place of `dir` by Commit(); until then
+// `dir` is untouched, and a partial folder that is never committed is removed on destruction (a
+// failing run leaves no half-written folder behind). A stale partial from a killed run is removed
+// first. `dir` is named without a trailing '/'; "." , ".." and "/" are refused, since the folder
+// is renamed as a whole.
+class FolderReplacement {
+ public:
+  explicit FolderReplacement(std::string dir) : dir_(Trimmed(std::move(dir))) {
+    namespace fs = std::filesystem;
+    const std::string name = fs::path(dir_).filename().string();
+    if (dir_.empty() || name == "." || name == ".." || dir_ == "/")
+      throw std::runtime_error("'" + dir_ + "': name the output folder itself (it is replaced "
+                               "as a whole), not '.', '..' or '/'");
+    // A status error means "no such path" here (or one under a file: create_directories below
+    // names that).
+    std::error_code ignored, error;
+    const fs::file_status status = fs::symlink_status(dir_, ignored);
+    if (fs::exists(status) && !fs::is_directory(status))
+      throw std::runtime_error(dir_ + ": exists and is not a folder; not replaced");
+    partial_ = dir_ + ".partial";
+    if (fs::exists(fs::symlink_status(partial_, ignored))) fs::remove_all(partial_, error);
+    if (error)
+      throw std::runtime_error(partial_ + ": cannot remove the stale partial folder: " +
+                               error.message());
+    fs::create_directories(partial_, error);
+    if (error)
+      throw std::runtime_error(partial_ + ": cannot create the output folder: " + error.message());
+  }
+  FolderReplacement(const FolderReplacement&) = delete;
+  FolderReplacement& operator=(const FolderReplacement&) = delete;
+  ~FolderReplacement() {
+    if (committed_) return;
+    std::error_code ignored;
+    std::filesystem::remove_all(partial_, ignored);
+  }
+
+  const std::string& dir() const { return dir_; }
+  // Where to write the folder's content.
+  const std::string& partial() const { return partial_; }
+  void Commit() {
+    ReplaceDirectory(partial_, dir_);
+    committed_ = true;
+  }
+
+ private:
+  static std::string Trimmed(std::string dir) {
+    while (dir.size() > 1 && dir.back() == '/') dir.pop_back();
+    return dir;
+  }
+
+  std::string dir_, partial_;
+  bool committed_ = false;
+};
 
 }  // namespace netlab

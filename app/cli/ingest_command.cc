@@ -101,6 +101,7 @@ void PrintJson(const recon::SynchronizedSequence& sequence, const recon::CheckRe
       WriteIndices(json, "unreadable", c.unreadable);
       WriteIndices(json, "duplicated", c.duplicated);
       WriteIndices(json, "timestamp_gaps", c.timestamp_gaps);
+      WriteIndices(json, "untimed", c.untimed);
       json.Key("problems").BeginArray();
       for (const std::string& p : c.problems) json.String(p);
       json.EndArray();

@@ -25,7 +25,8 @@ constexpr char kHelp[] =
     "double-sided checker foil in DIR/calibration/<camera>/ with DIR/calibration/foil.yaml.\n\n"
     "options:\n"
     "  --sim FILE             simulation result (needs /nodes and /scenario)\n"
-    "  --out DIR              output folder (created)\n"
+    "  --out DIR              output folder, written as DIR.partial and put in place of DIR\n"
+    "                         when complete (a failing run leaves an existing DIR as it was)\n"
     "  --rig FILE             rig file (default: the paper's rig, two facing stereo pairs)\n"
     "  --frames A:B           camera frames A to B inclusive, frame k at time k / fps\n"
     "                         (default: every frame the simulation covers)\n"
@@ -112,8 +113,13 @@ int RunRender(const std::vector<std::string>& args) {
     else if (background != "black")
       throw UsageError("--background expects black or white, got '" + background + "'");
 
-    if (const auto coloring = cl.Option("coloring"))
+    if (const auto coloring = cl.Option("coloring")) {
       job.coloring = {recon::LoadYarnColoring(*coloring)};
+      job.coloring_file = *coloring;
+    }
+    for (const char* input : {"rig", "coloring"})
+      if (const auto path = cl.Option(input))
+        recon::CheckOutsideOutput(*path, std::string("--") + input, job.out_dir);
     ProgressBar bar("rendering", !cl.Flag("quiet"));
     const recon::RenderSummary summary =
         recon::RenderExperiment(job, [&](int done, int total) { bar.Update(done, total); });

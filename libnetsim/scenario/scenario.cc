@@ -464,20 +464,23 @@ void CheckModelSize(const Scenario& s, const std::string& origin) {
 
 }  // namespace
 
-BuiltScenario BuildScenario(const Scenario& s) {
+std::pair<Model, State> BuildModel(const Scenario& s) {
   const std::string origin = s.source_path.empty() ? s.name : s.source_path;
   CheckModelSize(s, origin);
   ModelBuilder builder(s.model);
-  Model model;
-  State state;
   try {
     for (const Material& m : s.materials) builder.AddMaterial(m);
     for (const RodSpec& r : s.rods) builder.AddRod(r);
     for (const NetSpec& n : s.nets) builder.AddNet(n);
-    std::tie(model, state) = std::move(builder).Build();
+    return std::move(builder).Build();
   } catch (const std::invalid_argument& e) {
     throw InputError(origin + ": " + e.what());
   }
+}
+
+BuiltScenario BuildScenario(const Scenario& s) {
+  const std::string origin = s.source_path.empty() ? s.name : s.source_path;
+  auto [model, state] = BuildModel(s);
 
   // The forces this scene uses, and only those.
   std::vector<std::unique_ptr<Force>> forces;

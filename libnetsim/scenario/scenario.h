@@ -95,6 +95,10 @@ struct BuiltScenario {
 
 // Builds the model, the forces the scene uses (and only those) and the simulation.
 BuiltScenario BuildScenario(const Scenario& scenario);
+// Only the model and its initial state: the geometry, without the forces or the simulation's
+// stability and contact set-up (what reading a result back needs; `netlab render` of a net with
+// segments_per_link 1 has no bending stiffness to size the contact from, yet draws fine).
+std::pair<Model, State> BuildModel(const Scenario& scenario);
 
 // Node index in the built model of a NodeRef.
 int ResolveNode(const Model& model, const NodeRef& ref);

@@ -7,6 +7,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "common/files.h"
 #include "common/yaml_util.h"
 
 namespace netlab::recon {
@@ -38,6 +39,16 @@ std::string PathFrom(const std::string& file, const std::string& path) {
 }
 
 }  // namespace
+
+std::string BlackLevelProblem(double black_level, int bit_depth) {
+  // At or above the white level every pixel would correct to zero or less: no image is left.
+  const double white = std::ldexp(1.0, bit_depth) - 1.0;
+  if (black_level < white) return "";
+  std::ostringstream os;
+  os << black_level << " is " << (black_level > white ? "above" : "at") << " the " << bit_depth
+     << "-bit white level " << white << " (no signal would remain)";
+  return os.str();
+}
 
 int Experiment::Find(const std::string& camera) const {
   for (size_t i = 0; i < cameras.size(); ++i)
@@ -75,6 +86,11 @@ Experiment ParseExperiment(const std::string& text, const std::string& origin,
       c.bit_depth = depth;
     }
     c.black_level = m.Positive("black_level", 0.0, true);
+    if (m.Has("black_level")) c.black_level_where = m.Where("black_level");
+    if (c.bit_depth) {
+      if (const std::string why = BlackLevelProblem(c.black_level, *c.bit_depth); !why.empty())
+        m.Fail("black_level", why);
+    }
     if (m.Has("white_balance")) {
       const std::vector<double> wb = m.Doubles("white_balance");
       if (wb.size() != 3 || !(wb[0] > 0 && wb[1] > 0 && wb[2] > 0))
@@ -115,7 +131,7 @@ void WriteExperiment(const std::string& path, const Experiment& e) {
     out << os.str();
     if (!out) throw std::runtime_error(path + ": cannot write experiment file");
   }
-  std::filesystem::rename(partial, path);
+  RenameInto(partial, path);
 }
 
 std::map<int, double> ReadTimestamps(const std::string& path) {

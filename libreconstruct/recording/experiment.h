@@ -30,6 +30,7 @@ struct CameraSpec {
   std::string timestamps;               // resolved path, or ""
   std::optional<int> bit_depth;
   double black_level = 0.0;
+  std::string black_level_where;        // "file:line: cameras[i].black_level" when given
   std::array<double, 3> white_balance_rgb = {1.0, 1.0, 1.0};
 };
 
@@ -42,6 +43,11 @@ struct Experiment {
 
   int Find(const std::string& camera) const;  // index, or -1
 };
+
+// Why `black_level` (raw units) does not fit data of `bit_depth` bits, or "" when it does: it
+// must be below the white level 2^bit_depth - 1. Checked against bit_depth when the file gives
+// it, else against the frames' depth when the recording is opened (SynchronizedSequence).
+std::string BlackLevelProblem(double black_level, int bit_depth);
 
 // Reads and checks an experiment file; InputError with file, line and key on bad input.
 Experiment LoadExperiment(const std::string& path);

@@ -6,8 +6,10 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <opencv2/core/utils/logger.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
+#include <opencv2/videoio/registry.hpp>
 #include <regex>
 
 #include "common/hdf5_util.h"
@@ -75,6 +77,51 @@ bool ParsePgmHeader(const std::string& head, FrameInfo* info, size_t* data_offse
   return true;
 }
 
+// The image format a file's first bytes say ("PNM", "PNG", "TIFF", "JPEG", "BMP"), or "" when
+// they say none of these.
+std::string FormatOfContent(const std::string& head) {
+  const auto starts = [&](const char* magic, size_t n) {
+    return head.compare(0, n, magic, n) == 0;
+  };
+  if (head.size() >= 2 && head[0] == 'P' && head[1] >= '1' && head[1] <= '6') return "PNM";
+  if (starts("\x89PNG", 4)) return "PNG";
+  if (starts("II*\0", 4) || starts("MM\0*", 4)) return "TIFF";
+  if (starts("\xFF\xD8\xFF", 3)) return "JPEG";
+  if (starts("BM", 2)) return "BMP";
+  return "";
+}
+
+// The format a file name's extension promises, or "" for another extension.
+std::string FormatOfName(const std::string& path) {
+  const std::string ext = Lower(fs::path(path).extension().string());
+  if (ext == ".pgm" || ext == ".pnm" || ext == ".ppm") return "PNM";
+  if (ext == ".png") return "PNG";
+  if (ext == ".tif" || ext == ".tiff") return "TIFF";
+  if (ext == ".jpg" || ext == ".jpeg") return "JPEG";
+  if (ext == ".bmp") return "BMP";
+  return "";
+}
+
+// The one rule for a frame file, header check and decoding alike: a file's content must be the
+// format its name says (a PNG renamed .pgm would pass a check by content and then fail to decode
+// by name, or the other way round). "" when it is, else e.g. "a PNG file named .pgm".
+std::string NameMismatch(const std::string& path, const std::string& head) {
+  const std::string named = FormatOfName(path), content = FormatOfContent(head);
+  if (named.empty() || content.empty() || named == content) return "";
+  return "a " + content + " file named " + fs::path(path).extension().string();
+}
+
+// The first bytes of a file (up to 512) and its size; false when it cannot be opened.
+bool ReadHead(const std::string& path, std::string* head, std::streamsize* size) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) return false;
+  *size = in.tellg();
+  in.seekg(0);
+  head->assign(static_cast<size_t>(std::min<std::streamsize>(*size, 512)), '\0');
+  in.read(head->data(), static_cast<std::streamsize>(head->size()));
+  return true;
+}
+
 uint32_t BigEndian32(const unsigned char* p) {
   return (uint32_t(p[0]) << 24) | (uint32_t(p[1]) << 16) | (uint32_t(p[2]) << 8) | p[3];
 }
@@ -82,6 +129,7 @@ uint32_t BigEndian32(const unsigned char* p) {
 class ImageSequenceSource final : public FrameSource {
  public:
   ImageSequenceSource(std::string pattern, std::string spec) : pattern_(std::move(pattern)), spec_(std::move(spec)) {
+    SilenceOpenCvLogging();
     const size_t percent = pattern_.find('%');
     const fs::path dir = fs::path(pattern_).parent_path();
     const std::string name = fs::path(pattern_).filename().string();
@@ -127,8 +175,18 @@ class ImageSequenceSource final : public FrameSource {
   cv::Mat Read(int index, std::string* error) const override {
     const std::string path = Path(index);
     if (extension_ == ".pgm" || extension_ == ".pnm") return ReadPgm(path, error);
+    std::string head;
+    std::streamsize size = 0;
+    if (!ReadHead(path, &head, &size)) {
+      *error = "cannot open file";
+      return {};
+    }
+    if (const std::string mismatch = NameMismatch(path, head); !mismatch.empty()) {
+      *error = mismatch;
+      return {};
+    }
     cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
-    if (image.empty()) *error = "cannot decode image";
+    if (image.empty()) *error = size == 0 ? "empty file" : "cannot decode image";
     return image;
   }
 
@@ -147,7 +205,7 @@ class VideoSource final : public FrameSource {
  public:
   VideoSource(std::string path, std::string spec) : path_(std::move(path)), spec_(std::move(spec)) {
     if (!fs::exists(path_)) throw InputError(spec_ + ": video file not found");
-    if (!capture_.open(path_)) throw InputError(spec_ + ": cannot open as a video");
+    OpenVideo();
     const int count = static_cast<int>(capture_.get(cv::CAP_PROP_FRAME_COUNT));
     for (int i = 0; i < count; ++i) indices_.push_back(i);
     info_.width = static_cast<int>(capture_.get(cv::CAP_PROP_FRAME_WIDTH));
@@ -159,6 +217,29 @@ class VideoSource final : public FrameSource {
   std::string Describe() const override { return spec_; }
   const std::vector<int>& indices() const override { return indices_; }
   std::string Where(int index) const override { return path_ + "[" + std::to_string(index) + "]"; }
+
+  // Opens the video quietly, so that netlab's message is the only one: OpenCV's logging off, and
+  // FFmpeg named as the backend when OpenCV has it (tried first by default, GStreamer prints
+  // "pipeline have not been created" and an assertion for any file it cannot open). An empty
+  // file is refused before any backend sees it.
+  void OpenVideo() {
+    SilenceOpenCvLogging();
+    std::error_code error;
+    if (fs::file_size(path_, error) == 0 && !error)
+      throw InputError(spec_ + ": empty file (0 bytes), not a video");
+    const int backend = cv::videoio_registry::hasBackend(cv::CAP_FFMPEG) ? cv::CAP_FFMPEG
+                                                                         : cv::CAP_ANY;
+    bool opened = false;
+    try {
+      opened = capture_.open(path_, backend);
+    } catch (const cv::Exception&) {
+      opened = false;
+    }
+    if (!opened)
+      throw InputError(spec_ + ": cannot open as a video (" +
+                       (backend == cv::CAP_FFMPEG ? "FFmpeg" : "OpenCV") +
+                       " reads no video stream from it)");
+  }
   bool Header(int index, FrameInfo* info, std::string* error) const override {
     if (index < 0 || index >= static_cast<int>(indices_.size())) {
       *error = "no such frame";
@@ -220,16 +301,14 @@ class Hdf5FrameSource final : public FrameSource {
       throw InputError(spec_ + ": attribute first_index is not an integer: '" + first_text + "'");
     }
     std::vector<uint8_t> valid(dims_[0], 1);
-    if (h5::Exists(file_.get(), dataset_path_ + "_valid") &&
-        h5::DatasetDims(file_.get(), dataset_path_ + "_valid") == std::vector<hsize_t>{dims_[0]})
+    if (HasPerFrame("_valid"))
       h5::ReadDataset(file_.get(), dataset_path_ + "_valid", H5T_NATIVE_UINT8, valid.data());
     for (hsize_t t = 0; t < dims_[0]; ++t)
       if (valid[t]) indices_.push_back(first + static_cast<int>(t));
     first_ = first;
     if (indices_.empty()) throw InputError(spec_ + ": the dataset holds no frames");
     const std::string times = dataset_path_ + "_timestamps";
-    if (h5::Exists(file_.get(), times) &&
-        h5::DatasetDims(file_.get(), times) == std::vector<hsize_t>{dims_[0]}) {
+    if (HasPerFrame("_timestamps")) {
       std::vector<double> t(dims_[0]);
       h5::ReadDataset(file_.get(), times, H5T_NATIVE_DOUBLE, t.data());
       for (int index : indices_)
@@ -237,6 +316,24 @@ class Hdf5FrameSource final : public FrameSource {
     }
   }
   std::map<int, double> Timestamps() const override { return timestamps_; }
+
+  // Whether the store has the per-frame dataset <dataset><suffix> (_valid, _timestamps); a
+  // length other than the frames' is an InputError naming both, not ignored: a short _valid
+  // silently dropped would count its gaps' zeros as frames.
+  bool HasPerFrame(const std::string& suffix) const {
+    const std::string path = dataset_path_ + suffix;
+    if (!h5::Exists(file_.get(), path)) return false;
+    const std::vector<hsize_t> dims = h5::DatasetDims(file_.get(), path);
+    if (dims == std::vector<hsize_t>{dims_[0]}) return true;
+    std::string shape;
+    for (size_t i = 0; i < dims.size(); ++i) shape += (i ? " x " : "") + std::to_string(dims[i]);
+    throw InputError(file_path_ + ":" + path + " has " +
+                     (dims.size() == 1 ? std::to_string(dims[0]) + " entries"
+                                       : "shape [" + shape + "]") +
+                     ", " + dataset_path_ + " has " + std::to_string(dims_[0]) +
+                     " frames (one entry per frame expected)");
+  }
+
   ~Hdf5FrameSource() override {
     std::lock_guard<std::mutex> lock(h5::Mutex());
     dataset_.Reset();
@@ -286,6 +383,13 @@ class Hdf5FrameSource final : public FrameSource {
 
 }  // namespace
 
+void SilenceOpenCvLogging() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
+  });
+}
+
 cv::Mat ReadPgm(const std::string& path, std::string* error) {
   std::ifstream in(path, std::ios::binary | std::ios::ate);
   if (!in) {
@@ -296,6 +400,14 @@ cv::Mat ReadPgm(const std::string& path, std::string* error) {
   in.seekg(0);
   std::string head(std::min<std::streamsize>(size, 512), '\0');
   in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  if (size == 0) {
+    *error = "empty file";
+    return {};
+  }
+  if (const std::string mismatch = NameMismatch(path, head); !mismatch.empty()) {
+    *error = mismatch;
+    return {};
+  }
   FrameInfo info;
   size_t offset;
   int maxval;
@@ -323,16 +435,22 @@ cv::Mat ReadPgm(const std::string& path, std::string* error) {
 }
 
 bool ReadImageHeader(const std::string& path, FrameInfo* info, std::string* error) {
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  if (!in) {
+  std::string head;
+  std::streamsize size = 0;
+  if (!ReadHead(path, &head, &size)) {
     *error = "cannot open file";
     return false;
   }
-  const std::streamsize size = in.tellg();
-  in.seekg(0);
-  std::string head(std::min<std::streamsize>(size, 512), '\0');
-  in.read(head.data(), static_cast<std::streamsize>(head.size()));
-  if (head.size() >= 2 && head[0] == 'P' && head[1] == '5') {
+  if (size == 0) {
+    *error = "empty file";
+    return false;
+  }
+  if (const std::string mismatch = NameMismatch(path, head); !mismatch.empty()) {
+    *error = mismatch;
+    return false;
+  }
+  // A .pgm must be a binary PGM (ReadPgm reads nothing else), whatever cv::imread could decode.
+  if (FormatOfName(path) == "PNM" || (head.size() >= 2 && head[0] == 'P' && head[1] == '5')) {
     size_t offset;
     int maxval;
     if (!ParsePgmHeader(head, info, &offset, &maxval, error)) return false;
@@ -360,7 +478,7 @@ bool ReadImageHeader(const std::string& path, FrameInfo* info, std::string* erro
   // Other formats: decode to learn the size.
   const cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
   if (image.empty()) {
-    *error = size == 0 ? "empty file" : "cannot decode image";
+    *error = "cannot decode image";
     return false;
   }
   info->width = image.cols;

@@ -48,10 +48,17 @@ class FrameSource {
 // no file or the dataset does not exist.
 std::unique_ptr<FrameSource> OpenFrameSource(const std::string& spec, const std::string& base_dir);
 
+// Turns OpenCV's own logging off, once per process: its warnings (GStreamer's failed pipeline,
+// a codec's complaint) would otherwise come before netlab's message about the same file, which
+// names the file and what was expected. Called by every source that opens files with OpenCV.
+void SilenceOpenCvLogging();
+
 // Reads a binary PGM (P5, 8 or 16 bit, big-endian as the format says) faster than cv::imread (a
 // 2048 x 2048 16-bit frame in ~2 ms instead of 6), detecting truncated files from the header.
 cv::Mat ReadPgm(const std::string& path, std::string* error);
-// The header of a PGM or PNG file (other formats: false with "no header reader").
+// The header of a PGM or PNG file (other formats: decoded to learn the size); false with the
+// reason when the file is empty, unreadable, or its content is not the format its extension
+// names ("a PNG file named .pgm": decoding goes by the extension, so the check does too).
 bool ReadImageHeader(const std::string& path, FrameInfo* info, std::string* error);
 
 }  // namespace netlab::recon

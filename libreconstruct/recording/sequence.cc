@@ -70,6 +70,12 @@ SynchronizedSequence::SynchronizedSequence(Experiment experiment)
       for (int i : idx)
         if (sources_.back()->Header(i, &info, &error)) break;
       k.bit_depth = info.depth == CV_16U ? 16 : 8;
+      // Without bit_depth the file could not be checked: the frames' container says the depth.
+      if (const std::string why = BlackLevelProblem(c.black_level, k.bit_depth); !why.empty())
+        throw InputError((c.black_level_where.empty() ? experiment_.path + ": camera " + c.name
+                                                      : c.black_level_where) +
+                         ": " + why + " of " + c.name + "'s frames (" +
+                         sources_.back()->Describe() + ")");
     }
     corrections_.push_back(k);
   }
@@ -143,7 +149,10 @@ void CheckTimestamps(const std::vector<int>& idx, const std::map<int, double>& t
   const int* previous = nullptr;
   for (const int& f : idx) {
     const auto it = times.find(f);
-    if (it == times.end()) continue;
+    if (it == times.end()) {
+      cam.untimed.push_back(f);
+      continue;
+    }
     if (previous) {
       const double dt = it->second - times.at(*previous);
       const int steps = f - *previous;
@@ -249,6 +258,15 @@ CheckReport SynchronizedSequence::Check(bool decode,
       if (k >= static_cast<int>(idx.size()) || idx[k] != f) cam.missing.push_back(f);
     }
     CheckTimestamps(idx, timestamps_[c], experiment_.fps, cam);
+    if (!experiment_.cameras[c].timestamps.empty() && timestamps_[c].empty())
+      cam.untimed = idx;  // a timestamps file without a row
+    if (!cam.untimed.empty())
+      report.warnings.push_back(
+          cam.name + ": " + std::to_string(cam.untimed.size()) + " of " +
+          std::to_string(cam.frames) + " frames have no time in " +
+          (experiment_.cameras[c].timestamps.empty() ? sources_[c]->Describe()
+                                                     : experiment_.cameras[c].timestamps) +
+          " (" + ListIndices(cam.untimed) + ")");
     report.frames_read += cam.frames;
     report.cameras.push_back(cam);
   }
@@ -275,6 +293,7 @@ std::string CheckReport::BriefReport() const {
     if (!c.unreadable.empty()) os << "; unreadable " << ListIndices(c.unreadable);
     if (!c.duplicated.empty()) os << "; duplicated " << ListIndices(c.duplicated);
     if (!c.timestamp_gaps.empty()) os << "; timestamps skip after " << ListIndices(c.timestamp_gaps);
+    if (!c.untimed.empty()) os << "; no timestamp " << ListIndices(c.untimed);
     os << "\n";
     for (size_t i = 0; i < c.problems.size() && i < 10; ++i) os << "    " << c.problems[i] << "\n";
     if (c.problems.size() > 10) os << "    ... " << c.problems.size() - 10 << " more\n";

@@ -26,6 +26,7 @@ struct CameraReport {
   std::vector<int> unreadable;     // present but unreadable (truncated, corrupt, wrong size)
   std::vector<int> duplicated;     // same timestamp as, or identical to, the previous frame
   std::vector<int> timestamp_gaps; // indices after which the timestamps skip frames
+  std::vector<int> untimed;        // present, but without a time where the camera has times
   std::vector<std::string> problems;  // one line per unreadable frame: where and why
 };
 
@@ -37,7 +38,7 @@ struct CheckReport {
   double wall_s = 0.0;
   double read_fps = 0.0;        // frames (per camera) read (and decoded) per second
   bool decoded = false;
-  std::vector<std::string> warnings;  // different sizes or counts across cameras
+  std::vector<std::string> warnings;  // different sizes or counts across cameras, untimed frames
   std::string BriefReport() const;
 };
 

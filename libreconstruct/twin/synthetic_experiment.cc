@@ -6,6 +6,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
@@ -18,6 +19,7 @@
 
 #include "calibration/synthetic.h"
 #include "calibration/target.h"
+#include "common/files.h"
 #include "common/hdf5_util.h"
 #include "common/yaml_util.h"
 #include "libreconstruct/coloring/color_identify.h"
@@ -146,9 +148,15 @@ void WriteTextFile(const fs::path& path, const std::string& text) {
     out << text;
     if (!out) throw std::runtime_error(path.string() + ": cannot write");
   }
-  fs::rename(partial, path);
+  RenameInto(partial.string(), path.string());
 }
 
+
+// Writes an image (the format from the extension); std::runtime_error naming the file if not.
+void WriteImage(const fs::path& path, const cv::Mat& image) {
+  if (!cv::imwrite(path.string(), image))
+    throw std::runtime_error(path.string() + ": cannot write");
+}
 
 // labels_true.h5: the true pixel of every knot where a camera sees it (visibility 0), as the
 // labeling tools would have labeled it perfectly: what `netlab triangulate` takes to turn the
@@ -198,11 +206,13 @@ SimulatedShot::SimulatedShot(const std::string& path) {
   YAML::Emitter emitter;
   emitter << root;
   scenario_ = netsim::ParseScenario(emitter.c_str(), path + ":/scenario", "");
-  netsim::BuiltScenario built = netsim::BuildScenario(scenario_);
-  model_ = std::make_unique<netsim::Model>(built.simulation->model());
+  // Only the geometry: the simulation's stability and contact set-up are not needed to draw it
+  // (and refuse some valid results, e.g. a net of one segment per link).
+  model_ = std::make_unique<netsim::Model>(netsim::BuildModel(scenario_).first);
   if (static_cast<int>(nodes_.front().size()) != model_->num_nodes())
     throw InputError(path + ": /nodes/position has " + std::to_string(nodes_.front().size()) +
                      " nodes, its scenario builds " + std::to_string(model_->num_nodes()));
+  CheckFinite(path);
   for (int k = 0; k < tracks_.knots(); ++k) {
     const int net = tracks_.net.empty() ? 0 : tracks_.net[k];
     const int node = model_->KnotNode(net, tracks_.grid[k][0], tracks_.grid[k][1]);
@@ -221,6 +231,21 @@ SimulatedShot::SimulatedShot(const std::string& path) {
         corner_radius_.push_back(spec.corner_radius > 0 ? spec.corner_radius : 0.01);
       }
   }
+}
+
+void SimulatedShot::CheckFinite(const std::string& path) const {
+  // A NaN would otherwise surface deep in the renderer ("thread 0 point 0 is not finite") after
+  // frames were written; checked here, before any output, naming where the simulation broke.
+  for (size_t t = 0; t < nodes_.size(); ++t)
+    for (size_t n = 0; n < nodes_[t].size(); ++n) {
+      if (nodes_[t][n].allFinite()) continue;
+      std::ostringstream os;
+      os << path << ": /nodes/position is not finite at frame " << t << " (t = "
+         << (t < tracks_.time.size() ? tracks_.time[t] : std::nan("")) << " s), node " << n
+         << " (" << model_->DescribeNode(static_cast<int>(n)) << "): (" << nodes_[t][n].x()
+         << ", " << nodes_[t][n].y() << ", " << nodes_[t][n].z() << ")";
+      throw InputError(os.str());
+    }
 }
 
 std::vector<Eigen::Vector3d> SimulatedShot::NodesAt(double t) const {
@@ -334,12 +359,14 @@ calib::Rig ScaleRig(const calib::Rig& rig, double scale) {
 namespace {
 
 // Throws InputError when a net's colouring has not one colour per link of the net.
-void CheckColouring(const std::vector<YarnColoring>& coloring, const netsim::Model& model) {
+void CheckColouring(const std::vector<YarnColoring>& coloring, const std::string& file,
+                    const netsim::Model& model) {
   for (size_t n = 0; n < coloring.size() && n < model.nets.size(); ++n) {
     const netsim::NetInfo& net = model.nets[n];
     if (static_cast<int>(coloring[n].link_colour.size()) != net.num_links())
-      throw InputError("the colouring has " + std::to_string(coloring[n].link_colour.size()) +
-                       " links, net '" + net.name + "' (" + std::to_string(net.rows) + "x" +
+      throw InputError((file.empty() ? std::string() : file + ": ") + "the colouring has " +
+                       std::to_string(coloring[n].link_colour.size()) + " links, net '" +
+                       net.name + "' (" + std::to_string(net.rows) + "x" +
                        std::to_string(net.cols) + " knots) has " + std::to_string(net.num_links()));
   }
 }
@@ -353,6 +380,17 @@ struct FrameRange {
   int count() const { return last - first + 1; }
   double Time(int k) const { return start_time + k / fps; }
 };
+
+}  // namespace
+
+void CheckOutsideOutput(const std::string& input, const std::string& option,
+                        const std::string& out_dir) {
+  if (IsInsideFolder(input, out_dir))
+    throw InputError(option + " " + input + " is inside the output folder " + out_dir +
+                     ", which render replaces as a whole; render into another folder");
+}
+
+namespace {
 
 // The job's frames; InputError when they are not within the simulation.
 FrameRange FramesOf(const RenderJob& job, const SimulatedShot& shot) {
@@ -394,12 +432,24 @@ Experiment PrepareExperiment(const RenderJob& job, const FrameRange& range, cons
   return experiment;
 }
 
-// Runs `work` on `threads` threads (at least one: this one) and waits for them all.
+// Runs `work` on `threads` threads (at least one: this one), waits for them all and rethrows the
+// first exception any of them threw (one escaping a std::thread would terminate the process).
 void RunOnThreads(int threads, const std::function<void()>& work) {
+  std::mutex mutex;
+  std::exception_ptr failure;
+  const auto guarded = [&] {
+    try {
+      work();
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(mutex);
+      if (!failure) failure = std::current_exception();
+    }
+  };
   std::vector<std::thread> pool;
-  for (int t = 1; t < std::max(1, threads); ++t) pool.emplace_back(work);
-  work();
+  for (int t = 1; t < std::max(1, threads); ++t) pool.emplace_back(guarded);
+  guarded();
   for (std::thread& t : pool) t.join();
+  if (failure) std::rethrow_exception(failure);
 }
 
 // Renders frame k of camera c: the scene averaged over the exposure (blur samples), exposed by
@@ -424,8 +474,7 @@ void RenderFrame(const RenderJob& job, const SimulatedShot& shot, const FrameRan
   const cv::Mat raw = Expose(accumulator, camera.intrinsics, sensor);
   char name[32];
   std::snprintf(name, sizeof(name), "frame_%06d.pgm", k);
-  const fs::path file = out / camera.name / name;
-  if (!cv::imwrite(file.string(), raw)) throw std::runtime_error(file.string() + ": cannot write");
+  WriteImage(out / camera.name / name, raw);
 }
 
 // Renders every (frame, camera) on job.threads threads, reporting progress(done, total) after
@@ -541,7 +590,7 @@ void WriteTruth(const fs::path& out, const calib::Rig& rig, const FrameTruth& tr
     rig_text << rig_file.rdbuf();
     h5::WriteStringDataset(file.get(), "rig", rig_text.str());
   }
-  fs::rename(writing, truth_path);
+  RenameInto(writing, truth_path.string());
 }
 
 // The render options of the calibration images.
@@ -598,8 +647,8 @@ int RenderFoilViews(const RenderJob& job, const calib::CalibrationTarget& foil,
         o.seed = job.sensor.seed * 7919 + static_cast<uint64_t>(c) * 1000 + v;
         char name[32];
         std::snprintf(name, sizeof(name), "view_%03d.png", v);
-        cv::imwrite((out / "calibration" / camera.name / name).string(),
-                    calib::RenderTarget(camera, rays, prints, poses[v], o));
+        WriteImage(out / "calibration" / camera.name / name,
+                   calib::RenderTarget(camera, rays, prints, poses[v], o));
       }
     });
     images += static_cast<int>(poses.size());
@@ -622,9 +671,9 @@ int RenderMarkerViews(const RenderJob& job, const SimulatedShot& shot, const fs:
     fs::create_directories(out / "calibration" / "markers" / camera.name);
     calib::RenderOptions o = CalibrationRenderOptions(job);
     o.seed = job.sensor.seed * 7919 + 999;
-    cv::imwrite((out / "calibration" / "markers" / camera.name / "view_000.png").string(),
-                calib::RenderTarget(camera, calib::CameraRays(camera.intrinsics), map_prints,
-                                    calib::Rigid3d(), o));
+    WriteImage(out / "calibration" / "markers" / camera.name / "view_000.png",
+               calib::RenderTarget(camera, calib::CameraRays(camera.intrinsics), map_prints,
+                                   calib::Rigid3d(), o));
     ++images;
   }
   return images;
@@ -648,14 +697,17 @@ RenderSummary RenderExperiment(const RenderJob& job,
   const auto start = std::chrono::steady_clock::now();
   // Check the job against the simulation.
   const SimulatedShot shot(job.simulation);
-  CheckColouring(job.coloring, shot.model());
+  CheckColouring(job.coloring, job.coloring_file, shot.model());
   const calib::Rig& rig = job.rig;
   if (rig.cameras.empty()) throw InputError("the rig has no cameras");
   const FrameRange range = FramesOf(job, shot);
+  CheckOutsideOutput(job.simulation, "--sim", job.out_dir);
 
-  // The output folder, the rig and each camera's folder.
-  const fs::path out(job.out_dir);
-  fs::create_directories(out);
+  // The whole folder is written as out_dir.partial and replaces out_dir only when complete: a
+  // failing run leaves an existing shot as it was, and a shorter one leaves no stale frames.
+  // experiment.yaml names its files relative to its folder, so the folder moves whole.
+  FolderReplacement folder(job.out_dir);
+  const fs::path out(folder.partial());
   calib::WriteRig((out / "rig_true.yaml").string(), rig);
   const Experiment experiment = PrepareExperiment(job, range, out);
 
@@ -682,6 +734,7 @@ RenderSummary RenderExperiment(const RenderJob& job,
   summary.knots_visible_mean = std::move(truth.knots_visible_mean);
   summary.knots_visible_min = std::move(truth.knots_visible_min);
   summary.render_s = render_s;
+  folder.Commit();
   summary.wall_s = Seconds(start);
   return summary;
 }

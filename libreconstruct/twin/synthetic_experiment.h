@@ -42,7 +42,7 @@ namespace netlab::recon {
 class SimulatedShot {
  public:
   // Reads `path` (a `netlab simulate` file); InputError naming the file when it has no /nodes or
-  // no /scenario.
+  // no /scenario, or naming the frame and node of a node position that is not finite.
   explicit SimulatedShot(const std::string& path);
 
   double start_time() const { return tracks_.time.front(); }
@@ -60,6 +60,10 @@ class SimulatedShot {
   Scene SolidsAt(double t, const std::vector<Eigen::Vector3d>& nodes) const;
 
  private:
+  // InputError naming the file, the frame, its time and the node of the first non-finite node
+  // position.
+  void CheckFinite(const std::string& path) const;
+
   netsim::KnotTracks tracks_;
   std::vector<std::vector<Eigen::Vector3d>> nodes_;  // [T][N]
   netsim::Scenario scenario_;
@@ -83,6 +87,7 @@ struct RenderJob {
   Colour background{0.f, 0.f, 0.f};
   double illumination = 0.85; // scene white in sensor units (headroom below saturation)
   std::vector<YarnColoring> coloring;  // per net; empty: DefaultColoring
+  std::string coloring_file;           // where `coloring` was read from, for messages
   int calibration_views = 20; // foil poses seen by all cameras (0: no calibration images)
   int threads = 2;
 };
@@ -99,7 +104,14 @@ struct RenderSummary {
   double render_s = 0.0;  // of which rendering the frames
 };
 
-// Renders the experiment (frames, truth, calibration images) into job.out_dir.
+// InputError when `input` (a file the job reads, given as `option`) is inside `out_dir`, which
+// RenderExperiment replaces as a whole: rendering next to the simulation would delete it.
+void CheckOutsideOutput(const std::string& input, const std::string& option,
+                        const std::string& out_dir);
+
+// Renders the experiment (frames, truth, calibration images) into job.out_dir.partial, then puts
+// it in place of job.out_dir (common/files.h FolderReplacement): a failing run leaves an existing
+// out_dir as it was and removes its partial folder; every input is checked before any output.
 // progress(done, total) counts camera frames; it may be empty.
 RenderSummary RenderExperiment(const RenderJob& job,
                                const std::function<void(int, int)>& progress);

@@ -1,13 +1,16 @@
 #pragma once
 // Breaking a valid HDF5 file the way a user's tool or a bad copy would (the bad-input suites):
-// one value changed, or a dataset stored as another type. netlab's writers refuse to write such
-// files, so the tests write a good one and edit it here.
+// one value changed, a dataset stored as another type, its values or shape edited. netlab's
+// writers refuse to write such files, so the tests write a good one and edit it here.
 
-#include <hdf5.h>
-
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include <hdf5.h>
+
+#include "common/hdf5_util.h"
 
 namespace netlab::testing {
 
@@ -56,6 +59,22 @@ inline void RetypeH5ToInt32(const std::string& path, const std::string& name) {
   H5Sclose(space);
   H5Dclose(dataset);
   H5Fclose(file);
+}
+
+// Rewrites `file`:`name` of element type T (`type` in memory) after `edit` changed its values
+// or its dims (the values then must number the dims' product).
+template <typename T>
+void EditDataset(const std::string& file, const std::string& name, hid_t type,
+                 const std::function<void(std::vector<T>&, std::vector<hsize_t>&)>& edit) {
+  h5::Id f = h5::OpenFileReadWrite(file);
+  std::vector<hsize_t> dims = h5::DatasetDims(f.get(), name);
+  size_t count = 1;
+  for (hsize_t d : dims) count *= d;
+  std::vector<T> values(count);
+  h5::ReadDataset(f.get(), name, type, values.data());
+  edit(values, dims);
+  H5Ldelete(f.get(), name.c_str(), H5P_DEFAULT);
+  h5::WriteDataset(f.get(), name, type, dims, values.data());
 }
 
 }  // namespace netlab::testing
