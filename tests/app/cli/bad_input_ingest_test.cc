@@ -74,13 +74,17 @@ class BadInputIngest : public CommandTest {
       text.replace(at, 8, name + ".h5");
     std::ofstream(Path(name + ".yaml")) << text;
   }
-  // Shortens `file`:`dataset` (one entry per frame) to `keep` entries.
+  // Shortens `file`:`dataset` (one entry per frame: uint8 flags or float64 times) to `keep`
+  // entries, in its own type.
   void Shorten(const std::string& file, const std::string& dataset, hsize_t keep) {
-    EditDataset<double>(Path(file), dataset, H5T_NATIVE_DOUBLE,
-                        [&](std::vector<double>& v, std::vector<hsize_t>& dims) {
-                          v.resize(keep);
-                          dims = {keep};
-                        });
+    auto shorten = [&](auto& v, std::vector<hsize_t>& dims) {
+      v.resize(keep);
+      dims = {keep};
+    };
+    if (dataset.size() > 6 && dataset.substr(dataset.size() - 6) == "_valid")
+      EditDataset<uint8_t>(Path(file), dataset, H5T_NATIVE_UINT8, shorten);
+    else
+      EditDataset<double>(Path(file), dataset, H5T_NATIVE_DOUBLE, shorten);
   }
   static std::string Read(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
