@@ -400,9 +400,10 @@ FrameRange FramesOf(const RenderJob& job, const SimulatedShot& shot) {
   const int first = job.first_frame;
   const int last = job.last_frame < 0 ? available : job.last_frame;
   if (first < 0 || last < first || last > available)
-    throw InputError("frames " + std::to_string(first) + ":" + std::to_string(last) +
-                     " are outside the simulation's frames 0:" + std::to_string(available) +
-                     " at " + std::to_string(job.fps) + " fps");
+    throw InputError(job.simulation + ": frames " + std::to_string(first) + ":" +
+                     std::to_string(last) + " are outside the simulation's frames 0:" +
+                     std::to_string(available) + " at " + std::to_string(job.fps) + " fps (" +
+                     std::to_string(shot.end_time() - shot.start_time()) + " s of /time)");
   return {shot.start_time(), job.fps, first, last};
 }
 
