@@ -569,17 +569,17 @@ bool SearchBorderFirst(const Net& net, int k, Model& model, std::mt19937_64& rng
   for (int e = 0; e < net.links; ++e)
     inner_links[e] = !border[net.link_knots[e][0]] && !border[net.link_knots[e][1]];
   if (!border_first || !any_border || !any_inner) {
-    model.Start(RandomColouring(net, k, rng), all_knots, all_links);
+    if (!model.Start(RandomColouring(net, k, rng), all_knots, all_links, budget)) return false;
     if (!TabuSearch(net, k, model, rng, budget, refresh_every)) return false;
     *out = model.colours();
     return true;
   }
-  model.Start(RandomColouring(net, k, rng), border, all_links);
+  if (!model.Start(RandomColouring(net, k, rng), border, all_links, budget)) return false;
   if (!TabuSearch(net, k, model, rng, budget, refresh_every)) return false;
   std::vector<int> colour = RandomColouring(net, k, rng);
   for (int e = 0; e < net.links; ++e)
     if (!inner_links[e]) colour[e] = model.colours()[e];
-  model.Start(colour, all_knots, inner_links);
+  if (!model.Start(colour, all_knots, inner_links, budget)) return false;
   if (!TabuSearch(net, k, model, rng, budget, refresh_every)) return false;
   *out = model.colours();
   return true;
@@ -634,8 +634,9 @@ class LocalSearch : public CostModel {
   bool Run(Budget& budget, std::vector<int>* out) {
     // The border first pays where a distance is asked of the whole net (see SearchBorderFirst).
     const bool border_first = !hashed_ && o_.min_distance >= 2 && o_.radius == 0;
-    const int64_t refresh =
-        hashed_ ? RefreshEvery(net_) : std::max<int64_t>(1, net_.n / (4 * k_ * EvalWork()));
+    // Rebuild the list of knots in conflict (a pass over the net) every move while that costs
+    // no more than a move, else about as often as it costs what the moves between cost.
+    const int64_t refresh = std::max<int64_t>(1, net_.n / (4 * k_ * EvalWork()));
     return SearchBorderFirst(net_, k_, *this, rng_, budget, refresh, border_first, out);
   }
   // An evaluation is four codes hashed (hashed), or a scan of two knots' partners twice: units
@@ -647,7 +648,9 @@ class LocalSearch : public CostModel {
   int64_t ScanWork() const { return 1; }
 
   // Sets the colouring, which knots count and which links may change; recounts the cost.
-  void Start(std::vector<int> colour, std::vector<char> active, std::vector<char> movable) {
+  // False when the budget ran out first (the pair count, n x partners, is charged to it).
+  bool Start(std::vector<int> colour, std::vector<char> active, std::vector<char> movable,
+             Budget& budget) {
     Reset(std::move(colour), std::move(active), std::move(movable));
     pair_conf_.assign(net_.n, 0);
     count_.clear();
@@ -655,16 +658,19 @@ class LocalSearch : public CostModel {
       for (int x = 0; x < net_.n; ++x)
         if (active_[x]) cost_ += count_[CodeKey(o_.rule, cfg_[x])]++;
     } else {
-      for (int x = 0; x < net_.n; ++x)
+      for (int x = 0; x < net_.n; ++x) {
+        if (!budget.Spend(1 + static_cast<int64_t>(net_.partners(x).size()))) return false;
         for (int w : net_.partners(x))
           if (Counted(x, w) && Violates(cfg_[x], cfg_[w])) {
             ++pair_conf_[x];
             if (w > x) ++cost_;
           }
+      }
     }
     if (o_.adjacent_distinct)
       for (int x = 0; x < net_.n; ++x)
         if (active_[x]) cost_ += AdjacentPairs(cfg_[x]);
+    return true;
   }
   bool Counted(int x, int w) const { return active_[x] && active_[w]; }
   bool Violates(const Cfg& a, const Cfg& b) const {
@@ -828,7 +834,9 @@ class LocalSearchD2 : public CostModel {
   int64_t ScanWork() const { return o_.rule == CodeRule::kSet ? 8 : 4; }
 
   // Sets the colouring, which knots count and which links may change; recounts the keys.
-  void Start(std::vector<int> colour, std::vector<char> active, std::vector<char> movable) {
+  // False when the budget ran out first (the pair count, n x partners, is charged to it).
+  bool Start(std::vector<int> colour, std::vector<char> active, std::vector<char> movable,
+             Budget& budget) {
     Reset(std::move(colour), std::move(active), std::move(movable));
     own_.clear();
     own_.reserve(static_cast<size_t>(net_.n) * 4);
@@ -837,6 +845,8 @@ class LocalSearchD2 : public CostModel {
       Add(cfg_[x], 1);
       if (o_.adjacent_distinct) cost_ += AdjacentPairs(cfg_[x]);
     }
+    budget.work -= int64_t{net_.n} * ScanWork();
+    return true;
   }
   // Meetings of `keys` with the keys present (not counting `keys` themselves).
   int64_t Meetings(const std::vector<uint64_t>& keys) const {
