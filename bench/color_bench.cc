@@ -45,7 +45,9 @@ void ScaleCase(int n, CodeRule rule, int d, int radius, double time_s) {
     std::printf("| %dx%d | %s | %d | %d | %d | %d | %s | %.2f | %.2f | %s | %.0f |", n, n,
                 CodeRuleName(rule).c_str(), d, radius, result.colors, result.lower_bound,
                 result.time_limited ? "yes" : "no", solve_s, verify_s,
-                result.colors == 0 ? "-" : ok ? "yes" : "NO",
+                result.colors == 0 ? "-"
+                : ok               ? "yes"
+                                   : "NO",
                 EstimateColoringBytes(n, n, o) / 1e6);
     std::fflush(stdout);
     _exit(0);
@@ -58,8 +60,9 @@ void ScaleCase(int n, CodeRule rule, int d, int radius, double time_s) {
 
 void Scale(double time_s) {
   std::printf("Per-case time limit %.0f s; each case in its own process.\n\n", time_s);
-  std::printf("| knots | rule | D | radius | colours | lower bound | time-limited | solve (s) | "
-              "verify (s) | verified | estimate (MB) | peak RSS (MB) |\n");
+  std::printf(
+      "| knots | rule | D | radius | colours | lower bound | time-limited | solve (s) | "
+      "verify (s) | verified | estimate (MB) | peak RSS (MB) |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (int n : {100, 300, 1000}) {
     ScaleCase(n, CodeRule::kCyclic, 1, 0, time_s);
@@ -82,8 +85,9 @@ int main(int argc, char** argv) {
     return 0;
   }
   std::printf("Per-case time limit %.1f s.\n\n", time_s);
-  std::printf("| knots | rule | D | adjacent distinct | radius | colours | lower bound | optimal | "
-              "method | time (s) | verified |\n");
+  std::printf(
+      "| knots | rule | D | adjacent distinct | radius | colours | lower bound | optimal | "
+      "method | time (s) | verified |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
   struct Case {
     CodeRule rule;

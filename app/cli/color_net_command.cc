@@ -72,8 +72,8 @@ int RunColorNet(const std::vector<std::string>& args) {
 
     // Size before allocating: the search's memory grows with the net and, with a radius, with
     // the knots within it (docs/coloring.md).
-    const std::string what = "--knots " + std::to_string(rows) + "x" + std::to_string(cols) +
-                             (options.radius > 0 ? " --radius " + std::to_string(options.radius) : "");
+    std::string what = "--knots " + std::to_string(rows) + "x" + std::to_string(cols);
+    if (options.radius > 0) what += " --radius " + std::to_string(options.radius);
     const double needed = recon::EstimateColoringBytes(rows, cols, options);
     if (const std::string shortfall = MemoryShortfall(needed); !shortfall.empty())
       throw std::runtime_error(what + ": the colouring search " + shortfall);

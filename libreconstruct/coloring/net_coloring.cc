@@ -1215,7 +1215,8 @@ double EstimateColoringBytes(int rows, int cols, const ColoringOptions& o) {
   bytes += 4 * links * o.max_colors + 30 * links + 50 * n;
   // Its code counts (distance 1) or keys (distance 2: up to 14 per knot under the set rule).
   const bool hashed = o.radius == 0 && o.min_distance <= 2;
-  if (hashed) bytes += hash_entry * n * (o.min_distance == 1 ? 1 : o.rule == CodeRule::kSet ? 14 : 4);
+  const double keys = o.min_distance == 1 ? 1 : o.rule == CodeRule::kSet ? 14 : 4;
+  if (hashed) bytes += hash_entry * n * keys;
   // The lower bound's prefix sums over the rotated grid.
   if (o.radius > 0) bytes += 4.0 * (rows + cols) * (rows + cols);
   // VerifyColoring (colours and codes per knot, the table of codes) and the file's text, held
@@ -1514,8 +1515,12 @@ bool VerifyColoring(const NetColoring& col, std::string* why) {
   // looked up in a table of codes. The second finds every pair closer than min_distance: such a
   // pair has a knot whose links reach the other's code in fewer than min_distance changes.
   const double pairwise = static_cast<double>(n) * DiamondSize(col.rows, col.cols, o.radius);
-  const double looked_up = static_cast<double>(n) * HammingBallSize(4, col.colors, o.min_distance - 1);
-  const std::string violation = pairwise <= looked_up
+  const double looked_up =
+      static_cast<double>(n) * HammingBallSize(4, col.colors, o.min_distance - 1);
+  // (With a small radius the table would return the knots of a code from all over the net.)
+  const bool by_code =
+      looked_up < pairwise && (o.radius == 0 || 2 * DiamondSize(col.rows, col.cols, o.radius) >= n);
+  const std::string violation = !by_code
                                     ? FirstViolationWithin(col.rows, col.cols, o.radius, compare)
                                     : FirstViolationByCode(o, colours, col.colors, compare);
   if (!violation.empty()) return fail(violation);
