@@ -6,10 +6,12 @@
 #include <cstdio>
 #include <exception>
 #include <iostream>
+#include <new>
 
 #include "app/cli/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "common/memory.h"
 #include "libreconstruct/coloring/color_identify.h"
 #include "libreconstruct/coloring/net_coloring.h"
 
@@ -36,7 +38,9 @@ constexpr char kHelp[] =
     "                       (default: 16 common yarn dyes, when the colouring needs no more)\n"
     "  --background B       black, white or none: the scene behind the net, which the dyes must\n"
     "                       also differ from (default black)\n"
-    "  --time-limit S       seconds for proving optimality (default 30)\n"
+    "  --time-limit S       seconds at most (default 30). The search is budgeted by its own\n"
+    "                       steps, so one net and options give one colouring every run; a run\n"
+    "                       this limit cuts short says so and may differ between runs\n"
     "  --out FILE           coloring.yaml: the palette and every link's colour\n"
     "  --json               print one JSON summary object on stdout as the last output\n\n"
     "exit status: 0 coloured, 1 bad input or no colouring within the limits, 2 usage error.\n";
@@ -66,8 +70,28 @@ int RunColorNet(const std::vector<std::string>& args) {
     options.adjacent_distinct = cl.Flag("adjacent-distinct");
     options.time_limit_s = cl.DoubleOption("time-limit", 30.0, 0.0, 86400.0);
 
+    // Size before allocating: the search's memory grows with the net and, with a radius, with
+    // the knots within it (docs/coloring.md).
+    std::string what = "--knots " + std::to_string(rows) + "x" + std::to_string(cols);
+    if (options.radius > 0) what += " --radius " + std::to_string(options.radius);
+    const double needed = recon::EstimateColoringBytes(rows, cols, options);
+    if (const std::string shortfall = MemoryShortfall(needed); !shortfall.empty())
+      throw std::runtime_error(what + ": the colouring search " + shortfall);
     const auto start = std::chrono::steady_clock::now();
-    recon::NetColoring coloring = recon::SolveColoring(rows, cols, options);
+    recon::NetColoring coloring;
+    try {
+      coloring = recon::SolveColoring(rows, cols, options);
+    } catch (const std::bad_alloc&) {
+      throw std::runtime_error(what + ": the colouring search ran out of memory (estimated ~" +
+                               FormatBytes(needed) + ")");
+    }
+    if (coloring.method == "infeasible")
+      throw std::runtime_error(what + ": no palette of at most " +
+                               std::to_string(options.max_colors) + " colours can identify every "
+                               "knot under rule " + rule + ", distance " +
+                               std::to_string(options.min_distance) + " (lower bound " +
+                               std::to_string(coloring.lower_bound) +
+                               "); try --rule cyclic, a --radius, or a smaller --distance");
     std::vector<std::array<int, 3>> srgb;
     double min_delta_e = 0.0;
     // The physical palette: from the given candidates, else from common yarn dyes when there
@@ -83,7 +107,11 @@ int RunColorNet(const std::vector<std::string>& args) {
                                  std::to_string(coloring.colors));
     } else {
       candidates = recon::DefaultYarnCandidates();
-      if (static_cast<int>(candidates.size()) < coloring.colors) candidates.clear();
+      if (static_cast<int>(candidates.size()) < coloring.colors) {
+        source = "none: " + std::to_string(coloring.colors) + " colours are more than the " +
+                 std::to_string(candidates.size()) + " default yarn dyes (give --palette FILE)";
+        candidates.clear();
+      }
     }
     recon::Lighting lighting;  // white-balanced daylight
     const std::string background = cl.Option("background").value_or("black");
@@ -105,23 +133,38 @@ int RunColorNet(const std::vector<std::string>& args) {
       }
     }
     if (coloring.colors == 0)
-      throw std::runtime_error("no colouring found within the limits (" + coloring.method +
-                               "; try a larger --time-limit or a smaller --distance)");
+      throw std::runtime_error(
+          what + ": no colouring found " +
+          (coloring.time_limited ? "within --time-limit " + cl.Option("time-limit").value_or("30") +
+                                       " s; try a larger --time-limit"
+                                 : "within the search's budget; try a smaller --distance or a "
+                                   "--radius"));
     coloring.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::string why;
     if (!recon::VerifyColoring(coloring, &why))
       throw std::runtime_error("internal error: the colouring fails verification: " + why);
     recon::WriteColoring(out, coloring, srgb);
-    if (!cl.Flag("quiet"))
+    if (!cl.Flag("quiet")) {
+      char delta[32];
+      std::snprintf(delta, sizeof delta, "%.1f", min_delta_e);
+      const std::string dyes = srgb.empty() ? "dyes " + source
+                                            : "dyes from " + source +
+                                                  " (least CIEDE2000 difference " + delta + ")";
+      std::string notes;
+      if (coloring.exact_skipped)
+        notes += "; no exact search (more than " + std::to_string(recon::kExactSearchMaxKnots) +
+                 " knots)";
+      if (coloring.time_limited)
+        notes += "; cut short by --time-limit, so another run may differ";
       std::fprintf(stderr,
                    "%dx%d knots, rule %s, distance %d, radius %d%s: %d colours (lower bound %d, "
-                   "%s, %s) in %.2f s; dyes from %s (least CIEDE2000 difference %.1f); "
-                   "written to %s\n",
+                   "%s, %s) in %.2f s%s; %s; written to %s\n",
                    rows, cols, recon::CodeRuleName(options.rule).c_str(), options.min_distance,
                    options.radius, options.adjacent_distinct ? ", adjacent distinct" : "",
                    coloring.colors, coloring.lower_bound,
                    coloring.optimal ? "optimal" : "not proven optimal", coloring.method.c_str(),
-                   coloring.wall_s, source.c_str(), min_delta_e, out.c_str());
+                   coloring.wall_s, notes.c_str(), dyes.c_str(), out.c_str());
+    }
     if (cl.Flag("json")) {
       JsonWriter json;
       json.BeginObject();
@@ -136,6 +179,8 @@ int RunColorNet(const std::vector<std::string>& args) {
       json.Key("adjacent_distinct").Bool(options.adjacent_distinct);
       if (!srgb.empty()) json.Key("min_delta_e").Number(min_delta_e);
       json.Key("wall_s").Number(coloring.wall_s);
+      json.Key("time_limited").Bool(coloring.time_limited);
+      json.Key("exact_search").Bool(!coloring.exact_skipped);
       json.EndObject();
       std::cout << json.str() << std::endl;
     }

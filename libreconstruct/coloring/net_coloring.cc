@@ -11,6 +11,7 @@
 #include <map>
 #include <random>
 #include <set>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
@@ -343,16 +344,58 @@ int64_t PatternPackingBound(CodeRule rule, int degree, int k, bool distinct, int
   return static_cast<int64_t>(std::floor(opt + 1e-6));
 }
 
+// Same-degree knots within `radius` links of knot x (radius 0: the whole net), in increasing
+// order. On the full grid the graph distance is |dr| + |dc|, so the knots within R links are
+// the diamond around x, enumerated directly (O(R^2), not O(n)).
+template <typename Visit>
+void ForEachPartner(int rows, int cols, const std::vector<int>& degree, int radius, int x,
+                    Visit visit) {
+  const int r = x / cols, c = x % cols;
+  const int reach = radius == 0 ? rows + cols : radius;
+  for (int wr = std::max(0, r - reach); wr <= std::min(rows - 1, r + reach); ++wr) {
+    const int span = reach - std::abs(wr - r);
+    for (int wc = std::max(0, c - span); wc <= std::min(cols - 1, c + span); ++wc) {
+      const int w = wr * cols + wc;
+      if (w != x && degree[w] == degree[x]) visit(w);
+    }
+  }
+}
+
+// How many knots a diamond of radius R holds at most (radius 0: the whole net), less one.
+int64_t PartnersPerKnot(int rows, int cols, int radius) {
+  const int64_t n = int64_t{rows} * cols;
+  if (radius == 0) return n - 1;
+  const int64_t r = radius;
+  return std::min(n - 1, 2 * r * r + 2 * r);
+}
+
 // The fixed structure of the net under the options: links per knot, constrained partners.
 struct Net {
   int rows = 0, cols = 0, n = 0, links = 0;
   std::vector<std::array<int, 4>> knot_links;  // geometric order, -1 padded
   std::vector<int> degree;
   std::vector<std::array<int, 2>> link_knots;
-  std::vector<std::vector<int>> partners;  // same degree, within radius (all when radius 0)
+  // Same degree, within the radius (all when radius 0): knot x's are
+  // partner_list[partner_begin[x] .. partner_begin[x + 1]). Built only for the searches that
+  // read them (NeedsPartners): at radius 0 they are n^2 ints.
+  std::vector<int64_t> partner_begin;
+  std::vector<int> partner_list;
+
+  std::span<const int> partners(int x) const {
+    return {partner_list.data() + partner_begin[x],
+            static_cast<size_t>(partner_begin[x + 1] - partner_begin[x])};
+  }
 };
 
-Net BuildNet(int rows, int cols, const ColoringOptions& o) {
+// The heuristics with hashed codes (distance 1) or keys (distance 2) over the whole net never
+// compare knots pairwise; the general search and the exact search do.
+bool HeuristicNeedsPartners(const ColoringOptions& o) {
+  return !(o.radius == 0 && (o.min_distance == 1 || o.min_distance == 2));
+}
+
+bool RunsExactStage(int rows, int cols) { return int64_t{rows} * cols <= kExactSearchMaxKnots; }
+
+Net BuildNet(int rows, int cols, const ColoringOptions& o, bool with_partners) {
   Net net;
   net.rows = rows;
   net.cols = cols;
@@ -368,17 +411,20 @@ Net BuildNet(int rows, int cols, const ColoringOptions& o) {
       net.knot_links[r * cols + c] = a;
       net.degree[r * cols + c] = static_cast<int>(l.size());
     }
+  net.link_knots.reserve(net.links);
   for (int l = 0; l < net.links; ++l) {
     const auto k = LinkKnots(rows, cols, l);
     net.link_knots.push_back({k[0] * cols + k[1], k[2] * cols + k[3]});
   }
-  net.partners.resize(net.n);
-  for (int x = 0; x < net.n; ++x)
-    for (int w = 0; w < net.n; ++w) {
-      if (w == x || net.degree[w] != net.degree[x]) continue;
-      const int g = std::abs(x / cols - w / cols) + std::abs(x % cols - w % cols);
-      if (o.radius == 0 || g <= o.radius) net.partners[x].push_back(w);
-    }
+  net.partner_begin.assign(net.n + 1, 0);
+  if (!with_partners) return net;
+  net.partner_list.reserve(static_cast<size_t>(net.n) * PartnersPerKnot(rows, cols, o.radius));
+  for (int x = 0; x < net.n; ++x) {
+    net.partner_begin[x] = static_cast<int64_t>(net.partner_list.size());
+    ForEachPartner(rows, cols, net.degree, o.radius, x,
+                   [&](int w) { net.partner_list.push_back(w); });
+  }
+  net.partner_begin[net.n] = static_cast<int64_t>(net.partner_list.size());
   return net;
 }
 
@@ -415,23 +461,50 @@ std::vector<int> RandomColouring(const Net& net, int k, std::mt19937_64& rng) {
   return colour;
 }
 
+// What a search may still spend: work, the budget that decides the result (counted in the
+// search's own steps: code or key evaluations, or exact-search nodes, so that the result does not
+// depend on the machine's load), and the wall-clock cap, which only stops a search the work
+// budget would have let go on (and records that it did: only then can the result differ between
+// runs).
+struct Budget {
+  int64_t work = 0;
+  Clock::time_point deadline;
+  bool capped = false;
+  int64_t calls = 0;
+
+  // False (and capped set when it was the clock) when the search must stop before spending
+  // `units` more; the clock is read every 64th call.
+  bool Spend(int64_t units) {
+    if (work <= 0) return false;
+    work -= units;
+    if ((++calls & 63) == 0 && Clock::now() > deadline) capped = true;
+    return !capped;
+  }
+};
+
 // The tabu min-conflicts loop shared by the cost models below: pick a knot in conflict, move
 // one of its links to the colour that lowers the cost most (ties at random; a move back is tabu
 // for a while unless it beats the best cost seen; 3 % random walk), until the cost is 0 or the
-// deadline passes. Model: int64_t cost() const, bool Conflicted(int knot),
+// budget is spent. Model: int64_t cost() const, bool Conflicted(int knot),
 // int64_t Delta(int link, int colour), void Apply(int link, int colour), int Colour(int link),
 // bool Movable(int link).
-// The list of knots in conflict is rebuilt every `refresh_every` moves (every move where that is
-// cheap next to a move) and extended after each move.
+// The list of knots in conflict is rebuilt every `refresh_every` moves (a pass over the net, so
+// only as often as it costs about what the moves between cost) and extended after each move with
+// the moved knots still in conflict: every conflicting pair keeps a knot in the list.
+// Each move spends its evaluations (links x other colours, each model.EvalWork() units), each
+// rebuild n x model.ScanWork(). The tabu tenures are move numbers in 32 bits: links x colours of
+// them are the search's largest array.
 template <typename Model>
-bool TabuSearch(const Net& net, int k, Model& model, std::mt19937_64& rng,
-                Clock::time_point deadline, int refresh_every) {
-  std::vector<int64_t> tabu(static_cast<size_t>(net.links) * k, -1);
+bool TabuSearch(const Net& net, int k, Model& model, std::mt19937_64& rng, Budget& budget,
+                int64_t refresh_every) {
+  std::vector<int32_t> tabu(static_cast<size_t>(net.links) * k, -1);
   std::vector<int> conflicted;
   int64_t best_cost = model.cost();
-  for (int64_t iter = 0; model.cost() > 0; ++iter) {
-    if ((iter & 15) == 0 && Clock::now() > deadline) return false;
+  const int64_t move_work = 4 * (k - 1) * model.EvalWork();
+  for (int32_t iter = 0; model.cost() > 0; ++iter) {
+    if (iter == INT32_MAX || !budget.Spend(move_work)) return false;
     if (iter % refresh_every == 0 || conflicted.empty()) {
+      budget.work -= net.n * model.ScanWork();
       conflicted.clear();
       for (int x = 0; x < net.n; ++x)
         if (model.Conflicted(x)) conflicted.push_back(x);
@@ -464,8 +537,10 @@ bool TabuSearch(const Net& net, int k, Model& model, std::mt19937_64& rng,
       }
     }
     if (best_link < 0) continue;
+    const int64_t tenure = 5 + static_cast<int64_t>(rng() % 10) +
+                           static_cast<int64_t>(std::min<size_t>(conflicted.size() / 4, 1 << 24));
     tabu[static_cast<size_t>(best_link) * k + model.Colour(best_link)] =
-        iter + 5 + static_cast<int64_t>(rng() % 10) + static_cast<int64_t>(conflicted.size() / 4);
+        static_cast<int32_t>(std::min<int64_t>(iter + tenure, INT32_MAX));
     model.Apply(best_link, best_c);
     best_cost = std::min(best_cost, model.cost());
     for (int y : net.link_knots[best_link])
@@ -482,7 +557,7 @@ bool TabuSearch(const Net& net, int k, Model& model, std::mt19937_64& rng,
 // knots have room to spare wherever the border is the tight part).
 template <typename Model>
 bool SearchBorderFirst(const Net& net, int k, Model& model, std::mt19937_64& rng,
-                       Clock::time_point deadline, int refresh_every, bool border_first,
+                       Budget& budget, int64_t refresh_every, bool border_first,
                        std::vector<int>* out) {
   const std::vector<char> all_knots(net.n, 1), all_links(net.links, 1);
   std::vector<char> border(net.n), inner_links(net.links);
@@ -494,21 +569,25 @@ bool SearchBorderFirst(const Net& net, int k, Model& model, std::mt19937_64& rng
   for (int e = 0; e < net.links; ++e)
     inner_links[e] = !border[net.link_knots[e][0]] && !border[net.link_knots[e][1]];
   if (!border_first || !any_border || !any_inner) {
-    model.Start(RandomColouring(net, k, rng), all_knots, all_links);
-    if (!TabuSearch(net, k, model, rng, deadline, refresh_every)) return false;
+    if (!model.Start(RandomColouring(net, k, rng), all_knots, all_links, budget)) return false;
+    if (!TabuSearch(net, k, model, rng, budget, refresh_every)) return false;
     *out = model.colours();
     return true;
   }
-  model.Start(RandomColouring(net, k, rng), border, all_links);
-  if (!TabuSearch(net, k, model, rng, deadline, refresh_every)) return false;
+  if (!model.Start(RandomColouring(net, k, rng), border, all_links, budget)) return false;
+  if (!TabuSearch(net, k, model, rng, budget, refresh_every)) return false;
   std::vector<int> colour = RandomColouring(net, k, rng);
   for (int e = 0; e < net.links; ++e)
     if (!inner_links[e]) colour[e] = model.colours()[e];
-  model.Start(colour, all_knots, inner_links);
-  if (!TabuSearch(net, k, model, rng, deadline, refresh_every)) return false;
+  if (!model.Start(colour, all_knots, inner_links, budget)) return false;
+  if (!TabuSearch(net, k, model, rng, budget, refresh_every)) return false;
   *out = model.colours();
   return true;
 }
+
+// How often the hashed searches rebuild their list of knots in conflict: a move costs a few hash
+// operations, a rebuild one per knot, so every n / 16 moves (at least 64).
+int64_t RefreshEvery(const Net& net) { return std::max<int64_t>(64, net.n / 16); }
 
 // What both cost models keep, and the part of TabuSearch's interface that is the same for both:
 // the colouring, its knots' configurations, the cost, which knots count (active) and which links
@@ -552,14 +631,26 @@ class LocalSearch : public CostModel {
   LocalSearch(const Net& net, const ColoringOptions& o, int k, uint64_t seed)
       : CostModel(net, o, k, seed), hashed_(o.min_distance == 1 && o.radius == 0) {}
 
-  bool Run(Clock::time_point deadline, std::vector<int>* out) {
+  bool Run(Budget& budget, std::vector<int>* out) {
     // The border first pays where a distance is asked of the whole net (see SearchBorderFirst).
     const bool border_first = !hashed_ && o_.min_distance >= 2 && o_.radius == 0;
-    return SearchBorderFirst(net_, k_, *this, rng_, deadline, 1, border_first, out);
+    // Rebuild the list of knots in conflict (a pass over the net) every move while that costs
+    // no more than a move, else about as often as it costs what the moves between cost.
+    const int64_t refresh = std::max<int64_t>(1, net_.n / (4 * k_ * EvalWork()));
+    return SearchBorderFirst(net_, k_, *this, rng_, budget, refresh, border_first, out);
   }
+  // An evaluation is four codes hashed (hashed), or a scan of two knots' partners twice: units
+  // of roughly equal time (50-70 ns here).
+  int64_t EvalWork() const {
+    if (hashed_) return 4;
+    return 16 + 4 * (net_.n > 0 ? net_.partner_begin[net_.n] / net_.n : 0);
+  }
+  int64_t ScanWork() const { return 1; }
 
   // Sets the colouring, which knots count and which links may change; recounts the cost.
-  void Start(std::vector<int> colour, std::vector<char> active, std::vector<char> movable) {
+  // False when the budget ran out first (the pair count, n x partners, is charged to it).
+  bool Start(std::vector<int> colour, std::vector<char> active, std::vector<char> movable,
+             Budget& budget) {
     Reset(std::move(colour), std::move(active), std::move(movable));
     pair_conf_.assign(net_.n, 0);
     count_.clear();
@@ -567,16 +658,19 @@ class LocalSearch : public CostModel {
       for (int x = 0; x < net_.n; ++x)
         if (active_[x]) cost_ += count_[CodeKey(o_.rule, cfg_[x])]++;
     } else {
-      for (int x = 0; x < net_.n; ++x)
-        for (int w : net_.partners[x])
+      for (int x = 0; x < net_.n; ++x) {
+        if (!budget.Spend(1 + static_cast<int64_t>(net_.partners(x).size()))) return false;
+        for (int w : net_.partners(x))
           if (Counted(x, w) && Violates(cfg_[x], cfg_[w])) {
             ++pair_conf_[x];
             if (w > x) ++cost_;
           }
+      }
     }
     if (o_.adjacent_distinct)
       for (int x = 0; x < net_.n; ++x)
         if (active_[x]) cost_ += AdjacentPairs(cfg_[x]);
+    return true;
   }
   bool Counted(int x, int w) const { return active_[x] && active_[w]; }
   bool Violates(const Cfg& a, const Cfg& b) const {
@@ -591,9 +685,9 @@ class LocalSearch : public CostModel {
   // Cost of the pairs touching u or v when their configurations are cu, cv.
   int64_t Contribution(int u, int v, const Cfg& cu, const Cfg& cv) const {
     int64_t s = 0;
-    for (int w : net_.partners[u])
+    for (int w : net_.partners(u))
       if (Counted(u, w)) s += Violates(cu, w == v ? cv : cfg_[w]);
-    for (int w : net_.partners[v])
+    for (int w : net_.partners(v))
       if (w != u && Counted(v, w)) s += Violates(cv, cfg_[w]);
     if (o_.adjacent_distinct) s += active_[u] * AdjacentPairs(cu) + active_[v] * AdjacentPairs(cv);
     return s;
@@ -640,10 +734,10 @@ class LocalSearch : public CostModel {
       pair_conf_[x] += s;
       pair_conf_[w] += s;
     };
-    for (int w : net_.partners[u])
+    for (int w : net_.partners(u))
       if (Counted(u, w))
         update(u, w, Violates(old_u, w == v ? old_v : cfg_[w]), Violates(cfg_[u], cfg_[w]));
-    for (int w : net_.partners[v])
+    for (int w : net_.partners(v))
       if (w != u && Counted(v, w)) update(v, w, Violates(old_v, cfg_[w]), Violates(cfg_[v], cfg_[w]));
   }
 
@@ -732,12 +826,17 @@ class LocalSearchD2 : public CostModel {
   LocalSearchD2(const Net& net, const ColoringOptions& o, int k, uint64_t seed)
       : CostModel(net, o, k, seed) {}
 
-  bool Run(Clock::time_point deadline, std::vector<int>* out) {
-    return SearchBorderFirst(net_, k_, *this, rng_, deadline, 64, true, out);
+  bool Run(Budget& budget, std::vector<int>* out) {
+    return SearchBorderFirst(net_, k_, *this, rng_, budget, RefreshEvery(net_), true, out);
   }
+  // An evaluation takes four knots' keys out and in (up to 14 keys each under the set rule).
+  int64_t EvalWork() const { return o_.rule == CodeRule::kSet ? 32 : 16; }
+  int64_t ScanWork() const { return o_.rule == CodeRule::kSet ? 8 : 4; }
 
   // Sets the colouring, which knots count and which links may change; recounts the keys.
-  void Start(std::vector<int> colour, std::vector<char> active, std::vector<char> movable) {
+  // False when the budget ran out first (the pair count, n x partners, is charged to it).
+  bool Start(std::vector<int> colour, std::vector<char> active, std::vector<char> movable,
+             Budget& budget) {
     Reset(std::move(colour), std::move(active), std::move(movable));
     own_.clear();
     own_.reserve(static_cast<size_t>(net_.n) * 4);
@@ -746,6 +845,8 @@ class LocalSearchD2 : public CostModel {
       Add(cfg_[x], 1);
       if (o_.adjacent_distinct) cost_ += AdjacentPairs(cfg_[x]);
     }
+    budget.work -= int64_t{net_.n} * ScanWork();
+    return true;
   }
   // Meetings of `keys` with the keys present (not counting `keys` themselves).
   int64_t Meetings(const std::vector<uint64_t>& keys) const {
@@ -830,8 +931,8 @@ class LocalSearchD2 : public CostModel {
 // set, distance to every earlier-completed partner as each knot completes.
 class ExactSearch {
  public:
-  ExactSearch(const Net& net, const ColoringOptions& o, int k, Clock::time_point deadline)
-      : net_(net), o_(o), k_(k), deadline_(deadline) {
+  ExactSearch(const Net& net, const ColoringOptions& o, int k, Budget& budget)
+      : net_(net), o_(o), k_(k), budget_(budget) {
     for (int x = 0; x < net.n; ++x)
       for (int i = 0; i < net.degree[x]; ++i) {
         const int e = net.knot_links[x][i];
@@ -860,7 +961,8 @@ class ExactSearch {
  private:
   int Dfs(int step, int max_used) {
     if (step == net_.links) return 1;
-    if ((++nodes_ & 4095) == 0 && Clock::now() > deadline_) return -1;
+    if (!budget_.Spend(1 + checks_)) return -1;
+    checks_ = 0;
     const int e = order_[step];
     const int top = std::min(k_ - 1, max_used + 1);
     for (int c = 0; c <= top; ++c) {
@@ -881,9 +983,10 @@ class ExactSearch {
         }
     for (int x : completes_[step]) {
       const Cfg cx = KnotCfg(net_, colour_, x);
-      for (int w : net_.partners[x]) {
+      for (int w : net_.partners(x)) {
         const int sw = complete_step_[w];
         if (sw > step || (sw == step && w > x)) continue;
+        ++checks_;
         if (Distance(o_.rule, cx, KnotCfg(net_, colour_, w)) < o_.min_distance) return false;
       }
     }
@@ -893,12 +996,12 @@ class ExactSearch {
   const Net& net_;
   const ColoringOptions& o_;
   int k_;
-  Clock::time_point deadline_;
+  Budget& budget_;  // in nodes and code comparisons
+  mutable int64_t checks_ = 0;  // code comparisons since the last node
   std::vector<int> order_;
   std::vector<std::vector<int>> completes_;
   std::vector<int> complete_step_;
   std::vector<int> colour_;
-  int64_t nodes_ = 0;
 };
 
 }  // namespace
@@ -939,6 +1042,8 @@ bool ColoringOptions::IsValid(std::string* error) const {
   else if (radius < 0) e = "radius must be >= 0 (0: whole net)";
   else if (max_colors < 1 || max_colors > 64) e = "max_colors must be in 1..64";
   else if (!(time_limit_s >= 0.0)) e = "time_limit_s must be >= 0";
+  else if (work_per_link < 1) e = "work_per_link must be >= 1";
+  else if (exact_work < 0) e = "exact_work must be >= 0";
   if (error) *error = e;
   return e.empty();
 }
@@ -1028,6 +1133,33 @@ int64_t MaxCodePacking(CodeRule rule, int degree, int k, bool adjacent_distinct,
   return std::min(all, PatternPackingBound(keyed, degree, k, adjacent_distinct, min_distance));
 }
 
+namespace {
+
+// The most knots with in(r, c) in one box [u0, u0 + R] x [v0, v0 + R] of the rotated coordinates
+// u = r + c, v = r - c + cols - 1 (each in 0 .. rows + cols - 2).
+template <typename In>
+int LargestInBox(int rows, int cols, int R, In in) {
+  const int w = rows + cols - 1;
+  // sum[u][v]: knots with in() at u' < u, v' < v.
+  std::vector<int> sum(static_cast<size_t>(w + 1) * (w + 1), 0);
+  auto at = [&](int u, int v) -> int& { return sum[static_cast<size_t>(u) * (w + 1) + v]; };
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c)
+      if (in(r, c)) ++at(r + c + 1, r - c + cols);
+  for (int u = 1; u <= w; ++u)
+    for (int v = 1; v <= w; ++v) at(u, v) += at(u - 1, v) + at(u, v - 1) - at(u - 1, v - 1);
+  int best = 0;
+  for (int u0 = -R; u0 < w; ++u0)
+    for (int v0 = -R; v0 < w; ++v0) {
+      const int u1 = std::clamp(u0, 0, w), u2 = std::clamp(u0 + R + 1, 0, w);
+      const int v1 = std::clamp(v0, 0, w), v2 = std::clamp(v0 + R + 1, 0, w);
+      best = std::max(best, at(u2, v2) - at(u1, v2) - at(u2, v1) + at(u1, v1));
+    }
+  return best;
+}
+
+}  // namespace
+
 int ColoringLowerBound(int rows, int cols, const ColoringOptions& options) {
   if (NumLinks(rows, cols) == 0) return 0;
   // Largest group per degree that must pairwise differ.
@@ -1041,19 +1173,12 @@ int ColoringLowerBound(int rows, int cols, const ColoringOptions& options) {
       for (int c = 0; c < cols; ++c) ++need[degree_of(r, c)];
   } else {
     // Graph distance is |dr| + |dc| = max(|du|, |dv|) with u = r + c, v = r - c, so a group of
-    // pairwise distance <= R fits in a box [u0, u0 + R] x [v0, v0 + R].
-    for (int u0 = -R; u0 <= rows + cols; ++u0)
-      for (int v0 = -(cols - 1) - R; v0 <= rows - 1; ++v0) {
-        std::array<int, 5> n{};
-        for (int u = u0; u <= u0 + R; ++u)
-          for (int v = v0; v <= v0 + R; ++v) {
-            if (((u + v) & 1) != 0) continue;
-            const int r = (u + v) / 2, c = (u - v) / 2;
-            if (r < 0 || r >= rows || c < 0 || c >= cols) continue;
-            ++n[degree_of(r, c)];
-          }
-        for (int d = 0; d < 5; ++d) need[d] = std::max(need[d], n[d]);
-      }
+    // pairwise distance <= R fits in a box [u0, u0 + R] x [v0, v0 + R]: the largest count of
+    // each degree over all such boxes, from prefix sums over (u, v) (O((rows + cols)^2) per
+    // degree instead of R^2 per box).
+    for (int d = 1; d < 5; ++d) need[d] = LargestInBox(rows, cols, R, [&](int r, int c) {
+      return degree_of(r, c) == d;
+    });
   }
   // Two knots of equal degree d joined by a link share its colour, so they are at most d - 1
   // apart under every rule: min_distance >= d makes such a pair impossible to separate.
@@ -1078,18 +1203,62 @@ int ColoringLowerBound(int rows, int cols, const ColoringOptions& options) {
   return 65;  // no palette of <= 64 colours can work
 }
 
-int ExactColoring(int rows, int cols, const ColoringOptions& options, int k, double time_limit_s,
-                  std::vector<int>* link_colour) {
-  const Net net = BuildNet(rows, cols, options);
+double EstimateColoringBytes(int rows, int cols, const ColoringOptions& o) {
+  const double n = static_cast<double>(rows) * cols, links = NumLinks(rows, cols);
+  const double hash_entry = 48;  // an unordered_map node with its bucket, as glibc allocates it
+  // The net (links per knot, degrees, knots per link) and the partner lists where read.
+  double bytes = 28 * n + 8 * links;
+  if (HeuristicNeedsPartners(o) || RunsExactStage(rows, cols))
+    bytes += 8 * n + 4 * n * static_cast<double>(PartnersPerKnot(rows, cols, o.radius));
+  // The heuristic: tabu tenures for every link and colour, the colouring and its copies,
+  // per-knot configurations, masks and conflict lists.
+  bytes += 4 * links * o.max_colors + 30 * links + 50 * n;
+  // Its code counts (distance 1) or keys (distance 2: up to 14 per knot under the set rule).
+  const bool hashed = o.radius == 0 && o.min_distance <= 2;
+  const double keys = o.min_distance == 1 ? 1 : o.rule == CodeRule::kSet ? 14 : 4;
+  if (hashed) bytes += hash_entry * n * keys;
+  // The lower bound's prefix sums over the rotated grid.
+  if (o.radius > 0) bytes += 4.0 * (rows + cols) * (rows + cols);
+  // VerifyColoring (colours and codes per knot, the table of codes) and the file's text, held
+  // twice while written (about 47 characters a link).
+  bytes += (2 * 56 + 16 + hash_entry) * n + 2 * 47 * links;
+  return bytes;
+}
+
+namespace {
+
+Clock::time_point After(Clock::time_point t0, double seconds) {
+  return t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+}
+
+// The exact search with k colours on a net built with its partner lists.
+int ExactOnNet(const Net& net, const ColoringOptions& o, int k, Budget& budget,
+               std::vector<int>* link_colour) {
   if (net.links == 0) {
     link_colour->clear();
     return 1;
   }
   if (k <= 0) return 0;
-  ExactSearch search(net, options, k,
-                     Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                        std::chrono::duration<double>(time_limit_s)));
+  ExactSearch search(net, o, k, budget);
   return search.Run(link_colour);
+}
+
+// The heuristic's work for one palette: work_per_link per link, at least a million units (small
+// nets are cheap, and a few thousand moves decide little).
+int64_t WorkBudget(int links, const ColoringOptions& o) {
+  return std::max<int64_t>(1'000'000, o.work_per_link * links);
+}
+
+}  // namespace
+
+int ExactColoring(int rows, int cols, const ColoringOptions& options, int k, double time_limit_s,
+                  std::vector<int>* link_colour) {
+  if (!RunsExactStage(rows, cols))
+    throw std::invalid_argument("ExactColoring: more than " +
+                                std::to_string(kExactSearchMaxKnots) + " knots");
+  const Net net = BuildNet(rows, cols, options, true);
+  Budget budget{options.exact_work, After(Clock::now(), time_limit_s)};
+  return ExactOnNet(net, options, k, budget, link_colour);
 }
 
 NetColoring SolveColoring(int rows, int cols, const ColoringOptions& options) {
@@ -1102,76 +1271,87 @@ NetColoring SolveColoring(int rows, int cols, const ColoringOptions& options) {
   result.cols = cols;
   result.options = options;
   result.lower_bound = ColoringLowerBound(rows, cols, options);
-  const auto deadline = t0 + std::chrono::duration_cast<Clock::duration>(
-                                 std::chrono::duration<double>(options.time_limit_s));
-  const Net net = BuildNet(rows, cols, options);
-  if (net.links == 0) {
+  if (NumLinks(rows, cols) == 0) {
     result.method = "exact";
     result.optimal = true;
     result.wall_s = Since(t0);
     return result;
   }
+  // Before anything is allocated: no palette of max_colors colours can work (see the bound).
   if (result.lower_bound > options.max_colors) {
-    result.method = "infeasible";  // no palette of max_colors colours can work (see the bound)
+    result.method = "infeasible";
     result.wall_s = Since(t0);
     return result;
   }
-  // Heuristic: upwards from the lower bound with small budgets until a palette works, then
-  // downwards with the time left while it keeps working.
+  const bool exact_stage = RunsExactStage(rows, cols);
+  result.exact_skipped = !exact_stage;
+  const Net net = BuildNet(rows, cols, options, HeuristicNeedsPartners(options) || exact_stage);
+  const auto deadline = After(t0, options.time_limit_s);
+  // True (and the result marked) once the wall-clock cap has passed.
+  auto out_of_time = [&] {
+    const bool past = Clock::now() > deadline;
+    result.time_limited = result.time_limited || past;
+    return past;
+  };
   result.method = "none";
-  auto try_heuristic = [&](int k, double budget_s) {
-    const auto budget = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                           std::chrono::duration<double>(budget_s));
+  // Each palette within its work, and within a share of the time limit so that a short limit is
+  // not spent on the first palette (a share that cuts the work short marks the result too).
+  auto try_heuristic = [&](int k, int64_t work, double seconds) {
+    Budget budget{work, std::min(deadline, After(Clock::now(), seconds))};
     std::vector<int> colour;
     const uint64_t seed = options.seed + static_cast<uint64_t>(k);
+    bool found;
     if (options.min_distance == 2 && options.radius == 0) {
       LocalSearchD2 search(net, options, k, seed);
-      if (!search.Run(std::min(budget, deadline), &colour)) return false;    } else {
+      found = search.Run(budget, &colour);
+    } else {
       LocalSearch search(net, options, k, seed);
-      if (!search.Run(std::min(budget, deadline), &colour)) return false;
+      found = search.Run(budget, &colour);
     }
+    result.time_limited = result.time_limited || budget.capped;
+    if (!found) return false;
     result.colors = k;
-    result.link_colour = colour;
+    result.link_colour = std::move(colour);
     result.method = "heuristic";
     return true;
   };
-  // Steps of 1, 1, 2, 4, ... so that a weak bound (D >= 2) is left behind quickly.
+  // Heuristic: upwards from the lower bound with one budget per palette (and 5 % of the time
+  // limit) until a palette works (steps of 1, 1, 2, 4, ... so that a weak bound, D >= 2, is left
+  // behind quickly; the largest palette gets 4 budgets and all the time left), bisect between the
+  // last failure and the palette found (a share of the time left per round), then downwards with
+  // 4 budgets (and half the time left) each while it keeps working.
+  const int64_t work = WorkBudget(net.links, options);
+  auto left = [&] { return options.time_limit_s - Since(t0); };
   int failed_below = result.lower_bound - 1;  // the largest palette that failed so far
   for (int k = result.lower_bound, step = 1; k <= options.max_colors + step - 1;
        k += step, step *= (k > result.lower_bound + 1 ? 2 : 1)) {
     const int kk = std::min(k, options.max_colors);
-    if (Since(t0) >= options.time_limit_s) break;
-    // The largest palette gets all the time left: a large net needs long runs even there.
-    const double budget_s = kk == options.max_colors ? options.time_limit_s - Since(t0)
-                                                     : 0.05 * options.time_limit_s;
-    if (try_heuristic(kk, budget_s)) break;
+    if (out_of_time()) break;
+    const bool last = kk == options.max_colors;
+    if (try_heuristic(kk, last ? 4 * work : work, last ? left() : 0.05 * options.time_limit_s))
+      break;
     failed_below = kk;
     if (kk == options.max_colors) break;
   }
-  // Bisect between the last failure and the palette found, sharing the time left.
-  while (result.colors > 0 && result.colors - failed_below > 1) {
-    const double left = options.time_limit_s - Since(t0);
-    if (left <= 0) break;
+  while (result.colors > 0 && result.colors - failed_below > 1 && !out_of_time()) {
     int rounds = 1;
     for (int gap = result.colors - failed_below; gap > 1; gap = (gap + 1) / 2) ++rounds;
     const int mid = failed_below + (result.colors - failed_below) / 2;
-    if (!try_heuristic(mid, left / rounds)) failed_below = mid;
+    if (!try_heuristic(mid, work, left() / rounds)) failed_below = mid;
   }
-  for (int k = result.colors - 1; result.colors > 0 && k >= result.lower_bound; --k) {
-    const double left = options.time_limit_s - Since(t0);
-    if (left <= 0 || !try_heuristic(k, 0.5 * left)) break;
-  }
+  for (int k = result.colors - 1; result.colors > 0 && k >= result.lower_bound; --k)
+    if (out_of_time() || !try_heuristic(k, 4 * work, 0.5 * left())) break;
   if (result.method == "none") {
     result.wall_s = Since(t0);
     return result;
   }
-  // Prove (or improve) with the exact search on colors - 1.
+  // Prove (or improve) with the exact search on colors - 1, within one work budget.
   result.optimal = result.colors <= result.lower_bound;
-  while (!result.optimal) {
-    const double left = options.time_limit_s - Since(t0);
-    if (left <= 0) break;
+  Budget exact_budget{options.exact_work, deadline};
+  while (exact_stage && !result.optimal && !out_of_time()) {
     std::vector<int> colour;
-    const int r = ExactColoring(rows, cols, options, result.colors - 1, left, &colour);
+    const int r = ExactOnNet(net, options, result.colors - 1, exact_budget, &colour);
+    result.time_limited = result.time_limited || exact_budget.capped;
     if (r < 0) break;
     result.method = "heuristic+exact";
     if (r == 0) {
@@ -1185,6 +1365,91 @@ NetColoring SolveColoring(int rows, int cols, const ColoringOptions& options) {
   result.wall_s = Since(t0);
   return result;
 }
+
+namespace {
+
+// Knots in the diamond of radius R around a knot (all of them for radius 0).
+double DiamondSize(int rows, int cols, int radius) {
+  const double n = static_cast<double>(rows) * cols, r = radius;
+  return radius == 0 ? n : std::min(n, 2 * r * r + 2 * r + 1);
+}
+
+// Configurations of d links within `changes` link changes of one configuration, k colours.
+double HammingBallSize(int d, int k, int changes) {
+  double size = 0, choose = 1, power = 1;
+  for (int j = 0; j <= std::min(changes, d); ++j) {
+    size += choose * power;
+    choose = choose * (d - j) / (j + 1);
+    power *= std::max(k - 1, 0);
+  }
+  return size;
+}
+
+// The first non-empty compare(x, w) over the knots x and the knots w > x in the diamond of
+// `radius` around x (row-major order; radius 0: every knot).
+template <typename Compare>
+std::string FirstViolationWithin(int rows, int cols, int radius, Compare compare) {
+  const int reach = radius == 0 ? rows + cols : radius;
+  for (int x = 0; x < rows * cols; ++x) {
+    const int r = x / cols, c = x % cols;
+    for (int wr = r; wr <= std::min(rows - 1, r + reach); ++wr) {
+      const int span = reach - (wr - r);
+      for (int wc = std::max(0, c - span); wc <= std::min(cols - 1, c + span); ++wc) {
+        const int w = wr * cols + wc;
+        if (w <= x) continue;
+        const std::string violation = compare(x, w);
+        if (!violation.empty()) return violation;
+      }
+    }
+  }
+  return "";
+}
+
+// A knot code and its degree as one number (codes hold at most 4 colours below 64).
+uint64_t PackedCode(size_t degree, const std::vector<int>& code) {
+  uint64_t key = degree;
+  for (int c : code) key = key * 65 + static_cast<uint64_t>(c + 1);
+  return key;
+}
+
+// The first non-empty compare(x, w) for knots w whose code some configuration within
+// min_distance - 1 link changes of knot x has (x in order; a table of codes, O(n) memory).
+template <typename Compare>
+std::string FirstViolationByCode(const ColoringOptions& o,
+                                 const std::vector<std::vector<int>>& colours, int k,
+                                 Compare compare) {
+  const int n = static_cast<int>(colours.size());
+  std::unordered_multimap<uint64_t, int> knots_of;
+  knots_of.reserve(n);
+  for (int x = 0; x < n; ++x)
+    knots_of.emplace(PackedCode(colours[x].size(), KnotCode(o.rule, colours[x])), x);
+  std::string violation;
+  std::vector<int> y;
+  // Changes links from `from` on with `left` changes to spare; true when a violation was found.
+  std::function<bool(int, size_t, int)> visit = [&](int x, size_t from, int left) {
+    const auto [begin, end] = knots_of.equal_range(PackedCode(y.size(), KnotCode(o.rule, y)));
+    for (auto it = begin; it != end; ++it)
+      if (!(violation = compare(x, it->second)).empty()) return true;
+    if (left == 0) return false;
+    for (size_t i = from; i < y.size(); ++i) {
+      const int own = y[i];
+      for (int c = 0; c < k; ++c) {
+        if (c == own) continue;
+        y[i] = c;
+        if (visit(x, i + 1, left - 1)) return true;
+      }
+      y[i] = own;
+    }
+    return false;
+  };
+  for (int x = 0; x < n; ++x) {
+    y = colours[x];
+    if (visit(x, 0, o.min_distance - 1)) return violation;
+  }
+  return "";
+}
+
+}  // namespace
 
 bool VerifyColoring(const NetColoring& col, std::string* why) {
   auto fail = [&](const std::string& m) {
@@ -1228,35 +1493,37 @@ bool VerifyColoring(const NetColoring& col, std::string* why) {
             return fail(name(x) + ": two links share colour " + std::to_string(colours[x][i]) +
                         " (adjacent_distinct)");
   }
-  // All pairs, graph distance by breadth-first search from each knot.
-  std::vector<int> hops(n);
-  for (int x = 0; x < n; ++x) {
-    std::fill(hops.begin(), hops.end(), -1);
-    std::deque<int> queue{x};
-    hops[x] = 0;
-    while (!queue.empty()) {
-      const int y = queue.front();
-      queue.pop_front();
-      const int r = y / col.cols, c = y % col.cols;
-      const int nb[4][2] = {{r, c + 1}, {r + 1, c}, {r, c - 1}, {r - 1, c}};
-      for (const auto& p : nb) {
-        if (p[0] < 0 || p[0] >= col.rows || p[1] < 0 || p[1] >= col.cols) continue;
-        const int z = p[0] * col.cols + p[1];
-        if (hops[z] < 0) hops[z] = hops[y] + 1, queue.push_back(z);
-      }
-    }
-    for (int w = x + 1; w < n; ++w) {
-      if (colours[w].size() != colours[x].size()) continue;
-      if (o.radius > 0 && hops[w] > o.radius) continue;
-      const int d = KnotDistance(o.rule, colours[x], colours[w]);
-      if (d < o.min_distance)
-        return fail(name(x) + " and " + name(w) + " (degree " + std::to_string(colours[x].size()) +
-                    ", " + std::to_string(hops[w]) + " links apart): codes " +
-                    CodeString(o.rule, codes[x]) + " and " + CodeString(o.rule, codes[w]) +
-                    " at distance " + std::to_string(d) + " < min_distance " +
-                    std::to_string(o.min_distance));
-    }
-  }
+  // The pairs that must differ. On the full grid the graph distance is |dr| + |dc| (a shortest
+  // path turns at most once), so no breadth-first search is needed.
+  auto hops = [&](int x, int w) {
+    return std::abs(x / col.cols - w / col.cols) + std::abs(x % col.cols - w % col.cols);
+  };
+  // Empty when knots x and w may share their codes' neighbourhood, else the violation.
+  auto compare = [&](int x, int w) -> std::string {
+    if (x == w || colours[w].size() != colours[x].size()) return "";
+    if (o.radius > 0 && hops(x, w) > o.radius) return "";
+    const int d = KnotDistance(o.rule, colours[x], colours[w]);
+    if (d >= o.min_distance) return "";
+    if (w < x) std::swap(x, w);
+    return name(x) + " and " + name(w) + " (degree " + std::to_string(colours[x].size()) + ", " +
+           std::to_string(hops(x, w)) + " links apart): codes " + CodeString(o.rule, codes[x]) +
+           " and " + CodeString(o.rule, codes[w]) + " at distance " + std::to_string(d) +
+           " < min_distance " + std::to_string(o.min_distance);
+  };
+  // Two ways, whichever compares fewer: each knot against the knots within the radius (the
+  // diamond around it), or each knot's configurations within min_distance - 1 link changes
+  // looked up in a table of codes. The second finds every pair closer than min_distance: such a
+  // pair has a knot whose links reach the other's code in fewer than min_distance changes.
+  const double pairwise = static_cast<double>(n) * DiamondSize(col.rows, col.cols, o.radius);
+  const double looked_up =
+      static_cast<double>(n) * HammingBallSize(4, col.colors, o.min_distance - 1);
+  // (With a small radius the table would return the knots of a code from all over the net.)
+  const bool by_code =
+      looked_up < pairwise && (o.radius == 0 || 2 * DiamondSize(col.rows, col.cols, o.radius) >= n);
+  const std::string violation = !by_code
+                                    ? FirstViolationWithin(col.rows, col.cols, o.radius, compare)
+                                    : FirstViolationByCode(o, colours, col.colors, compare);
+  if (!violation.empty()) return fail(violation);
   return true;
 }
 

@@ -50,10 +50,18 @@ struct ColoringOptions {
   bool adjacent_distinct = false;
   // The largest palette tried.
   int max_colors = 64;
-  // Wall-clock budget of SolveColoring, seconds.
+  // The search's budgets, counted in its own steps rather than seconds so that the result depends
+  // only on the net and these options, never on the machine's load (a wall-clock budget gave 23,
+  // 36 or 44 colours for one 100x100 net): for each palette the heuristic tries, work units per
+  // link (a unit is about 50-70 ns here: 4000 per link is ~1 s for 51x51 knots; the last
+  // palettes, tried downwards from the first that works, get 4 budgets), and for the exact
+  // search in nodes and code comparisons.
+  int64_t work_per_link = 4000;
+  int64_t exact_work = 100'000'000;
+  // Wall-clock cap of SolveColoring, seconds: the search stops there at the latest, and the
+  // result says so (NetColoring::time_limited); only such a result may differ between runs.
   double time_limit_s = 30.0;
-  // Seed of the heuristic's random choices (results are reproducible for a seed and time budget
-  // large enough that the search is not cut short).
+  // Seed of the heuristic's random choices.
   uint64_t seed = 1;
 
   // False with a reason for options out of range.
@@ -68,6 +76,8 @@ struct NetColoring {
   bool optimal = false;  // proven: lower bound reached, or the exact search exhausted colors - 1
   std::string method;    // "heuristic", "exact", "heuristic+exact"; "none" when nothing found
   double wall_s = 0.0;   // time SolveColoring took, seconds
+  bool time_limited = false;  // the wall-clock cap cut the search short (see time_limit_s)
+  bool exact_skipped = false; // more than kExactSearchMaxKnots knots: no exact stage was run
   std::vector<std::string> palette_names;  // optional, from a physical palette
 };
 
@@ -112,19 +122,35 @@ bool DistanceTwoKeysMeet(CodeRule rule, const std::vector<int>& a, const std::ve
 // degree with adjacent_distinct. 0 for a net without links.
 int ColoringLowerBound(int rows, int cols, const ColoringOptions& options);
 
+// The exact search's limit: its partner lists hold every pair of knots of one degree at radius
+// 0 (n^2 entries; 4 TB at 1000x1000) and it recurses once per link, while above ~30x30 knots it
+// cannot prove anything within any budget anyway.
+constexpr int kExactSearchMaxKnots = 1024;
+
+// The memory SolveColoring, VerifyColoring and WriteColoring need for a net of rows x cols knots
+// under these options, bytes (an upper estimate, for refusing a run before it allocates): the
+// net, the heuristic's state (the tabu list, links x max_colors), its code counts or distance-2
+// keys, the partner lists where the search reads them (same-degree knots within the radius:
+// about n (2R^2 + 2R) entries), and the written file's text.
+double EstimateColoringBytes(int rows, int cols, const ColoringOptions& options);
+
 // The fewest colours found: the heuristic (random start + tabu min-conflicts search) from the
 // lower bound upwards, then the exact search (backtracking, links in knot order, colours
 // introduced in increasing order, code conflicts checked as each knot completes) to prove
-// colors - 1 infeasible within the time limit. method "none" and colors 0 when nothing was found
-// up to max_colors in time.
+// colors - 1 infeasible within its work budget; nets above kExactSearchMaxKnots skip it
+// (exact_skipped). method "none" and colors 0 when nothing was found up to max_colors within the
+// budgets; method "infeasible" when the lower bound exceeds max_colors.
 NetColoring SolveColoring(int rows, int cols, const ColoringOptions& options);
 
-// Exact search alone with k colours: 1 found (*link_colour set), 0 proven infeasible, -1 time up.
+// Exact search alone with k colours: 1 found (*link_colour set), 0 proven infeasible, -1 budget
+// (options.exact_work) or time up. Throws std::invalid_argument above kExactSearchMaxKnots.
 int ExactColoring(int rows, int cols, const ColoringOptions& options, int k, double time_limit_s,
                   std::vector<int>* link_colour);
 
-// Independent check (codes recomputed from scratch, graph distance by BFS, all pairs compared):
-// false with the first violation named (which knots, which codes) in *why.
+// Independent check, with codes recomputed from the link list: false with the first violation
+// named (which knots, which codes) in *why. Time and memory O(n) for radius 0 (every knot's
+// configurations within min_distance - 1 changes looked up in a table of codes), O(n R^2) with
+// a radius (the knots within R links compared), never more than comparing all pairs.
 bool VerifyColoring(const NetColoring& coloring, std::string* why);
 
 // coloring.yaml: rows, cols, rule, min_distance, radius, adjacent_distinct, colors, lower_bound,

@@ -183,6 +183,82 @@ TEST(VerifyColoring, RejectsColoursOutsideThePalette) {
   EXPECT_NE(why.find("link 1"), std::string::npos) << why;
 }
 
+// The verifier compares pairs within the radius or looks codes up in a table, whichever is
+// cheaper; either way its verdict must be that of comparing every pair (graph distance on the
+// grid by breadth-first search here), on valid colourings and on ones with a link changed.
+bool AllPairsValid(const NetColoring& c) {
+  const int n = c.rows * c.cols;
+  std::vector<std::vector<int>> colours(n);
+  for (int x = 0; x < n; ++x) colours[x] = KnotLinkColours(c, x / c.cols, x % c.cols);
+  for (int x = 0; x < n; ++x) {
+    std::vector<int> hops(n, -1);
+    std::vector<int> queue{x};
+    hops[x] = 0;
+    for (size_t i = 0; i < queue.size(); ++i) {
+      const int y = queue[i], r = y / c.cols, col = y % c.cols;
+      for (auto [nr, nc] : {std::pair(r, col + 1), std::pair(r + 1, col), std::pair(r, col - 1),
+                            std::pair(r - 1, col)}) {
+        if (nr < 0 || nr >= c.rows || nc < 0 || nc >= c.cols || hops[nr * c.cols + nc] >= 0) continue;
+        hops[nr * c.cols + nc] = hops[y] + 1;
+        queue.push_back(nr * c.cols + nc);
+      }
+    }
+    for (int w = x + 1; w < n; ++w)
+      if ((c.options.radius == 0 || hops[w] <= c.options.radius) &&
+          KnotDistance(c.options.rule, colours[x], colours[w]) < c.options.min_distance)
+        return false;
+  }
+  return true;
+}
+
+TEST(VerifyColoring, AgreesWithComparingEveryPair) {
+  int valid = 0, invalid = 0;
+  for (CodeRule rule : kRules)
+    for (int d : {1, 2})
+      for (int radius : {0, 2})
+        for (auto [rows, cols] : {std::pair(4, 5), std::pair(9, 9)}) {
+          ColoringOptions o;
+          o.rule = rule;
+          o.min_distance = d;
+          o.radius = radius;
+          o.time_limit_s = 0.2;
+          const NetColoring solved = SolveColoring(rows, cols, o);
+          ASSERT_GT(solved.colors, 0);
+          for (int link = 0; link < NumLinks(rows, cols); link += 7) {
+            NetColoring c = solved;
+            if (link > 0) c.link_colour[link] = (c.link_colour[link] + link) % c.colors;
+            std::string why;
+            const bool expected = AllPairsValid(c);
+            EXPECT_EQ(VerifyColoring(c, &why), expected)
+                << CodeRuleName(rule) << " D=" << d << " R=" << radius << " " << rows << "x"
+                << cols << " link " << link << ": " << why;
+            ++(expected ? valid : invalid);
+          }
+        }
+  EXPECT_GT(valid, 20);
+  EXPECT_GT(invalid, 20);
+}
+
+// The memory estimate grows with the knots within the radius (the partner lists), and the
+// default search over the largest accepted net fits a workstation.
+TEST(EstimateColoringBytes, GrowsWithTheNetAndTheRadius) {
+  ColoringOptions o;
+  o.rule = CodeRule::kCyclic;
+  const double whole = EstimateColoringBytes(1000, 1000, o);
+  EXPECT_LT(whole, 4e9);
+  EXPECT_GT(whole, 2e6 * o.max_colors * 4);  // at least the tabu tenures, links x colours
+  EXPECT_LT(EstimateColoringBytes(100, 100, o), whole / 50);
+  o.radius = 3;
+  const double r3 = EstimateColoringBytes(1000, 1000, o);
+  o.radius = 30;
+  const double r30 = EstimateColoringBytes(1000, 1000, o);
+  // Partner lists: 4 bytes x 10^6 knots x (2 R^2 + 2 R) knots within R.
+  EXPECT_GT(r30 - r3, 4e6 * (2 * 900 + 60 - 2 * 9 - 6) * 0.99);
+  EXPECT_LT(r30 - r3, 4e6 * (2 * 900 + 60 - 2 * 9 - 6) * 1.01);
+  o.radius = 999;
+  EXPECT_GT(EstimateColoringBytes(1000, 1000, o), 1e12);
+}
+
 TEST(SolveColoring, EveryResultPassesTheVerifier) {
   for (CodeRule rule : kRules)
     for (int d : {1, 2})
