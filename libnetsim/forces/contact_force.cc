@@ -71,6 +71,13 @@ ContactForce::ContactForce(std::vector<RigidBody> bodies, double friction_veloci
   for (const RigidBody& body : bodies_) bounding_radius_.push_back(body.BoundingRadius());
 }
 
+double ContactForce::Friction(const RigidBody& body, double fn, double speed, double mass,
+                              double dt) const {
+  const double ft = body.friction * fn * speed /
+                    std::sqrt(speed * speed + friction_velocity_ * friction_velocity_);
+  return dt > 0.0 ? std::min(ft, mass * speed / dt) : ft;
+}
+
 void ContactForce::Accumulate(const Model& model, const State& state, double dt,
                               ForceBuffers& out) const {
   const int n = model.num_nodes();
@@ -101,12 +108,7 @@ void ContactForce::Accumulate(const Model& model, const State& state, double dt,
       if (body.friction > 0.0) {
         const Vector3d vt = v_rel - vn * normal;
         const double speed = vt.norm();
-        if (speed > 0.0) {
-          double ft = body.friction * fn * speed /
-                      std::sqrt(speed * speed + friction_velocity_ * friction_velocity_);
-          if (dt > 0.0) ft = std::min(ft, m * speed / dt);
-          f -= (ft / speed) * vt;
-        }
+        if (speed > 0.0) f -= (Friction(body, fn, speed, m, dt) / speed) * vt;
       }
       out.force[i] += f;
     }
@@ -185,12 +187,7 @@ double ContactForce::ResolveImplicit(const Model& model, int i, const Vector3d& 
     if (body.friction > 0.0) {
       const Vector3d vt = v_rel - vn * normal;
       const double speed = vt.norm();
-      if (speed > 0.0) {
-        double ft = body.friction * fn * speed /
-                    std::sqrt(speed * speed + friction_velocity_ * friction_velocity_);
-        ft = std::min(ft, m * speed / h);
-        *v -= (a * ft / speed) * vt;
-      }
+      if (speed > 0.0) *v -= (a * Friction(body, fn, speed, m, h) / speed) * vt;
     }
   }
   return deepest;

@@ -84,6 +84,9 @@ class ContactForce final : public Force {
     const double r = bounding_radius_[b] + reach;
     return std::isfinite(r) && (x - center).squaredNorm() > r * r;
   }
+  // The regularised Coulomb friction's magnitude (N) for a normal force fn and a sliding speed,
+  // capped (dt > 0) at what stops the sliding within dt.
+  double Friction(const RigidBody& body, double fn, double speed, double mass, double dt) const;
   double Stiffness(const RigidBody& body, double mass) const {
     return body.stiffness > 0.0 ? body.stiffness : mass * contact_omega_ * contact_omega_;
   }
