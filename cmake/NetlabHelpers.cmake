@@ -11,6 +11,12 @@ function(netlab_target_defaults target)
     target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer
                                              -fno-sanitize-recover=undefined)
     target_link_options(${target} PRIVATE -fsanitize=address,undefined)
+    # Eigen turns its "glibc malloc is 16-byte aligned" assumption off under __SANITIZE_ADDRESS__
+    # and then frees through its hand-made aligned allocator, which reads an offset stored before
+    # the block. Debian's libceres is built without the sanitizer, so a matrix it allocates with
+    # plain malloc and our code frees (ceres::GradientChecker's jacobians) was reported as a
+    # heap-buffer-overflow. Keep the library's choice: ASan's malloc is 16-byte aligned on x86-64.
+    target_compile_definitions(${target} PRIVATE EIGEN_MALLOC_ALREADY_ALIGNED=1)
   endif()
 endfunction()
 
