@@ -19,6 +19,7 @@ const std::vector<Command>& Commands();
 int RunSimulate(const std::vector<std::string>& args);
 int RunCalibrate(const std::vector<std::string>& args);
 int RunColorNet(const std::vector<std::string>& args);
+int RunFit(const std::vector<std::string>& args);
 int RunIngest(const std::vector<std::string>& args);
 int RunLabel(const std::vector<std::string>& args);
 int RunRender(const std::vector<std::string>& args);

@@ -72,6 +72,24 @@ std::string Kind(const YAML::Node& n) {
   return "'" + n.Scalar() + "'";
 }
 
+// The entry `part` of a list, by index or by its name; `where` and `walked` (the path to the list)
+// are for the error.
+YAML::Node EntryOf(const YAML::Node& list, const std::string& part, const std::string& where,
+                   const std::string& walked) {
+  char* end = nullptr;
+  const long i = std::strtol(part.c_str(), &end, 10);
+  if (end != part.c_str() && *end == '\0') {
+    if (i >= 0 && i < static_cast<long>(list.size())) return list[static_cast<size_t>(i)];
+  } else {
+    for (const YAML::Node& item : list)
+      if (item.IsMap() && item["name"] && item["name"].Scalar() == part) return item;
+  }
+  throw InputError(where + "'" + part + "' is not an entry of " + walked + " (" +
+                   std::to_string(list.size()) + (list.size() == 1 ? " entry" : " entries") +
+                   ": an index 0.." + std::to_string(static_cast<long>(list.size()) - 1) +
+                   ", or a name)");
+}
+
 }  // namespace
 
 ScenarioOverride ParseOverride(const std::string& arg) {
@@ -94,20 +112,8 @@ void ApplyOverride(const ScenarioOverride& o, const std::string& origin, YAML::N
   YAML::Node node;
   node.reset(root);
   std::string walked;  // the path so far
-  // The entry of a list by index, or by its name.
-  const auto entry = [&](const YAML::Node& list, const std::string& part) -> YAML::Node {
-    char* end = nullptr;
-    const long i = std::strtol(part.c_str(), &end, 10);
-    if (end != part.c_str() && *end == '\0') {
-      if (i >= 0 && i < static_cast<long>(list.size())) return list[static_cast<size_t>(i)];
-    } else {
-      for (const YAML::Node& item : list)
-        if (item.IsMap() && item["name"] && item["name"].Scalar() == part) return item;
-    }
-    throw InputError(where + "'" + part + "' is not an entry of " + walked + " (" +
-                     std::to_string(list.size()) + (list.size() == 1 ? " entry" : " entries") +
-                     ": an index 0.." + std::to_string(static_cast<long>(list.size()) - 1) +
-                     ", or a name)");
+  const auto entry = [&](const YAML::Node& list, const std::string& part) {
+    return EntryOf(list, part, where, walked);
   };
   for (size_t p = 0; p < parts.size(); ++p) {
     const std::string& part = parts[p];
@@ -191,6 +197,31 @@ Scenario LoadScenario(const std::string& path, const std::vector<ScenarioOverrid
   } catch (const InputError& e) {
     throw InputError(std::string(e.what()) + " (the scenario as changed by" + set + ")");
   }
+}
+
+YAML::Node ScenarioValue(const std::string& path, const std::vector<ScenarioOverride>& overrides,
+                         const std::string& dotted) {
+  YAML::Node tree = LoadYamlString(ReadScenarioText(path), path);
+  for (const ScenarioOverride& o : overrides) ApplyOverride(o, path, tree);
+  const std::string where = path + ": '" + dotted + "': ";
+  YAML::Node node;
+  node.reset(tree);
+  std::string walked;
+  for (const std::string& part : Split(dotted)) {
+    YAML::Node child;
+    if (node.IsMap() && node[part]) {
+      child.reset(node[part]);
+    } else if (node.IsSequence()) {
+      child.reset(EntryOf(node, part, where, walked));
+    } else {
+      throw InputError(where + "the scenario does not give '" +
+                       (walked.empty() ? part : walked + "." + part) +
+                       "' (a value left at its default has no start: give it with --set)");
+    }
+    node.reset(child);
+    walked = walked.empty() ? part : walked + "." + part;
+  }
+  return node;
 }
 
 }  // namespace netlab::netsim

@@ -39,4 +39,9 @@ void ApplyOverride(const ScenarioOverride& o, const std::string& origin, YAML::N
 // LoadScenario checks a file. Its `text` is the YAML that ran, headed by the overrides.
 Scenario LoadScenario(const std::string& path, const std::vector<ScenarioOverride>& overrides);
 
+// The value at the dotted path `dotted` of the scenario in `path` with the overrides applied: a
+// scalar, a list or a section. InputError naming the path when the file does not give it.
+YAML::Node ScenarioValue(const std::string& path, const std::vector<ScenarioOverride>& overrides,
+                         const std::string& dotted);
+
 }  // namespace netlab::netsim

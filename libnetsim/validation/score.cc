@@ -16,6 +16,7 @@
 #include <tuple>
 
 #include "common/hdf5_util.h"
+#include "libnetsim/validation/alignment.h"
 
 namespace netlab::netsim {
 namespace {
@@ -45,91 +46,7 @@ std::string FrameName(const KnotTracks& tracks, int row) {
   return s.str();
 }
 
-Matrix3d Skew(const Vector3d& a) {
-  Matrix3d m;
-  m << 0, -a.z(), a.y(), a.z(), 0, -a.x(), -a.y(), a.x(), 0;
-  return m;
-}
-
-Matrix3d ExpSo3(const Vector3d& w) {
-  const double angle = w.norm();
-  if (angle < 1e-12) return Matrix3d::Identity() + Skew(w);
-  return Eigen::AngleAxisd(angle, w / angle).toRotationMatrix();
-}
-
-// The stored simulation seen as a function of time: 4-point Lagrange (cubic) interpolation of the
-// frames around t, its time derivative, and an estimate of its error from the 4th divided
-// difference: e(t) ~ |f''''| / 24 * |prod (t - t_m)|, the interpolation remainder.
-class SimInterpolant {
- public:
-  SimInterpolant(const KnotTracks& sim, const std::vector<int>& sim_knot)
-      : sim_(sim), sim_knot_(sim_knot) {}
-
-  double begin() const { return sim_.time.front(); }
-  double end() const { return sim_.time.back(); }
-
-  // False when t is outside the stored span or a frame of the stencil is not valid.
-  bool At(double t, int k, Vector3d* p, Vector3d* v, double* error) const {
-    const auto& s = sim_.time;
-    const int n = static_cast<int>(s.size());
-    const double tol = 1e-9 * std::max(1.0, std::abs(t));
-    if (t < s.front() - tol || t > s.back() + tol) return false;
-    int i = static_cast<int>(std::upper_bound(s.begin(), s.end(), t) - s.begin()) - 1;
-    const int first = std::clamp(i - 1, 0, n - 4);
-    const int ks = sim_knot_[k];
-    double w[4], dw[4];
-    for (int a = 0; a < 4; ++a) {
-      // Lagrange basis l_a(t) and its derivative.
-      double num = 1.0, den = 1.0, dnum = 0.0;
-      for (int b = 0; b < 4; ++b) {
-        if (b == a) continue;
-        den *= s[first + a] - s[first + b];
-        double prod = 1.0;
-        for (int c = 0; c < 4; ++c)
-          if (c != a && c != b) prod *= t - s[first + c];
-        dnum += prod;
-        num *= t - s[first + b];
-      }
-      w[a] = num / den;
-      dw[a] = dnum / den;
-    }
-    Vector3d pos = Vector3d::Zero(), vel = Vector3d::Zero();
-    for (int a = 0; a < 4; ++a) {
-      if (!sim_.Valid(first + a, ks)) return false;
-      const Vector3d& q = sim_.Position(first + a, ks);
-      pos += w[a] * q;
-      vel += dw[a] * q;
-    }
-    *p = pos;
-    if (v) *v = vel;
-    if (error) {
-      // 4th divided difference over 5 frames (f''''/24), the stencil extended by one frame.
-      const int f5 = std::clamp(first, 0, n - 5);
-      *error = 0.0;
-      if (n >= 5) {
-        Vector3d dd[5];
-        for (int a = 0; a < 5; ++a) dd[a] = sim_.Position(f5 + a, ks);
-        for (int level = 1; level < 5; ++level)
-          for (int a = 0; a + level < 5; ++a)
-            dd[a] = (dd[a + 1] - dd[a]) / (s[f5 + a + level] - s[f5 + a]);
-        double prod = 1.0;
-        for (int a = 0; a < 4; ++a) prod *= t - s[first + a];
-        *error = dd[0].norm() * std::abs(prod);
-      }
-    }
-    return true;
-  }
-
- private:
-  const KnotTracks& sim_;
-  const std::vector<int>& sim_knot_;
-};
-
-// One measured knot-frame that can be compared.
-struct Point {
-  int frame, knot;
-  Matrix3d meas_cov;  // m^2
-};
+using Point = ComparedPoint;
 
 struct Fit {
   double tau = 0.0;
@@ -1153,16 +1070,28 @@ void D2Histogram(ScoreResult* result) {
 
 }  // namespace
 
+Comparison PrepareComparison(const KnotTracks& meas, const KnotTracks& sim,
+                             const ScoreOptions& options, const std::string& meas_name,
+                             const std::string& sim_name) {
+  const ScoreInput in{meas, sim, options, meas_name, sim_name};
+  CheckInput(in);
+  Comparison c;
+  c.sim_knot = MatchKnots(in);
+  CheckSimulationFinite(in);
+  c.points = MeasuredPoints(in, &c.masked);
+  return c;
+}
+
 ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOptions& options,
                   const std::string& meas_name, const std::string& sim_name) {
   const auto start = std::chrono::steady_clock::now();
   const ScoreInput in{meas, sim, options, meas_name, sim_name};
-  CheckInput(in);
-  const std::vector<int> sim_knot = MatchKnots(in);
-  CheckSimulationFinite(in);
+  Comparison c = PrepareComparison(meas, sim, options, meas_name, sim_name);
+  const std::vector<int>& sim_knot = c.sim_knot;
   ScoreResult result;
   ScoreSummary& s = result.summary;
-  Scorer scorer(meas, sim, sim_knot, MeasuredPoints(in, &s.masked), options);
+  s.masked = c.masked;
+  Scorer scorer(meas, sim, sim_knot, std::move(c.points), options);
   StartSummary(in, &s);
 
   // 1. The time offset: a coarse search over the window (every point of a thinned set; with a

@@ -160,6 +160,25 @@ struct ScoreResult {
   std::vector<double> d2_edges, d2_counts, d2_expected;
 };
 
+// One measured knot-frame that can be compared, with its checked covariance.
+struct ComparedPoint {
+  int frame, knot;
+  Eigen::Matrix3d meas_cov;  // m^2
+};
+
+// What Score compares, checked as Score checks it: the measured points (valid, finite, their
+// covariance symmetric positive definite or the isotropic meas_sigma_m) and the simulation's index
+// of every measured knot. `netlab fit` weighs its residuals by the same. Throws as Score does.
+struct Comparison {
+  std::vector<ComparedPoint> points;
+  std::vector<int> sim_knot;  // [K measured]
+  int masked = 0;             // measured knot-frames not valid
+};
+Comparison PrepareComparison(const KnotTracks& measured, const KnotTracks& sim,
+                             const ScoreOptions& options,
+                             const std::string& measured_name = "measured",
+                             const std::string& sim_name = "simulation");
+
 // Scores `sim` against `measured`. The file names are for error messages. Throws
 // std::invalid_argument naming the file, dataset, frame and knot on bad input: different nets
 // (grid mismatch), no overlap in time, NaN, a covariance that is not symmetric positive definite.

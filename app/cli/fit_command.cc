@@ -1,0 +1,295 @@
+// netlab fit SCENARIO.yaml --measured tracks.h5 --free PARAMS --out fit.yaml
+//            [--prior material.yaml] [--set PATH=VALUE ...] [--json] [--quiet]
+
+#include <glog/logging.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "app/cli/command_line.h"
+#include "app/cli/commands.h"
+#include "app/cli/json_writer.h"
+#include "common/files.h"
+#include "common/yaml_util.h"
+#include "libnetsim/identification/shot_fit.h"
+
+namespace netlab::app {
+namespace {
+
+constexpr char kHelp[] =
+    "usage: netlab fit SCENARIO.yaml --measured TRACKS.h5 --free PARAMS --out FIT.yaml\n"
+    "                  [--prior MATERIAL.yaml[,...]] [--set PATH=VALUE ...] [--time-offset S]\n"
+    "                  [--max-time-offset S] [--meas-sigma M] [--sim-sigma M] [--starts N]\n"
+    "                  [--max-iterations N] [--jobs N] [--json] [--quiet]\n\n"
+    "Identifies parameters of a shot from its measured knot tracks (docs/fit.md): finds the\n"
+    "values of the free parameters that make SCENARIO.yaml's simulation agree best with\n"
+    "TRACKS.h5, weighing every knot-frame by its covariance as `netlab score` does\n"
+    "(Levenberg-Marquardt; each iteration runs one simulation per scenario parameter, in\n"
+    "parallel). Reports each estimate with its standard uncertainty and whether the flight data\n"
+    "determined it or only the prior did. Progress and an ETA go to stderr.\n\n"
+    "options:\n"
+    "  --measured FILE  measured knot tracks (netlab triangulate), on the scenario's net\n"
+    "  --free PARAMS    comma-separated: dotted paths of the scenario as `simulate --set`\n"
+    "                   names them (materials.nylon_1mm.bend_stiffness, drag.drag_coefficient,\n"
+    "                   nets.0.velocity: one parameter per item of a list), plus time_offset\n"
+    "                   (the launch time) and frame (a rigid correction, 6 parameters)\n"
+    "  --out FILE       fit.yaml: the estimates, uncertainties, correlations, the score of the\n"
+    "                   fit, and the --set lines that rerun it (written via FILE.partial)\n"
+    "  --prior FILES    material files of `netlab characterize` (comma-separated): each value\n"
+    "                   given for a free parameter enters as a residual (value - prior) / sigma\n"
+    "  --set PATH=VALUE change a value before fitting (repeatable): the start of a free one\n"
+    "  --time-offset S  t_sim = t_measured + S: the start of time_offset, or its fixed value\n"
+    "                   (default 0)\n"
+    "  --max-time-offset S\n"
+    "                   how far time_offset may move from its start, s (default 0.05)\n"
+    "  --meas-sigma M   measurement standard deviation, m, for tracks without\n"
+    "                   /knots/covariance\n"
+    "  --sim-sigma M    the simulation's own standard deviation, m (default 0)\n"
+    "  --starts N       Levenberg-Marquardt from N starts (the first, then N-1 drawn within a\n"
+    "                   factor 2 of it), the best kept: for a cost with several minima (default 1)\n"
+    "  --max-iterations N\n"
+    "                   per start (default 25)\n"
+    "  --jobs N         simulations at a time (default: the machine's cores)\n"
+    "  --step H         finite-difference step: of ln(value) for materials and drag, of the\n"
+    "                   reference spread (docs/fit.md) times H for the others (default 1e-3)\n"
+    "  --json           print one JSON summary object on stdout as the last output: parameters\n"
+    "                   (name -> value, sigma, identified, ...), cost_initial, cost_final,\n"
+    "                   simulations, wall_s, score, correlation\n"
+    "  --quiet          no progress and no summary on stderr\n\n"
+    "exit status: 0 fitted (see each parameter's \"identified\"), 1 bad input or a failed\n"
+    "simulation, 2 usage error.\n";
+
+std::string Number(double value) {
+  if (std::isnan(value)) return ".nan";
+  if (std::isinf(value)) return value > 0 ? ".inf" : "-.inf";
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", value);
+  return text;
+}
+
+std::string Quoted(const std::string& text) {
+  std::string out = "\"";
+  for (char c : text) out += c == '"' ? std::string("\\\"") : std::string(1, c);
+  return out + "\"";
+}
+
+// fit.yaml: readable by people and by any YAML reader.
+std::string FitYaml(const std::string& scenario, const std::string& measured,
+                    const netsim::FitResult& r) {
+  std::ostringstream o;
+  o << "# netlab fit: " << scenario << " against " << measured << "\n"
+    << "# " << r.parameters.size() << " parameters, " << r.simulations << " simulations, "
+    << Number(r.wall_s) << " s. Rerun the fitted shot:\n"
+    << "#   netlab simulate " << scenario;
+  for (const auto& s : r.fitted_set) o << " --set " << s.Text();
+  o << " --out fitted.h5\n";
+  o << "scenario: " << Quoted(scenario) << "\nmeasured: " << Quoted(measured) << "\n";
+  o << "parameters:\n";
+  for (const auto& p : r.parameters) {
+    o << "  " << p.parameter.name << ": {value: " << Number(p.value)
+      << ", sigma: " << Number(p.sigma) << ", units: " << Quoted(p.parameter.units)
+      << ", start: " << Number(p.parameter.start) << ", data_sigma: " << Number(p.data_sigma)
+      << ", identified: " << (p.identified ? "true" : "false")
+      << ", determined_by: " << Quoted(p.determined_by);
+    if (p.has_prior)
+      o << ", prior: {value: " << Number(p.prior_value) << ", sigma: " << Number(p.prior_sigma)
+        << "}";
+    o << "}\n";
+  }
+  o << "# correlation of the fitted coordinates (ln(value) for materials and drag), rows and\n"
+    << "# columns in the order of `parameters`\ncorrelation:\n";
+  for (int i = 0; i < r.correlation.rows(); ++i) {
+    o << "  - [";
+    for (int j = 0; j < r.correlation.cols(); ++j)
+      o << (j ? ", " : "") << Number(r.correlation(i, j));
+    o << "]\n";
+  }
+  o << "cost_initial: " << Number(r.cost_initial) << "\ncost_final: " << Number(r.cost_final)
+    << "\nresiduals: " << r.residuals << "\ninflation: " << Number(r.inflation)
+    << "\nsimulations: " << r.simulations << "\niterations: " << r.iterations
+    << "\nwall_s: " << Number(r.wall_s) << "\nduration_s: " << Number(r.duration_s) << "\n";
+  o << "score: {rms_mm: " << Number(r.score.rms_m * 1e3)
+    << ", mean_d2: " << Number(r.score.mean_d2) << ", p_value: " << Number(r.score.p_value)
+    << ", verdict: " << r.score.verdict << "}\n";
+  o << "set:\n";
+  for (const auto& s : r.fitted_set) o << "  - " << Quoted(s.Text()) << "\n";
+  return o.str();
+}
+
+void WriteText(const std::string& path, const std::string& text) {
+  const std::string partial = path + ".partial";
+  {
+    std::ofstream out(partial);
+    out << text;
+    out.close();
+    if (!out) throw std::runtime_error(path + ": cannot write " + partial);
+  }
+  RenameInto(partial, path);
+}
+
+// The table a person reads: each parameter from its start to its estimate, and what set it.
+std::string Summary(const netsim::FitResult& r) {
+  std::ostringstream o;
+  o << "fit: " << r.parameters.size() << " parameters from " << r.residuals / 3
+    << " knot-frames; " << r.simulations << " simulations, " << r.iterations
+    << " iterations, " << Number(r.wall_s) << " s\n";
+  char line[256];
+  std::snprintf(line, sizeof line, "  %-40s %12s %12s %12s  %s\n", "parameter", "start", "fitted",
+                "sigma", "determined by");
+  o << line;
+  for (const auto& p : r.parameters) {
+    std::string by = p.determined_by;
+    if (!p.identified) by += p.has_prior ? " (the flight data adds little)" : ": not identified";
+    std::snprintf(line, sizeof line, "  %-40s %12s %12s %12s  %s\n", p.parameter.name.c_str(),
+                  Number(p.parameter.start).c_str(), Number(p.value).c_str(),
+                  Number(p.sigma).c_str(), by.c_str());
+    o << line;
+  }
+  o << "  stopped: " << r.termination << "\n";
+  o << "  cost " << Number(r.cost_initial) << " -> " << Number(r.cost_final)
+    << " (sum of squared whitened residuals";
+  if (r.inflation > 1.0) o << "; uncertainties inflated x" << Number(std::sqrt(r.inflation));
+  o << ")\n  score of the fit: RMS " << Number(r.score.rms_m * 1e3) << " mm, mean d2 "
+    << Number(r.score.mean_d2) << ", " << r.score.verdict << " (p = " << Number(r.score.p_value)
+    << ")\n";
+  for (int i = 0; i < r.correlation.rows(); ++i)
+    for (int j = i + 1; j < r.correlation.cols(); ++j)
+      if (std::abs(r.correlation(i, j)) > 0.9)
+        o << "  strongly correlated: " << r.parameters[i].parameter.name << " and "
+          << r.parameters[j].parameter.name << " (" << Number(r.correlation(i, j))
+          << "): the data fix a combination of them better than either\n";
+  return o.str();
+}
+
+void PrintJson(const netsim::FitResult& r, const std::string& out) {
+  JsonWriter json;
+  json.BeginObject();
+  json.Key("parameters").BeginObject();
+  for (const auto& p : r.parameters) {
+    json.Key(p.parameter.name).BeginObject();
+    json.Key("value").Number(p.value);
+    json.Key("sigma").Number(p.sigma);
+    json.Key("identified").Bool(p.identified);
+    json.Key("determined_by").String(p.determined_by);
+    json.Key("start").Number(p.parameter.start);
+    json.Key("data_sigma").Number(p.data_sigma);
+    json.Key("units").String(p.parameter.units);
+    if (p.has_prior) {
+      json.Key("prior_value").Number(p.prior_value);
+      json.Key("prior_sigma").Number(p.prior_sigma);
+    }
+    json.EndObject();
+  }
+  json.EndObject();
+  json.Key("correlation").BeginArray();
+  for (int i = 0; i < r.correlation.rows(); ++i) {
+    json.BeginArray();
+    for (int j = 0; j < r.correlation.cols(); ++j) json.Number(r.correlation(i, j));
+    json.EndArray();
+  }
+  json.EndArray();
+  json.Key("cost_initial").Number(r.cost_initial);
+  json.Key("cost_final").Number(r.cost_final);
+  json.Key("residuals").Int(r.residuals);
+  json.Key("inflation").Number(r.inflation);
+  json.Key("simulations").Int(r.simulations);
+  json.Key("iterations").Int(r.iterations);
+  json.Key("wall_s").Number(r.wall_s);
+  json.Key("score").BeginObject();
+  json.Key("rms_mm").Number(r.score.rms_m * 1e3);
+  json.Key("mean_d2").Number(r.score.mean_d2);
+  json.Key("p_value").Number(r.score.p_value);
+  json.Key("verdict").String(r.score.verdict);
+  json.EndObject();
+  json.Key("set").BeginArray();
+  for (const auto& s : r.fitted_set) json.String(s.Text());
+  json.EndArray();
+  json.Key("output").String(out);
+  json.EndObject();
+  std::cout << json.str() << std::endl;
+}
+
+std::string Duration(double s) {
+  char text[32];
+  if (s < 90) {
+    std::snprintf(text, sizeof text, "%.0f s", s);
+  } else {
+    std::snprintf(text, sizeof text, "%.0f min", s / 60);
+  }
+  return text;
+}
+
+}  // namespace
+
+int RunFit(const std::vector<std::string>& args) {
+  return RunGuarded("fit", [&] {
+    const CommandLine cl(args, {"json", "quiet", "help"},
+                         {"measured", "free", "out", "prior", "set", "time-offset",
+                          "max-time-offset", "meas-sigma", "sim-sigma", "starts",
+                          "max-iterations", "jobs", "step"});
+    if (cl.Flag("help")) {
+      std::fputs(kHelp, stdout);
+      return 0;
+    }
+    if (cl.positional().size() != 1) throw UsageError("expected one SCENARIO.yaml");
+    const std::string scenario = cl.positional()[0];
+    const std::string measured_path = cl.Required("measured");
+    const std::string free = cl.Required("free");
+    const std::string out = cl.Required("out");
+    netsim::FitOptions options;
+    for (const std::string& set : cl.Options("set")) {
+      try {
+        options.set.push_back(netsim::ParseOverride(set));
+      } catch (const InputError& e) {
+        throw UsageError(e.what());
+      }
+    }
+    options.score.time_offset_s = cl.DoubleOption("time-offset", 0.0, -1e6, 1e6);
+    options.score.max_time_offset_s = cl.DoubleOption("max-time-offset", 0.05, 1e-6, 1e3);
+    options.score.meas_sigma_m = cl.DoubleOption("meas-sigma", 0.0, 0.0, 1e3);
+    options.score.sim_sigma_m = cl.DoubleOption("sim-sigma", 0.0, 0.0, 1e3);
+    options.starts = cl.IntOption("starts", 1, 1, 1000);
+    options.max_iterations = cl.IntOption("max-iterations", 25, 1, 10000);
+    options.jobs = cl.IntOption("jobs", 0, 0, 4096);
+    options.step = cl.DoubleOption("step", options.step, 1e-9, 0.1);
+    const bool quiet = cl.Flag("quiet");
+    // Ceres' own warnings (a rejected step is part of the method) would bury netlab's lines.
+    FLAGS_minloglevel = google::GLOG_ERROR;
+    const bool tty = isatty(fileno(stderr));
+    if (!quiet)
+      options.progress = [tty](const netsim::FitProgress& p) {
+        std::fprintf(stderr, "%sfit: %siteration %d, cost %s, %d simulations, %s, ETA <= %s%s",
+                     tty ? "\r" : "",
+                     p.starts > 1 ? ("start " + std::to_string(p.start + 1) + "/" +
+                                     std::to_string(p.starts) + ", ")
+                                        .c_str()
+                                  : "",
+                     p.iteration, Number(p.cost).c_str(), p.simulations,
+                     Duration(p.elapsed_s).c_str(), Duration(p.eta_s).c_str(),
+                     tty ? "   " : "\n");
+      };
+
+    const std::vector<netsim::FitParameter> parameters = netsim::ParseFreeParameters(
+        free, scenario, options.set, options.score.time_offset_s);
+    const netsim::KnotTracks measured = netsim::ReadKnotTracks(measured_path);
+    if (!quiet)
+      std::fprintf(stderr, "fitting %zu parameters of %s to %s (%d frames x %d knots)\n",
+                   parameters.size(), scenario.c_str(), measured_path.c_str(), measured.frames(),
+                   measured.knots());
+    const netsim::FitResult result =
+        netsim::FitShot(scenario, measured, parameters, options, measured_path);
+    if (!quiet && tty) std::fputc('\n', stderr);
+    WriteText(out, FitYaml(scenario, measured_path, result));
+    if (!quiet || !cl.Flag("json")) std::cerr << Summary(result) << "  wrote " << out << "\n";
+    if (cl.Flag("json")) PrintJson(result, out);
+    return 0;
+  });
+}
+
+}  // namespace netlab::app

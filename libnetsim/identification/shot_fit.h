@@ -1,0 +1,98 @@
+#pragma once
+// Identification of a shot's parameters from its measured knot tracks: the engine of `netlab fit`
+// (docs/fit.md).
+//
+// Unknowns: the free parameters (fit_parameters.h). Residuals: every measured knot-frame that
+// `netlab score` compares, whitened by its covariance (Sigma_meas + sigma_sim^2 I + the cubic
+// interpolation's error^2, held at the start's values):
+//   e_tk = L_tk^-1 (p_meas(t, k) - Exp(w) p_sim(t + time_offset, k) - t_frame)
+// plus one residual (value - prior) / sigma_prior per parameter with a prior. Minimised with
+// Ceres' Levenberg-Marquardt; the Jacobian's columns of scenario parameters by forward finite
+// differences of whole simulations, run in parallel on the sweep pool (libnetsim/sweep); those of
+// time_offset and frame by central differences of the interpolation (no simulation).
+//
+// The uncertainty: the covariance (J^T J)^-1 at the fit, with the data's information divided by
+// the inflation `netlab score` finds for correlated residuals (integrated autocorrelation time x
+// within-frame design effect) and by the reduced chi^2 when above 1 (a model that cannot fit
+// the data within its noise).
+
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "libnetsim/identification/fit_parameters.h"
+#include "libnetsim/tracks/track_file.h"
+#include "libnetsim/validation/score.h"
+
+namespace netlab::netsim {
+
+// A prior on one parameter (from `netlab characterize`): a residual (value - mean) / sigma.
+struct FitPrior {
+  std::string name;  // the parameter's name (a dotted path)
+  double value = 0.0, sigma = 0.0;
+  std::string source;  // where it came from, for the report
+};
+
+struct FitProgress {
+  int iteration = 0;
+  double cost = 0.0;      // sum of squared whitened residuals (data + priors)
+  int simulations = 0;    // done so far
+  double elapsed_s = 0.0;
+  double eta_s = 0.0;     // at most this much more (the iterations left at the mean pace)
+  int start = 0, starts = 1;
+};
+
+struct FitOptions {
+  std::vector<ScenarioOverride> set;  // applied to the scenario before the parameters
+  ScoreOptions score;                 // meas_sigma_m, sim_sigma_m, time_offset_s (start or
+                                      // fixed), max_time_offset_s
+  std::vector<FitPrior> priors;
+  int jobs = 0;              // simulations at a time (0: the machine's cores)
+  int max_iterations = 25;   // Levenberg-Marquardt iterations per start
+  int starts = 1;            // > 1: also from starts-1 points spread over the start's box
+  // Forward-difference step of a scenario parameter: of ln(value) for log parameters, of the
+  // spread (fit_parameters.h) times this for the others.
+  double step = 1e-3;
+  uint32_t seed = 1;  // the extra starts' draws
+  std::function<void(const FitProgress&)> progress;
+};
+
+struct FittedParameter {
+  FitParameter parameter;
+  double value = 0.0;   // the estimate
+  double sigma = 0.0;   // its standard uncertainty (inf: the data and priors leave it free)
+  double data_sigma = 0.0;  // what the flight data alone says (inf: nothing)
+  bool has_prior = false;
+  double prior_value = 0.0, prior_sigma = 0.0;
+  bool identified = false;  // sigma < half the reference spread (the prior's sigma, or spread)
+  std::string determined_by;  // "flight data", "prior", "neither"
+};
+
+struct FitResult {
+  std::vector<FittedParameter> parameters;
+  Eigen::MatrixXd covariance;   // of the fitted coordinates (ln(value) for log parameters)
+  Eigen::MatrixXd correlation;
+  double cost_initial = 0.0, cost_final = 0.0;  // sum of squared whitened residuals + priors
+  int residuals = 0;            // data residuals (3 per knot-frame)
+  double inflation = 1.0;       // what the data's information was divided by
+  int iterations = 0;
+  int simulations = 0;
+  int best_start = 0;
+  std::string termination;      // Ceres' report
+  double wall_s = 0.0;
+  double duration_s = 0.0;      // the simulated span each run was cut to
+  ScoreSummary score;           // `netlab score` of the fitted simulation
+  std::vector<ScenarioOverride> fitted_set;  // the --set lines that reproduce the fit
+};
+
+// Fits `parameters` of the scenario in `scenario_path` to `measured`. Throws InputError (bad
+// scenario, parameters or priors), std::invalid_argument (the tracks, as `netlab score` checks
+// them) or std::runtime_error when the starting simulation fails.
+FitResult FitShot(const std::string& scenario_path, const KnotTracks& measured,
+                  const std::vector<FitParameter>& parameters, const FitOptions& options,
+                  const std::string& measured_name = "measured");
+
+}  // namespace netlab::netsim
