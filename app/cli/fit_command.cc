@@ -17,6 +17,7 @@
 #include "app/cli/json_writer.h"
 #include "common/files.h"
 #include "common/yaml_util.h"
+#include "libnetsim/characterization/material_file.h"
 #include "libnetsim/identification/shot_fit.h"
 
 namespace netlab::app {
@@ -215,6 +216,30 @@ void PrintJson(const netsim::FitResult& r, const std::string& out) {
   std::cout << json.str() << std::endl;
 }
 
+// The priors of every material file given (comma-separated), as free-parameter names
+// (materials.<name>.<key>). A file that names no free parameter is worth saying.
+std::vector<netsim::FitPrior> ReadPriors(const std::string& list,
+                                         const std::vector<netsim::FitParameter>& parameters,
+                                         bool quiet) {
+  std::vector<netsim::FitPrior> priors;
+  std::istringstream files(list);
+  std::string file;
+  while (std::getline(files, file, ',')) {
+    if (file.empty()) throw UsageError("--prior '" + list + "': an empty file name in the list");
+    int used = 0;
+    for (const netsim::ParameterEstimate& e : netsim::ReadMaterialFile(file)) {
+      netsim::FitPrior prior{"materials." + e.material + "." + e.key, e.value, e.sigma,
+                             file + " (" + e.test + " test)"};
+      for (const netsim::FitParameter& p : parameters) used += p.name == prior.name;
+      priors.push_back(prior);
+    }
+    if (used == 0 && !quiet)
+      std::fprintf(stderr, "note: %s gives no value for a free parameter; it is not used\n",
+                   file.c_str());
+  }
+  return priors;
+}
+
 std::string Duration(double s) {
   char text[32];
   if (s < 90) {
@@ -277,6 +302,7 @@ int RunFit(const std::vector<std::string>& args) {
 
     const std::vector<netsim::FitParameter> parameters = netsim::ParseFreeParameters(
         free, scenario, options.set, options.score.time_offset_s);
+    if (const auto prior = cl.Option("prior")) options.priors = ReadPriors(*prior, parameters, quiet);
     const netsim::KnotTracks measured = netsim::ReadKnotTracks(measured_path);
     if (!quiet)
       std::fprintf(stderr, "fitting %zu parameters of %s to %s (%d frames x %d knots)\n",
