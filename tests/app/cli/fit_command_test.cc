@@ -1,0 +1,142 @@
+// `netlab fit` end to end, as a user runs it on the digital twin: a small shot simulated with
+// known parameters, measured with 1 mm of noise, fitted from a wrong start; the --json contract,
+// fit.yaml, priors from a material file, and the bad inputs.
+
+#include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <random>
+
+#include "libnetsim/tracks/track_file.h"
+#include "tests/app/cli/bad_input.h"
+#include "tests/app/cli/run_netlab.h"
+
+namespace {
+
+using netlab::testing::LastJson;
+using netlab::testing::RunNetlab;
+
+constexpr char kShot[] = R"(name: twin_shot
+duration: 0.3
+output_interval: 0.005586592178770949
+integrator: {type: implicit, dt: auto}
+gravity: [0, 0, 0]
+drag: {air_density: 1.0, drag_coefficient: 1.2}
+materials:
+  nylon: {diameter: 1.0e-3, linear_density: 8.95e-4, stretch_stiffness: 1571,
+          stretch_damping: 7.6e-4, bend_stiffness: 9.82e-5, bend_damping: 6.0e-9,
+          twist_stiffness: 7.07e-5, twist_damping: 5.7e-11}
+nets:
+  - {name: net, material: nylon, knots: [4, 4], mesh: 0.1, segments_per_link: 2,
+     center: [0, 0, 0], normal: [1, 0, 0], x_axis: [0, 1, 0], corner_mass: 0.02,
+     velocity: [0.5, 0, 0],
+     corner_velocities: [[0.05, -0.05, -0.05], [0.05, 0.05, -0.05], [0.05, -0.05, 0.05],
+                         [0.05, 0.05, 0.05]]}
+)";
+
+// A material file as `netlab characterize` writes it (libnetsim/characterization/material_file.h).
+constexpr char kPrior[] = R"(# netlab characterize: torsion test from torsion.yaml
+materials:
+  nylon: {twist_stiffness: 7.0e-05, twist_damping: 6.0e-11}
+uncertainty:
+  nylon:
+    twist_stiffness: {sigma: 2.0e-06, test: torsion, source: torsion.yaml}
+    twist_damping: {sigma: 1.0e-11, test: torsion, source: torsion.yaml}
+)";
+
+class FitCommand : public netlab::testing::CommandTest {
+ protected:
+  FitCommand() : CommandTest("fit_command") {}
+  void SetUp() override {
+    CommandTest::SetUp();
+    std::ofstream(Path("shot.yaml")) << kShot;
+    std::ofstream(Path("prior.yaml")) << kPrior;
+    ASSERT_EQ(RunNetlab("simulate " + Path("shot.yaml") + " --out " + Path("truth.h5")).status, 0);
+    // Measured: the truth with 1 mm of noise and its covariance, as triangulate writes it.
+    netlab::netsim::KnotTracks m = netlab::netsim::ReadKnotTracks(Path("truth.h5"));
+    std::mt19937 rng(3);
+    std::normal_distribution<double> noise(0.0, 1e-3);
+    for (Eigen::Vector3d& p : m.position) p += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+    m.covariance.assign(m.position.size(), Eigen::Matrix3d::Identity() * 1e-6);
+    netlab::netsim::WriteKnotTracks(Path("measured.h5"), m);
+  }
+  std::string Fit(const std::string& more) const {
+    return "fit " + Path("shot.yaml") + " --measured " + Path("measured.h5") + " --out " +
+           Path("fit.yaml") + " " + more;
+  }
+};
+
+TEST_F(FitCommand, FitsTheTwinAndKeepsTheJsonContract) {
+  const auto r = RunNetlab(Fit("--free drag.drag_coefficient,nets.0.velocity,time_offset "
+                               "--set drag.drag_coefficient=2.4 --set nets.0.velocity=[0.25,0,0] "
+                               "--json"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto json = LastJson(r.out);
+  for (const char* key : {"parameters", "cost_initial", "cost_final", "simulations", "wall_s"})
+    EXPECT_TRUE(json.has(key)) << key;
+  const auto& drag = json["parameters"]["drag.drag_coefficient"];
+  EXPECT_LT(std::abs(drag["value"].number() - 1.2), 3 * drag["sigma"].number());
+  EXPECT_TRUE(drag["identified"].boolean());
+  const auto& vx = json["parameters"]["nets.0.velocity.0"];
+  EXPECT_LT(std::abs(vx["value"].number() - 0.5), 3 * vx["sigma"].number());
+  EXPECT_EQ(json["parameters"].object().size(), 5u);
+  EXPECT_LT(json["cost_final"].number(), 0.01 * json["cost_initial"].number());
+  EXPECT_GT(json["simulations"].number(), 5);
+  EXPECT_GT(json["wall_s"].number(), 0);
+  // Progress and the table on stderr.
+  EXPECT_NE(r.err.find("fit: iteration"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("determined by"), std::string::npos) << r.err;
+  // fit.yaml: the same estimates, readable by any YAML reader, and the --set lines to rerun it.
+  const YAML::Node file = YAML::LoadFile(Path("fit.yaml"));
+  EXPECT_NEAR(file["parameters"]["drag.drag_coefficient"]["value"].as<double>(),
+              drag["value"].number(), 1e-5 * drag["value"].number());
+  EXPECT_EQ(file["set"].size(), 4u);
+  EXPECT_EQ(file["correlation"].size(), 5u);
+  EXPECT_FALSE(std::filesystem::exists(Path("fit.yaml.partial")));
+}
+
+TEST_F(FitCommand, APriorDeterminesWhatTheFlightCannot) {
+  const auto r = RunNetlab(Fit("--free drag.drag_coefficient,materials.nylon.twist_damping --prior " +
+                               Path("prior.yaml") + " --json --quiet"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto& damping = LastJson(r.out)["parameters"]["materials.nylon.twist_damping"];
+  EXPECT_FALSE(damping["identified"].boolean());
+  EXPECT_EQ(damping["determined_by"].string(), "prior");
+  EXPECT_NEAR(damping["prior_sigma"].number(), 1e-11, 1e-20);
+}
+
+TEST_F(FitCommand, BadInputsAreNamed) {
+  std::ofstream(Path("zero_sigma.yaml")) << std::string(kPrior).replace(
+      std::string(kPrior).find("sigma: 1.0e-11"), 14, "sigma: 0");
+  ASSERT_EQ(RunNetlab("simulate " + Path("shot.yaml") + " --set nets.0.knots=[3,3] --out " +
+                      Path("other_net.h5")).status, 0);
+  const std::string shot = "fit {dir}/shot.yaml --out {dir}/fit.yaml ";
+  const std::vector<netlab::testing::BadInput> table = {
+      {"no --free", shot + "--measured {dir}/measured.h5", 2, {"--free"}},
+      {"an unknown parameter", shot + "--measured {dir}/measured.h5 --free "
+       "materials.nylon.bend_stifness", 1, {"shot.yaml", "bend_stifness"}},
+      {"a section", shot + "--measured {dir}/measured.h5 --free materials.nylon", 1,
+       {"materials.nylon", "is a section"}},
+      {"a missing measured file", shot + "--measured {dir}/nowhere.h5 --free time_offset", 1,
+       {"nowhere.h5"}},
+      {"another net", shot + "--measured {dir}/other_net.h5 --meas-sigma 0.001 --free time_offset",
+       1, {"grid mismatch", "other_net.h5"}},
+      {"tracks without covariance", shot + "--measured {dir}/truth.h5 --free time_offset", 1,
+       {"truth.h5", "--meas-sigma"}},
+      {"a missing prior file", shot + "--measured {dir}/measured.h5 --free time_offset "
+       "--prior {dir}/none.yaml", 1, {"none.yaml"}},
+      {"a prior without uncertainty", shot + "--measured {dir}/measured.h5 --free "
+       "materials.nylon.twist_damping --prior {dir}/zero_sigma.yaml", 1,
+       {"zero_sigma.yaml", "twist_damping", "sigma > 0"}},
+      {"an empty output", "fit {dir}/shot.yaml --measured {dir}/measured.h5 --free time_offset "
+       "--out ''", 2, {"--out"}},
+      {"a start the simulation cannot take", shot + "--measured {dir}/measured.h5 --free "
+       "materials.nylon.stretch_stiffness --set materials.nylon.stretch_stiffness=-5", 1,
+       {"stretch_stiffness"}},
+  };
+  netlab::testing::ExpectBadInputs(table, dir_.string());
+}
+
+}  // namespace
