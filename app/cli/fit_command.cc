@@ -137,7 +137,8 @@ void WriteText(const std::string& path, const std::string& text) {
 // The table a person reads: each parameter from its start to its estimate, and what set it.
 std::string Summary(const netsim::FitResult& r) {
   std::ostringstream o;
-  o << "fit: " << r.parameters.size() << " parameters from " << r.residuals / 3
+  o << "fit: " << r.parameters.size() << (r.parameters.size() == 1 ? " parameter" : " parameters")
+    << " from " << r.residuals / 3
     << " knot-frames; " << r.simulations << " simulations, " << r.iterations
     << " iterations, " << Number(r.wall_s) << " s\n";
   char line[256];
@@ -289,13 +290,12 @@ int RunFit(const std::vector<std::string>& args) {
     const bool tty = isatty(fileno(stderr));
     if (!quiet)
       options.progress = [tty](const netsim::FitProgress& p) {
+        std::string where;
+        if (p.starts > 1)
+          where += "start " + std::to_string(p.start + 1) + "/" + std::to_string(p.starts) + ", ";
+        if (!p.stage.empty()) where += "stage " + p.stage + ", ";
         std::fprintf(stderr, "%sfit: %siteration %d, cost %s, %d simulations, %s, ETA <= %s%s",
-                     tty ? "\r" : "",
-                     p.starts > 1 ? ("start " + std::to_string(p.start + 1) + "/" +
-                                     std::to_string(p.starts) + ", ")
-                                        .c_str()
-                                  : "",
-                     p.iteration, Number(p.cost).c_str(), p.simulations,
+                     tty ? "\r" : "", where.c_str(), p.iteration, Number(p.cost).c_str(), p.simulations,
                      Duration(p.elapsed_s).c_str(), Duration(p.eta_s).c_str(),
                      tty ? "   " : "\n");
       };
@@ -305,8 +305,8 @@ int RunFit(const std::vector<std::string>& args) {
     if (const auto prior = cl.Option("prior")) options.priors = ReadPriors(*prior, parameters, quiet);
     const netsim::KnotTracks measured = netsim::ReadKnotTracks(measured_path);
     if (!quiet)
-      std::fprintf(stderr, "fitting %zu parameters of %s to %s (%d frames x %d knots)\n",
-                   parameters.size(), scenario.c_str(), measured_path.c_str(), measured.frames(),
+      std::fprintf(stderr, "fitting %zu parameter%s of %s to %s (%d frames x %d knots)\n",
+                   parameters.size(), parameters.size() == 1 ? "" : "s", scenario.c_str(), measured_path.c_str(), measured.frames(),
                    measured.knots());
     const netsim::FitResult result =
         netsim::FitShot(scenario, measured, parameters, options, measured_path);

@@ -318,8 +318,12 @@ class ShotCost : public ceres::CostFunction {
 class ProgressCallback : public ceres::IterationCallback {
  public:
   ProgressCallback(const FitOptions& options, const Simulator& simulator, Clock::time_point start,
-                   int start_index)
-      : options_(options), simulator_(simulator), start_(start), start_index_(start_index) {}
+                   int start_index, std::string stage = "")
+      : options_(options),
+        simulator_(simulator),
+        start_(start),
+        start_index_(start_index),
+        stage_(std::move(stage)) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
     if (options_.progress) {
       FitProgress p;
@@ -335,6 +339,7 @@ class ProgressCallback : public ceres::IterationCallback {
                                 : 0.0;
       p.start = start_index_;
       p.starts = options_.starts;
+      p.stage = stage_;
       options_.progress(p);
     }
     return ceres::SOLVER_CONTINUE;
@@ -345,6 +350,7 @@ class ProgressCallback : public ceres::IterationCallback {
   const Simulator& simulator_;
   Clock::time_point start_;
   int start_index_;
+  std::string stage_;
 };
 
 // Standard deviations and covariance of an information matrix that may be singular: the
@@ -517,14 +523,16 @@ FitResult FitShot(const std::string& scenario_path, const KnotTracks& measured,
     ceres::Solver::Summary summary;
     if (staged) {
       cost->SetActive(launch);
-      LevenbergMarquardt(cost.get(), launch, options, ProgressCallback(options, simulator, start, s),
-                         &x, &summary);
+      LevenbergMarquardt(cost.get(), launch, options,
+                         ProgressCallback(options, simulator, start, s, "1/2 material held"), &x,
+                         &summary);
       if (s == 0) result.cost_initial = 2 * summary.initial_cost;
       result.iterations += static_cast<int>(summary.iterations.size()) - 1;
       cost->SetActive(all);
     }
     if (summary.termination_type != ceres::FAILURE || !staged)
-      LevenbergMarquardt(cost.get(), all, options, ProgressCallback(options, simulator, start, s),
+      LevenbergMarquardt(cost.get(), all, options,
+                         ProgressCallback(options, simulator, start, s, staged ? "2/2 all" : ""),
                          &x, &summary);
     if (s == 0 && !staged) result.cost_initial = 2 * summary.initial_cost;
     result.iterations += static_cast<int>(summary.iterations.size()) - 1;

@@ -43,6 +43,7 @@ struct FitProgress {
   double elapsed_s = 0.0;
   double eta_s = 0.0;     // at most this much more (the iterations left at the mean pace)
   int start = 0, starts = 1;
+  std::string stage;      // "1/2 material held", "2/2 all", or empty when not staged
 };
 
 struct FitOptions {

@@ -215,8 +215,11 @@ YAML::Node ScenarioValue(const std::string& path, const std::vector<ScenarioOver
       child.reset(EntryOf(node, part, where, walked));
     } else {
       throw InputError(where + "the scenario does not give '" +
-                       (walked.empty() ? part : walked + "." + part) +
-                       "' (a value left at its default has no start: give it with --set)");
+                       (walked.empty() ? part : walked + "." + part) + "' (" +
+                       (node.IsMap() ? (walked.empty() ? std::string("it has") : walked + " has") +
+                                           ": " + Keys(node) + "; "
+                                     : std::string()) +
+                       "a value left at its default has no start: give it with --set)");
     }
     node.reset(child);
     walked = walked.empty() ? part : walked + "." + part;
