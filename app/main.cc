@@ -13,7 +13,9 @@ namespace netlab::app {
 const std::vector<Command>& Commands() {
   static const std::vector<Command> commands = {
       {"calibrate", "calibrate the cameras into one world frame from target images", RunCalibrate},
-      {"color-net", "colour a net's yarns so every knot is known by its links' colours", RunColorNet},
+      {"characterize", "material parameters with uncertainties from a bench test", RunCharacterize},
+      {"color-net", "colour a net's yarns so every knot is known by its links' colours",
+       RunColorNet},
       {"gui", "the labeling workstation: four views, the tools, review, undo", gui::RunGui},
       {"ingest", "check the synchronized camera recordings or convert them to HDF5", RunIngest},
       {"label", "label the knots automatically from seed labels (Find Path, tracking)", RunLabel},
