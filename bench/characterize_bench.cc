@@ -35,7 +35,8 @@ double TrueValue(const Material& m, const std::string& key) {
 
 struct Row {
   double simulate_s = 0, fit_s = 0;
-  std::map<std::string, std::pair<double, double>> error;  // key -> (sum |rel err|, sum |z|)
+  std::map<std::string, std::pair<double, double>> error;  // key -> (mean |rel err|, mean |z|)
+  std::map<std::string, double> bias;                      // key -> mean rel err
 };
 
 }  // namespace
@@ -52,8 +53,8 @@ int main(int argc, char** argv) {
       {"torsion", [&](uint32_t s) { return SimulateTorsionTest(truth, {}, weighing, s); }}};
   std::printf("bench_characterize: %d noise seeds per test, 1 mm Nylon (synthetic_bench.h)\n\n",
               seeds);
-  std::printf("%-11s %-18s %10s %9s %12s %12s %10s\n", "test", "parameter", "simulate_s", "fit_s",
-              "mean|err|%", "mean sigma%", "mean|z|");
+  std::printf("%-11s %-18s %10s %9s %10s %11s %12s %8s\n", "test", "parameter", "simulate_s",
+              "fit_s", "mean err%", "mean|err|%", "mean sigma%", "mean|z|");
   for (const auto& [name, simulate] : tests) {
     Row row;
     std::map<std::string, double> sigma_sum;
@@ -67,13 +68,15 @@ int main(int argc, char** argv) {
       for (const ParameterEstimate& e : c.estimates) {
         const double want = TrueValue(truth, e.key);
         row.error[e.key].first += std::abs(e.value / want - 1) / seeds;
+        row.bias[e.key] += (e.value / want - 1) / seeds;
         row.error[e.key].second += std::abs(e.value - want) / e.sigma / seeds;
         sigma_sum[e.key] += e.sigma / want / seeds;
       }
     }
     for (const auto& [key, error] : row.error)
-      std::printf("%-11s %-18s %10.2f %9.3f %12.3f %12.3f %10.2f\n", name.c_str(), key.c_str(),
-                  row.simulate_s, row.fit_s, 100 * error.first, 100 * sigma_sum[key], error.second);
+      std::printf("%-11s %-18s %10.2f %9.3f %10.3f %11.3f %12.3f %8.2f\n", name.c_str(),
+                  key.c_str(), row.simulate_s, row.fit_s, 100 * row.bias[key], 100 * error.first,
+                  100 * sigma_sum[key], error.second);
   }
   std::printf(
       "\nmean|z| = mean |estimate - truth| / sigma: about 0.8 when the sigmas are right.\n");
