@@ -147,7 +147,7 @@ double GoldenSection(F f, double a, double b, double tolerance) {
   return 0.5 * (a + b);
 }
 
-// u = ln alpha and its standard uncertainty from the shape points: a scan of u over six e-folds
+// u = ln alpha and its standard uncertainty from the shape points: a scan of u over +-6 e-folds
 // around `u0`, then a golden-section search; sigma from the Jacobian d r / d u.
 std::pair<double, double> FitShape(const CantileverTest& c, double u0, double* rms) {
   auto rss = [&](double u) { return ShapeResiduals(c, u).squaredNorm(); };
