@@ -18,6 +18,7 @@ const std::vector<Command>& Commands();
 
 int RunSimulate(const std::vector<std::string>& args);
 int RunCalibrate(const std::vector<std::string>& args);
+int RunCharacterize(const std::vector<std::string>& args);
 int RunColorNet(const std::vector<std::string>& args);
 int RunFit(const std::vector<std::string>& args);
 int RunIngest(const std::vector<std::string>& args);

@@ -84,25 +84,15 @@ std::vector<FitParameter> ParseFreeParameters(const std::string& free_list,
     item.erase(item.find_last_not_of(" \t") + 1);
     if (item.empty())
       throw InputError("--free '" + free_list + "': an empty name in the list");
+    // Aggregates, not member assignments: GCC 12 warns of a false -Wrestrict on `p.units = "s"`.
     if (item == "time_offset") {
-      FitParameter p;
-      p.name = item;
-      p.kind = FitParameter::Kind::kTimeOffset;
-      p.start = time_offset_start;
-      p.spread = 0.01;
-      p.units = "s";
-      parameters.push_back(p);
+      parameters.push_back(
+          {item, FitParameter::Kind::kTimeOffset, 0, false, time_offset_start, 0.01, "s"});
     } else if (item == "frame") {
       static const char* kAxes[6] = {"wx", "wy", "wz", "tx", "ty", "tz"};
-      for (int a = 0; a < 6; ++a) {
-        FitParameter p;
-        p.name = std::string("frame.") + kAxes[a];
-        p.kind = FitParameter::Kind::kFrame;
-        p.frame_axis = a;
-        p.spread = 0.01;
-        p.units = a < 3 ? "rad" : "m";
-        parameters.push_back(p);
-      }
+      for (int a = 0; a < 6; ++a)
+        parameters.push_back({std::string("frame.") + kAxes[a], FitParameter::Kind::kFrame, a,
+                              false, 0.0, 0.01, a < 3 ? "rad" : "m"});
     } else {
       AddScalars(ScenarioValue(scenario_path, set, item), item, scenario_path, &parameters);
     }

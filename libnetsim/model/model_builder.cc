@@ -135,6 +135,9 @@ int ModelBuilder::AddRod(const RodSpec& spec) {
   if (spec.segments < 1) Fail(what, "segments must be >= 1");
   if (!AllFinite(spec.start) || !AllFinite(spec.end) || !AllFinite(spec.velocity))
     Fail(what, "start, end and velocity must be finite");
+  if (!(spec.tip_mass >= 0.0) || !std::isfinite(spec.tip_mass) || !AllFinite(spec.tip_inertia) ||
+      spec.tip_inertia.minCoeff() < 0.0)
+    Fail(what, "tip mass and inertia must be finite and >= 0");
   if ((spec.end - spec.start).norm() <= 0.0) Fail(what, "start and end coincide");
   if (model_.FindRod(spec.name) >= 0 || model_.FindNet(spec.name) >= 0)
     Fail(what, "name used twice");
@@ -151,6 +154,11 @@ int ModelBuilder::AddRod(const RodSpec& spec) {
     nodes.push_back(AddNode(spec.start + s * (spec.end - spec.start), spec.velocity, 0.0, radius));
   }
   AddChain(nodes, spec.material);
+  // The tip body turns with the last segment and moves with the last node.
+  model_.node_mass[nodes.back()] += spec.tip_mass;
+  Vector3d& tip_segment_inertia = model_.segment_inertia.back();
+  tip_segment_inertia += spec.tip_inertia;
+  model_.segment_inv_inertia.back() = tip_segment_inertia.cwiseInverse();
   info.num_nodes = spec.segments + 1;
   info.num_segments = spec.segments;
   model_.rods.push_back(info);

@@ -31,6 +31,11 @@ struct RodSpec {
   Fixity fix_start = Fixity::kFree;  // pinned: position; clamped: position and orientation
   Fixity fix_end = Fixity::kFree;
   Vector3d velocity = Vector3d::Zero();  // m/s, every free node
+  // A rigid body at the end (a torsion pendulum's bob, a weight): its mass (kg) is added to the
+  // last node, its principal moments (I1, I2, I3) about (d1, d2, d3) (kg m^2) to the last
+  // segment's, which turns with it. The thread's free length then ends at that segment's centre.
+  double tip_mass = 0.0;
+  Vector3d tip_inertia = Vector3d::Zero();
 };
 
 struct NetSpec {

@@ -187,7 +187,7 @@ class Parser {
   }
 
   void ParseRod(const YamlMap& m, Scenario* s) {
-    m.AllowOnly({"name", "material", "start", "end", "segments", "fixed", "velocity"});
+    m.AllowOnly({"name", "material", "start", "end", "segments", "fixed", "velocity", "tip"});
     RodSpec r;
     r.name = m.String("name");
     CheckNewName(m, r.name);
@@ -204,6 +204,13 @@ class Parser {
       r.fix_end = ParseFixity(f, "end");
     }
     if (m.Has("velocity")) r.velocity = ToVector(m.Vec3("velocity"));
+    if (m.Has("tip")) {
+      const YamlMap tip = m.Map("tip");
+      tip.AllowOnly({"mass", "inertia"});
+      r.tip_mass = tip.Positive("mass", 0.0, /*allow_zero=*/true);
+      if (tip.Has("inertia")) r.tip_inertia = ToVector(tip.Vec3("inertia"));
+      if (r.tip_inertia.minCoeff() < 0.0) tip.Fail("inertia", "must be >= 0 each");
+    }
     s->rods.push_back(r);
   }
 

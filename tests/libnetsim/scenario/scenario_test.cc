@@ -223,5 +223,53 @@ bodies:
   std::filesystem::remove_all(dir);
 }
 
+// A torsion pendulum: a 0.2 m Nylon thread along z, clamped at the top, a bob of inertia J about
+// the thread at its end, twisted from rest by a constant moment M. The bob is rigid with the last
+// segment, so the thread's twisting length ends at that segment's centre: L' = L - l/2. The bob
+// swings about M L'/GJ with the period 2 pi sqrt(J L'/GJ) (the thread's own inertia, 2e-11 kg m^2,
+// is 4e-4 of J).
+TEST(Scenario, RodTipMakesATorsionPendulumWithTheRigidBobsPeriod) {
+  const double length = 0.2, segments = 10, gj = 7.07e-5, j = 5e-8, moment = 1e-4;
+  const std::string text = R"(name: torsion
+duration: 1
+output_interval: 0.001
+integrator: {rotational_inertia: physical}
+materials:
+  nylon: {diameter: 1.0e-3, linear_density: 8.95e-4, stretch_stiffness: 1571,
+          bend_stiffness: 9.82e-5, twist_stiffness: 7.07e-5}
+rods:
+  - {name: thread, material: nylon, start: [0, 0, 0], end: [0, 0, -0.2], segments: 10,
+     fixed: {start: clamped}, tip: {mass: 1.0e-3, inertia: [2.5e-8, 2.5e-8, 5.0e-8]}}
+loads:
+  - {type: moment, rod: thread, node: end, vector: [0, 0, -1.0e-4]}
+)";
+  BuiltScenario built = BuildScenario(ParseScenario(text, "torsion.yaml", ""));
+  Simulation& sim = *built.simulation;
+  const Quaterniond start = sim.state().q.back();
+  const double free_length = length - 0.5 * length / segments;
+  const double mean = moment * free_length / gj;
+  // The bob's turn about the thread (d3); upward crossings of the mean angle time the period.
+  std::vector<double> crossings;
+  double previous = 0.0;
+  while (sim.state().time < 0.5) {
+    ASSERT_TRUE(sim.Step());
+    const Quaterniond turn = start.conjugate() * sim.state().q.back();
+    const double angle = 2.0 * std::atan2(turn.z(), turn.w());
+    if (previous < mean && angle >= mean)
+      crossings.push_back(sim.state().time - sim.dt() * (angle - mean) / (angle - previous));
+    previous = angle;
+  }
+  ASSERT_GE(crossings.size(), 4u);
+  const double period = (crossings.back() - crossings.front()) / (crossings.size() - 1);
+  EXPECT_NEAR(period, 2.0 * M_PI * std::sqrt(j * free_length / gj), 2e-3 * period);
+}
+
+TEST(Scenario, NegativeTipInertiaIsNamed) {
+  const std::string text = Replace(kPendulum, "fixed: {start: pinned}}",
+                                   "fixed: {start: pinned}, tip: {inertia: [0, 0, -1]}}");
+  EXPECT_NE(ParseError(text).find("rods[0].tip.inertia: must be >= 0"), std::string::npos)
+      << ParseError(text);
+}
+
 }  // namespace
 }  // namespace netlab::netsim

@@ -1,0 +1,161 @@
+// The bad-input suite of `netlab characterize` (issue 22, tests/app/cli/bad_input.h): each row one
+// kind of broken bench-test file, the exit status and what its message must name (the file, the
+// line where there is one, the key). The fixtures are written at run time from a good torsion test.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "tests/app/cli/bad_input.h"
+
+namespace netlab::testing {
+namespace {
+
+// A torsion test of 30 samples of a 10 Hz oscillation; rows "  - [t, angle]" from line 7 on.
+std::string Torsion(bool oscillating = true) {
+  std::string text =
+      "test: torsion\nmaterial: nylon_1mm\nlength: 0.18\ninertia: 5.0e-8\n"
+      "weighing: {mass: 8.95e-4, mass_sigma: 1.0e-6, length: 1.0, length_sigma: 1.0e-3}\n"
+      "samples:\n";
+  for (int i = 0; i < 30; ++i) {
+    const double t = 0.01 * i, angle = oscillating ? 0.5 * std::cos(2 * M_PI * 10 * t) : 0.5;
+    text += "  - [" + std::to_string(t) + ", " + std::to_string(angle) + "]\n";
+  }
+  return text;
+}
+
+std::string Tensile(bool moving) {
+  std::string text = "test: tensile\nmaterial: m\ngauge_length: 0.1\nsamples:\n";
+  for (int i = 0; i < 20; ++i)
+    text += "  - [" + std::to_string(0.01 * i) + ", " + (moving ? std::to_string(1e-5 * i) : "0") +
+            ", " + std::to_string(0.1 * i) + "]\n";
+  return text;
+}
+
+class BadInputCharacterize : public CommandTest {
+ protected:
+  BadInputCharacterize() : CommandTest("bad_input_characterize") {}
+  void SetUp() override {
+    CommandTest::SetUp();
+    Write("good.yaml", Torsion());
+    Write("empty.yaml", "");
+    Write("not_yaml.yaml", "test: [torsion\n  - {");
+    Write("unknown_key.yaml", Replace(Torsion(), "inertia: 5.0e-8", "inertia: 5.0e-8\ninertai: 1"));
+    Write("missing_key.yaml", Replace(Torsion(), "inertia: 5.0e-8\n", ""));
+    Write("wrong_kind.yaml", Replace(Torsion(), "length: 0.18", "length: long"));
+    Write("nan.yaml", Replace(Torsion(), "inertia: 5.0e-8", "inertia: .nan"));
+    Write("negative_length.yaml", Replace(Torsion(), "length: 0.18", "length: -0.18"));
+    Write("negative_mass.yaml", Replace(Torsion(), "mass: 8.95e-4", "mass: -8.95e-4"));
+    Write("time_back.yaml", Replace(Torsion(), "[0.020000,", "[0.001000,"));
+    Write("short_row.yaml", Replace(Torsion(), "[0.020000, ", "[0.020000"));
+    Write("text_cell.yaml", Replace(Torsion(), "[0.020000, ", "[0.020000, abc, "));
+    Write("few_points.yaml", Torsion().substr(0, Torsion().find("  - [0.050000")));
+    Write("flat.yaml", Torsion(false));
+    Write("unknown_test.yaml", Replace(Torsion(), "test: torsion", "test: bending"));
+    Write("tensile_static.yaml", Tensile(false));
+    Write("cantilever_unweighed.yaml",
+          "test: cantilever\nmaterial: m\nlength: 0.5\ntip_deflection: {vertical: 0.1, sigma: "
+          "1e-3}\n");
+    Write("cantilever_too_deep.yaml",
+          "test: cantilever\nmaterial: m\nlength: 0.5\n"
+          "weighing: {mass: 1e-3, mass_sigma: 1e-6, length: 1, length_sigma: 1e-3}\n"
+          "tip_deflection: {vertical: 0.6, sigma: 1e-3}\n");
+    Write("no_material.yaml", Replace(Torsion(), "material: nylon_1mm\n", ""));
+  }
+  void Write(const std::string& name, const std::string& text) {
+    std::ofstream(Path(name)) << text;
+  }
+  static std::string Replace(std::string text, const std::string& from, const std::string& to) {
+    text.replace(text.find(from), from.size(), to);
+    return text;
+  }
+};
+
+TEST_F(BadInputCharacterize, EachKindEndsInAClearError) {
+  const std::string out = " --out {dir}/material.yaml";
+  ExpectBadInputs(
+      {
+          {"no test file", "characterize --out {dir}/m.yaml", 2, {"expected one TEST.yaml"}},
+          {"no --out", "characterize {dir}/good.yaml", 2, {"--out"}},
+          {"missing file",
+           "characterize {dir}/missing.yaml" + out,
+           1,
+           {"{dir}/missing.yaml", "cannot open"}},
+          {"empty file", "characterize {dir}/empty.yaml" + out, 1, {"{dir}/empty.yaml", "empty"}},
+          {"not YAML", "characterize {dir}/not_yaml.yaml" + out, 1, {"{dir}/not_yaml.yaml:"}},
+          {"extra key",
+           "characterize {dir}/unknown_key.yaml" + out,
+           1,
+           {"{dir}/unknown_key.yaml:5: inertai: unknown key"}},
+          {"missing key",
+           "characterize {dir}/missing_key.yaml" + out,
+           1,
+           {"{dir}/missing_key.yaml:", "inertia: missing"}},
+          {"no material",
+           "characterize {dir}/no_material.yaml" + out,
+           1,
+           {"{dir}/no_material.yaml:", "material: missing"}},
+          {"wrong kind",
+           "characterize {dir}/wrong_kind.yaml" + out,
+           1,
+           {"{dir}/wrong_kind.yaml:3: length: expected a number"}},
+          {"NaN",
+           "characterize {dir}/nan.yaml" + out,
+           1,
+           {"{dir}/nan.yaml:4: inertia: must be finite"}},
+          {"negative length",
+           "characterize {dir}/negative_length.yaml" + out,
+           1,
+           {"{dir}/negative_length.yaml:3: length: must be > 0"}},
+          {"negative mass",
+           "characterize {dir}/negative_mass.yaml" + out,
+           1,
+           {"{dir}/negative_mass.yaml:5: weighing.mass: must be > 0"}},
+          {"time going back",
+           "characterize {dir}/time_back.yaml" + out,
+           1,
+           {"{dir}/time_back.yaml:9: samples[2]: time 0.001", "does not increase"}},
+          {"short row",
+           "characterize {dir}/short_row.yaml" + out,
+           1,
+           {"{dir}/short_row.yaml:9: samples[2]: expected a row of 2 numbers"}},
+          {"text in a row",
+           "characterize {dir}/text_cell.yaml" + out,
+           1,
+           {"{dir}/text_cell.yaml:9: samples[2]:"}},
+          {"too few points",
+           "characterize {dir}/few_points.yaml" + out,
+           1,
+           {"{dir}/few_points.yaml:", "samples: too few points: 5"}},
+          {"no oscillation",
+           "characterize {dir}/flat.yaml" + out,
+           1,
+           {"{dir}/flat.yaml:", "samples: cannot be fitted", "no oscillation"}},
+          {"unknown test",
+           "characterize {dir}/unknown_test.yaml" + out,
+           1,
+           {"{dir}/unknown_test.yaml:1: test: expected tensile, cantilever or torsion"}},
+          {"tensile without a cycle",
+           "characterize {dir}/tensile_static.yaml" + out,
+           1,
+           {"{dir}/tensile_static.yaml:", "samples: cannot be fitted"}},
+          {"cantilever without weighing",
+           "characterize {dir}/cantilever_unweighed.yaml" + out,
+           1,
+           {"{dir}/cantilever_unweighed.yaml:", "weighing: missing"}},
+          {"tip below the length",
+           "characterize {dir}/cantilever_too_deep.yaml" + out,
+           1,
+           {"{dir}/cantilever_too_deep.yaml:5: tip_deflection.vertical: must be below"}},
+      },
+      dir_.string());
+  // No bad input leaves an output behind.
+  EXPECT_FALSE(std::filesystem::exists(Path("material.yaml")));
+  EXPECT_FALSE(std::filesystem::exists(Path("material.yaml.partial")));
+}
+
+}  // namespace
+}  // namespace netlab::testing
