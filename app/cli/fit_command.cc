@@ -97,6 +97,8 @@ std::string FitYaml(const std::string& scenario, const std::string& measured,
       << ", sigma: " << Number(p.sigma) << ", units: " << Quoted(p.parameter.units)
       << ", start: " << Number(p.parameter.start) << ", data_sigma: " << Number(p.data_sigma)
       << ", identified: " << (p.identified ? "true" : "false")
+      << ", rough: " << (p.rough ? "true" : "false") << ", check: [" << Number(p.check[0]) << ", "
+      << Number(p.check[1]) << "]"
       << ", determined_by: " << Quoted(p.determined_by);
     if (p.has_prior)
       o << ", prior: {value: " << Number(p.prior_value) << ", sigma: " << Number(p.prior_sigma)
@@ -147,7 +149,11 @@ std::string Summary(const netsim::FitResult& r) {
   o << line;
   for (const auto& p : r.parameters) {
     std::string by = p.determined_by;
-    if (!p.identified) by += p.has_prior ? " (the flight data adds little)" : ": not identified";
+    if (p.rough)
+      by += ": the cost is rough in it (" + Number(p.check[0]) + "x / " + Number(p.check[1]) +
+            "x the quadratic rise at -/+ sigma), sigma means nothing";
+    else if (!p.identified)
+      by += p.has_prior ? " (the flight data adds little)" : ": not identified";
     std::snprintf(line, sizeof line, "  %-40s %12s %12s %12s  %s\n", p.parameter.name.c_str(),
                   Number(p.parameter.start).c_str(), Number(p.value).c_str(),
                   Number(p.sigma).c_str(), by.c_str());
@@ -178,6 +184,8 @@ void PrintJson(const netsim::FitResult& r, const std::string& out) {
     json.Key("value").Number(p.value);
     json.Key("sigma").Number(p.sigma);
     json.Key("identified").Bool(p.identified);
+    json.Key("rough").Bool(p.rough);
+    json.Key("check").BeginArray().Number(p.check[0]).Number(p.check[1]).EndArray();
     json.Key("determined_by").String(p.determined_by);
     json.Key("start").Number(p.parameter.start);
     json.Key("data_sigma").Number(p.data_sigma);

@@ -5,6 +5,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -274,6 +275,18 @@ class ShotCost : public ceres::CostFunction {
   // Which parameters the next evaluations move (the others' columns are zero, unsimulated).
   void SetActive(std::vector<bool> active) { active_ = std::move(active); }
 
+  // The cost (data and priors, sum of squares) at x from its simulation; NaN when the simulation
+  // does not reach a point.
+  double CostWith(const std::vector<double>& x, const KnotTracks& sim) const {
+    std::vector<double> r(num_residuals());
+    const Alignment6 a = AlignmentOf(parameters_, x.data(), options_.score.time_offset_s);
+    if (!residuals_.Evaluate(sim, a, r.data())) return std::numeric_limits<double>::quiet_NaN();
+    EvaluatePriors(x.data(), r.data() + residuals_.count(), nullptr);
+    double sum = 0.0;
+    for (double v : r) sum += v * v;
+    return sum;
+  }
+
   // The Jacobian (row-major, num_residuals x p) at x when the last evaluation was there.
   bool JacobianAt(const std::vector<double>& x, std::vector<double>* jacobian) const {
     if (x != last_x_) return false;
@@ -441,6 +454,39 @@ ScoreSummary FinalScore(const KnotTracks& measured, KnotTracks sim, const Alignm
   return Score(measured, sim, options, measured_name, "the fitted simulation").summary;
 }
 
+// The quadratic model's promise, checked where it matters: along each scenario parameter in
+// `check`, the cost one sigma either side of the estimate over the rise the Jacobian predicts,
+// sigma_i^2 (J^T J)_ii. About 1 on a smooth cost; far from 1 where the cost is rough (the
+// simulation's discrete events, a chaotic response), where sigma means nothing. NaN: not checked.
+std::vector<std::array<double, 2>> QuadraticCheck(const ShotCost& cost, Simulator* simulator,
+                                                  const std::vector<double>& best,
+                                                  double best_cost, const Eigen::VectorXd& sigma,
+                                                  const Eigen::MatrixXd& jtj,
+                                                  const std::vector<bool>& check) {
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  std::vector<std::array<double, 2>> ratio(best.size(), {kNaN, kNaN});
+  std::vector<std::vector<double>> xs;
+  std::vector<std::pair<int, int>> which;  // (parameter, side)
+  for (size_t i = 0; i < best.size(); ++i)
+    if (check[i])
+      for (int side = 0; side < 2; ++side) {
+        xs.push_back(best);
+        xs.back()[i] += (side == 0 ? -1 : 1) * sigma(i);
+        which.push_back({static_cast<int>(i), side});
+      }
+  if (xs.empty()) return ratio;
+  std::string error;
+  const auto sims = simulator->Run(xs, &error);
+  for (size_t r = 0; r < xs.size(); ++r) {
+    const auto [i, side] = which[r];
+    const double predicted = sigma(i) * sigma(i) * jtj(i, i);
+    // A failed run is a cost that is not smooth there either.
+    ratio[i][side] = sims[r] ? (cost.CostWith(xs[r], *sims[r]) - best_cost) / predicted
+                             : std::numeric_limits<double>::infinity();
+  }
+  return ratio;
+}
+
 // Levenberg-Marquardt from *x over the `active` parameters (the others held).
 void LevenbergMarquardt(ShotCost* cost, const std::vector<bool>& active, const FitOptions& options,
                         ProgressCallback callback, std::vector<double>* x,
@@ -582,6 +628,22 @@ FitResult FitShot(const std::string& scenario_path, const KnotTracks& measured,
       else if (r != c)
         result.correlation(r, c) = std::numeric_limits<double>::quiet_NaN();
 
+  // Which parameters look identified (sigma below half the reference spread: the prior's sigma,
+  // else the parameter's spread, fit_parameters.h), then whether the cost is smooth along the
+  // scenario ones among them.
+  std::vector<double> reference(p);
+  std::vector<bool> looks_identified(p), check(p);
+  for (int i = 0; i < p; ++i) {
+    reference[i] = parameters[i].spread;  // in coordinate units
+    for (const PriorTerm& prior : priors)
+      if (prior.parameter == i && !prior.anchor)
+        reference[i] = parameters[i].log ? prior.sigma / prior.value : prior.sigma;
+    looks_identified[i] = sigma(i) < 0.5 * reference[i];
+    check[i] = looks_identified[i] && parameters[i].kind == FitParameter::Kind::kScenario;
+  }
+  const Eigen::MatrixXd jtj = j.transpose() * j;
+  const auto ratio = QuadraticCheck(*cost, &simulator, best, best_cost, sigma, jtj, check);
+
   for (int i = 0; i < p; ++i) {
     const FitParameter& par = parameters[i];
     FittedParameter f;
@@ -590,15 +652,17 @@ FitResult FitShot(const std::string& scenario_path, const KnotTracks& measured,
     const double scale = par.log ? f.value : 1.0;  // d value / d coordinate
     f.sigma = sigma(i) * scale;
     f.data_sigma = data_sigma(i) * scale;
-    double reference = par.spread;  // in coordinate units
     for (const PriorTerm& prior : priors)
       if (prior.parameter == i && !prior.anchor) {
         f.has_prior = true;
         f.prior_value = prior.value;
         f.prior_sigma = prior.sigma;
-        reference = par.log ? prior.sigma / prior.value : prior.sigma;
       }
-    f.identified = sigma(i) < 0.5 * reference;
+    f.check = ratio[i];
+    // Smooth: the cost at +-sigma within a factor 2 of the quadratic model's rise.
+    f.rough = check[i] && !(std::min(ratio[i][0], ratio[i][1]) > 0.5 &&
+                            std::max(ratio[i][0], ratio[i][1]) < 2.0);
+    f.identified = looks_identified[i] && !f.rough;
     f.determined_by = f.identified ? "flight data" : f.has_prior ? "prior" : "neither";
     result.parameters.push_back(f);
   }

@@ -16,6 +16,7 @@
 // within-frame design effect) and by the reduced chi^2 when above 1 (a model that cannot fit
 // the data within its noise).
 
+#include <array>
 #include <functional>
 #include <limits>
 #include <string>
@@ -68,7 +69,13 @@ struct FittedParameter {
   double data_sigma = 0.0;  // what the flight data alone says (inf: nothing)
   bool has_prior = false;
   double prior_value = 0.0, prior_sigma = 0.0;
-  bool identified = false;  // sigma < half the reference spread (the prior's sigma, or spread)
+  // The cost at value -+ sigma over the rise the Jacobian predicts (about 1 on a smooth cost);
+  // NaN where not checked (parameters that do not look identified, time_offset and frame).
+  std::array<double, 2> check = {std::numeric_limits<double>::quiet_NaN(),
+                                 std::numeric_limits<double>::quiet_NaN()};
+  bool rough = false;       // checked, and the cost is not within 2x of the quadratic model
+  // sigma < half the reference spread (the prior's sigma, or spread) and the cost not rough
+  bool identified = false;
   std::string determined_by;  // "flight data", "prior", "neither"
 };
 
