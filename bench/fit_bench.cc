@@ -17,48 +17,16 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <random>
 #include <string>
 #include <unistd.h>
 #include <vector>
 
 #include "libnetsim/identification/shot_fit.h"
 #include "libnetsim/sweep/sweep_runner.h"
+#include "tests/libnetsim/identification/twin_shot.h"
 
 namespace netlab::netsim {
 namespace {
-
-constexpr char kSmallShot[] = R"(name: twin_shot
-duration: 0.4
-output_interval: 0.005586592178770949
-integrator: {type: implicit, dt: auto}
-gravity: [0, 0, 0]
-drag: {air_density: 1.0, drag_coefficient: 1.2}
-materials:
-  nylon: {diameter: 1.0e-3, linear_density: 8.95e-4, stretch_stiffness: 1571,
-          stretch_damping: 7.6e-4, bend_stiffness: 9.82e-5, bend_damping: 6.0e-9,
-          twist_stiffness: 7.07e-5, twist_damping: 5.7e-11}
-nets:
-  - {name: net, material: nylon, knots: [5, 5], mesh: 0.1, segments_per_link: 2,
-     center: [0, 0, 0], normal: [1, 0, 0], x_axis: [0, 1, 0], knot_mass: 3e-05,
-     corner_mass: 0.02, corner_radius: 0.01, velocity: [0.5, 0, 0],
-     corner_velocities: [[0.05, -0.05, -0.05], [0.05, 0.05, -0.05], [0.05, -0.05, 0.05],
-                         [0.05, 0.05, 0.05]]}
-)";
-
-// The truth's knots plus isotropic noise.
-KnotTracks Measured(const SweepRun& truth, double sigma, uint32_t seed) {
-  KnotTracks m;
-  m.time = truth.time;
-  m.grid = truth.grid;
-  m.net = truth.net;
-  m.position = truth.knots;
-  m.valid.assign(m.position.size(), 1);
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> noise(0.0, sigma);
-  for (Eigen::Vector3d& p : m.position) p += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
-  return m;
-}
 
 FitOptions Options(std::vector<ScenarioOverride> set, double sigma) {
   FitOptions o;
@@ -71,7 +39,7 @@ int Coverage(int draws) {
   const auto dir = std::filesystem::temp_directory_path() / ("bench_fit_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
   const std::string scenario = (dir / "shot.yaml").string();
-  std::ofstream(scenario) << kSmallShot;
+  std::ofstream(scenario) << testing::kTwinShot;
   const SweepRun truth = RunOne(scenario, 0, {}, 1);
   const std::vector<ScenarioOverride> start = {{"drag.drag_coefficient", "2.4"},
                                                {"nets.0.velocity", "[0.25, 0, 0]"}};
@@ -86,7 +54,7 @@ int Coverage(int draws) {
   std::map<std::string, double> sigma_sum, error_sq;
   double sims = 0, wall = 0;
   for (int d = 0; d < draws; ++d) {
-    const FitResult r = FitShot(scenario, Measured(truth, 1e-3, 100 + d), parameters,
+    const FitResult r = FitShot(scenario, testing::MeasuredTwin(truth, 1e-3, 100 + d), parameters,
                                 Options(start, 1e-3));
     sims += r.simulations;
     wall += r.wall_s;
@@ -134,15 +102,17 @@ int Flight(double seconds) {
       {"materials.nylon_1mm.stretch_stiffness", 1571},
       {"materials.nylon_1mm.bend_stiffness", 9.82e-5}};
   FitOptions options = Options(start, 1e-3);
-  const FitResult r = FitShot(scenario, Measured(truth, 1e-3, 7), parameters, options);
+  const FitResult r = FitShot(scenario, testing::MeasuredTwin(truth, 1e-3, 7), parameters, options);
   std::printf("flight: Net A at 0.5 m/s, %.1f s, 121 knots, 1 mm noise, start off by 2\n",
               seconds);
-  std::printf("| parameter | truth | fitted | sigma | error / sigma | determined by |\n");
-  std::printf("|---|---|---|---|---|---|\n");
+  std::printf("| parameter | truth | fitted | sigma | error / sigma | check -/+ sigma | "
+              "determined by |\n");
+  std::printf("|---|---|---|---|---|---|---|\n");
   for (const FittedParameter& p : r.parameters) {
     const double t = truth_of.at(p.parameter.name);
-    std::printf("| %s | %.4g | %.4g | %.3g | %.2f | %s |\n", p.parameter.name.c_str(), t,
-                p.value, p.sigma, (p.value - t) / p.sigma, p.determined_by.c_str());
+    std::printf("| %s | %.4g | %.4g | %.3g | %.2f | %.2f / %.2f | %s%s |\n",
+                p.parameter.name.c_str(), t, p.value, p.sigma, (p.value - t) / p.sigma,
+                p.check[0], p.check[1], p.determined_by.c_str(), p.rough ? " (rough)" : "");
   }
   std::printf("cost %.4g -> %.4g (%d residuals), mean d2 %.3f, %d simulations, %d iterations, "
               "%.1f s wall\n",

@@ -31,18 +31,6 @@ double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
 }
 
-// A run's knots as a track file in memory (every knot valid).
-KnotTracks TracksOf(const SweepRun& run) {
-  KnotTracks t;
-  t.time = run.time;
-  t.grid = run.grid;
-  t.net = run.net;
-  t.position = run.knots;
-  t.valid.assign(run.knots.size(), 1);
-  t.source = "netlab fit";
-  return t;
-}
-
 // The alignment parameters of coordinates x: the time offset and the rigid correction.
 struct Alignment6 {
   double tau = 0.0;
@@ -159,7 +147,7 @@ class Simulator {
         if (error) *error = std::string(StatusName(run.status)) + ": " + run.error;
         continue;
       }
-      auto tracks = std::make_shared<const KnotTracks>(TracksOf(run));
+      auto tracks = std::make_shared<const KnotTracks>(run.Tracks());
       out[which[r]] = tracks;
       // Only the unperturbed runs are asked for again (the accepted step's Jacobian).
       if (which[r] == 0) cache_[ScenarioPart(xs[which[r]])] = tracks;

@@ -253,6 +253,16 @@ int DefaultJobs(const SweepOptions& options) {
 
 }  // namespace
 
+KnotTracks SweepRun::Tracks() const {
+  KnotTracks t;
+  t.time = time;
+  t.grid = grid;
+  t.net = net;
+  t.position = knots;
+  t.valid.assign(knots.size(), 1);
+  return t;
+}
+
 const char* StatusName(SweepRun::Status status) {
   switch (status) {
     case SweepRun::Status::kOk:

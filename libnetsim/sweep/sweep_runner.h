@@ -22,6 +22,7 @@
 
 #include "libnetsim/scenario/run_scenario.h"
 #include "libnetsim/scenario/scenario_override.h"
+#include "libnetsim/tracks/track_file.h"
 
 namespace netlab::netsim {
 
@@ -71,6 +72,8 @@ struct SweepRun {
   int rank = 0;                          // MPI rank that ran it (0 without MPI)
 
   bool ok() const { return status == Status::kOk; }
+  // The kept knot tracks as a track file in memory (every knot valid, no covariance).
+  KnotTracks Tracks() const;
 };
 
 // "ok", "blew up", "bad value", "failed".

@@ -12,29 +12,12 @@
 #include "libnetsim/tracks/track_file.h"
 #include "tests/app/cli/bad_input.h"
 #include "tests/app/cli/run_netlab.h"
+#include "tests/libnetsim/identification/twin_shot.h"
 
 namespace {
 
 using netlab::testing::LastJson;
 using netlab::testing::RunNetlab;
-
-constexpr char kShot[] = R"(name: twin_shot
-duration: 0.3
-output_interval: 0.005586592178770949
-integrator: {type: implicit, dt: auto}
-gravity: [0, 0, 0]
-drag: {air_density: 1.0, drag_coefficient: 1.2}
-materials:
-  nylon: {diameter: 1.0e-3, linear_density: 8.95e-4, stretch_stiffness: 1571,
-          stretch_damping: 7.6e-4, bend_stiffness: 9.82e-5, bend_damping: 6.0e-9,
-          twist_stiffness: 7.07e-5, twist_damping: 5.7e-11}
-nets:
-  - {name: net, material: nylon, knots: [4, 4], mesh: 0.1, segments_per_link: 2,
-     center: [0, 0, 0], normal: [1, 0, 0], x_axis: [0, 1, 0], corner_mass: 0.02,
-     velocity: [0.5, 0, 0],
-     corner_velocities: [[0.05, -0.05, -0.05], [0.05, 0.05, -0.05], [0.05, -0.05, 0.05],
-                         [0.05, 0.05, 0.05]]}
-)";
 
 // A material file as `netlab characterize` writes it (libnetsim/characterization/material_file.h).
 constexpr char kPrior[] = R"(# netlab characterize: torsion test from torsion.yaml
@@ -51,7 +34,7 @@ class FitCommand : public netlab::testing::CommandTest {
   FitCommand() : CommandTest("fit_command") {}
   void SetUp() override {
     CommandTest::SetUp();
-    std::ofstream(Path("shot.yaml")) << kShot;
+    std::ofstream(Path("shot.yaml")) << netlab::testing::kTwinShot;
     std::ofstream(Path("prior.yaml")) << kPrior;
     ASSERT_EQ(RunNetlab("simulate " + Path("shot.yaml") + " --out " + Path("truth.h5")).status, 0);
     // Measured: the truth with 1 mm of noise and its covariance, as triangulate writes it.
@@ -110,7 +93,7 @@ TEST_F(FitCommand, APriorDeterminesWhatTheFlightCannot) {
 TEST_F(FitCommand, BadInputsAreNamed) {
   std::ofstream(Path("zero_sigma.yaml")) << std::string(kPrior).replace(
       std::string(kPrior).find("sigma: 1.0e-11"), 14, "sigma: 0");
-  ASSERT_EQ(RunNetlab("simulate " + Path("shot.yaml") + " --set nets.0.knots=[3,3] --out " +
+  ASSERT_EQ(RunNetlab("simulate " + Path("shot.yaml") + " --set nets.0.knots=[4,4] --out " +
                       Path("other_net.h5")).status, 0);
   const std::string shot = "fit {dir}/shot.yaml --out {dir}/fit.yaml ";
   const std::vector<netlab::testing::BadInput> table = {

@@ -9,32 +9,14 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <random>
 
 #include "common/yaml_util.h"
 #include "libnetsim/sweep/sweep_runner.h"
+#include "tests/libnetsim/identification/twin_shot.h"
 
 namespace netlab::netsim {
 namespace {
 
-// 5 x 5 knots, 10 cm mesh, shot at 0.5 m/s through cabin air, corner masses flying outward.
-constexpr char kShot[] = R"(name: twin_shot
-duration: 0.4
-output_interval: 0.005586592178770949
-integrator: {type: implicit, dt: auto}
-gravity: [0, 0, 0]
-drag: {air_density: 1.0, drag_coefficient: 1.2}
-materials:
-  nylon: {diameter: 1.0e-3, linear_density: 8.95e-4, stretch_stiffness: 1571,
-          stretch_damping: 7.6e-4, bend_stiffness: 9.82e-5, bend_damping: 6.0e-9,
-          twist_stiffness: 7.07e-5, twist_damping: 5.7e-11}
-nets:
-  - {name: net, material: nylon, knots: [5, 5], mesh: 0.1, segments_per_link: 2,
-     center: [0, 0, 0], normal: [1, 0, 0], x_axis: [0, 1, 0], knot_mass: 3e-05,
-     corner_mass: 0.02, corner_radius: 0.01, velocity: [0.5, 0, 0],
-     corner_velocities: [[0.05, -0.05, -0.05], [0.05, 0.05, -0.05], [0.05, -0.05, 0.05],
-                         [0.05, 0.05, 0.05]]}
-)";
 constexpr double kNoise = 1e-3;  // m
 
 class ShotFit : public ::testing::Test {
@@ -45,25 +27,14 @@ class ShotFit : public ::testing::Test {
             ::testing::UnitTest::GetInstance()->current_test_info()->name());
     std::filesystem::create_directories(dir_);
     scenario_ = (dir_ / "shot.yaml").string();
-    std::ofstream(scenario_) << kShot;
+    std::ofstream(scenario_) << testing::kTwinShot;
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
 
-  // The truth's knots with isotropic Gaussian noise of kNoise (seeded).
   KnotTracks Measured(uint32_t seed) const {
     const SweepRun truth = RunOne(scenario_, 0, {}, 1);
     EXPECT_TRUE(truth.ok()) << truth.error;
-    KnotTracks m;
-    m.time = truth.time;
-    m.grid = truth.grid;
-    m.net = truth.net;
-    m.position = truth.knots;
-    m.valid.assign(m.position.size(), 1);
-    std::mt19937 rng(seed);
-    std::normal_distribution<double> noise(0.0, kNoise);
-    for (Eigen::Vector3d& p : m.position)
-      p += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
-    return m;
+    return testing::MeasuredTwin(truth, kNoise, seed);
   }
 
   FitOptions Options(std::vector<ScenarioOverride> set) const {
@@ -106,6 +77,12 @@ TEST_F(ShotFit, RecoversDragLaunchAndTimeFromAStartOffByTwo) {
     EXPECT_TRUE(p.identified) << name;
     EXPECT_EQ(p.determined_by, "flight data") << name;
   }
+  // The cost is smooth in the drag: at -+ sigma it rises as the Jacobian predicts.
+  const FittedParameter& drag = Find(r, "drag.drag_coefficient");
+  EXPECT_FALSE(drag.rough);
+  EXPECT_NEAR(drag.check[0], 1.0, 0.2);
+  EXPECT_NEAR(drag.check[1], 1.0, 0.2);
+  EXPECT_TRUE(std::isnan(Find(r, "time_offset").check[0]));  // alignment: not simulated
   // Tight, not merely honest: 1 mm noise on 25 knots over 0.4 s fixes the drag to about 2 %.
   EXPECT_LT(Find(r, "drag.drag_coefficient").sigma, 0.05);
   EXPECT_LT(r.cost_final, 1e-2 * r.cost_initial);
