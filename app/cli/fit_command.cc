@@ -24,7 +24,8 @@ namespace netlab::app {
 namespace {
 
 constexpr char kHelp[] =
-    "usage: netlab fit SCENARIO.yaml --measured TRACKS.h5 --free PARAMS --out FIT.yaml\n"
+    "usage: netlab fit SCENARIO.yaml [SCENARIO2.yaml ...] --measured TRACKS.h5[,TRACKS2.h5,...]\n"
+    "                  --free PARAMS --out FIT.yaml\n"
     "                  [--prior MATERIAL.yaml[,...]] [--set PATH=VALUE ...] [--time-offset S]\n"
     "                  [--max-time-offset S] [--meas-sigma M] [--sim-sigma M] [--starts N]\n"
     "                  [--max-iterations N] [--jobs N] [--json] [--quiet]\n\n"
@@ -34,8 +35,12 @@ constexpr char kHelp[] =
     "(Levenberg-Marquardt; each iteration runs one simulation per scenario parameter, in\n"
     "parallel). Reports each estimate with its standard uncertainty and whether the flight data\n"
     "determined it or only the prior did. Progress and an ETA go to stderr.\n\n"
+    "Several shots (one scenario and one track file each, in the same order) are fitted at once:\n"
+    "material and drag values are shared by every shot, the other parameters are each shot's\n"
+    "own, named 1:nets.0.velocity.0, 2:time_offset, ...\n\n"
     "options:\n"
-    "  --measured FILE  measured knot tracks (netlab triangulate), on the scenario's net\n"
+    "  --measured FILES measured knot tracks (netlab triangulate), on the scenario's net; one\n"
+    "                   per scenario, comma-separated\n"
     "  --free PARAMS    comma-separated: dotted paths of the scenario as `simulate --set`\n"
     "                   names them (materials.nylon_1mm.bend_stiffness, drag.drag_coefficient,\n"
     "                   nets.0.velocity: one parameter per item of a list), plus time_offset\n"
@@ -81,16 +86,20 @@ std::string Quoted(const std::string& text) {
 }
 
 // fit.yaml: readable by people and by any YAML reader.
-std::string FitYaml(const std::string& scenario, const std::string& measured,
-                    const netsim::FitResult& r) {
+std::string FitYaml(const std::vector<std::string>& scenarios,
+                    const std::vector<std::string>& measured, const netsim::FitResult& r) {
   std::ostringstream o;
-  o << "# netlab fit: " << scenario << " against " << measured << "\n"
-    << "# " << r.parameters.size() << " parameters, " << r.simulations << " simulations, "
-    << Number(r.wall_s) << " s. Rerun the fitted shot:\n"
-    << "#   netlab simulate " << scenario;
-  for (const auto& s : r.fitted_set) o << " --set " << s.Text();
-  o << " --out fitted.h5\n";
-  o << "scenario: " << Quoted(scenario) << "\nmeasured: " << Quoted(measured) << "\n";
+  o << "# netlab fit: " << scenarios[0] << " against " << measured[0];
+  if (scenarios.size() > 1) o << " and " << scenarios.size() - 1 << " more shots";
+  o << "\n# " << r.parameters.size() << " parameters, " << r.simulations << " simulations, "
+    << Number(r.wall_s) << " s. Rerun the fitted shot" << (scenarios.size() > 1 ? "s" : "")
+    << ":\n";
+  for (size_t k = 0; k < scenarios.size(); ++k) {
+    o << "#   netlab simulate " << scenarios[k];
+    for (const auto& s : r.fitted_sets[k]) o << " --set " << s.Text();
+    o << " --out fitted" << (scenarios.size() > 1 ? std::to_string(k + 1) : "") << ".h5\n";
+  }
+  o << "scenario: " << Quoted(scenarios[0]) << "\nmeasured: " << Quoted(measured[0]) << "\n";
   o << "parameters:\n";
   for (const auto& p : r.parameters) {
     o << "  " << p.parameter.name << ": {value: " << Number(p.value)
@@ -122,6 +131,18 @@ std::string FitYaml(const std::string& scenario, const std::string& measured,
     << ", verdict: " << r.score.verdict << "}\n";
   o << "set:\n";
   for (const auto& s : r.fitted_set) o << "  - " << Quoted(s.Text()) << "\n";
+  if (scenarios.size() > 1) {
+    o << "# every shot (the keys above are the first one's)\nshots:\n";
+    for (size_t k = 0; k < scenarios.size(); ++k) {
+      const netsim::ScoreSummary& sc = r.scores[k];
+      o << "  - scenario: " << Quoted(scenarios[k]) << "\n    measured: " << Quoted(measured[k])
+        << "\n    score: {rms_mm: " << Number(sc.rms_m * 1e3)
+        << ", mean_d2: " << Number(sc.mean_d2) << ", p_value: " << Number(sc.p_value)
+        << ", verdict: " << sc.verdict << "}\n    inflation: " << Number(r.inflations[k])
+        << "\n    set:\n";
+      for (const auto& s : r.fitted_sets[k]) o << "      - " << Quoted(s.Text()) << "\n";
+    }
+  }
   return o.str();
 }
 
@@ -163,9 +184,13 @@ std::string Summary(const netsim::FitResult& r) {
   o << "  cost " << Number(r.cost_initial) << " -> " << Number(r.cost_final)
     << " (sum of squared whitened residuals";
   if (r.inflation > 1.0) o << "; uncertainties inflated x" << Number(std::sqrt(r.inflation));
-  o << ")\n  score of the fit: RMS " << Number(r.score.rms_m * 1e3) << " mm, mean d2 "
-    << Number(r.score.mean_d2) << ", " << r.score.verdict << " (p = " << Number(r.score.p_value)
-    << ")\n";
+  o << ")\n";
+  for (size_t k = 0; k < r.scores.size(); ++k) {
+    const netsim::ScoreSummary& sc = r.scores[k];
+    o << "  score of the fit" << (r.scores.size() > 1 ? ", shot " + std::to_string(k + 1) : "")
+      << ": RMS " << Number(sc.rms_m * 1e3) << " mm, mean d2 " << Number(sc.mean_d2) << ", "
+      << sc.verdict << " (p = " << Number(sc.p_value) << ")\n";
+  }
   for (int i = 0; i < r.correlation.rows(); ++i)
     for (int j = i + 1; j < r.correlation.cols(); ++j)
       if (std::abs(r.correlation(i, j)) > 0.9)
@@ -220,9 +245,36 @@ void PrintJson(const netsim::FitResult& r, const std::string& out) {
   json.Key("set").BeginArray();
   for (const auto& s : r.fitted_set) json.String(s.Text());
   json.EndArray();
+  json.Key("shots").BeginArray();
+  for (size_t k = 0; k < r.scores.size(); ++k) {
+    json.BeginObject();
+    json.Key("rms_mm").Number(r.scores[k].rms_m * 1e3);
+    json.Key("mean_d2").Number(r.scores[k].mean_d2);
+    json.Key("verdict").String(r.scores[k].verdict);
+    json.Key("inflation").Number(r.inflations[k]);
+    json.Key("set").BeginArray();
+    for (const auto& s : r.fitted_sets[k]) json.String(s.Text());
+    json.EndArray();
+    json.EndObject();
+  }
+  json.EndArray();
   json.Key("output").String(out);
   json.EndObject();
   std::cout << json.str() << std::endl;
+}
+
+// A comma-separated list of file names; an empty item is a usage error naming the option.
+std::vector<std::string> SplitList(const std::string& list, const std::string& option) {
+  std::vector<std::string> items;
+  std::istringstream in(list);
+  std::string item;
+  while (std::getline(in, item, ','))
+    if (item.empty()) {
+      throw UsageError("--" + option + " '" + list + "': an empty file name in the list");
+    } else {
+      items.push_back(item);
+    }
+  return items;
 }
 
 // The priors of every material file given (comma-separated), as free-parameter names
@@ -231,10 +283,7 @@ std::vector<netsim::FitPrior> ReadPriors(const std::string& list,
                                          const std::vector<netsim::FitParameter>& parameters,
                                          bool quiet) {
   std::vector<netsim::FitPrior> priors;
-  std::istringstream files(list);
-  std::string file;
-  while (std::getline(files, file, ',')) {
-    if (file.empty()) throw UsageError("--prior '" + list + "': an empty file name in the list");
+  for (const std::string& file : SplitList(list, "prior")) {
     int used = 0;
     for (const netsim::ParameterEstimate& e : netsim::ReadMaterialFile(file)) {
       netsim::FitPrior prior{"materials." + e.material + "." + e.key, e.value, e.sigma,
@@ -247,6 +296,27 @@ std::vector<netsim::FitPrior> ReadPriors(const std::string& list,
                    file.c_str());
   }
   return priors;
+}
+
+// The fit's options from the command line (all but the shots, the free parameters and priors).
+netsim::FitOptions OptionsFrom(const CommandLine& cl) {
+  netsim::FitOptions options;
+  for (const std::string& set : cl.Options("set")) {
+    try {
+      options.set.push_back(netsim::ParseOverride(set));
+    } catch (const InputError& e) {
+      throw UsageError(e.what());
+    }
+  }
+  options.score.time_offset_s = cl.DoubleOption("time-offset", 0.0, -1e6, 1e6);
+  options.score.max_time_offset_s = cl.DoubleOption("max-time-offset", 0.05, 1e-6, 1e3);
+  options.score.meas_sigma_m = cl.DoubleOption("meas-sigma", 0.0, 0.0, 1e3);
+  options.score.sim_sigma_m = cl.DoubleOption("sim-sigma", 0.0, 0.0, 1e3);
+  options.starts = cl.IntOption("starts", 1, 1, 1000);
+  options.max_iterations = cl.IntOption("max-iterations", 25, 1, 10000);
+  options.jobs = cl.IntOption("jobs", 0, 0, 4096);
+  options.step = cl.DoubleOption("step", options.step, 1e-9, 0.1);
+  return options;
 }
 
 std::string Duration(double s) {
@@ -271,27 +341,16 @@ int RunFit(const std::vector<std::string>& args) {
       std::fputs(kHelp, stdout);
       return 0;
     }
-    if (cl.positional().size() != 1) throw UsageError("expected one SCENARIO.yaml");
-    const std::string scenario = cl.positional()[0];
-    const std::string measured_path = cl.Required("measured");
+    if (cl.positional().empty()) throw UsageError("expected SCENARIO.yaml (one per shot)");
+    const std::vector<std::string> scenarios = cl.positional();
+    const std::vector<std::string> measured_paths = SplitList(cl.Required("measured"), "measured");
+    if (measured_paths.size() != scenarios.size())
+      throw UsageError("--measured names " + std::to_string(measured_paths.size()) +
+                       " track files for " + std::to_string(scenarios.size()) +
+                       " scenarios: one per shot, in the same order");
     const std::string free = cl.Required("free");
     const std::string out = cl.Required("out");
-    netsim::FitOptions options;
-    for (const std::string& set : cl.Options("set")) {
-      try {
-        options.set.push_back(netsim::ParseOverride(set));
-      } catch (const InputError& e) {
-        throw UsageError(e.what());
-      }
-    }
-    options.score.time_offset_s = cl.DoubleOption("time-offset", 0.0, -1e6, 1e6);
-    options.score.max_time_offset_s = cl.DoubleOption("max-time-offset", 0.05, 1e-6, 1e3);
-    options.score.meas_sigma_m = cl.DoubleOption("meas-sigma", 0.0, 0.0, 1e3);
-    options.score.sim_sigma_m = cl.DoubleOption("sim-sigma", 0.0, 0.0, 1e3);
-    options.starts = cl.IntOption("starts", 1, 1, 1000);
-    options.max_iterations = cl.IntOption("max-iterations", 25, 1, 10000);
-    options.jobs = cl.IntOption("jobs", 0, 0, 4096);
-    options.step = cl.DoubleOption("step", options.step, 1e-9, 0.1);
+    netsim::FitOptions options = OptionsFrom(cl);
     const bool quiet = cl.Flag("quiet");
     // Ceres' own warnings (a rejected step is part of the method) would bury netlab's lines.
     FLAGS_minloglevel = google::GLOG_ERROR;
@@ -309,17 +368,24 @@ int RunFit(const std::vector<std::string>& args) {
       };
 
     const std::vector<netsim::FitParameter> parameters = netsim::ParseFreeParameters(
-        free, scenario, options.set, options.score.time_offset_s);
+        free, scenarios, options.set, options.score.time_offset_s);
     if (const auto prior = cl.Option("prior")) options.priors = ReadPriors(*prior, parameters, quiet);
-    const netsim::KnotTracks measured = netsim::ReadKnotTracks(measured_path);
+    std::vector<netsim::KnotTracks> measured;
+    std::vector<netsim::FitShotInput> shots;
+    for (const std::string& path : measured_paths) measured.push_back(netsim::ReadKnotTracks(path));
+    for (size_t k = 0; k < scenarios.size(); ++k) {
+      shots.push_back({scenarios[k], &measured[k], measured_paths[k]});
+      if (!quiet)
+        std::fprintf(stderr, "shot %zu: %s against %s (%d frames x %d knots)\n", k + 1,
+                     scenarios[k].c_str(), measured_paths[k].c_str(), measured[k].frames(),
+                     measured[k].knots());
+    }
     if (!quiet)
-      std::fprintf(stderr, "fitting %zu parameter%s of %s to %s (%d frames x %d knots)\n",
-                   parameters.size(), parameters.size() == 1 ? "" : "s", scenario.c_str(), measured_path.c_str(), measured.frames(),
-                   measured.knots());
-    const netsim::FitResult result =
-        netsim::FitShot(scenario, measured, parameters, options, measured_path);
+      std::fprintf(stderr, "fitting %zu parameter%s\n", parameters.size(),
+                   parameters.size() == 1 ? "" : "s");
+    const netsim::FitResult result = netsim::FitShots(shots, parameters, options);
     if (!quiet && tty) std::fputc('\n', stderr);
-    WriteText(out, FitYaml(scenario, measured_path, result));
+    WriteText(out, FitYaml(scenarios, measured_paths, result));
     if (!quiet || !cl.Flag("json")) std::cerr << Summary(result) << "  wrote " << out << "\n";
     if (cl.Flag("json")) PrintJson(result, out);
     return 0;

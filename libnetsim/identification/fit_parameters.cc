@@ -56,6 +56,7 @@ void AddScalars(const YAML::Node& node, const std::string& path, const std::stri
   }
   FitParameter p;
   p.name = path;
+  p.path = path;
   p.start = value;
   p.units = UnitsOf(path);
   p.log = IsScale(path);
@@ -72,11 +73,46 @@ void AddScalars(const YAML::Node& node, const std::string& path, const std::stri
 double FitParameter::Value(double x) const { return log ? std::exp(x) : x; }
 double FitParameter::Coordinate(double value) const { return log ? std::log(value) : value; }
 
+namespace {
+
+// The parameters one item of --free names in the scenario in `scenario_path`.
+std::vector<FitParameter> ItemParameters(const std::string& item, const std::string& scenario_path,
+                                         const std::vector<ScenarioOverride>& set,
+                                         double time_offset_start) {
+  std::vector<FitParameter> parameters;
+  // Aggregates, not member assignments: GCC 12 warns of a false -Wrestrict on `p.units = "s"`.
+  if (item == "time_offset") {
+    parameters.push_back({item, FitParameter::Kind::kTimeOffset, 0, false, time_offset_start,
+                          0.01, "s", item});
+  } else if (item == "frame") {
+    static const char* kAxes[6] = {"wx", "wy", "wz", "tx", "ty", "tz"};
+    for (int a = 0; a < 6; ++a) {
+      const std::string name = std::string("frame.") + kAxes[a];
+      parameters.push_back(
+          {name, FitParameter::Kind::kFrame, a, false, 0.0, 0.01, a < 3 ? "rad" : "m", name});
+    }
+  } else {
+    AddScalars(ScenarioValue(scenario_path, set, item), item, scenario_path, &parameters);
+  }
+  return parameters;
+}
+
+}  // namespace
+
 std::vector<FitParameter> ParseFreeParameters(const std::string& free_list,
                                               const std::string& scenario_path,
                                               const std::vector<ScenarioOverride>& set,
                                               double time_offset_start) {
+  return ParseFreeParameters(free_list, std::vector<std::string>{scenario_path}, set,
+                             time_offset_start);
+}
+
+std::vector<FitParameter> ParseFreeParameters(const std::string& free_list,
+                                              const std::vector<std::string>& scenario_paths,
+                                              const std::vector<ScenarioOverride>& set,
+                                              double time_offset_start) {
   std::vector<FitParameter> parameters;
+  const int shots = static_cast<int>(scenario_paths.size());
   std::istringstream items(free_list);
   std::string item;
   while (std::getline(items, item, ',')) {
@@ -84,18 +120,18 @@ std::vector<FitParameter> ParseFreeParameters(const std::string& free_list,
     item.erase(item.find_last_not_of(" \t") + 1);
     if (item.empty())
       throw InputError("--free '" + free_list + "': an empty name in the list");
-    // Aggregates, not member assignments: GCC 12 warns of a false -Wrestrict on `p.units = "s"`.
-    if (item == "time_offset") {
-      parameters.push_back(
-          {item, FitParameter::Kind::kTimeOffset, 0, false, time_offset_start, 0.01, "s"});
-    } else if (item == "frame") {
-      static const char* kAxes[6] = {"wx", "wy", "wz", "tx", "ty", "tz"};
-      for (int a = 0; a < 6; ++a)
-        parameters.push_back({std::string("frame.") + kAxes[a], FitParameter::Kind::kFrame, a,
-                              false, 0.0, 0.01, a < 3 ? "rad" : "m"});
-    } else {
-      AddScalars(ScenarioValue(scenario_path, set, item), item, scenario_path, &parameters);
+    if (IsScale(item)) {  // the thread and the air: one parameter for every shot
+      for (FitParameter& p : ItemParameters(item, scenario_paths[0], set, time_offset_start))
+        parameters.push_back(p);
+      continue;
     }
+    for (int shot = 0; shot < shots; ++shot)
+      for (FitParameter& p :
+           ItemParameters(item, scenario_paths[shot], set, time_offset_start)) {
+        p.shot = shot;
+        if (shots > 1) p.name = std::to_string(shot + 1) + ":" + p.name;
+        parameters.push_back(p);
+      }
   }
   if (parameters.empty()) throw InputError("--free: no parameter named");
   std::set<std::string> seen;
@@ -106,13 +142,14 @@ std::vector<FitParameter> ParseFreeParameters(const std::string& free_list,
 }
 
 std::vector<ScenarioOverride> ScenarioOverrides(const std::vector<FitParameter>& parameters,
-                                                const std::vector<double>& x) {
+                                                const std::vector<double>& x, int shot) {
   std::vector<ScenarioOverride> overrides;
   for (size_t i = 0; i < parameters.size(); ++i) {
-    if (parameters[i].kind != FitParameter::Kind::kScenario) continue;
+    if (parameters[i].kind != FitParameter::Kind::kScenario || !Moves(parameters[i], shot))
+      continue;
     char value[32];
     std::snprintf(value, sizeof value, "%.17g", parameters[i].Value(x[i]));
-    overrides.push_back({parameters[i].name, value});
+    overrides.push_back({parameters[i].path, value});
   }
   return overrides;
 }

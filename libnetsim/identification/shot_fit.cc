@@ -38,13 +38,15 @@ struct Alignment6 {
   Vector3d translation = Vector3d::Zero();
 };
 
+// Shot `shot`'s alignment at coordinates x (its own time_offset and frame).
 Alignment6 AlignmentOf(const std::vector<FitParameter>& parameters, const double* x,
-                       double fixed_tau) {
+                       double fixed_tau, int shot) {
   Alignment6 a;
   a.tau = fixed_tau;
   Vector3d w = Vector3d::Zero();
   for (size_t i = 0; i < parameters.size(); ++i) {
     const FitParameter& p = parameters[i];
+    if (p.shot != shot) continue;
     if (p.kind == FitParameter::Kind::kTimeOffset) a.tau = x[i];
     if (p.kind != FitParameter::Kind::kFrame) continue;
     if (p.frame_axis < 3) {
@@ -110,17 +112,23 @@ class Residuals {
   std::vector<Matrix3d> whiten_;
 };
 
-// Runs simulations of scenario-parameter vectors, several at a time, remembering the last few.
+// Runs one shot's simulations of coordinate vectors, several at a time, remembering the
+// unperturbed ones.
 class Simulator {
  public:
-  Simulator(const std::string& scenario_path, const std::vector<FitParameter>& parameters,
-            const FitOptions& options)
-      : path_(scenario_path), parameters_(parameters), options_(options) {}
+  Simulator(std::string scenario_path, int shot, std::vector<ScenarioOverride> set,
+            const std::vector<FitParameter>& parameters, const FitOptions& options)
+      : path_(std::move(scenario_path)),
+        shot_(shot),
+        set_(std::move(set)),
+        parameters_(parameters),
+        options_(options) {}
 
   // The knot tracks of every coordinate vector (full x; only the scenario parameters matter), in
   // order; an empty pointer for a run that failed (its reason in *error).
+  // Const: remembering runs and counting them changes nothing a caller sees.
   std::vector<std::shared_ptr<const KnotTracks>> Run(const std::vector<std::vector<double>>& xs,
-                                                     std::string* error) {
+                                                     std::string* error) const {
     std::vector<std::shared_ptr<const KnotTracks>> out(xs.size());
     std::vector<std::vector<ScenarioOverride>> runs;
     std::vector<size_t> which;
@@ -130,8 +138,9 @@ class Simulator {
         out[i] = hit->second;
         continue;
       }
-      std::vector<ScenarioOverride> set = options_.set;
-      for (const ScenarioOverride& o : ScenarioOverrides(parameters_, xs[i])) set.push_back(o);
+      std::vector<ScenarioOverride> set = set_;
+      for (const ScenarioOverride& o : ScenarioOverrides(parameters_, xs[i], shot_))
+        set.push_back(o);
       runs.push_back(std::move(set));
       which.push_back(i);
     }
@@ -161,15 +170,18 @@ class Simulator {
   std::vector<double> ScenarioPart(const std::vector<double>& x) const {
     std::vector<double> key;
     for (size_t i = 0; i < parameters_.size(); ++i)
-      if (parameters_[i].kind == FitParameter::Kind::kScenario) key.push_back(x[i]);
+      if (parameters_[i].kind == FitParameter::Kind::kScenario && Moves(parameters_[i], shot_))
+        key.push_back(x[i]);
     return key;
   }
 
-  const std::string& path_;
+  const std::string path_;
+  const int shot_;
+  const std::vector<ScenarioOverride> set_;  // --set and the cut duration
   const std::vector<FitParameter>& parameters_;
   const FitOptions& options_;
-  std::map<std::vector<double>, std::shared_ptr<const KnotTracks>> cache_;
-  int simulations_ = 0;
+  mutable std::map<std::vector<double>, std::shared_ptr<const KnotTracks>> cache_;
+  mutable int simulations_ = 0;
 };
 
 // The priors by parameter index: (mean, sigma) in the parameter's units.
@@ -184,22 +196,33 @@ struct PriorTerm {
 };
 constexpr double kAnchorSigma = 6.907755278982137;  // ln 1000
 
+// One shot of the fit: its fixed residuals, its simulations, where its rows start.
+struct Shot {
+  Residuals residuals;
+  Simulator simulator;
+  int offset = 0;  // first row of its residuals
+};
+
 
 // The whole least-squares problem as one Ceres cost: data residuals, then prior residuals.
 class ShotCost : public ceres::CostFunction {
  public:
-  ShotCost(const std::vector<FitParameter>& parameters, const Residuals& residuals,
-           Simulator* simulator, std::vector<PriorTerm> priors, const FitOptions& options,
-           double margin)
+  ShotCost(const std::vector<FitParameter>& parameters, std::vector<Shot>* shots,
+           std::vector<PriorTerm> priors, const FitOptions& options, double margin)
       : active_(parameters.size(), true),
         margin_(margin),
         parameters_(parameters),
-        residuals_(residuals),
-        simulator_(simulator),
+        shots_(*shots),
         priors_(std::move(priors)),
         options_(options) {
     mutable_parameter_block_sizes()->push_back(static_cast<int>(parameters.size()));
-    set_num_residuals(residuals.count() + static_cast<int>(priors_.size()));
+    int rows = 0;
+    for (Shot& shot : shots_) {
+      shot.offset = rows;
+      rows += shot.residuals.count();
+    }
+    data_rows_ = rows;
+    set_num_residuals(rows + static_cast<int>(priors_.size()));
   }
 
   bool Evaluate(double const* const* x_blocks, double* residuals,
@@ -208,52 +231,16 @@ class ShotCost : public ceres::CostFunction {
     const std::vector<double> x(x_blocks[0], x_blocks[0] + p);
     // The offset's range, as a rejected step rather than a Ceres bound: a bound makes Ceres
     // search along the projected step, a Jacobian (a batch of simulations) per trial.
-    const double tau = AlignmentOf(parameters_, x.data(), options_.score.time_offset_s).tau;
-    if (std::abs(tau - options_.score.time_offset_s) > margin_)
-      return Reject("the time offset left its range");
-    const bool jacobian = jacobians != nullptr && jacobians[0] != nullptr;
-    std::vector<std::vector<double>> xs = {x};
-    std::vector<int> column_of_run = {-1};
-    if (jacobian)
-      for (int j = 0; j < p; ++j)
-        if (parameters_[j].kind == FitParameter::Kind::kScenario && active_[j]) {
-          xs.push_back(x);
-          xs.back()[j] += Step(j);
-          column_of_run.push_back(j);
-        }
-    std::string error;
-    const auto sims = simulator_->Run(xs, &error);
-    if (!sims[0]) return Reject(error);
-    const int n = residuals_.count();
-    const Alignment6 a = AlignmentOf(parameters_, x.data(), options_.score.time_offset_s);
-    if (!residuals_.Evaluate(*sims[0], a, residuals)) return Reject("the simulation ends early");
-    EvaluatePriors(x.data(), residuals + n, jacobian ? jacobians[0] + size_t(n) * p : nullptr);
-    if (!jacobian) return true;
-    double* jac = jacobians[0];
     for (int j = 0; j < p; ++j)
-      if (!active_[j])
-        for (int i = 0; i < n; ++i) jac[size_t(i) * p + j] = 0.0;
-    std::vector<double> plus(n), minus(n);
-    for (size_t r = 1; r < xs.size(); ++r) {
-      const int j = column_of_run[r];
-      if (!sims[r] || !residuals_.Evaluate(*sims[r], a, plus.data()))
-        return Reject("a finite-difference run of " + parameters_[j].name + " failed: " + error);
-      for (int i = 0; i < n; ++i) jac[size_t(i) * p + j] = (plus[i] - residuals[i]) / Step(j);
-    }
-    for (int j = 0; j < p; ++j) {
-      if (parameters_[j].kind == FitParameter::Kind::kScenario || !active_[j]) continue;
-      // Alignment columns: central differences of the interpolation, no simulation.
-      const double h = parameters_[j].kind == FitParameter::Kind::kTimeOffset ? 1e-5 : 1e-6;
-      std::vector<double> xp = x, xm = x;
-      xp[j] += h;
-      xm[j] -= h;
-      const double fixed = options_.score.time_offset_s;
-      if (!residuals_.Evaluate(*sims[0], AlignmentOf(parameters_, xp.data(), fixed), plus.data()) ||
-          !residuals_.Evaluate(*sims[0], AlignmentOf(parameters_, xm.data(), fixed), minus.data()))
-        return Reject("the time offset leaves the simulated span");
-      for (int i = 0; i < n; ++i) jac[size_t(i) * p + j] = (plus[i] - minus[i]) / (2 * h);
-    }
-    if (std::find(active_.begin(), active_.end(), false) == active_.end()) {
+      if (parameters_[j].kind == FitParameter::Kind::kTimeOffset &&
+          std::abs(x[j] - options_.score.time_offset_s) > margin_)
+        return Reject("the time offset left its range");
+    double* jac = jacobians != nullptr ? jacobians[0] : nullptr;
+    if (jac) std::fill(jac, jac + size_t(data_rows_) * p, 0.0);
+    for (size_t k = 0; k < shots_.size(); ++k)
+      if (!EvaluateShot(static_cast<int>(k), x, residuals, jac)) return false;
+    EvaluatePriors(x.data(), residuals + data_rows_, jac ? jac + size_t(data_rows_) * p : nullptr);
+    if (jac && std::find(active_.begin(), active_.end(), false) == active_.end()) {
       last_x_ = x;
       last_jacobian_.assign(jac, jac + size_t(num_residuals()) * p);
     }
@@ -263,17 +250,39 @@ class ShotCost : public ceres::CostFunction {
   // Which parameters the next evaluations move (the others' columns are zero, unsimulated).
   void SetActive(std::vector<bool> active) { active_ = std::move(active); }
 
-  // The cost (data and priors, sum of squares) at x from its simulation; NaN when the simulation
-  // does not reach a point.
-  double CostWith(const std::vector<double>& x, const KnotTracks& sim) const {
-    std::vector<double> r(num_residuals());
-    const Alignment6 a = AlignmentOf(parameters_, x.data(), options_.score.time_offset_s);
-    if (!residuals_.Evaluate(sim, a, r.data())) return std::numeric_limits<double>::quiet_NaN();
-    EvaluatePriors(x.data(), r.data() + residuals_.count(), nullptr);
-    double sum = 0.0;
-    for (double v : r) sum += v * v;
-    return sum;
+  // The cost (data and priors, sum of squares) at each coordinate vector, every shot's
+  // simulations run together; NaN where a simulation fails or does not reach a point.
+  std::vector<double> CostsAt(const std::vector<std::vector<double>>& xs) const {
+    std::vector<double> costs(xs.size(), 0.0);
+    std::string error;
+    for (size_t k = 0; k < shots_.size(); ++k) {
+      const Shot& shot = shots_[k];
+      const auto sims = shot.simulator.Run(xs, &error);
+      std::vector<double> r(shot.residuals.count());
+      for (size_t i = 0; i < xs.size(); ++i) {
+        const Alignment6 a = AlignmentOf(parameters_, xs[i].data(), options_.score.time_offset_s,
+                                         static_cast<int>(k));
+        if (!sims[i] || !shot.residuals.Evaluate(*sims[i], a, r.data())) {
+          costs[i] = std::numeric_limits<double>::quiet_NaN();
+          continue;
+        }
+        for (double v : r) costs[i] += v * v;
+      }
+    }
+    std::vector<double> prior(priors_.size());
+    for (size_t i = 0; i < xs.size(); ++i) {
+      EvaluatePriors(xs[i].data(), prior.data(), nullptr);
+      for (double v : prior) costs[i] += v * v;
+    }
+    return costs;
   }
+
+  int simulations() const {
+    int n = 0;
+    for (const Shot& shot : shots_) n += shot.simulator.simulations();
+    return n;
+  }
+  int data_rows() const { return data_rows_; }
 
   // The Jacobian (row-major, num_residuals x p) at x when the last evaluation was there.
   bool JacobianAt(const std::vector<double>& x, std::vector<double>* jacobian) const {
@@ -284,6 +293,56 @@ class ShotCost : public ceres::CostFunction {
   const std::string& last_failure() const { return failure_; }
 
  private:
+  // Shot k's rows of the residuals (and of the Jacobian, zeroed by the caller): its unperturbed
+  // run and, for a Jacobian, one forward-difference run per active scenario parameter that moves
+  // it, all at once; its alignment columns by central differences of the interpolation.
+  bool EvaluateShot(int k, const std::vector<double>& x, double* residuals, double* jac) const {
+    const int p = static_cast<int>(parameters_.size());
+    const Shot& shot = shots_[k];
+    std::vector<std::vector<double>> xs = {x};
+    std::vector<int> column_of_run = {-1};
+    for (int j = 0; jac && j < p; ++j)
+      if (parameters_[j].kind == FitParameter::Kind::kScenario && active_[j] &&
+          Moves(parameters_[j], k)) {
+        xs.push_back(x);
+        xs.back()[j] += Step(j);
+        column_of_run.push_back(j);
+      }
+    std::string error;
+    const auto sims = shot.simulator.Run(xs, &error);
+    if (!sims[0]) return Reject(error);
+    const int n = shot.residuals.count();
+    double* r0 = residuals + shot.offset;
+    const double fixed = options_.score.time_offset_s;
+    const Alignment6 a = AlignmentOf(parameters_, x.data(), fixed, k);
+    if (!shot.residuals.Evaluate(*sims[0], a, r0)) return Reject("the simulation ends early");
+    if (!jac) return true;
+    double* rows = jac + size_t(shot.offset) * p;
+    std::vector<double> plus(n), minus(n);
+    for (size_t r = 1; r < xs.size(); ++r) {
+      const int j = column_of_run[r];
+      if (!sims[r] || !shot.residuals.Evaluate(*sims[r], a, plus.data()))
+        return Reject("a finite-difference run of " + parameters_[j].name + " failed: " + error);
+      for (int i = 0; i < n; ++i) rows[size_t(i) * p + j] = (plus[i] - r0[i]) / Step(j);
+    }
+    for (int j = 0; j < p; ++j) {
+      if (parameters_[j].kind == FitParameter::Kind::kScenario || !active_[j] ||
+          parameters_[j].shot != k)
+        continue;
+      const double h = parameters_[j].kind == FitParameter::Kind::kTimeOffset ? 1e-5 : 1e-6;
+      std::vector<double> xp = x, xm = x;
+      xp[j] += h;
+      xm[j] -= h;
+      if (!shot.residuals.Evaluate(*sims[0], AlignmentOf(parameters_, xp.data(), fixed, k),
+                                   plus.data()) ||
+          !shot.residuals.Evaluate(*sims[0], AlignmentOf(parameters_, xm.data(), fixed, k),
+                                   minus.data()))
+        return Reject("the time offset leaves the simulated span");
+      for (int i = 0; i < n; ++i) rows[size_t(i) * p + j] = (plus[i] - minus[i]) / (2 * h);
+    }
+    return true;
+  }
+
   double Step(int j) const {
     return parameters_[j].log ? options_.step : options_.step * parameters_[j].spread;
   }
@@ -307,8 +366,8 @@ class ShotCost : public ceres::CostFunction {
   std::vector<bool> active_;
   const double margin_;  // s, how far the time offset may move
   const std::vector<FitParameter>& parameters_;
-  const Residuals& residuals_;
-  Simulator* simulator_;
+  std::vector<Shot>& shots_;
+  int data_rows_ = 0;
   const std::vector<PriorTerm> priors_;
   const FitOptions& options_;
   mutable std::vector<double> last_x_, last_jacobian_;
@@ -318,10 +377,10 @@ class ShotCost : public ceres::CostFunction {
 // Progress once per Levenberg-Marquardt iteration.
 class ProgressCallback : public ceres::IterationCallback {
  public:
-  ProgressCallback(const FitOptions& options, const Simulator& simulator, Clock::time_point start,
+  ProgressCallback(const FitOptions& options, const ShotCost& cost, Clock::time_point start,
                    int start_index, std::string stage = "")
       : options_(options),
-        simulator_(simulator),
+        cost_(cost),
         start_(start),
         start_index_(start_index),
         stage_(std::move(stage)) {}
@@ -330,7 +389,7 @@ class ProgressCallback : public ceres::IterationCallback {
       FitProgress p;
       p.iteration = s.iteration;
       p.cost = 2 * s.cost;
-      p.simulations = simulator_.simulations();
+      p.simulations = cost_.simulations();
       p.elapsed_s = Seconds(start_);
       const int left = (options_.max_iterations - s.iteration) +
                        (options_.starts - 1 - start_index_) * options_.max_iterations;
@@ -348,7 +407,7 @@ class ProgressCallback : public ceres::IterationCallback {
 
  private:
   const FitOptions& options_;
-  const Simulator& simulator_;
+  const ShotCost& cost_;
   Clock::time_point start_;
   int start_index_;
   std::string stage_;
@@ -410,7 +469,7 @@ std::vector<PriorTerm> PriorTerms(const std::vector<FitParameter>& parameters,
 // offset to move and for the interpolation's stencil.
 double FitDuration(const std::string& path, const FitOptions& options, const KnotTracks& measured,
                    double margin, std::vector<ScenarioOverride>* set) {
-  const Scenario scenario = LoadScenario(path, options.set);
+  const Scenario scenario = LoadScenario(path, *set);
   const double needed = measured.time.back() + options.score.time_offset_s + margin +
                         4 * scenario.output_interval;
   if (needed >= scenario.duration) return scenario.duration;
@@ -446,7 +505,7 @@ ScoreSummary FinalScore(const KnotTracks& measured, KnotTracks sim, const Alignm
 // `check`, the cost one sigma either side of the estimate over the rise the Jacobian predicts,
 // sigma_i^2 (J^T J)_ii. About 1 on a smooth cost; far from 1 where the cost is rough (the
 // simulation's discrete events, a chaotic response), where sigma means nothing. NaN: not checked.
-std::vector<std::array<double, 2>> QuadraticCheck(const ShotCost& cost, Simulator* simulator,
+std::vector<std::array<double, 2>> QuadraticCheck(const ShotCost& cost,
                                                   const std::vector<double>& best,
                                                   double best_cost, const Eigen::VectorXd& sigma,
                                                   const Eigen::MatrixXd& jtj,
@@ -463,14 +522,13 @@ std::vector<std::array<double, 2>> QuadraticCheck(const ShotCost& cost, Simulato
         which.push_back({static_cast<int>(i), side});
       }
   if (xs.empty()) return ratio;
-  std::string error;
-  const auto sims = simulator->Run(xs, &error);
+  const std::vector<double> costs = cost.CostsAt(xs);
   for (size_t r = 0; r < xs.size(); ++r) {
     const auto [i, side] = which[r];
     const double predicted = sigma(i) * sigma(i) * jtj(i, i);
     // A failed run is a cost that is not smooth there either.
-    ratio[i][side] = sims[r] ? (cost.CostWith(xs[r], *sims[r]) - best_cost) / predicted
-                             : std::numeric_limits<double>::infinity();
+    ratio[i][side] = std::isfinite(costs[r]) ? (costs[r] - best_cost) / predicted
+                                             : std::numeric_limits<double>::infinity();
   }
   return ratio;
 }
@@ -502,136 +560,147 @@ void LevenbergMarquardt(ShotCost* cost, const std::vector<bool>& active, const F
     throw std::runtime_error("the fit could not start: " + cost->last_failure());
 }
 
-}  // namespace
+// Each shot with its residuals fixed by the start's simulation: the points it reaches and their
+// weights.
+std::vector<Shot> PrepareShots(const std::vector<FitShotInput>& inputs,
+                               const std::vector<FitParameter>& parameters,
+                               const FitOptions& options, const std::vector<double>& x0,
+                               double margin, bool fit_time, FitResult* result) {
+  std::vector<Shot> shots;
+  shots.reserve(inputs.size());
+  for (size_t k = 0; k < inputs.size(); ++k) {
+    const FitShotInput& in = inputs[k];
+    if (in.measured == nullptr || in.measured->frames() < 1)
+      throw std::invalid_argument(in.measured_name + ": no frame");
+    std::vector<ScenarioOverride> set = options.set;
+    const double duration = FitDuration(in.scenario_path, options, *in.measured, margin, &set);
+    if (k == 0) result->duration_s = duration;
+    Simulator simulator(in.scenario_path, static_cast<int>(k), std::move(set), parameters,
+                        options);
+    std::string error;
+    const auto first = simulator.Run({x0}, &error);
+    if (!first[0])
+      throw std::runtime_error(in.scenario_path + ": the starting simulation failed: " + error);
+    Residuals residuals(*in.measured,
+                        PrepareComparison(*in.measured, *first[0], options.score,
+                                          in.measured_name, "the starting simulation"));
+    // The points are kept a little beyond the bounds of the offset, for its central differences.
+    residuals.Fix(*first[0], options.score.time_offset_s, fit_time ? margin + 1e-3 : 0.0,
+                  options.score.sim_sigma_m);
+    if (residuals.count() == 0)
+      throw std::invalid_argument(in.measured_name + ": no measured knot-frame within the " +
+                                  "simulated span (check --time-offset)");
+    shots.push_back({std::move(residuals), std::move(simulator), 0});
+  }
+  return shots;
+}
 
-FitResult FitShot(const std::string& scenario_path, const KnotTracks& measured,
-                  const std::vector<FitParameter>& parameters, const FitOptions& options_in,
-                  const std::string& measured_name) {
-  const auto start = Clock::now();
-  FitOptions options = options_in;
-  if (options.starts < 1 || options.max_iterations < 1 || !(options.step > 0))
-    throw std::invalid_argument("fit options: starts, max_iterations and step must be positive");
+// Levenberg-Marquardt from each start, in two stages when material parameters are fitted with
+// others: first the launch, the drag and the alignment with the material held, then everything.
+// The material's signal in a flight is weak; fitted from a start far off in velocity or drag, the
+// stiffnesses went where they explain the wrong launch (a net of EA = 26 N and EI = 4e-7 N m^2, a
+// valley of wrong minima, in the twin's Net A flight). Returns the best end; its cost in *cost.
+std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& parameters,
+                             const FitOptions& options, const std::vector<double>& x0,
+                             Clock::time_point start, FitResult* result) {
   const int p = static_cast<int>(parameters.size());
-  bool fit_time = false;
-  for (const FitParameter& par : parameters)
-    fit_time |= par.kind == FitParameter::Kind::kTimeOffset;
-  const double margin = fit_time ? std::min(options.score.max_time_offset_s, 0.05) : 0.0;
-
-  FitResult result;
-  if (measured.frames() < 1) throw std::invalid_argument(measured_name + ": no frame");
-  result.duration_s = FitDuration(scenario_path, options_in, measured, margin, &options.set);
-  const std::vector<PriorTerm> priors = PriorTerms(parameters, options.priors);
-
-  // The start's simulation fixes the points and their weights.
-  std::vector<double> x0(p);
-  for (int i = 0; i < p; ++i) x0[i] = parameters[i].Coordinate(parameters[i].start);
-  Simulator simulator(scenario_path, parameters, options);
-  std::string error;
-  const auto first = simulator.Run({x0}, &error);
-  if (!first[0]) throw std::runtime_error("the starting simulation failed: " + error);
-  Residuals residuals(measured, PrepareComparison(measured, *first[0], options.score,
-                                                  measured_name, "the starting simulation"));
-  // The points are kept a little beyond the bounds of the offset, for its central differences.
-  residuals.Fix(*first[0], options.score.time_offset_s, fit_time ? margin + 1e-3 : 0.0,
-                options.score.sim_sigma_m);
-  if (residuals.count() == 0)
-    throw std::invalid_argument(measured_name + ": no measured knot-frame within the simulated " +
-                                "span (check --time-offset)");
-  result.residuals = residuals.count();
-  const auto cost = std::make_unique<ShotCost>(parameters, residuals, &simulator, priors, options, margin);
-
-  // Levenberg-Marquardt from each start; the best one wins.
+  std::vector<bool> all(p, true), launch(p);
+  for (int i = 0; i < p; ++i) launch[i] = parameters[i].path.rfind("materials.", 0) != 0;
+  const bool staged = std::count(launch.begin(), launch.end(), true) % p != 0;
   std::mt19937 rng(options.seed);
   std::vector<double> best;
-  double best_cost = kInf;
-  // Each start in two stages when material parameters are fitted with others: first the launch,
-  // the drag and the alignment with the material held, then everything. The material's signal
-  // in a flight is weak; fitted from a start far off in velocity or drag, the stiffnesses went
-  // where they explain the wrong launch (a net of EA = 26 N and EI = 4e-7 N m^2, a valley of
-  // wrong minima, in the twin's Net A flight).
-  std::vector<bool> all(p, true), launch(p);
-  for (int i = 0; i < p; ++i) launch[i] = parameters[i].name.rfind("materials.", 0) != 0;
-  const bool staged = std::count(launch.begin(), launch.end(), true) % p != 0;
+  result->cost_final = kInf;
   for (int s = 0; s < options.starts; ++s) {
     std::vector<double> x = s == 0 ? x0 : DrawStart(parameters, x0, &rng);
     ceres::Solver::Summary summary;
     if (staged) {
       cost->SetActive(launch);
-      LevenbergMarquardt(cost.get(), launch, options,
-                         ProgressCallback(options, simulator, start, s, "1/2 material held"), &x,
+      LevenbergMarquardt(cost, launch, options,
+                         ProgressCallback(options, *cost, start, s, "1/2 material held"), &x,
                          &summary);
-      if (s == 0) result.cost_initial = 2 * summary.initial_cost;
-      result.iterations += static_cast<int>(summary.iterations.size()) - 1;
+      if (s == 0) result->cost_initial = 2 * summary.initial_cost;
+      result->iterations += static_cast<int>(summary.iterations.size()) - 1;
       cost->SetActive(all);
     }
     if (summary.termination_type != ceres::FAILURE || !staged)
-      LevenbergMarquardt(cost.get(), all, options,
-                         ProgressCallback(options, simulator, start, s, staged ? "2/2 all" : ""),
-                         &x, &summary);
-    if (s == 0 && !staged) result.cost_initial = 2 * summary.initial_cost;
-    result.iterations += static_cast<int>(summary.iterations.size()) - 1;
-    if (summary.IsSolutionUsable() && 2 * summary.final_cost < best_cost) {
-      best_cost = 2 * summary.final_cost;
+      LevenbergMarquardt(cost, all, options,
+                         ProgressCallback(options, *cost, start, s, staged ? "2/2 all" : ""), &x,
+                         &summary);
+    if (s == 0 && !staged) result->cost_initial = 2 * summary.initial_cost;
+    result->iterations += static_cast<int>(summary.iterations.size()) - 1;
+    if (summary.IsSolutionUsable() && 2 * summary.final_cost < result->cost_final) {
+      result->cost_final = 2 * summary.final_cost;
       best = x;
-      result.best_start = s;
-      result.termination = summary.message;
+      result->best_start = s;
+      result->termination = summary.message;
     }
   }
   if (best.empty()) throw std::runtime_error("the fit failed: " + cost->last_failure());
-  result.cost_final = best_cost;
+  return best;
+}
 
-  // The Jacobian at the fit (Ceres' last one when it was taken there).
+// The Jacobian at x (Ceres' last one when it was taken there), row-major.
+std::vector<double> JacobianAt(const ShotCost& cost, const std::vector<double>& x) {
   std::vector<double> jac;
-  if (!cost->JacobianAt(best, &jac)) {
-    std::vector<double> r(cost->num_residuals());
-    jac.resize(size_t(cost->num_residuals()) * p);
-    const double* blocks[] = {best.data()};
-    double* jacobians[] = {jac.data()};
-    if (!cost->Evaluate(blocks, r.data(), jacobians))
-      throw std::runtime_error("the Jacobian at the fit failed: " + cost->last_failure());
+  if (cost.JacobianAt(x, &jac)) return jac;
+  std::vector<double> r(cost.num_residuals());
+  jac.resize(size_t(cost.num_residuals()) * x.size());
+  const double* blocks[] = {x.data()};
+  double* jacobians[] = {jac.data()};
+  if (!cost.Evaluate(blocks, r.data(), jacobians))
+    throw std::runtime_error("the Jacobian at the fit failed: " + cost.last_failure());
+  return jac;
+}
+
+// Every shot's score at the fit, and the data's information, each shot's rows divided by the
+// inflation its score finds for correlated residuals (and by its reduced chi^2 above 1).
+Eigen::MatrixXd DataInformation(const std::vector<FitShotInput>& inputs,
+                                const std::vector<Shot>& shots,
+                                const std::vector<FitParameter>& parameters,
+                                const FitOptions& options, const std::vector<double>& best,
+                                const Eigen::MatrixXd& j, FitResult* result) {
+  const int p = static_cast<int>(parameters.size());
+  Eigen::MatrixXd information = Eigen::MatrixXd::Zero(p, p);
+  for (size_t k = 0; k < shots.size(); ++k) {
+    const int kk = static_cast<int>(k);
+    std::string error;
+    const auto sim = shots[k].simulator.Run({best}, &error);
+    if (!sim[0]) throw std::runtime_error("the fitted simulation failed: " + error);
+    const Alignment6 a = AlignmentOf(parameters, best.data(), options.score.time_offset_s, kk);
+    const ScoreSummary score =
+        FinalScore(*inputs[k].measured, *sim[0], a, options.score, inputs[k].measured_name);
+    const double inflation = std::max(1.0, score.tau_int) * std::max(1.0, score.design_effect) *
+                             std::max(1.0, score.mean_d2 / 3.0);
+    const auto rows = j.middleRows(shots[k].offset, shots[k].residuals.count());
+    information += rows.transpose() * rows / inflation;
+    result->scores.push_back(score);
+    result->inflations.push_back(inflation);
+    result->fitted_sets.push_back(ScenarioOverrides(parameters, best, kk));
+    result->inflation = std::max(result->inflation, inflation);
   }
-  const int n = residuals.count();
-  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>
-      j(jac.data(), cost->num_residuals(), p);
+  result->score = result->scores.front();
+  result->fitted_set = result->fitted_sets.front();
+  return information;
+}
 
-  // The final score, and the inflation of the data's information it finds.
-  const Alignment6 a = AlignmentOf(parameters, best.data(), options.score.time_offset_s);
-  const auto final_sim = simulator.Run({best}, &error);
-  if (!final_sim[0]) throw std::runtime_error("the fitted simulation failed: " + error);
-  result.score = FinalScore(measured, *final_sim[0], a, options.score, measured_name);
-  result.inflation = std::max(1.0, result.score.tau_int) * std::max(1.0, result.score.design_effect) *
-                     std::max(1.0, result.score.mean_d2 / 3.0);
-  const Eigen::MatrixXd data_information =
-      j.topRows(n).transpose() * j.topRows(n) / result.inflation;
-  const Eigen::MatrixXd information =
-      data_information + j.bottomRows(priors.size()).transpose() * j.bottomRows(priors.size());
-  Eigen::VectorXd sigma, data_sigma;
-  result.covariance = CovarianceOf(information, &sigma);
-  CovarianceOf(data_information, &data_sigma);
-  result.correlation = Eigen::MatrixXd::Identity(p, p);
-  for (int r = 0; r < p; ++r)
-    for (int c = 0; c < p; ++c)
-      if (r != c && std::isfinite(sigma(r)) && std::isfinite(sigma(c)) && sigma(r) * sigma(c) > 0)
-        result.correlation(r, c) = result.covariance(r, c) / (sigma(r) * sigma(c));
-      else if (r != c)
-        result.correlation(r, c) = std::numeric_limits<double>::quiet_NaN();
-
-  // Which parameters look identified (sigma below half the reference spread: the prior's sigma,
-  // else the parameter's spread, fit_parameters.h), then whether the cost is smooth along the
-  // scenario ones among them.
-  std::vector<double> reference(p);
+// Estimates, sigmas, whether each is identified (sigma below half the reference spread: the
+// prior's sigma, else the parameter's spread, fit_parameters.h) and, for the scenario ones that
+// look identified, whether the cost is smooth enough for sigma to mean something.
+void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
+            const std::vector<PriorTerm>& priors, const std::vector<double>& best,
+            const Eigen::VectorXd& sigma, const Eigen::VectorXd& data_sigma,
+            const Eigen::MatrixXd& jtj, FitResult* result) {
+  const int p = static_cast<int>(parameters.size());
   std::vector<bool> looks_identified(p), check(p);
   for (int i = 0; i < p; ++i) {
-    reference[i] = parameters[i].spread;  // in coordinate units
+    double reference = parameters[i].spread;  // in coordinate units
     for (const PriorTerm& prior : priors)
       if (prior.parameter == i && !prior.anchor)
-        reference[i] = parameters[i].log ? prior.sigma / prior.value : prior.sigma;
-    looks_identified[i] = sigma(i) < 0.5 * reference[i];
+        reference = parameters[i].log ? prior.sigma / prior.value : prior.sigma;
+    looks_identified[i] = sigma(i) < 0.5 * reference;
     check[i] = looks_identified[i] && parameters[i].kind == FitParameter::Kind::kScenario;
   }
-  const Eigen::MatrixXd jtj = j.transpose() * j;
-  const auto ratio = QuadraticCheck(*cost, &simulator, best, best_cost, sigma, jtj, check);
-
+  const auto ratio = QuadraticCheck(cost, best, result->cost_final, sigma, jtj, check);
   for (int i = 0; i < p; ++i) {
     const FitParameter& par = parameters[i];
     FittedParameter f;
@@ -652,10 +721,63 @@ FitResult FitShot(const std::string& scenario_path, const KnotTracks& measured,
                             std::max(ratio[i][0], ratio[i][1]) < 2.0);
     f.identified = looks_identified[i] && !f.rough;
     f.determined_by = f.identified ? "flight data" : f.has_prior ? "prior" : "neither";
-    result.parameters.push_back(f);
+    result->parameters.push_back(f);
   }
-  result.fitted_set = ScenarioOverrides(parameters, best);
-  result.simulations = simulator.simulations();
+}
+
+}  // namespace
+
+FitResult FitShot(const std::string& scenario_path, const KnotTracks& measured,
+                  const std::vector<FitParameter>& parameters, const FitOptions& options,
+                  const std::string& measured_name) {
+  return FitShots({{scenario_path, &measured, measured_name}}, parameters, options);
+}
+
+FitResult FitShots(const std::vector<FitShotInput>& inputs,
+                   const std::vector<FitParameter>& parameters, const FitOptions& options) {
+  const auto start = Clock::now();
+  if (inputs.empty()) throw std::invalid_argument("fit: no shot");
+  if (options.starts < 1 || options.max_iterations < 1 || !(options.step > 0))
+    throw std::invalid_argument("fit options: starts, max_iterations and step must be positive");
+  for (const FitParameter& par : parameters)
+    if (par.shot >= static_cast<int>(inputs.size()))
+      throw std::invalid_argument("fit: " + par.name + " belongs to a shot that is not given");
+  const int p = static_cast<int>(parameters.size());
+  bool fit_time = false;
+  for (const FitParameter& par : parameters)
+    fit_time |= par.kind == FitParameter::Kind::kTimeOffset;
+  const double margin = fit_time ? std::min(options.score.max_time_offset_s, 0.05) : 0.0;
+  const std::vector<PriorTerm> priors = PriorTerms(parameters, options.priors);
+  std::vector<double> x0(p);
+  for (int i = 0; i < p; ++i) x0[i] = parameters[i].Coordinate(parameters[i].start);
+
+  FitResult result;
+  std::vector<Shot> shots = PrepareShots(inputs, parameters, options, x0, margin, fit_time, &result);
+  ShotCost cost(parameters, &shots, priors, options, margin);
+  result.residuals = cost.data_rows();
+  const std::vector<double> best = Minimise(&cost, parameters, options, x0, start, &result);
+
+  // The covariance: the data's information (inflated per shot) plus the priors'.
+  const std::vector<double> jac = JacobianAt(cost, best);
+  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>
+      j(jac.data(), cost.num_residuals(), p);
+  const Eigen::MatrixXd data_information =
+      DataInformation(inputs, shots, parameters, options, best, j, &result);
+  const auto prior_rows = j.bottomRows(priors.size());
+  Eigen::VectorXd sigma, data_sigma;
+  result.covariance =
+      CovarianceOf(data_information + prior_rows.transpose() * prior_rows, &sigma);
+  CovarianceOf(data_information, &data_sigma);
+  result.correlation = Eigen::MatrixXd::Identity(p, p);
+  for (int r = 0; r < p; ++r)
+    for (int c = 0; c < p; ++c)
+      if (r != c && std::isfinite(sigma(r)) && std::isfinite(sigma(c)) && sigma(r) * sigma(c) > 0)
+        result.correlation(r, c) = result.covariance(r, c) / (sigma(r) * sigma(c));
+      else if (r != c)
+        result.correlation(r, c) = std::numeric_limits<double>::quiet_NaN();
+
+  Report(cost, parameters, priors, best, sigma, data_sigma, j.transpose() * j, &result);
+  result.simulations = cost.simulations();
   result.wall_s = Seconds(start);
   return result;
 }

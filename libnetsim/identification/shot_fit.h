@@ -85,15 +85,26 @@ struct FitResult {
   Eigen::MatrixXd correlation;
   double cost_initial = 0.0, cost_final = 0.0;  // sum of squared whitened residuals + priors
   int residuals = 0;            // data residuals (3 per knot-frame)
-  double inflation = 1.0;       // what the data's information was divided by
+  double inflation = 1.0;       // what the data's information was divided by (the largest shot's)
   int iterations = 0;
   int simulations = 0;
   int best_start = 0;
   std::string termination;      // Ceres' report
   double wall_s = 0.0;
   double duration_s = 0.0;      // the simulated span each run was cut to
-  ScoreSummary score;           // `netlab score` of the fitted simulation
-  std::vector<ScenarioOverride> fitted_set;  // the --set lines that reproduce the fit
+  ScoreSummary score;           // `netlab score` of the fitted simulation (the first shot's)
+  std::vector<ScenarioOverride> fitted_set;  // the --set lines that reproduce the fit (first shot)
+  // Per shot, in order: the score, the inflation, the --set lines.
+  std::vector<ScoreSummary> scores;
+  std::vector<double> inflations;
+  std::vector<std::vector<ScenarioOverride>> fitted_sets;
+};
+
+// One measured shot and the scenario that simulates it.
+struct FitShotInput {
+  std::string scenario_path;
+  const KnotTracks* measured = nullptr;
+  std::string measured_name = "measured";
 };
 
 // Fits `parameters` of the scenario in `scenario_path` to `measured`. Throws InputError (bad
@@ -102,5 +113,10 @@ struct FitResult {
 FitResult FitShot(const std::string& scenario_path, const KnotTracks& measured,
                   const std::vector<FitParameter>& parameters, const FitOptions& options,
                   const std::string& measured_name = "measured");
+
+// Several shots at once (fit_parameters.h: the material and drag shared, the rest per shot): the
+// residuals of every shot, each weighed and inflated as one shot's.
+FitResult FitShots(const std::vector<FitShotInput>& shots,
+                   const std::vector<FitParameter>& parameters, const FitOptions& options);
 
 }  // namespace netlab::netsim

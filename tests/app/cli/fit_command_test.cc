@@ -113,6 +113,8 @@ TEST_F(FitCommand, BadInputsAreNamed) {
       {"a prior without uncertainty", shot + "--measured {dir}/measured.h5 --free "
        "materials.nylon.twist_damping --prior {dir}/zero_sigma.yaml", 1,
        {"zero_sigma.yaml", "twist_damping", "sigma > 0"}},
+      {"fewer track files than shots", "fit {dir}/shot.yaml {dir}/shot.yaml --out {dir}/fit.yaml "
+       "--measured {dir}/measured.h5 --free time_offset", 2, {"--measured", "one per shot"}},
       {"an empty output", "fit {dir}/shot.yaml --measured {dir}/measured.h5 --free time_offset "
        "--out ''", 2, {"--out"}},
       {"a start the simulation cannot take", shot + "--measured {dir}/measured.h5 --free "

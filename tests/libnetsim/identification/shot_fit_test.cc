@@ -122,6 +122,44 @@ TEST_F(ShotFit, SaysWhatTheFlightCannotDetermine) {
   EXPECT_NEAR(informed.sigma, 1e-11, 1e-12);
 }
 
+// Two shots of the same net at 0.5 and 0.8 m/s: one drag for both, each shot its own launch; the
+// drag twice as well known (about 1/sqrt(2) of one shot's sigma, or better: the faster shot feels
+// more drag), every estimate within 3 sigma.
+TEST_F(ShotFit, TwoShotsShareTheDragAndKeepTheirLaunches) {
+  const std::string fast = (dir_ / "fast.yaml").string();
+  std::string text = testing::kTwinShot;
+  text.replace(text.find("velocity: [0.5, 0, 0]"), 21, "velocity: [0.8, 0, 0]");
+  std::ofstream(fast) << text;
+  const SweepRun truth_fast = RunOne(fast, 0, {}, 1);
+  ASSERT_TRUE(truth_fast.ok()) << truth_fast.error;
+  const KnotTracks slow_measured = Measured(7);
+  const KnotTracks fast_measured = testing::MeasuredTwin(truth_fast, kNoise, 8);
+  const std::vector<ScenarioOverride> start = {{"drag.drag_coefficient", "2.4"}};
+  const std::string free = "drag.drag_coefficient,nets.0.velocity,time_offset";
+  const auto both = ParseFreeParameters(free, std::vector<std::string>{scenario_, fast}, start, 0);
+  ASSERT_EQ(both.size(), 9u);  // one drag, two launches of 3, two offsets
+  EXPECT_EQ(both[0].shot, -1);
+  EXPECT_EQ(both[4].name, "2:nets.0.velocity.0");
+  EXPECT_EQ(both[4].path, "nets.0.velocity.0");
+  const FitResult two = FitShots({{scenario_, &slow_measured, "slow"}, {fast, &fast_measured, "fast"}},
+                                 both, Options(start));
+  const FitResult one =
+      FitShot(scenario_, slow_measured, ParseFreeParameters(free, scenario_, start, 0), Options(start));
+  const FittedParameter& drag = Find(two, "drag.drag_coefficient");
+  EXPECT_LT(std::abs(drag.value - 1.2), 3 * drag.sigma) << drag.value << " +- " << drag.sigma;
+  EXPECT_LT(drag.sigma, 0.8 * Find(one, "drag.drag_coefficient").sigma);
+  const FittedParameter& v1 = Find(two, "1:nets.0.velocity.0");
+  const FittedParameter& v2 = Find(two, "2:nets.0.velocity.0");
+  EXPECT_LT(std::abs(v1.value - 0.5), 3 * v1.sigma);
+  EXPECT_LT(std::abs(v2.value - 0.8), 3 * v2.sigma);
+  ASSERT_EQ(two.scores.size(), 2u);
+  EXPECT_EQ(two.scores[1].verdict, "consistent");
+  // Each shot's --set lines: the shared drag, its own velocity, by the scenario's own paths.
+  ASSERT_EQ(two.fitted_sets.size(), 2u);
+  EXPECT_EQ(two.fitted_sets[1][1].path, "nets.0.velocity.0");
+  EXPECT_NEAR(std::stod(two.fitted_sets[1][1].value), v2.value, 1e-12);
+}
+
 // --free's names: lists expand to their items, `frame` to 6, starts read after --set; what cannot
 // be a parameter is named.
 TEST_F(ShotFit, FreeParametersAreExpandedAndChecked) {
