@@ -1,5 +1,5 @@
-// netlab fit SCENARIO.yaml --measured tracks.h5 --free PARAMS --out fit.yaml
-//            [--prior material.yaml] [--set PATH=VALUE ...] [--json] [--quiet]
+// netlab fit SCENARIO.yaml [SCENARIO2.yaml ...] --measured tracks.h5[,tracks2.h5,...]
+//            --free PARAMS --out fit.yaml [--prior material.yaml] [--set PATH=VALUE ...] [--json]
 
 #include <glog/logging.h>
 #include <unistd.h>
@@ -28,7 +28,7 @@ constexpr char kHelp[] =
     "                  --free PARAMS --out FIT.yaml\n"
     "                  [--prior MATERIAL.yaml[,...]] [--set PATH=VALUE ...] [--time-offset S]\n"
     "                  [--max-time-offset S] [--meas-sigma M] [--sim-sigma M] [--starts N]\n"
-    "                  [--max-iterations N] [--jobs N] [--json] [--quiet]\n\n"
+    "                  [--max-iterations N] [--step H] [--jobs N] [--json] [--quiet]\n\n"
     "Identifies parameters of a shot from its measured knot tracks (docs/fit.md): finds the\n"
     "values of the free parameters that make SCENARIO.yaml's simulation agree best with\n"
     "TRACKS.h5, weighing every knot-frame by its covariance as `netlab score` does\n"

@@ -16,7 +16,8 @@
 // shot's own, one per shot, named with the shot's number: 2:nets.0.velocity.0, 2:time_offset.
 //
 // A parameter is "identified" by the data when its posterior standard deviation is below half
-// its reference spread: the prior's sigma when a prior is given, else `spread` below.
+// its reference spread (the prior's sigma when a prior is given, else `spread` below) and the cost
+// is smooth enough along it for that sigma to mean something (shot_fit.h).
 
 #include <string>
 #include <vector>

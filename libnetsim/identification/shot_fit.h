@@ -14,7 +14,10 @@
 // The uncertainty: the covariance (J^T J)^-1 at the fit, with the data's information divided by
 // the inflation `netlab score` finds for correlated residuals (integrated autocorrelation time x
 // within-frame design effect) and by the reduced chi^2 when above 1 (a model that cannot fit
-// the data within its noise).
+// the data within its noise), each shot's rows by its own. Weak anchors keep scale parameters no
+// data or prior can see near their start; material parameters are held while the launch is
+// fitted first. A parameter that looks identified is checked: the cost at -+ 2 sigma must rise
+// within 2x of the Jacobian's prediction, or the cost is rough there and sigma means nothing.
 
 #include <array>
 #include <functional>
@@ -69,7 +72,7 @@ struct FittedParameter {
   double data_sigma = 0.0;  // what the flight data alone says (inf: nothing)
   bool has_prior = false;
   double prior_value = 0.0, prior_sigma = 0.0;
-  // The cost at value -+ sigma over the rise the Jacobian predicts (about 1 on a smooth cost);
+  // The cost at value -+ 2 sigma over the rise the Jacobian predicts (about 1 on a smooth cost);
   // NaN where not checked (parameters that do not look identified, time_offset and frame).
   std::array<double, 2> check = {std::numeric_limits<double>::quiet_NaN(),
                                  std::numeric_limits<double>::quiet_NaN()};
