@@ -24,15 +24,6 @@ double Seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
 }
 
-double TrueValue(const Material& m, const std::string& key) {
-  const std::map<std::string, double> values = {
-      {"linear_density", m.linear_density},   {"stretch_stiffness", m.stretch_stiffness},
-      {"stretch_damping", m.stretch_damping}, {"bend_stiffness", m.bend_stiffness},
-      {"bend_damping", m.bend_damping},       {"twist_stiffness", m.twist_stiffness},
-      {"twist_damping", m.twist_damping}};
-  return values.at(key);
-}
-
 struct Row {
   double simulate_s = 0, fit_s = 0;
   std::map<std::string, std::pair<double, double>> error;  // key -> (mean |rel err|, mean |z|)
@@ -66,7 +57,7 @@ int main(int argc, char** argv) {
       const Characterization c = Characterize(test);
       row.fit_s += Seconds(start) / seeds;
       for (const ParameterEstimate& e : c.estimates) {
-        const double want = TrueValue(truth, e.key);
+        const double want = MaterialValue(truth, e.key);
         row.error[e.key].first += std::abs(e.value / want - 1) / seeds;
         row.bias[e.key] += (e.value / want - 1) / seeds;
         row.error[e.key].second += std::abs(e.value - want) / e.sigma / seeds;

@@ -21,6 +21,8 @@
 #include <string_view>
 #include <vector>
 
+#include "libnetsim/model/material.h"
+
 namespace netlab::netsim {
 
 // The scenario's material keys, in the order the file lists them.
@@ -30,6 +32,9 @@ inline constexpr std::array<std::string_view, 8> kMaterialKeys = {
 // The tests a value may come from.
 inline constexpr std::array<std::string_view, 4> kBenchTests = {"tensile", "cantilever", "torsion",
                                                                 "weighing"};
+
+// The value of material key `key` (one of kMaterialKeys) of `m`; std::invalid_argument for another.
+double MaterialValue(const Material& m, std::string_view key);
 
 // One measured material parameter.
 struct ParameterEstimate {

@@ -5,7 +5,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <map>
 #include <string>
 
 #include "libnetsim/characterization/material_file.h"
@@ -16,16 +15,6 @@ namespace netlab::testing {
 namespace {
 
 const std::string kBench = std::string(NETLAB_SOURCE_DIR) + "/scenarios/bench/";
-
-double Generating(const std::string& key) {
-  const netsim::Material m = netsim::BenchNylon();
-  const std::map<std::string, double> values = {
-      {"linear_density", m.linear_density},   {"stretch_stiffness", m.stretch_stiffness},
-      {"stretch_damping", m.stretch_damping}, {"bend_stiffness", m.bend_stiffness},
-      {"bend_damping", m.bend_damping},       {"twist_stiffness", m.twist_stiffness},
-      {"twist_damping", m.twist_damping}};
-  return values.at(key);
-}
 
 class CharacterizeCommand : public CommandTest {
  protected:
@@ -53,8 +42,8 @@ class CharacterizeCommand : public CommandTest {
       EXPECT_EQ(printed["test"].string(), e.test);
       EXPECT_EQ(e.source, name + ".yaml");
       EXPECT_EQ(e.material, "nylon_1mm");
-      EXPECT_LT(std::abs(e.value - Generating(e.key)), 3 * e.sigma)
-          << e.value << " +- " << e.sigma << ", generated with " << Generating(e.key);
+      EXPECT_LT(std::abs(e.value - netsim::MaterialValue(netsim::BenchNylon(), e.key)), 3 * e.sigma)
+          << e.value << " +- " << e.sigma << ", generated with " << netsim::MaterialValue(netsim::BenchNylon(), e.key);
     }
     return read;
   }
