@@ -14,7 +14,8 @@ const std::vector<Command>& Commands() {
   static const std::vector<Command> commands = {
       {"calibrate", "calibrate the cameras into one world frame from target images", RunCalibrate},
       {"characterize", "material parameters with uncertainties from a bench test", RunCharacterize},
-      {"color-net", "colour a net's yarns so every knot is known by its links' colours", RunColorNet},
+      {"color-net", "colour a net's yarns so every knot is known by its links' colours",
+       RunColorNet},
       {"fit", "identify a shot's parameters from its measured tracks, with uncertainties", RunFit},
       {"gui", "the labeling workstation: four views, the tools, review, undo", gui::RunGui},
       {"ingest", "check the synchronized camera recordings or convert them to HDF5", RunIngest},

@@ -16,6 +16,8 @@
 //
 // Prints tables; never fails on time.
 
+#include <unistd.h>
+
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -24,7 +26,6 @@
 #include <fstream>
 #include <map>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 #include "libnetsim/identification/shot_fit.h"
@@ -42,7 +43,8 @@ FitOptions Options(std::vector<ScenarioOverride> set, double sigma) {
 }
 
 int Coverage(int draws) {
-  const auto dir = std::filesystem::temp_directory_path() / ("bench_fit_" + std::to_string(getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("bench_fit_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
   const std::string scenario = (dir / "shot.yaml").string();
   std::ofstream(scenario) << testing::kTwinShot;
@@ -77,9 +79,9 @@ int Coverage(int draws) {
   std::printf("| parameter | mean sigma | RMS error | within 1 sigma | within 2 sigma |\n");
   std::printf("|---|---|---|---|---|\n");
   for (const auto& [name, truth_value] : truth_of)
-    std::printf("| %s | %.3g | %.3g | %.0f %% | %.0f %% |\n", name.c_str(),
-                sigma_sum[name] / draws, std::sqrt(error_sq[name] / draws),
-                100.0 * within1[name] / draws, 100.0 * within2[name] / draws);
+    std::printf("| %s | %.3g | %.3g | %.0f %% | %.0f %% |\n", name.c_str(), sigma_sum[name] / draws,
+                std::sqrt(error_sq[name] / draws), 100.0 * within1[name] / draws,
+                100.0 * within2[name] / draws);
   std::printf("simulations per fit %.1f, wall per fit %.3f s\n", sims / draws, wall / draws);
   return 0;
 }
@@ -95,17 +97,20 @@ int Shots(int draws) {
   std::vector<SweepRun> truths;
   for (const char* speed : speeds) {
     std::string text = testing::kTwinShot;
-    text.replace(text.find("velocity: [0.5, 0, 0]"), 21, std::string("velocity: [") + speed + ", 0, 0]");
+    text.replace(text.find("velocity: [0.5, 0, 0]"), 21,
+                 std::string("velocity: [") + speed + ", 0, 0]");
     paths.push_back((dir / (std::string("shot_") + speed + ".yaml")).string());
     std::ofstream(paths.back()) << text;
     truths.push_back(RunOne(paths.back(), 0, {}, 1));
   }
   const std::vector<ScenarioOverride> start = {{"drag.drag_coefficient", "2.4"}};
-  std::printf("shots: the twin (5 x 5 knots, 0.4 s) at 0.5, 0.8, 0.3, 1.0 m/s, 1 mm noise, %d "
-              "draws; free: the drag (shared), each shot's launch velocity and time offset\n",
-              draws);
-  std::printf("| shots | drag RMS error | drag mean sigma | within 2 sigma | simulations | "
-              "wall per fit |\n|---|---|---|---|---|---|\n");
+  std::printf(
+      "shots: the twin (5 x 5 knots, 0.4 s) at 0.5, 0.8, 0.3, 1.0 m/s, 1 mm noise, %d "
+      "draws; free: the drag (shared), each shot's launch velocity and time offset\n",
+      draws);
+  std::printf(
+      "| shots | drag RMS error | drag mean sigma | within 2 sigma | simulations | "
+      "wall per fit |\n|---|---|---|---|---|---|\n");
   for (int n : {1, 2, 4}) {
     const std::vector<std::string> used(paths.begin(), paths.begin() + n);
     const auto parameters =
@@ -127,8 +132,8 @@ int Shots(int draws) {
       wall += r.wall_s;
     }
     std::printf("| %d | %.4f (%.2f %%) | %.4f | %.0f %% | %.0f | %.2f s |\n", n,
-                std::sqrt(error_sq / draws), 100 * std::sqrt(error_sq / draws) / 1.2,
-                sigma / draws, 100.0 * within / draws, sims / draws, wall / draws);
+                std::sqrt(error_sq / draws), 100 * std::sqrt(error_sq / draws) / 1.2, sigma / draws,
+                100.0 * within / draws, sims / draws, wall / draws);
   }
   std::filesystem::remove_all(dir);
   return 0;
@@ -162,11 +167,10 @@ int Flight(double seconds, int shots) {
   }
   // The launch is each scenario's own: started at half its speed by a --set per shot is not
   // possible (--set is shared), so the shared start moves every shot to 0.25 m/s.
-  const std::vector<ScenarioOverride> start = {
-      {"drag.drag_coefficient", "2.4"},
-      {"nets.0.velocity", "[0.25, 0, 0]"},
-      {"materials.nylon_1mm.stretch_stiffness", "3142"},
-      {"materials.nylon_1mm.bend_stiffness", "4.91e-5"}};
+  const std::vector<ScenarioOverride> start = {{"drag.drag_coefficient", "2.4"},
+                                               {"nets.0.velocity", "[0.25, 0, 0]"},
+                                               {"materials.nylon_1mm.stretch_stiffness", "3142"},
+                                               {"materials.nylon_1mm.bend_stiffness", "4.91e-5"}};
   const auto parameters = ParseFreeParameters(
       "drag.drag_coefficient,nets.0.velocity,time_offset,materials.nylon_1mm.stretch_stiffness,"
       "materials.nylon_1mm.bend_stiffness",
@@ -177,14 +181,15 @@ int Flight(double seconds, int shots) {
   std::printf("flight: %d shot%s (", shots, shots > 1 ? "s" : "");
   for (int k = 0; k < shots; ++k) std::printf("%s%s", k ? ", " : "", cases[k]);
   std::printf("), %.1f s each, 1 mm noise, start off by 2\n", seconds);
-  std::printf("| parameter | truth | fitted | sigma | error / sigma | check -/+ sigma | "
-              "determined by |\n");
+  std::printf(
+      "| parameter | truth | fitted | sigma | error / sigma | check -/+ sigma | "
+      "determined by |\n");
   std::printf("|---|---|---|---|---|---|---|\n");
   for (const FittedParameter& p : r.parameters) {
     const double t = truth_of.at(p.parameter.name);
     std::printf("| %s | %.4g | %.4g | %.3g | %.2f | %.2f / %.2f | %s%s |\n",
-                p.parameter.name.c_str(), t, p.value, p.sigma, (p.value - t) / p.sigma,
-                p.check[0], p.check[1], p.determined_by.c_str(), p.rough ? " (rough)" : "");
+                p.parameter.name.c_str(), t, p.value, p.sigma, (p.value - t) / p.sigma, p.check[0],
+                p.check[1], p.determined_by.c_str(), p.rough ? " (rough)" : "");
   }
   std::printf("cost %.4g -> %.4g (%d residuals), %d simulations, %d iterations, %.1f s wall\n",
               r.cost_initial, r.cost_final, r.residuals, r.simulations, r.iterations, r.wall_s);
@@ -201,6 +206,7 @@ int main(int argc, char** argv) {
     return netlab::netsim::Flight(argc > 2 ? std::atof(argv[2]) : 2.0,
                                   argc > 3 ? std::atoi(argv[3]) : 1);
   if (what == "shots") return netlab::netsim::Shots(argc > 2 ? std::atoi(argv[2]) : 20);
-  std::fprintf(stderr, "usage: bench_fit coverage [draws] | flight [seconds] [shots] | shots [draws]\n");
+  std::fprintf(stderr,
+               "usage: bench_fit coverage [draws] | flight [seconds] [shots] | shots [draws]\n");
   return 2;
 }

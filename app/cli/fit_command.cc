@@ -58,7 +58,8 @@ constexpr char kHelp[] =
     "                   /knots/covariance\n"
     "  --sim-sigma M    the simulation's own standard deviation, m (default 0)\n"
     "  --starts N       Levenberg-Marquardt from N starts (the first, then N-1 drawn within a\n"
-    "                   factor 2 of it), the best kept: for a cost with several minima (default 1)\n"
+    "                   factor 2 of it), the best kept: for a cost with several minima\n"
+    "                   (default 1)\n"
     "  --max-iterations N\n"
     "                   per start (default 25)\n"
     "  --jobs N         simulations at a time (default: the machine's cores)\n"
@@ -126,9 +127,8 @@ std::string FitYaml(const std::vector<std::string>& scenarios,
     << "\nresiduals: " << r.residuals << "\ninflation: " << Number(r.inflation)
     << "\nsimulations: " << r.simulations << "\niterations: " << r.iterations
     << "\nwall_s: " << Number(r.wall_s) << "\nduration_s: " << Number(r.duration_s) << "\n";
-  o << "score: {rms_mm: " << Number(r.score.rms_m * 1e3)
-    << ", mean_d2: " << Number(r.score.mean_d2) << ", p_value: " << Number(r.score.p_value)
-    << ", verdict: " << r.score.verdict << "}\n";
+  o << "score: {rms_mm: " << Number(r.score.rms_m * 1e3) << ", mean_d2: " << Number(r.score.mean_d2)
+    << ", p_value: " << Number(r.score.p_value) << ", verdict: " << r.score.verdict << "}\n";
   o << "set:\n";
   for (const auto& s : r.fitted_set) o << "  - " << Quoted(s.Text()) << "\n";
   if (scenarios.size() > 1) {
@@ -136,10 +136,9 @@ std::string FitYaml(const std::vector<std::string>& scenarios,
     for (size_t k = 0; k < scenarios.size(); ++k) {
       const netsim::ScoreSummary& sc = r.scores[k];
       o << "  - scenario: " << Quoted(scenarios[k]) << "\n    measured: " << Quoted(measured[k])
-        << "\n    score: {rms_mm: " << Number(sc.rms_m * 1e3)
-        << ", mean_d2: " << Number(sc.mean_d2) << ", p_value: " << Number(sc.p_value)
-        << ", verdict: " << sc.verdict << "}\n    inflation: " << Number(r.inflations[k])
-        << "\n    set:\n";
+        << "\n    score: {rms_mm: " << Number(sc.rms_m * 1e3) << ", mean_d2: " << Number(sc.mean_d2)
+        << ", p_value: " << Number(sc.p_value) << ", verdict: " << sc.verdict
+        << "}\n    inflation: " << Number(r.inflations[k]) << "\n    set:\n";
       for (const auto& s : r.fitted_sets[k]) o << "      - " << Quoted(s.Text()) << "\n";
     }
   }
@@ -161,9 +160,8 @@ void WriteText(const std::string& path, const std::string& text) {
 std::string Summary(const netsim::FitResult& r) {
   std::ostringstream o;
   o << "fit: " << r.parameters.size() << (r.parameters.size() == 1 ? " parameter" : " parameters")
-    << " from " << r.residuals / 3
-    << " knot-frames; " << r.simulations << " simulations, " << r.iterations
-    << " iterations, " << Number(r.wall_s) << " s\n";
+    << " from " << r.residuals / 3 << " knot-frames; " << r.simulations << " simulations, "
+    << r.iterations << " iterations, " << Number(r.wall_s) << " s\n";
   char line[256];
   std::snprintf(line, sizeof line, "  %-40s %12s %12s %12s  %s\n", "parameter", "start", "fitted",
                 "sigma", "determined by");
@@ -333,10 +331,10 @@ std::string Duration(double s) {
 
 int RunFit(const std::vector<std::string>& args) {
   return RunGuarded("fit", [&] {
-    const CommandLine cl(args, {"json", "quiet", "help"},
-                         {"measured", "free", "out", "prior", "set", "time-offset",
-                          "max-time-offset", "meas-sigma", "sim-sigma", "starts",
-                          "max-iterations", "jobs", "step"});
+    const CommandLine cl(
+        args, {"json", "quiet", "help"},
+        {"measured", "free", "out", "prior", "set", "time-offset", "max-time-offset", "meas-sigma",
+         "sim-sigma", "starts", "max-iterations", "jobs", "step"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -362,14 +360,15 @@ int RunFit(const std::vector<std::string>& args) {
           where += "start " + std::to_string(p.start + 1) + "/" + std::to_string(p.starts) + ", ";
         if (!p.stage.empty()) where += "stage " + p.stage + ", ";
         std::fprintf(stderr, "%sfit: %siteration %d, cost %s, %d simulations, %s, ETA <= %s%s",
-                     tty ? "\r" : "", where.c_str(), p.iteration, Number(p.cost).c_str(), p.simulations,
-                     Duration(p.elapsed_s).c_str(), Duration(p.eta_s).c_str(),
+                     tty ? "\r" : "", where.c_str(), p.iteration, Number(p.cost).c_str(),
+                     p.simulations, Duration(p.elapsed_s).c_str(), Duration(p.eta_s).c_str(),
                      tty ? "   " : "\n");
       };
 
-    const std::vector<netsim::FitParameter> parameters = netsim::ParseFreeParameters(
-        free, scenarios, options.set, options.score.time_offset_s);
-    if (const auto prior = cl.Option("prior")) options.priors = ReadPriors(*prior, parameters, quiet);
+    const std::vector<netsim::FitParameter> parameters =
+        netsim::ParseFreeParameters(free, scenarios, options.set, options.score.time_offset_s);
+    if (const auto prior = cl.Option("prior"))
+      options.priors = ReadPriors(*prior, parameters, quiet);
     std::vector<netsim::KnotTracks> measured;
     std::vector<netsim::FitShotInput> shots;
     for (const std::string& path : measured_paths) measured.push_back(netsim::ReadKnotTracks(path));

@@ -14,11 +14,14 @@
 namespace netlab::netsim {
 
 double MaterialValue(const Material& m, std::string_view key) {
-  const std::pair<std::string_view, double> values[] = {
-      {"diameter", m.diameter},               {"linear_density", m.linear_density},
-      {"stretch_stiffness", m.stretch_stiffness}, {"stretch_damping", m.stretch_damping},
-      {"bend_stiffness", m.bend_stiffness},   {"bend_damping", m.bend_damping},
-      {"twist_stiffness", m.twist_stiffness}, {"twist_damping", m.twist_damping}};
+  const std::pair<std::string_view, double> values[] = {{"diameter", m.diameter},
+                                                        {"linear_density", m.linear_density},
+                                                        {"stretch_stiffness", m.stretch_stiffness},
+                                                        {"stretch_damping", m.stretch_damping},
+                                                        {"bend_stiffness", m.bend_stiffness},
+                                                        {"bend_damping", m.bend_damping},
+                                                        {"twist_stiffness", m.twist_stiffness},
+                                                        {"twist_damping", m.twist_damping}};
   for (const auto& [name, value] : values)
     if (name == key) return value;
   throw std::invalid_argument("'" + std::string(key) + "' is not a material key");

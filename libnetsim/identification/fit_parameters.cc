@@ -13,13 +13,23 @@ namespace {
 
 // Units by the path's last key (docs/scenarios.md).
 std::string UnitsOf(const std::string& path) {
-  static const std::map<std::string, std::string> units = {
-      {"diameter", "m"},           {"linear_density", "kg/m"}, {"stretch_stiffness", "N"},
-      {"stretch_damping", "N s"},  {"bend_stiffness", "N m^2"}, {"bend_damping", "N m^2 s"},
-      {"twist_stiffness", "N m^2"}, {"twist_damping", "N m^2 s"}, {"drag_coefficient", "1"},
-      {"air_density", "kg/m^3"},   {"velocity", "m/s"},         {"corner_velocities", "m/s"},
-      {"corner_mass", "kg"},       {"knot_mass", "kg"},         {"mesh", "m"},
-      {"center", "m"},             {"friction", "1"}};
+  static const std::map<std::string, std::string> units = {{"diameter", "m"},
+                                                           {"linear_density", "kg/m"},
+                                                           {"stretch_stiffness", "N"},
+                                                           {"stretch_damping", "N s"},
+                                                           {"bend_stiffness", "N m^2"},
+                                                           {"bend_damping", "N m^2 s"},
+                                                           {"twist_stiffness", "N m^2"},
+                                                           {"twist_damping", "N m^2 s"},
+                                                           {"drag_coefficient", "1"},
+                                                           {"air_density", "kg/m^3"},
+                                                           {"velocity", "m/s"},
+                                                           {"corner_velocities", "m/s"},
+                                                           {"corner_mass", "kg"},
+                                                           {"knot_mass", "kg"},
+                                                           {"mesh", "m"},
+                                                           {"center", "m"},
+                                                           {"friction", "1"}};
   std::istringstream parts(path);
   std::string part;
   std::string found;
@@ -63,7 +73,8 @@ void AddScalars(const YAML::Node& node, const std::string& path, const std::stri
   if (p.log && !(value > 0))
     throw InputError(where + "starts at " + node.Scalar() +
                      ": a material or drag value is fitted on a log scale and must start "
-                     "positive (give a start with --set " + path + "=...)");
+                     "positive (give a start with --set " +
+                     path + "=...)");
   p.spread = p.log ? 0.5 : IsVelocity(path) ? 0.1 : std::max(0.5 * std::abs(value), 1e-12);
   out->push_back(p);
 }
@@ -82,8 +93,8 @@ std::vector<FitParameter> ItemParameters(const std::string& item, const std::str
   std::vector<FitParameter> parameters;
   // Aggregates, not member assignments: GCC 12 warns of a false -Wrestrict on `p.units = "s"`.
   if (item == "time_offset") {
-    parameters.push_back({item, FitParameter::Kind::kTimeOffset, 0, false, time_offset_start,
-                          0.01, "s", item});
+    parameters.push_back(
+        {item, FitParameter::Kind::kTimeOffset, 0, false, time_offset_start, 0.01, "s", item});
   } else if (item == "frame") {
     static const char* kAxes[6] = {"wx", "wy", "wz", "tx", "ty", "tz"};
     for (int a = 0; a < 6; ++a) {
@@ -118,16 +129,14 @@ std::vector<FitParameter> ParseFreeParameters(const std::string& free_list,
   while (std::getline(items, item, ',')) {
     item.erase(0, item.find_first_not_of(" \t"));
     item.erase(item.find_last_not_of(" \t") + 1);
-    if (item.empty())
-      throw InputError("--free '" + free_list + "': an empty name in the list");
+    if (item.empty()) throw InputError("--free '" + free_list + "': an empty name in the list");
     if (IsScale(item)) {  // the thread and the air: one parameter for every shot
       for (FitParameter& p : ItemParameters(item, scenario_paths[0], set, time_offset_start))
         parameters.push_back(p);
       continue;
     }
     for (int shot = 0; shot < shots; ++shot)
-      for (FitParameter& p :
-           ItemParameters(item, scenario_paths[shot], set, time_offset_start)) {
+      for (FitParameter& p : ItemParameters(item, scenario_paths[shot], set, time_offset_start)) {
         p.shot = shot;
         if (shots > 1) p.name = std::to_string(shot + 1) + ":" + p.name;
         parameters.push_back(p);

@@ -28,8 +28,8 @@ namespace netlab::netsim {
 
 struct FitParameter {
   enum class Kind { kScenario, kTimeOffset, kFrame };
-  std::string name;   // the dotted path (kScenario), "time_offset" or "frame.wx" ...; "2:" first
-                      // for a shot's own parameter when there are several shots
+  std::string name;  // the dotted path (kScenario), "time_offset" or "frame.wx" ...; "2:" first
+                     // for a shot's own parameter when there are several shots
   Kind kind = Kind::kScenario;
   int frame_axis = 0;  // kFrame: 0..2 rotation vector (rad), 3..5 translation (m)
   bool log = false;    // fitted as ln(value)

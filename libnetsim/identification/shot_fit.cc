@@ -203,7 +203,6 @@ struct Shot {
   int offset = 0;  // first row of its residuals
 };
 
-
 // The whole least-squares problem as one Ceres cost: data residuals, then prior residuals.
 class ShotCost : public ceres::CostFunction {
  public:
@@ -393,10 +392,9 @@ class ProgressCallback : public ceres::IterationCallback {
       p.elapsed_s = Seconds(start_);
       const int left = (options_.max_iterations - s.iteration) +
                        (options_.starts - 1 - start_index_) * options_.max_iterations;
-      p.eta_s = s.iteration > 0 ? p.elapsed_s / (s.iteration + start_index_ *
-                                                                   options_.max_iterations) *
-                                      left
-                                : 0.0;
+      p.eta_s = s.iteration > 0
+                    ? p.elapsed_s / (s.iteration + start_index_ * options_.max_iterations) * left
+                    : 0.0;
       p.start = start_index_;
       p.starts = options_.starts;
       p.stage = stage_;
@@ -460,8 +458,8 @@ std::vector<PriorTerm> PriorTerms(const std::vector<FitParameter>& parameters,
   }
   for (size_t i = 0; i < parameters.size(); ++i)
     if (parameters[i].log && !has[i])
-      terms.push_back({static_cast<int>(i), parameters[i].Coordinate(parameters[i].start),
-                       kAnchorSigma, true});
+      terms.push_back(
+          {static_cast<int>(i), parameters[i].Coordinate(parameters[i].start), kAnchorSigma, true});
   return terms;
 }
 
@@ -470,8 +468,8 @@ std::vector<PriorTerm> PriorTerms(const std::vector<FitParameter>& parameters,
 double FitDuration(const std::string& path, const FitOptions& options, const KnotTracks& measured,
                    double margin, std::vector<ScenarioOverride>* set) {
   const Scenario scenario = LoadScenario(path, *set);
-  const double needed = measured.time.back() + options.score.time_offset_s + margin +
-                        4 * scenario.output_interval;
+  const double needed =
+      measured.time.back() + options.score.time_offset_s + margin + 4 * scenario.output_interval;
   if (needed >= scenario.duration) return scenario.duration;
   char value[32];
   std::snprintf(value, sizeof value, "%.17g", needed);
@@ -509,8 +507,8 @@ ScoreSummary FinalScore(const KnotTracks& measured, KnotTracks sim, const Alignm
 // the cost (a few tenths on Net A's flight) moved well-determined launch velocities' ratios to
 // 0.4 and 1.6.
 std::vector<std::array<double, 2>> QuadraticCheck(const ShotCost& cost,
-                                                  const std::vector<double>& best,
-                                                  double best_cost, const Eigen::VectorXd& sigma,
+                                                  const std::vector<double>& best, double best_cost,
+                                                  const Eigen::VectorXd& sigma,
                                                   const Eigen::MatrixXd& jtj,
                                                   const std::vector<bool>& check) {
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -578,15 +576,14 @@ std::vector<Shot> PrepareShots(const std::vector<FitShotInput>& inputs,
     std::vector<ScenarioOverride> set = options.set;
     const double duration = FitDuration(in.scenario_path, options, *in.measured, margin, &set);
     if (k == 0) result->duration_s = duration;
-    Simulator simulator(in.scenario_path, static_cast<int>(k), std::move(set), parameters,
-                        options);
+    Simulator simulator(in.scenario_path, static_cast<int>(k), std::move(set), parameters, options);
     std::string error;
     const auto first = simulator.Run({x0}, &error);
     if (!first[0])
       throw std::runtime_error(in.scenario_path + ": the starting simulation failed: " + error);
     Residuals residuals(*in.measured,
-                        PrepareComparison(*in.measured, *first[0], options.score,
-                                          in.measured_name, "the starting simulation"));
+                        PrepareComparison(*in.measured, *first[0], options.score, in.measured_name,
+                                          "the starting simulation"));
     // The points are kept a little beyond the bounds of the offset, for its central differences.
     residuals.Fix(*first[0], options.score.time_offset_s, fit_time ? margin + 1e-3 : 0.0,
                   options.score.sim_sigma_m);
@@ -755,21 +752,21 @@ FitResult FitShots(const std::vector<FitShotInput>& inputs,
   for (int i = 0; i < p; ++i) x0[i] = parameters[i].Coordinate(parameters[i].start);
 
   FitResult result;
-  std::vector<Shot> shots = PrepareShots(inputs, parameters, options, x0, margin, fit_time, &result);
+  std::vector<Shot> shots =
+      PrepareShots(inputs, parameters, options, x0, margin, fit_time, &result);
   ShotCost cost(parameters, &shots, priors, options, margin);
   result.residuals = cost.data_rows();
   const std::vector<double> best = Minimise(&cost, parameters, options, x0, start, &result);
 
   // The covariance: the data's information (inflated per shot) plus the priors'.
   const std::vector<double> jac = JacobianAt(cost, best);
-  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>
-      j(jac.data(), cost.num_residuals(), p);
+  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> j(
+      jac.data(), cost.num_residuals(), p);
   const Eigen::MatrixXd data_information =
       DataInformation(inputs, shots, parameters, options, best, j, &result);
   const auto prior_rows = j.bottomRows(priors.size());
   Eigen::VectorXd sigma, data_sigma;
-  result.covariance =
-      CovarianceOf(data_information + prior_rows.transpose() * prior_rows, &sigma);
+  result.covariance = CovarianceOf(data_information + prior_rows.transpose() * prior_rows, &sigma);
   CovarianceOf(data_information, &data_sigma);
   result.correlation = Eigen::MatrixXd::Identity(p, p);
   for (int r = 0; r < p; ++r)

@@ -19,13 +19,12 @@
 // fitted first. A parameter that looks identified is checked: the cost at -+ 2 sigma must rise
 // within 2x of the Jacobian's prediction, or the cost is rough there and sigma means nothing.
 
+#include <Eigen/Core>
 #include <array>
 #include <functional>
 #include <limits>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "libnetsim/identification/fit_parameters.h"
 #include "libnetsim/tracks/track_file.h"
@@ -42,12 +41,12 @@ struct FitPrior {
 
 struct FitProgress {
   int iteration = 0;
-  double cost = 0.0;      // sum of squared whitened residuals (data + priors)
-  int simulations = 0;    // done so far
+  double cost = 0.0;    // sum of squared whitened residuals (data + priors)
+  int simulations = 0;  // done so far
   double elapsed_s = 0.0;
-  double eta_s = 0.0;     // at most this much more (the iterations left at the mean pace)
+  double eta_s = 0.0;  // at most this much more (the iterations left at the mean pace)
   int start = 0, starts = 1;
-  std::string stage;      // "1/2 material held", "2/2 all", or empty when not staged
+  std::string stage;  // "1/2 material held", "2/2 all", or empty when not staged
 };
 
 struct FitOptions {
@@ -55,9 +54,9 @@ struct FitOptions {
   ScoreOptions score;                 // meas_sigma_m, sim_sigma_m, time_offset_s (start or
                                       // fixed), max_time_offset_s
   std::vector<FitPrior> priors;
-  int jobs = 0;              // simulations at a time (0: the machine's cores)
-  int max_iterations = 25;   // Levenberg-Marquardt iterations per start
-  int starts = 1;            // > 1: also from starts-1 points spread over the start's box
+  int jobs = 0;             // simulations at a time (0: the machine's cores)
+  int max_iterations = 25;  // Levenberg-Marquardt iterations per start
+  int starts = 1;           // > 1: also from starts-1 points spread over the start's box
   // Forward-difference step of a scenario parameter: of ln(value) for log parameters, of the
   // spread (fit_parameters.h) times this for the others.
   double step = 1e-3;
@@ -67,8 +66,8 @@ struct FitOptions {
 
 struct FittedParameter {
   FitParameter parameter;
-  double value = 0.0;   // the estimate
-  double sigma = 0.0;   // its standard uncertainty (inf: the data and priors leave it free)
+  double value = 0.0;       // the estimate
+  double sigma = 0.0;       // its standard uncertainty (inf: the data and priors leave it free)
   double data_sigma = 0.0;  // what the flight data alone says (inf: nothing)
   bool has_prior = false;
   double prior_value = 0.0, prior_sigma = 0.0;
@@ -76,7 +75,7 @@ struct FittedParameter {
   // NaN where not checked (parameters that do not look identified, time_offset and frame).
   std::array<double, 2> check = {std::numeric_limits<double>::quiet_NaN(),
                                  std::numeric_limits<double>::quiet_NaN()};
-  bool rough = false;       // checked, and the cost is not within 2x of the quadratic model
+  bool rough = false;  // checked, and the cost is not within 2x of the quadratic model
   // sigma < half the reference spread (the prior's sigma, or spread) and the cost not rough
   bool identified = false;
   std::string determined_by;  // "flight data", "prior", "neither"
@@ -84,18 +83,18 @@ struct FittedParameter {
 
 struct FitResult {
   std::vector<FittedParameter> parameters;
-  Eigen::MatrixXd covariance;   // of the fitted coordinates (ln(value) for log parameters)
+  Eigen::MatrixXd covariance;  // of the fitted coordinates (ln(value) for log parameters)
   Eigen::MatrixXd correlation;
   double cost_initial = 0.0, cost_final = 0.0;  // sum of squared whitened residuals + priors
-  int residuals = 0;            // data residuals (3 per knot-frame)
-  double inflation = 1.0;       // what the data's information was divided by (the largest shot's)
+  int residuals = 0;                            // data residuals (3 per knot-frame)
+  double inflation = 1.0;  // what the data's information was divided by (the largest shot's)
   int iterations = 0;
   int simulations = 0;
   int best_start = 0;
-  std::string termination;      // Ceres' report
+  std::string termination;  // Ceres' report
   double wall_s = 0.0;
-  double duration_s = 0.0;      // the simulated span each run was cut to
-  ScoreSummary score;           // `netlab score` of the fitted simulation (the first shot's)
+  double duration_s = 0.0;  // the simulated span each run was cut to
+  ScoreSummary score;       // `netlab score` of the fitted simulation (the first shot's)
   std::vector<ScenarioOverride> fitted_set;  // the --set lines that reproduce the fit (first shot)
   // Per shot, in order: the score, the inflation, the --set lines.
   std::vector<ScoreSummary> scores;

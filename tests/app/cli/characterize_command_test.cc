@@ -43,7 +43,8 @@ class CharacterizeCommand : public CommandTest {
       EXPECT_EQ(e.source, name + ".yaml");
       EXPECT_EQ(e.material, "nylon_1mm");
       EXPECT_LT(std::abs(e.value - netsim::MaterialValue(netsim::BenchNylon(), e.key)), 3 * e.sigma)
-          << e.value << " +- " << e.sigma << ", generated with " << netsim::MaterialValue(netsim::BenchNylon(), e.key);
+          << e.value << " +- " << e.sigma << ", generated with "
+          << netsim::MaterialValue(netsim::BenchNylon(), e.key);
     }
     return read;
   }

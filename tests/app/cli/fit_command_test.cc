@@ -52,9 +52,10 @@ class FitCommand : public netlab::testing::CommandTest {
 };
 
 TEST_F(FitCommand, FitsTheTwinAndKeepsTheJsonContract) {
-  const auto r = RunNetlab(Fit("--free drag.drag_coefficient,nets.0.velocity,time_offset "
-                               "--set drag.drag_coefficient=2.4 --set nets.0.velocity=[0.25,0,0] "
-                               "--json"));
+  const auto r =
+      RunNetlab(Fit("--free drag.drag_coefficient,nets.0.velocity,time_offset "
+                    "--set drag.drag_coefficient=2.4 --set nets.0.velocity=[0.25,0,0] "
+                    "--json"));
   ASSERT_EQ(r.status, 0) << r.err;
   const auto json = LastJson(r.out);
   for (const char* key : {"parameters", "cost_initial", "cost_final", "simulations", "wall_s"})
@@ -81,8 +82,9 @@ TEST_F(FitCommand, FitsTheTwinAndKeepsTheJsonContract) {
 }
 
 TEST_F(FitCommand, APriorDeterminesWhatTheFlightCannot) {
-  const auto r = RunNetlab(Fit("--free drag.drag_coefficient,materials.nylon.twist_damping --prior " +
-                               Path("prior.yaml") + " --json --quiet"));
+  const auto r =
+      RunNetlab(Fit("--free drag.drag_coefficient,materials.nylon.twist_damping --prior " +
+                    Path("prior.yaml") + " --json --quiet"));
   ASSERT_EQ(r.status, 0) << r.err;
   const auto& damping = LastJson(r.out)["parameters"]["materials.nylon.twist_damping"];
   EXPECT_FALSE(damping["identified"].boolean());
@@ -91,34 +93,60 @@ TEST_F(FitCommand, APriorDeterminesWhatTheFlightCannot) {
 }
 
 TEST_F(FitCommand, BadInputsAreNamed) {
-  std::ofstream(Path("zero_sigma.yaml")) << std::string(kPrior).replace(
-      std::string(kPrior).find("sigma: 1.0e-11"), 14, "sigma: 0");
+  std::ofstream(Path("zero_sigma.yaml"))
+      << std::string(kPrior).replace(std::string(kPrior).find("sigma: 1.0e-11"), 14, "sigma: 0");
   ASSERT_EQ(RunNetlab("simulate " + Path("shot.yaml") + " --set nets.0.knots=[4,4] --out " +
-                      Path("other_net.h5")).status, 0);
+                      Path("other_net.h5"))
+                .status,
+            0);
   const std::string shot = "fit {dir}/shot.yaml --out {dir}/fit.yaml ";
   const std::vector<netlab::testing::BadInput> table = {
       {"no --free", shot + "--measured {dir}/measured.h5", 2, {"--free"}},
-      {"an unknown parameter", shot + "--measured {dir}/measured.h5 --free "
-       "materials.nylon.bend_stifness", 1, {"shot.yaml", "bend_stifness"}},
-      {"a section", shot + "--measured {dir}/measured.h5 --free materials.nylon", 1,
+      {"an unknown parameter",
+       shot + "--measured {dir}/measured.h5 --free "
+              "materials.nylon.bend_stifness",
+       1,
+       {"shot.yaml", "bend_stifness"}},
+      {"a section",
+       shot + "--measured {dir}/measured.h5 --free materials.nylon",
+       1,
        {"materials.nylon", "is a section"}},
-      {"a missing measured file", shot + "--measured {dir}/nowhere.h5 --free time_offset", 1,
+      {"a missing measured file",
+       shot + "--measured {dir}/nowhere.h5 --free time_offset",
+       1,
        {"nowhere.h5"}},
-      {"another net", shot + "--measured {dir}/other_net.h5 --meas-sigma 0.001 --free time_offset",
-       1, {"grid mismatch", "other_net.h5"}},
-      {"tracks without covariance", shot + "--measured {dir}/truth.h5 --free time_offset", 1,
+      {"another net",
+       shot + "--measured {dir}/other_net.h5 --meas-sigma 0.001 --free time_offset",
+       1,
+       {"grid mismatch", "other_net.h5"}},
+      {"tracks without covariance",
+       shot + "--measured {dir}/truth.h5 --free time_offset",
+       1,
        {"truth.h5", "--meas-sigma"}},
-      {"a missing prior file", shot + "--measured {dir}/measured.h5 --free time_offset "
-       "--prior {dir}/none.yaml", 1, {"none.yaml"}},
-      {"a prior without uncertainty", shot + "--measured {dir}/measured.h5 --free "
-       "materials.nylon.twist_damping --prior {dir}/zero_sigma.yaml", 1,
+      {"a missing prior file",
+       shot + "--measured {dir}/measured.h5 --free time_offset "
+              "--prior {dir}/none.yaml",
+       1,
+       {"none.yaml"}},
+      {"a prior without uncertainty",
+       shot + "--measured {dir}/measured.h5 --free "
+              "materials.nylon.twist_damping --prior {dir}/zero_sigma.yaml",
+       1,
        {"zero_sigma.yaml", "twist_damping", "sigma > 0"}},
-      {"fewer track files than shots", "fit {dir}/shot.yaml {dir}/shot.yaml --out {dir}/fit.yaml "
-       "--measured {dir}/measured.h5 --free time_offset", 2, {"--measured", "one per shot"}},
-      {"an empty output", "fit {dir}/shot.yaml --measured {dir}/measured.h5 --free time_offset "
-       "--out ''", 2, {"--out"}},
-      {"a start the simulation cannot take", shot + "--measured {dir}/measured.h5 --free "
-       "materials.nylon.stretch_stiffness --set materials.nylon.stretch_stiffness=-5", 1,
+      {"fewer track files than shots",
+       "fit {dir}/shot.yaml {dir}/shot.yaml --out {dir}/fit.yaml "
+       "--measured {dir}/measured.h5 --free time_offset",
+       2,
+       {"--measured", "one per shot"}},
+      {"an empty output",
+       "fit {dir}/shot.yaml --measured {dir}/measured.h5 --free time_offset "
+       "--out ''",
+       2,
+       {"--out"}},
+      {"a start the simulation cannot take",
+       shot + "--measured {dir}/measured.h5 --free "
+              "materials.nylon.stretch_stiffness --set materials.nylon.stretch_stiffness=-5",
+       1,
        {"stretch_stiffness"}},
   };
   netlab::testing::ExpectBadInputs(table, dir_.string());

@@ -66,14 +66,16 @@ TEST_F(ShotFit, RecoversDragLaunchAndTimeFromAStartOffByTwo) {
                                               scenario_, start, 0.0);
   ASSERT_EQ(parameters.size(), 5u);
   const FitResult r = FitShot(scenario_, measured, parameters, Options(start));
-  const std::vector<std::pair<std::string, double>> truth = {
-      {"drag.drag_coefficient", 1.2}, {"nets.0.velocity.0", 0.5}, {"nets.0.velocity.1", 0.0},
-      {"nets.0.velocity.2", 0.0},     {"time_offset", 0.0}};
+  const std::vector<std::pair<std::string, double>> truth = {{"drag.drag_coefficient", 1.2},
+                                                             {"nets.0.velocity.0", 0.5},
+                                                             {"nets.0.velocity.1", 0.0},
+                                                             {"nets.0.velocity.2", 0.0},
+                                                             {"time_offset", 0.0}};
   for (const auto& [name, value] : truth) {
     const FittedParameter& p = Find(r, name);
     EXPECT_TRUE(std::isfinite(p.sigma) && p.sigma > 0) << name << " sigma " << p.sigma;
-    EXPECT_LT(std::abs(p.value - value), 3 * p.sigma) << name << " = " << p.value << " +- "
-                                                      << p.sigma << ", truth " << value;
+    EXPECT_LT(std::abs(p.value - value), 3 * p.sigma)
+        << name << " = " << p.value << " +- " << p.sigma << ", truth " << value;
     EXPECT_TRUE(p.identified) << name;
     EXPECT_EQ(p.determined_by, "flight data") << name;
   }
@@ -98,13 +100,13 @@ TEST_F(ShotFit, RecoversDragLaunchAndTimeFromAStartOffByTwo) {
 }
 
 // The twist damping of a net in free flight leaves no trace the knots show: reported as not
-// identified (its sigma the anchor's, ln 1000 = 6.9 times its value: not a confident number), and with
-// a prior, as determined by the prior, its sigma the prior's.
+// identified (its sigma the anchor's, ln 1000 = 6.9 times its value: not a confident number), and
+// with a prior, as determined by the prior, its sigma the prior's.
 TEST_F(ShotFit, SaysWhatTheFlightCannotDetermine) {
   const KnotTracks measured = Measured(11);
   const std::string free = "drag.drag_coefficient,materials.nylon.twist_damping";
-  FitResult r = FitShot(scenario_, measured, ParseFreeParameters(free, scenario_, {}, 0.0),
-                        Options({}));
+  FitResult r =
+      FitShot(scenario_, measured, ParseFreeParameters(free, scenario_, {}, 0.0), Options({}));
   const FittedParameter& damping = Find(r, "materials.nylon.twist_damping");
   EXPECT_FALSE(damping.identified);
   EXPECT_EQ(damping.determined_by, "neither");
@@ -141,10 +143,10 @@ TEST_F(ShotFit, TwoShotsShareTheDragAndKeepTheirLaunches) {
   EXPECT_EQ(both[0].shot, -1);
   EXPECT_EQ(both[4].name, "2:nets.0.velocity.0");
   EXPECT_EQ(both[4].path, "nets.0.velocity.0");
-  const FitResult two = FitShots({{scenario_, &slow_measured, "slow"}, {fast, &fast_measured, "fast"}},
-                                 both, Options(start));
-  const FitResult one =
-      FitShot(scenario_, slow_measured, ParseFreeParameters(free, scenario_, start, 0), Options(start));
+  const FitResult two = FitShots(
+      {{scenario_, &slow_measured, "slow"}, {fast, &fast_measured, "fast"}}, both, Options(start));
+  const FitResult one = FitShot(scenario_, slow_measured,
+                                ParseFreeParameters(free, scenario_, start, 0), Options(start));
   const FittedParameter& drag = Find(two, "drag.drag_coefficient");
   EXPECT_LT(std::abs(drag.value - 1.2), 3 * drag.sigma) << drag.value << " +- " << drag.sigma;
   EXPECT_LT(drag.sigma, 0.8 * Find(one, "drag.drag_coefficient").sigma);
