@@ -464,13 +464,13 @@ std::vector<PriorTerm> PriorTerms(const std::vector<FitParameter>& parameters,
 }
 
 // The simulated span the fit needs: the measured one shifted by the offset, with room for the
-// offset to move and for the interpolation's stencil.
+// offset to move and for the interpolation's stencil. The scenario's duration is cut or extended
+// to it.
 double FitDuration(const std::string& path, const FitOptions& options, const KnotTracks& measured,
                    double margin, std::vector<ScenarioOverride>* set) {
   const Scenario scenario = LoadScenario(path, *set);
   const double needed =
       measured.time.back() + options.score.time_offset_s + margin + 4 * scenario.output_interval;
-  if (needed >= scenario.duration) return scenario.duration;
   char value[32];
   std::snprintf(value, sizeof value, "%.17g", needed);
   set->push_back({"duration", value});
@@ -746,7 +746,15 @@ FitResult FitShots(const std::vector<FitShotInput>& inputs,
   bool fit_time = false;
   for (const FitParameter& par : parameters)
     fit_time |= par.kind == FitParameter::Kind::kTimeOffset;
-  const double margin = fit_time ? std::min(options.score.max_time_offset_s, 0.05) : 0.0;
+  // How far the time offset may move: --max-time-offset, at most 50 ms and a tenth of the
+  // shortest measured span. The points the simulation does not reach at every offset within it
+  // are left out, so a wide margin would leave a short shot nothing (16 frames span 84 ms).
+  double span = kInf;
+  for (const FitShotInput& in : inputs)
+    if (in.measured != nullptr && in.measured->frames() > 0)
+      span = std::min(span, in.measured->time.back() - in.measured->time.front());
+  const double margin =
+      fit_time ? std::min({options.score.max_time_offset_s, 0.05, 0.1 * span}) : 0.0;
   const std::vector<PriorTerm> priors = PriorTerms(parameters, options.priors);
   std::vector<double> x0(p);
   for (int i = 0; i < p; ++i) x0[i] = parameters[i].Coordinate(parameters[i].start);
