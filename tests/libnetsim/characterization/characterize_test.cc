@@ -10,22 +10,11 @@
 #include <string>
 
 #include "libnetsim/characterization/heavy_cantilever.h"
+#include "libnetsim/characterization/material_file.h"
 #include "libnetsim/characterization/synthetic_bench.h"
 
 namespace netlab::netsim {
 namespace {
-
-double TrueValue(const Material& m, const std::string& key) {
-  const std::map<std::string, double> values = {{"diameter", m.diameter},
-                                                {"linear_density", m.linear_density},
-                                                {"stretch_stiffness", m.stretch_stiffness},
-                                                {"stretch_damping", m.stretch_damping},
-                                                {"bend_stiffness", m.bend_stiffness},
-                                                {"bend_damping", m.bend_damping},
-                                                {"twist_stiffness", m.twist_stiffness},
-                                                {"twist_damping", m.twist_damping}};
-  return values.at(key);
-}
 
 double Diagnostic(const Characterization& c, const std::string& name) {
   for (const FitDiagnostic& d : c.diagnostics)
@@ -44,7 +33,7 @@ void ExpectRecovered(const Characterization& c, const Material& truth,
     for (const ParameterEstimate& e : c.estimates) {
       if (e.key != key) continue;
       found = true;
-      const double want = TrueValue(truth, key);
+      const double want = MaterialValue(truth, key);
       EXPECT_LT(std::abs(e.value - want), 3 * e.sigma)
           << key << ": " << e.value << " +- " << e.sigma << ", truth " << want;
       EXPECT_LT(e.sigma, bound * want) << key;
