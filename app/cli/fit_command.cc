@@ -81,9 +81,13 @@ std::string Number(double value) {
   return text;
 }
 
+// A YAML double-quoted scalar: quotes and backslashes escaped.
 std::string Quoted(const std::string& text) {
   std::string out = "\"";
-  for (char c : text) out += c == '"' ? std::string("\\\"") : std::string(1, c);
+  for (char c : text) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
   return out + "\"";
 }
 
