@@ -5,7 +5,9 @@
 
 #include <unistd.h>
 
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
 #include <string>
 #include <system_error>
@@ -18,6 +20,23 @@ inline void RenameInto(const std::string& from, const std::string& to) {
   std::filesystem::rename(from, to, error);
   if (error)
     throw std::runtime_error(to + ": cannot rename " + from + " into place: " + error.message());
+}
+
+// Writes `text` to `path` through "<path>.partial" and a rename: `path` is either what it was or
+// the whole new text. std::runtime_error naming the file when it cannot be written (the partial
+// file is removed) or renamed.
+inline void WriteTextFile(const std::string& path, const std::string& text) {
+  const std::string partial = path + ".partial";
+  {
+    std::ofstream out(partial, std::ios::trunc);
+    out << text;
+    out.close();
+    if (!out) {
+      std::remove(partial.c_str());
+      throw std::runtime_error(path + ": cannot write " + partial);
+    }
+  }
+  RenameInto(partial, path);
 }
 
 // Whether `path` is `folder` or lies inside it, symbolic links and ".." resolved (neither needs

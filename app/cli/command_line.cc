@@ -5,6 +5,7 @@
 #include <new>
 
 #include "common/memory.h"
+#include "common/yaml_util.h"
 
 namespace netlab::app {
 
@@ -113,6 +114,18 @@ void CommandLine::Knots(const std::string& name, int* rows, int* cols) const {
   }
   if (*rows < 2 || *cols < 2 || *rows > 1000 || *cols > 1000)
     throw UsageError("--" + name + " " + text + ": need 2..1000 knots per side");
+}
+
+std::vector<netsim::ScenarioOverride> CommandLine::Overrides(const std::string& name) const {
+  std::vector<netsim::ScenarioOverride> overrides;
+  for (const std::string& text : Options(name)) {
+    try {
+      overrides.push_back(netsim::ParseOverride(text));
+    } catch (const InputError& e) {
+      throw UsageError(e.what());
+    }
+  }
+  return overrides;
 }
 
 bool CommandLine::FrameRange(const std::string& name, int* first, int* last) const {

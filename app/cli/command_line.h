@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "libnetsim/scenario/scenario_override.h"
+
 namespace netlab::app {
 
 // A usage error: the command prints it with its --help hint and exits with status 2.
@@ -37,6 +39,8 @@ class CommandLine {
   // A frame range A:B (inclusive, 0 <= A <= B) in option `name`: false (first, last untouched)
   // when the option is absent, UsageError naming it when malformed.
   bool FrameRange(const std::string& name, int* first, int* last) const;
+  // Every PATH=VALUE of option `name` (`--set`), in order; UsageError for a malformed one.
+  std::vector<netsim::ScenarioOverride> Overrides(const std::string& name) const;
 
  private:
   std::map<std::string, std::vector<std::string>> values_;

@@ -6,7 +6,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <sstream>
 #include <string>
@@ -148,17 +147,6 @@ std::string FitYaml(const std::vector<std::string>& scenarios,
     }
   }
   return o.str();
-}
-
-void WriteText(const std::string& path, const std::string& text) {
-  const std::string partial = path + ".partial";
-  {
-    std::ofstream out(partial);
-    out << text;
-    out.close();
-    if (!out) throw std::runtime_error(path + ": cannot write " + partial);
-  }
-  RenameInto(partial, path);
 }
 
 // The table a person reads: each parameter from its start to its estimate, and what set it.
@@ -304,13 +292,7 @@ std::vector<netsim::FitPrior> ReadPriors(const std::string& list,
 // The fit's options from the command line (all but the shots, the free parameters and priors).
 netsim::FitOptions OptionsFrom(const CommandLine& cl) {
   netsim::FitOptions options;
-  for (const std::string& set : cl.Options("set")) {
-    try {
-      options.set.push_back(netsim::ParseOverride(set));
-    } catch (const InputError& e) {
-      throw UsageError(e.what());
-    }
-  }
+  options.set = cl.Overrides("set");
   options.score.time_offset_s = cl.DoubleOption("time-offset", 0.0, -1e6, 1e6);
   options.score.max_time_offset_s = cl.DoubleOption("max-time-offset", 0.05, 1e-6, 1e3);
   options.score.meas_sigma_m = cl.DoubleOption("meas-sigma", 0.0, 0.0, 1e3);
@@ -389,7 +371,7 @@ int RunFit(const std::vector<std::string>& args) {
                    parameters.size() == 1 ? "" : "s");
     const netsim::FitResult result = netsim::FitShots(shots, parameters, options);
     if (!quiet && tty) std::fputc('\n', stderr);
-    WriteText(out, FitYaml(scenarios, measured_paths, result));
+    WriteTextFile(out, FitYaml(scenarios, measured_paths, result));
     if (!quiet || !cl.Flag("json")) std::cerr << Summary(result) << "  wrote " << out << "\n";
     if (cl.Flag("json")) PrintJson(result, out);
     return 0;

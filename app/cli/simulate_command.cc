@@ -87,14 +87,7 @@ int RunSimulate(const std::vector<std::string>& args) {
     if (cl.positional().size() != 1) throw UsageError("expected one SCENARIO.yaml");
     const std::string out = cl.Required("out");
 
-    std::vector<netsim::ScenarioOverride> overrides;
-    for (const std::string& set : cl.Options("set")) {
-      try {
-        overrides.push_back(netsim::ParseOverride(set));
-      } catch (const InputError& e) {
-        throw UsageError(e.what());
-      }
-    }
+    const std::vector<netsim::ScenarioOverride> overrides = cl.Overrides("set");
     netsim::Scenario scenario = netsim::LoadScenario(cl.positional()[0], overrides);
     // A shorter (or longer) run of the same scene, e.g. the first second of a flight.
     scenario.duration = cl.DoubleOption("duration", scenario.duration, 1e-9, 1e6);

@@ -219,10 +219,9 @@ int RunSweep(const std::vector<std::string>& args) {
     const std::string report = cl.Option("report").value_or("");
     const int jobs = cl.IntOption("jobs", 0, 1, 1024);
     const int decimate = cl.IntOption("decimate", 1, 1, 1000000);
-    std::vector<netsim::ScenarioOverride> fixed;
+    const std::vector<netsim::ScenarioOverride> fixed = cl.Overrides("set");
     std::vector<netsim::SweepParameter> parameters;
     try {
-      for (const std::string& set : cl.Options("set")) fixed.push_back(netsim::ParseOverride(set));
       for (const std::string& vary : cl.Options("vary"))
         parameters.push_back(netsim::ParseVary(vary));
     } catch (const InputError& e) {

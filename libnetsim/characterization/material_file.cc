@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <map>
 #include <sstream>
 #include <stdexcept>
@@ -170,17 +169,7 @@ std::vector<ParameterEstimate> ReadMaterialFile(const std::string& path) {
 void WriteMaterialFile(const std::string& path, const std::vector<ParameterEstimate>& estimates,
                        const std::string& header_comment) {
   CheckEstimates(estimates);
-  const std::string partial = path + ".partial";
-  {
-    std::ofstream out(partial, std::ios::trunc);
-    out << MaterialFileText(estimates, header_comment);
-    out.close();
-    if (!out) {
-      std::remove(partial.c_str());
-      throw std::runtime_error(path + ": cannot write " + partial);
-    }
-  }
-  RenameInto(partial, path);
+  WriteTextFile(path, MaterialFileText(estimates, header_comment));
 }
 
 }  // namespace netlab::netsim

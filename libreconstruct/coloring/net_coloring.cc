@@ -16,6 +16,7 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include "common/files.h"
 #include "common/yaml_util.h"
 
 namespace netlab::recon {
@@ -1539,8 +1540,10 @@ void WriteColoring(const std::string& path, const NetColoring& col,
   if (!col.palette_names.empty() || !palette_srgb.empty()) {
     os << "palette:\n";
     for (int i = 0; i < col.colors; ++i) {
-      const std::string name =
-          i < static_cast<int>(col.palette_names.size()) ? col.palette_names[i] : "c" + std::to_string(i);
+      // Appended, not "c" + ...: GCC 12 warns of a false -Wrestrict on that once inlined.
+      const std::string name = i < static_cast<int>(col.palette_names.size())
+                                   ? col.palette_names[i]
+                                   : std::string("c").append(std::to_string(i));
       os << "  - {name: \"" << name << "\"";
       if (i < static_cast<int>(palette_srgb.size()))
         os << ", srgb: [" << palette_srgb[i][0] << ", " << palette_srgb[i][1] << ", "
@@ -1554,13 +1557,7 @@ void WriteColoring(const std::string& path, const NetColoring& col,
     os << "  - {a: [" << k[0] << ", " << k[1] << "], b: [" << k[2] << ", " << k[3]
        << "], colour: " << col.link_colour[l] << "}\n";
   }
-  const std::string partial = path + ".partial";
-  {
-    std::ofstream out(partial);
-    out << os.str();
-    if (!out) throw std::runtime_error(path + ": cannot write colouring file");
-  }
-  std::filesystem::rename(partial, path);
+  WriteTextFile(path, os.str());
 }
 
 NetColoring ReadColoring(const std::string& path, std::vector<std::array<int, 3>>* palette_srgb) {
