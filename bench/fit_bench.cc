@@ -196,6 +196,63 @@ int Flight(double seconds, int shots) {
   return 0;
 }
 
+
+// The cost along one material parameter: chi^2 = sum d2 of net_a_0.5 with the parameter scaled by
+// f against the truth's knots plus 1 mm of noise, for the horizons seconds/4, /2, 3/4 and
+// seconds. Where the fit's cost is smooth enough for Levenberg-Marquardt, and from how far.
+int Landscape(const std::string& parameter, double truth_value, double seconds,
+              double fixed_dt) {
+  const std::string path = std::string(NETLAB_SOURCE_DIR) + "/scenarios/net_a_0.5.yaml";
+  char duration[32];
+  std::snprintf(duration, sizeof duration, "%.17g", seconds);
+  const SweepRun truth = RunOne(path, 0, {{"duration", duration}}, 1);
+  if (!truth.ok()) return 1;
+  const KnotTracks measured = testing::MeasuredTwin(truth, 1e-3, 7);
+  char dt[32];
+  std::snprintf(dt, sizeof dt, "%.17g", fixed_dt > 0 ? fixed_dt : truth.summary.dt);
+  std::vector<double> horizons;
+  for (int q = 1; q <= 4; ++q) horizons.push_back(seconds * q / 4);
+  std::printf(
+      "landscape of %s (truth %.4g) on net_a_0.5, 1 mm noise, dt %s: chi^2 - 3 N per horizon\n",
+      parameter.c_str(), truth_value, fixed_dt >= 0 ? dt : "auto");
+  std::printf("| factor |");
+  for (double h : horizons) std::printf(" %.2f s |", h);
+  std::printf("\n|---|");
+  for (size_t i = 0; i < horizons.size(); ++i) std::printf("---|");
+  std::printf("\n");
+  for (int i = -8; i <= 8; ++i) {
+    const double f = std::pow(2.0, i / 8.0);
+    char value[32];
+    std::snprintf(value, sizeof value, "%.17g", truth_value * f);
+    std::vector<ScenarioOverride> set = {{"duration", duration}, {parameter, value}};
+    if (fixed_dt >= 0) set.push_back({"integrator.dt", dt});
+    const SweepRun run = RunOne(path, 0, set, 1);
+    std::printf("| %.3f |", f);
+    for (double h : horizons) {
+      if (!run.ok()) {
+        std::printf(" failed |");
+        continue;
+      }
+      KnotTracks cut = measured;
+      int frames = 0;
+      while (frames < static_cast<int>(cut.time.size()) && cut.time[frames] <= h + 1e-9) ++frames;
+      const size_t n = static_cast<size_t>(frames) * cut.knots();
+      cut.time.resize(frames);
+      cut.position.resize(n);
+      cut.valid.resize(n);
+      if (!cut.covariance.empty()) cut.covariance.resize(n);
+      if (!cut.frame_index.empty()) cut.frame_index.resize(frames);
+      ScoreOptions o;
+      o.meas_sigma_m = 1e-3;
+      const ScoreSummary s = Score(cut, run.Tracks(), o).summary;
+      std::printf(" %.4g |", s.mean_d2 * s.points - 3.0 * s.points);
+    }
+    std::printf("\n");
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
 }  // namespace
 }  // namespace netlab::netsim
 
@@ -205,6 +262,11 @@ int main(int argc, char** argv) {
   if (what == "flight")
     return netlab::netsim::Flight(argc > 2 ? std::atof(argv[2]) : 2.0,
                                   argc > 3 ? std::atoi(argv[3]) : 1);
+  if (what == "landscape")
+    return netlab::netsim::Landscape(argc > 2 ? argv[2] : "materials.nylon_1mm.bend_stiffness",
+                                     argc > 3 ? std::atof(argv[3]) : 9.82e-5,
+                                     argc > 4 ? std::atof(argv[4]) : 2.0,
+                                     argc > 5 ? std::atof(argv[5]) : -1.0);
   if (what == "shots") return netlab::netsim::Shots(argc > 2 ? std::atoi(argv[2]) : 20);
   std::fprintf(stderr,
                "usage: bench_fit coverage [draws] | flight [seconds] [shots] | shots [draws]\n");

@@ -130,7 +130,9 @@ std::string FitYaml(const std::vector<std::string>& scenarios,
   o << "cost_initial: " << Number(r.cost_initial) << "\ncost_final: " << Number(r.cost_final)
     << "\nresiduals: " << r.residuals << "\ninflation: " << Number(r.inflation)
     << "\nsimulations: " << r.simulations << "\niterations: " << r.iterations
-    << "\nwall_s: " << Number(r.wall_s) << "\nduration_s: " << Number(r.duration_s) << "\n";
+    << "\nwall_s: " << Number(r.wall_s) << "\nduration_s: " << Number(r.duration_s)
+    << "\ndt_s: " << Number(r.dt_s) << "  # the automatic step held for every run; 0: the "
+    << "scenario's own\n";
   o << "score: {rms_mm: " << Number(r.score.rms_m * 1e3) << ", mean_d2: " << Number(r.score.mean_d2)
     << ", p_value: " << Number(r.score.p_value) << ", verdict: " << r.score.verdict << "}\n";
   o << "set:\n";
@@ -227,6 +229,7 @@ void PrintJson(const netsim::FitResult& r, const std::string& out) {
   json.Key("simulations").Int(r.simulations);
   json.Key("iterations").Int(r.iterations);
   json.Key("wall_s").Number(r.wall_s);
+  json.Key("dt_s").Number(r.dt_s);
   json.Key("score").BeginObject();
   json.Key("rms_mm").Number(r.score.rms_m * 1e3);
   json.Key("mean_d2").Number(r.score.mean_d2);

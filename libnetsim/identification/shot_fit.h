@@ -94,8 +94,12 @@ struct FitResult {
   std::string termination;  // Ceres' report
   double wall_s = 0.0;
   double duration_s = 0.0;  // the simulated span each run was cut to
+  double dt_s = 0.0;        // the automatic step held for every run (the start's); 0: the
+                            // scenario's own dt
   ScoreSummary score;       // `netlab score` of the fitted simulation (the first shot's)
-  std::vector<ScenarioOverride> fitted_set;  // the --set lines that reproduce the fit (first shot)
+  // The --set lines that reproduce the fit (first shot): the fitted parameters, then the held step
+  // (integrator.dt) when the scenario's was auto.
+  std::vector<ScenarioOverride> fitted_set;
   // Per shot, in order: the score, the inflation, the --set lines.
   std::vector<ScoreSummary> scores;
   std::vector<double> inflations;

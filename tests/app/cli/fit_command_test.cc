@@ -76,7 +76,9 @@ TEST_F(FitCommand, FitsTheTwinAndKeepsTheJsonContract) {
   const YAML::Node file = YAML::LoadFile(Path("fit.yaml"));
   EXPECT_NEAR(file["parameters"]["drag.drag_coefficient"]["value"].as<double>(),
               drag["value"].number(), 1e-5 * drag["value"].number());
-  EXPECT_EQ(file["set"].size(), 4u);
+  ASSERT_EQ(file["set"].size(), 5u);  // drag, velocity's 3, the held step
+  EXPECT_EQ(file["set"][4].as<std::string>().rfind("integrator.dt=", 0), 0u);
+  EXPECT_GT(file["dt_s"].as<double>(), 0.0);
   EXPECT_EQ(file["correlation"].size(), 5u);
   EXPECT_FALSE(std::filesystem::exists(Path("fit.yaml.partial")));
 }

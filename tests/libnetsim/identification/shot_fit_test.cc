@@ -93,10 +93,13 @@ TEST_F(ShotFit, RecoversDragLaunchAndTimeFromAStartOffByTwo) {
   EXPECT_GT(r.simulations, 5);
   ASSERT_EQ(r.correlation.rows(), 5);
   EXPECT_NEAR(r.correlation(0, 0), 1.0, 1e-12);
-  // The --set lines reproduce the estimates.
-  ASSERT_EQ(r.fitted_set.size(), 4u);
+  // The --set lines reproduce the estimates, with the automatic step the fit held.
+  ASSERT_EQ(r.fitted_set.size(), 5u);
   EXPECT_EQ(r.fitted_set[0].path, "drag.drag_coefficient");
   EXPECT_NEAR(std::stod(r.fitted_set[0].value), Find(r, "drag.drag_coefficient").value, 1e-12);
+  EXPECT_EQ(r.fitted_set[4].path, "integrator.dt");
+  EXPECT_GT(r.dt_s, 0.0);
+  EXPECT_EQ(std::stod(r.fitted_set[4].value), r.dt_s);
 }
 
 // The twist damping of a net in free flight leaves no trace the knots show: reported as not
