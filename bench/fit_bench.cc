@@ -142,7 +142,7 @@ int Shots(int draws) {
 // The flight cases cut to `seconds`, 1 mm of noise, fitted `shots` at a time (net_a_0.5,
 // net_a_0.8, net_b_0.5, net_b_0.8 in that order): drag, EA and EI shared, each shot's launch
 // velocity and time; from drag x2, velocity x1/2, EA x2 and EI x1/2.
-int Flight(double seconds, int shots) {
+int Flight(double seconds, int shots, const std::string& integrator) {
   const char* cases[4] = {"net_a_0.5", "net_a_0.8", "net_b_0.5", "net_b_0.8"};
   const double speeds[4] = {0.5, 0.8, 0.5, 0.8};
   char duration[32];
@@ -154,7 +154,8 @@ int Flight(double seconds, int shots) {
                                             {"materials.nylon_1mm.bend_stiffness", 9.82e-5}};
   for (int k = 0; k < shots; ++k) {
     paths.push_back(std::string(NETLAB_SOURCE_DIR) + "/scenarios/" + cases[k] + ".yaml");
-    const SweepRun truth = RunOne(paths.back(), 0, {{"duration", duration}}, 1);
+    const SweepRun truth =
+        RunOne(paths.back(), 0, {{"duration", duration}, {"integrator.type", integrator}}, 1);
     if (!truth.ok()) {
       std::fprintf(stderr, "the truth of %s failed: %s\n", cases[k], truth.error.c_str());
       return 1;
@@ -167,7 +168,8 @@ int Flight(double seconds, int shots) {
   }
   // The launch is each scenario's own: started at half its speed by a --set per shot is not
   // possible (--set is shared), so the shared start moves every shot to 0.25 m/s.
-  const std::vector<ScenarioOverride> start = {{"drag.drag_coefficient", "2.4"},
+  const std::vector<ScenarioOverride> start = {{"integrator.type", integrator},
+                                               {"drag.drag_coefficient", "2.4"},
                                                {"nets.0.velocity", "[0.25, 0, 0]"},
                                                {"materials.nylon_1mm.stretch_stiffness", "3142"},
                                                {"materials.nylon_1mm.bend_stiffness", "4.91e-5"}};
@@ -177,10 +179,15 @@ int Flight(double seconds, int shots) {
       paths, start, 0);
   std::vector<FitShotInput> inputs;
   for (int k = 0; k < shots; ++k) inputs.push_back({paths[k], &measured[k], cases[k]});
-  const FitResult r = FitShots(inputs, parameters, Options(start, 1e-3));
+  FitOptions options = Options(start, 1e-3);
+  options.progress = [](const FitProgress& p) {
+    std::fprintf(stderr, "  %s, iteration %d: cost %.6g, %d simulations, %.0f s\n",
+                 p.stage.c_str(), p.iteration, p.cost, p.simulations, p.elapsed_s);
+  };
+  const FitResult r = FitShots(inputs, parameters, options);
   std::printf("flight: %d shot%s (", shots, shots > 1 ? "s" : "");
   for (int k = 0; k < shots; ++k) std::printf("%s%s", k ? ", " : "", cases[k]);
-  std::printf("), %.1f s each, 1 mm noise, start off by 2\n", seconds);
+  std::printf("), %.1f s each, %s, 1 mm noise, start off by 2\n", seconds, integrator.c_str());
   std::printf(
       "| parameter | truth | fitted | sigma | error / sigma | check -/+ sigma | "
       "determined by |\n");
@@ -189,10 +196,12 @@ int Flight(double seconds, int shots) {
     const double t = truth_of.at(p.parameter.name);
     std::printf("| %s | %.4g | %.4g | %.3g | %.2f | %.2f / %.2f | %s%s |\n",
                 p.parameter.name.c_str(), t, p.value, p.sigma, (p.value - t) / p.sigma, p.check[0],
-                p.check[1], p.determined_by.c_str(), p.rough ? " (rough)" : "");
+                p.check[1], p.determined_by.c_str(),
+                p.rough ? " (rough)" : p.ambiguous ? " (two minima)" : "");
   }
-  std::printf("cost %.4g -> %.4g (%d residuals), %d simulations, %d iterations, %.1f s wall\n",
-              r.cost_initial, r.cost_final, r.residuals, r.simulations, r.iterations, r.wall_s);
+  std::printf(
+      "cost %.4g -> %.4g (%d residuals), %d simulations, %d iterations, %d ends, %.1f s wall\n",
+      r.cost_initial, r.cost_final, r.residuals, r.simulations, r.iterations, r.ends, r.wall_s);
   return 0;
 }
 
@@ -201,11 +210,12 @@ int Flight(double seconds, int shots) {
 // f against the truth's knots plus 1 mm of noise, for the horizons seconds/4, /2, 3/4 and
 // seconds. Where the fit's cost is smooth enough for Levenberg-Marquardt, and from how far.
 int Landscape(const std::string& parameter, double truth_value, double seconds,
-              double fixed_dt) {
+              double fixed_dt, const std::string& integrator) {
   const std::string path = std::string(NETLAB_SOURCE_DIR) + "/scenarios/net_a_0.5.yaml";
   char duration[32];
   std::snprintf(duration, sizeof duration, "%.17g", seconds);
-  const SweepRun truth = RunOne(path, 0, {{"duration", duration}}, 1);
+  const SweepRun truth =
+      RunOne(path, 0, {{"duration", duration}, {"integrator.type", integrator}}, 1);
   if (!truth.ok()) return 1;
   const KnotTracks measured = testing::MeasuredTwin(truth, 1e-3, 7);
   char dt[32];
@@ -213,8 +223,9 @@ int Landscape(const std::string& parameter, double truth_value, double seconds,
   std::vector<double> horizons;
   for (int q = 1; q <= 4; ++q) horizons.push_back(seconds * q / 4);
   std::printf(
-      "landscape of %s (truth %.4g) on net_a_0.5, 1 mm noise, dt %s: chi^2 - 3 N per horizon\n",
-      parameter.c_str(), truth_value, fixed_dt >= 0 ? dt : "auto");
+      "landscape of %s (truth %.4g) on net_a_0.5, 1 mm noise, %s, dt %s: chi^2 - 3 N per "
+      "horizon\n",
+      parameter.c_str(), truth_value, integrator.c_str(), fixed_dt >= 0 ? dt : "auto");
   std::printf("| factor |");
   for (double h : horizons) std::printf(" %.2f s |", h);
   std::printf("\n|---|");
@@ -224,7 +235,8 @@ int Landscape(const std::string& parameter, double truth_value, double seconds,
     const double f = std::pow(2.0, i / 8.0);
     char value[32];
     std::snprintf(value, sizeof value, "%.17g", truth_value * f);
-    std::vector<ScenarioOverride> set = {{"duration", duration}, {parameter, value}};
+    std::vector<ScenarioOverride> set = {
+        {"duration", duration}, {"integrator.type", integrator}, {parameter, value}};
     if (fixed_dt >= 0) set.push_back({"integrator.dt", dt});
     const SweepRun run = RunOne(path, 0, set, 1);
     std::printf("| %.3f |", f);
@@ -261,12 +273,14 @@ int main(int argc, char** argv) {
   if (what == "coverage") return netlab::netsim::Coverage(argc > 2 ? std::atoi(argv[2]) : 40);
   if (what == "flight")
     return netlab::netsim::Flight(argc > 2 ? std::atof(argv[2]) : 2.0,
-                                  argc > 3 ? std::atoi(argv[3]) : 1);
+                                  argc > 3 ? std::atoi(argv[3]) : 1,
+                                  argc > 4 ? argv[4] : "implicit");
   if (what == "landscape")
     return netlab::netsim::Landscape(argc > 2 ? argv[2] : "materials.nylon_1mm.bend_stiffness",
                                      argc > 3 ? std::atof(argv[3]) : 9.82e-5,
                                      argc > 4 ? std::atof(argv[4]) : 2.0,
-                                     argc > 5 ? std::atof(argv[5]) : -1.0);
+                                     argc > 5 ? std::atof(argv[5]) : -1.0,
+                                     argc > 6 ? argv[6] : "implicit");
   if (what == "shots") return netlab::netsim::Shots(argc > 2 ? std::atoi(argv[2]) : 20);
   std::fprintf(stderr,
                "usage: bench_fit coverage [draws] | flight [seconds] [shots] | shots [draws]\n");

@@ -27,7 +27,8 @@ constexpr char kHelp[] =
     "                  --free PARAMS --out FIT.yaml\n"
     "                  [--prior MATERIAL.yaml[,...]] [--set PATH=VALUE ...] [--time-offset S]\n"
     "                  [--max-time-offset S] [--meas-sigma M] [--sim-sigma M] [--starts N]\n"
-    "                  [--max-iterations N] [--step H] [--jobs N] [--json] [--quiet]\n\n"
+    "                  [--scan N] [--max-iterations N] [--step H] [--jobs N] [--json]\n"
+    "                  [--quiet]\n\n"
     "Identifies parameters of a shot from its measured knot tracks (docs/fit.md): finds the\n"
     "values of the free parameters that make SCENARIO.yaml's simulation agree best with\n"
     "TRACKS.h5, weighing every knot-frame by its covariance as `netlab score` does\n"
@@ -60,6 +61,9 @@ constexpr char kHelp[] =
     "  --starts N       Levenberg-Marquardt from N starts (the first, then N-1 drawn within a\n"
     "                   factor 2 of it), the best kept: for a cost with several minima\n"
     "                   (default 1)\n"
+    "  --scan N         before the material parameters are fitted, scan each over a factor 2\n"
+    "                   either way of its start, N values per factor 2 (default 8; 0: no scan):\n"
+    "                   a stiffness's cost has a narrow valley that a start far off misses\n"
     "  --max-iterations N\n"
     "                   per start (default 25)\n"
     "  --jobs N         simulations at a time (default: the machine's cores)\n"
@@ -111,7 +115,9 @@ std::string FitYaml(const std::vector<std::string>& scenarios,
       << ", sigma: " << Number(p.sigma) << ", units: " << Quoted(p.parameter.units)
       << ", start: " << Number(p.parameter.start) << ", data_sigma: " << Number(p.data_sigma)
       << ", identified: " << (p.identified ? "true" : "false")
-      << ", rough: " << (p.rough ? "true" : "false") << ", check: [" << Number(p.check[0]) << ", "
+      << ", rough: " << (p.rough ? "true" : "false")
+      << ", ambiguous: " << (p.ambiguous ? "true" : "false")
+      << ", alternative: " << Number(p.alternative) << ", check: [" << Number(p.check[0]) << ", "
       << Number(p.check[1]) << "]"
       << ", determined_by: " << Quoted(p.determined_by);
     if (p.has_prior)
@@ -166,12 +172,15 @@ std::string Summary(const netsim::FitResult& r) {
     if (p.rough)
       by += ": the cost is rough in it (" + Number(p.check[0]) + "x / " + Number(p.check[1]) +
             "x the quadratic rise at -/+ sigma), sigma means nothing";
+    else if (p.ambiguous)
+      by += ": two minima fit as well (" + Number(p.alternative) + " from " + p.alternative_from +
+            ")";
     else if (!p.identified)
       by += p.has_prior ? " (the flight data adds little)" : ": not identified";
-    std::snprintf(line, sizeof line, "  %-40s %12s %12s %12s  %s\n", p.parameter.name.c_str(),
+    std::snprintf(line, sizeof line, "  %-40s %12s %12s %12s  ", p.parameter.name.c_str(),
                   Number(p.parameter.start).c_str(), Number(p.value).c_str(),
-                  Number(p.sigma).c_str(), by.c_str());
-    o << line;
+                  Number(p.sigma).c_str());
+    o << line << by << "\n";
   }
   o << "  stopped: " << r.termination << "\n";
   o << "  cost " << Number(r.cost_initial) << " -> " << Number(r.cost_final)
@@ -203,6 +212,8 @@ void PrintJson(const netsim::FitResult& r, const std::string& out) {
     json.Key("sigma").Number(p.sigma);
     json.Key("identified").Bool(p.identified);
     json.Key("rough").Bool(p.rough);
+    json.Key("ambiguous").Bool(p.ambiguous);
+    json.Key("alternative").Number(p.alternative);
     json.Key("check").BeginArray().Number(p.check[0]).Number(p.check[1]).EndArray();
     json.Key("determined_by").String(p.determined_by);
     json.Key("start").Number(p.parameter.start);
@@ -301,6 +312,7 @@ netsim::FitOptions OptionsFrom(const CommandLine& cl) {
   options.score.meas_sigma_m = cl.DoubleOption("meas-sigma", 0.0, 0.0, 1e3);
   options.score.sim_sigma_m = cl.DoubleOption("sim-sigma", 0.0, 0.0, 1e3);
   options.starts = cl.IntOption("starts", 1, 1, 1000);
+  options.scan_steps = cl.IntOption("scan", options.scan_steps, 0, 64);
   options.max_iterations = cl.IntOption("max-iterations", 25, 1, 10000);
   options.jobs = cl.IntOption("jobs", 0, 0, 4096);
   options.step = cl.DoubleOption("step", options.step, 1e-9, 0.1);
@@ -324,7 +336,7 @@ int RunFit(const std::vector<std::string>& args) {
     const CommandLine cl(
         args, {"json", "quiet", "help"},
         {"measured", "free", "out", "prior", "set", "time-offset", "max-time-offset", "meas-sigma",
-         "sim-sigma", "starts", "max-iterations", "jobs", "step"});
+         "sim-sigma", "starts", "scan", "max-iterations", "jobs", "step"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;

@@ -28,6 +28,11 @@ using Eigen::Matrix3d;
 using Eigen::Vector3d;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// A material parameter: the thread's, shared by every shot, fitted as ln(value).
+bool IsMaterial(const FitParameter& p) {
+  return p.kind == FitParameter::Kind::kScenario && p.log && p.path.rfind("materials.", 0) == 0;
+}
+
 double Seconds(Clock::time_point since) {
   return std::chrono::duration<double>(Clock::now() - since).count();
 }
@@ -479,28 +484,42 @@ double FitDuration(const std::string& path, const FitOptions& options, const Kno
   return needed;
 }
 
-// An automatic step (integrator.dt: auto) is held at the start's for every run of the fit. The
-// automatic step follows the bending stiffness (dt ~ 1/sqrt(EI)) in jumps, since it divides the
-// output interval exactly; each jump changes the integrator's error by about as much as EI's own
-// signal in a free flight, so with it the cost along EI jumped by 100-400 between values 10 %
-// apart (bench_fit landscape). Held, the cost is smooth from half the truth up; a stiffer
-// material than the start's may step beyond its stability limit, which rejects that trial step.
-// Returns the held step, 0 when the scenario gives its own.
+// An automatic step (integrator.dt: auto) is held for every run of the fit. The automatic step
+// follows the bending stiffness (dt ~ 1/sqrt(EI)) in jumps, since it divides the output interval
+// exactly; on Net A's implicit flight each jump changed the integrator's error by about as much as
+// EI's own signal, and the cost along EI jumped by 100-400 between values 10 % apart (bench_fit
+// landscape). The step held is the one stable over the start's box: the start's automatic step
+// times, for each log material parameter, the ratio its step falls by at x2 or /2 of its start
+// (probes of one output frame). A material stiffer still may step beyond its stability limit,
+// which rejects that trial step. Returns the held step, 0 when the scenario gives its own.
 double HoldStep(const std::string& path, const std::vector<FitParameter>& parameters,
                 const std::vector<double>& x0, int shot, std::vector<ScenarioOverride>* set) {
   const Scenario scenario = LoadScenario(path, *set);
   if (scenario.simulation.dt > 0.0) return 0.0;
-  std::vector<ScenarioOverride> probe = *set;
-  for (const ScenarioOverride& o : ScenarioOverrides(parameters, x0, shot)) probe.push_back(o);
   char value[32];
   std::snprintf(value, sizeof value, "%.17g", scenario.output_interval);
-  probe.push_back({"duration", value});
-  const SweepRun run = RunOne(path, 0, probe, 1);
-  if (!run.ok() || !(run.summary.dt > 0.0))
-    throw std::runtime_error(path + ": the starting simulation failed: " + run.error);
-  std::snprintf(value, sizeof value, "%.17g", run.summary.dt);
+  auto step_at = [&](const std::vector<double>& x) {
+    std::vector<ScenarioOverride> probe = *set;
+    for (const ScenarioOverride& o : ScenarioOverrides(parameters, x, shot)) probe.push_back(o);
+    probe.push_back({"duration", value});
+    const SweepRun run = RunOne(path, 0, probe, 1);
+    if (!run.ok() || !(run.summary.dt > 0.0))
+      throw std::runtime_error(path + ": the starting simulation failed: " + run.error);
+    return run.summary.dt;
+  };
+  const double start = step_at(x0);
+  double dt = start;
+  for (size_t i = 0; i < parameters.size(); ++i) {
+    if (!IsMaterial(parameters[i])) continue;
+    for (const double factor : {2.0, 0.5}) {
+      std::vector<double> x = x0;
+      x[i] += std::log(factor);
+      dt *= std::min(1.0, step_at(x) / start);
+    }
+  }
+  std::snprintf(value, sizeof value, "%.17g", dt);
   set->push_back({"integrator.dt", value});
-  return run.summary.dt;
+  return dt;
 }
 
 // A start spread over the box around the first: ln 2 either way for log parameters, the spread
@@ -627,45 +646,121 @@ std::vector<Shot> PrepareShots(const std::vector<FitShotInput>& inputs,
   return shots;
 }
 
-// Levenberg-Marquardt from each start, in two stages when material parameters are fitted with
-// others: first the launch, the drag and the alignment with the material held, then everything.
+// The scan between the stages: along each material parameter in turn, the cost at
+// options.scan_steps values per factor 2 either way of the current one (2 x 8: steps of 9 %),
+// simulated at once, and the parameter moved to the lowest. Levenberg-Marquardt follows the cost
+// from where it is, and a stiffness's cost in a flight is a narrow valley: the net's bending waves
+// come back into phase away from it. On Net A's flight with the explicit integrator the cost
+// along EI rises from x0.5 to x0.77 of the truth and falls again to it, a basin of about +-15 %
+// (bench_fit landscape) that a start off by 2 does not reach by descending.
+// Returns the rivals: for each parameter whose scan shows another local minimum behind a barrier
+// (a rise of kBarrier above both), the point at the lowest such minimum, for the last stage to
+// start from too (the other parameters not yet refitted, the scan's costs only rank basins).
+constexpr double kBarrier = 9.0;  // a chi^2 rise of 9: 3 sigma in one parameter
+std::vector<std::pair<int, std::vector<double>>> ScanMaterial(
+    const ShotCost& cost, const std::vector<FitParameter>& parameters, const FitOptions& options,
+    Clock::time_point start, int start_index, std::vector<double>* x) {
+  std::vector<std::pair<int, std::vector<double>>> rivals;
+  if (options.scan_steps <= 0) return rivals;
+  const int steps = options.scan_steps, n = 2 * steps + 1;
+  for (size_t i = 0; i < parameters.size(); ++i) {
+    if (!IsMaterial(parameters[i])) continue;
+    std::vector<std::vector<double>> xs(n, *x);
+    for (int k = -steps; k <= steps; ++k) xs[k + steps][i] += std::log(2.0) * k / steps;
+    std::vector<double> c = cost.CostsAt(xs);
+    for (double& v : c)
+      if (!std::isfinite(v)) v = kInf;  // a failed run: no minimum there
+    int best = steps;  // the current value, unless another is lower
+    for (int k = 0; k < n; ++k)
+      if (c[k] < c[best]) best = k;
+    int rival = -1;
+    for (int k = 0; k < n; ++k) {
+      const bool minimum = std::isfinite(c[k]) && (k == 0 || c[k] < c[k - 1]) &&
+                           (k == n - 1 || c[k] < c[k + 1]);
+      if (!minimum || k == best) continue;
+      const auto [lo, hi] = std::minmax(k, best);
+      const double barrier = *std::max_element(c.begin() + lo, c.begin() + hi + 1);
+      if (barrier - std::max(c[k], c[best]) >= kBarrier && (rival < 0 || c[k] < c[rival]))
+        rival = k;
+    }
+    if (rival >= 0) rivals.push_back({static_cast<int>(i), xs[rival]});
+    (*x)[i] = xs[best][i];
+    if (options.progress) {
+      FitProgress p;
+      p.cost = c[best];
+      p.simulations = cost.simulations();
+      p.elapsed_s = Seconds(start);
+      p.start = start_index;
+      p.starts = options.starts;
+      p.stage = "2/3 scan " + parameters[i].name + (rival >= 0 ? " (2 minima)" : "");
+      options.progress(p);
+    }
+  }
+  return rivals;
+}
+
+// Levenberg-Marquardt from each start, in stages when material parameters are fitted with
+// others: first the launch, the drag and the alignment with the material held, then a scan along
+// each material parameter (ScanMaterial), then everything.
 // The material's signal in a flight is weak; fitted from a start far off in velocity or drag, the
 // stiffnesses went where they explain the wrong launch (a net of EA = 26 N and EI = 4e-7 N m^2, a
 // valley of wrong minima, in the twin's Net A flight). Returns the best end; its cost in *cost.
+// Where one run of the last stage ended: a start, or a rival minimum of the scan.
+struct FitEnd {
+  std::vector<double> x;
+  double cost = kInf;
+  std::string from;  // "start 2", "the other minimum of <parameter>"
+};
+
 std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& parameters,
                              const FitOptions& options, const std::vector<double>& x0,
-                             Clock::time_point start, FitResult* result) {
+                             Clock::time_point start, FitResult* result,
+                             std::vector<FitEnd>* ends) {
   const int p = static_cast<int>(parameters.size());
   std::vector<bool> all(p, true), launch(p);
-  for (int i = 0; i < p; ++i) launch[i] = parameters[i].path.rfind("materials.", 0) != 0;
+  for (int i = 0; i < p; ++i) launch[i] = !IsMaterial(parameters[i]);
   const bool staged = std::count(launch.begin(), launch.end(), true) % p != 0;
   std::mt19937 rng(options.seed);
   std::vector<double> best;
   result->cost_final = kInf;
+  // The last stage from x; its end kept when usable, and the best end remembered.
+  auto last_stage = [&](std::vector<double> x, int s, const std::string& from,
+                        ceres::Solver::Summary* summary) {
+    LevenbergMarquardt(cost, all, options,
+                       ProgressCallback(options, *cost, start, s,
+                                        staged ? "3/3 all" + (from.empty() ? "" : ", " + from)
+                                               : ""),
+                       &x, summary);
+    result->iterations += static_cast<int>(summary->iterations.size()) - 1;
+    if (!summary->IsSolutionUsable()) return;
+    const std::string name = "start " + std::to_string(s + 1) + (from.empty() ? "" : ", " + from);
+    ends->push_back({x, 2 * summary->final_cost, name});
+    if (2 * summary->final_cost < result->cost_final) {
+      result->cost_final = 2 * summary->final_cost;
+      best = x;
+      result->best_start = s;
+      result->termination = summary->message;
+    }
+  };
   for (int s = 0; s < options.starts; ++s) {
     std::vector<double> x = s == 0 ? x0 : DrawStart(parameters, x0, &rng);
     ceres::Solver::Summary summary;
+    std::vector<std::pair<int, std::vector<double>>> rivals;
     if (staged) {
       cost->SetActive(launch);
       LevenbergMarquardt(cost, launch, options,
-                         ProgressCallback(options, *cost, start, s, "1/2 material held"), &x,
+                         ProgressCallback(options, *cost, start, s, "1/3 material held"), &x,
                          &summary);
       if (s == 0) result->cost_initial = 2 * summary.initial_cost;
       result->iterations += static_cast<int>(summary.iterations.size()) - 1;
       cost->SetActive(all);
+      if (summary.termination_type == ceres::FAILURE) continue;
+      rivals = ScanMaterial(*cost, parameters, options, start, s, &x);
     }
-    if (summary.termination_type != ceres::FAILURE || !staged)
-      LevenbergMarquardt(cost, all, options,
-                         ProgressCallback(options, *cost, start, s, staged ? "2/2 all" : ""), &x,
-                         &summary);
+    last_stage(x, s, "", &summary);
     if (s == 0 && !staged) result->cost_initial = 2 * summary.initial_cost;
-    result->iterations += static_cast<int>(summary.iterations.size()) - 1;
-    if (summary.IsSolutionUsable() && 2 * summary.final_cost < result->cost_final) {
-      result->cost_final = 2 * summary.final_cost;
-      best = x;
-      result->best_start = s;
-      result->termination = summary.message;
-    }
+    for (const auto& [i, rival] : rivals)
+      last_stage(rival, s, "from the other minimum of " + parameters[i].name, &summary);
   }
   if (best.empty()) throw std::runtime_error("the fit failed: " + cost->last_failure());
   return best;
@@ -719,10 +814,14 @@ Eigen::MatrixXd DataInformation(const std::vector<FitShotInput>& inputs,
 // Estimates, sigmas, whether each is identified (sigma below half the reference spread: the
 // prior's sigma, else the parameter's spread, fit_parameters.h) and, for the scenario ones that
 // look identified, whether the cost is smooth enough for sigma to mean something.
+// An end counts as fitting as well as the best when its cost is within chi^2_1's 95 % quantile
+// of the best's, times the data's inflation.
+constexpr double kAsWell = 3.841458820694124;
+
 void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
             const std::vector<PriorTerm>& priors, const std::vector<double>& best,
-            const Eigen::VectorXd& sigma, const Eigen::VectorXd& data_sigma,
-            const Eigen::MatrixXd& jtj, FitResult* result) {
+            const std::vector<FitEnd>& ends, const Eigen::VectorXd& sigma,
+            const Eigen::VectorXd& data_sigma, const Eigen::MatrixXd& jtj, FitResult* result) {
   const int p = static_cast<int>(parameters.size());
   std::vector<bool> looks_identified(p), check(p);
   for (int i = 0; i < p; ++i) {
@@ -752,7 +851,16 @@ void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
     // Smooth: the cost at -+2 sigma within a factor 2 of the quadratic model's rise.
     f.rough = check[i] && !(std::min(ratio[i][0], ratio[i][1]) > 0.5 &&
                             std::max(ratio[i][0], ratio[i][1]) < 2.0);
-    f.identified = looks_identified[i] && !f.rough;
+    // Another end of the fit (a start, the scan's other minimum) that fits as well with this
+    // parameter beyond 2 sigma of the estimate: the data do not tell the two apart.
+    for (const FitEnd& e : ends)
+      if (e.cost - result->cost_final < kAsWell * result->inflation &&
+          std::abs(e.x[i] - best[i]) > 2 * sigma(i) && !f.ambiguous) {
+        f.ambiguous = true;
+        f.alternative = par.Value(e.x[i]);
+        f.alternative_from = e.from;
+      }
+    f.identified = looks_identified[i] && !f.rough && !f.ambiguous;
     f.determined_by = f.identified ? "flight data" : f.has_prior ? "prior" : "neither";
     result->parameters.push_back(f);
   }
@@ -797,7 +905,9 @@ FitResult FitShots(const std::vector<FitShotInput>& inputs,
       PrepareShots(inputs, parameters, options, x0, margin, fit_time, &result);
   ShotCost cost(parameters, &shots, priors, options, margin);
   result.residuals = cost.data_rows();
-  const std::vector<double> best = Minimise(&cost, parameters, options, x0, start, &result);
+  std::vector<FitEnd> ends;
+  const std::vector<double> best =
+      Minimise(&cost, parameters, options, x0, start, &result, &ends);
 
   // The covariance: the data's information (inflated per shot) plus the priors'.
   const std::vector<double> jac = JacobianAt(cost, best);
@@ -817,7 +927,8 @@ FitResult FitShots(const std::vector<FitShotInput>& inputs,
       else if (r != c)
         result.correlation(r, c) = std::numeric_limits<double>::quiet_NaN();
 
-  Report(cost, parameters, priors, best, sigma, data_sigma, j.transpose() * j, &result);
+  Report(cost, parameters, priors, best, ends, sigma, data_sigma, j.transpose() * j, &result);
+  result.ends = static_cast<int>(ends.size());
   result.simulations = cost.simulations();
   result.wall_s = Seconds(start);
   return result;

@@ -16,8 +16,9 @@
 // within-frame design effect) and by the reduced chi^2 when above 1 (a model that cannot fit
 // the data within its noise), each shot's rows by its own. Weak anchors keep scale parameters no
 // data or prior can see near their start; material parameters are held while the launch is
-// fitted first. A parameter that looks identified is checked: the cost at -+ 2 sigma must rise
-// within 2x of the Jacobian's prediction, or the cost is rough there and sigma means nothing.
+// fitted first, then each is scanned over a factor 2 either way before everything is fitted. A
+// parameter that looks identified is checked: the cost at -+ 2 sigma must rise within 2x of the
+// Jacobian's prediction, or the cost is rough there and sigma means nothing.
 
 #include <Eigen/Core>
 #include <array>
@@ -46,7 +47,8 @@ struct FitProgress {
   double elapsed_s = 0.0;
   double eta_s = 0.0;  // at most this much more (the iterations left at the mean pace)
   int start = 0, starts = 1;
-  std::string stage;  // "1/2 material held", "2/2 all", or empty when not staged
+  std::string stage;  // "1/3 material held", "2/3 scan <parameter>", "3/3 all", or empty when
+                      // not staged
 };
 
 struct FitOptions {
@@ -61,6 +63,9 @@ struct FitOptions {
   // spread (fit_parameters.h) times this for the others.
   double step = 1e-3;
   uint32_t seed = 1;  // the extra starts' draws
+  // Between the stages, each material parameter is scanned over a factor 2 either way of where the
+  // first stage left it, this many values per factor 2 (0: no scan).
+  int scan_steps = 8;
   std::function<void(const FitProgress&)> progress;
 };
 
@@ -76,7 +81,14 @@ struct FittedParameter {
   std::array<double, 2> check = {std::numeric_limits<double>::quiet_NaN(),
                                  std::numeric_limits<double>::quiet_NaN()};
   bool rough = false;  // checked, and the cost is not within 2x of the quadratic model
-  // sigma < half the reference spread (the prior's sigma, or spread) and the cost not rough
+  // Another end of the fit (a start, or the scan's other minimum) fits as well (its cost within
+  // 3.84 x the inflation of the best's) with this parameter more than 2 sigma away: that value,
+  // and where that end started.
+  bool ambiguous = false;
+  double alternative = std::numeric_limits<double>::quiet_NaN();
+  std::string alternative_from;
+  // sigma < half the reference spread (the prior's sigma, or spread), the cost not rough and no
+  // other end as good
   bool identified = false;
   std::string determined_by;  // "flight data", "prior", "neither"
 };
@@ -91,6 +103,7 @@ struct FitResult {
   int iterations = 0;
   int simulations = 0;
   int best_start = 0;
+  int ends = 0;  // runs of the last stage that ended usable (starts, and the scan's rivals)
   std::string termination;  // Ceres' report
   double wall_s = 0.0;
   double duration_s = 0.0;  // the simulated span each run was cut to
