@@ -654,12 +654,11 @@ std::vector<Shot> PrepareShots(const std::vector<FitShotInput>& inputs,
 // along EI rises from x0.5 to x0.77 of the truth and falls again to it, a basin of about +-15 %
 // (bench_fit landscape) that a start off by 2 does not reach by descending.
 // Returns the rivals: for each parameter whose scan shows another local minimum behind a barrier
-// (a rise of kBarrier above both), the point at the lowest such minimum, for the last stage to
-// start from too (the other parameters not yet refitted, the scan's costs only rank basins).
-constexpr double kBarrier = 9.0;  // a chi^2 rise of 9: 3 sigma in one parameter
+// (FindScanMinima), the point at the lowest such minimum, for the last stage to start from too
+// (the other parameters not yet refitted there: the scan's costs only rank basins).
 std::vector<std::pair<int, std::vector<double>>> ScanMaterial(
     const ShotCost& cost, const std::vector<FitParameter>& parameters, const FitOptions& options,
-    Clock::time_point start, int start_index, std::vector<double>* x) {
+    Clock::time_point start, int start_index, const std::string& stage, std::vector<double>* x) {
   std::vector<std::pair<int, std::vector<double>>> rivals;
   if (options.scan_steps <= 0) return rivals;
   const int steps = options.scan_steps, n = 2 * steps + 1;
@@ -667,22 +666,8 @@ std::vector<std::pair<int, std::vector<double>>> ScanMaterial(
     if (!IsMaterial(parameters[i])) continue;
     std::vector<std::vector<double>> xs(n, *x);
     for (int k = -steps; k <= steps; ++k) xs[k + steps][i] += std::log(2.0) * k / steps;
-    std::vector<double> c = cost.CostsAt(xs);
-    for (double& v : c)
-      if (!std::isfinite(v)) v = kInf;  // a failed run: no minimum there
-    int best = steps;  // the current value, unless another is lower
-    for (int k = 0; k < n; ++k)
-      if (c[k] < c[best]) best = k;
-    int rival = -1;
-    for (int k = 0; k < n; ++k) {
-      const bool minimum = std::isfinite(c[k]) && (k == 0 || c[k] < c[k - 1]) &&
-                           (k == n - 1 || c[k] < c[k + 1]);
-      if (!minimum || k == best) continue;
-      const auto [lo, hi] = std::minmax(k, best);
-      const double barrier = *std::max_element(c.begin() + lo, c.begin() + hi + 1);
-      if (barrier - std::max(c[k], c[best]) >= kBarrier && (rival < 0 || c[k] < c[rival]))
-        rival = k;
-    }
+    const std::vector<double> c = cost.CostsAt(xs);
+    const auto [best, rival] = FindScanMinima(c, steps);
     if (rival >= 0) rivals.push_back({static_cast<int>(i), xs[rival]});
     (*x)[i] = xs[best][i];
     if (options.progress) {
@@ -692,25 +677,27 @@ std::vector<std::pair<int, std::vector<double>>> ScanMaterial(
       p.elapsed_s = Seconds(start);
       p.start = start_index;
       p.starts = options.starts;
-      p.stage = "2/3 scan " + parameters[i].name + (rival >= 0 ? " (2 minima)" : "");
+      p.stage = stage + " " + parameters[i].name + (rival >= 0 ? " (2 minima)" : "");
       options.progress(p);
     }
   }
   return rivals;
 }
 
-// Levenberg-Marquardt from each start, in stages when material parameters are fitted with
-// others: first the launch, the drag and the alignment with the material held, then a scan along
-// each material parameter (ScanMaterial), then everything.
-// The material's signal in a flight is weak; fitted from a start far off in velocity or drag, the
-// stiffnesses went where they explain the wrong launch (a net of EA = 26 N and EI = 4e-7 N m^2, a
-// valley of wrong minima, in the twin's Net A flight). Returns the best end; its cost in *cost.
 // Where one run of the last stage ended: a start, or a rival minimum of the scan.
 struct FitEnd {
   std::vector<double> x;
   double cost = kInf;
-  std::string from;  // "start 2", "the other minimum of <parameter>"
+  std::string from;  // "start 2", "start 1, from the other minimum of <parameter>"
 };
+
+// Levenberg-Marquardt from each start, in stages when material parameters are free: with others,
+// first the launch, the drag and the alignment with the material held; then a scan along each
+// material parameter (ScanMaterial); then everything, from the scan's best and its rivals.
+// The material's signal in a flight is weak; fitted from a start far off in velocity or drag, the
+// stiffnesses went where they explain the wrong launch (a net of EA = 26 N and EI = 4e-7 N m^2, a
+// valley of wrong minima, in the twin's Net A flight). Returns the best end (its cost in
+// result->cost_final); every usable end in *ends.
 
 std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& parameters,
                              const FitOptions& options, const std::vector<double>& x0,
@@ -719,18 +706,25 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
   const int p = static_cast<int>(parameters.size());
   std::vector<bool> all(p, true), launch(p);
   for (int i = 0; i < p; ++i) launch[i] = !IsMaterial(parameters[i]);
-  const bool staged = std::count(launch.begin(), launch.end(), true) % p != 0;
+  const int others = static_cast<int>(std::count(launch.begin(), launch.end(), true));
+  const bool staged = others % p != 0;    // material and others free: the material held first
+  const bool scanned = others < p && options.scan_steps > 0;
+  const int stages = 1 + staged + scanned;
+  auto stage = [&](int k, const std::string& what) {
+    return stages == 1 ? std::string() : std::to_string(k) + "/" + std::to_string(stages) + " " + what;
+  };
   std::mt19937 rng(options.seed);
   std::vector<double> best;
+  result->cost_initial = cost->CostsAt({x0})[0];  // the start's run is remembered: no simulation
   result->cost_final = kInf;
   // The last stage from x; its end kept when usable, and the best end remembered.
   auto last_stage = [&](std::vector<double> x, int s, const std::string& from,
                         ceres::Solver::Summary* summary) {
-    LevenbergMarquardt(cost, all, options,
-                       ProgressCallback(options, *cost, start, s,
-                                        staged ? "3/3 all" + (from.empty() ? "" : ", " + from)
-                                               : ""),
-                       &x, summary);
+    LevenbergMarquardt(
+        cost, all, options,
+        ProgressCallback(options, *cost, start, s,
+                         stage(stages, "all") + (from.empty() || stages == 1 ? "" : ", " + from)),
+        &x, summary);
     result->iterations += static_cast<int>(summary->iterations.size()) - 1;
     if (!summary->IsSolutionUsable()) return;
     const std::string name = "start " + std::to_string(s + 1) + (from.empty() ? "" : ", " + from);
@@ -749,16 +743,15 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
     if (staged) {
       cost->SetActive(launch);
       LevenbergMarquardt(cost, launch, options,
-                         ProgressCallback(options, *cost, start, s, "1/3 material held"), &x,
-                         &summary);
-      if (s == 0) result->cost_initial = 2 * summary.initial_cost;
+                         ProgressCallback(options, *cost, start, s, stage(1, "material held")),
+                         &x, &summary);
       result->iterations += static_cast<int>(summary.iterations.size()) - 1;
       cost->SetActive(all);
       if (summary.termination_type == ceres::FAILURE) continue;
-      rivals = ScanMaterial(*cost, parameters, options, start, s, &x);
     }
+    if (scanned)
+      rivals = ScanMaterial(*cost, parameters, options, start, s, stage(1 + staged, "scan"), &x);
     last_stage(x, s, "", &summary);
-    if (s == 0 && !staged) result->cost_initial = 2 * summary.initial_cost;
     for (const auto& [i, rival] : rivals)
       last_stage(rival, s, "from the other minimum of " + parameters[i].name, &summary);
   }
@@ -811,12 +804,14 @@ Eigen::MatrixXd DataInformation(const std::vector<FitShotInput>& inputs,
   return information;
 }
 
-// Estimates, sigmas, whether each is identified (sigma below half the reference spread: the
-// prior's sigma, else the parameter's spread, fit_parameters.h) and, for the scenario ones that
-// look identified, whether the cost is smooth enough for sigma to mean something.
 // An end counts as fitting as well as the best when its cost is within chi^2_1's 95 % quantile
 // of the best's, times the data's inflation.
 constexpr double kAsWell = 3.841458820694124;
+
+// Estimates, sigmas, whether each is identified (sigma below half the reference spread: the
+// prior's sigma, else the parameter's spread, fit_parameters.h), for the scenario ones that
+// look identified whether the cost is smooth enough for sigma to mean something, and whether
+// another end of the fit fits as well.
 
 void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
             const std::vector<PriorTerm>& priors, const std::vector<double>& best,
@@ -867,6 +862,28 @@ void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
 }
 
 }  // namespace
+
+ScanMinima FindScanMinima(const std::vector<double>& costs, int current, double barrier) {
+  const int n = static_cast<int>(costs.size());
+  ScanMinima m;
+  if (current < 0 || current >= n) return m;
+  std::vector<double> c = costs;
+  for (double& v : c)
+    if (!std::isfinite(v)) v = kInf;  // a failed run: no minimum there
+  m.best = current;
+  for (int k = 0; k < n; ++k)
+    if (c[k] < c[m.best]) m.best = k;
+  for (int k = 0; k < n; ++k) {
+    const bool minimum =
+        std::isfinite(c[k]) && (k == 0 || c[k] < c[k - 1]) && (k == n - 1 || c[k] < c[k + 1]);
+    if (!minimum || k == m.best) continue;
+    const auto [lo, hi] = std::minmax(k, m.best);
+    const double top = *std::max_element(c.begin() + lo, c.begin() + hi + 1);
+    if (top - std::max(c[k], c[m.best]) >= barrier && (m.rival < 0 || c[k] < c[m.rival]))
+      m.rival = k;
+  }
+  return m;
+}
 
 FitResult FitShot(const std::string& scenario_path, const KnotTracks& measured,
                   const std::vector<FitParameter>& parameters, const FitOptions& options,

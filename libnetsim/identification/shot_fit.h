@@ -47,8 +47,9 @@ struct FitProgress {
   double elapsed_s = 0.0;
   double eta_s = 0.0;  // at most this much more (the iterations left at the mean pace)
   int start = 0, starts = 1;
-  std::string stage;  // "1/3 material held", "2/3 scan <parameter>", "3/3 all", or empty when
-                      // not staged
+  // "1/3 material held", "2/3 scan <parameter>", "3/3 all" (without the first when only material
+  // parameters are free), or empty when no material parameter is
+  std::string stage;
 };
 
 struct FitOptions {
@@ -137,5 +138,16 @@ FitResult FitShot(const std::string& scenario_path, const KnotTracks& measured,
 // residuals of every shot, each weighed and inflated as one shot's.
 FitResult FitShots(const std::vector<FitShotInput>& shots,
                    const std::vector<FitParameter>& parameters, const FitOptions& options);
+
+// The scan's reading of one profile of costs along a parameter (NaN or inf: a failed run): the
+// lowest (the one at `current` unless another is lower), and the lowest other local minimum
+// behind a barrier, a rise of at least `barrier` above both between them (-1: none). The default,
+// a chi^2 rise of 9, is 3 sigma in one parameter. The simulation's jitter in the cost (tenths to
+// tens on Net A's flight, with the step held) seldom makes a rival, and one it makes costs a run
+// of the last stage, not a wrong answer.
+struct ScanMinima {
+  int best = -1, rival = -1;
+};
+ScanMinima FindScanMinima(const std::vector<double>& costs, int current, double barrier = 9.0);
 
 }  // namespace netlab::netsim

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include "common/yaml_util.h"
 #include "libnetsim/sweep/sweep_runner.h"
@@ -108,13 +109,22 @@ TEST_F(ShotFit, RecoversDragLaunchAndTimeFromAStartOffByTwo) {
 TEST_F(ShotFit, SaysWhatTheFlightCannotDetermine) {
   const KnotTracks measured = Measured(11);
   const std::string free = "drag.drag_coefficient,materials.nylon.twist_damping";
-  FitResult r =
-      FitShot(scenario_, measured, ParseFreeParameters(free, scenario_, {}, 0.0), Options({}));
+  FitOptions options = Options({});
+  std::vector<std::string> stages;
+  options.progress = [&](const FitProgress& p) {
+    if (stages.empty() || stages.back() != p.stage) stages.push_back(p.stage);
+  };
+  FitResult r = FitShot(scenario_, measured, ParseFreeParameters(free, scenario_, {}, 0.0), options);
   const FittedParameter& damping = Find(r, "materials.nylon.twist_damping");
   EXPECT_FALSE(damping.identified);
   EXPECT_EQ(damping.determined_by, "neither");
   EXPECT_GT(damping.sigma, 5 * damping.value);
   EXPECT_TRUE(Find(r, "drag.drag_coefficient").identified);
+  // The stages: the drag with the material held, the damping scanned, then both.
+  const std::vector<std::string> expected = {
+      "1/3 material held", "2/3 scan materials.nylon.twist_damping", "3/3 all"};
+  EXPECT_EQ(stages, expected);
+  EXPECT_GE(r.ends, 1);
 
   FitOptions with_prior = Options({});
   with_prior.priors = {{"materials.nylon.twist_damping", 6e-11, 1e-11, "torsion.yaml"}};
@@ -125,6 +135,34 @@ TEST_F(ShotFit, SaysWhatTheFlightCannotDetermine) {
   EXPECT_TRUE(informed.has_prior);
   EXPECT_NEAR(informed.value, 6e-11, 1e-12);
   EXPECT_NEAR(informed.sigma, 1e-11, 1e-12);
+}
+
+// The scan's reading of a profile: the lowest point, and a second basin only behind a real
+// barrier (a chi^2 rise of 9 above both), not the simulation's jitter or a failed run.
+TEST(ScanMinima, ASecondBasinIsARivalJitterIsNot) {
+  // One basin, jitter of 2 on its walls: no rival.
+  ScanMinima m = FindScanMinima({50, 30, 32, 12, 5, 0, 4, 20, 18, 40}, 4);
+  EXPECT_EQ(m.best, 5);
+  EXPECT_EQ(m.rival, -1);
+  // Net A's explicit profile along EI, in shape: a minimum at the scan's low end, a hump, the
+  // truth's basin at the high end (the lower): each other's rival.
+  const std::vector<double> two = {100, 110, 160, 210, 250, 240, 120, 20, 0, 30};
+  m = FindScanMinima(two, 4);
+  EXPECT_EQ(m.best, 8);
+  EXPECT_EQ(m.rival, 0);
+  // The barrier must rise 9 above both minima.
+  m = FindScanMinima({10, 18, 0, 5}, 1);
+  EXPECT_EQ(m.best, 2);
+  EXPECT_EQ(m.rival, -1);
+  m = FindScanMinima({8, 18, 0, 5}, 1);
+  EXPECT_EQ(m.rival, 0);
+  // Failed runs (NaN, inf) are never minima; the current point stays the best on a flat
+  // profile.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  m = FindScanMinima({nan, 3, 3, 3, std::numeric_limits<double>::infinity()}, 2);
+  EXPECT_EQ(m.best, 2);
+  EXPECT_EQ(m.rival, -1);
+  EXPECT_EQ(FindScanMinima({}, 0).best, -1);
 }
 
 // Two shots of the same net at 0.5 and 0.8 m/s: one drag for both, each shot its own launch; the
