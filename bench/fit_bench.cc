@@ -139,6 +139,16 @@ int Shots(int draws) {
   return 0;
 }
 
+// Why a parameter is not identified beyond its sigma, for the table.
+std::string Note(const FittedParameter& p) {
+  if (p.rough) return " (rough)";
+  if (!p.ambiguous) return "";
+  if (std::isnan(p.alternative)) return " (two valleys)";
+  char text[96];
+  std::snprintf(text, sizeof text, " (two valleys; the other's end: %.4g)", p.alternative);
+  return text;
+}
+
 // The flight cases cut to `seconds`, 1 mm of noise, fitted `shots` at a time (net_a_0.5,
 // net_a_0.8, net_b_0.5, net_b_0.8 in that order): drag, EA and EI shared, each shot's launch
 // velocity and time; from drag x2, velocity x1/2, EA x2 and EI x1/2.
@@ -197,7 +207,7 @@ int Flight(double seconds, int shots, const std::string& integrator) {
     std::printf("| %s | %.4g | %.4g | %.3g | %.2f | %.2f / %.2f | %s%s |\n",
                 p.parameter.name.c_str(), t, p.value, p.sigma, (p.value - t) / p.sigma, p.check[0],
                 p.check[1], p.determined_by.c_str(),
-                p.rough ? " (rough)" : p.ambiguous ? " (two minima)" : "");
+                Note(p).c_str());
   }
   std::printf(
       "cost %.4g -> %.4g (%d residuals), %d simulations, %d iterations, %d ends, %.1f s wall\n",

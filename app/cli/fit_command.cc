@@ -173,8 +173,10 @@ std::string Summary(const netsim::FitResult& r) {
       by += ": the cost is rough in it (" + Number(p.check[0]) + "x / " + Number(p.check[1]) +
             "x the quadratic rise at -/+ sigma), sigma means nothing";
     else if (p.ambiguous)
-      by += ": two minima fit as well (" + Number(p.alternative) + " from " + p.alternative_from +
-            ")";
+      by += std::isnan(p.alternative)
+                ? ": the cost has another valley along it (the fit from there failed)"
+                : ": the cost has another valley along it (" + Number(p.alternative) + ", " +
+                      p.alternative_from + ")";
     else if (!p.identified)
       by += p.has_prior ? " (the flight data adds little)" : ": not identified";
     std::snprintf(line, sizeof line, "  %-40s %12s %12s %12s  ", p.parameter.name.c_str(),

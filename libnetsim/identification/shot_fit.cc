@@ -689,6 +689,7 @@ struct FitEnd {
   std::vector<double> x;
   double cost = kInf;
   std::string from;  // "start 2", "start 1, from the other minimum of <parameter>"
+  int rival_of = -1;  // the parameter whose scan found the valley it started in
 };
 
 // Levenberg-Marquardt from each start, in stages when material parameters are free: with others,
@@ -697,12 +698,13 @@ struct FitEnd {
 // The material's signal in a flight is weak; fitted from a start far off in velocity or drag, the
 // stiffnesses went where they explain the wrong launch (a net of EA = 26 N and EI = 4e-7 N m^2, a
 // valley of wrong minima, in the twin's Net A flight). Returns the best end (its cost in
-// result->cost_final); every usable end in *ends.
+// result->cost_final); every usable end in *ends; in *multimodal, the parameters whose scan found
+// another valley.
 
 std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& parameters,
                              const FitOptions& options, const std::vector<double>& x0,
                              Clock::time_point start, FitResult* result,
-                             std::vector<FitEnd>* ends) {
+                             std::vector<FitEnd>* ends, std::vector<bool>* multimodal) {
   const int p = static_cast<int>(parameters.size());
   std::vector<bool> all(p, true), launch(p);
   for (int i = 0; i < p; ++i) launch[i] = !IsMaterial(parameters[i]);
@@ -718,7 +720,7 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
   result->cost_initial = cost->CostsAt({x0})[0];  // the start's run is remembered: no simulation
   result->cost_final = kInf;
   // The last stage from x; its end kept when usable, and the best end remembered.
-  auto last_stage = [&](std::vector<double> x, int s, const std::string& from,
+  auto last_stage = [&](std::vector<double> x, int s, const std::string& from, int rival_of,
                         ceres::Solver::Summary* summary) {
     LevenbergMarquardt(
         cost, all, options,
@@ -728,7 +730,7 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
     result->iterations += static_cast<int>(summary->iterations.size()) - 1;
     if (!summary->IsSolutionUsable()) return;
     const std::string name = "start " + std::to_string(s + 1) + (from.empty() ? "" : ", " + from);
-    ends->push_back({x, 2 * summary->final_cost, name});
+    ends->push_back({x, 2 * summary->final_cost, name, rival_of});
     if (2 * summary->final_cost < result->cost_final) {
       result->cost_final = 2 * summary->final_cost;
       best = x;
@@ -751,9 +753,11 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
     }
     if (scanned)
       rivals = ScanMaterial(*cost, parameters, options, start, s, stage(1 + staged, "scan"), &x);
-    last_stage(x, s, "", &summary);
-    for (const auto& [i, rival] : rivals)
-      last_stage(rival, s, "from the other minimum of " + parameters[i].name, &summary);
+    last_stage(x, s, "", -1, &summary);
+    for (const auto& [i, rival] : rivals) {
+      (*multimodal)[i] = true;
+      last_stage(rival, s, "from the other minimum of " + parameters[i].name, i, &summary);
+    }
   }
   if (best.empty()) throw std::runtime_error("the fit failed: " + cost->last_failure());
   return best;
@@ -815,7 +819,8 @@ constexpr double kAsWell = 3.841458820694124;
 
 void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
             const std::vector<PriorTerm>& priors, const std::vector<double>& best,
-            const std::vector<FitEnd>& ends, const Eigen::VectorXd& sigma,
+            const std::vector<FitEnd>& ends, const std::vector<bool>& multimodal,
+            const Eigen::VectorXd& sigma,
             const Eigen::VectorXd& data_sigma, const Eigen::MatrixXd& jtj, FitResult* result) {
   const int p = static_cast<int>(parameters.size());
   std::vector<bool> looks_identified(p), check(p);
@@ -846,15 +851,24 @@ void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
     // Smooth: the cost at -+2 sigma within a factor 2 of the quadratic model's rise.
     f.rough = check[i] && !(std::min(ratio[i][0], ratio[i][1]) > 0.5 &&
                             std::max(ratio[i][0], ratio[i][1]) < 2.0);
-    // Another end of the fit (a start, the scan's other minimum) that fits as well with this
-    // parameter beyond 2 sigma of the estimate: the data do not tell the two apart.
-    for (const FitEnd& e : ends)
-      if (e.cost - result->cost_final < kAsWell * result->inflation &&
-          std::abs(e.x[i] - best[i]) > 2 * sigma(i) && !f.ambiguous) {
+    // Another end of the fit (a start, the scan's other valley) that fits as well with this
+    // parameter beyond 2 sigma of the estimate: the data do not tell the two apart. And a
+    // parameter whose scan found another valley, however well the fit from it ended: the scan
+    // saw one parameter at a time, and the valley the truth is in can lie where the others were
+    // not yet right (Net A's explicit flight: from EA x2 and EI x0.5 the fit ended at EI x0.35,
+    // smooth and within the noise, the truth's cost about 170 lower; the fit from the scan's
+    // other valley of EI ended 84 above it).
+    for (const FitEnd& e : ends) {
+      if (f.ambiguous) break;
+      if ((e.cost - result->cost_final < kAsWell * result->inflation &&
+           std::abs(e.x[i] - best[i]) > 2 * sigma(i)) ||
+          (e.rival_of == i && e.x[i] != best[i])) {
         f.ambiguous = true;
         f.alternative = par.Value(e.x[i]);
         f.alternative_from = e.from;
       }
+    }
+    if (multimodal[i]) f.ambiguous = true;
     f.identified = looks_identified[i] && !f.rough && !f.ambiguous;
     f.determined_by = f.identified ? "flight data" : f.has_prior ? "prior" : "neither";
     result->parameters.push_back(f);
@@ -923,8 +937,9 @@ FitResult FitShots(const std::vector<FitShotInput>& inputs,
   ShotCost cost(parameters, &shots, priors, options, margin);
   result.residuals = cost.data_rows();
   std::vector<FitEnd> ends;
+  std::vector<bool> multimodal(p, false);
   const std::vector<double> best =
-      Minimise(&cost, parameters, options, x0, start, &result, &ends);
+      Minimise(&cost, parameters, options, x0, start, &result, &ends, &multimodal);
 
   // The covariance: the data's information (inflated per shot) plus the priors'.
   const std::vector<double> jac = JacobianAt(cost, best);
@@ -944,7 +959,8 @@ FitResult FitShots(const std::vector<FitShotInput>& inputs,
       else if (r != c)
         result.correlation(r, c) = std::numeric_limits<double>::quiet_NaN();
 
-  Report(cost, parameters, priors, best, ends, sigma, data_sigma, j.transpose() * j, &result);
+  Report(cost, parameters, priors, best, ends, multimodal, sigma, data_sigma, j.transpose() * j,
+         &result);
   result.ends = static_cast<int>(ends.size());
   result.simulations = cost.simulations();
   result.wall_s = Seconds(start);

@@ -82,9 +82,12 @@ struct FittedParameter {
   std::array<double, 2> check = {std::numeric_limits<double>::quiet_NaN(),
                                  std::numeric_limits<double>::quiet_NaN()};
   bool rough = false;  // checked, and the cost is not within 2x of the quadratic model
-  // Another end of the fit (a start, or the scan's other minimum) fits as well (its cost within
-  // 3.84 x the inflation of the best's) with this parameter more than 2 sigma away: that value,
-  // and where that end started.
+  // The cost has more than one valley along it: another end of the fit (a start, or the scan's
+  // other valley) fits as well (its cost within 3.84 x the inflation of the best's) with this
+  // parameter more than 2 sigma away, or its scan found another valley at all (the fit from there
+  // may have ended worse only because the other parameters were not yet right). The estimate is
+  // the lowest end found, not identified by the flight; a prior decides. The other end's value
+  // and where it started (NaN and empty when that fit failed).
   bool ambiguous = false;
   double alternative = std::numeric_limits<double>::quiet_NaN();
   std::string alternative_from;
