@@ -191,8 +191,8 @@ int Flight(double seconds, int shots, const std::string& integrator) {
   for (int k = 0; k < shots; ++k) inputs.push_back({paths[k], &measured[k], cases[k]});
   FitOptions options = Options(start, 1e-3);
   options.progress = [](const FitProgress& p) {
-    std::fprintf(stderr, "  %s, iteration %d: cost %.6g, %d simulations, %.0f s\n",
-                 p.stage.c_str(), p.iteration, p.cost, p.simulations, p.elapsed_s);
+    std::fprintf(stderr, "  %s, iteration %d: cost %.6g, %d simulations, %.0f s\n", p.stage.c_str(),
+                 p.iteration, p.cost, p.simulations, p.elapsed_s);
   };
   const FitResult r = FitShots(inputs, parameters, options);
   std::printf("flight: %d shot%s (", shots, shots > 1 ? "s" : "");
@@ -206,8 +206,7 @@ int Flight(double seconds, int shots, const std::string& integrator) {
     const double t = truth_of.at(p.parameter.name);
     std::printf("| %s | %.4g | %.4g | %.3g | %.2f | %.2f / %.2f | %s%s |\n",
                 p.parameter.name.c_str(), t, p.value, p.sigma, (p.value - t) / p.sigma, p.check[0],
-                p.check[1], p.determined_by.c_str(),
-                Note(p).c_str());
+                p.check[1], p.determined_by.c_str(), Note(p).c_str());
   }
   std::printf(
       "cost %.4g -> %.4g (%d residuals), %d simulations, %d iterations, %d ends, %.1f s wall\n",
@@ -215,12 +214,11 @@ int Flight(double seconds, int shots, const std::string& integrator) {
   return 0;
 }
 
-
 // The cost along one material parameter: chi^2 = sum d2 of net_a_0.5 with the parameter scaled by
 // f against the truth's knots plus 1 mm of noise, for the horizons seconds/4, /2, 3/4 and
 // seconds. Where the fit's cost is smooth enough for Levenberg-Marquardt, and from how far.
-int Landscape(const std::string& parameter, double truth_value, double seconds,
-              double fixed_dt, const std::string& integrator) {
+int Landscape(const std::string& parameter, double truth_value, double seconds, double fixed_dt,
+              const std::string& integrator) {
   const std::string path = std::string(NETLAB_SOURCE_DIR) + "/scenarios/net_a_0.5.yaml";
   char duration[32];
   std::snprintf(duration, sizeof duration, "%.17g", seconds);
@@ -286,11 +284,10 @@ int main(int argc, char** argv) {
                                   argc > 3 ? std::atoi(argv[3]) : 1,
                                   argc > 4 ? argv[4] : "implicit");
   if (what == "landscape")
-    return netlab::netsim::Landscape(argc > 2 ? argv[2] : "materials.nylon_1mm.bend_stiffness",
-                                     argc > 3 ? std::atof(argv[3]) : 9.82e-5,
-                                     argc > 4 ? std::atof(argv[4]) : 2.0,
-                                     argc > 5 ? std::atof(argv[5]) : -1.0,
-                                     argc > 6 ? argv[6] : "implicit");
+    return netlab::netsim::Landscape(
+        argc > 2 ? argv[2] : "materials.nylon_1mm.bend_stiffness",
+        argc > 3 ? std::atof(argv[3]) : 9.82e-5, argc > 4 ? std::atof(argv[4]) : 2.0,
+        argc > 5 ? std::atof(argv[5]) : -1.0, argc > 6 ? argv[6] : "implicit");
   if (what == "shots") return netlab::netsim::Shots(argc > 2 ? std::atoi(argv[2]) : 20);
   std::fprintf(stderr,
                "usage: bench_fit coverage [draws] | flight [seconds] [shots] | shots [draws]\n");

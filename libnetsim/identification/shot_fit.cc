@@ -688,7 +688,7 @@ std::vector<std::pair<int, std::vector<double>>> ScanMaterial(
 struct FitEnd {
   std::vector<double> x;
   double cost = kInf;
-  std::string from;  // "start 2", "start 1, from the other minimum of <parameter>"
+  std::string from;   // "start 2", "start 1, from the other valley of <parameter>"
   int rival_of = -1;  // the parameter whose scan found the valley it started in
 };
 
@@ -703,17 +703,18 @@ struct FitEnd {
 
 std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& parameters,
                              const FitOptions& options, const std::vector<double>& x0,
-                             Clock::time_point start, FitResult* result,
-                             std::vector<FitEnd>* ends, std::vector<bool>* multimodal) {
+                             Clock::time_point start, FitResult* result, std::vector<FitEnd>* ends,
+                             std::vector<bool>* multimodal) {
   const int p = static_cast<int>(parameters.size());
   std::vector<bool> all(p, true), launch(p);
   for (int i = 0; i < p; ++i) launch[i] = !IsMaterial(parameters[i]);
   const int others = static_cast<int>(std::count(launch.begin(), launch.end(), true));
-  const bool staged = others % p != 0;    // material and others free: the material held first
+  const bool staged = others % p != 0;  // material and others free: the material held first
   const bool scanned = others < p && options.scan_steps > 0;
   const int stages = 1 + staged + scanned;
   auto stage = [&](int k, const std::string& what) {
-    return stages == 1 ? std::string() : std::to_string(k) + "/" + std::to_string(stages) + " " + what;
+    return stages == 1 ? std::string()
+                       : std::to_string(k) + "/" + std::to_string(stages) + " " + what;
   };
   std::mt19937 rng(options.seed);
   std::vector<double> best;
@@ -745,8 +746,8 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
     if (staged) {
       cost->SetActive(launch);
       LevenbergMarquardt(cost, launch, options,
-                         ProgressCallback(options, *cost, start, s, stage(1, "material held")),
-                         &x, &summary);
+                         ProgressCallback(options, *cost, start, s, stage(1, "material held")), &x,
+                         &summary);
       result->iterations += static_cast<int>(summary.iterations.size()) - 1;
       cost->SetActive(all);
       if (summary.termination_type == ceres::FAILURE) continue;
@@ -756,7 +757,7 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
     last_stage(x, s, "", -1, &summary);
     for (const auto& [i, rival] : rivals) {
       (*multimodal)[i] = true;
-      last_stage(rival, s, "from the other minimum of " + parameters[i].name, i, &summary);
+      last_stage(rival, s, "from the other valley of " + parameters[i].name, i, &summary);
     }
   }
   if (best.empty()) throw std::runtime_error("the fit failed: " + cost->last_failure());
@@ -820,8 +821,8 @@ constexpr double kAsWell = 3.841458820694124;
 void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
             const std::vector<PriorTerm>& priors, const std::vector<double>& best,
             const std::vector<FitEnd>& ends, const std::vector<bool>& multimodal,
-            const Eigen::VectorXd& sigma,
-            const Eigen::VectorXd& data_sigma, const Eigen::MatrixXd& jtj, FitResult* result) {
+            const Eigen::VectorXd& sigma, const Eigen::VectorXd& data_sigma,
+            const Eigen::MatrixXd& jtj, FitResult* result) {
   const int p = static_cast<int>(parameters.size());
   std::vector<bool> looks_identified(p), check(p);
   for (int i = 0; i < p; ++i) {

@@ -114,15 +114,16 @@ TEST_F(ShotFit, SaysWhatTheFlightCannotDetermine) {
   options.progress = [&](const FitProgress& p) {
     if (stages.empty() || stages.back() != p.stage) stages.push_back(p.stage);
   };
-  FitResult r = FitShot(scenario_, measured, ParseFreeParameters(free, scenario_, {}, 0.0), options);
+  FitResult r =
+      FitShot(scenario_, measured, ParseFreeParameters(free, scenario_, {}, 0.0), options);
   const FittedParameter& damping = Find(r, "materials.nylon.twist_damping");
   EXPECT_FALSE(damping.identified);
   EXPECT_EQ(damping.determined_by, "neither");
   EXPECT_GT(damping.sigma, 5 * damping.value);
   EXPECT_TRUE(Find(r, "drag.drag_coefficient").identified);
   // The stages: the drag with the material held, the damping scanned, then both.
-  const std::vector<std::string> expected = {
-      "1/3 material held", "2/3 scan materials.nylon.twist_damping", "3/3 all"};
+  const std::vector<std::string> expected = {"1/3 material held",
+                                             "2/3 scan materials.nylon.twist_damping", "3/3 all"};
   EXPECT_EQ(stages, expected);
   EXPECT_GE(r.ends, 1);
 
