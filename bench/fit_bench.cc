@@ -7,12 +7,18 @@
 //   bench_fit shots [draws]      the shot at 0.5, 0.8, 0.3 and 1.0 m/s, fitted 1, 2 and 4 at a
 //                                time (one drag, each shot's launch and time; default 20 draws):
 //                                the drag's error and sigma as shots are added
-//   bench_fit flight [seconds] [shots]
+//   bench_fit flight [seconds] [shots] [implicit|explicit]
 //                                scenarios/net_a_0.5.yaml (then net_a_0.8, net_b_0.5, net_b_0.8
 //                                for 2 or 4 shots) cut to `seconds` (default 2) of flight, 1 mm of
 //                                noise; drag, EA and EI shared, each shot's launch velocity and
 //                                time, from off by 2: error and sigma per parameter, simulations,
-//                                wall time
+//                                wall time; with the scenarios' implicit integrator or the
+//                                explicit one (truth and fit)
+//   bench_fit landscape [path] [truth] [seconds] [dt] [implicit|explicit]
+//                                the cost along one material parameter (default the bend
+//                                stiffness, 9.82e-5) of net_a_0.5 scaled x0.5 .. x2, for 4
+//                                horizons up to `seconds`; dt: the step of every run (0: the
+//                                truth's; default: automatic)
 //
 // Prints tables; never fails on time.
 
@@ -290,6 +296,7 @@ int main(int argc, char** argv) {
         argc > 5 ? std::atof(argv[5]) : -1.0, argc > 6 ? argv[6] : "implicit");
   if (what == "shots") return netlab::netsim::Shots(argc > 2 ? std::atoi(argv[2]) : 20);
   std::fprintf(stderr,
-               "usage: bench_fit coverage [draws] | flight [seconds] [shots] | shots [draws]\n");
+               "usage: bench_fit coverage [draws] | flight [seconds] [shots] [integrator] | "
+               "shots [draws] | landscape [path] [truth] [seconds] [dt] [integrator]\n");
   return 2;
 }
