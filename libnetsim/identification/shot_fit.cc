@@ -777,6 +777,38 @@ std::vector<double> JacobianAt(const ShotCost& cost, const std::vector<double>& 
   return jac;
 }
 
+// The --set lines that rerun shot `shot` as fitted: the user's own (integrator.type=explicit, a
+// changed duration...) but those the fitted values replace whole (a free parameter's, or a list
+// whose every item is free), then the fitted values, which come later and so win where a user's
+// line set a list or a section only in part.
+std::vector<ScenarioOverride> FittedSet(const std::vector<FitParameter>& parameters,
+                                        const std::vector<ScenarioOverride>& set,
+                                        const std::vector<double>& x, int shot) {
+  // The items of a list value: its top-level commas + 1 ("[0.25, 0, 0]" has 3); 0 if not a list.
+  auto items = [](const std::string& value) {
+    if (value.empty() || value.front() != '[') return 0;
+    int depth = 0, n = 1;
+    for (char c : value) {
+      depth += c == '[' ? 1 : c == ']' ? -1 : 0;
+      n += c == ',' && depth == 1;
+    }
+    return n;
+  };
+  std::vector<ScenarioOverride> out;
+  for (const ScenarioOverride& o : set) {
+    int free_items = 0;
+    bool exact = false;
+    for (const FitParameter& p : parameters) {
+      if (p.kind != FitParameter::Kind::kScenario || !Moves(p, shot)) continue;
+      exact |= p.path == o.path;
+      free_items += p.path.rfind(o.path + ".", 0) == 0;
+    }
+    if (!exact && !(free_items > 0 && free_items == items(o.value))) out.push_back(o);
+  }
+  for (const ScenarioOverride& o : ScenarioOverrides(parameters, x, shot)) out.push_back(o);
+  return out;
+}
+
 // Every shot's score at the fit, and the data's information, each shot's rows divided by the
 // inflation its score finds for correlated residuals (and by its reduced chi^2 above 1).
 Eigen::MatrixXd DataInformation(const std::vector<FitShotInput>& inputs,
@@ -800,7 +832,7 @@ Eigen::MatrixXd DataInformation(const std::vector<FitShotInput>& inputs,
     information += rows.transpose() * rows / inflation;
     result->scores.push_back(score);
     result->inflations.push_back(inflation);
-    result->fitted_sets.push_back(ScenarioOverrides(parameters, best, kk));
+    result->fitted_sets.push_back(FittedSet(parameters, options.set, best, kk));
     if (shots[k].held_step) result->fitted_sets.back().push_back(*shots[k].held_step);
     result->inflation = std::max(result->inflation, inflation);
   }

@@ -114,8 +114,9 @@ struct FitResult {
   double dt_s = 0.0;        // the automatic step held for every run (the start's); 0: the
                             // scenario's own dt
   ScoreSummary score;       // `netlab score` of the fitted simulation (the first shot's)
-  // The --set lines that reproduce the fit (first shot): the fitted parameters, then the held step
-  // (integrator.dt) when the scenario's was auto.
+  // The --set lines that reproduce the fit (first shot): the user's own but those naming a free
+  // parameter, the fitted parameters, then the held step (integrator.dt) when the scenario's was
+  // auto.
   std::vector<ScenarioOverride> fitted_set;
   // Per shot, in order: the score, the inflation, the --set lines.
   std::vector<ScoreSummary> scores;

@@ -61,8 +61,10 @@ class ShotFit : public ::testing::Test {
 // of its reported sigmas of the truth, each identified, and the fit consistent with the noise.
 TEST_F(ShotFit, RecoversDragLaunchAndTimeFromAStartOffByTwo) {
   const KnotTracks measured = Measured(7);
+  // The starts, and a line no free parameter replaces (the twin's own integrator, named).
   const std::vector<ScenarioOverride> start = {{"drag.drag_coefficient", "2.4"},
-                                               {"nets.0.velocity", "[0.25, 0, 0]"}};
+                                               {"nets.0.velocity", "[0.25, 0, 0]"},
+                                               {"integrator.type", "implicit"}};
   const auto parameters = ParseFreeParameters("drag.drag_coefficient,nets.0.velocity,time_offset",
                                               scenario_, start, 0.0);
   ASSERT_EQ(parameters.size(), 5u);
@@ -94,13 +96,16 @@ TEST_F(ShotFit, RecoversDragLaunchAndTimeFromAStartOffByTwo) {
   EXPECT_GT(r.simulations, 5);
   ASSERT_EQ(r.correlation.rows(), 5);
   EXPECT_NEAR(r.correlation(0, 0), 1.0, 1e-12);
-  // The --set lines reproduce the estimates, with the automatic step the fit held.
-  ASSERT_EQ(r.fitted_set.size(), 5u);
-  EXPECT_EQ(r.fitted_set[0].path, "drag.drag_coefficient");
-  EXPECT_NEAR(std::stod(r.fitted_set[0].value), Find(r, "drag.drag_coefficient").value, 1e-12);
-  EXPECT_EQ(r.fitted_set[4].path, "integrator.dt");
+  // The --set lines reproduce the fitted run: the user's line no estimate replaces (the start's
+  // drag and whole velocity list are replaced), the estimates, the automatic step the fit held.
+  ASSERT_EQ(r.fitted_set.size(), 6u);
+  EXPECT_EQ(r.fitted_set[0].Text(), "integrator.type=implicit");
+  EXPECT_EQ(r.fitted_set[1].path, "drag.drag_coefficient");
+  EXPECT_NEAR(std::stod(r.fitted_set[1].value), Find(r, "drag.drag_coefficient").value, 1e-12);
+  EXPECT_EQ(r.fitted_set[2].path, "nets.0.velocity.0");
+  EXPECT_EQ(r.fitted_set[5].path, "integrator.dt");
   EXPECT_GT(r.dt_s, 0.0);
-  EXPECT_EQ(std::stod(r.fitted_set[4].value), r.dt_s);
+  EXPECT_EQ(std::stod(r.fitted_set[5].value), r.dt_s);
 }
 
 // The twist damping of a net in free flight leaves no trace the knots show: reported as not
