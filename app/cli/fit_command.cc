@@ -171,7 +171,7 @@ std::string Summary(const netsim::FitResult& r) {
     std::string by = p.determined_by;
     if (p.rough)
       by += ": the cost is rough in it (" + Number(p.check[0]) + "x / " + Number(p.check[1]) +
-            "x the quadratic rise at -/+ sigma), sigma means nothing";
+            "x the quadratic rise at -/+ 2 sigma), sigma means nothing";
     else if (p.ambiguous)
       by += std::isnan(p.alternative)
                 ? ": the cost has another valley along it (the fit from there failed)"
