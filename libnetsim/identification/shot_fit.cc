@@ -473,9 +473,8 @@ std::vector<PriorTerm> PriorTerms(const std::vector<FitParameter>& parameters,
 // The simulated span the fit needs: the measured one shifted by the offset, with room for the
 // offset to move and for the interpolation's stencil. The scenario's duration is cut or extended
 // to it.
-double FitDuration(const std::string& path, const FitOptions& options, const KnotTracks& measured,
+double FitDuration(const Scenario& scenario, const FitOptions& options, const KnotTracks& measured,
                    double margin, std::vector<ScenarioOverride>* set) {
-  const Scenario scenario = LoadScenario(path, *set);
   const double needed =
       measured.time.back() + options.score.time_offset_s + margin + 4 * scenario.output_interval;
   char value[32];
@@ -492,9 +491,9 @@ double FitDuration(const std::string& path, const FitOptions& options, const Kno
 // times, for each log material parameter, the ratio its step falls by at x2 or /2 of its start
 // (probes of one output frame). A material stiffer still may step beyond its stability limit,
 // which rejects that trial step. Returns the held step, 0 when the scenario gives its own.
-double HoldStep(const std::string& path, const std::vector<FitParameter>& parameters,
-                const std::vector<double>& x0, int shot, std::vector<ScenarioOverride>* set) {
-  const Scenario scenario = LoadScenario(path, *set);
+double HoldStep(const std::string& path, const Scenario& scenario,
+                const std::vector<FitParameter>& parameters, const std::vector<double>& x0,
+                int shot, std::vector<ScenarioOverride>* set) {
   if (scenario.simulation.dt > 0.0) return 0.0;
   char value[32];
   std::snprintf(value, sizeof value, "%.17g", scenario.output_interval);
@@ -619,8 +618,10 @@ std::vector<Shot> PrepareShots(const std::vector<FitShotInput>& inputs,
     if (in.measured == nullptr || in.measured->frames() < 1)
       throw std::invalid_argument(in.measured_name + ": no frame");
     std::vector<ScenarioOverride> set = options.set;
-    const double duration = FitDuration(in.scenario_path, options, *in.measured, margin, &set);
-    const double dt = HoldStep(in.scenario_path, parameters, x0, static_cast<int>(k), &set);
+    const Scenario scenario = LoadScenario(in.scenario_path, set);
+    const double duration = FitDuration(scenario, options, *in.measured, margin, &set);
+    const double dt =
+        HoldStep(in.scenario_path, scenario, parameters, x0, static_cast<int>(k), &set);
     std::optional<ScenarioOverride> held_step;
     if (dt > 0.0) held_step = set.back();
     if (k == 0) {
@@ -700,7 +701,6 @@ struct FitEnd {
 // valley of wrong minima, in the twin's Net A flight). Returns the best end (its cost in
 // result->cost_final); every usable end in *ends; in *multimodal, the parameters whose scan found
 // another valley.
-
 std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& parameters,
                              const FitOptions& options, const std::vector<double>& x0,
                              Clock::time_point start, FitResult* result, std::vector<FitEnd>* ends,
@@ -784,15 +784,14 @@ std::vector<double> JacobianAt(const ShotCost& cost, const std::vector<double>& 
 std::vector<ScenarioOverride> FittedSet(const std::vector<FitParameter>& parameters,
                                         const std::vector<ScenarioOverride>& set,
                                         const std::vector<double>& x, int shot) {
-  // The items of a list value: its top-level commas + 1 ("[0.25, 0, 0]" has 3); 0 if not a list.
+  // The items of a list value, read as ApplyOverride reads it; 0 if not a list.
   auto items = [](const std::string& value) {
-    if (value.empty() || value.front() != '[') return 0;
-    int depth = 0, n = 1;
-    for (char c : value) {
-      depth += c == '[' ? 1 : c == ']' ? -1 : 0;
-      n += c == ',' && depth == 1;
+    try {
+      const YAML::Node node = YAML::Load(value);
+      return node.IsSequence() ? static_cast<int>(node.size()) : 0;
+    } catch (const YAML::Exception&) {
+      return 0;
     }
-    return n;
   };
   std::vector<ScenarioOverride> out;
   for (const ScenarioOverride& o : set) {
@@ -849,7 +848,6 @@ constexpr double kAsWell = 3.841458820694124;
 // prior's sigma, else the parameter's spread, fit_parameters.h), for the scenario ones that
 // look identified whether the cost is smooth enough for sigma to mean something, and whether
 // another end of the fit fits as well.
-
 void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
             const std::vector<PriorTerm>& priors, const std::vector<double>& best,
             const std::vector<FitEnd>& ends, const std::vector<bool>& multimodal,
