@@ -197,8 +197,8 @@ int Flight(double seconds, int shots, const std::string& integrator) {
   for (int k = 0; k < shots; ++k) inputs.push_back({paths[k], &measured[k], cases[k]});
   FitOptions options = Options(start, 1e-3);
   options.progress = [](const FitProgress& p) {
-    std::fprintf(stderr, "  %s, iteration %d: cost %.6g, %d simulations, %.0f s\n", p.stage.c_str(),
-                 p.iteration, p.cost, p.simulations, p.elapsed_s);
+    std::fprintf(stderr, "  %s, iteration %d: cost %.6g, %d simulations, %.0f s, ETA <= %.0f s\n",
+                 p.stage.c_str(), p.iteration, p.cost, p.simulations, p.elapsed_s, p.eta_s);
   };
   const FitResult r = FitShots(inputs, parameters, options);
   std::printf("flight: %d shot%s (", shots, shots > 1 ? "s" : "");

@@ -363,10 +363,10 @@ int RunFit(const std::vector<std::string>& args) {
         if (p.starts > 1)
           where += "start " + std::to_string(p.start + 1) + "/" + std::to_string(p.starts) + ", ";
         if (!p.stage.empty()) where += "stage " + p.stage + ", ";
-        std::fprintf(stderr, "%sfit: %siteration %d, cost %s, %d simulations, %s, ETA <= %s%s",
-                     tty ? "\r" : "", where.c_str(), p.iteration, Number(p.cost).c_str(),
-                     p.simulations, Duration(p.elapsed_s).c_str(), Duration(p.eta_s).c_str(),
-                     tty ? "   " : "\n");
+        if (p.iteration >= 0) where += "iteration " + std::to_string(p.iteration) + ", ";
+        std::fprintf(stderr, "%sfit: %scost %s, %d simulations, %s, ETA <= %s%s", tty ? "\r" : "",
+                     where.c_str(), Number(p.cost).c_str(), p.simulations,
+                     Duration(p.elapsed_s).c_str(), Duration(p.eta_s).c_str(), tty ? "   " : "\n");
       };
 
     const std::vector<netsim::FitParameter> parameters =

@@ -283,6 +283,21 @@ class ShotCost : public ceres::CostFunction {
     return costs;
   }
 
+  // At most the simulations one Levenberg-Marquardt iteration over `active` runs: each shot's
+  // trial step and a forward difference per active scenario parameter that moves it (the
+  // accepted step's own run is remembered).
+  long RunsPerIteration(const std::vector<bool>& active) const {
+    long runs = 0;
+    for (size_t k = 0; k < shots_.size(); ++k) {
+      ++runs;
+      for (size_t j = 0; j < parameters_.size(); ++j)
+        runs += parameters_[j].kind == FitParameter::Kind::kScenario && active[j] &&
+                Moves(parameters_[j], static_cast<int>(k));
+    }
+    return runs;
+  }
+  int shots() const { return static_cast<int>(shots_.size()); }
+
   int simulations() const {
     int n = 0;
     for (const Shot& shot : shots_) n += shot.simulator.simulations();
@@ -380,16 +395,26 @@ class ShotCost : public ceres::CostFunction {
   mutable std::string failure_;
 };
 
-// Progress once per Levenberg-Marquardt iteration.
+// The ETA: at most `runs` more simulations at the pace so far (every run of the fit takes about
+// as long; the start's run is done before any report, so the pace is known from the first).
+double EtaSeconds(const ShotCost& cost, Clock::time_point start, long runs) {
+  const int done = cost.simulations();
+  return done > 0 ? Seconds(start) / done * static_cast<double>(runs) : 0.0;
+}
+
+// Progress once per Levenberg-Marquardt iteration; `after` (simulations of the stages after this
+// one) and the run's own iterations left bound the ETA.
 class ProgressCallback : public ceres::IterationCallback {
  public:
   ProgressCallback(const FitOptions& options, const ShotCost& cost, Clock::time_point start,
-                   int start_index, std::string stage = "")
+                   int start_index, std::string stage, const std::vector<bool>& active, long after)
       : options_(options),
         cost_(cost),
         start_(start),
         start_index_(start_index),
-        stage_(std::move(stage)) {}
+        stage_(std::move(stage)),
+        per_iteration_(cost.RunsPerIteration(active)),
+        after_(after) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
     if (options_.progress) {
       FitProgress p;
@@ -397,11 +422,9 @@ class ProgressCallback : public ceres::IterationCallback {
       p.cost = 2 * s.cost;
       p.simulations = cost_.simulations();
       p.elapsed_s = Seconds(start_);
-      const int left = (options_.max_iterations - s.iteration) +
-                       (options_.starts - 1 - start_index_) * options_.max_iterations;
-      p.eta_s = s.iteration > 0
-                    ? p.elapsed_s / (s.iteration + start_index_ * options_.max_iterations) * left
-                    : 0.0;
+      p.simulations_left =
+          static_cast<long>(options_.max_iterations - s.iteration) * per_iteration_ + after_;
+      p.eta_s = EtaSeconds(cost_, start_, p.simulations_left);
       p.start = start_index_;
       p.starts = options_.starts;
       p.stage = stage_;
@@ -416,6 +439,8 @@ class ProgressCallback : public ceres::IterationCallback {
   Clock::time_point start_;
   int start_index_;
   std::string stage_;
+  long per_iteration_;
+  long after_;
 };
 
 // Standard deviations and covariance of an information matrix that may be singular: the
@@ -647,6 +672,15 @@ std::vector<Shot> PrepareShots(const std::vector<FitShotInput>& inputs,
   return shots;
 }
 
+// The simulations of one scan: every shot at 2 x options.scan_steps points per material parameter
+// (the middle one is where the scan stands, already run).
+long ScanRuns(const ShotCost& cost, const std::vector<FitParameter>& parameters,
+              const FitOptions& options) {
+  if (options.scan_steps <= 0) return 0;
+  const long materials = std::count_if(parameters.begin(), parameters.end(), IsMaterial);
+  return materials * 2 * options.scan_steps * cost.shots();
+}
+
 // The scan between the stages: along each material parameter in turn, the cost at
 // options.scan_steps values per factor 2 either way of the current one (2 x 8: steps of 9 %),
 // simulated at once, and the parameter moved to the lowest. Levenberg-Marquardt follows the cost
@@ -659,12 +693,15 @@ std::vector<Shot> PrepareShots(const std::vector<FitShotInput>& inputs,
 // (the other parameters not yet refitted there: the scan's costs only rank basins).
 std::vector<std::pair<int, std::vector<double>>> ScanMaterial(
     const ShotCost& cost, const std::vector<FitParameter>& parameters, const FitOptions& options,
-    Clock::time_point start, int start_index, const std::string& stage, std::vector<double>* x) {
+    Clock::time_point start, int start_index, const std::string& stage, long after,
+    std::vector<double>* x) {
   std::vector<std::pair<int, std::vector<double>>> rivals;
   if (options.scan_steps <= 0) return rivals;
   const int steps = options.scan_steps, n = 2 * steps + 1;
+  long left = ScanRuns(cost, parameters, options);
   for (size_t i = 0; i < parameters.size(); ++i) {
     if (!IsMaterial(parameters[i])) continue;
+    left -= 2L * steps * cost.shots();
     std::vector<std::vector<double>> xs(n, *x);
     for (int k = -steps; k <= steps; ++k) xs[k + steps][i] += std::log(2.0) * k / steps;
     const std::vector<double> c = cost.CostsAt(xs);
@@ -676,6 +713,9 @@ std::vector<std::pair<int, std::vector<double>>> ScanMaterial(
       p.cost = c[best];
       p.simulations = cost.simulations();
       p.elapsed_s = Seconds(start);
+      p.iteration = -1;
+      p.simulations_left = left + after;
+      p.eta_s = EtaSeconds(cost, start, p.simulations_left);
       p.start = start_index;
       p.starts = options.starts;
       p.stage = stage + " " + parameters[i].name + (rival >= 0 ? " (2 minima)" : "");
@@ -716,17 +756,36 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
     return stages == 1 ? std::string()
                        : std::to_string(k) + "/" + std::to_string(stages) + " " + what;
   };
+  // Upper bounds of the simulations left, for the ETA: a Levenberg-Marquardt run of every stage,
+  // a whole start, and what follows the last start (the quadratic check: two points per scenario
+  // parameter; the Jacobian at the best end when it is not the last one taken).
+  // (Iteration 0 is the start's Jacobian.)
+  const long lm_all = (options.max_iterations + 1L) * cost->RunsPerIteration(all);
+  const long lm_launch =
+      staged ? (options.max_iterations + 1L) * cost->RunsPerIteration(launch) : 0;
+  const long scan = scanned ? ScanRuns(*cost, parameters, options) : 0;
+  const long per_start = lm_launch + scan + lm_all;
+  const long finish = 2L *
+                          std::count_if(parameters.begin(), parameters.end(),
+                                        [](const FitParameter& par) {
+                                          return par.kind == FitParameter::Kind::kScenario;
+                                        }) *
+                          cost->shots() +
+                      cost->RunsPerIteration(all);
   std::mt19937 rng(options.seed);
   std::vector<double> best;
   result->cost_initial = cost->CostsAt({x0})[0];  // the start's run is remembered: no simulation
   result->cost_final = kInf;
   // The last stage from x; its end kept when usable, and the best end remembered.
+  // `after`: the simulations after this run (its start's other valleys, the later starts, the
+  // check).
   auto last_stage = [&](std::vector<double> x, int s, const std::string& from, int rival_of,
-                        ceres::Solver::Summary* summary) {
+                        long after, ceres::Solver::Summary* summary) {
     LevenbergMarquardt(
         cost, all, options,
         ProgressCallback(options, *cost, start, s,
-                         stage(stages, "all") + (from.empty() || stages == 1 ? "" : ", " + from)),
+                         stage(stages, "all") + (from.empty() || stages == 1 ? "" : ", " + from),
+                         all, after),
         &x, summary);
     result->iterations += static_cast<int>(summary->iterations.size()) - 1;
     if (!summary->IsSolutionUsable()) return;
@@ -743,21 +802,26 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
     std::vector<double> x = s == 0 ? x0 : DrawStart(parameters, x0, &rng);
     ceres::Solver::Summary summary;
     std::vector<std::pair<int, std::vector<double>>> rivals;
+    const long later = (options.starts - 1 - s) * per_start + finish;
     if (staged) {
       cost->SetActive(launch);
       LevenbergMarquardt(cost, launch, options,
-                         ProgressCallback(options, *cost, start, s, stage(1, "material held")), &x,
-                         &summary);
+                         ProgressCallback(options, *cost, start, s, stage(1, "material held"),
+                                          launch, scan + lm_all + later),
+                         &x, &summary);
       result->iterations += static_cast<int>(summary.iterations.size()) - 1;
       cost->SetActive(all);
       if (summary.termination_type == ceres::FAILURE) continue;
     }
     if (scanned)
-      rivals = ScanMaterial(*cost, parameters, options, start, s, stage(1 + staged, "scan"), &x);
-    last_stage(x, s, "", -1, &summary);
+      rivals = ScanMaterial(*cost, parameters, options, start, s, stage(1 + staged, "scan"),
+                            lm_all + later, &x);
+    long valleys = static_cast<long>(rivals.size());
+    last_stage(x, s, "", -1, valleys * lm_all + later, &summary);
     for (const auto& [i, rival] : rivals) {
       (*multimodal)[i] = true;
-      last_stage(rival, s, "from the other valley of " + parameters[i].name, i, &summary);
+      last_stage(rival, s, "from the other valley of " + parameters[i].name, i,
+                 --valleys * lm_all + later, &summary);
     }
   }
   if (best.empty()) throw std::runtime_error("the fit failed: " + cost->last_failure());

@@ -41,11 +41,15 @@ struct FitPrior {
 };
 
 struct FitProgress {
-  int iteration = 0;
+  int iteration = 0;    // of Levenberg-Marquardt; -1 in the scan's reports
   double cost = 0.0;    // sum of squared whitened residuals (data + priors)
   int simulations = 0;  // done so far
   double elapsed_s = 0.0;
-  double eta_s = 0.0;  // at most this much more (the iterations left at the mean pace)
+  // At most this many more simulations: every Levenberg-Marquardt run to max_iterations, the
+  // scan, the last stage from each other valley found so far (a valley found later adds its
+  // own), the final check.
+  long simulations_left = 0;
+  double eta_s = 0.0;  // simulations_left at the mean pace so far
   int start = 0, starts = 1;
   // "1/3 material held", "2/3 scan <parameter>", "3/3 all" (without the first when only material
   // parameters are free), or empty when no material parameter is

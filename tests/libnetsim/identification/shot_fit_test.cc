@@ -116,11 +116,25 @@ TEST_F(ShotFit, SaysWhatTheFlightCannotDetermine) {
   const std::string free = "drag.drag_coefficient,materials.nylon.twist_damping";
   FitOptions options = Options({});
   std::vector<std::string> stages;
+  std::vector<FitProgress> reports;
   options.progress = [&](const FitProgress& p) {
     if (stages.empty() || stages.back() != p.stage) stages.push_back(p.stage);
+    reports.push_back(p);
   };
   FitResult r =
       FitShot(scenario_, measured, ParseFreeParameters(free, scenario_, {}, 0.0), options);
+  // The ETA's count bounds what the fit still ran, from the first report on (the scan found no
+  // second valley here: nothing was added later), and it shrinks.
+  ASSERT_FALSE(reports.empty());
+  for (const FitProgress& p : reports) {
+    EXPECT_GE(p.simulations + p.simulations_left, r.simulations)
+        << p.stage << ", iteration " << p.iteration;
+    EXPECT_GT(p.eta_s, 0.0) << p.stage << ", iteration " << p.iteration;
+  }
+  for (size_t i = 1; i < reports.size(); ++i)
+    EXPECT_LE(reports[i].simulations + reports[i].simulations_left,
+              reports[i - 1].simulations + reports[i - 1].simulations_left)
+        << reports[i].stage << ", iteration " << reports[i].iteration;
   const FittedParameter& damping = Find(r, "materials.nylon.twist_damping");
   EXPECT_FALSE(damping.identified);
   EXPECT_EQ(damping.determined_by, "neither");
