@@ -143,6 +143,8 @@ std::string FitYaml(const std::vector<std::string>& scenarios,
     << ", p_value: " << Number(r.score.p_value) << ", verdict: " << r.score.verdict << "}\n";
   o << "set:\n";
   for (const auto& s : r.fitted_set) o << "  - " << Quoted(s.Text()) << "\n";
+  o << "notes:" << (r.notes.empty() ? " []" : "") << "\n";
+  for (const auto& note : r.notes) o << "  - " << Quoted(note) << "\n";
   if (scenarios.size() > 1) {
     o << "# every shot (the keys above are the first one's)\nshots:\n";
     for (size_t k = 0; k < scenarios.size(); ++k) {
@@ -201,6 +203,7 @@ std::string Summary(const netsim::FitResult& r) {
         o << "  strongly correlated: " << r.parameters[i].parameter.name << " and "
           << r.parameters[j].parameter.name << " (" << Number(r.correlation(i, j))
           << "): the data fix a combination of them better than either\n";
+  for (const auto& note : r.notes) o << "  note: " << note << "\n";
   return o.str();
 }
 
@@ -251,6 +254,9 @@ void PrintJson(const netsim::FitResult& r, const std::string& out) {
   json.EndObject();
   json.Key("set").BeginArray();
   for (const auto& s : r.fitted_set) json.String(s.Text());
+  json.EndArray();
+  json.Key("notes").BeginArray();
+  for (const auto& note : r.notes) json.String(note);
   json.EndArray();
   json.Key("shots").BeginArray();
   for (size_t k = 0; k < r.scores.size(); ++k) {
@@ -383,9 +389,14 @@ int RunFit(const std::vector<std::string>& args) {
                      scenarios[k].c_str(), measured_paths[k].c_str(), measured[k].frames(),
                      measured[k].knots());
     }
-    if (!quiet)
+    if (!quiet) {
+      for (const std::string& path : scenarios)
+        for (const std::string& note :
+             netsim::ResolutionNotes(netsim::LoadScenario(path, options.set), parameters, path))
+          std::fprintf(stderr, "note: %s\n", note.c_str());
       std::fprintf(stderr, "fitting %zu parameter%s\n", parameters.size(),
                    parameters.size() == 1 ? "" : "s");
+    }
     const netsim::FitResult result = netsim::FitShots(shots, parameters, options);
     if (!quiet && tty) std::fputc('\n', stderr);
     WriteTextFile(out, FitYaml(scenarios, measured_paths, result));

@@ -644,6 +644,8 @@ std::vector<Shot> PrepareShots(const std::vector<FitShotInput>& inputs,
       throw std::invalid_argument(in.measured_name + ": no frame");
     std::vector<ScenarioOverride> set = options.set;
     const Scenario scenario = LoadScenario(in.scenario_path, set);
+    for (std::string& note : ResolutionNotes(scenario, parameters, in.scenario_path))
+      result->notes.push_back(std::move(note));
     const double duration = FitDuration(scenario, options, *in.measured, margin, &set);
     const double dt =
         HoldStep(in.scenario_path, scenario, parameters, x0, static_cast<int>(k), &set);
@@ -992,6 +994,39 @@ ScanMinima FindScanMinima(const std::vector<double>& costs, int current, double 
       m.rival = k;
   }
   return m;
+}
+
+std::vector<std::string> ResolutionNotes(const Scenario& scenario,
+                                         const std::vector<FitParameter>& parameters,
+                                         const std::string& name) {
+  std::vector<std::string> notes;
+  for (const FitParameter& par : parameters) {
+    if (par.kind != FitParameter::Kind::kScenario) continue;
+    const std::string prefix = "materials.", key = ".bend_stiffness";
+    const std::string& path = par.path;
+    if (path.rfind(prefix, 0) != 0 || path.size() <= prefix.size() + key.size() ||
+        path.compare(path.size() - key.size(), key.size(), key) != 0)
+      continue;
+    const std::string material =
+        path.substr(prefix.size(), path.size() - prefix.size() - key.size());
+    for (size_t n = 0; n < scenario.nets.size(); ++n) {
+      const NetSpec& net = scenario.nets[n];
+      if (scenario.materials[net.material].name != material) continue;
+      const double segment = net.mesh / net.segments_per_link;
+      if (segment <= kBendingSegment * 1.001) continue;
+      char text[640];
+      std::snprintf(
+          text, sizeof text,
+          "net '%s' of %s has %.3g cm segments (%d per link), too coarse to show EI in a "
+          "flight: the fitted %s is this model's, not the thread's (Net A's flight shows a tenth "
+          "of EI's effect at 2.5 cm segments, two thirds at 1.25 cm; docs/benchmarks.md). To fit "
+          "the thread's, refine the links: --set nets.%zu.segments_per_link=%d",
+          net.name.c_str(), name.c_str(), segment * 100, net.segments_per_link, par.name.c_str(), n,
+          static_cast<int>(std::ceil(net.mesh / kBendingSegment - 1e-9)));
+      notes.push_back(text);
+    }
+  }
+  return notes;
 }
 
 FitResult FitShot(const std::string& scenario_path, const KnotTracks& measured,

@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "libnetsim/identification/fit_parameters.h"
+#include "libnetsim/scenario/scenario.h"
 #include "libnetsim/tracks/track_file.h"
 #include "libnetsim/validation/score.h"
 
@@ -126,6 +127,8 @@ struct FitResult {
   std::vector<ScoreSummary> scores;
   std::vector<double> inflations;
   std::vector<std::vector<ScenarioOverride>> fitted_sets;
+  // What the user should know about the fit beyond the numbers (ResolutionNotes).
+  std::vector<std::string> notes;
 };
 
 // One measured shot and the scenario that simulates it.
@@ -146,6 +149,15 @@ FitResult FitShot(const std::string& scenario_path, const KnotTracks& measured,
 // residuals of every shot, each weighed and inflated as one shot's.
 FitResult FitShots(const std::vector<FitShotInput>& shots,
                    const std::vector<FitParameter>& parameters, const FitOptions& options);
+
+// Notes for a free bending stiffness whose net is too coarse to show it: a link's segments
+// longer than kBendingSegment. At net A's 2.5 cm a flight shows a tenth of EI's effect on the
+// knots with the implicit step, at 1.25 cm two thirds (docs/benchmarks.md, bending waves), so
+// the fitted EI is that resolution's, not the thread's. `name` names the scenario in the note.
+inline constexpr double kBendingSegment = 0.0125;  // m
+std::vector<std::string> ResolutionNotes(const Scenario& scenario,
+                                         const std::vector<FitParameter>& parameters,
+                                         const std::string& name);
 
 // The scan's reading of one profile of costs along a parameter (NaN or inf: a failed run): the
 // lowest (the one at `current` unless another is lower), and the lowest other local minimum

@@ -80,7 +80,30 @@ TEST_F(FitCommand, FitsTheTwinAndKeepsTheJsonContract) {
   EXPECT_EQ(file["set"][4].as<std::string>().rfind("integrator.dt=", 0), 0u);
   EXPECT_GT(file["dt_s"].as<double>(), 0.0);
   EXPECT_EQ(file["correlation"].size(), 5u);
+  EXPECT_TRUE(json["notes"].array().empty());
+  EXPECT_EQ(file["notes"].size(), 0u);
   EXPECT_FALSE(std::filesystem::exists(Path("fit.yaml.partial")));
+}
+
+// A free EI on a net whose links are too coarse to show it (the twin's 5 cm segments): said before
+// the fit starts, after the table, in fit.yaml and in the JSON, with the --set that refines them.
+TEST_F(FitCommand, SaysWhenTheLinksAreTooCoarseForTheBendingStiffness) {
+  const auto r =
+      RunNetlab(Fit("--free drag.drag_coefficient,materials.nylon.bend_stiffness --json"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto json = LastJson(r.out);
+  ASSERT_EQ(json["notes"].array().size(), 1u);
+  const std::string note = json["notes"].array()[0].string();
+  EXPECT_NE(note.find("net 'net'"), std::string::npos) << note;
+  EXPECT_NE(note.find("5 cm segments (2 per link)"), std::string::npos) << note;
+  EXPECT_NE(note.find("--set nets.0.segments_per_link=8"), std::string::npos) << note;
+  const size_t first = r.err.find("note: " + note);
+  ASSERT_NE(first, std::string::npos) << r.err;
+  EXPECT_LT(first, r.err.find("fitting 2 parameters")) << r.err;
+  EXPECT_NE(r.err.find("  note: " + note), std::string::npos) << r.err;  // after the table
+  const YAML::Node file = YAML::LoadFile(Path("fit.yaml"));
+  ASSERT_EQ(file["notes"].size(), 1u);
+  EXPECT_EQ(file["notes"][0].as<std::string>(), note);
 }
 
 TEST_F(FitCommand, APriorDeterminesWhatTheFlightCannot) {

@@ -157,6 +157,27 @@ TEST_F(ShotFit, SaysWhatTheFlightCannotDetermine) {
   EXPECT_NEAR(informed.sigma, 1e-11, 1e-12);
 }
 
+// A free EI is noted when a net of its material has segments longer than 1.25 cm, with the count
+// per link that brings them there; not for another parameter, another material or fine links.
+TEST_F(ShotFit, NotesLinksTooCoarseForTheBendingStiffness) {
+  const auto notes = [&](const std::string& free, const std::vector<ScenarioOverride>& set) {
+    return ResolutionNotes(LoadScenario(scenario_, set),
+                           ParseFreeParameters(free, scenario_, set, 0.0), "shot.yaml");
+  };
+  const auto coarse = notes("drag.drag_coefficient,materials.nylon.bend_stiffness", {});
+  ASSERT_EQ(coarse.size(), 1u);
+  EXPECT_EQ(coarse[0].rfind("net 'net' of shot.yaml has 5 cm segments (2 per link)", 0), 0u)
+      << coarse[0];
+  EXPECT_NE(coarse[0].find("the fitted materials.nylon.bend_stiffness is this model's"),
+            std::string::npos)
+      << coarse[0];
+  EXPECT_NE(coarse[0].find("--set nets.0.segments_per_link=8"), std::string::npos) << coarse[0];
+  EXPECT_TRUE(notes("materials.nylon.twist_stiffness,drag.drag_coefficient", {}).empty());
+  EXPECT_TRUE(notes("materials.nylon.bend_stiffness", {{"nets.0.segments_per_link", "8"}}).empty());
+  EXPECT_EQ(notes("materials.nylon.bend_stiffness", {{"nets.0.segments_per_link", "7"}}).size(),
+            1u);
+}
+
 // The scan's reading of a profile: the lowest point, and a second basin only behind a real
 // barrier (a chi^2 rise of 9 above both), not the simulation's jitter or a failed run.
 TEST(ScanMinima, ASecondBasinIsARivalJitterIsNot) {
