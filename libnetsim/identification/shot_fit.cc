@@ -758,22 +758,19 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
     return stages == 1 ? std::string()
                        : std::to_string(k) + "/" + std::to_string(stages) + " " + what;
   };
-  // Upper bounds of the simulations left, for the ETA: a Levenberg-Marquardt run of every stage,
-  // a whole start, and what follows the last start (the quadratic check: two points per scenario
-  // parameter; the Jacobian at the best end when it is not the last one taken).
-  // (Iteration 0 is the start's Jacobian.)
+  // Upper bounds of the simulations left, for the ETA: a Levenberg-Marquardt run of each stage
+  // (iteration 0 is its start's Jacobian), a whole start, and what follows the last start (the
+  // quadratic check: two points per scenario parameter; the Jacobian at the best end when it is
+  // not the last one taken).
   const long lm_all = (options.max_iterations + 1L) * cost->RunsPerIteration(all);
   const long lm_launch =
       staged ? (options.max_iterations + 1L) * cost->RunsPerIteration(launch) : 0;
   const long scan = scanned ? ScanRuns(*cost, parameters, options) : 0;
   const long per_start = lm_launch + scan + lm_all;
-  const long finish = 2L *
-                          std::count_if(parameters.begin(), parameters.end(),
-                                        [](const FitParameter& par) {
-                                          return par.kind == FitParameter::Kind::kScenario;
-                                        }) *
-                          cost->shots() +
-                      cost->RunsPerIteration(all);
+  const long simulated = std::count_if(parameters.begin(), parameters.end(), [](const auto& par) {
+    return par.kind == FitParameter::Kind::kScenario;
+  });
+  const long finish = 2 * simulated * cost->shots() + cost->RunsPerIteration(all);
   std::mt19937 rng(options.seed);
   std::vector<double> best;
   result->cost_initial = cost->CostsAt({x0})[0];  // the start's run is remembered: no simulation
