@@ -419,7 +419,9 @@ class ProgressCallback : public ceres::IterationCallback {
     if (options_.progress) {
       FitProgress p;
       p.iteration = s.iteration;
-      p.cost = 2 * s.cost;
+      // Ceres reports a rejected step's cost; the fit stays where it was.
+      if (s.iteration == 0 || s.step_is_successful) cost_now_ = 2 * s.cost;
+      p.cost = cost_now_;
       p.simulations = cost_.simulations();
       p.elapsed_s = Seconds(start_);
       p.simulations_left =
@@ -441,6 +443,7 @@ class ProgressCallback : public ceres::IterationCallback {
   std::string stage_;
   long per_iteration_;
   long after_;
+  double cost_now_ = 0.0;  // the cost where the run stands
 };
 
 // Standard deviations and covariance of an information matrix that may be singular: the

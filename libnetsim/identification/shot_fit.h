@@ -43,7 +43,7 @@ struct FitPrior {
 
 struct FitProgress {
   int iteration = 0;    // of Levenberg-Marquardt; -1 in the scan's reports
-  double cost = 0.0;    // sum of squared whitened residuals (data + priors)
+  double cost = 0.0;    // sum of squared whitened residuals (data + priors) where the fit stands
   int simulations = 0;  // done so far
   double elapsed_s = 0.0;
   // At most this many more simulations: every Levenberg-Marquardt run to max_iterations, the

@@ -131,10 +131,16 @@ TEST_F(ShotFit, SaysWhatTheFlightCannotDetermine) {
         << p.stage << ", iteration " << p.iteration;
     EXPECT_GT(p.eta_s, 0.0) << p.stage << ", iteration " << p.iteration;
   }
-  for (size_t i = 1; i < reports.size(); ++i)
+  // The cost reported is where the fit stands: it never rises within a stage (a rejected step's
+  // cost is not reported), and the scan moves to its lowest point.
+  for (size_t i = 1; i < reports.size(); ++i) {
     EXPECT_LE(reports[i].simulations + reports[i].simulations_left,
               reports[i - 1].simulations + reports[i - 1].simulations_left)
         << reports[i].stage << ", iteration " << reports[i].iteration;
+    if (reports[i].stage == reports[i - 1].stage)
+      EXPECT_LE(reports[i].cost, reports[i - 1].cost)
+          << reports[i].stage << ", iteration " << reports[i].iteration;
+  }
   const FittedParameter& damping = Find(r, "materials.nylon.twist_damping");
   EXPECT_FALSE(damping.identified);
   EXPECT_EQ(damping.determined_by, "neither");
