@@ -7,13 +7,15 @@
 //   bench_fit shots [draws]      the shot at 0.5, 0.8, 0.3 and 1.0 m/s, fitted 1, 2 and 4 at a
 //                                time (one drag, each shot's launch and time; default 20 draws):
 //                                the drag's error and sigma as shots are added
-//   bench_fit flight [seconds] [shots] [implicit|explicit]
+//   bench_fit flight [seconds] [shots] [implicit|explicit] [segments] [truth's segments]
 //                                scenarios/net_a_0.5.yaml (then net_a_0.8, net_b_0.5, net_b_0.8
 //                                for 2 or 4 shots) cut to `seconds` (default 2) of flight, 1 mm of
 //                                noise; drag, EA and EI shared, each shot's launch velocity and
 //                                time, from off by 2: error and sigma per parameter, simulations,
 //                                wall time; with the scenarios' implicit integrator or the
-//                                explicit one (truth and fit)
+//                                explicit one (truth and fit); the fit's and the truth's segments
+//                                per link (0: the scenario's): a truth finer than the fit stands
+//                                for a world the model does not resolve
 //   bench_fit landscape [path] [truth] [seconds] [dt] [implicit|explicit]
 //                                the cost along one material parameter (default the bend
 //                                stiffness, 9.82e-5) of net_a_0.5 scaled x0.5 .. x2, for 4
@@ -158,7 +160,8 @@ std::string Note(const FittedParameter& p) {
 // The flight cases cut to `seconds`, 1 mm of noise, fitted `shots` at a time (net_a_0.5,
 // net_a_0.8, net_b_0.5, net_b_0.8 in that order): drag, EA and EI shared, each shot's launch
 // velocity and time; from drag x2, velocity x1/2, EA x2 and EI x1/2.
-int Flight(double seconds, int shots, const std::string& integrator) {
+int Flight(double seconds, int shots, const std::string& integrator, int segments,
+           int truth_segments) {
   const char* cases[4] = {"net_a_0.5", "net_a_0.8", "net_b_0.5", "net_b_0.8"};
   const double speeds[4] = {0.5, 0.8, 0.5, 0.8};
   char duration[32];
@@ -170,8 +173,11 @@ int Flight(double seconds, int shots, const std::string& integrator) {
                                             {"materials.nylon_1mm.bend_stiffness", 9.82e-5}};
   for (int k = 0; k < shots; ++k) {
     paths.push_back(std::string(NETLAB_SOURCE_DIR) + "/scenarios/" + cases[k] + ".yaml");
-    const SweepRun truth =
-        RunOne(paths.back(), 0, {{"duration", duration}, {"integrator.type", integrator}}, 1);
+    std::vector<ScenarioOverride> truth_set = {{"duration", duration},
+                                               {"integrator.type", integrator}};
+    if (truth_segments > 0)
+      truth_set.push_back({"nets.0.segments_per_link", std::to_string(truth_segments)});
+    const SweepRun truth = RunOne(paths.back(), 0, truth_set, 1);
     if (!truth.ok()) {
       std::fprintf(stderr, "the truth of %s failed: %s\n", cases[k], truth.error.c_str());
       return 1;
@@ -184,11 +190,12 @@ int Flight(double seconds, int shots, const std::string& integrator) {
   }
   // The launch is each scenario's own: started at half its speed by a --set per shot is not
   // possible (--set is shared), so the shared start moves every shot to 0.25 m/s.
-  const std::vector<ScenarioOverride> start = {{"integrator.type", integrator},
-                                               {"drag.drag_coefficient", "2.4"},
-                                               {"nets.0.velocity", "[0.25, 0, 0]"},
-                                               {"materials.nylon_1mm.stretch_stiffness", "3142"},
-                                               {"materials.nylon_1mm.bend_stiffness", "4.91e-5"}};
+  std::vector<ScenarioOverride> start = {{"integrator.type", integrator},
+                                         {"drag.drag_coefficient", "2.4"},
+                                         {"nets.0.velocity", "[0.25, 0, 0]"},
+                                         {"materials.nylon_1mm.stretch_stiffness", "3142"},
+                                         {"materials.nylon_1mm.bend_stiffness", "4.91e-5"}};
+  if (segments > 0) start.push_back({"nets.0.segments_per_link", std::to_string(segments)});
   const auto parameters = ParseFreeParameters(
       "drag.drag_coefficient,nets.0.velocity,time_offset,materials.nylon_1mm.stretch_stiffness,"
       "materials.nylon_1mm.bend_stiffness",
@@ -203,7 +210,11 @@ int Flight(double seconds, int shots, const std::string& integrator) {
   const FitResult r = FitShots(inputs, parameters, options);
   std::printf("flight: %d shot%s (", shots, shots > 1 ? "s" : "");
   for (int k = 0; k < shots; ++k) std::printf("%s%s", k ? ", " : "", cases[k]);
-  std::printf("), %.1f s each, %s, 1 mm noise, start off by 2\n", seconds, integrator.c_str());
+  std::printf("), %.1f s each, %s, segments per link %s (truth's %s), 1 mm noise, start off by 2\n",
+              seconds, integrator.c_str(),
+              segments > 0 ? std::to_string(segments).c_str() : "the scenario's",
+              truth_segments > 0 ? std::to_string(truth_segments).c_str() : "the scenario's");
+  for (const std::string& note : r.notes) std::printf("note: %s\n", note.c_str());
   std::printf(
       "| parameter | truth | fitted | sigma | error / sigma | check -/+ sigma | "
       "determined by |\n");
@@ -286,17 +297,20 @@ int main(int argc, char** argv) {
   const std::string what = argc > 1 ? argv[1] : "coverage";
   if (what == "coverage") return netlab::netsim::Coverage(argc > 2 ? std::atoi(argv[2]) : 40);
   if (what == "flight")
-    return netlab::netsim::Flight(argc > 2 ? std::atof(argv[2]) : 2.0,
-                                  argc > 3 ? std::atoi(argv[3]) : 1,
-                                  argc > 4 ? argv[4] : "implicit");
+    return netlab::netsim::Flight(
+        argc > 2 ? std::atof(argv[2]) : 2.0, argc > 3 ? std::atoi(argv[3]) : 1,
+        argc > 4 ? argv[4] : "implicit", argc > 5 ? std::atoi(argv[5]) : 0,
+        argc > 6 ? std::atoi(argv[6]) : 0);
   if (what == "landscape")
     return netlab::netsim::Landscape(
         argc > 2 ? argv[2] : "materials.nylon_1mm.bend_stiffness",
         argc > 3 ? std::atof(argv[3]) : 9.82e-5, argc > 4 ? std::atof(argv[4]) : 2.0,
         argc > 5 ? std::atof(argv[5]) : -1.0, argc > 6 ? argv[6] : "implicit");
   if (what == "shots") return netlab::netsim::Shots(argc > 2 ? std::atoi(argv[2]) : 20);
-  std::fprintf(stderr,
-               "usage: bench_fit coverage [draws] | flight [seconds] [shots] [integrator] | "
-               "shots [draws] | landscape [path] [truth] [seconds] [dt] [integrator]\n");
+  std::fprintf(
+      stderr,
+      "usage: bench_fit coverage [draws] | flight [seconds] [shots] [integrator] [segments] "
+      "[truth's segments] | "
+      "shots [draws] | landscape [path] [truth] [seconds] [dt] [integrator]\n");
   return 2;
 }
