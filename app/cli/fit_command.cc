@@ -171,9 +171,13 @@ std::string Summary(const netsim::FitResult& r) {
   o << line;
   for (const auto& p : r.parameters) {
     std::string by = p.determined_by;
+    // A check's ratio, or why there is none (the run there failed or fell short).
+    const auto ratio = [](double v) {
+      return std::isfinite(v) ? Number(v) + "x" : std::string("failed");
+    };
     if (p.rough)
-      by += ": the cost is rough in it (" + Number(p.check[0]) + "x / " + Number(p.check[1]) +
-            "x the quadratic rise at -/+ 2 sigma), sigma means nothing";
+      by += ": the cost is rough in it (" + ratio(p.check[0]) + " / " + ratio(p.check[1]) +
+            " the quadratic rise at -/+ 2 sigma), sigma means nothing";
     else if (p.ambiguous)
       by += std::isnan(p.alternative)
                 ? ": the cost has another valley along it (the fit from there failed)"
