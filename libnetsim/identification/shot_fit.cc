@@ -1018,9 +1018,10 @@ std::vector<std::string> ResolutionNotes(const Scenario& scenario,
       std::snprintf(
           text, sizeof text,
           "net '%s' of %s has %.3g cm segments (%d per link), too coarse to show EI in a "
-          "flight: the fitted %s is this model's, not the thread's (Net A's flight shows a tenth "
-          "of EI's effect at 2.5 cm segments, two thirds at 1.25 cm; docs/benchmarks.md). To fit "
-          "the thread's, refine the links: --set nets.%zu.segments_per_link=%d",
+          "flight: the fitted %s is this model's, not the thread's (Net A's flight, implicit "
+          "step: a tenth of EI's effect on the knots at 2.5 cm segments, two thirds at 1.25 cm; "
+          "docs/benchmarks.md). To fit the thread's, refine the links: --set "
+          "nets.%zu.segments_per_link=%d",
           net.name.c_str(), name.c_str(), segment * 100, net.segments_per_link, par.name.c_str(), n,
           static_cast<int>(std::ceil(net.mesh / kBendingSegment - 1e-9)));
       notes.push_back(text);
