@@ -169,12 +169,12 @@ std::string Summary(const netsim::FitResult& r) {
   std::snprintf(line, sizeof line, "  %-40s %12s %12s %12s  %s\n", "parameter", "start", "fitted",
                 "sigma", "determined by");
   o << line;
+  // A check's ratio, or why there is none (the run there failed or fell short).
+  const auto ratio = [](double v) {
+    return std::isfinite(v) ? Number(v) + "x" : std::string("failed");
+  };
   for (const auto& p : r.parameters) {
     std::string by = p.determined_by;
-    // A check's ratio, or why there is none (the run there failed or fell short).
-    const auto ratio = [](double v) {
-      return std::isfinite(v) ? Number(v) + "x" : std::string("failed");
-    };
     if (p.rough)
       by += ": the cost is rough in it (" + ratio(p.check[0]) + " / " + ratio(p.check[1]) +
             " the quadratic rise at -/+ 2 sigma), sigma means nothing";

@@ -1001,14 +1001,11 @@ std::vector<std::string> ResolutionNotes(const Scenario& scenario,
                                          const std::string& name) {
   std::vector<std::string> notes;
   for (const FitParameter& par : parameters) {
-    if (par.kind != FitParameter::Kind::kScenario) continue;
-    const std::string prefix = "materials.", key = ".bend_stiffness";
-    const std::string& path = par.path;
-    if (path.rfind(prefix, 0) != 0 || path.size() <= prefix.size() + key.size() ||
-        path.compare(path.size() - key.size(), key.size(), key) != 0)
-      continue;
-    const std::string material =
-        path.substr(prefix.size(), path.size() - prefix.size() - key.size());
+    // materials.<material>.bend_stiffness
+    const std::string key = ".bend_stiffness";
+    if (!IsMaterial(par) || !par.path.ends_with(key)) continue;
+    const size_t first = std::string("materials.").size();
+    const std::string material = par.path.substr(first, par.path.size() - first - key.size());
     for (size_t n = 0; n < scenario.nets.size(); ++n) {
       const NetSpec& net = scenario.nets[n];
       if (scenario.materials[net.material].name != material) continue;
