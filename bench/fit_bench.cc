@@ -7,7 +7,7 @@
 //   bench_fit shots [draws]      the shot at 0.5, 0.8, 0.3 and 1.0 m/s, fitted 1, 2 and 4 at a
 //                                time (one drag, each shot's launch and time; default 20 draws):
 //                                the drag's error and sigma as shots are added
-//   bench_fit flight [seconds] [shots] [implicit|explicit] [segments] [truth's segments]
+//   bench_fit flight [seconds] [shots] [implicit|explicit] [segments] [truth's segments] [prior]
 //                                scenarios/net_a_0.5.yaml (then net_a_0.8, net_b_0.5, net_b_0.8
 //                                for 2 or 4 shots) cut to `seconds` (default 2) of flight, 1 mm of
 //                                noise; drag, EA and EI shared, each shot's launch velocity and
@@ -15,7 +15,9 @@
 //                                wall time; with the scenarios' implicit integrator or the
 //                                explicit one (truth and fit); the fit's and the truth's segments
 //                                per link (0: the scenario's): a truth finer than the fit stands
-//                                for a world the model does not resolve
+//                                for a world the model does not resolve; prior: a bench prior on
+//                                EA and EI with that relative spread (0.05: 5 %), EA 0.8 of it
+//                                low and EI 0.8 of it high, the stiffnesses started there
 //   bench_fit landscape [path] [truth] [seconds] [dt] [implicit|explicit]
 //                                the cost along one material parameter (default the bend
 //                                stiffness, 9.82e-5) of net_a_0.5 scaled x0.5 .. x2, for 4
@@ -159,9 +161,10 @@ std::string Note(const FittedParameter& p) {
 
 // The flight cases cut to `seconds`, 1 mm of noise, fitted `shots` at a time (net_a_0.5,
 // net_a_0.8, net_b_0.5, net_b_0.8 in that order): drag, EA and EI shared, each shot's launch
-// velocity and time; from drag x2, velocity x1/2, EA x2 and EI x1/2.
+// velocity and time; from drag x2, velocity x1/2, EA x2 and EI x1/2, or with a prior of relative
+// spread `prior` (> 0), from the prior's values.
 int Flight(double seconds, int shots, const std::string& integrator, int segments,
-           int truth_segments) {
+           int truth_segments, double prior) {
   const char* cases[4] = {"net_a_0.5", "net_a_0.8", "net_b_0.5", "net_b_0.8"};
   const double speeds[4] = {0.5, 0.8, 0.5, 0.8};
   char duration[32];
@@ -196,6 +199,20 @@ int Flight(double seconds, int shots, const std::string& integrator, int segment
                                          {"materials.nylon_1mm.stretch_stiffness", "3142"},
                                          {"materials.nylon_1mm.bend_stiffness", "4.91e-5"}};
   if (segments > 0) start.push_back({"nets.0.segments_per_link", std::to_string(segments)});
+  // A bench's prior, off the truth by 0.8 of its spread: EA low, EI high (as a tensile test that
+  // reads soft and a cantilever that reads stiff).
+  std::vector<FitPrior> priors;
+  if (prior > 0) {
+    for (const auto& [name, sign] :
+         {std::pair<std::string, double>{"stretch_stiffness", -1.0}, {"bend_stiffness", 1.0}}) {
+      const std::string path = "materials.nylon_1mm." + name;
+      const double value = truth_of.at(path) * (1 + sign * 0.8 * prior);
+      priors.push_back({path, value, prior * value, "a bench's prior"});
+      char text[32];
+      std::snprintf(text, sizeof text, "%.17g", value);
+      start.push_back({path, text});
+    }
+  }
   const auto parameters = ParseFreeParameters(
       "drag.drag_coefficient,nets.0.velocity,time_offset,materials.nylon_1mm.stretch_stiffness,"
       "materials.nylon_1mm.bend_stiffness",
@@ -203,6 +220,7 @@ int Flight(double seconds, int shots, const std::string& integrator, int segment
   std::vector<FitShotInput> inputs;
   for (int k = 0; k < shots; ++k) inputs.push_back({paths[k], &measured[k], cases[k]});
   FitOptions options = Options(start, 1e-3);
+  options.priors = priors;
   options.progress = [](const FitProgress& p) {
     std::fprintf(stderr, "  %s, iteration %d: cost %.6g, %d simulations, %.0f s, ETA <= %.0f s\n",
                  p.stage.c_str(), p.iteration, p.cost, p.simulations, p.elapsed_s, p.eta_s);
@@ -214,9 +232,12 @@ int Flight(double seconds, int shots, const std::string& integrator, int segment
               seconds, integrator.c_str(),
               segments > 0 ? std::to_string(segments).c_str() : "the scenario's",
               truth_segments > 0 ? std::to_string(truth_segments).c_str() : "the scenario's");
+  for (const FitPrior& p : priors)
+    std::printf("prior: %s %.4g +- %.3g (%.0f %%), the start\n", p.name.c_str(), p.value, p.sigma,
+                100 * prior);
   for (const std::string& note : r.notes) std::printf("note: %s\n", note.c_str());
   std::printf(
-      "| parameter | truth | fitted | sigma | error / sigma | check -/+ sigma | "
+      "| parameter | truth | fitted | sigma | error / sigma | check -/+ 2 sigma | "
       "determined by |\n");
   std::printf("|---|---|---|---|---|---|---|\n");
   for (const FittedParameter& p : r.parameters) {
@@ -300,7 +321,7 @@ int main(int argc, char** argv) {
     return netlab::netsim::Flight(
         argc > 2 ? std::atof(argv[2]) : 2.0, argc > 3 ? std::atoi(argv[3]) : 1,
         argc > 4 ? argv[4] : "implicit", argc > 5 ? std::atoi(argv[5]) : 0,
-        argc > 6 ? std::atoi(argv[6]) : 0);
+        argc > 6 ? std::atoi(argv[6]) : 0, argc > 7 ? std::atof(argv[7]) : 0.0);
   if (what == "landscape")
     return netlab::netsim::Landscape(
         argc > 2 ? argv[2] : "materials.nylon_1mm.bend_stiffness",
@@ -310,7 +331,7 @@ int main(int argc, char** argv) {
   std::fprintf(
       stderr,
       "usage: bench_fit coverage [draws] | flight [seconds] [shots] [integrator] [segments] "
-      "[truth's segments] | "
+      "[truth's segments] [prior] | "
       "shots [draws] | landscape [path] [truth] [seconds] [dt] [integrator]\n");
   return 2;
 }

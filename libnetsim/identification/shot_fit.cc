@@ -679,16 +679,32 @@ std::vector<Shot> PrepareShots(const std::vector<FitShotInput>& inputs,
 
 // The simulations of one scan: every shot at 2 x options.scan_steps points per material parameter
 // (the middle one is where the scan stands, already run).
+// The prior given for a parameter, or null.
+const FitPrior* PriorOf(const FitParameter& parameter, const FitOptions& options) {
+  for (const FitPrior& prior : options.priors)
+    if (prior.name == parameter.name) return &prior;
+  return nullptr;
+}
+
+// The scan's runs along one material parameter: its values but the one the fit stands at, and
+// that one too when a prior centres the scan elsewhere (ScanCoordinates).
+long ScanRunsOf(const ShotCost& cost, const FitParameter& parameter, const FitOptions& options) {
+  return (2L * options.scan_steps + (PriorOf(parameter, options) ? 1 : 0)) * cost.shots();
+}
+
 long ScanRuns(const ShotCost& cost, const std::vector<FitParameter>& parameters,
               const FitOptions& options) {
-  if (options.scan_steps <= 0) return 0;
-  const long materials = std::count_if(parameters.begin(), parameters.end(), IsMaterial);
-  return materials * 2 * options.scan_steps * cost.shots();
+  long runs = 0;
+  if (options.scan_steps <= 0) return runs;
+  for (const FitParameter& par : parameters)
+    if (IsMaterial(par)) runs += ScanRunsOf(cost, par, options);
+  return runs;
 }
 
 // The scan between the stages: along each material parameter in turn, the cost at
-// options.scan_steps values per factor 2 either way of the current one (2 x 8: steps of 9 %),
-// simulated at once, and the parameter moved to the lowest. Levenberg-Marquardt follows the cost
+// options.scan_steps values per factor 2 either way of the current one (2 x 8: steps of 9 %), or
+// over its prior's reach (ScanCoordinates), simulated at once, and the parameter moved to the
+// lowest. Levenberg-Marquardt follows the cost
 // from where it is, and a stiffness's cost in a flight is a narrow valley: the net's bending waves
 // come back into phase away from it. On Net A's flight with the explicit integrator the cost
 // along EI rises from x0.5 to x0.77 of the truth and falls again to it, a basin of about +-15 %
@@ -706,9 +722,11 @@ std::vector<std::pair<int, std::vector<double>>> ScanMaterial(
   long left = ScanRuns(cost, parameters, options);
   for (size_t i = 0; i < parameters.size(); ++i) {
     if (!IsMaterial(parameters[i])) continue;
-    left -= 2L * steps * cost.shots();
+    left -= ScanRunsOf(cost, parameters[i], options);
+    const std::vector<double> along =
+        ScanCoordinates(parameters[i], PriorOf(parameters[i], options), (*x)[i], steps);
     std::vector<std::vector<double>> xs(n, *x);
-    for (int k = -steps; k <= steps; ++k) xs[k + steps][i] += std::log(2.0) * k / steps;
+    for (int k = 0; k < n; ++k) xs[k][i] = along[k];
     const std::vector<double> c = cost.CostsAt(xs);
     const auto [best, rival] = FindScanMinima(c, steps);
     if (rival >= 0) rivals.push_back({static_cast<int>(i), xs[rival]});
@@ -974,6 +992,33 @@ void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
 
 }  // namespace
 
+std::string PriorConflictNote(const FittedParameter& f, const std::string& source) {
+  if (!f.has_prior || !(f.prior_sigma > 0)) return "";
+  const double away = (f.value - f.prior_value) / f.prior_sigma;
+  if (!(std::abs(away) > kPriorReach)) return "";
+  char text[640];
+  std::snprintf(text, sizeof text,
+                "the fit puts %s at %.4g, %.1f sigma from its prior (%.4g +- %.3g%s%s): the flight "
+                "and the bench disagree. A model coarser than the flight biases what it fits "
+                "(docs/fit.md, Limits), or the bench did not measure this thread",
+                f.parameter.name.c_str(), f.value, away, f.prior_value, f.prior_sigma,
+                source.empty() ? "" : ", ", source.c_str());
+  return text;
+}
+
+std::vector<double> ScanCoordinates(const FitParameter& parameter, const FitPrior* prior,
+                                    double current, int steps) {
+  double centre = current, half = std::log(2.0);
+  if (prior != nullptr && prior->value > 0 && prior->sigma > 0) {
+    centre = parameter.Coordinate(prior->value);
+    half = std::min(half, kPriorReach * prior->sigma / prior->value);
+  }
+  std::vector<double> along;
+  for (int k = -steps; k <= steps; ++k)
+    along.push_back(k == 0 ? centre : centre + half * k / std::max(steps, 1));
+  return along;
+}
+
 ScanMinima FindScanMinima(const std::vector<double>& costs, int current, double barrier) {
   const int n = static_cast<int>(costs.size());
   ScanMinima m;
@@ -1089,6 +1134,11 @@ FitResult FitShots(const std::vector<FitShotInput>& inputs,
 
   Report(cost, parameters, priors, best, ends, multimodal, sigma, data_sigma, j.transpose() * j,
          &result);
+  for (const FittedParameter& f : result.parameters)
+    if (const FitPrior* prior = PriorOf(f.parameter, options)) {
+      const std::string note = PriorConflictNote(f, prior->source);
+      if (!note.empty()) result.notes.push_back(note);
+    }
   result.ends = static_cast<int>(ends.size());
   result.simulations = cost.simulations();
   result.wall_s = Seconds(start);

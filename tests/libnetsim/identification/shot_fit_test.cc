@@ -137,9 +137,10 @@ TEST_F(ShotFit, SaysWhatTheFlightCannotDetermine) {
     EXPECT_LE(reports[i].simulations + reports[i].simulations_left,
               reports[i - 1].simulations + reports[i - 1].simulations_left)
         << reports[i].stage << ", iteration " << reports[i].iteration;
-    if (reports[i].stage == reports[i - 1].stage)
+    if (reports[i].stage == reports[i - 1].stage) {
       EXPECT_LE(reports[i].cost, reports[i - 1].cost)
           << reports[i].stage << ", iteration " << reports[i].iteration;
+    }
   }
   const FittedParameter& damping = Find(r, "materials.nylon.twist_damping");
   EXPECT_FALSE(damping.identified);
@@ -210,6 +211,82 @@ TEST(ScanMinima, ASecondBasinIsARivalJitterIsNot) {
   EXPECT_EQ(m.best, 2);
   EXPECT_EQ(m.rival, -1);
   EXPECT_EQ(FindScanMinima({}, 0).best, -1);
+}
+
+// The scan looks a factor 2 either way of where the fit stands; with a prior, over the prior's
+// reach (+-3 sigma about its value) when that is narrower, and never wider than a factor 2.
+TEST(ScanCoordinates, APriorBoundsTheScanToItsReach) {
+  FitParameter ea;
+  ea.name = ea.path = "materials.nylon.stretch_stiffness";
+  ea.log = true;
+  const double current = std::log(3000.0);
+  auto check = [](const std::vector<double>& along, double centre, double half) {
+    ASSERT_EQ(along.size(), 17u);
+    EXPECT_DOUBLE_EQ(along[8], centre);
+    EXPECT_NEAR(along.front(), centre - half, 1e-12);
+    EXPECT_NEAR(along.back(), centre + half, 1e-12);
+    for (size_t k = 1; k < along.size(); ++k) EXPECT_GT(along[k], along[k - 1]);
+  };
+  check(ScanCoordinates(ea, nullptr, current, 8), current, std::log(2.0));
+  // A bench's 5 % prior, off the start: the scan is centred on the prior, +-15 % in ln value.
+  const FitPrior bench{ea.name, 1500.0, 75.0, "tensile.yaml"};
+  check(ScanCoordinates(ea, &bench, current, 8), std::log(1500.0), 0.15);
+  // A loose prior (50 %) reaches beyond a factor 2: the factor 2, about the prior.
+  const FitPrior loose{ea.name, 1500.0, 750.0, "guess.yaml"};
+  check(ScanCoordinates(ea, &loose, current, 8), std::log(1500.0), std::log(2.0));
+  // A prior without a spread cannot bound anything: as without one.
+  const FitPrior none{ea.name, 1500.0, 0.0, "broken.yaml"};
+  check(ScanCoordinates(ea, &none, current, 8), current, std::log(2.0));
+}
+
+// A fit that ends beyond its prior's reach says the flight and the bench disagree, naming the
+// parameter, how far and the prior's source; within reach, or without a prior, nothing.
+TEST(PriorConflict, AnEndBeyondThePriorsReachIsNoted) {
+  FittedParameter f;
+  f.parameter.name = "materials.nylon_1mm.stretch_stiffness";
+  f.has_prior = true;
+  f.prior_value = 1508.16;
+  f.prior_sigma = 75.4;
+  f.value = 2842.0;  // Net A: 4 segments per link fitted to a 16-segment flight
+  const std::string note = PriorConflictNote(f, "bench.yaml (tensile test)");
+  EXPECT_EQ(note.rfind("the fit puts materials.nylon_1mm.stretch_stiffness at 2842, 17.7 sigma "
+                       "from its prior (1508 +- 75.4, bench.yaml (tensile test)): the flight "
+                       "and the bench disagree",
+                       0),
+            0u)
+      << note;
+  f.value = 1508.16 - 3.1 * 75.4;
+  EXPECT_NE(PriorConflictNote(f, "").find("-3.1 sigma from its prior (1508 +- 75.4)"),
+            std::string::npos)
+      << PriorConflictNote(f, "");
+  f.value = 1591.0;  // the explicit fit with a bench prior: 1.1 sigma
+  EXPECT_TRUE(PriorConflictNote(f, "bench.yaml").empty());
+  f.value = 1508.16 + 2.99 * 75.4;
+  EXPECT_TRUE(PriorConflictNote(f, "bench.yaml").empty());
+  f.value = 2842.0;
+  f.has_prior = false;
+  EXPECT_TRUE(PriorConflictNote(f, "bench.yaml").empty());
+}
+
+// End to end: a prior the flight contradicts (the drag's, 2.4 +- 0.05 where the flight has 1.2)
+// is pulled far out of its reach, and the fit says so in its notes; a prior that agrees adds no
+// note.
+TEST_F(ShotFit, NotesAPriorTheFlightContradicts) {
+  const KnotTracks measured = Measured(7);
+  const auto parameters = ParseFreeParameters("drag.drag_coefficient", scenario_, {}, 0.0);
+  FitOptions options = Options({});
+  options.priors = {{"drag.drag_coefficient", 2.4, 0.05, "wind-tunnel.yaml"}};
+  const FitResult off = FitShot(scenario_, measured, parameters, options);
+  const FittedParameter& drag = Find(off, "drag.drag_coefficient");
+  EXPECT_LT(drag.value, 2.4 - 3 * 0.05);  // the flight wins
+  ASSERT_EQ(off.notes.size(), 1u);
+  EXPECT_EQ(off.notes[0].rfind("the fit puts drag.drag_coefficient at ", 0), 0u) << off.notes[0];
+  EXPECT_NE(off.notes[0].find("(2.4 +- 0.05, wind-tunnel.yaml)"), std::string::npos)
+      << off.notes[0];
+  options.priors = {{"drag.drag_coefficient", 1.2, 0.05, "wind-tunnel.yaml"}};
+  const FitResult agrees = FitShot(scenario_, measured, parameters, options);
+  EXPECT_TRUE(agrees.notes.empty()) << agrees.notes.front();
+  EXPECT_TRUE(Find(agrees, "drag.drag_coefficient").identified);
 }
 
 // Two shots of the same net at 0.5 and 0.8 m/s: one drag for both, each shot its own launch; the
