@@ -763,11 +763,12 @@ struct FitEnd {
 // stiffnesses went where they explain the wrong launch (a net of EA = 26 N and EI = 4e-7 N m^2, a
 // valley of wrong minima, in the twin's Net A flight). Returns the best end (its cost in
 // result->cost_final); every usable end in *ends; in *multimodal, the parameters whose scan found
+// another valley; *rival_failed when the last stage from one of them ended unusable;
 // another valley.
 std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& parameters,
                              const FitOptions& options, const std::vector<double>& x0,
                              Clock::time_point start, FitResult* result, std::vector<FitEnd>* ends,
-                             std::vector<bool>* multimodal) {
+                             std::vector<bool>* multimodal, bool* rival_failed) {
   const int p = static_cast<int>(parameters.size());
   std::vector<bool> all(p, true), launch(p);
   for (int i = 0; i < p; ++i) launch[i] = !IsMaterial(parameters[i]);
@@ -800,7 +801,7 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
   // `after`: the simulations after this run (its start's other valleys, the later starts, the
   // check).
   auto last_stage = [&](std::vector<double> x, int s, const std::string& from, int rival_of,
-                        long after, ceres::Solver::Summary* summary) {
+                        long after, ceres::Solver::Summary* summary) -> bool {
     LevenbergMarquardt(
         cost, all, options,
         ProgressCallback(options, *cost, start, s,
@@ -808,7 +809,7 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
                          all, after),
         &x, summary);
     result->iterations += static_cast<int>(summary->iterations.size()) - 1;
-    if (!summary->IsSolutionUsable()) return;
+    if (!summary->IsSolutionUsable()) return false;
     const std::string name = "start " + std::to_string(s + 1) + (from.empty() ? "" : ", " + from);
     ends->push_back({x, 2 * summary->final_cost, name, rival_of});
     if (2 * summary->final_cost < result->cost_final) {
@@ -817,6 +818,7 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
       result->best_start = s;
       result->termination = summary->message;
     }
+    return true;
   };
   for (int s = 0; s < options.starts; ++s) {
     std::vector<double> x = s == 0 ? x0 : DrawStart(parameters, x0, &rng);
@@ -840,8 +842,9 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
     last_stage(x, s, "", -1, valleys * lm_all + later, &summary);
     for (const auto& [i, rival] : rivals) {
       (*multimodal)[i] = true;
-      last_stage(rival, s, "from the other valley of " + parameters[i].name, i,
-                 --valleys * lm_all + later, &summary);
+      if (!last_stage(rival, s, "from the other valley of " + parameters[i].name, i,
+                      --valleys * lm_all + later, &summary))
+        *rival_failed = true;
     }
   }
   if (best.empty()) throw std::runtime_error("the fit failed: " + cost->last_failure());
@@ -934,7 +937,7 @@ constexpr double kAsWell = 3.841458820694124;
 // another end of the fit fits as well.
 void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
             const std::vector<PriorTerm>& priors, const std::vector<double>& best,
-            const std::vector<FitEnd>& ends, const std::vector<bool>& multimodal,
+            const std::vector<FitEnd>& ends, const std::vector<bool>& multimodal, bool rival_failed,
             const Eigen::VectorXd& sigma, const Eigen::VectorXd& data_sigma,
             const Eigen::MatrixXd& jtj, FitResult* result) {
   const int p = static_cast<int>(parameters.size());
@@ -948,6 +951,25 @@ void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
     check[i] = looks_identified[i] && parameters[i].kind == FitParameter::Kind::kScenario;
   }
   const auto ratio = QuadraticCheck(cost, best, result->cost_final, sigma, jtj, check);
+  // Another basin: when a scan found another valley, an end of the fit with a material parameter
+  // beyond 2 sigma of the estimate, however well it fits, or a last stage from such a valley that
+  // failed. The scan saw one parameter at a time, and the basin the truth is in can be the one
+  // that looks worse (Net A's explicit flight: from EA x2 and EI x0.5 the fit ended at EA x2 and
+  // EI x0.35, smooth and within the noise, the truth's cost about 170 lower; the fit from the
+  // scan's other valley of EI ended 84 above it, elsewhere). Then every material parameter is in
+  // doubt, not only the one whose scan found the valley: there EA was as wrong as EI. When every
+  // last stage came back to the same end, the scan's second valley was one parameter's view of a
+  // single basin.
+  const FitEnd* elsewhere = nullptr;
+  if (std::find(multimodal.begin(), multimodal.end(), true) != multimodal.end()) {
+    std::vector<std::vector<double>> xs;
+    for (const FitEnd& e : ends) xs.push_back(e.x);
+    std::vector<bool> material(p);
+    for (int j = 0; j < p; ++j) material[j] = IsMaterial(parameters[j]);
+    const int k = EndElsewhere(xs, best, {sigma.data(), sigma.data() + p}, material);
+    if (k >= 0) elsewhere = &ends[k];
+  }
+  const bool another_basin = elsewhere != nullptr || rival_failed;
   for (int i = 0; i < p; ++i) {
     const FitParameter& par = parameters[i];
     FittedParameter f;
@@ -967,23 +989,24 @@ void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
     f.rough = check[i] && !(std::min(ratio[i][0], ratio[i][1]) > 0.5 &&
                             std::max(ratio[i][0], ratio[i][1]) < 2.0);
     // Another end of the fit (a start, the scan's other valley) that fits as well with this
-    // parameter beyond 2 sigma of the estimate: the data do not tell the two apart. And a
-    // parameter whose scan found another valley, however well the fit from it ended: the scan
-    // saw one parameter at a time, and the valley the truth is in can lie where the others were
-    // not yet right (Net A's explicit flight: from EA x2 and EI x0.5 the fit ended at EI x0.35,
-    // smooth and within the noise, the truth's cost about 170 lower; the fit from the scan's
-    // other valley of EI ended 84 above it).
+    // parameter beyond 2 sigma of the estimate: the data do not tell the two apart. And, for a
+    // material parameter, another basin (above).
     for (const FitEnd& e : ends) {
-      if (f.ambiguous) break;
-      if ((e.cost - result->cost_final < kAsWell * result->inflation &&
-           std::abs(e.x[i] - best[i]) > 2 * sigma(i)) ||
-          (e.rival_of == i && e.x[i] != best[i])) {
+      if (e.cost - result->cost_final < kAsWell * result->inflation &&
+          std::abs(e.x[i] - best[i]) > 2 * sigma(i)) {
         f.ambiguous = true;
         f.alternative = par.Value(e.x[i]);
         f.alternative_from = e.from;
+        break;
       }
     }
-    if (multimodal[i]) f.ambiguous = true;
+    if (!f.ambiguous && another_basin && IsMaterial(par)) {
+      f.ambiguous = true;
+      if (elsewhere != nullptr) {
+        f.alternative = par.Value(elsewhere->x[i]);
+        f.alternative_from = elsewhere->from;
+      }
+    }
     f.identified = looks_identified[i] && !f.rough && !f.ambiguous;
     f.determined_by = f.identified ? "flight data" : f.has_prior ? "prior" : "neither";
     result->parameters.push_back(f);
@@ -991,6 +1014,14 @@ void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
 }
 
 }  // namespace
+
+int EndElsewhere(const std::vector<std::vector<double>>& ends, const std::vector<double>& best,
+                 const std::vector<double>& sigma, const std::vector<bool>& material) {
+  for (size_t k = 0; k < ends.size(); ++k)
+    for (size_t j = 0; j < best.size(); ++j)
+      if (material[j] && std::abs(ends[k][j] - best[j]) > 2 * sigma[j]) return static_cast<int>(k);
+  return -1;
+}
 
 std::string PriorConflictNote(const FittedParameter& f, const std::string& source) {
   if (!f.has_prior || !(f.prior_sigma > 0)) return "";
@@ -1111,8 +1142,9 @@ FitResult FitShots(const std::vector<FitShotInput>& inputs,
   result.residuals = cost.data_rows();
   std::vector<FitEnd> ends;
   std::vector<bool> multimodal(p, false);
+  bool rival_failed = false;
   const std::vector<double> best =
-      Minimise(&cost, parameters, options, x0, start, &result, &ends, &multimodal);
+      Minimise(&cost, parameters, options, x0, start, &result, &ends, &multimodal, &rival_failed);
 
   // The covariance: the data's information (inflated per shot) plus the priors'.
   const std::vector<double> jac = JacobianAt(cost, best);
@@ -1132,8 +1164,8 @@ FitResult FitShots(const std::vector<FitShotInput>& inputs,
       else if (r != c)
         result.correlation(r, c) = std::numeric_limits<double>::quiet_NaN();
 
-  Report(cost, parameters, priors, best, ends, multimodal, sigma, data_sigma, j.transpose() * j,
-         &result);
+  Report(cost, parameters, priors, best, ends, multimodal, rival_failed, sigma, data_sigma,
+         j.transpose() * j, &result);
   for (const FittedParameter& f : result.parameters)
     if (const FitPrior* prior = PriorOf(f.parameter, options)) {
       const std::string note = PriorConflictNote(f, prior->source);

@@ -91,10 +91,11 @@ struct FittedParameter {
   bool rough = false;  // checked, and the cost is not within 2x of the quadratic model
   // The cost has more than one valley along it: another end of the fit (a start, or the scan's
   // other valley) fits as well (its cost within 3.84 x the inflation of the best's) with this
-  // parameter more than 2 sigma away, or its scan found another valley at all (the fit from there
-  // may have ended worse only because the other parameters were not yet right). The estimate is
-  // the lowest end found, not identified by the flight; a prior decides. The other end's value
-  // and where it started (NaN and empty when that fit failed).
+  // parameter more than 2 sigma away; or, for a material parameter, a scan found another valley
+  // and the fit from there ended in another basin (EndElsewhere), however much worse (it may
+  // have ended worse only because the other parameters were not yet right), or failed. The
+  // estimate is the lowest end found, not identified by the flight; a prior decides. The other
+  // end's value and where it started (NaN and empty when that fit failed).
   bool ambiguous = false;
   double alternative = std::numeric_limits<double>::quiet_NaN();
   std::string alternative_from;
@@ -172,6 +173,13 @@ struct ScanMinima {
   int best = -1, rival = -1;
 };
 ScanMinima FindScanMinima(const std::vector<double>& costs, int current, double barrier = 9.0);
+
+// When a scan found another valley, the fit's last stage ran from it too; the first of the ends
+// (coordinates) that lies in another basin than `best`: a material parameter (`material`) more
+// than 2 sigma (`sigma`, of the coordinates) from the estimate. -1 when every end came back to the
+// estimate's basin. One found makes every material parameter ambiguous (FittedParameter).
+int EndElsewhere(const std::vector<std::vector<double>>& ends, const std::vector<double>& best,
+                 const std::vector<double>& sigma, const std::vector<bool>& material);
 
 // Where the scan between the stages looks along a material parameter: 2 steps + 1 coordinates
 // (ln value), ascending, the middle one the centre. Without a prior, a factor 2 either way of

@@ -239,6 +239,26 @@ TEST(ScanCoordinates, APriorBoundsTheScanToItsReach) {
   check(ScanCoordinates(ea, &none, current, 8), current, std::log(2.0));
 }
 
+// The fit's ends after a scan found a second valley: one basin when every end is within 2 sigma
+// of the estimate in the material parameters; another when any is beyond, whatever the others.
+TEST(EndElsewhere, AnEndBeyondTwoSigmaInAMaterialIsAnotherBasin) {
+  // drag, EA, EI (ln value); sigma of each
+  const std::vector<double> best = {0.18, 7.37, -9.22}, sigma = {1e-4, 0.013, 0.011};
+  const std::vector<bool> material = {false, true, true};
+  // The rival's last stage came back (within 2 sigma).
+  EXPECT_EQ(EndElsewhere({best, {0.18, 7.37 + 0.02, -9.22 - 0.015}}, best, sigma, material), -1);
+  // Net A's explicit flight with a bench prior: a rival ended at EA 1137 N against 1591 +- 21.
+  EXPECT_EQ(EndElsewhere({best, {0.18, std::log(1137.0), -9.22}}, best, sigma, material), 1);
+  // Only EI elsewhere: still another basin.
+  EXPECT_EQ(EndElsewhere({{0.18, 7.37, -9.0}, best}, best, sigma, material), 0);
+  // Only the drag moved (not a material): the scan's valleys are the material's.
+  EXPECT_EQ(EndElsewhere({{0.19, 7.37, -9.22}}, best, sigma, material), -1);
+  // Infinite sigma (a direction the data leave free) never puts an end elsewhere.
+  EXPECT_EQ(EndElsewhere({{0.18, 9.0, -9.22}}, best,
+                         {1e-4, std::numeric_limits<double>::infinity(), 0.011}, material),
+            -1);
+}
+
 // A fit that ends beyond its prior's reach says the flight and the bench disagree, naming the
 // parameter, how far and the prior's source; within reach, or without a prior, nothing.
 TEST(PriorConflict, AnEndBeyondThePriorsReachIsNoted) {
