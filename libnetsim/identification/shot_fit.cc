@@ -677,8 +677,6 @@ std::vector<Shot> PrepareShots(const std::vector<FitShotInput>& inputs,
   return shots;
 }
 
-// The simulations of one scan: every shot at 2 x options.scan_steps points per material parameter
-// (the middle one is where the scan stands, already run).
 // The prior given for a parameter, or null.
 const FitPrior* PriorOf(const FitParameter& parameter, const FitOptions& options) {
   for (const FitPrior& prior : options.priors)
@@ -692,6 +690,8 @@ long ScanRunsOf(const ShotCost& cost, const FitParameter& parameter, const FitOp
   return (2L * options.scan_steps + (PriorOf(parameter, options) ? 1 : 0)) * cost.shots();
 }
 
+// The simulations of one scan: every shot at 2 x options.scan_steps points per material parameter
+// (the middle one is where the scan stands, already run), and the middle one of a prior's.
 long ScanRuns(const ShotCost& cost, const std::vector<FitParameter>& parameters,
               const FitOptions& options) {
   long runs = 0;
@@ -704,14 +704,14 @@ long ScanRuns(const ShotCost& cost, const std::vector<FitParameter>& parameters,
 // The scan between the stages: along each material parameter in turn, the cost at
 // options.scan_steps values per factor 2 either way of the current one (2 x 8: steps of 9 %), or
 // over its prior's reach (ScanCoordinates), simulated at once, and the parameter moved to the
-// lowest. Levenberg-Marquardt follows the cost
-// from where it is, and a stiffness's cost in a flight is a narrow valley: the net's bending waves
-// come back into phase away from it. On Net A's flight with the explicit integrator the cost
-// along EI rises from x0.5 to x0.77 of the truth and falls again to it, a basin of about +-15 %
-// (bench_fit landscape) that a start off by 2 does not reach by descending.
-// Returns the rivals: for each parameter whose scan shows another local minimum behind a barrier
-// (FindScanMinima), the point at the lowest such minimum, for the last stage to start from too
-// (the other parameters not yet refitted there: the scan's costs only rank basins).
+// lowest. Levenberg-Marquardt follows the cost from where it is, and a stiffness's cost in a
+// flight is a narrow valley: the net's bending waves come back into phase away from it. On Net A's
+// flight with the explicit integrator the cost along EI rises from x0.5 to x0.77 of the truth and
+// falls again to it, a basin of about +-15 % (bench_fit landscape) that a start off by 2 does not
+// reach by descending. Returns the rivals: for each parameter whose scan shows another local
+// minimum behind a barrier (FindScanMinima), the point at the lowest such minimum, for the last
+// stage to start from too (the other parameters not yet refitted there: the scan's costs only rank
+// basins).
 std::vector<std::pair<int, std::vector<double>>> ScanMaterial(
     const ShotCost& cost, const std::vector<FitParameter>& parameters, const FitOptions& options,
     Clock::time_point start, int start_index, const std::string& stage, long after,
@@ -752,8 +752,7 @@ std::vector<std::pair<int, std::vector<double>>> ScanMaterial(
 struct FitEnd {
   std::vector<double> x;
   double cost = kInf;
-  std::string from;   // "start 2", "start 1, from the other valley of <parameter>"
-  int rival_of = -1;  // the parameter whose scan found the valley it started in
+  std::string from;  // "start 2", "start 1, from the other valley of <parameter>"
 };
 
 // Levenberg-Marquardt from each start, in stages when material parameters are free: with others,
@@ -763,8 +762,7 @@ struct FitEnd {
 // stiffnesses went where they explain the wrong launch (a net of EA = 26 N and EI = 4e-7 N m^2, a
 // valley of wrong minima, in the twin's Net A flight). Returns the best end (its cost in
 // result->cost_final); every usable end in *ends; in *multimodal, the parameters whose scan found
-// another valley; *rival_failed when the last stage from one of them ended unusable;
-// another valley.
+// another valley; *rival_failed when the last stage from one of them ended unusable.
 std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& parameters,
                              const FitOptions& options, const std::vector<double>& x0,
                              Clock::time_point start, FitResult* result, std::vector<FitEnd>* ends,
@@ -800,8 +798,8 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
   // The last stage from x; its end kept when usable, and the best end remembered.
   // `after`: the simulations after this run (its start's other valleys, the later starts, the
   // check).
-  auto last_stage = [&](std::vector<double> x, int s, const std::string& from, int rival_of,
-                        long after, ceres::Solver::Summary* summary) -> bool {
+  auto last_stage = [&](std::vector<double> x, int s, const std::string& from, long after,
+                        ceres::Solver::Summary* summary) -> bool {
     LevenbergMarquardt(
         cost, all, options,
         ProgressCallback(options, *cost, start, s,
@@ -811,7 +809,7 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
     result->iterations += static_cast<int>(summary->iterations.size()) - 1;
     if (!summary->IsSolutionUsable()) return false;
     const std::string name = "start " + std::to_string(s + 1) + (from.empty() ? "" : ", " + from);
-    ends->push_back({x, 2 * summary->final_cost, name, rival_of});
+    ends->push_back({x, 2 * summary->final_cost, name});
     if (2 * summary->final_cost < result->cost_final) {
       result->cost_final = 2 * summary->final_cost;
       best = x;
@@ -839,10 +837,10 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
       rivals = ScanMaterial(*cost, parameters, options, start, s, stage(1 + staged, "scan"),
                             lm_all + later, &x);
     long valleys = static_cast<long>(rivals.size());
-    last_stage(x, s, "", -1, valleys * lm_all + later, &summary);
+    last_stage(x, s, "", valleys * lm_all + later, &summary);
     for (const auto& [i, rival] : rivals) {
       (*multimodal)[i] = true;
-      if (!last_stage(rival, s, "from the other valley of " + parameters[i].name, i,
+      if (!last_stage(rival, s, "from the other valley of " + parameters[i].name,
                       --valleys * lm_all + later, &summary))
         *rival_failed = true;
     }
