@@ -118,8 +118,9 @@ std::string FitYaml(const std::vector<std::string>& scenarios,
       << ", identified: " << (p.identified ? "true" : "false")
       << ", rough: " << (p.rough ? "true" : "false")
       << ", ambiguous: " << (p.ambiguous ? "true" : "false")
-      << ", alternative: " << Number(p.alternative) << ", check: [" << Number(p.check[0]) << ", "
-      << Number(p.check[1]) << "]"
+      << ", alternative: " << Number(p.alternative)
+      << ", alternative_rise: " << Number(p.alternative_rise) << ", check: [" << Number(p.check[0])
+      << ", " << Number(p.check[1]) << "]"
       << ", determined_by: " << Quoted(p.determined_by);
     if (p.has_prior)
       o << ", prior: {value: " << Number(p.prior_value) << ", sigma: " << Number(p.prior_sigma)
@@ -174,6 +175,12 @@ std::string Summary(const netsim::FitResult& r) {
   const auto ratio = [](double v) {
     return std::isfinite(v) ? Number(v) + "x" : std::string("failed");
   };
+  // How much higher another end's cost ended: "+66.2".
+  const auto rise = [](double v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%+.3g", v);
+    return std::string(text);
+  };
   for (const auto& p : r.parameters) {
     std::string by = p.determined_by;
     if (p.rough)
@@ -182,8 +189,8 @@ std::string Summary(const netsim::FitResult& r) {
     else if (p.ambiguous)
       by += std::isnan(p.alternative)
                 ? ": the cost has another valley along it (the fit from there failed)"
-                : ": the cost has another valley along it (" + Number(p.alternative) + ", " +
-                      p.alternative_from + ")";
+                : ": the cost has another valley along it (" + Number(p.alternative) + ", cost " +
+                      rise(p.alternative_rise) + ", " + p.alternative_from + ")";
     else if (!p.identified)
       by += p.has_prior ? " (the flight data adds little)" : ": not identified";
     std::snprintf(line, sizeof line, "  %-40s %12s %12s %12s  ", p.parameter.name.c_str(),
@@ -224,6 +231,7 @@ void PrintJson(const netsim::FitResult& r, const std::string& out) {
     json.Key("rough").Bool(p.rough);
     json.Key("ambiguous").Bool(p.ambiguous);
     json.Key("alternative").Number(p.alternative);
+    json.Key("alternative_rise").Number(p.alternative_rise);
     json.Key("check").BeginArray().Number(p.check[0]).Number(p.check[1]).EndArray();
     json.Key("determined_by").String(p.determined_by);
     json.Key("start").Number(p.parameter.start);

@@ -994,6 +994,7 @@ void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
           std::abs(e.x[i] - best[i]) > 2 * sigma(i)) {
         f.ambiguous = true;
         f.alternative = par.Value(e.x[i]);
+        f.alternative_rise = e.cost - result->cost_final;
         f.alternative_from = e.from;
         break;
       }
@@ -1002,6 +1003,7 @@ void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
       f.ambiguous = true;
       if (elsewhere != nullptr) {
         f.alternative = par.Value(elsewhere->x[i]);
+        f.alternative_rise = elsewhere->cost - result->cost_final;
         f.alternative_from = elsewhere->from;
       }
     }

@@ -95,9 +95,11 @@ struct FittedParameter {
   // and the fit from there ended in another basin (EndElsewhere), however much worse (it may
   // have ended worse only because the other parameters were not yet right), or failed. The
   // estimate is the lowest end found, not identified by the flight; a prior decides. The other
-  // end's value and where it started (NaN and empty when that fit failed).
+  // end's value, how much higher its cost ended, and where it started (NaN and empty when that
+  // fit failed).
   bool ambiguous = false;
   double alternative = std::numeric_limits<double>::quiet_NaN();
+  double alternative_rise = std::numeric_limits<double>::quiet_NaN();  // its cost above the best's
   std::string alternative_from;
   // sigma < half the reference spread (the prior's sigma, or spread), the cost not rough and no
   // other end as good
