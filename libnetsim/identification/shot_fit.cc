@@ -1027,14 +1027,12 @@ std::string PriorConflictNote(const FittedParameter& f, const std::string& sourc
   if (!f.has_prior || !(f.prior_sigma > 0)) return "";
   const double away = (f.value - f.prior_value) / f.prior_sigma;
   if (!(std::abs(away) > kPriorReach)) return "";
-  char text[640];
-  std::snprintf(text, sizeof text,
-                "the fit puts %s at %.4g, %.1f sigma from its prior (%.4g +- %.3g%s%s): the flight "
-                "and the bench disagree. A model coarser than the flight biases what it fits "
-                "(docs/fit.md, Limits), or the bench did not measure this thread",
-                f.parameter.name.c_str(), f.value, away, f.prior_value, f.prior_sigma,
-                source.empty() ? "" : ", ", source.c_str());
-  return text;
+  char numbers[128];
+  std::snprintf(numbers, sizeof numbers, " at %.4g, %.1f sigma from its prior (%.4g +- %.3g",
+                f.value, away, f.prior_value, f.prior_sigma);
+  return "the fit puts " + f.parameter.name + numbers + (source.empty() ? "" : ", " + source) +
+         "): the flight and the bench disagree. A model coarser than the flight biases what it "
+         "fits (docs/fit.md, Limits), or the bench did not measure this thread";
 }
 
 std::vector<double> ScanCoordinates(const FitParameter& parameter, const FitPrior* prior,
@@ -1087,17 +1085,18 @@ std::vector<std::string> ResolutionNotes(const Scenario& scenario,
       if (scenario.materials[net.material].name != material) continue;
       const double segment = net.mesh / net.segments_per_link;
       if (segment <= kBendingSegment * 1.001) continue;
-      char text[640];
-      std::snprintf(
-          text, sizeof text,
-          "net '%s' of %s has %.3g cm segments (%d per link), too coarse to show EI in a "
-          "flight: the fitted %s is this model's, not the thread's (Net A's flight, implicit "
-          "step: a tenth of EI's effect on the knots at 2.5 cm segments, two thirds at 1.25 cm; "
-          "docs/benchmarks.md). To fit the thread's, refine the links: --set "
-          "nets.%zu.segments_per_link=%d",
-          net.name.c_str(), name.c_str(), segment * 100, net.segments_per_link, par.name.c_str(), n,
-          static_cast<int>(std::ceil(net.mesh / kBendingSegment - 1e-9)));
-      notes.push_back(text);
+      char size[64];
+      std::snprintf(size, sizeof size, "%.3g cm segments (%d per link)", segment * 100,
+                    net.segments_per_link);
+      notes.push_back(
+          "net '" + net.name + "' of " + name + " has " + size +
+          ", too coarse to show EI in a flight: the fitted " + par.name +
+          " is this model's, not the thread's (Net A's flight, implicit step: a tenth of EI's "
+          "effect on the knots at 2.5 cm segments, two thirds at 1.25 cm; docs/benchmarks.md). "
+          "To fit the thread's, refine the links: --set nets." +
+          std::to_string(n) + ".segments_per_link=" +
+          std::to_string(static_cast<int>(std::ceil(net.mesh / kBendingSegment - 1e-9))) +
+          ", with the bench's values as a prior (--prior) to pick the valley");
     }
   }
   return notes;

@@ -131,7 +131,8 @@ TEST_F(FitCommand, APriorDeterminesWhatTheFlightCannot) {
       RunNetlab(Fit("--free drag.drag_coefficient,materials.nylon.twist_damping --prior " +
                     Path("prior.yaml") + " --json --quiet"));
   ASSERT_EQ(r.status, 0) << r.err;
-  const auto& damping = LastJson(r.out)["parameters"]["materials.nylon.twist_damping"];
+  const auto json = LastJson(r.out);  // kept: a reference into a temporary would dangle
+  const auto& damping = json["parameters"]["materials.nylon.twist_damping"];
   EXPECT_FALSE(damping["identified"].boolean());
   EXPECT_EQ(damping["determined_by"].string(), "prior");
   EXPECT_NEAR(damping["prior_sigma"].number(), 1e-11, 1e-20);

@@ -183,6 +183,14 @@ TEST_F(ShotFit, NotesLinksTooCoarseForTheBendingStiffness) {
   EXPECT_TRUE(notes("materials.nylon.bend_stiffness", {{"nets.0.segments_per_link", "8"}}).empty());
   EXPECT_EQ(notes("materials.nylon.bend_stiffness", {{"nets.0.segments_per_link", "7"}}).size(),
             1u);
+  // A long scenario path is kept whole, and the note ends as written.
+  const std::string path(700, 'd');
+  const auto long_note = ResolutionNotes(
+      LoadScenario(scenario_, {}),
+      ParseFreeParameters("materials.nylon.bend_stiffness", scenario_, {}, 0.0), path);
+  ASSERT_EQ(long_note.size(), 1u);
+  EXPECT_NE(long_note[0].find(" of " + path + " has "), std::string::npos);
+  EXPECT_TRUE(long_note[0].ends_with("as a prior (--prior) to pick the valley")) << long_note[0];
 }
 
 // The scan's reading of a profile: the lowest point, and a second basin only behind a real
@@ -279,6 +287,12 @@ TEST(PriorConflict, AnEndBeyondThePriorsReachIsNoted) {
   EXPECT_NE(PriorConflictNote(f, "").find("-3.1 sigma from its prior (1508 +- 75.4)"),
             std::string::npos)
       << PriorConflictNote(f, "");
+  const std::string source(700, 's');  // a long path, kept whole
+  EXPECT_TRUE(PriorConflictNote(f, source).ends_with(", " + source +
+                                                     "): the flight and the bench disagree. A "
+                                                     "model coarser than the flight biases what "
+                                                     "it fits (docs/fit.md, Limits), or the "
+                                                     "bench did not measure this thread"));
   f.value = 1591.0;  // the explicit fit with a bench prior: 1.1 sigma
   EXPECT_TRUE(PriorConflictNote(f, "bench.yaml").empty());
   f.value = 1508.16 + 2.99 * 75.4;
