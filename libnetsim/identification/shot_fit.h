@@ -17,9 +17,9 @@
 // the data within its noise), each shot's rows by its own. Weak anchors keep scale parameters no
 // data or prior can see near their start; material parameters are held while the launch is
 // fitted first, then each is scanned over a factor 2 either way (or over its prior's reach,
-// ScanCoordinates) before everything is fitted. A
-// parameter that looks identified is checked: the cost at -+ 2 sigma must rise within 2x of the
-// Jacobian's prediction, or the cost is rough there and sigma means nothing.
+// ScanCoordinates) before everything is fitted. A parameter that looks identified is checked:
+// the cost at -+ 2 sigma must rise within 2x of the Jacobian's prediction, or the cost is rough
+// there and sigma means nothing.
 
 #include <Eigen/Core>
 #include <array>
@@ -188,17 +188,16 @@ int EndElsewhere(const std::vector<std::vector<double>>& ends, const std::vector
 // `current`, the coordinate the fit stands at. With one, the prior's reach: its value +-3 sigma
 // (3 sigma / value in ln value), or a factor 2 either way of it when that is narrower. A valley
 // beyond the prior's reach is not a rival: the bench puts the parameter there with odds below
-// 0.3 %. (Net A's explicit flight with a 5 % prior: the scan over a factor 2 found valleys whose
-// fits ended 3-5 prior sigma away, and marked both stiffnesses ambiguous although the flight
-// alone gave them to 1.3 % within 1 sigma of the truth.)
+// 0.3 %. (Net A's explicit flight with a 5 % prior: over a factor 2 the scan found valleys whose
+// fits ended 3-5 prior sigma away; within the prior's reach it found no second one along EI and
+// one along EA, whose fit still ended in another basin, docs/benchmarks.md.)
 inline constexpr double kPriorReach = 3.0;
+std::vector<double> ScanCoordinates(const FitParameter& parameter, const FitPrior* prior,
+                                    double current, int steps);
 
 // A note when the fit ends beyond its prior's reach (more than kPriorReach prior sigma from the
 // prior's value): the flight and the bench disagree. Empty when it does not, or has no prior.
 // `source` names the prior (its file).
 std::string PriorConflictNote(const FittedParameter& fitted, const std::string& source);
-
-std::vector<double> ScanCoordinates(const FitParameter& parameter, const FitPrior* prior,
-                                    double current, int steps);
 
 }  // namespace netlab::netsim
