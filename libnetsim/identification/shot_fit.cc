@@ -761,12 +761,12 @@ struct FitEnd {
 // The material's signal in a flight is weak; fitted from a start far off in velocity or drag, the
 // stiffnesses went where they explain the wrong launch (a net of EA = 26 N and EI = 4e-7 N m^2, a
 // valley of wrong minima, in the twin's Net A flight). Returns the best end (its cost in
-// result->cost_final); every usable end in *ends; in *multimodal, the parameters whose scan found
-// another valley; *rival_failed when the last stage from one of them ended unusable.
+// result->cost_final); every usable end in *ends; *valley_found when a scan found another valley,
+// *rival_failed when the last stage from one ended unusable.
 std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& parameters,
                              const FitOptions& options, const std::vector<double>& x0,
                              Clock::time_point start, FitResult* result, std::vector<FitEnd>* ends,
-                             std::vector<bool>* multimodal, bool* rival_failed) {
+                             bool* valley_found, bool* rival_failed) {
   const int p = static_cast<int>(parameters.size());
   std::vector<bool> all(p, true), launch(p);
   for (int i = 0; i < p; ++i) launch[i] = !IsMaterial(parameters[i]);
@@ -839,7 +839,7 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
     long valleys = static_cast<long>(rivals.size());
     last_stage(x, s, "", valleys * lm_all + later, &summary);
     for (const auto& [i, rival] : rivals) {
-      (*multimodal)[i] = true;
+      *valley_found = true;
       if (!last_stage(rival, s, "from the other valley of " + parameters[i].name,
                       --valleys * lm_all + later, &summary))
         *rival_failed = true;
@@ -935,7 +935,7 @@ constexpr double kAsWell = 3.841458820694124;
 // another end of the fit fits as well.
 void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
             const std::vector<PriorTerm>& priors, const std::vector<double>& best,
-            const std::vector<FitEnd>& ends, const std::vector<bool>& multimodal, bool rival_failed,
+            const std::vector<FitEnd>& ends, bool valley_found, bool rival_failed,
             const Eigen::VectorXd& sigma, const Eigen::VectorXd& data_sigma,
             const Eigen::MatrixXd& jtj, FitResult* result) {
   const int p = static_cast<int>(parameters.size());
@@ -959,7 +959,7 @@ void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
   // last stage came back to the same end, the scan's second valley was one parameter's view of a
   // single basin.
   const FitEnd* elsewhere = nullptr;
-  if (std::find(multimodal.begin(), multimodal.end(), true) != multimodal.end()) {
+  if (valley_found) {
     std::vector<std::vector<double>> xs;
     for (const FitEnd& e : ends) xs.push_back(e.x);
     std::vector<bool> material(p);
@@ -1140,10 +1140,9 @@ FitResult FitShots(const std::vector<FitShotInput>& inputs,
   ShotCost cost(parameters, &shots, priors, options, margin);
   result.residuals = cost.data_rows();
   std::vector<FitEnd> ends;
-  std::vector<bool> multimodal(p, false);
-  bool rival_failed = false;
+  bool valley_found = false, rival_failed = false;
   const std::vector<double> best =
-      Minimise(&cost, parameters, options, x0, start, &result, &ends, &multimodal, &rival_failed);
+      Minimise(&cost, parameters, options, x0, start, &result, &ends, &valley_found, &rival_failed);
 
   // The covariance: the data's information (inflated per shot) plus the priors'.
   const std::vector<double> jac = JacobianAt(cost, best);
@@ -1163,7 +1162,7 @@ FitResult FitShots(const std::vector<FitShotInput>& inputs,
       else if (r != c)
         result.correlation(r, c) = std::numeric_limits<double>::quiet_NaN();
 
-  Report(cost, parameters, priors, best, ends, multimodal, rival_failed, sigma, data_sigma,
+  Report(cost, parameters, priors, best, ends, valley_found, rival_failed, sigma, data_sigma,
          j.transpose() * j, &result);
   for (const FittedParameter& f : result.parameters)
     if (const FitPrior* prior = PriorOf(f.parameter, options)) {
