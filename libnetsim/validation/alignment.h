@@ -38,7 +38,10 @@ class SimInterpolant {
   double begin() const { return sim_.time.front(); }
   double end() const { return sim_.time.back(); }
 
-  // False when t is outside the stored span or a frame of the stencil is not valid.
+  // False when t is outside the stored span, a frame of the stencil is not valid, or (with 5 or
+  // more frames) no 5 consecutive valid frames near it give the error estimate.
+  // Only valid frames are read: a file may hold NaN where /knots/valid is 0 (a triangulated
+  // tracks file does), and whether a point is available does not depend on asking for the error.
   bool At(double t, int k, Eigen::Vector3d* p, Eigen::Vector3d* v, double* error) const {
     const auto& s = sim_.time;
     const int n = static_cast<int>(s.size());
@@ -70,11 +73,27 @@ class SimInterpolant {
       pos += w[a] * q;
       vel += dw[a] * q;
     }
+    // The error's window: 5 valid frames, the stencil extended by the frame after it (before it
+    // at the end of the file) where they are, else the nearest such window within kReach frames
+    // (f'''' changes slowly; a knot lost now and then must not mask its neighbours' frames).
+    int f5 = 0;
+    if (n >= 5) {
+      constexpr int kReach = 4;
+      const int start = std::clamp(first, 0, n - 5);
+      f5 = -1;
+      for (int d = 0; d <= kReach && f5 < 0; ++d)
+        for (const int candidate : {start - d, start + d}) {
+          if (candidate < 0 || candidate > n - 5 || f5 >= 0) continue;
+          bool valid = true;
+          for (int a = 0; a < 5 && valid; ++a) valid = sim_.Valid(candidate + a, ks);
+          if (valid) f5 = candidate;
+        }
+      if (f5 < 0) return false;
+    }
     *p = pos;
     if (v) *v = vel;
     if (error) {
       // 4th divided difference over 5 frames (f''''/24), the stencil extended by one frame.
-      const int f5 = std::clamp(first, 0, n - 5);
       *error = 0.0;
       if (n >= 5) {
         Eigen::Vector3d dd[5];

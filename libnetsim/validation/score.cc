@@ -421,15 +421,23 @@ std::vector<int> MatchKnots(const ScoreInput& in) {
   return sim_knot;
 }
 
-// NaN in the simulation is a blow-up carried on: stop, naming it.
+// NaN in the simulation is a blow-up carried on: stop, naming it. Only the valid knot-frames
+// count: a simulation given as tracks (a triangulated file, or one with knots lost) holds NaN
+// where /knots/valid is 0, and those are never read.
 void CheckSimulationFinite(const ScoreInput& in) {
   const KnotTracks& sim = in.sim;
   const int knots = in.meas.knots();  // the simulation's too (MatchKnots)
   for (int t = 0; t < sim.frames(); ++t)
-    for (int k = 0; k < knots; ++k)
-      if (sim.Valid(t, k) && !sim.Position(t, k).allFinite())
+    for (int k = 0; k < knots; ++k) {
+      if (!sim.Valid(t, k)) continue;
+      if (!sim.Position(t, k).allFinite())
         Fail(in.sim_name + ": /knots/position is not a number at " + FrameName(sim, t) + ", knot " +
              KnotName(sim.grid[k]));
+      if (!sim.covariance.empty() &&
+          !sim.covariance[static_cast<size_t>(t) * knots + k].allFinite())
+        Fail(in.sim_name + ": /knots/covariance is not a number at " + FrameName(sim, t) +
+             ", knot " + KnotName(sim.grid[k]) + ", where /knots/valid is 1");
+    }
 }
 
 // Sigma_meas of knot k in frame t (`where`, for the message): the file's, checked symmetric
@@ -485,6 +493,23 @@ std::vector<Point> MeasuredPoints(const ScoreInput& in, int* masked) {
 std::string NoOverlapMessage(const ScoreInput& in) {
   const KnotTracks &meas = in.meas, &sim = in.sim;
   std::ostringstream o;
+  // The spans overlap, but the simulation's knots are lost (/knots/valid 0) around every
+  // measured knot-frame: say so, not "no overlap".
+  const double tau = in.options.time_offset_s;
+  const double lo = std::max(meas.time.front() + tau, sim.time.front());
+  const double hi = std::min(meas.time.back() + tau, sim.time.back());
+  const double span = meas.time.back() - meas.time.front();
+  size_t valid = 0;
+  for (uint8_t v : sim.valid) valid += v != 0;
+  if (hi >= lo && (span <= 0 || hi - lo >= 0.5 * span) && valid < sim.valid.size()) {
+    o << "no measured knot-frame can be compared: " << in.sim_name << " has "
+      << sim.valid.size() - valid << " of its " << sim.valid.size()
+      << " knot-frames lost (/knots/valid 0), and a knot is simulated at a time only where it "
+      << "is valid in the 4 frames around that time and in 5 consecutive frames near them (for "
+      << "its interpolation and the interpolation's error); give --sim a simulation (netlab "
+      << "simulate), or tracks with fewer knots lost";
+    return o.str();
+  }
   o << "no overlap in time: " << in.meas_name << " spans " << meas.time.front() << " .. "
     << meas.time.back() << " s, " << in.sim_name << " " << sim.time.front() << " .. "
     << sim.time.back() << " s (offset " << in.options.time_offset_s << " s";
@@ -629,6 +654,11 @@ void ResidualsAtFit(const KnotTracks& meas, const Scorer& scorer, const Fit& fit
       continue;
     }
     const size_t i = static_cast<size_t>(pt.frame) * meas.knots() + pt.knot;
+    // Every number read is checked finite; a NaN here would be a bug, and would index the d2
+    // histogram out of its bins (the crash a triangulated file given as --sim once caused).
+    if (!std::isfinite(r.dot(w * r)))
+      throw std::logic_error("score: d2 is not a number at " + FrameName(meas, pt.frame) +
+                             ", knot " + KnotName(meas.grid[pt.knot]));
     result->residual[i] = r;
     result->d2[i] = r.dot(w * r);
     result->compared[i] = 1;
@@ -708,7 +738,7 @@ std::array<int, 4> FirstNetCorners(const KnotTracks& meas,
 }
 
 // The net's side: the thread length along the first net's first row in the first simulated
-// frame.
+// frame (each link in the first frame that has both its knots valid; a simulation's are all).
 double FirstRowLength(const KnotTracks& meas, const KnotTracks& sim,
                       const std::vector<int>& sim_knot,
                       const std::map<int, std::array<int, 2>>& extent) {
@@ -717,8 +747,12 @@ double FirstRowLength(const KnotTracks& meas, const KnotTracks& sim,
   double side = 0.0;
   for (int c = 0; c < e0[1]; ++c) {
     const int a = meas.FindKnot(0, c, net0), b = meas.FindKnot(0, c + 1, net0);
-    if (a >= 0 && b >= 0)
-      side += (sim.Position(0, sim_knot[b]) - sim.Position(0, sim_knot[a])).norm();
+    if (a < 0 || b < 0) continue;
+    for (int t = 0; t < sim.frames(); ++t)
+      if (sim.Valid(t, sim_knot[a]) && sim.Valid(t, sim_knot[b])) {
+        side += (sim.Position(t, sim_knot[b]) - sim.Position(t, sim_knot[a])).norm();
+        break;
+      }
   }
   return side;
 }
