@@ -76,10 +76,13 @@ struct KnotTracks {
 void WriteKnotTracks(const std::string& path, const KnotTracks& tracks);
 
 // Reads a knot-track file. Throws std::runtime_error naming the file and the dataset when the file
-// is missing, not HDF5, not a knot-track file, or its datasets disagree in shape.
+// is missing, not HDF5, not a knot-track file, or its datasets disagree in shape. A "units"
+// attribute is honoured: /time and /contact_start in s, ms, us or ns, positions in m, cm, mm or
+// um, covariances in m^2, cm^2 or mm^2 are converted to s, m and m^2; other units are refused by
+// name (no attribute: the SI unit netlab writes).
 KnotTracks ReadKnotTracks(const std::string& path);
 
-// Node positions of a simulation file, [T][N] (empty if the file has none).
+// Node positions of a simulation file, [T][N], m (empty if the file has none; units as above).
 std::vector<std::vector<Eigen::Vector3d>> ReadNodePositions(const std::string& path);
 
 // Streams a simulation into a knot-track file, one frame at a time (a run may be longer than
