@@ -6,6 +6,8 @@
 #include <opencv2/core/eigen.hpp>
 #include <stdexcept>
 
+#include "common/files.h"
+
 namespace netlab::calib {
 
 int Rig::Find(const std::string& name) const {
@@ -32,9 +34,7 @@ void WriteRig(const std::string& path, const Rig& rig) {
     fs << "]";
     fs.release();
   }
-  std::error_code error;
-  std::filesystem::rename(partial, path, error);
-  if (error) throw std::runtime_error(path + ": cannot rename " + partial + ": " + error.message());
+  RenameInto(partial, path);
 }
 
 Rig ReadRig(const std::string& path) {

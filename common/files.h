@@ -15,9 +15,19 @@
 namespace netlab {
 
 // Renames `from` onto `to` (atomic on one file system); std::runtime_error naming both if not.
+// Never over anything but a regular file, a link to one, or a folder (ReplaceDirectory): a
+// rename onto a character device or a FIFO would replace the device's node with a file (`--out
+// /dev/null` run as root). The commands refuse such an output before any work
+// (common/output_paths.h); this is the last line.
 inline void RenameInto(const std::string& from, const std::string& to) {
+  namespace fs = std::filesystem;
   std::error_code error;
-  std::filesystem::rename(from, to, error);
+  const fs::file_status target = fs::status(to, error);
+  if (fs::exists(target) && !fs::is_regular_file(target) && !fs::is_directory(target))
+    throw std::runtime_error(to + ": not a regular file (a device, FIFO or socket): not replaced "
+                             "by " + from);
+  error.clear();
+  fs::rename(from, to, error);
   if (error)
     throw std::runtime_error(to + ": cannot rename " + from + " into place: " + error.message());
 }

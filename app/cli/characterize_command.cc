@@ -8,6 +8,7 @@
 #include "app/cli/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "common/output_paths.h"
 #include "libnetsim/characterization/bench_test.h"
 #include "libnetsim/characterization/characterize.h"
 #include "libnetsim/characterization/material_file.h"
@@ -70,6 +71,7 @@ int RunCharacterize(const std::vector<std::string>& args) {
     }
     if (cl.positional().size() != 1) throw UsageError("expected one TEST.yaml");
     const std::string out = cl.Required("out");
+    CheckOutputPaths({{"the test file", cl.positional()[0]}}, {{"--out", out}});
     const netsim::BenchTest test = netsim::ReadBenchTest(cl.positional()[0]);
     const netsim::Characterization c = netsim::Characterize(test);
     netsim::WriteMaterialFile(out, c.estimates,

@@ -12,6 +12,7 @@
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
 #include "common/memory.h"
+#include "common/output_paths.h"
 #include "libreconstruct/coloring/color_identify.h"
 #include "libreconstruct/coloring/net_coloring.h"
 
@@ -69,6 +70,7 @@ int RunColorNet(const std::vector<std::string>& args) {
     options.radius = cl.IntOption("radius", 0, 0, 10000);
     options.adjacent_distinct = cl.Flag("adjacent-distinct");
     options.time_limit_s = cl.DoubleOption("time-limit", 30.0, 0.0, 86400.0);
+    CheckOutputPaths({{"--palette", cl.Option("palette").value_or("")}}, {{"--out", out}});
 
     // Size before allocating: the search's memory grows with the net and, with a radius, with
     // the knots within it (docs/coloring.md).

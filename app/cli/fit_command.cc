@@ -15,6 +15,7 @@
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
 #include "common/files.h"
+#include "common/output_paths.h"
 #include "common/yaml_util.h"
 #include "libnetsim/characterization/material_file.h"
 #include "libnetsim/identification/shot_fit.h"
@@ -373,6 +374,12 @@ int RunFit(const std::vector<std::string>& args) {
     const std::string out = cl.Required("out");
     netsim::FitOptions options = OptionsFrom(cl);
     const bool quiet = cl.Flag("quiet");
+    // Before any work: fit.yaml over a scenario, a measured file or the prior is refused.
+    std::vector<NamedPath> inputs;
+    for (const std::string& path : scenarios) inputs.push_back({"scenario", path});
+    for (const std::string& path : measured_paths) inputs.push_back({"--measured", path});
+    inputs.push_back({"--prior", cl.Option("prior").value_or("")});
+    CheckOutputPaths(inputs, {{"--out", out}});
     // Ceres' own warnings (a rejected step is part of the method) would bury netlab's lines.
     FLAGS_minloglevel = google::GLOG_ERROR;
     const bool tty = isatty(fileno(stderr));

@@ -16,6 +16,7 @@
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
 #include "app/cli/progress_bar.h"
+#include "common/output_paths.h"
 #include "common/yaml_util.h"
 #include "libreconstruct/recording/frame_store.h"
 #include "libreconstruct/recording/sequence.h"
@@ -152,7 +153,18 @@ int RunIngest(const std::vector<std::string>& args) {
     const int threads = cl.IntOption("threads", 2, 1, 64);
     const bool quiet = cl.Flag("quiet");
 
-    const recon::SynchronizedSequence sequence(recon::LoadExperiment(cl.positional()[0]));
+    recon::Experiment experiment = recon::LoadExperiment(cl.positional()[0]);
+    if (to_hdf5) {
+      // Before any work: neither the store nor its experiment file over an input (the experiment
+      // file, a camera's video, store or timestamps) or over each other.
+      std::vector<NamedPath> inputs = {{"experiment", cl.positional()[0]}};
+      for (const auto& [what, path] : recon::RecordingFiles(experiment))
+        inputs.push_back({what, path});
+      CheckOutputPaths(inputs, {{"--to-hdf5", *to_hdf5},
+                                {"--to-hdf5's experiment file",
+                                 recon::FrameStoreExperimentPath(*to_hdf5)}});
+    }
+    const recon::SynchronizedSequence sequence(std::move(experiment));
     recon::CheckReport check;
     double decode_fps = 0.0;
     bool sampled = false;

@@ -18,6 +18,7 @@
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
 #include "calibration/rig.h"
+#include "common/output_paths.h"
 #include "common/yaml_util.h"
 #include "libreconstruct/coloring/net_coloring.h"
 #include "libreconstruct/labeling/label_engine.h"
@@ -244,6 +245,12 @@ int RunLabel(const std::vector<std::string>& args) {
     const auto start = std::chrono::steady_clock::now();
     const bool quiet = cl.Flag("quiet");
     const std::string out = cl.Required("out");
+    // Before any work: no output over an input or the other output, both outputs writable.
+    CheckOutputPaths({{"experiment", cl.positional()[0]},
+                      {"--rig", cl.Required("rig")},
+                      {"--coloring", cl.Required("coloring")},
+                      {"--seed", cl.Required("seed")}},
+                     {{"--out", out}, {"--xypts", cl.Option("xypts").value_or("")}});
     // The inputs: rig, colouring, experiment, frames, seeds.
     const calib::Rig rig = calib::ReadRig(cl.Required("rig"));
     std::vector<std::array<int, 3>> dyes;

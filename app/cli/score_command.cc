@@ -9,6 +9,7 @@
 #include "app/cli/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "common/output_paths.h"
 #include "libnetsim/tracks/track_file.h"
 #include "libnetsim/validation/score.h"
 #include "libnetsim/validation/score_file.h"
@@ -131,6 +132,9 @@ int RunScore(const std::vector<std::string>& args) {
     std::string why;
     if (!options.IsValid(&why)) throw UsageError(why);
     const bool quiet = cl.Flag("quiet");
+    // Before any work: no output over an input or the other output, every output writable.
+    CheckOutputPaths({{"--measured", measured_path}, {"--sim", sim_path}},
+                     {{"--out", out}, {"--report", report}});
 
     if (!quiet)
       std::fprintf(stderr, "reading %s and %s\n", measured_path.c_str(), sim_path.c_str());

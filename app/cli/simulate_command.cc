@@ -12,6 +12,7 @@
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
 #include "common/log.h"
+#include "common/output_paths.h"
 #include "common/yaml_util.h"
 #include "libnetsim/scenario/run_scenario.h"
 #include "libnetsim/scenario/scenario_override.h"
@@ -86,8 +87,9 @@ int RunSimulate(const std::vector<std::string>& args) {
     }
     if (cl.positional().size() != 1) throw UsageError("expected one SCENARIO.yaml");
     const std::string out = cl.Required("out");
-
     const std::vector<netsim::ScenarioOverride> overrides = cl.Overrides("set");
+    CheckOutputPaths({{"scenario", cl.positional()[0]}}, {{"--out", out}});
+
     netsim::Scenario scenario = netsim::LoadScenario(cl.positional()[0], overrides);
     // A shorter (or longer) run of the same scene, e.g. the first second of a flight.
     scenario.duration = cl.DoubleOption("duration", scenario.duration, 1e-9, 1e6);

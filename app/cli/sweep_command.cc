@@ -15,6 +15,7 @@
 #include "app/cli/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "common/output_paths.h"
 #include "common/yaml_util.h"
 #include "libnetsim/scenario/scenario_override.h"
 #include "libnetsim/sweep/sweep_file.h"
@@ -228,6 +229,8 @@ int RunSweep(const std::vector<std::string>& args) {
       throw UsageError(e.what());
     }
     if (parameters.empty()) throw UsageError("expected at least one --vary PATH=a:b:n");
+    // Before any run: no output over the scenario or the other output, both writable.
+    CheckOutputPaths({{"scenario", scenario_path}}, {{"--out", out}, {"--report", report}});
 
     if (netsim::MpiSession::Launched()) {
       if (!netsim::MpiSession::BuiltIn())

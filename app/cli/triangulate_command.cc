@@ -16,6 +16,7 @@
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
 #include "calibration/rig.h"
+#include "common/output_paths.h"
 #include "common/yaml_util.h"
 #include "libnetsim/tracks/track_file.h"
 #include "libreconstruct/geometry/bundle_adjust.h"
@@ -312,6 +313,12 @@ int RunTriangulate(const std::vector<std::string>& args) {
       throw UsageError("unexpected argument '" + cl.positional()[0] + "'");
     const auto start = std::chrono::steady_clock::now();
     TriangulateArgs a = ParseArgs(cl);
+    // Before any work: no output over an input or another output, every output's folder there.
+    CheckOutputPaths({{"--rig", a.rig_path}, {"--labels", a.labels_path},
+                      {"--truth", a.truth_path.value_or("")}},
+                     {{"--out", a.out},
+                      {"--csv", a.csv ? *a.csv + "xyzpts.csv" : ""},
+                      {"--csv", a.csv ? *a.csv + "xyzres.csv" : ""}});
 
     // The inputs: rig, labels (of the rig's cameras), the truth.
     const calib::Rig rig = calib::ReadRig(a.rig_path);

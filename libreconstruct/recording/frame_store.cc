@@ -6,9 +6,35 @@
 #include <mutex>
 #include <stdexcept>
 
+#include "common/files.h"
 #include "common/hdf5_util.h"
 
 namespace netlab::recon {
+
+std::string FrameStoreExperimentPath(const std::string& path) {
+  const bool h5 = path.size() > 3 && path.substr(path.size() - 3) == ".h5";
+  return path.substr(0, path.size() - (h5 ? 3 : 0)) + ".yaml";
+}
+
+std::vector<std::pair<std::string, std::string>> RecordingFiles(const Experiment& experiment) {
+  namespace fs = std::filesystem;
+  auto resolve = [&](const std::string& path) {
+    return fs::path(path).is_absolute() || experiment.base_dir.empty()
+               ? path
+               : (fs::path(experiment.base_dir) / path).string();
+  };
+  std::vector<std::pair<std::string, std::string>> files;
+  for (const CameraSpec& c : experiment.cameras) {
+    // As OpenFrameSource reads the spec: "file.h5:/dataset", an image pattern, or a video.
+    const size_t colon = c.frames.find(".h5:");
+    if (colon != std::string::npos)
+      files.emplace_back(c.name + "'s frames", resolve(c.frames.substr(0, colon + 3)));
+    else if (c.frames.find('%') == std::string::npos)
+      files.emplace_back(c.name + "'s frames", resolve(c.frames));
+    if (!c.timestamps.empty()) files.emplace_back(c.name + "'s timestamps", c.timestamps);
+  }
+  return files;
+}
 
 Experiment ConvertToFrameStore(const SynchronizedSequence& sequence, const std::string& path,
                                const FrameStoreOptions& options,
@@ -17,7 +43,7 @@ Experiment ConvertToFrameStore(const SynchronizedSequence& sequence, const std::
   const int first = sequence.first_frame(), count = sequence.last_frame() - first + 1;
   const std::string partial = path + ".partial";
   Experiment out = in;
-  out.path = path.substr(0, path.size() - (path.size() > 3 && path.substr(path.size() - 3) == ".h5" ? 3 : 0)) + ".yaml";
+  out.path = FrameStoreExperimentPath(path);
   out.base_dir = std::filesystem::path(path).parent_path().string();
   const std::string file_name = std::filesystem::path(path).filename().string();
   const int total = count * sequence.num_cameras();
@@ -90,9 +116,7 @@ Experiment ConvertToFrameStore(const SynchronizedSequence& sequence, const std::
     std::filesystem::remove(partial, ignored);  // no half-written store is left behind
     throw;
   }
-  std::error_code error;
-  std::filesystem::rename(partial, path, error);
-  if (error) throw std::runtime_error(path + ": cannot rename " + partial + ": " + error.message());
+  RenameInto(partial, path);
   return out;
 }
 

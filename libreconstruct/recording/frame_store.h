@@ -12,6 +12,8 @@
 
 #include <functional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "libreconstruct/recording/sequence.h"
 
@@ -20,6 +22,15 @@ namespace netlab::recon {
 struct FrameStoreOptions {
   int deflate_level = 0;  // 0: none; 1..9: gzip (smaller, slower)
 };
+
+// The experiment file that reads the store at `path`, written beside it: "shot/store.h5" ->
+// "shot/store.yaml" (a name without ".h5" gets ".yaml" appended).
+std::string FrameStoreExperimentPath(const std::string& path);
+
+// The files a recording is read from, named for a message ("cam0's frames", "cam0's
+// timestamps"): every video or frame store and timestamps file (an image pattern names many files
+// and none of them can be an output of netlab's, so it is left out).
+std::vector<std::pair<std::string, std::string>> RecordingFiles(const Experiment& experiment);
 
 // Converts `sequence` into the store at `path` (via "<path>.partial" and a rename) and returns the
 // experiment that reads it (frames "<file name>:/<camera>"). progress(done, total) may be empty.

@@ -3,8 +3,13 @@
 // with the exit status it must end in and the fragments its message must hold (the file, the key
 // or frame, what was expected). Every row is also checked for what no bad input may do: end in a
 // signal or an unexplained std::bad_alloc, or bury netlab's own line under a library's noise
-// (OpenCV's, GStreamer's or libpng's lines may only follow it).
+// (OpenCV's, GStreamer's or libpng's lines may only follow it); and a row may name files the run
+// must leave as they were (issue 49: an output never replaces an input, a failed run leaves every
+// existing output unchanged).
 
+#include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -19,7 +24,30 @@ struct BadInput {
   std::string args;                    // the netlab arguments; "{dir}" is the fixture folder
   int status;                          // expected exit status: 1 bad input, 2 usage
   std::vector<std::string> fragments;  // each must be in stderr
+  // Files ("{dir}/...") the run must leave as they were: an input it must not replace, an output
+  // a failed run must not touch. A regular file byte for byte; a FIFO, device or folder stays
+  // one (and is not read); a missing file stays missing.
+  std::vector<std::string> unchanged = {};
 };
+
+// What ExpectBadInput compares of an `unchanged` file: its kind and, for a regular file, its bytes.
+inline std::string Snapshot(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code error;
+  const fs::file_status link = fs::symlink_status(path, error);
+  if (!fs::exists(link)) return "(missing)";
+  std::string kind = fs::is_symlink(link) ? "link to " + fs::read_symlink(path, error).string() +
+                                                ": "
+                                          : "";
+  const fs::file_status status = fs::status(path, error);
+  if (!fs::is_regular_file(status))
+    return kind + "(not a regular file, type " + std::to_string(static_cast<int>(status.type())) +
+           ")";
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  return kind + bytes.str();
+}
 
 inline std::string Substitute(std::string text, const std::string& dir) {
   for (size_t at = text.find("{dir}"); at != std::string::npos; at = text.find("{dir}", at))
@@ -36,7 +64,12 @@ inline size_t OwnLine(const std::string& err) {
 
 inline void ExpectBadInput(const BadInput& input, const std::string& dir) {
   SCOPED_TRACE(input.what + ": netlab " + Substitute(input.args, dir));
+  std::vector<std::string> before;
+  for (const std::string& file : input.unchanged) before.push_back(Snapshot(Substitute(file, dir)));
   const NetlabResult r = RunNetlab(Substitute(input.args, dir));
+  for (size_t i = 0; i < input.unchanged.size(); ++i)
+    EXPECT_TRUE(Snapshot(Substitute(input.unchanged[i], dir)) == before[i])
+        << Substitute(input.unchanged[i], dir) << " was changed by the run";
   EXPECT_EQ(r.status, input.status) << r.err;
   for (const std::string& fragment : input.fragments)
     EXPECT_NE(r.err.find(Substitute(fragment, dir)), std::string::npos)

@@ -5,12 +5,16 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
 
 #include "calibration/rig.h"
+#include "common/hdf5_util.h"
 #include "libnetsim/tracks/track_file.h"
 #include "libreconstruct/labels/label_set.h"
 #include "tests/app/cli/bad_input.h"
@@ -39,6 +43,39 @@ netsim::KnotTracks Truth(int rows, int cols, double t0 = 0.0) {
   }
   tracks.source = "test";
   return tracks;
+}
+
+// Knots lost as a triangulated file loses them: /knots/valid 0 and NaN in their position (and
+// covariance), legal content every reader must skip. Knot (0,0) from frame 6 on (a knot-frame
+// next to it then has a valid stencil whose error window reaches a lost frame), knot (0,1) in
+// frames 0..2 (the net's side is measured along row 0 in the first frame), knot (1,1) in 4..5.
+void LoseKnots(netsim::KnotTracks* tracks) {
+  const int knots = tracks->knots();
+  auto lose = [&](int t, int k) {
+    const size_t i = static_cast<size_t>(t) * knots + k;
+    tracks->valid[i] = 0;
+    tracks->position[i] = Eigen::Vector3d::Constant(NAN);
+    if (!tracks->covariance.empty()) tracks->covariance[i] = Eigen::Matrix3d::Constant(NAN);
+  };
+  for (int t = 6; t < tracks->frames(); ++t) lose(t, 0);
+  for (int t = 0; t <= 2; ++t) lose(t, 1);
+  for (int t = 4; t <= 5; ++t) lose(t, 5);
+}
+
+// Rewrites a knot-track file with its time, positions and covariances in other units, scaled to
+// match and the "units" attributes saying so.
+void ToUnits(const std::string& path, const std::string& time_units, double per_s,
+             const std::string& length_units, double per_m) {
+  netsim::KnotTracks tracks = netsim::ReadKnotTracks(path);
+  for (double& t : tracks.time) t *= per_s;
+  for (Eigen::Vector3d& p : tracks.position) p *= per_m;
+  for (Eigen::Matrix3d& c : tracks.covariance) c *= per_m * per_m;
+  netsim::WriteKnotTracks(path, tracks);
+  h5::Id file = h5::OpenFileReadWrite(path);
+  h5::SetUnits(file.get(), "time", time_units);
+  h5::SetUnits(file.get(), "knots/position", length_units);
+  if (!tracks.covariance.empty())
+    h5::SetUnits(file.get(), "knots/covariance", length_units + "^2");
 }
 
 class BadInputTriangulate : public CommandTest {
@@ -84,6 +121,30 @@ class BadInputTriangulate : public CommandTest {
     const NetlabResult measured = RunNetlab(Base() + "--labels " + Path("labels.h5") +
                                             " --out " + Path("measured.h5") + " --quiet");
     ASSERT_EQ(measured.status, 0) << measured.err;
+
+    // Legal files score used to crash on, and files in other units (issue 49).
+    netsim::KnotTracks lost = netsim::ReadKnotTracks(Path("truth.h5"));
+    LoseKnots(&lost);
+    netsim::WriteKnotTracks(Path("lost.h5"), lost);
+    netsim::KnotTracks measured_lost = netsim::ReadKnotTracks(Path("measured.h5"));
+    LoseKnots(&measured_lost);
+    netsim::WriteKnotTracks(Path("measured_lost.h5"), measured_lost);
+    // The truth measured with 1 mm of noise (a fixed pattern), in s and m, and in ms and mm.
+    netsim::KnotTracks noisy = Truth(kRows, kCols);
+    for (size_t i = 0; i < noisy.position.size(); ++i) {
+      noisy.position[i] += 1e-3 * Eigen::Vector3d(std::sin(1.0 * i), std::cos(2.0 * i),
+                                                  std::sin(3.0 * i + 1));
+      noisy.covariance.push_back(Eigen::Matrix3d::Identity() * 1e-6);
+    }
+    netsim::WriteKnotTracks(Path("noisy.h5"), noisy);
+    netsim::WriteKnotTracks(Path("noisy_mm.h5"), noisy);
+    ToUnits(Path("noisy_mm.h5"), "ms", 1e3, "mm", 1e3);
+    std::filesystem::copy_file(Path("measured.h5"), Path("measured_furlong.h5"));
+    ToUnits(Path("measured_furlong.h5"), "s", 1.0, "furlong", 1.0 / 201.168);
+    std::filesystem::create_symlink(Path("truth.h5"), Path("link_to_truth.h5"));
+    std::filesystem::create_symlink("/dev/null", Path("link_to_null"));
+    ASSERT_EQ(mkfifo(Path("fifo").c_str(), 0644), 0);
+    std::ofstream(Path("old_score.h5")) << "the previous score";
   }
   std::string Base() const {
     return "triangulate --rig " + Path("rig.yaml") + " --knots 4x4 --fps 179 ";
@@ -157,9 +218,69 @@ TEST_F(BadInputTriangulate, ScoreEndsInAClearError) {
            {"--out needs a non-empty value"}},
           {"empty --report", base + "--sim {dir}/truth.h5 --out {dir}/s.h5 --report ''", 2,
            {"--report needs a non-empty value"}},
+          // Issue 49: an output over an input or the other output, or where no file can go.
+          {"--out is the --measured file", base + "--sim {dir}/truth.h5 --out {dir}/measured.h5",
+           1, {"--out {dir}/measured.h5", "the --measured file {dir}/measured.h5"},
+           {"{dir}/measured.h5"}},
+          {"--out is a link to the --sim file",
+           base + "--sim {dir}/truth.h5 --out {dir}/link_to_truth.h5", 1,
+           {"--out {dir}/link_to_truth.h5", "the --sim file {dir}/truth.h5"},
+           {"{dir}/truth.h5", "{dir}/link_to_truth.h5"}},
+          {"--report is --out", base + "--sim {dir}/truth.h5 --out {dir}/s.h5 --report {dir}/s.h5",
+           1, {"--report {dir}/s.h5", "is also --out {dir}/s.h5"}},
+          {"--out is a FIFO", base + "--sim {dir}/truth.h5 --out {dir}/fifo", 1,
+           {"--out {dir}/fifo", "a FIFO", "not a regular file"}, {"{dir}/fifo"}},
+          {"--out is a link to a character device",
+           base + "--sim {dir}/truth.h5 --out {dir}/link_to_null", 1,
+           {"--out {dir}/link_to_null", "a character device"}, {"{dir}/link_to_null"}},
+          {"--report in a folder that does not exist",
+           base + "--sim {dir}/truth.h5 --out {dir}/old_score.h5 --report {dir}/no/such/r.html", 1,
+           {"--report {dir}/no/such/r.html", "does not exist", "nothing was written"},
+           {"{dir}/old_score.h5"}},
+          {"positions in unknown units", "score --measured {dir}/measured_furlong.h5 --sim "
+                                         "{dir}/truth.h5 --out {dir}/s.h5", 1,
+           {"{dir}/measured_furlong.h5:/knots/position has units 'furlong'", "mm"}},
       },
       dir_.string());
   EXPECT_FALSE(std::filesystem::exists(dir_ / "s.h5"));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "old_score.h5.partial"));
+}
+
+// A simulation with knots lost (NaN where /knots/valid is 0), and a triangulated file given as
+// --sim, are legal: they segfaulted with --align none and rigid (a NaN interpolation error
+// indexed the d2 histogram out of its bins) and found "no overlap in time" with the time fitted.
+// The lost knot-frames are masked; the rest is scored.
+TEST_F(BadInputTriangulate, ScoreSkipsTheKnotsASimulationLost) {
+  for (const char* sim : {"lost.h5", "measured_lost.h5"})
+    for (const char* align : {"none", "rigid", "time", "time+rigid"}) {
+      SCOPED_TRACE(std::string(sim) + " --align " + align);
+      const NetlabResult r = RunNetlab("score --measured " + Path("measured.h5") + " --sim " +
+                                       Path(sim) + " --out " + Path("s.h5") + " --align " + align +
+                                       " --json --quiet");
+      ASSERT_EQ(r.status, 0) << r.err;
+      const Json json = LastJson(r.out);
+      EXPECT_GT(json["masked"].number(), 0);
+      EXPECT_GT(json["points"].number(), kFrames * kRows * kCols / 2);
+      EXPECT_TRUE(std::isfinite(json["mean_d2"].number()));
+      EXPECT_TRUE(std::isfinite(json["rms_percent_of_side"].number()));
+    }
+}
+
+// A "units" attribute is honoured: the measurement in ms and mm scores as the one in s and m (it
+// was read as metres: a net 1000 times larger).
+TEST_F(BadInputTriangulate, ScoreConvertsMillisecondsAndMillimetres) {
+  auto score = [&](const std::string& measured) {
+    const NetlabResult r = RunNetlab("score --measured " + Path(measured) + " --sim " +
+                                     Path("truth.h5") + " --out " + Path("s.h5") +
+                                     " --align none --json --quiet");
+    EXPECT_EQ(r.status, 0) << r.err;
+    return LastJson(r.out);
+  };
+  const Json si = score("noisy.h5"), mm = score("noisy_mm.h5");
+  EXPECT_NEAR(si["mean_d2"].number(), 1.5, 0.3);  // sin^2 + cos^2 + sin^2 mm^2 over 1 mm^2
+  for (const char* key : {"rms_mm", "mean_d2", "side_m", "max_area_measured_m2"})
+    EXPECT_NEAR(mm[key].number(), si[key].number(), 1e-9 * std::abs(si[key].number())) << key;
+  EXPECT_EQ(mm["points"].number(), si["points"].number());
 }
 
 }  // namespace

@@ -218,14 +218,17 @@ TEST_F(SweepCommand, BadVaryIsAnErrorNamingIt) {
 }
 
 // The file is written to sweep.h5.partial and renamed when complete: an output that cannot be
-// created fails before any run, and a finished sweep replaces the previous file whole.
+// created (its folder missing) fails before any run, and a finished sweep replaces the previous
+// file whole.
 TEST_F(SweepCommand, OutputIsReplacedOnlyWhenComplete) {
   const NetlabResult bad = RunNetlab("sweep " + scenario_ + " --vary duration=0.01:0.02:2 --out " +
                                      Path("no_such_dir/sweep.h5"));
   EXPECT_EQ(bad.status, 1);
-  EXPECT_NE(bad.err.find("no_such_dir/sweep.h5.partial: cannot create HDF5 file"),
+  EXPECT_NE(bad.err.find("--out " + Path("no_such_dir/sweep.h5") + ": the folder"),
             std::string::npos)
       << bad.err;
+  EXPECT_NE(bad.err.find("no_such_dir does not exist"), std::string::npos) << bad.err;
+  EXPECT_EQ(bad.err.find("run 0"), std::string::npos) << bad.err;  // before any run
   const std::string out = Path("sweep.h5");
   std::ofstream(out) << "the previous sweep";
   const NetlabResult r = RunNetlab("sweep " + scenario_ + " --vary duration=0.01:0.02:2 --out " +
