@@ -1,12 +1,15 @@
 #include "libnetsim/scenario/run_scenario.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <iomanip>
 #include <limits>
 #include <memory>
 #include <sstream>
 
+#include "common/memory.h"
 #include "common/yaml_util.h"
 #include "libnetsim/tracks/track_file.h"
 
@@ -42,6 +45,50 @@ std::string RunSummary::BriefReport() const {
   return os.str();
 }
 
+namespace {
+
+// Throws InputError when the run's output frames cannot fit where they go (see RunScenario).
+void CheckOutputSize(const Scenario& scenario, const RunOptions& options, double dt, int nodes,
+                     int knots, int probes) {
+  namespace fs = std::filesystem;
+  // As the run counts them: a frame every steps_per_frame steps, and the first one.
+  const double steps = scenario.duration / dt;
+  const double steps_per_frame = std::max(1.0, std::round(scenario.output_interval / dt));
+  const double frames = std::floor(steps / steps_per_frame) + 1.0;
+  std::ostringstream head;
+  head << std::setprecision(3)
+       << (scenario.source_path.empty() ? scenario.name : scenario.source_path)
+       << ": output_interval " << scenario.output_interval << " s over duration "
+       << scenario.duration << " s (a step of " << dt << " s) gives " << frames
+       << " output frames";
+  const char* advice = "; raise output_interval (the flight scenarios write one frame per "
+                       "camera frame, 1/179 s)";
+  if (!options.out_path.empty()) {
+    // /time, the knots (position and valid), the probes and, when stored, every node.
+    const double per_frame = 8.0 + knots * 25.0 + probes * 24.0 +
+                             (scenario.store_nodes ? nodes * 24.0 : 0.0);
+    std::error_code error;
+    fs::path folder = fs::absolute(options.out_path, error).parent_path();
+    const fs::space_info space = fs::space(folder, error);
+    if (!error && frames * per_frame > static_cast<double>(space.available)) {
+      std::ostringstream os;
+      os << head.str() << ": ~" << FormatBytes(frames * per_frame) << " in " << options.out_path
+         << ", " << FormatBytes(static_cast<double>(space.available)) << " free there" << advice;
+      throw InputError(os.str());
+    }
+  }
+  if (options.keep_every > 0) {
+    const double kept = std::ceil(frames / options.keep_every) * (8.0 + knots * 24.0);
+    if (const std::string shortfall = MemoryShortfall(kept); !shortfall.empty()) {
+      std::ostringstream os;
+      os << head.str() << ": keeping their knot tracks in memory " << shortfall << advice;
+      throw InputError(os.str());
+    }
+  }
+}
+
+}  // namespace
+
 RunSummary RunScenario(const Scenario& scenario, const RunOptions& options) {
   BuiltScenario built = BuildScenario(scenario);
   if (options.on_built) options.on_built(built);
@@ -59,6 +106,13 @@ RunSummary RunScenario(const Scenario& scenario, const RunOptions& options) {
   summary.knots = model.num_knots();
   summary.active = sim.active_forces();
 
+  // The output sized before any step: an output_interval of 1e-12 s asks for a frame every step
+  // of a step shrunk to it (the step divides the interval), 6e10 frames of a 0.06 s shot, and ran
+  // for days filling the disk. Refused when the frames need more than the disk holds (a file) or
+  // the memory (frames kept by on_frame), naming output_interval and the size.
+  CheckOutputSize(scenario, options, sim.dt(), model.num_nodes(),
+                  static_cast<int>(built.knot_nodes.size()),
+                  static_cast<int>(built.probe_nodes.size()));
   // A step so small that the run could never end (a material 1e300 stiff gave dt = 6.5e-154 s,
   // and the step count overflowed into a run of 0 steps reported as stable) is refused up front.
   // 1e13 segment-steps is a week at the 15 M segment-steps/s of one core.

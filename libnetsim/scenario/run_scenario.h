@@ -19,6 +19,9 @@ struct RunOptions {
   // Called at every output frame (the frames the file gets) with the time (s) and the knots'
   // positions (m, in Model::knots order), e.g. to keep the tracks in memory; may be empty.
   std::function<void(double time, const std::vector<Vector3d>& knots)> on_frame;
+  // on_frame keeps every keep_every-th frame's knots in memory (0: none): the run is refused
+  // before its first step when they would not fit (as is a file larger than its disk's space).
+  int keep_every = 0;
   // Called once the scenario is built, before the first step (the knots' grid and nets); may be
   // empty.
   std::function<void(const BuiltScenario& built)> on_built;

@@ -292,6 +292,7 @@ SweepRun RunOne(const std::string& scenario_path, int index,
     const Scenario scenario = LoadScenario(scenario_path, overrides);
     RunOptions options;
     options.progress = progress;
+    options.keep_every = decimate;
     // Net 0's corners, for the opening area.
     std::array<int, 4> corners = {-1, -1, -1, -1};
     options.on_built = [&](const BuiltScenario& built) {

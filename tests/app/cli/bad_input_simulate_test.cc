@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -31,6 +34,17 @@ class BadInputSimulate : public CommandTest {
     Write("huge_net.yaml", Replace(kSmallShotScenario, "knots: [6, 6]", "knots: [40000, 40000]"));
     Write("stiff.yaml",
           Replace(kSmallShotScenario, "stretch_stiffness: 1571", "stretch_stiffness: 1e300"));
+    // An output frame every 1e-12 s (the step shrinks to divide it: 6e10 steps and frames), and
+    // every 1e-9 s over a 6 s flight: each ran for days, filling the disk.
+    Write("dense.yaml", Replace(kSmallShotScenario, "output_interval: 0.005586592178770949",
+                                "output_interval: 1e-12"));
+    Write("dense_flight.yaml",
+          Replace(Replace(kSmallShotScenario, "output_interval: 0.005586592178770949",
+                          "output_interval: 1e-9"),
+                  "duration: 0.06", "duration: 6"));
+    std::ofstream(Path("previous.h5")) << "the previous output";
+    std::filesystem::create_symlink(Path("scene.yaml"), Path("link_to_scene.h5"));
+    mkfifo(Path("fifo").c_str(), 0644);
   }
   void Write(const std::string& name, const std::string& text) { std::ofstream(Path(name)) << text; }
   static std::string Replace(std::string text, const std::string& from, const std::string& to) {
@@ -109,6 +123,22 @@ TEST_F(BadInputSimulate, EachKindEndsInAClearError) {
            "simulate {dir}/scene.yaml --out {dir}/a.h5 --bogus",
            2,
            {"unknown option --bogus"}},
+          // Issue 49.
+          {"--out is the scenario",
+           "simulate {dir}/scene.yaml --out {dir}/scene.yaml",
+           1,
+           {"--out {dir}/scene.yaml", "the scenario file {dir}/scene.yaml"},
+           {"{dir}/scene.yaml"}},
+          {"--out is a link to the scenario",
+           "simulate {dir}/scene.yaml --out {dir}/link_to_scene.h5",
+           1,
+           {"--out {dir}/link_to_scene.h5", "the scenario file {dir}/scene.yaml"},
+           {"{dir}/scene.yaml", "{dir}/link_to_scene.h5"}},
+          {"--out is a FIFO",
+           "simulate {dir}/scene.yaml --out {dir}/fifo",
+           1,
+           {"--out {dir}/fifo", "a FIFO", "not a regular file"},
+           {"{dir}/fifo"}},
       },
       dir_.string());
   // Nothing was written under the outputs' names, and no partial file was left.
@@ -139,6 +169,20 @@ TEST_F(BadInputSimulate, SweepEndsInAClearError) {
           {"out-of-range --jobs",
            "sweep {dir}/scene.yaml --vary duration=0.01:0.02:2 --out {dir}/s.h5 --jobs 0", 2,
            {"--jobs"}},
+          // Issue 49.
+          {"--out is the scenario",
+           "sweep {dir}/scene.yaml --vary duration=0.01:0.02:2 --out {dir}/scene.yaml", 1,
+           {"--out {dir}/scene.yaml", "the scenario file {dir}/scene.yaml"}, {"{dir}/scene.yaml"}},
+          {"--report is --out",
+           "sweep {dir}/scene.yaml --vary duration=0.01:0.02:2 --out {dir}/previous.h5 --report "
+           "{dir}/previous.h5", 1,
+           {"--report {dir}/previous.h5", "is also --out {dir}/previous.h5"},
+           {"{dir}/previous.h5"}},
+          {"--report in a folder that does not exist",
+           "sweep {dir}/scene.yaml --vary duration=0.01:0.02:2 --out {dir}/previous.h5 --report "
+           "{dir}/no/such/r.html", 1,
+           {"--report {dir}/no/such/r.html", "does not exist", "nothing was written"},
+           {"{dir}/previous.h5"}},
       },
       dir_.string());
   EXPECT_FALSE(std::filesystem::exists(dir_ / "s.h5"));
@@ -150,6 +194,36 @@ TEST_F(BadInputSimulate, SweepEndsInAClearError) {
                   1,
                   {"run 0", "materials.nylon.linear_density", "all 2 runs failed", "{dir}/s.h5"}},
                  dir_.string());
+}
+
+// An output_interval that asks for more frames than the disk (simulate) or the memory (sweep,
+// which keeps each run's tracks) holds is refused before the first step, naming the key and the
+// size: these ran for days.
+TEST_F(BadInputSimulate, AnOutputTooLargeIsRefusedBeforeAnyStep) {
+  const auto start = std::chrono::steady_clock::now();
+  ExpectBadInputs(
+      {
+          {"a frame every 1e-12 s",
+           "simulate {dir}/dense.yaml --out {dir}/previous.h5",
+           1,
+           {"{dir}/dense.yaml", "output_interval 1e-12 s", "6e+10 output frames", "TB in "
+            "{dir}/previous.h5", "free there"},
+           {"{dir}/previous.h5"}},
+          {"a frame every 1e-9 s of a 6 s flight",
+           "simulate {dir}/dense_flight.yaml --out {dir}/a.h5",
+           1,
+           {"{dir}/dense_flight.yaml", "output_interval 1e-09 s", "6e+09 output frames", "TB"}},
+          {"a sweep of frames every 1e-12 s",
+           "sweep {dir}/dense.yaml --vary duration=0.05:0.06:2 --out {dir}/dense_sweep.h5 --quiet",
+           1,
+           {"run 0", "output_interval 1e-12 s", "output frames", "in memory", "available",
+            "all 2 runs failed"}},
+      },
+      dir_.string());
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 60.0);
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "a.h5"));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "a.h5.partial"));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "previous.h5.partial"));
 }
 
 }  // namespace
