@@ -14,6 +14,7 @@
 #include <mutex>
 #include <optional>
 #include <random>
+#include <sstream>
 #include <stdexcept>
 
 #include "common/yaml_util.h"
@@ -498,6 +499,26 @@ std::vector<PriorTerm> PriorTerms(const std::vector<FitParameter>& parameters,
   return terms;
 }
 
+// The measured span, shifted by the offset (and as far as the offset may move), must overlap the
+// scenario's own [0, duration]: the fit extends the simulation to the measured span's end, and a
+// measurement 100 s after the launch (another clock's time, or ms read as s) would have it
+// simulate 100 s of flight for every trial, for hours, before any message.
+void CheckTimeOverlap(const FitShotInput& in, const Scenario& scenario, const FitOptions& options,
+                      double margin) {
+  const KnotTracks& measured = *in.measured;
+  const double offset = options.score.time_offset_s;
+  const double lo = measured.time.front() + offset, hi = measured.time.back() + offset;
+  if (lo - margin <= scenario.duration && hi + margin >= 0.0) return;
+  std::ostringstream os;
+  os << in.measured_name << ": /time spans " << measured.time.front() << " .. "
+     << measured.time.back() << " s; at --time-offset " << offset << " s (+- " << margin
+     << " s) that is " << lo << " .. " << hi << " s of the simulation, which "
+     << in.scenario_path << " runs over 0 .. " << scenario.duration
+     << " s (duration): no overlap. Give the measured file's launch as its time 0, or the "
+     << "offset between them as --time-offset";
+  throw InputError(os.str());
+}
+
 // The simulated span the fit needs: the measured one shifted by the offset, with room for the
 // offset to move and for the interpolation's stencil. The scenario's duration is cut or extended
 // to it.
@@ -649,6 +670,7 @@ std::vector<Shot> PrepareShots(const std::vector<FitShotInput>& inputs,
     const Scenario scenario = LoadScenario(in.scenario_path, set);
     for (std::string& note : ResolutionNotes(scenario, parameters, in.scenario_path))
       result->notes.push_back(std::move(note));
+    CheckTimeOverlap(in, scenario, options, margin);
     const double duration = FitDuration(scenario, options, *in.measured, margin, &set);
     const double dt =
         HoldStep(in.scenario_path, scenario, parameters, x0, static_cast<int>(k), &set);

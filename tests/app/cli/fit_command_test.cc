@@ -5,12 +5,14 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <limits>
 #include <random>
 #include <sstream>
 
+#include "common/hdf5_util.h"
 #include "libnetsim/tracks/track_file.h"
 #include "tests/app/cli/bad_input.h"
 #include "tests/app/cli/run_netlab.h"
@@ -145,7 +147,48 @@ TEST_F(FitCommand, BadInputsAreNamed) {
                       Path("other_net.h5"))
                 .status,
             0);
+  // The measurement on another clock: 100 s after the launch, in s and (converted) in ms.
+  netlab::netsim::KnotTracks late = netlab::netsim::ReadKnotTracks(Path("measured.h5"));
+  for (double& t : late.time) t += 100.0;
+  netlab::netsim::WriteKnotTracks(Path("late.h5"), late);
+  for (double& t : late.time) t *= 1e3;
+  netlab::netsim::WriteKnotTracks(Path("late_ms.h5"), late);
+  {
+    netlab::h5::Id file = netlab::h5::OpenFileReadWrite(Path("late_ms.h5"));
+    netlab::h5::SetUnits(file.get(), "time", "ms");
+  }
   const std::string shot = "fit {dir}/shot.yaml --out {dir}/fit.yaml ";
+  const std::string free = " --free time_offset";
+  const std::vector<netlab::testing::BadInput> issue49 = {
+      // These simulated 100 s of flight for every trial, for hours, before any message.
+      {"a measurement 100 s after the launch",
+       shot + "--measured {dir}/late.h5" + free,
+       1,
+       {"{dir}/late.h5: /time spans 100 .. 100.", "no overlap", "--time-offset"}},
+      {"a measurement in ms, 100 s after the launch",
+       shot + "--measured {dir}/late_ms.h5" + free,
+       1,
+       {"{dir}/late_ms.h5: /time spans 100 .. 100.", "no overlap"}},
+      {"--out is the scenario",
+       "fit {dir}/shot.yaml --measured {dir}/measured.h5 --out {dir}/shot.yaml" + free,
+       1,
+       {"--out {dir}/shot.yaml", "the scenario file {dir}/shot.yaml"},
+       {"{dir}/shot.yaml"}},
+      {"--out is the measured file",
+       "fit {dir}/shot.yaml --measured {dir}/measured.h5 --out {dir}/measured.h5" + free,
+       1,
+       {"--out {dir}/measured.h5", "the --measured file {dir}/measured.h5"},
+       {"{dir}/measured.h5"}},
+      {"--out is the prior",
+       shot.substr(0, shot.find("--out")) + "--out {dir}/prior.yaml --measured "
+       "{dir}/measured.h5 --prior {dir}/prior.yaml --free materials.nylon.twist_damping",
+       1,
+       {"--out {dir}/prior.yaml", "the --prior file {dir}/prior.yaml"},
+       {"{dir}/prior.yaml"}},
+  };
+  const auto start = std::chrono::steady_clock::now();
+  netlab::testing::ExpectBadInputs(issue49, dir_.string());
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 60.0);
   const std::vector<netlab::testing::BadInput> table = {
       {"no --free", shot + "--measured {dir}/measured.h5", 2, {"--free"}},
       {"an unknown parameter",
