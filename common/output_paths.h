@@ -58,6 +58,9 @@ inline std::string Describe(const NamedPath& p) {
   return text;
 }
 
+// The option of a named output: "--to-hdf5" of "--to-hdf5 (the experiment file beside it)".
+inline std::string Option(const NamedPath& p) { return p.name.substr(0, p.name.find(' ')); }
+
 // "a character device", "a FIFO", ... for an existing path that is not a regular file; "" when it
 // is one (or does not exist).
 inline std::string SpecialKind(const std::string& path) {
@@ -92,11 +95,11 @@ inline void CheckOutputPaths(const std::vector<NamedPath>& inputs,
       if (SameFile(out.path, in.path))
         throw std::runtime_error(Describe(out) + " is the " + in.name + " file " + in.path +
                                  ": the output would replace the input it is made from; name "
-                                 "another " + out.name);
+                                 "another " + Option(out));
       if (SameFile(out.path + ".partial", in.path))
         throw std::runtime_error(Describe(out) + " would be written first to " + out.path +
                                  ".partial, which is the " + in.name + " file " + in.path +
-                                 "; name another " + out.name);
+                                 "; name another " + Option(out));
     }
     for (size_t j = 0; j < i; ++j)
       if (!outputs[j].path.empty() && SameFile(out.path, outputs[j].path))

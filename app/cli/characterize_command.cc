@@ -71,7 +71,7 @@ int RunCharacterize(const std::vector<std::string>& args) {
     }
     if (cl.positional().size() != 1) throw UsageError("expected one TEST.yaml");
     const std::string out = cl.Required("out");
-    CheckOutputPaths({{"the test file", cl.positional()[0]}}, {{"--out", out}});
+    CheckOutputPaths({{"test", cl.positional()[0]}}, {{"--out", out}});
     const netsim::BenchTest test = netsim::ReadBenchTest(cl.positional()[0]);
     const netsim::Characterization c = netsim::Characterize(test);
     netsim::WriteMaterialFile(out, c.estimates,

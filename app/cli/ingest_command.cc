@@ -161,7 +161,7 @@ int RunIngest(const std::vector<std::string>& args) {
       for (const auto& [what, path] : recon::RecordingFiles(experiment))
         inputs.push_back({what, path});
       CheckOutputPaths(inputs, {{"--to-hdf5", *to_hdf5},
-                                {"--to-hdf5's experiment file",
+                                {"--to-hdf5 (the experiment file written beside it)",
                                  recon::FrameStoreExperimentPath(*to_hdf5)}});
     }
     const recon::SynchronizedSequence sequence(std::move(experiment));

@@ -28,10 +28,10 @@ std::vector<std::pair<std::string, std::string>> RecordingFiles(const Experiment
     // As OpenFrameSource reads the spec: "file.h5:/dataset", an image pattern, or a video.
     const size_t colon = c.frames.find(".h5:");
     if (colon != std::string::npos)
-      files.emplace_back(c.name + "'s frames", resolve(c.frames.substr(0, colon + 3)));
+      files.emplace_back(c.name + " frames", resolve(c.frames.substr(0, colon + 3)));
     else if (c.frames.find('%') == std::string::npos)
-      files.emplace_back(c.name + "'s frames", resolve(c.frames));
-    if (!c.timestamps.empty()) files.emplace_back(c.name + "'s timestamps", c.timestamps);
+      files.emplace_back(c.name + " frames", resolve(c.frames));
+    if (!c.timestamps.empty()) files.emplace_back(c.name + " timestamps", c.timestamps);
   }
   return files;
 }

@@ -27,7 +27,7 @@ struct FrameStoreOptions {
 // "shot/store.yaml" (a name without ".h5" gets ".yaml" appended).
 std::string FrameStoreExperimentPath(const std::string& path);
 
-// The files a recording is read from, named for a message ("cam0's frames", "cam0's
+// The files a recording is read from, named for a message ("cam0 frames", "cam0
 // timestamps"): every video or frame store and timestamps file (an image pattern names many files
 // and none of them can be an output of netlab's, so it is left out).
 std::vector<std::pair<std::string, std::string>> RecordingFiles(const Experiment& experiment);

@@ -80,6 +80,8 @@ TEST_F(BadInputCharacterize, EachKindEndsInAClearError) {
       {
           {"no test file", "characterize --out {dir}/m.yaml", 2, {"expected one TEST.yaml"}},
           {"no --out", "characterize {dir}/good.yaml", 2, {"--out"}},
+          {"--out is the test file", "characterize {dir}/good.yaml --out {dir}/good.yaml", 1,
+           {"--out {dir}/good.yaml", "the test file {dir}/good.yaml"}, {"{dir}/good.yaml"}},
           {"missing file",
            "characterize {dir}/missing.yaml" + out,
            1,

@@ -208,6 +208,20 @@ TEST_F(BadInputIngest, EveryBadInputIsNamed) {
           {"--threads 0", "ingest {dir}/experiment.yaml --check --threads 0", 2, {"--threads"}},
           {"no EXPERIMENT", "ingest --check", 2, {"EXPERIMENT.yaml"}},
           {"neither --check nor --to-hdf5", "ingest {dir}/experiment.yaml", 2, {"--check"}},
+          // Issue 49: the store, or the experiment file written beside it, over an input.
+          {"--to-hdf5 is the experiment file",
+           "ingest {dir}/experiment.yaml --quiet --to-hdf5 {dir}/experiment.yaml", 1,
+           {"--to-hdf5 {dir}/experiment.yaml", "the experiment file {dir}/experiment.yaml"},
+           {"{dir}/experiment.yaml"}},
+          {"the experiment file beside --to-hdf5 is the experiment file",
+           "ingest {dir}/experiment.yaml --quiet --to-hdf5 {dir}/experiment.h5", 1,
+           {"--to-hdf5 (the experiment file written beside it) {dir}/experiment.yaml",
+            "the experiment file {dir}/experiment.yaml", "name another --to-hdf5"},
+           {"{dir}/experiment.yaml", "{dir}/experiment.h5"}},
+          {"--to-hdf5 is a camera's timestamps",
+           "ingest {dir}/experiment.yaml --quiet --to-hdf5 {dir}/cam0/timestamps.csv", 1,
+           {"--to-hdf5 {dir}/cam0/timestamps.csv", "the cam0 timestamps file"},
+           {"{dir}/cam0/timestamps.csv"}},
       },
       dir_.string());
   EXPECT_FALSE(fs::exists(Path("o.h5")));

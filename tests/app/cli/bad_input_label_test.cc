@@ -40,6 +40,7 @@ class BadInputLabel : public CommandTest {
     PokeH5(Path("far.h5"), "/cameras/cam0/position_px", 1, 5);
     PokeH5(Path("inf.h5"), "/cameras/cam0/position_px", 0, INFINITY);
     PokeH5(Path("inf.h5"), "/cameras/cam0/position_px", 1, 1e300);
+    std::ofstream(Path("previous.h5")) << "the previous labels";
   }
 };
 
@@ -77,6 +78,17 @@ TEST_F(BadInputLabel, EachKindEndsInAClearError) {
           {"empty --out", seeded + "--out ''", 2, {"--out needs a non-empty value"}},
           {"--out in a folder that is a file", seeded + "--out {dir}/coloring.yaml/l.h5", 1,
            {"{dir}/coloring.yaml/l.h5"}},
+          // Issue 49.
+          {"--out is the --seed file", seeded + "--out {dir}/shot/labels_true.h5", 1,
+           {"--out {dir}/shot/labels_true.h5", "the --seed file {dir}/shot/labels_true.h5"},
+           {"{dir}/shot/labels_true.h5"}},
+          {"--out is the --rig file", seeded + "--out {dir}/shot/rig_true.yaml", 1,
+           {"--out {dir}/shot/rig_true.yaml", "the --rig file"}, {"{dir}/shot/rig_true.yaml"}},
+          {"--xypts is --out", seeded + "--out {dir}/l.csv --xypts {dir}/l.csv", 1,
+           {"--xypts {dir}/l.csv", "is also --out {dir}/l.csv"}},
+          {"--xypts in a folder that does not exist",
+           seeded + "--out {dir}/previous.h5 --xypts {dir}/no/such/x.csv", 1,
+           {"--xypts {dir}/no/such/x.csv", "does not exist"}, {"{dir}/previous.h5"}},
       },
       dir_.string());
   EXPECT_FALSE(std::filesystem::exists(dir_ / "l.h5"));

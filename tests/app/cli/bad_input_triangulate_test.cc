@@ -194,6 +194,21 @@ TEST_F(BadInputTriangulate, EachKindEndsInAClearError) {
           {"empty --out", good + "--out ''", 2, {"--out needs a non-empty value"}},
           {"--out in a folder that is a file", good + "--out {dir}/rig.yaml/t.h5", 1,
            {"{dir}/rig.yaml/t.h5"}},
+          // Issue 49: an output over an input or the other output, or where no file can go.
+          {"--out is the --labels file", good + "--out {dir}/labels.h5", 1,
+           {"--out {dir}/labels.h5", "the --labels file {dir}/labels.h5"}, {"{dir}/labels.h5"}},
+          {"--out is the --rig file", good + "--out {dir}/rig.yaml", 1,
+           {"--out {dir}/rig.yaml", "the --rig file {dir}/rig.yaml"}, {"{dir}/rig.yaml"}},
+          {"--out is the --truth file", good + "--out {dir}/truth.h5 --truth {dir}/truth.h5", 1,
+           {"--out {dir}/truth.h5", "the --truth file {dir}/truth.h5"}, {"{dir}/truth.h5"}},
+          {"--csv names --out", good + "--out {dir}/t_xyzpts.csv --csv {dir}/t_", 1,
+           {"--csv {dir}/t_xyzpts.csv", "is also --out {dir}/t_xyzpts.csv"}},
+          {"--csv in a folder that does not exist",
+           good + "--out {dir}/old_score.h5 --csv {dir}/no/such/run_", 1,
+           {"--csv {dir}/no/such/run_xyzpts.csv", "does not exist", "nothing was written"},
+           {"{dir}/old_score.h5"}},
+          {"--out is a FIFO", good + "--out {dir}/fifo", 1, {"--out {dir}/fifo", "a FIFO"},
+           {"{dir}/fifo"}},
       },
       dir_.string());
   EXPECT_FALSE(std::filesystem::exists(dir_ / "t.h5"));
