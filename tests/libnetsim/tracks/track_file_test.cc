@@ -7,6 +7,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
+
+#include "common/hdf5_util.h"
 
 namespace netlab::netsim {
 namespace {
@@ -143,6 +146,49 @@ TEST_F(TrackFile, MismatchedShapesAreNamed) {
   KnotTracks t = Example();
   t.position.pop_back();
   EXPECT_THROW(WriteKnotTracks(Path("bad.h5"), t), std::invalid_argument);
+}
+
+// A "units" attribute is honoured (DESIGN.md): ms, mm and mm^2 are converted to s, m and m^2,
+// and a unit netlab does not know is refused by file, dataset and units (mm read as m made a
+// net 1000 times larger).
+TEST_F(TrackFile, UnitsAttributesAreConvertedOrRefused) {
+  KnotTracks in = Example();
+  KnotTracks scaled = in;
+  for (double& t : scaled.time) t *= 1e3;
+  for (Eigen::Vector3d& p : scaled.position) p *= 1e3;
+  for (Eigen::Matrix3d& c : scaled.covariance) c *= 1e6;
+  scaled.contact_start_s *= 1e3;
+  WriteKnotTracks(Path("mm.h5"), scaled);
+  {
+    h5::Id file = h5::OpenFileReadWrite(Path("mm.h5"));
+    h5::SetUnits(file.get(), "time", "ms");
+    h5::SetUnits(file.get(), "contact_start", "ms");
+    h5::SetUnits(file.get(), "knots/position", "mm");
+    h5::SetUnits(file.get(), "knots/covariance", "mm^2");
+  }
+  const KnotTracks out = ReadKnotTracks(Path("mm.h5"));
+  for (size_t i = 0; i < in.time.size(); ++i) EXPECT_NEAR(out.time[i], in.time[i], 1e-15);
+  for (size_t i = 0; i < in.position.size(); ++i)
+    EXPECT_TRUE(out.position[i].isApprox(in.position[i], 1e-12) ||
+                (out.position[i] - in.position[i]).norm() < 1e-15)
+        << i;
+  EXPECT_TRUE(out.covariance[5].isApprox(in.covariance[5], 1e-12));
+  EXPECT_NEAR(out.contact_start_s, in.contact_start_s, 1e-15);
+
+  WriteKnotTracks(Path("feet.h5"), in);
+  {
+    h5::Id file = h5::OpenFileReadWrite(Path("feet.h5"));
+    h5::SetUnits(file.get(), "knots/position", "ft");
+  }
+  try {
+    ReadKnotTracks(Path("feet.h5"));
+    FAIL() << "positions in feet were read";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(Path("feet.h5") + ":/knots/position has units 'ft'"), std::string::npos)
+        << what;
+    EXPECT_NE(what.find("mm"), std::string::npos) << what;
+  }
 }
 
 }  // namespace
