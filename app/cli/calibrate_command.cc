@@ -16,6 +16,7 @@
 #include "app/cli/json_writer.h"
 #include "calibration/calibrate.h"
 #include "calibration/rig_compare.h"
+#include "common/output_paths.h"
 
 namespace netlab::app {
 namespace {
@@ -162,6 +163,13 @@ int RunCalibrate(const std::vector<std::string>& args) {
       files.push_back(std::move(matched));
     }
     if (names.empty()) throw UsageError("--images NAME=GLOB is required (once per camera)");
+    // Before any work: the rig is not written over an image, the board file or a rig read.
+    std::vector<NamedPath> inputs = {{"--board", cl.Required("board")},
+                                     {"--fix-intrinsics", cl.Option("fix-intrinsics").value_or("")},
+                                     {"--truth", cl.Option("truth").value_or("")}};
+    for (size_t c = 0; c < names.size(); ++c)
+      for (const std::string& file : files[c]) inputs.push_back({"--images " + names[c], file});
+    CheckOutputPaths(inputs, {{"--out", out}});
 
     calib::CalibrationOptions options;
     options.rational = cl.Flag("rational");

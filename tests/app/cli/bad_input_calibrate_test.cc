@@ -71,6 +71,16 @@ TEST_F(BadInputCalibrate, EachKindEndsInAClearError) {
            1, {"{dir}/missing.yaml"}},
           {"empty --out", board + "--images cam0='{dir}/blank/*.png' --out ''", 2,
            {"--out needs a non-empty value"}},
+          // Issue 49: the rig over one of the run's inputs.
+          {"--out is the --fix-intrinsics file",
+           board + "--images cam0='{dir}/blank/*.png' --out {dir}/board.yaml --fix-intrinsics "
+                   "{dir}/board.yaml",
+           1, {"--out {dir}/board.yaml", "the --fix-intrinsics file {dir}/board.yaml"},
+           {"{dir}/board.yaml"}},
+          {"--out is an image", board + "--images cam0='{dir}/blank/*.png' --out "
+                                        "{dir}/blank/frame_0.png",
+           1, {"--out {dir}/blank/frame_0.png", "the --images cam0 file"},
+           {"{dir}/blank/frame_0.png"}},
       },
       dir_.string());
   EXPECT_FALSE(std::filesystem::exists(dir_ / "rig.yaml"));
