@@ -26,7 +26,8 @@
 // to act on a visible knot (no label, or the engine's reason for review; NETLAB_FULL_CAUSES=1:
 // the whole reason, and whether a missing label was in the first frame, on the border). With
 // --coloring (the colouring the shot was rendered with) the engine also checks every label
-// against the yarn colours. NETLAB_WRONG_CROPS=DIR writes a crop of each wrong label there.
+// against the yarn colours. NETLAB_WRONG_CROPS=DIR writes a crop of each wrong label there;
+// NETLAB_WRONG_CSV=FILE lists every wrong label (camera, frame, knot, source, px off).
 //
 // --detector: no engine and no script; Find Node at every visible knot's true place (the brush
 // of --radius, and tracking's 3 px snap), what it answers per camera, with and without the
@@ -58,6 +59,7 @@
 #include "libreconstruct/labels/label_set.h"
 #include "libreconstruct/recording/experiment.h"
 #include "libreconstruct/recording/sequence.h"
+#include "bench/person_time.h"
 
 namespace {
 
@@ -77,11 +79,19 @@ double Quantile(std::vector<double> v, double q) {
 
 struct Tally {
   int64_t knot_frames = 0, seeds = 0, find_node = 0, manual = 0, deletes = 0;
+  int64_t find_node_missing = 0;  // of find_node: on a knot with no label (searched for)
   int64_t fill_grid = 0;  // --fill-grid-between: G and Enter, two actions a press
   int64_t engine_accepted = 0, engine_review = 0, wrong = 0, over_1px = 0;
   std::vector<double> error;
   std::map<std::string, std::vector<double>> error_by_source;
   int64_t actions() const { return seeds + find_node + manual + deletes + fill_grid; }
+  // The person's time for these actions, s (bench/person_time.h).
+  double seconds() const {
+    using P = bench::PersonTime;
+    return seeds * P::Seed() + (find_node - find_node_missing) * P::FindNodeOnReview() +
+           find_node_missing * P::FindNodeOnMissing() + manual * P::PlaceByHand() +
+           deletes * P::DeleteReview() + fill_grid / 2 * P::FillGrid();
+  }
 };
 
 const char* SourceName(recon::LabelSource s) {
@@ -308,6 +318,7 @@ struct ScriptedUser {
     ++y.knot_frames;
     if (l.accepted()) return;
     ++y.find_node;
+    y.find_node_missing += !l.present();
     auto& [n, n_off] = causes[Cause(c, t, k)];
     ++n, n_off += l.present() && (l.px - truth_l.px).norm() > 1.0;
     std::string before =
@@ -371,6 +382,10 @@ void SaveCrop(const cv::Mat& img, const Eigen::Vector2d& truth, const Eigen::Vec
 // search's).
 void TallyErrors(const Shot& shot, const recon::LabelStore& store, std::vector<Tally>* tally,
                  const std::function<cv::Mat(int, int)>& image) {
+  // NETLAB_WRONG_CSV=FILE: every wrong accepted label, a row each (camera, frame, knot, row,
+  // col, source, px off; -1: the knot is hidden).
+  std::FILE* wrong_csv = nullptr;
+  if (const char* path = std::getenv("NETLAB_WRONG_CSV")) wrong_csv = std::fopen(path, "w");
   for (int c = 0; c < shot.n_cam(); ++c)
     for (int t = 0; t < shot.n_t(); ++t)
       for (int k = 0; k < shot.knots; ++k) {
@@ -380,6 +395,9 @@ void TallyErrors(const Shot& shot, const recon::LabelStore& store, std::vector<T
         const double e = truth_l.present() ? (l.px - truth_l.px).norm() : -1.0;
         Tally& y = (*tally)[c];
         if (!truth_l.present() || e > 2.0) {
+          if (wrong_csv)
+            std::fprintf(wrong_csv, "%s,%d,%d,%d,%d,%s,%.3f\n", shot.cameras[c].c_str(),
+                         shot.frames[t], k, k / shot.cols, k % shot.cols, SourceName(l.source), e);
           if (++y.wrong <= 10)
             std::fprintf(stderr, "wrong: %s frame %d knot %d (%d,%d) %s: %s\n",
                          shot.cameras[c].c_str(), shot.frames[t], k, k / shot.cols, k % shot.cols,
@@ -432,6 +450,7 @@ void TallyErrors(const Shot& shot, const recon::LabelStore& store, std::vector<T
         y.error.push_back(e);
         y.error_by_source[SourceName(l.source)].push_back(e);
       }
+  if (wrong_csv) std::fclose(wrong_csv);
 }
 
 // One row of the table (with_g: the G presses of --fill-grid-between too).
@@ -477,6 +496,7 @@ Tally PrintTables(const BenchOptions& o, const Shot& shot, const std::vector<Tal
     const Tally& y = tally[c];
     all.knot_frames += y.knot_frames, all.seeds += y.seeds, all.find_node += y.find_node;
     all.manual += y.manual, all.deletes += y.deletes, all.wrong += y.wrong;
+    all.find_node_missing += y.find_node_missing;
     all.fill_grid += y.fill_grid;
     all.over_1px += y.over_1px;
     all.engine_accepted += y.engine_accepted, all.engine_review += y.engine_review;
@@ -485,6 +505,18 @@ Tally PrintTables(const BenchOptions& o, const Shot& shot, const std::vector<Tal
       all.error_by_source[s].insert(all.error_by_source[s].end(), v.begin(), v.end());
   }
   PrintRow("all", all, o.fill_grid_between);
+  // The person's time (bench/person_time.h, docs/gui.md), and a whole 6 s shot at this rate: the
+  // same visible knot-views per frame over kShotFrames frames.
+  if (all.knot_frames > 0) {
+    const double per_kf = all.seconds() / all.knot_frames;
+    const double shot_kf = static_cast<double>(all.knot_frames) / shot.n_t() * bench::kShotFrames;
+    std::printf("\nthe person's time: %.1f min (%.4f s per knot-frame; Find Node on %lld review "
+                "labels and %lld missing knots, %lld by hand, %lld deletes, %lld seeds); a 6 s "
+                "shot at this rate (%.0f knot-frames): %.1f h\n",
+                all.seconds() / 60.0, per_kf, (long long)(all.find_node - all.find_node_missing),
+                (long long)all.find_node_missing, (long long)all.manual, (long long)all.deletes,
+                (long long)all.seeds, shot_kf, per_kf * shot_kf / 3600.0);
+  }
   std::printf("\n| source | labels | median px | p99 px | max px |\n|---|---|---|---|---|\n");
   for (const auto& [s, v] : all.error_by_source)
     std::printf("| %s | %zu | %.3f | %.3f | %.3f |\n", s.c_str(), v.size(), Quantile(v, 0.5),

@@ -470,36 +470,55 @@ bool Trackable(const Label& to, const Label& from) {
 
 EngineCounts LabelEngine::Track(int from, int to) {
   const LabelSet& set = store_->labels();
-  std::vector<LabelEdit> edits;
-  for (int camera = 0; camera < static_cast<int>(set.cameras.size()); ++camera) {
+  // One camera's tracking: its knots to track, and what TrackKnots made of them.
+  struct CameraTrack {
     std::vector<std::pair<int, Eigen::Vector2d>> knots;
     std::vector<bool> was_accepted;
     std::vector<KnownMotion> known;  // knots accepted in both frames, not tracked again
+    const cv::Mat* a = nullptr;
+    const cv::Mat* b = nullptr;
+    std::vector<TrackedKnot> tracked;
+  };
+  const int n_cam = static_cast<int>(set.cameras.size());
+  std::vector<CameraTrack> jobs(n_cam);
+  for (int camera = 0; camera < n_cam; ++camera) {
+    CameraTrack& job = jobs[camera];
     for (int k = 0; k < set.knots(); ++k) {
       const Label& l = set.at(camera, from, k);
       if (!l.present()) continue;
       if (!Trackable(set.at(camera, to, k), l)) {
         if (l.accepted() && set.at(camera, to, k).accepted())
-          known.push_back({k, l.px, set.at(camera, to, k).px});
+          job.known.push_back({k, l.px, set.at(camera, to, k).px});
         continue;
       }
-      knots.emplace_back(k, l.px);
-      was_accepted.push_back(l.state == LabelState::kAccepted);
+      job.knots.emplace_back(k, l.px);
+      job.was_accepted.push_back(l.state == LabelState::kAccepted);
     }
-    if (knots.empty()) continue;
+    if (job.knots.empty()) continue;
+    // The frames are read here, one camera after the other (the cache is not shared across
+    // threads); std::map keeps the references valid while other cameras' frames are added.
     const cv::Mat& a = Image(camera, from);
     const cv::Mat& b = Image(camera, to);
     if (a.empty() || b.empty()) continue;
-    const std::vector<TrackedKnot> tracked =
-        TrackKnots(a, b, knots, set.rows, set.cols, o_.track, known);
-    for (size_t i = 0; i < tracked.size(); ++i) {
-      const bool accepted = tracked[i].accepted && was_accepted[i];
-      edits.push_back({camera, to, tracked[i].knot,
-                       Made(tracked[i].px, LabelSource::kTracked, tracked[i].confidence,
-                            accepted)});
+    job.a = &a, job.b = &b;
+  }
+  // The cameras tracked side by side: each camera's knots depend on that camera's frames only.
+#pragma omp parallel for schedule(dynamic) num_threads(std::max(1, o_.threads))
+  for (int camera = 0; camera < n_cam; ++camera) {
+    CameraTrack& job = jobs[camera];
+    if (job.a)
+      job.tracked = TrackKnots(*job.a, *job.b, job.knots, set.rows, set.cols, o_.track, job.known);
+  }
+  std::vector<LabelEdit> edits;
+  for (int camera = 0; camera < n_cam; ++camera) {
+    const CameraTrack& job = jobs[camera];
+    for (size_t i = 0; i < job.tracked.size(); ++i) {
+      const TrackedKnot& tk = job.tracked[i];
+      const bool accepted = tk.accepted && job.was_accepted[i];
+      edits.push_back({camera, to, tk.knot,
+                       Made(tk.px, LabelSource::kTracked, tk.confidence, accepted)});
       if (!accepted)
-        Note(camera, to, tracked[i].knot,
-             tracked[i].accepted ? "tracked from a label under review" : tracked[i].why);
+        Note(camera, to, tk.knot, tk.accepted ? "tracked from a label under review" : tk.why);
     }
   }
   return Commit("track frame row " + std::to_string(from) + " to " + std::to_string(to), edits);
@@ -722,6 +741,13 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
                   (j.colour_step - j.px).norm());
     return why;
   }
+  // What confirms the junction is the knot: a crossing of two yarns of a folded net looks like
+  // a knot to the rings and the fit, so a junction is accepted only where a check that could
+  // have refused it ran and passed (its motion, its yarns towards two or more labeled
+  // neighbours, the other cameras, its path), or it is the corner's own mass.
+  // A corner mass confirms its corner where only the corner's two yarns leave it: bunched in a
+  // fold, with more yarns around it, its outline's centre was 2.0-2.3 px from the knot.
+  bool confirmed = j.solid && Neighbours(knot).size() == 2 && j.branches <= 2;
   // Its motion since the adjacent frame against its neighbours' (a junction of another layer
   // of a folded net, 3.6 px from the knot, had yarns along the knot's own).
   const std::optional<double> moved = MotionOff(camera, t, knot, j.px);
@@ -731,11 +757,21 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
                   "frame before", *moved);
     return why;
   }
+  confirmed = confirmed || moved.has_value();
   // Its yarns against its accepted neighbours in this view.
   const NeighbourSlots slots = Slots(camera, t, knot, {});
-  if (KnownLinkAngles(j.px, slots).size() >= 2 &&
-      !BranchesMatchLinks(j, slots, o_.branch_tolerance_deg, true))
-    return "the junction's yarns do not run towards its labeled neighbours";
+  // They confirm it only where every link's direction is known and each yarn runs along one:
+  // with a link unknown, its yarn may be another knot's (a folded net seen edge-on put a row's
+  // three links on one line in the image, and a column's yarn crossing it 5.5 px from the knot
+  // passed for the unknown link).
+  const std::vector<double> link_angles = KnownLinkAngles(j.px, slots);
+  if (link_angles.size() >= 2) {
+    if (!BranchesMatchLinks(j, slots, o_.branch_tolerance_deg, true))
+      return "the junction's yarns do not run towards its labeled neighbours";
+    const int links = static_cast<int>(Neighbours(knot).size());
+    confirmed = confirmed || (static_cast<int>(link_angles.size()) == links &&
+                              BranchesMatchLinks(j, slots, o_.branch_tolerance_deg));
+  }
   // Its place against the point two or more other cameras agree on.
   const std::vector<Observation> others = OtherViews(camera, t, knot);
   // A junction a yarn short of the knot's degree, with neither its motion nor the other
@@ -759,15 +795,40 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
       return "a yarn of the junction leads to no labeled neighbour, and nothing checks its "
              "place (no motion, no other cameras that fix it)";
   }
+  const std::string unconfirmed =
+      "nothing confirms the junction is the knot and not a crossing of yarns (no labeled "
+      "neighbours, motion or other cameras to check it against)";
   // One other camera or none: its path over the adjacent frames with that view (MotionPoint),
   // where it fixes the knot to a pixel (a check needs less than a placement): in a fold a
   // junction of another layer 2.1 px from the knot moved 1.4 px otherwise than the knot's
   // neighbours, within place_motion_px, and 1.6 px from where its path put it.
   if (others.size() < 2) {
+    // One other camera's label: the junction must lie on its epipolar line (a crossing on the
+    // knot's own yarn passes only where the yarn runs along that line).
+    if (others.size() == 1) {
+      std::vector<Observation> pair = others;
+      pair.push_back({RigIndex(camera), j.px});
+      TriangulationOptions topt;
+      topt.outlier_threshold_px = o_.epipolar_tolerance_px;
+      const PointEstimate e = TriangulatePoint(*rig_, pair, topt);
+      // Two views leave the same residual in each (half the distance from the epipolar line,
+      // where their scales are alike); an outlier between two is either of them.
+      const bool fitted = e.residual_px.size() == 2 && std::isfinite(e.residual_px[0]) &&
+                          std::isfinite(e.residual_px[1]);
+      if (fitted && (!e.outliers.empty() ||
+                     !(e.residual_px[0] + e.residual_px[1] <= o_.epipolar_tolerance_px))) {
+        char why[112];
+        std::snprintf(why, sizeof why,
+                      "%.1f px from the epipolar line of the other camera's label",
+                      e.residual_px[0] + e.residual_px[1]);
+        return why;
+      }
+    }
     const std::optional<PointEstimate> path = MotionPoint(camera, t, knot);
     const std::optional<ProjectedPoint> p =
         path ? ProjectEstimate(*rig_, RigIndex(camera), *path) : std::nullopt;
-    if (!p || !(WorstSigma(*p, o_.label_sigma_px) <= kPathCheckSigmaPx)) return "";
+    if (!p || !(WorstSigma(*p, o_.label_sigma_px) <= kPathCheckSigmaPx))
+      return confirmed ? "" : unconfirmed;
     const double off = (p->px - j.px).norm();
     if (off <= o_.projection_tolerance_px) return "";
     char why[120];
@@ -782,7 +843,7 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
   // Where the others do not agree there is nothing to go by.
   const std::optional<ProjectedPoint> q =
       ProjectAgreeingViews(*rig_, RigIndex(camera), others, topt);
-  if (!q) return "";
+  if (!q) return confirmed ? "" : unconfirmed;
   const double off = (q->px - j.px).norm();
   if (off <= o_.projection_tolerance_px) return "";
   char why[112];

@@ -131,6 +131,9 @@ struct LabelEngineOptions {
   // most background_tolerance (0..1 of the image's range).
   double background_reach_px = 10.0;
   double background_tolerance = 0.08;
+  // Threads for the work that is independent per camera (tracking each camera's knots); the
+  // labels do not depend on it.
+  int threads = 2;
 };
 
 // Per camera, frame and knot: why a label needs review (absent: it does not, or there is none):
@@ -221,7 +224,12 @@ class LabelEngine {
   // but some may be hidden (two at least seen), when two or more links' directions are known;
   // and it must lie within projection_tolerance_px of where two or more other cameras' accepted
   // labels of the knot, consistent among themselves, put it (as Fill Grid's own projection), or
-  // where fewer, with the knot's path (MotionPoint), put it to a pixel. Where the brush finds no
+  // where fewer, with the knot's path (MotionPoint), put it to a pixel; and where one other
+  // camera has a label of the knot, it must lie on that label's epipolar line. A junction is
+  // accepted only where something confirms it is the knot and not a crossing of yarns: those
+  // cameras, its motion since the adjacent frame as its neighbours moved, every link's
+  // direction known and each of its yarns along one, or (a corner) its corner mass with the
+  // corner's two yarns alone; otherwise it is kept for review. Where the brush finds no
   // junction and they fix the knot within the brush (OthersPlace), the label is placed there
   // (LabelSource::kProjected): the person's brush says the knot is seen. A junction they put
   // elsewhere is kept for review (one of the two is wrong, and nothing tells which); several
