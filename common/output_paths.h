@@ -13,7 +13,7 @@
 //     run with several outputs (--out and --report) cannot write the first and fail on the second.
 //
 // Each path is given with the option or argument that named it ("--out", "--measured",
-// "the scenario"), and every message names both sides and what to do.
+// "scenario"), and every message names both sides and what to do.
 
 #include <unistd.h>
 
@@ -27,7 +27,7 @@ namespace netlab {
 
 // One file a command reads or writes, and what named it on the command line.
 struct NamedPath {
-  std::string name;  // "--out", "--measured", "the scenario", ...
+  std::string name;  // "--out", "--measured", "scenario" (told as "the scenario file x.yaml")
   std::string path;  // as the user gave it
 };
 
@@ -49,7 +49,7 @@ inline bool SameFile(const std::string& a, const std::string& b) {
   return std::filesystem::equivalent(a, b, error) && !error;
 }
 
-// "--out 'x.h5'" and, when it resolves elsewhere (a link, ".."), where to.
+// "--out x.h5" and, when it resolves elsewhere (a link, ".."), where to: "--out l.h5 (/d/x.h5)".
 inline std::string Describe(const NamedPath& p) {
   std::string text = p.name + " " + p.path;
   const std::filesystem::path resolved = Resolved(p.path);
@@ -58,7 +58,8 @@ inline std::string Describe(const NamedPath& p) {
   return text;
 }
 
-// The option of a named output: "--to-hdf5" of "--to-hdf5 (the experiment file beside it)".
+// The option of a named output: "--to-hdf5" of "--to-hdf5 (the experiment file written beside
+// it)".
 inline std::string Option(const NamedPath& p) { return p.name.substr(0, p.name.find(' ')); }
 
 // "a character device", "a FIFO", ... for an existing path that is not a regular file; "" when it
