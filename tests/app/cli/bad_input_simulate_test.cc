@@ -218,6 +218,11 @@ TEST_F(BadInputSimulate, AnOutputTooLargeIsRefusedBeforeAnyStep) {
            1,
            {"run 0", "output_interval 1e-12 s", "output frames", "in memory", "available",
             "all 2 runs failed"}},
+          {"a sweep of frames every 1e-9 s of a 6 s flight",
+           "sweep {dir}/dense_flight.yaml --vary nets.0.velocity.0=0.4:0.6:2 --out "
+           "{dir}/dense_sweep.h5 --quiet",
+           1,
+           {"run 1", "output_interval 1e-09 s", "6e+09 output frames", "in memory"}},
       },
       dir_.string());
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 60.0);
