@@ -138,6 +138,10 @@ struct Junction {
   bool solid = false;        // the centre of a solid (corner mass), not a yarn junction;
                              // branches: the yarns leaving it, fit_rms_px: its outline's RMS
                              // distance from the fitted circle
+  // A solid whose outline an edge of the background crosses (the target's outline, within 2 px
+  // of its rim): its foreground is cut unevenly there, and its centre was found 2.2-2.9 px off
+  // a corner mass lying half over the target's face.
+  bool solid_on_edge = false;
 };
 
 class KnotDetector {

@@ -114,6 +114,12 @@ bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot*
     t->why = "a blob there, no yarn junction (the knot has no corner mass)";
     return false;
   }
+  // A corner mass across the target's outline: its centre is not where the knot is.
+  if (j.solid && j.solid_on_edge) {
+    t->px = j.px;
+    t->why = "the corner mass lies across the edge of the target (its centre is uncertain there)";
+    return false;
+  }
   t->px = j.px;
   t->confidence = j.confidence;
   t->branch_angles_rad = j.solid ? std::vector<double>{} : j.branch_angles_rad;

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <opencv2/imgproc.hpp>
 #include <random>
@@ -127,6 +128,35 @@ TEST(FindNode, ReturnsTheCentreOfACornerMassWithItsTwoYarns) {
     const Eigen::Vector2d beside = net.Pixel(0, 0) + 0.4 * (net.Pixel(0, 1) - net.Pixel(0, 0));
     EXPECT_EQ(FindNode(net.image, beside, 6).status, FindNodeStatus::kNone);
   }
+}
+
+// A corner mass lying half over a body's face (the target behind the net, grey where the rest is
+// dark): the face's edge crosses its outline, so its foreground is cut unevenly and its centre
+// is not to be trusted; the detector marks it (Junction::solid_on_edge). A mass wholly on the
+// dark background is not marked.
+TEST(FindNode, MarksACornerMassAcrossTheEdgeOfABodyBehindIt) {
+  NetImage net = RenderNet(ShotLike(3.0, 10.0, 8));
+  const Eigen::Vector2d corner = net.Pixel(0, 0);
+  // The face (a dim grey: a brighter one joins the mass into one blob too large for a solid):
+  // every dark pixel left of the mass's centre, within 80 px of it and outside the
+  // mass (its radius: 1 cm at 3 m through 16 mm and 5.5 um pixels, 9.7 px), turned grey.
+  const double mass_px = 0.01 / 3.0 * 16e-3 / 5.5e-6;
+  for (int y = std::max(0, static_cast<int>(corner.y()) - 80);
+       y < std::min(net.image.rows, static_cast<int>(corner.y()) + 80); ++y)
+    for (int x = std::max(0, static_cast<int>(corner.x()) - 80); x < static_cast<int>(corner.x());
+         ++x) {
+      if ((Eigen::Vector2d(x, y) - corner).norm() < mass_px + 1.5) continue;
+      cv::Vec3b& p = net.image.at<cv::Vec3b>(y, x);
+      if (std::max({p[0], p[1], p[2]}) < 25) p = cv::Vec3b(30, 30, 30);
+    }
+  const FindNodeResult across = FindNode(net.image, corner, 6);
+  ASSERT_EQ(across.status, FindNodeStatus::kFound) << across.why;
+  EXPECT_TRUE(across.knot.solid);
+  EXPECT_TRUE(across.knot.solid_on_edge);
+  const FindNodeResult clear = FindNode(net.image, net.Pixel(kRows - 1, kCols - 1), 6);
+  ASSERT_EQ(clear.status, FindNodeStatus::kFound) << clear.why;
+  EXPECT_TRUE(clear.knot.solid);
+  EXPECT_FALSE(clear.knot.solid_on_edge);
 }
 
 // Where a yarn a twentieth as bright as the others meets them, the knot is still a junction of

@@ -451,7 +451,8 @@ TEST(LabelEngine, FindNodeOnAnotherKnotIsKeptForReview) {
 // Knot 2, on the edge, in camera a with its left link's colour painted 2.5 px on into its right
 // link: the junction stays where it is, but the colour of the straight pair changes 2.5 px from
 // it. Of a knotless net (edge_colour_step_px), Find Node keeps it for review with the reason;
-// otherwise (a knot ball moves the change) the engine does not look, and accepts it.
+// otherwise (a knot ball moves the change) the engine does not look, and accepts it (its
+// neighbours labeled, its yarns confirm it).
 TEST(LabelEngine, FindNodeDoubtsAKnotlessEdgeKnotWhereItsColourDoesNotChange) {
   Shot shot = Render(1);
   const Eigen::Vector2d knot = shot.Truth(0, 0, 2);
@@ -475,6 +476,7 @@ TEST(LabelEngine, FindNodeDoubtsAKnotlessEdgeKnotWhereItsColourDoesNotChange) {
            cv::Scalar(colour[0], colour[1], colour[2]), 2, cv::LINE_AA, 4);
   for (const double step_px : {1.0, 0.0}) {
     LabelSet labels = Empty(shot);
+    for (int k : {1, 3, 7}) labels.at(0, 0, k) = Accepted(shot.Truth(0, 0, k));
     LabelStore store(std::move(labels));
     LabelEngineOptions options;
     options.edge_colour_step_px = step_px;
@@ -859,7 +861,9 @@ TEST(LabelEngine, FindNodeDoubtsAKnotThatMovedOtherwiseThanItsNeighbours) {
 // in frame 3: it does not fix it, but with the knot's path over frames 0-2 it does. The brush's
 // junction and the path then disagree, and nothing tells which is wrong: the junction is kept
 // for review with the reason (also where the path fixes the knot too loosely to place it,
-// place_sigma_px 0.05 here). Without the frames before (motion_frames 0) nothing doubts it.
+// place_sigma_px 0.05 here). Without the frames before (motion_frames 0) nothing checks it
+// against the path, and nothing confirms it either (no neighbour labeled in a, one other camera
+// whose epipolar line runs along the offset): kept for review all the same.
 // Where a shows no junction (painted out), the brush places the knot where the path puts it.
 TEST(LabelEngine, FindNodeGoesByWhereItsPathPutsTheKnot) {
   const Shot shot = Render(4);
@@ -900,7 +904,10 @@ TEST(LabelEngine, FindNodeGoesByWhereItsPathPutsTheKnot) {
     EXPECT_LT((l.px - seen).norm(), 0.3) << what;
     EXPECT_EQ(l.source, LabelSource::kFindNode) << what;
     if (what == kNoMotion) {
-      EXPECT_TRUE(l.accepted());
+      EXPECT_EQ(l.state, LabelState::kNeedsReview);
+      ASSERT_TRUE(engine.reasons().count({0, 3, 12}));
+      EXPECT_NE(engine.reasons().at({0, 3, 12}).find("nothing confirms"), std::string::npos)
+          << engine.reasons().at({0, 3, 12});
       continue;
     }
     EXPECT_EQ(l.state, LabelState::kNeedsReview) << what;
