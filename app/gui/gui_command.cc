@@ -6,6 +6,7 @@
 #include <QAction>
 #include <QApplication>
 #include <QFileInfo>
+#include <QImage>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -15,6 +16,8 @@
 #include "app/gui/document/project.h"
 #include "app/gui/main_window.h"
 #include "app/gui/settings.h"
+#include "common/files.h"
+#include "common/output_paths.h"
 #include "common/yaml_util.h"
 
 namespace netlab::gui {
@@ -50,8 +53,48 @@ bool IsProjectFile(const std::string& path) {
   return root.IsMap() && root["netlab_project"];
 }
 
+// Why `path` (not a project) cannot be the experiment of a new project either, when the options
+// that make one are missing: what the file holds, and the two ways it can be opened.
+std::string NotAProject(const std::string& path) {
+  const YAML::Node root = LoadYamlFile(path);
+  const std::string holds = root.IsNull()       ? "is empty"
+                            : root.IsSequence() ? "holds a list, not a mapping of keys"
+                            : root.IsScalar()   ? "holds a single value, not a mapping of keys"
+                                                : "has no key netlab_project";
+  return path + " " + holds +
+         ": not a netlab project (a mapping with netlab_project: 1; docs/gui.md). To make a "
+         "project of an experiment, give --rig and --labels with it";
+}
+
+// Writes `image` to `path` through "<path>.partial" and a rename: `path` is either what it was
+// or the whole image. False, with the reason on stderr, when it cannot.
+bool SaveScreenshot(const QImage& image, const std::string& path) {
+  const std::string partial = path + ".partial";
+  QByteArray format = QFileInfo(QString::fromStdString(path)).suffix().toLower().toLatin1();
+  if (format.isEmpty() || (format != "png" && format != "jpg" && format != "jpeg" &&
+                           format != "bmp" && format != "ppm"))
+    format = "png";
+  if (!image.save(QString::fromStdString(partial), format.constData())) {
+    std::filesystem::remove(partial);
+    std::fprintf(stderr, "netlab gui: cannot write %s\n", partial.c_str());
+    return false;
+  }
+  try {
+    RenameInto(partial, path);
+  } catch (const std::exception& e) {
+    std::filesystem::remove(partial);
+    std::fprintf(stderr, "netlab gui: %s\n", e.what());
+    return false;
+  }
+  return true;
+}
+
 bool HasDisplay() {
-  return std::getenv("DISPLAY") || std::getenv("WAYLAND_DISPLAY") || std::getenv("QT_QPA_PLATFORM");
+  for (const char* name : {"DISPLAY", "WAYLAND_DISPLAY", "QT_QPA_PLATFORM"}) {
+    const char* value = std::getenv(name);
+    if (value != nullptr && *value != '\0') return true;  // DISPLAY= is no display
+  }
+  return false;
 }
 
 // Triggers the window's actions bound to `keys` (Settings::ParseKeys: "G", "M;E"), one after
@@ -99,6 +142,8 @@ int RunGui(const std::vector<std::string>& args) {
       const std::string& file = cl.positional()[0];
       if (IsProjectFile(file)) {
         project_path = file;
+      } else if (!cl.Option("rig") && !cl.Option("labels")) {
+        throw std::runtime_error(NotAProject(file));
       } else {
         // An experiment: make its project first.
         int rows = 0, cols = 0;
@@ -114,6 +159,17 @@ int RunGui(const std::vector<std::string>& args) {
       }
     } else if (!screenshot.empty()) {
       throw app::UsageError("--screenshot needs a project");
+    }
+    if (!project_path.empty()) {
+      // The project read before any window: a file that is no project says why here (exit 1),
+      // and the screenshot never replaces the project or a file it names.
+      const Project project = LoadProject(project_path);
+      CheckOutputPaths({{"project", project_path},
+                        {"experiment", project.experiment},
+                        {"rig", project.rig},
+                        {"coloring", project.coloring},
+                        {"labels", project.labels}},
+                       {{"--screenshot", screenshot}});
     }
   } catch (const app::UsageError& e) {
     std::fprintf(stderr, "netlab gui: %s\n\n%s", e.what(), kHelp);
@@ -138,7 +194,14 @@ int RunGui(const std::vector<std::string>& args) {
   QApplication::setApplicationName("netlab-gui");
   MainWindow window;
   if (!project_path.empty()) {
-    if (!window.OpenProject(QString::fromStdString(project_path), screenshot.empty())) return 1;
+    // A start that fails says why on stderr (and, in a window, in a dialog too); a screenshot
+    // never waits on a dialog.
+    QString error;
+    if (!window.OpenProject(QString::fromStdString(project_path), screenshot.empty(), &error)) {
+      std::fprintf(stderr, "netlab gui: cannot open the project: %s\n",
+                   error.toLocal8Bit().constData());
+      return 1;
+    }
     if (frame >= 0) window.SetFrame(frame - window.session()->frame_number(0));
     for (int i = 0; i < review; ++i) window.NextReview();
   }
@@ -151,10 +214,7 @@ int RunGui(const std::vector<std::string>& args) {
     // The layouts their results changed, settled as a person would see them (the preview
     // banner's second line was cut off in the screenshot, not in the window).
     QCoreApplication::processEvents();
-    if (!window.grab().save(QString::fromStdString(screenshot))) {
-      std::fprintf(stderr, "netlab gui: cannot write %s\n", screenshot.c_str());
-      return 1;
-    }
+    if (!SaveScreenshot(window.grab().toImage(), screenshot)) return 1;
     std::fprintf(stderr, "netlab gui: wrote %s\n", screenshot.c_str());
     return 0;
   }

@@ -86,8 +86,11 @@ void KnotGrid::Pick(int knot) {
 
 bool KnotGrid::event(QEvent* event) {
   if (event->type() == QEvent::ShortcutOverride) {
-    const int key = static_cast<QKeyEvent*>(event)->key();
-    if (key == Qt::Key_Left || key == Qt::Key_Right || key == Qt::Key_Up || key == Qt::Key_Down) {
+    const auto* key_event = static_cast<QKeyEvent*>(event);
+    const int key = key_event->key();
+    // Plain arrows only: with Ctrl (nudge the label) or Shift (10 frames) they stay the window's.
+    if ((key == Qt::Key_Left || key == Qt::Key_Right || key == Qt::Key_Up || key == Qt::Key_Down) &&
+        (key_event->modifiers() & ~Qt::KeypadModifier) == Qt::NoModifier) {
       event->accept();  // the grid's, not the window's frame keys
       return true;
     }
@@ -111,7 +114,8 @@ bool KnotGrid::event(QEvent* event) {
 }
 
 void KnotGrid::keyPressEvent(QKeyEvent* event) {
-  if (rows_ < 1 || cols_ < 1) return QWidget::keyPressEvent(event);
+  if (rows_ < 1 || cols_ < 1 || (event->modifiers() & ~Qt::KeypadModifier) != Qt::NoModifier)
+    return QWidget::keyPressEvent(event);
   const int k = std::max(0, selected_);
   int row = k / cols_, col = k % cols_;
   switch (event->key()) {

@@ -14,6 +14,7 @@
 #include <QHBoxLayout>
 #include <QHeaderView>
 #include <QInputDialog>
+#include <QKeyEvent>
 #include <QLabel>
 #include <QMenuBar>
 #include <QMessageBox>
@@ -138,7 +139,9 @@ void MainWindow::BuildWelcome() {
     for (const QString& path : recent) {
       auto* button = new QPushButton(path);
       button->setFlat(true);
-      connect(button, &QPushButton::clicked, this, [this, path] { OpenProject(path); });
+      connect(button, &QPushButton::clicked, this, [this, path, button] {
+        if (!OpenProject(path)) button->hide();  // and out of the settings' list
+      });
       layout->addWidget(button);
     }
   }
@@ -166,6 +169,8 @@ void MainWindow::BuildWorkspace() {
   frame_box_ = new QSpinBox;
   frame_box_->setPrefix("frame ");
   frame_box_->setKeyboardTracking(false);
+  frame_box_->setToolTip("Click to type a frame number; Enter goes there and hands the keys back "
+                         "to the view");
   timeline_ = new Timeline;
   bar->addWidget(frame_box_);
   bar->addWidget(timeline_, 1);
@@ -182,6 +187,12 @@ void MainWindow::BuildWorkspace() {
   picker->addWidget(new QLabel(" Knot to label: row "));
   row_box_ = new QSpinBox;
   col_box_ = new QSpinBox;
+  // Reached by a click only (never by the focus leaving a hidden view or by Tab), and taking only
+  // a number's keys (eventFilter): the labeling keys are never typed into them.
+  for (QSpinBox* box : {frame_box_, row_box_, col_box_}) {
+    box->setFocusPolicy(Qt::ClickFocus);
+    box->installEventFilter(this);
+  }
   picker->addWidget(row_box_);
   picker->addWidget(new QLabel(" col "));
   picker->addWidget(col_box_);
@@ -240,20 +251,24 @@ void MainWindow::BuildWorkspace() {
   connect(colours_dock, &QDockWidget::visibilityChanged, this, [this](bool visible) {
     if (visible) colours_timer_->start();
   });
+  // A row double-clicked (or Enter on it): its item as Space shows it, the camera alone.
   connect(review_table_, &QTableView::activated, this, [this](const QModelIndex& index) {
-    const int c = index.data(ReviewModel::kCameraRole).toInt();
-    SetFrame(index.data(ReviewModel::kFrameRowRole).toInt());
-    SetCamera(c);
-    SetKnot(index.data(ReviewModel::kKnotRole).toInt());
-    ZoomOnKnot();
+    if (!review_model_ || !review_proxy_) return;
+    const QModelIndex source = review_proxy_->mapToSource(index);
+    if (source.isValid() && source.row() < review_model_->rowCount()) ShowReviewRow(source.row());
   });
 
   status_frame_ = new QLabel;
   status_cursor_ = new QLabel;
   status_knot_ = new QLabel;
-  statusBar()->addPermanentWidget(status_knot_);
+  // The knot and the frame make room for a message (each view's caption says them too); the
+  // cursor's pixel stays. A message longer than the bar is whole in the bar's tooltip.
+  statusBar()->addWidget(status_knot_);
+  statusBar()->addWidget(status_frame_, 1);
+  status_frame_->setAlignment(Qt::AlignRight | Qt::AlignVCenter);
   statusBar()->addPermanentWidget(status_cursor_);
-  statusBar()->addPermanentWidget(status_frame_);
+  connect(statusBar(), &QStatusBar::messageChanged, statusBar(),
+          [bar = statusBar()](const QString& message) { bar->setToolTip(message); });
 }
 
 QAction* MainWindow::AddAction(QMenu* menu, const QString& name, const QString& keys,
@@ -347,18 +362,26 @@ void MainWindow::BuildActions() {
   AddAction(view, "Show labels", "L", &MainWindow::ToggleLabels);
   AddAction(view, "Show links", "K", &MainWindow::ToggleLinks);
   AddAction(view, "Show epipolar curves", "E", &MainWindow::ToggleEpipolar);
+  // The panels: a closed one comes back from here (checked: shown).
+  view->addSeparator();
+  for (QDockWidget* dock : findChildren<QDockWidget*>()) view->addAction(dock->toggleViewAction());
+  for (QToolBar* bar : findChildren<QToolBar*>()) view->addAction(bar->toggleViewAction());
 
   QMenu* help = menuBar()->addMenu("&Help");
   AddAction(help, "Keyboard shortcuts", "F1;?", &MainWindow::ShowShortcuts);
 }
 
-bool MainWindow::OpenProject(const QString& path, bool ask) {
+bool MainWindow::OpenProject(const QString& path, bool ask, QString* error) {
   std::unique_ptr<Session> session;
   try {
     session = Session::Open(LoadProject(path.toStdString()));
   } catch (const std::exception& e) {
-    QMessageBox::critical(this, "Cannot open the project",
-                          QString("%1\n\n%2").arg(path, QString::fromLocal8Bit(e.what())));
+    Settings::RemoveRecentProject(QFileInfo(path).absoluteFilePath());
+    const QString why = QString::fromLocal8Bit(e.what());
+    if (error != nullptr)
+      *error = why.contains(path) ? why : QString("%1: %2").arg(path, why);
+    else
+      QMessageBox::critical(this, "Cannot open the project", QString("%1\n\n%2").arg(path, why));
     return false;
   }
   if (!MaybeSave()) return false;
@@ -398,11 +421,10 @@ bool MainWindow::OpenProject(const QString& path, bool ask) {
   review_proxy_->setSourceModel(review_model_.get());
   review_proxy_->setSortRole(Qt::EditRole);
   review_table_->setModel(review_proxy_);
-  review_table_->setColumnWidth(ReviewModel::kCamera, 52);
-  review_table_->setColumnWidth(ReviewModel::kFrame, 48);
-  review_table_->setColumnWidth(ReviewModel::kKnot, 60);
-  review_table_->setColumnWidth(ReviewModel::kSource, 70);
-  review_table_->setColumnWidth(ReviewModel::kSeverity, 56);
+  // Wide enough for the header and its sort arrow, and for the cells.
+  for (int column : {ReviewModel::kCamera, ReviewModel::kFrame, ReviewModel::kKnot,
+                     ReviewModel::kSource, ReviewModel::kSeverity})
+    review_table_->resizeColumnToContents(column);
   connect(&session_->document(), &LabelDocument::labelsChanged, this, &MainWindow::OnLabelsChanged);
   connect(&session_->document(), &LabelDocument::journalFailed, this,
           [this](const QString& message) {
@@ -414,6 +436,7 @@ bool MainWindow::OpenProject(const QString& path, bool ask) {
   connect(&session_->document(), &LabelDocument::modifiedChanged, this,
           [this](bool modified) { setWindowModified(modified); });
   setWindowTitle(QString("netlab — %1[*]").arg(QFileInfo(path).fileName()));
+  setWindowModified(session_->document().modified());  // recovered edits are unsaved
   const Project& p = session_->project();
   row_box_->setRange(0, p.rows - 1);
   col_box_->setRange(0, p.cols - 1);
@@ -451,6 +474,63 @@ void MainWindow::SetFrame(int t) {
   timeline_->SetCurrent(t);
   RequestFrame();  // the overlays follow with the image
   RefreshStatus();
+  FocusView();
+}
+
+void MainWindow::FocusView() {
+  if (!session_ || camera_ < 0 || camera_ >= session_->cameras() || camera_ >= 4) return;
+  // A spin box has the focus only when the person clicked into it: it keeps it until Enter or
+  // Esc (its arrows step the frame). Anything else hands the keys to the view.
+  if (qobject_cast<QAbstractSpinBox*>(QApplication::focusWidget()) != nullptr &&
+      QApplication::focusWidget()->isVisible())
+    return;
+  if (views_[camera_]->isVisible() && !views_[camera_]->hasFocus())
+    views_[camera_]->setFocus(Qt::OtherFocusReason);
+}
+
+bool MainWindow::eventFilter(QObject* watched, QEvent* event) {
+  auto* box = qobject_cast<QSpinBox*>(watched);
+  if (box == nullptr || (event->type() != QEvent::ShortcutOverride &&
+                         event->type() != QEvent::KeyPress))
+    return QMainWindow::eventFilter(watched, event);
+  const auto* key = static_cast<QKeyEvent*>(event);
+  const Qt::KeyboardModifiers mods = key->modifiers() & ~Qt::KeypadModifier;
+  const int k = key->key();
+  const bool enter = k == Qt::Key_Return || k == Qt::Key_Enter, escape = k == Qt::Key_Escape;
+  // A number's keys: digits, editing, the steps (the arrows), Enter and Esc.
+  const bool number =
+      mods == Qt::NoModifier &&
+      ((k >= Qt::Key_0 && k <= Qt::Key_9) || k == Qt::Key_Backspace || k == Qt::Key_Delete ||
+       k == Qt::Key_Left || k == Qt::Key_Right || k == Qt::Key_Up || k == Qt::Key_Down ||
+       k == Qt::Key_PageUp || k == Qt::Key_PageDown || k == Qt::Key_Home || k == Qt::Key_End ||
+       enter || escape);
+  if (event->type() == QEvent::ShortcutOverride) {
+    if (number) {
+      event->accept();  // the box's, not the window's (Enter would accept a preview)
+    } else {
+      event->ignore();  // the window's shortcut (A, D, T, Space, Ctrl+S, ...)
+    }
+    return true;
+  }
+  if (escape) {  // the typed text forgotten, the keys back to the view
+    if (session_) {
+      const QSignalBlocker block(box);
+      const int cols = session_->project().cols;
+      box->setValue(box == frame_box_ ? session_->frame_number(frame_)
+                    : box == row_box_ ? knot_ / cols
+                                      : knot_ % cols);
+    }
+    box->clearFocus();
+    FocusView();
+    return true;
+  }
+  if (enter) {  // the box takes the number, then the keys go back to the view
+    QTimer::singleShot(0, this, [this, box] {
+      if (box->hasFocus()) box->clearFocus();
+      FocusView();
+    });
+  }
+  return false;
 }
 
 void MainWindow::RequestFrame() {
@@ -718,8 +798,11 @@ void MainWindow::SetCamera(int c) {
   if (!session_ || c < 0 || c >= session_->cameras()) return;
   if (c != hint_camera_) ClearHint();
   camera_ = c;
+  // One camera shown alone: the camera acted on is the one shown.
+  if (maximised_ >= 0 && maximised_ != c) Maximise(c);
   RefreshKnotGrid();
   RefreshStatus();
+  FocusView();
 }
 
 void MainWindow::SetKnot(int knot) {
@@ -1117,8 +1200,11 @@ void MainWindow::SetHalfResolution(bool half) {
 
 void MainWindow::Maximise(int c) {
   maximised_ = c;
+  // The view to be shown first: hiding the one with the focus then moves it there, not away.
+  if (session_ && c >= 0 && c < session_->cameras() && c < 4) views_[c]->setVisible(true);
   for (int i = 0; i < 4; ++i)
     views_[i]->setVisible(session_ && i < session_->cameras() && (c < 0 || i == c));
+  FocusView();
 }
 
 void MainWindow::ToggleMaximise() { Maximise(maximised_ >= 0 ? -1 : camera_); }

@@ -47,8 +47,10 @@ class MainWindow : public QMainWindow {
   static constexpr int kMaxReviewPerFrame = 0;
 
   // Opens a project (asks about a journal left by a crash unless `ask` is false, then recovers
-  // nothing). False, with a dialog naming the file and the reason, when it cannot be opened.
-  bool OpenProject(const QString& path, bool ask = true);
+  // nothing). False when it cannot be opened: the reason, naming the file, goes to `error` when
+  // given (no dialog: the command line prints it), else into a dialog. A path that fails to open
+  // leaves the recent projects.
+  bool OpenProject(const QString& path, bool ask = true, QString* error = nullptr);
   Session* session() { return session_.get(); }
 
   // The current frame row, camera (the one the person works in) and knot (the knot picker).
@@ -63,8 +65,10 @@ class MainWindow : public QMainWindow {
   KnotGrid* knot_grid() const { return knot_grid_; }
   // Half-resolution display (faster decode and paint at 2048^2).
   void SetHalfResolution(bool half);
-  // Shows one camera alone (-1: all four).
+  // Shows one camera alone (-1: all four). While one camera is shown alone, a change of the
+  // current camera shows that camera alone instead: the view always shows the camera acted on.
   void Maximise(int c);
+  int maximised() const { return maximised_; }
 
   // Waits (processing events) until the current frame is drawn in every view; false after
   // `timeout_ms`.
@@ -94,6 +98,10 @@ class MainWindow : public QMainWindow {
 
  protected:
   void closeEvent(QCloseEvent* event) override;
+  // The spin boxes of the frame and the knot: they take the keys of a number (digits, editing,
+  // steps) only, and only after a click into them; every other key is the window's (A, D, T,
+  // ...), and Enter or Esc hands the keys back to the current view.
+  bool eventFilter(QObject* watched, QEvent* event) override;
 
  private:
   void BuildWelcome();
@@ -103,6 +111,9 @@ class MainWindow : public QMainWindow {
                      void (MainWindow::*slot)());
   void RequestFrame();
   void OnFrameLoaded();
+  // Gives the keyboard focus to the current camera's view (after a change of camera or frame),
+  // unless the person is typing into a spin box they clicked: the labeling keys reach the view.
+  void FocusView();
   void RefreshOverlays();
   void RefreshStatus();
   // Goes to row `row` of the review model: its frame, its camera maximised, the knot selected.

@@ -32,6 +32,12 @@ class Settings {
     while (recent.size() > kMaxRecent) recent.removeLast();
     settings.setValue(kRecentProjects, recent);
   }
+  // Forgets `path` (a project that failed to open).
+  static void RemoveRecentProject(const QString& path) {
+    QSettings settings("netlab", "netlab-gui");
+    QStringList recent = settings.value(kRecentProjects).toStringList();
+    if (recent.removeAll(path) > 0) settings.setValue(kRecentProjects, recent);
+  }
   static QString Shortcut(const QString& action, const QString& fallback) {
     return QSettings("netlab", "netlab-gui")
         .value(QString(kShortcutPrefix) + action, fallback)

@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 #include "common/files.h"
 #include "common/yaml_util.h"
@@ -26,10 +27,25 @@ std::string Relative(const fs::path& folder, const std::string& file) {
   return rel.string();
 }
 
+// A key given twice in a mapping: YAML readers keep one of them silently, so the project would
+// name a file the person did not mean.
+void RefuseDuplicateKeys(const YAML::Node& map, const std::string& file, const std::string& in) {
+  std::set<std::string> seen;
+  for (auto it = map.begin(); it != map.end(); ++it) {
+    const std::string key = it->first.as<std::string>();
+    if (!seen.insert(key).second)
+      throw InputError(file + ":" + std::to_string(it->first.Mark().line + 1) + ": " + in + key +
+                       ": given twice (keep one)");
+  }
+}
+
 }  // namespace
 
 Project LoadProject(const std::string& path) {
   const YamlMap root(LoadYamlFile(path), path, "");
+  RefuseDuplicateKeys(root.node(), path, "");
+  if (root.node()["net"] && root.node()["net"].IsMap())
+    RefuseDuplicateKeys(root.node()["net"], path, "net.");
   root.AllowOnly(
       {"netlab_project", "experiment", "rig", "coloring", "labels", "net", "illumination"});
   if (root.Int("netlab_project") != 1)

@@ -1,5 +1,6 @@
 #include "app/gui/document/review_model.h"
 
+#include <QRegularExpression>
 #include <algorithm>
 
 namespace netlab::gui {
@@ -94,10 +95,25 @@ int ReviewModel::columnCount(const QModelIndex& parent) const {
   return parent.isValid() ? 0 : kColumns;
 }
 
+double ReasonSeverity(const std::string& reason) {
+  // The cameras' point itself in doubt: nothing says the label is right.
+  if (reason.find("disagree") != std::string::npos) return 1.0;
+  // Every distance the reason gives ("2.4 px from the epipolar line", "1555.8 px off the point
+  // of all the cameras"), the largest over kSurePx.
+  static const QRegularExpression distance(
+      R"(([0-9]+(?:\.[0-9]+)?) px (?:off|from|otherwise|apart|away|where))");
+  double worst = 0.0;
+  auto it = distance.globalMatch(QString::fromStdString(reason));
+  while (it.hasNext()) worst = std::max(worst, it.next().captured(1).toDouble());
+  return std::clamp(worst / kSurePx, 0.0, 1.0);
+}
+
 double ReviewModel::Severity(const LabelKey& key) const {
   const auto& [c, t, k] = key;
   if (!document_->at(c, t, k).present()) return 1.0;  // a missing knot: no label at all
-  return 1.0 - std::clamp(static_cast<double>(document_->at(c, t, k).confidence), 0.0, 1.0);
+  const double doubt =
+      1.0 - std::clamp(static_cast<double>(document_->at(c, t, k).confidence), 0.0, 1.0);
+  return std::max(doubt, ReasonSeverity(document_->Reason(c, t, k)));
 }
 
 QVariant ReviewModel::data(const QModelIndex& index, int role) const {

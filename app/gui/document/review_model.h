@@ -38,7 +38,9 @@ class ReviewModel : public QAbstractTableModel {
   // The row of the item after / before `key` in the queue's order (wrapping); -1 when empty.
   int Next(const LabelKey& key) const;
   int Previous(const LabelKey& key) const;
-  // 0 (sure) .. 1 (doubtful): one minus the label's confidence (a missing knot: 1, no label).
+  // 0 (sure) .. 1 (doubtful): one minus the label's confidence, or what its reason says when
+  // that is worse (ReasonSeverity: a label flagged 1555.8 px off is 1 whatever its detector's
+  // confidence); a missing knot: 1 (no label).
   double Severity(const LabelKey& key) const;
 
   // Lists `missing`'s knots too, and follows its changes (null: review items only). `missing`
@@ -63,5 +65,13 @@ class ReviewModel : public QAbstractTableModel {
 
 // The name of a label's source as the window shows it ("person", "Find Node", ...).
 QString SourceName(recon::LabelSource source);
+
+// A review reason's distance from where the label should be, at or beyond which a label is
+// surely off its knot (a knot ball's size on the rendered shots): severity 1.
+constexpr double kSurePx = 10.0;
+// 0 .. 1: how doubtful a review reason makes a label: its largest distance ("4.2 px from the
+// epipolar line", "moved 3.1 px otherwise than its neighbours") over kSurePx, 1 when the cameras
+// disagree; 0 when it gives none.
+double ReasonSeverity(const std::string& reason);
 
 }  // namespace netlab::gui

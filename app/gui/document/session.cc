@@ -21,7 +21,15 @@ namespace {
 recon::LabelSet OpenLabels(const Project& p, const std::vector<std::string>& cameras,
                            const std::vector<int>& frames) {
   recon::LabelSet empty = recon::LabelSet::Empty(p.rows, p.cols, cameras, frames);
-  if (!std::filesystem::exists(p.labels)) return empty;
+  if (!std::filesystem::exists(p.labels)) {
+    // New labels: their folder must be there, or no edit could be journaled nor saved.
+    const std::filesystem::path folder = std::filesystem::path(p.labels).parent_path();
+    if (!folder.empty() && !std::filesystem::is_directory(folder))
+      throw InputError(p.labels + ": the labels' folder " + folder.string() +
+                       " does not exist, so they could never be saved (create it, or name "
+                       "another labels file in the project)");
+    return empty;
+  }
   const recon::LabelSet read = recon::ReadLabelsAny(p.labels, p.rows, p.cols, cameras);
   // Onto the recording's frames, by camera name and frame number.
   for (size_t rc = 0; rc < read.cameras.size(); ++rc) {
