@@ -1227,7 +1227,7 @@ std::vector<Junction> KnotDetector::SolidsInCircle(const Eigen::Vector2d& centre
     j.contrast = weakest;
     j.fit_rms_px = s.rms_px;
     j.confidence = std::exp(-0.5 * (s.rms_px / 0.5) * (s.rms_px / 0.5));
-    j.solid_on_edge = NearBackgroundEdge(s.centre, s.radius + 2.0);
+    j.solid_cut = !(s.rms_px <= o_.solid_round_px);
     found.push_back(j);
   }
   return found;

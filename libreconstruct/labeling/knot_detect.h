@@ -116,6 +116,9 @@ struct KnotDetectorOptions {
   double solid_fraction = 0.3;    // foreground above this fraction of the brightest that stays
   double max_solid_area_px = 3000;  // under an opening, in a blob up to this area: a solid
                                     // (corner mass), where no ridge is taken
+  // A solid whose outline's RMS distance from its fitted circle exceeds this is not round
+  // (something covers or cuts it): Junction::solid_cut (px).
+  double solid_round_px = 0.5;
   // Where the local background changes this fast (per px, 0..1 colour units), at an edge of a
   // target behind the net, ridges along the edge are weakened (fully at this rate) and the
   // yarn model takes no samples (from half of it); 0: off.
@@ -138,10 +141,11 @@ struct Junction {
   bool solid = false;        // the centre of a solid (corner mass), not a yarn junction;
                              // branches: the yarns leaving it, fit_rms_px: its outline's RMS
                              // distance from the fitted circle
-  // A solid whose outline an edge of the background crosses (the target's outline, within 2 px
-  // of its rim): its foreground is cut unevenly there, and its centre was found 2.2-2.9 px off
-  // a corner mass lying half over the target's face.
-  bool solid_on_edge = false;
+  // A solid whose outline is cut, so that its centre is uncertain: its outline is not round
+  // (RMS distance from its circle over KnotDetectorOptions::solid_round_px). A corner mass lying
+  // half over the target's face, a yarn across it, had its centre found 2.2-2.9 px off (outline
+  // RMS 1.0-1.2 px; 0.16-0.22 px for a mass in the clear).
+  bool solid_cut = false;
 };
 
 class KnotDetector {

@@ -114,10 +114,11 @@ bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot*
     t->why = "a blob there, no yarn junction (the knot has no corner mass)";
     return false;
   }
-  // A corner mass across the target's outline: its centre is not where the knot is.
-  if (j.solid && j.solid_on_edge) {
+  // A corner mass whose outline is cut (the target's edge across it, a yarn in front of it):
+  // its centre is not where the knot is.
+  if (j.solid && j.solid_cut) {
     t->px = j.px;
-    t->why = "the corner mass lies across the edge of the target (its centre is uncertain there)";
+    t->why = "the corner mass's outline is cut (not round): its centre is uncertain";
     return false;
   }
   t->px = j.px;

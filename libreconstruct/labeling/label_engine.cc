@@ -747,7 +747,7 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
   // neighbours, the other cameras, its path), or it is the corner's own mass.
   // A corner mass confirms its corner where only the corner's two yarns leave it: bunched in a
   // fold, with more yarns around it, its outline's centre was 2.0-2.3 px from the knot.
-  bool confirmed = j.solid && Neighbours(knot).size() == 2 && j.branches <= 2 && !j.solid_on_edge;
+  bool confirmed = j.solid && Neighbours(knot).size() == 2 && j.branches <= 2 && !j.solid_cut;
   // Its motion since the adjacent frame against its neighbours' (a junction of another layer
   // of a folded net, 3.6 px from the knot, had yarns along the knot's own).
   const std::optional<double> moved = MotionOff(camera, t, knot, j.px);
