@@ -13,6 +13,12 @@
 #include <QDockWidget>
 #include <QElapsedTimer>
 #include <QLabel>
+#include <QMenu>
+#include <QMenuBar>
+#include <QMessageBox>
+#include <QPushButton>
+#include <QSettings>
+#include <QSpinBox>
 #include <QStatusBar>
 #include <QTableView>
 #include <QTableWidget>
@@ -25,6 +31,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <future>
 #include <map>
 #include <set>
@@ -34,6 +41,7 @@
 #include "app/gui/camera_view.h"
 #include "app/gui/document/project.h"
 #include "app/gui/knot_grid.h"
+#include "app/gui/settings.h"
 #include "app/gui/shortcut_editor.h"
 #include "app/gui/timeline.h"
 #include "libreconstruct/geometry/triangulation.h"
@@ -647,6 +655,300 @@ TEST_F(MainWindowTest, AfterAFixTheWindowGoesOnToTheFramesNextItem) {
   EXPECT_TRUE(s->document().at(0, t, other).accepted());
   EXPECT_EQ(w.camera(), 0);
   EXPECT_EQ(w.knot(), other);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Keys and the camera a person acts on (issue 41): keys typed as a keyboard types them, to the
+// widget that has the focus, not sent to the window.
+
+// Types `key` where the keyboard's keys go: the focus widget (the window when none has it).
+void Type(MainWindow* w, Qt::Key key, Qt::KeyboardModifiers modifiers = Qt::NoModifier) {
+  QWidget* focus = QApplication::focusWidget();
+  QTest::keyClick(focus != nullptr ? focus : w, key, modifiers);
+}
+
+// The window on the true labels with every missing knot marked hidden, and two labels of frame t
+// put under review: knot a in camera 0, knot b in camera 2 (the queue holds these two only).
+struct TwoItems {
+  int t = 5, a = -1, b = -1;
+};
+TwoItems PlantTwoItems(MainWindow* w, const recon::LabelSet& truth) {
+  Session* s = w->session();
+  TwoItems items;
+  items.a = KnotSeenByAll(truth, items.t);
+  items.b = KnotSeenByAll(truth, items.t, items.a + 1);
+  for (const LabelKey& key : s->missing().Items())
+    s->MarkHidden(std::get<0>(key), std::get<1>(key), std::get<2>(key));
+  for (const auto& [c, k] : {std::pair{0, items.a}, std::pair{2, items.b}}) {
+    recon::Label doubt = s->document().at(c, items.t, k);
+    doubt.state = recon::LabelState::kNeedsReview;
+    s->document().Apply("doubt", {{c, items.t, k, doubt}});
+  }
+  return items;
+}
+
+// The issue's reproduction: the window moves to another camera (the queue's next item, then the
+// frame's next after a fix) while the person worked in camera 3; focus used to land in the frame
+// spin box, where A, D, T did nothing and digits changed the frame. Now every camera change hands
+// the keys to the current view; the spin box takes a number's keys only after a click into it,
+// Enter goes back to the view, and the labeling keys work even while it has the focus.
+TEST_F(MainWindowTest, LetterKeysReachTheViewAfterTheWindowMovesToAnotherCamera) {
+  const recon::LabelSet truth = Truth();
+  const std::string project = MakeProjectFile("focus", (Dir() / "shot/labels_true.h5").string());
+  MainWindow w;
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, project));
+  Session* s = w.session();
+  const TwoItems items = PlantTwoItems(&w, truth);
+  ASSERT_GE(items.b, 0);
+  ASSERT_EQ(w.review_table()->model()->rowCount(), 2);
+  // The person works in camera 3 at frame t: a click on one of its labels.
+  w.SetFrame(items.t);
+  ASSERT_TRUE(w.WaitForFrame());
+  int k3 = -1;
+  for (int k = 0; k < s->project().knots() && k3 < 0; ++k)
+    if (k != items.a && k != items.b && s->document().at(3, items.t, k).present()) k3 = k;
+  ASSERT_GE(k3, 0);
+  QTest::mouseClick(w.view(3), Qt::LeftButton, Qt::NoModifier,
+                    w.view(3)->ToWidget(s->document().at(3, items.t, k3).px).toPoint());
+  ASSERT_EQ(w.camera(), 3);
+  ASSERT_EQ(QApplication::focusWidget(), w.view(3));
+  // Space: the queue's next item, camera 0 alone; the keys are its view's.
+  Type(&w, Qt::Key_Space);
+  ASSERT_EQ(w.camera(), 0);
+  ASSERT_EQ(w.knot(), items.a);
+  EXPECT_EQ(QApplication::focusWidget(), w.view(0));
+  // Digits change nothing; A accepts; the window goes on to camera 2's item, and D deletes it.
+  Type(&w, Qt::Key_7);
+  EXPECT_EQ(w.frame(), items.t);
+  Type(&w, Qt::Key_A);
+  EXPECT_TRUE(s->document().at(0, items.t, items.a).accepted());
+  ASSERT_EQ(w.camera(), 2);
+  ASSERT_EQ(w.knot(), items.b);
+  EXPECT_EQ(QApplication::focusWidget(), w.view(2));
+  Type(&w, Qt::Key_D);
+  EXPECT_FALSE(s->document().at(2, items.t, items.b).present());
+  EXPECT_EQ(w.frame(), items.t);
+  // The frame's spin box: a click into it, then F is still the window's key (next frame), the
+  // typed number and Enter go to that frame, and the keys are the view's again.
+  QSpinBox* box = nullptr;
+  for (QSpinBox* b : w.findChildren<QSpinBox*>())
+    if (b->prefix() == "frame ") box = b;
+  ASSERT_NE(box, nullptr);
+  EXPECT_EQ(box->focusPolicy(), Qt::ClickFocus);
+  QTest::mouseClick(box, Qt::LeftButton, Qt::NoModifier, QPoint(box->width() / 2, box->height() / 2));
+  ASSERT_EQ(QApplication::focusWidget(), box);
+  Type(&w, Qt::Key_F);
+  EXPECT_EQ(w.frame(), items.t + 1);
+  Type(&w, Qt::Key_A, Qt::ControlModifier);  // select the box's text
+  QTest::keyClicks(box, QString::number(s->frame_number(12)));
+  Type(&w, Qt::Key_Return);
+  EXPECT_EQ(w.frame(), 12);
+  EXPECT_TRUE(QTest::qWaitFor(
+      [&] { return QApplication::focusWidget() == w.view(w.camera()); }, 2000));
+  Type(&w, Qt::Key_Z, Qt::ControlModifier);  // the delete undone: the keys are the window's
+  EXPECT_TRUE(s->document().at(2, items.t, items.b).present());
+}
+
+// A review row of another camera double-clicked while one camera is shown alone: that camera is
+// shown alone (its frame, its caption), so A accepts the label the person sees.
+TEST_F(MainWindowTest, ADoubleClickedReviewRowShowsItsCameraAlone) {
+  const recon::LabelSet truth = Truth();
+  const std::string project = MakeProjectFile("dclick", (Dir() / "shot/labels_true.h5").string());
+  MainWindow w;
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, project));
+  Session* s = w.session();
+  const TwoItems items = PlantTwoItems(&w, truth);
+  ASSERT_GE(items.b, 0);
+  Type(&w, Qt::Key_Home, Qt::ControlModifier);  // the queue's first item: camera 0 alone
+  ASSERT_EQ(w.camera(), 0);
+  ASSERT_EQ(w.maximised(), 0);
+  ASSERT_TRUE(w.WaitForFrame());
+  // Camera 2's row, double-clicked.
+  QTableView* table = w.review_table();
+  int row = -1;
+  for (int r = 0; r < table->model()->rowCount(); ++r)
+    if (table->model()->index(r, 0).data(ReviewModel::kCameraRole).toInt() == 2) row = r;
+  ASSERT_GE(row, 0);
+  const QRect cell = table->visualRect(table->model()->index(row, ReviewModel::kKnot));
+  // As a mouse double-clicks: press and release, press (the double click), release.
+  QTest::mouseClick(table->viewport(), Qt::LeftButton, Qt::NoModifier, cell.center());
+  QTest::mouseDClick(table->viewport(), Qt::LeftButton, Qt::NoModifier, cell.center());
+  QTest::mouseRelease(table->viewport(), Qt::LeftButton, Qt::NoModifier, cell.center());
+  ASSERT_EQ(w.camera(), 2);
+  EXPECT_EQ(w.frame(), items.t);
+  EXPECT_EQ(w.knot(), items.b);
+  ASSERT_TRUE(w.WaitForFrame());
+  // The view shown is camera 2's, at that frame; no other camera's view is.
+  EXPECT_EQ(w.maximised(), 2);
+  EXPECT_TRUE(w.view(2)->isVisible());
+  for (int c = 0; c < s->cameras(); ++c)
+    if (c != 2) EXPECT_FALSE(w.view(c)->isVisible()) << c;
+  EXPECT_TRUE(w.view(2)->has_image());
+  const QString caption = w.view(2)->overlay().caption;
+  EXPECT_TRUE(caption.startsWith(QString::fromStdString(s->camera_names()[2]) + " · frame " +
+                                 QString::number(s->frame_number(items.t))))
+      << caption.toStdString();
+  // A accepts the label shown.
+  Type(&w, Qt::Key_A);
+  EXPECT_TRUE(s->document().at(2, items.t, items.b).accepted());
+  EXPECT_FALSE(s->document().at(0, items.t, items.a).accepted());
+  w.grab().save((Dir() / "dclick.png").string().c_str());
+}
+
+// Ctrl+arrows nudge the selected label even while the Net grid has the focus (its plain arrows
+// still pick the knot).
+TEST_F(MainWindowTest, CtrlArrowsNudgeTheLabelWhileTheNetGridHasTheFocus) {
+  const std::string project = MakeProjectFile("nudge", (Dir() / "shot/labels_true.h5").string());
+  MainWindow w;
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, project));
+  Session* s = w.session();
+  int k = -1;
+  for (int i = 0; i + 1 < s->project().knots() && k < 0; ++i)
+    if (s->document().at(0, 0, i).present() && i % s->project().cols + 1 < s->project().cols) k = i;
+  ASSERT_GE(k, 0);
+  KnotGrid* grid = w.knot_grid();
+  QTest::mouseClick(grid, Qt::LeftButton, Qt::NoModifier, grid->KnotCentre(k).toPoint());
+  ASSERT_EQ(w.knot(), k);
+  ASSERT_EQ(QApplication::focusWidget(), grid);
+  const Eigen::Vector2d before = s->document().at(0, 0, k).px;
+  Type(&w, Qt::Key_Right, Qt::ControlModifier);
+  EXPECT_EQ(w.knot(), k);
+  EXPECT_GT(s->document().at(0, 0, k).px.x(), before.x() + 0.4);
+  EXPECT_NEAR(s->document().at(0, 0, k).px.y(), before.y(), 1e-9);
+  Type(&w, Qt::Key_Right);  // plain: the grid's pick
+  EXPECT_EQ(w.knot(), k + 1);
+}
+
+// A panel closed with its title bar's button comes back from the View menu.
+TEST_F(MainWindowTest, AClosedPanelIsReopenedFromTheViewMenu) {
+  MainWindow w;
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, MakeProjectFile("docks")));
+  QMenu* view = nullptr;
+  for (QAction* a : w.menuBar()->actions())
+    if (a->text() == "&View") view = a->menu();
+  ASSERT_NE(view, nullptr);
+  for (const char* name : {"review_dock", "colours_dock", "knot_grid_dock"}) {
+    auto* dock = w.findChild<QDockWidget*>(name);
+    ASSERT_NE(dock, nullptr) << name;
+    dock->close();
+    QCoreApplication::processEvents();
+    ASSERT_FALSE(dock->isVisible()) << name;
+    ASSERT_TRUE(view->actions().contains(dock->toggleViewAction())) << name;
+    // The menu opened and its entry clicked.
+    view->popup(w.mapToGlobal(QPoint(10, 10)));
+    ASSERT_TRUE(QTest::qWaitForWindowExposed(view));
+    QTest::mouseClick(view, Qt::LeftButton, Qt::NoModifier,
+                      view->actionGeometry(dock->toggleViewAction()).center());
+    EXPECT_TRUE(QTest::qWaitFor([&] { return dock->isVisible(); }, 2000)) << name;
+  }
+}
+
+// After edits recovered from a crash's journal the title says they are unsaved ('*').
+TEST_F(MainWindowTest, RecoveredEditsMarkTheTitleUnsaved) {
+  const std::string project = MakeProjectFile("recover", (Dir() / "shot/labels_true.h5").string());
+  {
+    MainWindow crashed;
+    ASSERT_NO_FATAL_FAILURE(OpenShown(crashed, project));
+    Session* s = crashed.session();
+    int k = 0;
+    while (!s->document().at(0, 0, k).present()) ++k;
+    crashed.SetKnot(k);
+    crashed.SetCamera(0);
+    Type(&crashed, Qt::Key_D);
+    ASSERT_TRUE(s->document().modified());
+    ASSERT_TRUE(crashed.isWindowModified());
+  }  // gone without saving (no close event): the journal stays
+  MainWindow w;
+  w.resize(1400, 1000);
+  w.show();
+  bool asked = false;
+  QTimer::singleShot(300, [&] {  // the question answered "Yes" with its button
+    if (auto* box = qobject_cast<QMessageBox*>(QApplication::activeModalWidget())) {
+      asked = true;
+      QTest::mouseClick(box->button(QMessageBox::Yes), Qt::LeftButton);
+    }
+  });
+  ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), true));
+  EXPECT_TRUE(asked);
+  EXPECT_TRUE(w.session()->document().modified());
+  EXPECT_TRUE(w.isWindowModified());
+  EXPECT_TRUE(w.windowTitle().contains("[*]"));
+}
+
+// A project that fails to open leaves the recent projects, and says why without a dialog when
+// asked to (the command line).
+TEST_F(MainWindowTest, AProjectThatFailsToOpenLeavesTheRecentProjects) {
+  const QStringList before = Settings::RecentProjects();
+  const QString bad = QString::fromStdString((Dir() / "gone_project.yaml").string());
+  Settings::AddRecentProject(bad);
+  ASSERT_TRUE(Settings::RecentProjects().contains(bad));
+  MainWindow w;
+  QString error;
+  EXPECT_FALSE(w.OpenProject(bad, false, &error));
+  EXPECT_TRUE(error.contains("gone_project.yaml")) << error.toStdString();
+  EXPECT_FALSE(Settings::RecentProjects().contains(bad));
+  QSettings("netlab", "netlab-gui").setValue(Settings::kRecentProjects, before);
+}
+
+// `netlab gui BROKEN --screenshot out.png` exits 1 at once with the reason on stderr (no dialog
+// to wait on), as does a start without --screenshot; a screenshot never replaces the project or
+// one of its files, and is written whole (no .partial left).
+TEST_F(MainWindowTest, ABrokenProjectFailsAtOnceWithTheReasonOnStderr) {
+  const fs::path d = Dir() / "broken";
+  fs::create_directories(d);
+  const std::string good = MakeProjectFile("broken_good");
+  std::string text;
+  {
+    std::ifstream in(good);
+    text.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const auto with_line = [&](const std::string& key, const std::string& line) {
+    std::string t = text;
+    const size_t at = t.find(key + ":");
+    const size_t end = t.find('\n', at);
+    return t.replace(at, end - at, line);
+  };
+  const std::map<std::string, std::pair<std::string, std::string>> cases = {
+      // name: (contents, what stderr must say); "missing" is not written.
+      {"missing", {"", "cannot open file"}},
+      {"empty", {"", "is empty"}},
+      {"list", {"- experiment\n- rig\n", "holds a list"}},
+      {"no_rig", {with_line("rig", "rig: nowhere/rig.yaml"), "rig file not found"}},
+      {"no_labels_folder", {with_line("labels", "labels: nowhere/labels.h5"), "does not exist"}},
+      {"duplicate", {text + "rig: other.yaml\n", "rig: given twice"}},
+      {"syntax", {"netlab_project: 1\nrig: [unclosed\n", "YAML syntax error"}},
+  };
+  for (const auto& [name, want] : cases) {
+    const std::string path = (Dir() / (name + ".yaml")).string();
+    fs::remove(path);
+    if (name != "missing") std::ofstream(path) << want.first;
+    const std::string png = (d / (name + ".png")).string();
+    QElapsedTimer clock;
+    clock.start();
+    const auto shot = RunNetlab("gui " + path + " --screenshot " + png);
+    EXPECT_LT(clock.elapsed(), 10000) << name;
+    EXPECT_EQ(shot.status, 1) << name << ": " << shot.err;
+    EXPECT_NE(shot.err.find(want.second), std::string::npos) << name << ": " << shot.err;
+    EXPECT_FALSE(fs::exists(png)) << name;
+    const auto window = RunNetlab("gui " + path);  // a window (offscreen here) that cannot start
+    EXPECT_EQ(window.status, 1) << name << ": " << window.err;
+    EXPECT_NE(window.err.find(want.second), std::string::npos) << name << ": " << window.err;
+  }
+  // Never over the project or a file it names.
+  for (const std::string& target : {good, LoadProject(good).rig}) {
+    std::ifstream before_in(target, std::ios::binary);
+    const std::string before((std::istreambuf_iterator<char>(before_in)), {});
+    const auto over = RunNetlab("gui " + good + " --screenshot " + target);
+    EXPECT_EQ(over.status, 1) << over.err;
+    EXPECT_NE(over.err.find("would replace the input"), std::string::npos) << over.err;
+    std::ifstream after_in(target, std::ios::binary);
+    EXPECT_EQ(std::string((std::istreambuf_iterator<char>(after_in)), {}), before) << target;
+  }
+  const std::string png = (d / "good.png").string();
+  const auto ok = RunNetlab("gui " + good + " --screenshot " + png);
+  ASSERT_EQ(ok.status, 0) << ok.err;
+  EXPECT_FALSE(QImage(QString::fromStdString(png)).isNull());
+  EXPECT_FALSE(fs::exists(png + ".partial"));
 }
 
 // ---------------------------------------------------------------------------------------------
