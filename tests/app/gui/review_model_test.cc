@@ -73,6 +73,30 @@ TEST(ReviewModel, NextAndPreviousWalkTheQueueInOrderAndWrap) {
   EXPECT_EQ(model.items()[model.Previous({0, 2, 1})], (LabelKey{1, 0, 3}));
 }
 
+// The Severity column follows the reason when it says more than the detector's confidence: a
+// label flagged 1555.8 px off is 1.00 however sure its junction was; a small distance leaves
+// the confidence's word; the cameras disagreeing is 1.
+TEST(ReviewModel, SeverityFollowsTheReasonsDistance) {
+  LabelDocument doc(recon::LabelSet::Empty(2, 2, {"a", "b"}, {0, 1}), "/nonexistent/l.h5");
+  ReviewModel model(&doc, {0, 1});
+  doc.Apply("Track", {{0, 0, 0, Review(1, 0.95f)}, {0, 0, 1, Review(2, 0.95f)},
+                      {0, 0, 2, Review(3, 0.95f)}, {0, 0, 3, Review(4, 0.6f)}});
+  doc.MergeReasons({{{0, 0, 0}, "epipolar check: 1555.8 px off the point of all the cameras"},
+                    {{0, 0, 1}, "epipolar check: 4.0 px from where the other cameras put the knot"},
+                    {{0, 0, 2}, "epipolar check: the cameras disagree (rays 0.00 deg apart)"},
+                    {{0, 0, 3}, "moved 0.5 px otherwise than its neighbours"}});
+  ASSERT_EQ(model.rowCount(), 4);
+  const auto severity = [&](int row) {
+    return model.index(row, ReviewModel::kSeverity).data(Qt::EditRole).toDouble();
+  };
+  EXPECT_DOUBLE_EQ(severity(0), 1.0);
+  EXPECT_EQ(model.index(0, ReviewModel::kSeverity).data().toString(), "1.00");
+  EXPECT_NEAR(severity(1), 4.0 / kSurePx, 1e-9);
+  EXPECT_DOUBLE_EQ(severity(2), 1.0);
+  EXPECT_NEAR(severity(3), 0.4, 1e-6);  // 1 - confidence: more than 0.5 px says
+  EXPECT_DOUBLE_EQ(ReasonSeverity("kept for review (no reason recorded)"), 0.0);
+}
+
 // Both kinds in one queue: a 2 x 2 net 1.5 m before three cameras, labeled exactly in a and b;
 // camera c has a doubtful label of knot 1 in frame row 0 and nothing else. Its other knots are
 // missing there (a and b agree on them); the model lists both kinds in the queue's order, says
