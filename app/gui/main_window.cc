@@ -267,8 +267,13 @@ void MainWindow::BuildWorkspace() {
   statusBar()->addWidget(status_frame_, 1);
   status_frame_->setAlignment(Qt::AlignRight | Qt::AlignVCenter);
   statusBar()->addPermanentWidget(status_cursor_);
-  connect(statusBar(), &QStatusBar::messageChanged, statusBar(),
-          [bar = statusBar()](const QString& message) { bar->setToolTip(message); });
+  // (QStatusBar hides them itself only when they are visible: not for a message given before
+  // the window is shown, as the command line's --review does.)
+  connect(statusBar(), &QStatusBar::messageChanged, this, [this](const QString& message) {
+    statusBar()->setToolTip(message);
+    status_knot_->setVisible(message.isEmpty());
+    status_frame_->setVisible(message.isEmpty());
+  });
 }
 
 QAction* MainWindow::AddAction(QMenu* menu, const QString& name, const QString& keys,
