@@ -760,17 +760,17 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
   confirmed = confirmed || moved.has_value();
   // Its yarns against its accepted neighbours in this view.
   const NeighbourSlots slots = Slots(camera, t, knot, {});
-  // They confirm it only where every link's direction is known and each yarn runs along one:
-  // with a link unknown, its yarn may be another knot's (a folded net seen edge-on put a row's
-  // three links on one line in the image, and a column's yarn crossing it 5.5 px from the knot
-  // passed for the unknown link).
+  // They confirm it only where every link's direction is known (each yarn seen then runs along
+  // one, three at least): with a link unknown, its yarn may be another knot's (a folded net seen
+  // edge-on put a row's three links on one line in the image, and a column's yarn crossing it
+  // 5.5 px from the knot passed for the unknown link).
   const std::vector<double> link_angles = KnownLinkAngles(j.px, slots);
   if (link_angles.size() >= 2) {
     if (!BranchesMatchLinks(j, slots, o_.branch_tolerance_deg, true))
       return "the junction's yarns do not run towards its labeled neighbours";
     const int links = static_cast<int>(Neighbours(knot).size());
     confirmed = confirmed || (static_cast<int>(link_angles.size()) == links &&
-                              BranchesMatchLinks(j, slots, o_.branch_tolerance_deg));
+                              j.branches >= std::min(links, 3));
   }
   // Its place against the point two or more other cameras agree on.
   const std::vector<Observation> others = OtherViews(camera, t, knot);
