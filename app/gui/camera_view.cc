@@ -164,8 +164,8 @@ void CameraView::paintEvent(QPaintEvent*) {
   DrawOverlay(painter);
   // The caption and the focus frame.
   painter.setPen(Qt::white);
-  painter.fillRect(QRect(0, 0, width(), 20), QColor(0, 0, 0, 150));
-  painter.drawText(QRect(6, 0, width() - 12, 20), Qt::AlignVCenter | Qt::AlignLeft,
+  painter.fillRect(QRect(0, 0, width(), kCaptionHeight), QColor(0, 0, 0, 150));
+  painter.drawText(QRect(6, 0, width() - 12, kCaptionHeight), Qt::AlignVCenter | Qt::AlignLeft,
                    overlay_.caption);
   if (hasFocus()) {
     painter.setPen(QPen(QColor(90, 160, 255), 2));
@@ -349,6 +349,8 @@ void CameraView::mousePressEvent(QMouseEvent* event) {
     return;
   }
   if (event->button() != Qt::LeftButton) return;
+  // On the caption bar: the camera picked, nothing labeled.
+  if (event->position().y() < kCaptionHeight) return;
   // On a label without Shift: select it (and maybe drag it); elsewhere: a click for the tools.
   const int near = (event->modifiers() & Qt::ShiftModifier) ? -1 : LabelNear(event->position());
   if (near >= 0) {

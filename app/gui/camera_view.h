@@ -82,6 +82,10 @@ class CameraView : public QWidget {
   // label has.
   static constexpr QRgb kGhostColour = 0xffff46aa;
 
+  // The caption bar across the view's top (widget pixels): a click on it makes the camera the
+  // current one and labels nothing.
+  static constexpr int kCaptionHeight = 20;
+
   explicit CameraView(int camera, QWidget* parent = nullptr);
 
   int camera() const { return camera_; }
@@ -122,7 +126,7 @@ class CameraView : public QWidget {
   void labelDragged(int camera, int knot, Eigen::Vector2d px);  // on release: one step
   void labelSelected(int camera, int knot);
   void cursorMoved(int camera, Eigen::Vector2d px, QString value);
-  void activated(int camera);  // the person works in this view
+  void activated(int camera);  // the person works in this view (any press, the caption's too)
 
  protected:
   void paintEvent(QPaintEvent* event) override;

@@ -198,7 +198,8 @@ void MainWindow::BuildWorkspace() {
   picker->addWidget(col_box_);
   picker->addWidget(
       new QLabel("   click: Find Node in the brush · Shift+click: exactly here · "
-                 "I: which knot is this? · drag a label: move it · F1: all keys"));
+                 "I: which knot is this? · drag a label: move it · 1-4 or a click on a "
+                 "caption: the camera · F1: all keys"));
   auto picked = [this] {
     SetKnot(row_box_->value() * session_->project().cols + col_box_->value());
   };
@@ -326,6 +327,10 @@ void MainWindow::BuildActions() {
   advance_->setChecked(true);
   advance_->setToolTip(
       "After A, D, or a click that fixes a review item, go to the next item of the same frame");
+  AddAction(go, "Camera 1 (current, shown alone when one is)", "1", &MainWindow::PickCamera1);
+  AddAction(go, "Camera 2 (current, shown alone when one is)", "2", &MainWindow::PickCamera2);
+  AddAction(go, "Camera 3 (current, shown alone when one is)", "3", &MainWindow::PickCamera3);
+  AddAction(go, "Camera 4 (current, shown alone when one is)", "4", &MainWindow::PickCamera4);
   AddAction(go, "Next knot", ".", &MainWindow::NextKnot);
   AddAction(go, "Previous knot", ",", &MainWindow::PreviousKnot);
 

@@ -152,6 +152,10 @@ class MainWindow : public QMainWindow {
   void LastFrame();
   void GoToFrame();
   void TogglePlay();
+  void PickCamera1() { SetCamera(0); }  // keys 1-4: the current camera, nothing labeled
+  void PickCamera2() { SetCamera(1); }
+  void PickCamera3() { SetCamera(2); }
+  void PickCamera4() { SetCamera(3); }
   void NextKnot() { SetKnot(knot_ + 1); }
   void PreviousKnot() { SetKnot(knot_ - 1); }
   void NextReviewItem() { NextReview(false); }

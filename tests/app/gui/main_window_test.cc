@@ -795,6 +795,32 @@ TEST_F(MainWindowTest, ADoubleClickedReviewRowShowsItsCameraAlone) {
   w.grab().save((Dir() / "dclick.png").string().c_str());
 }
 
+// A camera is made current without a click that runs Find Node: a click on its view's caption
+// bar, or its key (1-4); with one camera shown alone, the key shows that camera alone.
+TEST_F(MainWindowTest, ACameraIsPickedByItsCaptionOrItsKeyWithoutLabeling) {
+  MainWindow w;
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, MakeProjectFile("pick_camera")));
+  Session* s = w.session();
+  const int steps = s->document().undo_stack()->count();
+  QTest::mouseClick(w.view(2), Qt::LeftButton, Qt::NoModifier,
+                    QPoint(w.view(2)->width() / 2, CameraView::kCaptionHeight / 2));
+  EXPECT_EQ(w.camera(), 2);
+  EXPECT_EQ(QApplication::focusWidget(), w.view(2));
+  EXPECT_EQ(s->document().undo_stack()->count(), steps);
+  EXPECT_EQ(s->document().labels().CountPresent(), 0);
+  Type(&w, Qt::Key_4);
+  EXPECT_EQ(w.camera(), 3);
+  Type(&w, Qt::Key_M);  // camera 4 alone
+  ASSERT_EQ(w.maximised(), 3);
+  Type(&w, Qt::Key_2);
+  EXPECT_EQ(w.camera(), 1);
+  EXPECT_EQ(w.maximised(), 1);
+  EXPECT_TRUE(w.view(1)->isVisible());
+  EXPECT_FALSE(w.view(3)->isVisible());
+  EXPECT_EQ(QApplication::focusWidget(), w.view(1));
+  EXPECT_EQ(s->document().undo_stack()->count(), steps);
+}
+
 // Ctrl+arrows nudge the selected label even while the Net grid has the focus (its plain arrows
 // still pick the knot).
 TEST_F(MainWindowTest, CtrlArrowsNudgeTheLabelWhileTheNetGridHasTheFocus) {
