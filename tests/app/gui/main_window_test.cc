@@ -749,6 +749,45 @@ TEST_F(MainWindowTest, LetterKeysReachTheViewAfterTheWindowMovesToAnotherCamera)
   EXPECT_TRUE(s->document().at(2, items.t, items.b).present());
 }
 
+// The issue's own steps: the person works in camera 3, T tracks from frame 0 and stops at frame
+// 1 on a label for review in camera 0 (tracked from one under review); the keys typed then reach
+// camera 0's view, and A accepts the label shown.
+TEST_F(MainWindowTest, AfterTStopsInAnotherCameraItsKeysWork) {
+  const recon::LabelSet truth = Truth();
+  recon::LabelSet start = truth;
+  for (int c = 0; c < static_cast<int>(start.cameras.size()); ++c)
+    for (int t = 1; t < start.frames(); ++t)
+      for (int k = 0; k < start.knots(); ++k) start.at(c, t, k) = recon::Label{};
+  const int a = KnotSeenByAll(truth, 0);
+  ASSERT_GE(a, 0);
+  start.at(0, 0, a).state = recon::LabelState::kNeedsReview;
+  start.reasons[{0, 0, a}] = "kept for review by the test";
+  const std::string file = (Dir() / "t_stop_start.h5").string();
+  recon::WriteLabels(file, start);
+  MainWindow w;
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, MakeProjectFile("t_stop", file)));
+  Session* s = w.session();
+  int k3 = -1;
+  for (int k = 0; k < s->project().knots() && k3 < 0; ++k)
+    if (s->document().at(3, 0, k).present()) k3 = k;
+  ASSERT_GE(k3, 0);
+  QTest::mouseClick(w.view(3), Qt::LeftButton, Qt::NoModifier,
+                    w.view(3)->ToWidget(s->document().at(3, 0, k3).px).toPoint());
+  ASSERT_EQ(w.camera(), 3);
+  Type(&w, Qt::Key_T);
+  ASSERT_TRUE(QTest::qWaitFor([&] { return !w.busy(); }, 600000));
+  QCoreApplication::processEvents();
+  ASSERT_EQ(w.frame(), 1) << w.statusBar()->currentMessage().toStdString();
+  ASSERT_EQ(w.camera(), 0);
+  ASSERT_EQ(w.maximised(), 0);
+  const int k = w.knot();
+  ASSERT_EQ(s->document().at(0, 1, k).state, recon::LabelState::kNeedsReview);
+  EXPECT_EQ(QApplication::focusWidget(), w.view(0));
+  Type(&w, Qt::Key_A);
+  EXPECT_TRUE(s->document().at(0, 1, k).accepted());
+  EXPECT_EQ(w.frame(), 1);
+}
+
 // A review row of another camera double-clicked while one camera is shown alone: that camera is
 // shown alone (its frame, its caption), so A accepts the label the person sees.
 TEST_F(MainWindowTest, ADoubleClickedReviewRowShowsItsCameraAlone) {
