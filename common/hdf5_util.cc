@@ -221,9 +221,30 @@ std::string ReadStringDataset(hid_t loc, const std::string& name) {
   Id dataset(H5Dopen2(loc, name.c_str(), H5P_DEFAULT));
   if (!dataset.valid()) Fail(ObjectName(loc) + ": missing dataset " + name);
   Id type(H5Dget_type(dataset.get()));
+  Id space(H5Dget_space(dataset.get()));
+  const std::string where = ObjectName(loc) + (ObjectName(loc).ends_with('/') ? "" : "/") + name;
+  if (H5Tget_class(type.get()) != H5T_STRING)
+    Fail(where + ": expected a string, the dataset holds another type");
+  if (H5Sget_simple_extent_npoints(space.get()) != 1)
+    Fail(where + ": expected one string (a scalar dataset), found " +
+         std::to_string(H5Sget_simple_extent_npoints(space.get())) + " values");
+  // A variable-length string (h5py's default) is read as a pointer to its text, not into a
+  // buffer of the type's size (which is the pointer's size).
+  if (H5Tis_variable_str(type.get()) > 0) {
+    char* text = nullptr;
+    Id memory_type(H5Tcopy(H5T_C_S1));
+    H5Tset_size(memory_type.get(), H5T_VARIABLE);
+    H5Tset_cset(memory_type.get(), H5Tget_cset(type.get()));
+    if (H5Dread(dataset.get(), memory_type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, &text) < 0)
+      Fail(where + ": cannot read the string (corrupt file?)");
+    std::string result = text ? text : "";
+    H5free_memory(text);
+    return result;
+  }
   const size_t size = H5Tget_size(type.get());
   std::string value(size, '\0');
-  H5Dread(dataset.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, value.data());
+  if (H5Dread(dataset.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, value.data()) < 0)
+    Fail(where + ": cannot read the string (corrupt file?)");
   value.resize(value.find_last_not_of('\0') + 1);
   return value;
 }

@@ -215,6 +215,32 @@ TEST(LabelsFile, ReviewReasonsRoundTripAsOneLineEach) {
   EXPECT_TRUE(ReadLabels(dir / "plain.h5").reasons.empty());
 }
 
+// Written by another tool as a variable-length string (h5py's default for str): read as its
+// text, not as the bytes of a pointer; a reason line that is wrong is quoted as written.
+TEST(LabelsFile, ReviewReasonsAsAVariableLengthStringAreReadAsText) {
+  ScratchDir dir("labels");
+  WriteLabels(dir / "labels.h5", Example());
+  const auto write_vlen = [](hid_t f, const std::string& text) {
+    H5Ldelete(f, "review_reasons", H5P_DEFAULT);
+    h5::Id type(H5Tcopy(H5T_C_S1));
+    H5Tset_size(type.get(), H5T_VARIABLE);
+    H5Tset_cset(type.get(), H5T_CSET_UTF8);
+    h5::Id space(H5Screate(H5S_SCALAR));
+    h5::Id dataset(H5Dcreate2(f, "review_reasons", type.get(), space.get(), H5P_DEFAULT,
+                              H5P_DEFAULT, H5P_DEFAULT));
+    const char* data = text.c_str();
+    H5Dwrite(dataset.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, &data);
+  };
+  EditFile(dir / "labels.h5",
+           [&](hid_t f) { write_vlen(f, "1\t4\t2\tmoved 2.1 px otherwise than its neighbours\n"); });
+  EXPECT_EQ(ReadLabels(dir / "labels.h5").reasons.at({1, 4, 2}),
+            "moved 2.1 px otherwise than its neighbours");
+  EditFile(dir / "labels.h5", [&](hid_t f) { write_vlen(f, "9 9 9 out of the set\n"); });
+  const std::string error = ErrorOf([&] { ReadLabels(dir / "labels.h5"); });
+  EXPECT_NE(error.find("/review_reasons line 1"), std::string::npos) << error;
+  EXPECT_NE(error.find("9 9 9 out of the set"), std::string::npos) << error;
+}
+
 TEST(LabelsFile, RoundTripOfNoFramesAndNoCameras) {
   ScratchDir dir("labels");
   for (const LabelSet& written : {LabelSet::Empty(2, 2, {"a", "b"}, {}),
