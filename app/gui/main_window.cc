@@ -1163,13 +1163,17 @@ void MainWindow::TrackTo(int to, bool wait, int max_review) {
                                           : QString()),
         10000);
     SetFrame(run.last_done);
-    // Stopped where the person is needed: that frame's first review item.
-    if (run.stopped_for_review)
-      for (int row = 0; row < review_model_->rowCount(); ++row)
-        if (std::get<1>(review_model_->items()[row]) == run.last_done) {
-          ShowReviewRow(row);
-          break;
-        }
+    // Stopped where the person is needed: that frame's first label for review (what stopped
+    // the run; the frame's missing knots wait, as after a fix), else its first item.
+    if (run.stopped_for_review) {
+      int first = -1, label = -1;
+      for (int row = 0; row < review_model_->rowCount() && label < 0; ++row) {
+        if (std::get<1>(review_model_->items()[row]) != run.last_done) continue;
+        if (first < 0) first = row;
+        if (!review_model_->IsMissing(row)) label = row;
+      }
+      if (label >= 0 || first >= 0) ShowReviewRow(label >= 0 ? label : first);
+    }
   });
   tracking_ = true;
   tracker_.setFuture(QtConcurrent::run(

@@ -788,6 +788,43 @@ TEST_F(MainWindowTest, AfterTStopsInAnotherCameraItsKeysWork) {
   EXPECT_EQ(w.frame(), 1);
 }
 
+// T stops at the first frame with a label for review and shows that label, not a missing knot
+// the queue lists before it in that frame (the target's shadow in a lower camera).
+TEST_F(MainWindowTest, TShowsTheLabelThatStoppedItNotAMissingKnotBeforeIt) {
+  const recon::LabelSet truth = Truth();
+  recon::LabelSet start = truth;
+  for (int c = 0; c < static_cast<int>(start.cameras.size()); ++c)
+    for (int t = 1; t < start.frames(); ++t)
+      for (int k = 0; k < start.knots(); ++k) start.at(c, t, k) = recon::Label{};
+  const int a = KnotSeenByAll(truth, 0);
+  ASSERT_GE(a, 0);
+  start.at(3, 0, a).state = recon::LabelState::kNeedsReview;
+  start.reasons[{3, 0, a}] = "kept for review by the test";
+  // Camera 0 unlabeled: its knots the others see are missing, in frame 1 too, before the label.
+  for (int k = 0; k < start.knots(); ++k) start.at(0, 0, k) = recon::Label{};
+  const std::string file = (Dir() / "t_label_start.h5").string();
+  recon::WriteLabels(file, start);
+  MainWindow w;
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, MakeProjectFile("t_label", file)));
+  Session* s = w.session();
+  Type(&w, Qt::Key_T);
+  ASSERT_TRUE(QTest::qWaitFor([&] { return !w.busy(); }, 600000));
+  QCoreApplication::processEvents();
+  ASSERT_EQ(w.frame(), 1) << w.statusBar()->currentMessage().toStdString();
+  const int c = w.camera(), k = w.knot();
+  EXPECT_EQ(s->document().at(c, 1, k).state, recon::LabelState::kNeedsReview);
+  EXPECT_EQ(s->missing().Find(c, 1, k), nullptr);
+  // The test means something: frame 1 has a missing knot before that label in the queue.
+  bool missing_before = false;
+  for (const LabelKey& key : s->missing().Items())
+    missing_before = missing_before || (std::get<1>(key) == 1 &&
+                                        std::pair(std::get<0>(key), std::get<2>(key)) <
+                                            std::pair(c, k));
+  EXPECT_TRUE(missing_before) << "camera " << c << " knot " << k;
+  EXPECT_TRUE(w.statusBar()->currentMessage().startsWith("Review"))
+      << w.statusBar()->currentMessage().toStdString();
+}
+
 // A review row of another camera double-clicked while one camera is shown alone: that camera is
 // shown alone (its frame, its caption), so A accepts the label the person sees.
 TEST_F(MainWindowTest, ADoubleClickedReviewRowShowsItsCameraAlone) {
