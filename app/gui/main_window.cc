@@ -26,6 +26,7 @@
 #include <QStatusBar>
 #include <QTableView>
 #include <QTableWidget>
+#include <QTextBrowser>
 #include <QTextDocumentFragment>
 #include <QTimer>
 #include <QToolBar>
@@ -379,6 +380,7 @@ void MainWindow::BuildActions() {
 
   QMenu* help = menuBar()->addMenu("&Help");
   AddAction(help, "Keyboard shortcuts", "F1;?", &MainWindow::ShowShortcuts);
+  help->addAction("Manual (docs/gui.md)", this, &MainWindow::ShowManual);
 }
 
 bool MainWindow::OpenProject(const QString& path, bool ask, QString* error) {
@@ -1303,6 +1305,39 @@ void MainWindow::ShowShortcuts() {
   layout->addWidget(table);
   dialog.resize(620, 700);
   dialog.exec();
+}
+
+void MainWindow::ShowManual() {
+  // The source tree's docs (where netlab is built), else a docs folder beside the executable.
+  QString docs;
+  for (const QString& dir :
+       {QStringLiteral(NETLAB_DOCS_DIR), QCoreApplication::applicationDirPath() + "/../docs",
+        QCoreApplication::applicationDirPath() + "/../../docs"})
+    if (QFileInfo::exists(dir + "/gui.md")) {
+      docs = QFileInfo(dir).canonicalFilePath();
+      break;
+    }
+  if (docs.isEmpty()) {
+    QMessageBox::information(this, "Manual",
+                             "The manual is docs/gui.md in netlab's source tree (not found "
+                             "from here: " NETLAB_DOCS_DIR ").");
+    return;
+  }
+  auto* manual = findChild<QDialog*>("manual");
+  if (manual == nullptr) {
+    manual = new QDialog(this);
+    manual->setObjectName("manual");
+    manual->setWindowTitle("netlab gui — manual (" + docs + "/gui.md)");
+    auto* layout = new QVBoxLayout(manual);
+    auto* browser = new QTextBrowser;
+    browser->setOpenExternalLinks(true);
+    browser->setSearchPaths({docs});
+    browser->setSource(QUrl::fromLocalFile(docs + "/gui.md"), QTextDocument::MarkdownResource);
+    layout->addWidget(browser);
+    manual->resize(900, 900);
+  }
+  manual->show();
+  manual->raise();
 }
 
 bool MainWindow::MaybeSave() {

@@ -189,6 +189,8 @@ class MainWindow : public QMainWindow {
   void BrushLarger();
   void BrushSmaller();
   void ShowShortcuts();
+  // Help > Manual: docs/gui.md in a window of its own (kept open beside the work).
+  void ShowManual();
   // The Fill Grid preview (G, Enter, Esc; see fill_grid_preview()).
   void BuildPreviewBanner();
   // from_corners: Find Path from the corners first (Ctrl+P), applied as its own step.

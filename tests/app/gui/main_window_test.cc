@@ -10,6 +10,7 @@
 
 #include <QAction>
 #include <QApplication>
+#include <QDialog>
 #include <QDockWidget>
 #include <QElapsedTimer>
 #include <QLabel>
@@ -22,6 +23,7 @@
 #include <QStatusBar>
 #include <QTableView>
 #include <QTableWidget>
+#include <QTextBrowser>
 #include <QTest>
 #include <QTimer>
 #include <QUndoStack>
@@ -943,6 +945,24 @@ TEST_F(MainWindowTest, AClosedPanelIsReopenedFromTheViewMenu) {
                       view->actionGeometry(dock->toggleViewAction()).center());
     EXPECT_TRUE(QTest::qWaitFor([&] { return dock->isVisible(); }, 2000)) << name;
   }
+}
+
+// Help > Manual shows docs/gui.md, in a window of its own.
+TEST(MainWindowHelp, TheManualIsInTheHelpMenu) {
+  MainWindow w;
+  QAction* manual = nullptr;
+  for (QAction* a : w.findChildren<QAction*>())
+    if (a->text().startsWith("Manual")) manual = a;
+  ASSERT_NE(manual, nullptr);
+  manual->trigger();
+  auto* dialog = w.findChild<QDialog*>("manual");
+  ASSERT_NE(dialog, nullptr);
+  EXPECT_TRUE(dialog->isVisible());
+  auto* browser = dialog->findChild<QTextBrowser*>();
+  ASSERT_NE(browser, nullptr);
+  EXPECT_TRUE(browser->toPlainText().contains("The labeling workstation"));
+  EXPECT_TRUE(browser->toPlainText().contains("Where the keys go"));
+  dialog->close();
 }
 
 // After edits recovered from a crash's journal the title says they are unsaved ('*').
