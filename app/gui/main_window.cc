@@ -1019,7 +1019,7 @@ void MainWindow::ShowReviewRow(int row) {
       QString("Review %1 of %2: %3 — A accepts, a click fixes with Find Node, D deletes")
           .arg(row + 1)
           .arg(review_model_->rowCount())
-          .arg(QString::fromStdString(session_->document().Reason(c, t, k))),
+          .arg(review_model_->index(row, ReviewModel::kReason).data().toString()),
       10000);
 }
 
