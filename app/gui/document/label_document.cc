@@ -142,7 +142,13 @@ std::string LabelDocument::Reason(int camera, int t, int knot) const {
 }
 
 void LabelDocument::MergeReasons(const recon::ReviewReasons& reasons) {
-  for (const auto& [key, why] : reasons) reasons_[key] = why;
+  bool changed = false;
+  for (const auto& [key, why] : reasons) {
+    std::string& held = reasons_[key];
+    changed = changed || held != why;
+    held = why;
+  }
+  if (changed) emit reasonsChanged();
 }
 
 std::vector<LabelKey> LabelDocument::ReviewItems() const {

@@ -79,6 +79,9 @@ class LabelDocument : public QObject {
  signals:
   // Labels of these frame rows changed (an edit, undo or redo).
   void labelsChanged(const QList<int>& frames);
+  // MergeReasons changed a reason (the engine says why after its edits are applied: a view of
+  // the reasons shown with those edits is stale until this).
+  void reasonsChanged();
   void modifiedChanged(bool modified);
   // The journal could not be written (once per document): edits are not crash-safe.
   void journalFailed(const QString& message);

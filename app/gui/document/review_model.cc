@@ -43,6 +43,11 @@ ReviewModel::ReviewModel(const LabelDocument* document, std::vector<int> frame_n
     : QAbstractTableModel(parent), document_(document), frame_numbers_(std::move(frame_numbers)) {
   Gather();
   connect(document_, &LabelDocument::labelsChanged, this, &ReviewModel::Refresh);
+  // A reason given after its label's edit: the same rows, their severity and reason anew.
+  connect(document_, &LabelDocument::reasonsChanged, this, [this] {
+    if (!items_.empty())
+      emit dataChanged(index(0, kSeverity), index(rowCount() - 1, kReason));
+  });
 }
 
 void ReviewModel::Refresh() {

@@ -7,6 +7,7 @@
 
 #include <QAbstractItemModelTester>
 #include <QCoreApplication>
+#include <QSignalSpy>
 #include <QSortFilterProxyModel>
 
 #include "app/gui/document/missing_knots.h"
@@ -95,6 +96,26 @@ TEST(ReviewModel, SeverityFollowsTheReasonsDistance) {
   EXPECT_DOUBLE_EQ(severity(2), 1.0);
   EXPECT_NEAR(severity(3), 0.4, 1e-6);  // 1 - confidence: more than 0.5 px says
   EXPECT_DOUBLE_EQ(ReasonSeverity("kept for review (no reason recorded)"), 0.0);
+}
+
+// The engine gives its reasons after the edits it applied: the rows' reason and severity are
+// announced anew (a view showed the reason of before), and only when a reason changed.
+TEST(ReviewModel, AReasonGivenAfterItsEditReachesTheView) {
+  LabelDocument doc(recon::LabelSet::Empty(2, 2, {"a", "b"}, {0, 1}), "/nonexistent/l.h5");
+  ReviewModel model(&doc, {0, 1});
+  QAbstractItemModelTester tester(&model, QAbstractItemModelTester::FailureReportingMode::Fatal);
+  doc.Apply("Find Node", {{1, 1, 2, Review(1, 0.9f)}});
+  ASSERT_EQ(model.rowCount(), 1);
+  QSignalSpy changed(&model, &QAbstractItemModel::dataChanged);
+  doc.MergeReasons({{{1, 1, 2}, "12.0 px from where the other cameras' labels put the knot"}});
+  ASSERT_EQ(changed.count(), 1);
+  const auto from = changed[0][0].value<QModelIndex>(), to = changed[0][1].value<QModelIndex>();
+  EXPECT_LE(from.column(), ReviewModel::kSeverity);
+  EXPECT_GE(to.column(), ReviewModel::kReason);
+  EXPECT_EQ(to.row(), 0);
+  EXPECT_EQ(model.index(0, ReviewModel::kSeverity).data().toString(), "1.00");
+  doc.MergeReasons({{{1, 1, 2}, "12.0 px from where the other cameras' labels put the knot"}});
+  EXPECT_EQ(changed.count(), 1);  // nothing new
 }
 
 // Both kinds in one queue: a 2 x 2 net 1.5 m before three cameras, labeled exactly in a and b;
