@@ -901,33 +901,46 @@ void MainWindow::OnCursor(int camera, const Eigen::Vector2d& px, const QString& 
 // Actions.
 
 void MainWindow::NewProject() {
-  const QString experiment =
-      QFileDialog::getOpenFileName(this, "The experiment (1 of 4)", {}, "Experiment (*.yaml)");
+  // Each dialog's title says what it asks (the steps depend on the answers: no count to
+  // contradict).
+  const QString experiment = QFileDialog::getOpenFileName(
+      this, "New project: the experiment (experiment.yaml)", {}, "Experiment (*.yaml)");
   if (experiment.isEmpty()) return;
-  const QString rig = QFileDialog::getOpenFileName(this, "The calibrated rig (2 of 4)",
+  const QString rig = QFileDialog::getOpenFileName(this, "New project: the calibrated rig",
                                                    QFileInfo(experiment).path(), "Rig (*.yaml)");
   if (rig.isEmpty()) return;
   const QString coloring = QFileDialog::getOpenFileName(
-      this, "The net's colouring, coloring.yaml (3 of 4; Cancel: none)", QFileInfo(rig).path(),
-      "Colouring (*.yaml)");
+      this, "New project: the net's colouring, coloring.yaml (Cancel: none)",
+      QFileInfo(rig).path(), "Colouring (*.yaml)");
   int rows = 0, cols = 0;
-  if (coloring.isEmpty()) {
+  if (coloring.isEmpty()) {  // the grid from the person: rows and columns (Net B is 17 x 17)
     bool ok = false;
-    rows = cols = QInputDialog::getInt(this, "The net", "Knots per side (a square net):", 11, 2,
-                                       1000, 1, &ok);
+    rows = QInputDialog::getInt(this, "New project: the net", "Knots in a column (rows):", 11, 2,
+                                1000, 1, &ok);
+    if (!ok) return;
+    cols = QInputDialog::getInt(this, "New project: the net", "Knots in a row (columns):", rows,
+                                2, 1000, 1, &ok);
     if (!ok) return;
   }
+  const auto balls = QMessageBox::question(
+      this, "New project: the net",
+      "Has the net knot balls?\n\nNo: a knotless net (Net B), whose edge knots must lie where "
+      "the colour of their straight links changes.",
+      QMessageBox::Yes | QMessageBox::No | QMessageBox::Cancel, QMessageBox::Yes);
+  if (balls == QMessageBox::Cancel) return;
   const QString labels = QFileDialog::getSaveFileName(
-      this, "Where the labels are saved (4 of 4)", QFileInfo(experiment).path() + "/labels.h5",
+      this, "New project: where the labels are saved", QFileInfo(experiment).path() + "/labels.h5",
       "Labels (*.h5)", nullptr, QFileDialog::DontConfirmOverwrite);
   if (labels.isEmpty()) return;
   const QString path = QFileDialog::getSaveFileName(
-      this, "Save the project as", QFileInfo(labels).path() + "/project.yaml", "Project (*.yaml)");
+      this, "New project: save the project as", QFileInfo(labels).path() + "/project.yaml",
+      "Project (*.yaml)");
   if (path.isEmpty()) return;
   try {
-    SaveProject(MakeProject(experiment.toStdString(), rig.toStdString(), coloring.toStdString(),
-                            labels.toStdString(), rows, cols),
-                path.toStdString());
+    Project project = MakeProject(experiment.toStdString(), rig.toStdString(),
+                                  coloring.toStdString(), labels.toStdString(), rows, cols);
+    project.knotless = balls == QMessageBox::No;
+    SaveProject(project, path.toStdString());
   } catch (const std::exception& e) {
     QMessageBox::critical(this, "Cannot make the project", QString::fromLocal8Bit(e.what()));
     return;

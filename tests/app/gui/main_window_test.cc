@@ -13,6 +13,9 @@
 #include <QDialog>
 #include <QDockWidget>
 #include <QElapsedTimer>
+#include <QFileDialog>
+#include <QInputDialog>
+#include <QLineEdit>
 #include <QLabel>
 #include <QMenu>
 #include <QMenuBar>
@@ -946,6 +949,67 @@ TEST_F(MainWindowTest, AClosedPanelIsReopenedFromTheViewMenu) {
                       view->actionGeometry(dock->toggleViewAction()).center());
     EXPECT_TRUE(QTest::qWaitFor([&] { return dock->isVisible(); }, 2000)) << name;
   }
+}
+
+// File > New project, its dialogs answered as a person does: without a colouring it asks the
+// rows and the columns (a net need not be square) and whether the net has knot balls; the
+// project it writes says so, and opens.
+TEST_F(MainWindowTest, NewProjectAsksRowsColumnsAndKnotBalls) {
+  const std::string d = Dir().string();
+  const std::string labels = d + "/wizard.h5", project = d + "/wizard.yaml";
+  fs::remove(labels);
+  fs::remove(project);
+  MainWindow w;
+  w.resize(1400, 1000);
+  w.show();
+  QStringList titles;
+  QTimer answer;
+  answer.setInterval(50);
+  QObject::connect(&answer, &QTimer::timeout, [&] {
+    QWidget* modal = QApplication::activeModalWidget();
+    if (modal == nullptr || (!titles.isEmpty() && titles.back() == modal->windowTitle() + "#" +
+                                                       QString::number(quintptr(modal))))
+      return;
+    titles << modal->windowTitle() + "#" + QString::number(quintptr(modal));
+    // Answered from within its own event loop (a dialog answered while it is being shown
+    // leaves exec() waiting on a hidden dialog).
+    QTimer::singleShot(100, modal, [&, modal] {
+    const QString title = modal->windowTitle();
+    if (auto* files = qobject_cast<QFileDialog*>(modal)) {
+      const QString file = title.contains("experiment")    ? QString::fromStdString(d + "/shot/experiment.yaml")
+                           : title.contains("rig")         ? QString::fromStdString(d + "/shot/rig_true.yaml")
+                           : title.contains("labels")      ? QString::fromStdString(labels)
+                           : title.contains("project as")  ? QString::fromStdString(project)
+                                                           : QString();
+      if (file.isEmpty()) {
+        files->reject();  // the colouring: none
+      } else {
+        // Typed into its file name box, then its Open / Save button.
+        auto* name = files->findChild<QLineEdit*>("fileNameEdit");
+        if (name != nullptr) name->setText(file);
+        QMetaObject::invokeMethod(files, "accept");
+      }
+    } else if (auto* number = qobject_cast<QInputDialog*>(modal)) {
+      number->setIntValue(number->labelText().contains("rows") ? 6 : 7);
+      number->accept();
+    } else if (auto* box = qobject_cast<QMessageBox*>(modal)) {
+      box->button(QMessageBox::No)->click();  // no knot balls
+    }
+    });
+  });
+  answer.start();
+  for (QAction* a : w.actions())
+    if (a->text() == "New project…") a->trigger();
+  answer.stop();
+  ASSERT_TRUE(fs::exists(project)) << titles.join(" | ").toStdString();
+  const Project p = LoadProject(project);
+  EXPECT_EQ(p.rows, 6);
+  EXPECT_EQ(p.cols, 7);
+  EXPECT_TRUE(p.knotless);
+  ASSERT_NE(w.session(), nullptr);
+  EXPECT_EQ(w.session()->project().cols, 7);
+  for (const QString& t : titles) EXPECT_FALSE(t.contains(" of ")) << t.toStdString();
+  EXPECT_EQ(titles.size(), 8) << titles.join(" | ").toStdString();
 }
 
 // Help > Manual shows docs/gui.md, in a window of its own.
