@@ -129,6 +129,21 @@ int CheckAccepted(const Shot& shot, const LabelStore& store, int t) {
   return accepted;
 }
 
+// The two stores hold the same labels (place, state, source) in three cameras' first `frames`.
+void ExpectSameLabels(const LabelStore& a, const LabelStore& b, int frames) {
+  for (int c = 0; c < 3; ++c)
+    for (int t = 0; t < frames; ++t)
+      for (int k = 0; k < kKnots; ++k) {
+        const Label& x = a.at(c, t, k);
+        const Label& y = b.at(c, t, k);
+        ASSERT_EQ(x.present(), y.present()) << "camera " << c << " frame " << t << " knot " << k;
+        if (!x.present()) continue;
+        EXPECT_EQ(x.px, y.px);
+        EXPECT_EQ(x.state, y.state);
+        EXPECT_EQ(x.source, y.source);
+      }
+}
+
 // Knots whose image is at least 14 px inside the frame (the detector's inner ring is 9 px).
 int InView(const Shot& shot, int t) {
   int n = 0;
@@ -348,17 +363,7 @@ TEST(LabelEngine, LabelFramesLabelsFrameByFrameAsItsStepsDo) {
   EXPECT_EQ(summary.tracked.review, tracked.review);
   EXPECT_EQ(summary.cross_checked.accepted, checked.accepted);
   EXPECT_EQ(summary.cross_checked.review, checked.review);
-  for (int c = 0; c < 3; ++c)
-    for (int t = 0; t < 3; ++t)
-      for (int k = 0; k < kKnots; ++k) {
-        const Label& a = by_steps.at(c, t, k);
-        const Label& b = by_frames.at(c, t, k);
-        ASSERT_EQ(a.present(), b.present()) << "camera " << c << " frame " << t << " knot " << k;
-        if (!a.present()) continue;
-        EXPECT_EQ(a.px, b.px);
-        EXPECT_EQ(a.state, b.state);
-        EXPECT_EQ(a.source, b.source);
-      }
+  ExpectSameLabels(by_steps, by_frames, 3);
   for (int t = 0; t < 3; ++t) CheckAccepted(shot, by_frames, t);
 }
 
@@ -1142,19 +1147,11 @@ TEST(LabelEngine, TrackingGivesTheSameLabelsOnOneThreadAsOnTwo) {
   LabelEngine b(&two, &shot.rig, Images(shot), parallel);
   a.LabelFrames(0, 2);
   b.LabelFrames(0, 2);
+  ExpectSameLabels(one, two, 3);
   int accepted = 0;
   for (int c = 0; c < 3; ++c)
-    for (int t = 0; t < 3; ++t)
-      for (int k = 0; k < kKnots; ++k) {
-        const Label& x = one.at(c, t, k);
-        const Label& y = two.at(c, t, k);
-        ASSERT_EQ(x.present(), y.present()) << "camera " << c << " frame " << t << " knot " << k;
-        if (!x.present()) continue;
-        EXPECT_EQ(x.px, y.px);
-        EXPECT_EQ(x.state, y.state);
-        EXPECT_EQ(x.source, y.source);
-        accepted += t > 0 && x.accepted();
-      }
+    for (int t = 1; t < 3; ++t)
+      for (int k = 0; k < kKnots; ++k) accepted += one.at(c, t, k).accepted();
   EXPECT_GT(accepted, 2 * 3 * kKnots / 2);  // tracking labeled most of the later frames
   EXPECT_EQ(a.reasons(), b.reasons());
 }
