@@ -1,5 +1,5 @@
 #pragma once
-// What every command checks about its outputs before any work starts (issue 49), so that a run
+// What every command checks about its outputs before any work starts, so that a run
 // never replaces one of its own inputs and a failed run leaves every existing output as it was:
 //
 //   - an output is not an input of the same run, nor another output of it, after ".." and

@@ -747,7 +747,8 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
   // neighbours, the other cameras, its path), or it is the corner's own mass.
   // A corner mass confirms its corner where only the corner's two yarns leave it: bunched in a
   // fold, with more yarns around it, its outline's centre was 2.0-2.3 px from the knot.
-  bool confirmed = j.solid && Neighbours(knot).size() == 2 && j.branches <= 2 && !j.solid_cut;
+  const int degree = static_cast<int>(Neighbours(knot).size());
+  bool confirmed = j.solid && degree == 2 && j.branches <= 2 && !j.solid_cut;
   // Its motion since the adjacent frame against its neighbours' (a junction of another layer
   // of a folded net, 3.6 px from the knot, had yarns along the knot's own).
   const std::optional<double> moved = MotionOff(camera, t, knot, j.px);
@@ -768,9 +769,8 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
   if (link_angles.size() >= 2) {
     if (!BranchesMatchLinks(j, slots, o_.branch_tolerance_deg, true))
       return "the junction's yarns do not run towards its labeled neighbours";
-    const int links = static_cast<int>(Neighbours(knot).size());
-    confirmed = confirmed || (static_cast<int>(link_angles.size()) == links &&
-                              j.branches >= std::min(links, 3));
+    confirmed = confirmed || (static_cast<int>(link_angles.size()) == degree &&
+                              j.branches >= std::min(degree, 3));
   }
   // Its place against the point two or more other cameras agree on.
   const std::vector<Observation> others = OtherViews(camera, t, knot);
@@ -780,21 +780,21 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
   // cameras check it only where they fix the knot (OthersPlace; the caller found they do not):
   // the far pair alone, whose point projects into a near camera to a pixel or more, once let a
   // junction 2.7 px off pass within the 1.5 px of their check below.
-  const int degree = static_cast<int>(std::count(slots.present.begin(), slots.present.end(), true));
   // Where nothing checks its place, a junction of the knot's degree must have each yarn along
   // one of its links (another layer's yarn crossing a row 2 px from a knot made one).
   if (!j.solid && !moved) {
-    char why[128];
+    char why[160];
     if (j.branches < degree) {
       std::snprintf(why, sizeof why, "the junction has %d yarns, the knot %d, and nothing checks "
                     "its place (no motion, no other cameras that fix it)", j.branches, degree);
       return why;
     }
-    if (KnownLinkAngles(j.px, slots).size() >= 2 &&
-        !BranchesMatchLinks(j, slots, o_.track.max_yarn_angle_deg))
+    if (link_angles.size() >= 2 && !BranchesMatchLinks(j, slots, o_.track.max_yarn_angle_deg))
       return "a yarn of the junction leads to no labeled neighbour, and nothing checks its "
              "place (no motion, no other cameras that fix it)";
   }
+  TriangulationOptions topt;
+  topt.outlier_threshold_px = o_.epipolar_tolerance_px;
   const std::string unconfirmed =
       "nothing confirms the junction is the knot and not a crossing of yarns (no labeled "
       "neighbours, motion or other cameras to check it against)";
@@ -808,8 +808,6 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
     if (others.size() == 1) {
       std::vector<Observation> pair = others;
       pair.push_back({RigIndex(camera), j.px});
-      TriangulationOptions topt;
-      topt.outlier_threshold_px = o_.epipolar_tolerance_px;
       const PointEstimate e = TriangulatePoint(*rig_, pair, topt);
       // Two views leave the same residual in each (half the distance from the epipolar line,
       // where their scales are alike); an outlier between two is either of them.
@@ -838,8 +836,6 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
                   off);
     return why;
   }
-  TriangulationOptions topt;
-  topt.outlier_threshold_px = o_.epipolar_tolerance_px;
   // Where the others do not agree there is nothing to go by.
   const std::optional<ProjectedPoint> q =
       ProjectAgreeingViews(*rig_, RigIndex(camera), others, topt);

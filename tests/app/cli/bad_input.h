@@ -4,7 +4,7 @@
 // or frame, what was expected). Every row is also checked for what no bad input may do: end in a
 // signal or an unexplained std::bad_alloc, or bury netlab's own line under a library's noise
 // (OpenCV's, GStreamer's or libpng's lines may only follow it); and a row may name files the run
-// must leave as they were (issue 49: an output never replaces an input, a failed run leaves every
+// must leave as they were (an output never replaces an input, a failed run leaves every
 // existing output unchanged).
 
 #include <filesystem>

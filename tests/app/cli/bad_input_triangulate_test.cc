@@ -122,7 +122,7 @@ class BadInputTriangulate : public CommandTest {
                                             " --out " + Path("measured.h5") + " --quiet");
     ASSERT_EQ(measured.status, 0) << measured.err;
 
-    // Legal files score used to crash on, and files in other units (issue 49).
+    // Legal files score used to crash on, and files in other units.
     netsim::KnotTracks lost = netsim::ReadKnotTracks(Path("truth.h5"));
     LoseKnots(&lost);
     netsim::WriteKnotTracks(Path("lost.h5"), lost);
