@@ -9,7 +9,7 @@
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
 #include "common/output_paths.h"
-#include "libnetsim/characterization/bench_test.h"
+#include "libnetsim/characterization/bench_file.h"
 #include "libnetsim/characterization/characterize.h"
 #include "libnetsim/characterization/material_file.h"
 

@@ -18,7 +18,7 @@
 #include <utility>
 #include <vector>
 
-#include "libnetsim/characterization/bench_test.h"
+#include "libnetsim/characterization/bench_file.h"
 #include "libnetsim/characterization/material_file.h"
 
 namespace netlab::netsim {

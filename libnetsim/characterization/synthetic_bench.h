@@ -18,7 +18,7 @@
 
 #include <cstdint>
 
-#include "libnetsim/characterization/bench_test.h"
+#include "libnetsim/characterization/bench_file.h"
 #include "libnetsim/model/material.h"
 
 namespace netlab::netsim {

@@ -1,4 +1,4 @@
-#include "libnetsim/characterization/bench_test.h"
+#include "libnetsim/characterization/bench_file.h"
 
 #include <gtest/gtest.h>
 
