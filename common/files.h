@@ -8,18 +8,35 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 #include <system_error>
+#include <vector>
 
 namespace netlab {
 
-// Renames `from` onto `to` (atomic on one file system); std::runtime_error naming both if not.
-// Never over anything but a regular file, a link to one, or a folder (ReplaceDirectory): a
-// rename onto a character device or a FIFO would replace the device's node with a file (`--out
-// /dev/null` run as root). The commands refuse such an output before any work
-// (common/output_paths.h); this is the last line.
-inline void RenameInto(const std::string& from, const std::string& to) {
+namespace files_internal {
+
+// The outputs an OutputSet holds back: the complete "<output>.partial" each writer renamed into
+// place, parked until the set commits. Keyed by the output's absolute path.
+struct Parked {
+  std::mutex mutex;
+  std::map<std::string, std::string> partial_of;  // output -> its complete partial ("" = none yet)
+};
+inline Parked& ParkedOutputs() {
+  static Parked parked;
+  return parked;
+}
+inline std::string Key(const std::string& path) {
+  std::error_code error;
+  const std::filesystem::path absolute = std::filesystem::absolute(path, error);
+  return (error ? std::filesystem::path(path) : absolute).lexically_normal().string();
+}
+
+// Renames `from` onto `to` now (the last step of RenameInto).
+inline void RenameNow(const std::string& from, const std::string& to) {
   namespace fs = std::filesystem;
   std::error_code error;
   const fs::file_status target = fs::status(to, error);
@@ -31,6 +48,95 @@ inline void RenameInto(const std::string& from, const std::string& to) {
   if (error)
     throw std::runtime_error(to + ": cannot rename " + from + " into place: " + error.message());
 }
+
+}  // namespace files_internal
+
+// Renames `from` onto `to` (atomic on one file system); std::runtime_error naming both if not.
+// Never over anything but a regular file, a link to one, or a folder (ReplaceDirectory): a
+// rename onto a character device or a FIFO would replace the device's node with a file (`--out
+// /dev/null` run as root). The commands refuse such an output before any work
+// (common/output_paths.h); this is the last line.
+// An output an OutputSet holds is not renamed here but parked until the set commits.
+inline void RenameInto(const std::string& from, const std::string& to) {
+  {
+    files_internal::Parked& parked = files_internal::ParkedOutputs();
+    std::lock_guard<std::mutex> lock(parked.mutex);
+    const auto it = parked.partial_of.find(files_internal::Key(to));
+    if (it != parked.partial_of.end()) {
+      it->second = from;
+      return;
+    }
+  }
+  files_internal::RenameNow(from, to);
+}
+
+// The outputs of one run, put in place together once every one is complete. While a set lives,
+// a writer's final rename of one of its outputs (RenameInto) is held back, the complete
+// "<output>.partial" left where it is; Commit() renames them all into place, in the order given.
+// A set destroyed without Commit (the run failed on a later output) removes the partials it holds,
+// so a run with several outputs that fails leaves every existing output as it was:
+//
+//   OutputSet outputs({out, report});
+//   WriteTracks(out, ...);       // complete in out.partial
+//   WriteReport(report, ...);    // throws: out is left as it was, out.partial removed
+//   outputs.Commit();
+//
+// Empty paths (an option not given) are skipped. One set at a time holds a given output.
+class OutputSet {
+ public:
+  explicit OutputSet(const std::vector<std::string>& outputs) {
+    files_internal::Parked& parked = files_internal::ParkedOutputs();
+    std::lock_guard<std::mutex> lock(parked.mutex);
+    for (const std::string& output : outputs) {
+      if (output.empty()) continue;
+      const std::string key = files_internal::Key(output);
+      if (parked.partial_of.count(key)) continue;  // named twice: held once
+      parked.partial_of[key] = "";
+      outputs_.push_back(output);
+      keys_.push_back(key);
+    }
+  }
+  OutputSet(const OutputSet&) = delete;
+  OutputSet& operator=(const OutputSet&) = delete;
+  ~OutputSet() {
+    const std::vector<std::string> partials = Release();
+    for (const std::string& partial : partials)
+      if (!partial.empty()) std::remove(partial.c_str());
+  }
+
+  // Renames every output written so far into place (an output never written is skipped).
+  // std::runtime_error naming the output when a rename fails: the outputs before it are in
+  // place, the partials of the rest removed.
+  void Commit() {
+    const std::vector<std::string> partials = Release();
+    for (size_t i = 0; i < partials.size(); ++i) {
+      if (partials[i].empty()) continue;
+      try {
+        files_internal::RenameNow(partials[i], outputs_[i]);
+      } catch (const std::exception&) {
+        for (size_t j = i; j < partials.size(); ++j)
+          if (!partials[j].empty()) std::remove(partials[j].c_str());
+        throw;
+      }
+    }
+  }
+
+ private:
+  // Stops holding the outputs back; the partial each writer left ("" for none), in order.
+  std::vector<std::string> Release() {
+    files_internal::Parked& parked = files_internal::ParkedOutputs();
+    std::lock_guard<std::mutex> lock(parked.mutex);
+    std::vector<std::string> partials;
+    for (const std::string& key : keys_) {
+      partials.push_back(parked.partial_of[key]);
+      parked.partial_of.erase(key);
+    }
+    keys_.clear();
+    return partials;
+  }
+
+  std::vector<std::string> outputs_, keys_;
+};
 
 // Writes `text` to `path` through "<path>.partial" and a rename: `path` is either what it was or
 // the whole new text. std::runtime_error naming the file when it cannot be written (the partial

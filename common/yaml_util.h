@@ -3,47 +3,131 @@
 // the file, the line and the key path, and what was expected:
 //   scenarios/pendulum.yaml:14: materials.pp_yarn.bend_stiffness: must be > 0 (got -1)
 //
-//   YamlMap root(YAML::LoadFile(path), path, "");
+//   YamlMap root(LoadYamlFile(path), path, "");
 //   root.AllowOnly({"name", "duration"});
 //   double duration = root.Double("duration");
 
 #include <yaml-cpp/yaml.h>
 
 #include <array>
-#include <cstdio>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <initializer_list>
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <system_error>
+#include <utility>
 #include <vector>
+
+#include "common/errors.h"
 
 namespace netlab {
 
-// A bad input file: the message names file, line and key.
-class InputError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+namespace yaml_util_internal {
 
-// Loads a YAML file; syntax errors and missing files become InputError with file and line.
-inline YAML::Node LoadYamlFile(const std::string& path) {
-  try {
-    return YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw InputError(path + ": cannot open file");
-  } catch (const YAML::ParserException& e) {
-    throw InputError(path + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg);
+// The most bytes a YAML file netlab reads may hold: scenarios, experiments and bench tests are
+// kilobytes to a few megabytes (yaml-cpp needs some 50 bytes of memory per byte of text); a device
+// such as /dev/zero would otherwise be read until memory runs out.
+inline constexpr std::uintmax_t kMaxYamlBytes = std::uintmax_t{64} << 20;
+
+inline std::string Line(const std::string& origin, const YAML::Mark& mark) {
+  return origin + (mark.line >= 0 ? ":" + std::to_string(mark.line + 1) : std::string()) + ": ";
+}
+
+inline std::string Child(const std::string& path, const std::string& key) {
+  return path.empty() ? key : path + "." + key;
+}
+
+// Walks the tree once and refuses what a YAML reader accepts but netlab would misread:
+//   - a key given twice in one mapping (yaml-cpp keeps the first silently), naming both lines;
+//   - an explicit tag ("!!str 5", "!seconds 3"), which netlab's readers ignore, so the value
+//     would be read as if it had none;
+//   - aliases that expand to far more values than the text holds (a "billion laughs" of nested
+//     aliases), before anything walks the expanded tree. `budget` counts the values visited.
+inline void CheckTree(const YAML::Node& node, const std::string& origin, const std::string& path,
+                      std::size_t& budget) {
+  if (budget == 0)
+    throw InputError(origin + ": its aliases ('*name') expand to more values than the file's "
+                              "text holds; netlab reads no alias bombs");
+  --budget;
+  const std::string& tag = node.Tag();
+  if (!tag.empty() && tag != "?" && tag != "!") {
+    const std::string shown = tag.rfind("tag:yaml.org,2002:", 0) == 0 ? "!!" + tag.substr(18) : tag;
+    throw InputError(Line(origin, node.Mark()) + (path.empty() ? std::string("(root)") : path) +
+                     ": the tag '" + shown + "' is not read by netlab (the value would be read "
+                     "as if it had none); remove it");
+  }
+  if (node.IsMap()) {
+    std::vector<std::pair<std::string, int>> seen;  // key, line
+    for (auto it = node.begin(); it != node.end(); ++it) {
+      const YAML::Node& key = it->first;
+      const std::string name = key.IsScalar() ? key.Scalar() : std::string("(complex key)");
+      if (key.IsScalar())
+        for (const auto& [other, line] : seen)
+          if (other == name)
+            throw InputError(
+                Line(origin, key.Mark()) + Child(path, name) + ": given twice, at lines " +
+                std::to_string(line + 1) + " and " + std::to_string(key.Mark().line + 1) +
+                " (a YAML reader keeps one of them silently); keep one");
+      seen.emplace_back(name, key.Mark().line);
+      CheckTree(key, origin, Child(path, name), budget);
+      CheckTree(it->second, origin, Child(path, name), budget);
+    }
+  } else if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i)
+      CheckTree(node[i], origin, path + "[" + std::to_string(i) + "]", budget);
   }
 }
 
+}  // namespace yaml_util_internal
+
+// Parses YAML text read from `origin` (a file name, or what the text came from): syntax errors
+// become InputError with origin and line, and so do a key given twice in one mapping, an explicit
+// tag on a value, a second document after '---', and aliases that expand beyond the text's size
+// (yaml_util_internal::CheckTree). An empty text gives a null node.
 inline YAML::Node LoadYamlString(const std::string& text, const std::string& origin) {
+  using namespace yaml_util_internal;
+  std::vector<YAML::Node> documents;
   try {
-    return YAML::Load(text);
+    documents = YAML::LoadAll(text);
   } catch (const YAML::ParserException& e) {
     throw InputError(origin + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " +
                      e.msg);
   }
+  for (std::size_t i = 1; i < documents.size(); ++i)
+    if (!documents[i].IsNull())
+      throw InputError(Line(origin, documents[i].Mark()) +
+                       "a second YAML document (after a '---' line): netlab reads one document "
+                       "per file, and would ignore this one; remove it or the '---'");
+  if (documents.empty()) return YAML::Node();
+  std::size_t budget = 2 * text.size() + 1000;  // each value takes at least a byte of text
+  CheckTree(documents[0], origin, "", budget);
+  return documents[0];
+}
+
+// Reads and parses a YAML file (LoadYamlString); a missing or unreadable file, a folder, or one
+// larger than 64 MiB (a device such as /dev/zero) becomes InputError naming it.
+inline YAML::Node LoadYamlFile(const std::string& path) {
+  using namespace yaml_util_internal;
+  namespace fs = std::filesystem;
+  std::error_code error;
+  const fs::file_status status = fs::status(path, error);
+  if (fs::is_directory(status)) throw InputError(path + ": is a folder, not a YAML file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open file");
+  std::string text;
+  char buffer[1 << 16];
+  while (in.read(buffer, sizeof(buffer)) || in.gcount() > 0) {
+    text.append(buffer, static_cast<std::size_t>(in.gcount()));
+    if (text.size() > kMaxYamlBytes)
+      throw InputError(path + ": more than 64 MiB; not a YAML file netlab reads (a device?)");
+  }
+  if (in.bad()) throw InputError(path + ": cannot read file");
+  return LoadYamlString(text, path);
 }
 
 class YamlMap {
@@ -155,6 +239,12 @@ class YamlMap {
     return file_ + (mark.line >= 0 ? ":" + std::to_string(mark.line + 1) : std::string()) + ": ";
   }
 
+  // A value as an error message quotes it: whole up to 60 characters, else its start and length.
+  static std::string Shown(const std::string& text) {
+    if (text.size() <= 60) return text;
+    return text.substr(0, 40) + "... (" + std::to_string(text.size()) + " characters)";
+  }
+
   static std::string Number(double v) {
     std::string s = std::to_string(v);
     if (std::abs(v) < 1e-3 && v != 0.0) {
@@ -174,7 +264,7 @@ class YamlMap {
       v = value.as<double>();
     } catch (const YAML::Exception&) {
       throw InputError(Location(value) + what + ": expected a number, got '" +
-                       value.as<std::string>() + "'");
+                       Shown(value.Scalar()) + "'");
     }
     if (!std::isfinite(v)) throw InputError(Location(value) + what + ": must be finite");
     return v;

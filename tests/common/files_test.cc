@@ -1,11 +1,14 @@
 // common/files.h: a folder replaced as a whole (FolderReplacement, ReplaceDirectory) never loses
 // the folder it replaces when the writer fails, and never keeps a stale file of it when it does
-// not.
+// not; the outputs of one run are put in place together (OutputSet); a write that fails for want
+// of space leaves the file as it was.
 
 #include "common/files.h"
 
 #include <gtest/gtest.h>
 
+#include <signal.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -113,6 +116,82 @@ TEST_F(FolderReplacementTest, AFileOrTheWorkingFolderIsNotReplaced) {
   EXPECT_EQ(Contents(dir_).at("file"), "a file, not a folder");
   for (const std::string name : {".", "..", "/", "a/.."})
     EXPECT_THROW(FolderReplacement folder(name), std::runtime_error) << name;
+}
+
+// Writes `text` to `path` as every writer does: to "<path>.partial", renamed into place.
+void WriteThroughPartial(const fs::path& path, const std::string& text) {
+  std::ofstream(path.string() + ".partial") << text;
+  RenameInto(path.string() + ".partial", path.string());
+}
+
+TEST_F(FolderReplacementTest, AnOutputSetPutsItsOutputsInPlaceOnlyTogether) {
+  Write(dir_ / "out.h5", "old out");
+  Write(dir_ / "report.html", "old report");
+  {
+    OutputSet outputs({(dir_ / "out.h5").string(), (dir_ / "report.html").string()});
+    WriteThroughPartial(dir_ / "out.h5", "new out");
+    // Held back: the old file is still in place, the new one complete beside it.
+    EXPECT_EQ(Contents(dir_).at("out.h5"), "old out");
+    EXPECT_EQ(Contents(dir_).at("out.h5.partial"), "new out");
+    // The second output fails: the set is never committed.
+  }
+  EXPECT_EQ(Contents(dir_), (std::map<std::string, std::string>{{"out.h5", "old out"},
+                                                                 {"report.html", "old report"}}));
+  {
+    OutputSet outputs({(dir_ / "out.h5").string(), (dir_ / "report.html").string(), ""});
+    WriteThroughPartial(dir_ / "out.h5", "new out");
+    WriteThroughPartial(dir_ / "report.html", "new report");
+    EXPECT_EQ(Contents(dir_).at("report.html"), "old report");
+    outputs.Commit();
+  }
+  EXPECT_EQ(Contents(dir_), (std::map<std::string, std::string>{{"out.h5", "new out"},
+                                                                 {"report.html", "new report"}}));
+  // Without a set, a rename happens at once; an output the set never saw written is skipped.
+  WriteThroughPartial(dir_ / "out.h5", "newer out");
+  EXPECT_EQ(Contents(dir_).at("out.h5"), "newer out");
+  {
+    OutputSet outputs({(dir_ / "out.h5").string(), (dir_ / "other.csv").string()});
+    WriteThroughPartial(dir_ / "out.h5", "newest out");
+    outputs.Commit();
+  }
+  EXPECT_EQ(Contents(dir_), (std::map<std::string, std::string>{{"out.h5", "newest out"},
+                                                                 {"report.html", "new report"}}));
+}
+
+// A file size limit (RLIMIT_FSIZE, with SIGXFSZ ignored) makes a write past it fail with EFBIG, as
+// a full disk fails it with ENOSPC; restored on destruction.
+class FileSizeLimit {
+ public:
+  explicit FileSizeLimit(rlim_t bytes) {
+    getrlimit(RLIMIT_FSIZE, &old_);
+    old_handler_ = signal(SIGXFSZ, SIG_IGN);
+    rlimit limit = old_;
+    limit.rlim_cur = bytes;
+    setrlimit(RLIMIT_FSIZE, &limit);
+  }
+  ~FileSizeLimit() {
+    setrlimit(RLIMIT_FSIZE, &old_);
+    signal(SIGXFSZ, old_handler_);
+  }
+
+ private:
+  rlimit old_;
+  sighandler_t old_handler_;
+};
+
+TEST_F(FolderReplacementTest, AWriteThatRunsOutOfSpaceLeavesTheFileAsItWas) {
+  Write(dir_ / "material.yaml", "the previous file");
+  try {
+    FileSizeLimit limit(4096);
+    WriteTextFile((dir_ / "material.yaml").string(), std::string(100000, 'x'));
+    ADD_FAILURE() << "a write past the limit succeeded";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find((dir_ / "material.yaml").string() + ": cannot write"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(Contents(dir_),
+            (std::map<std::string, std::string>{{"material.yaml", "the previous file"}}));
 }
 
 TEST(IsInsideFolder, ResolvesDotsAndNeedsNoFiles) {
