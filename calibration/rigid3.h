@@ -1,5 +1,6 @@
 #pragma once
-// Rigid transforms. Named b_from_a: x_in_b = b_from_a * x_in_a = R x_in_a + t (DESIGN.md).
+// Rigid transforms. Named b_from_a: x_in_b = b_from_a * x_in_a = R x_in_a + t
+// (docs/architecture.md, Conventions).
 // The rotation is an Eigen quaternion: constructed (w, x, y, z), stored x, y, z, w.
 
 #include <Eigen/Core>

@@ -60,7 +60,8 @@ class LabelStore {
 
   // Whether anything changed since the last Save or Load.
   bool modified() const { return modified_; }
-  // labels.h5 through "<path>.partial" and a rename (labels.h: WriteLabels).
+  // labels.h5 through "<path>.partial" and a rename (libreconstruct/labels/label_set.h:
+  // WriteLabels).
   void Save(const std::string& path);
   static LabelStore Load(const std::string& path);
 
