@@ -9,7 +9,9 @@ Documents: README.md, docs/*.md and every README.md below the root. Checked in t
   in capitals, `...`) are not paths. `build/bench/NAME` must be a benchmark bench/CMakeLists.txt
   declares; other build outputs are not checked.
 - links to a page's heading (`docs/benchmarks.md#labeling`, `#the-implicit-integrator`): the
-  heading exists (GitHub's anchors: lower case, punctuation dropped, spaces as '-').
+  heading exists (GitHub's anchors: lower case, punctuation dropped, spaces as '-'); and a
+  section named by its heading, `docs/simulator.md, "The implicit integrator"`: a heading of
+  that page, or a paragraph's bold lead-in, starts with those words.
 - `netlab SUBCOMMAND ...` lines of code blocks, and inline code that starts so: the subcommand
   exists and each --flag is one its --help lists.
 
@@ -71,6 +73,22 @@ def anchors(path, cache={}):
                 n = seen.get(s, 0)
                 result.add(s if n == 0 else "%s-%d" % (s, n))
                 seen[s] = n + 1
+        cache[path] = result
+    return cache[path]
+
+
+def headings(path, cache={}):
+    """The headings of a page as text, lower case, without backticks."""
+    if path not in cache:
+        result, in_code = [], False
+        for line in open(path, encoding="utf-8"):
+            if line.startswith("```"):
+                in_code = not in_code
+            # A heading, or a paragraph's bold lead-in ("**The implicit integrator** (...)").
+            m = None if in_code else (re.match(r"#+\s+(.*)", line) or
+                                      re.match(r"(?:- )?\*\*([^*]+)\*\*", line))
+            if m:
+                result.append(m.group(1).replace("`", "").strip().rstrip(".").lower())
         cache[path] = result
     return cache[path]
 
@@ -137,6 +155,17 @@ class Checker:
                     self.check_anchor(doc, line, c, anchor)
                 return
         self.fail(doc, line, "`%s` does not exist (looked for %s)" % (token, ", ".join(candidates)))
+
+    def check_section(self, doc, line, target, section):
+        """`docs/x.md, "Heading"`: a heading of that page starts with the quoted words."""
+        path = os.path.join(self.root, target)
+        if not os.path.isfile(path):
+            return  # the path check reports it
+        self.links += 1
+        section = " ".join(section.split())
+        want = section.replace("`", "").lower()
+        if not any(h.startswith(want) for h in headings(path)):
+            self.fail(doc, line, '%s, "%s": no heading of %s starts so' % (target, section, target))
 
     def check_anchor(self, doc, line, target, anchor):
         self.links += 1
@@ -218,6 +247,14 @@ class Checker:
                 self.check_path(doc, n, span, from_link=False)
             for m in re.finditer(r"\]\(([^)\s]+)\)", raw):
                 self.check_path(doc, n, m.group(1), from_link=True)
+        # Sections named by their heading: (docs/benchmarks.md, "Through the approach ...").
+        text = "\n".join(lines)
+        for m in re.finditer(r"`?((?:docs/)?[\w]+\.md)`?,\s+\"([^\"]+)\"", text):
+            target = m.group(1)
+            if "/" not in target:
+                target = os.path.join(os.path.dirname(doc), target) if doc.startswith("docs/") \
+                    else target
+            self.check_section(doc, text.count("\n", 0, m.start()) + 1, target, m.group(2))
 
 
 def main():
@@ -231,7 +268,7 @@ def main():
         checker.check_document(doc)
     for f in checker.failures:
         print(f)
-    print("%d documents: %d paths, %d links to headings, %d netlab command lines (%d subcommands "
+    print("%d documents: %d paths, %d links and references to headings, %d netlab command lines (%d subcommands "
           "asked for --help): %d failures" % (len(docs), checker.paths, checker.links,
                                               checker.commands, len(checker.helps),
                                               len(checker.failures)))

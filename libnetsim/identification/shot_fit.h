@@ -157,9 +157,9 @@ FitResult FitShots(const std::vector<FitShotInput>& shots,
                    const std::vector<FitParameter>& parameters, const FitOptions& options);
 
 // Notes for a free bending stiffness whose net is too coarse to show it: a link's segments
-// longer than kBendingSegment. At net A's 2.5 cm a flight shows a tenth of EI's effect on the
-// knots with the implicit step, at 1.25 cm two thirds (docs/benchmarks.md, bending waves), so
-// the fitted EI is that resolution's, not the thread's. `name` names the scenario in the note.
+// longer than kBendingSegment, where a flight shows only part of EI's effect on the knots, so the
+// fitted EI is that resolution's, not the thread's (docs/benchmarks.md, "Bending waves"). `name`
+// names the scenario in the note.
 inline constexpr double kBendingSegment = 0.0125;  // m
 std::vector<std::string> ResolutionNotes(const Scenario& scenario,
                                          const std::vector<FitParameter>& parameters,
@@ -168,9 +168,8 @@ std::vector<std::string> ResolutionNotes(const Scenario& scenario,
 // The scan's reading of one profile of costs along a parameter (NaN or inf: a failed run): the
 // lowest (the one at `current` unless another is lower), and the lowest other local minimum
 // behind a barrier, a rise of at least `barrier` above both between them (-1: none). The default,
-// a chi^2 rise of 9, is 3 sigma in one parameter. The simulation's jitter in the cost (tenths to
-// tens on Net A's flight, with the step held) seldom makes a rival, and one it makes costs a run
-// of the last stage, not a wrong answer.
+// a chi^2 rise of 9, is 3 sigma in one parameter: the simulation's jitter in the cost seldom
+// makes a rival, and one it makes costs a run of the last stage, not a wrong answer.
 struct ScanMinima {
   int best = -1, rival = -1;
 };
@@ -188,9 +187,7 @@ int EndElsewhere(const std::vector<std::vector<double>>& ends, const std::vector
 // `current`, the coordinate the fit stands at. With one, the prior's reach: its value +-3 sigma
 // (3 sigma / value in ln value), or a factor 2 either way of it when that is narrower. A valley
 // beyond the prior's reach is not a rival: the bench puts the parameter there with odds below
-// 0.3 %. (Net A's explicit flight with a 5 % prior: over a factor 2 the scan found valleys whose
-// fits ended 3-5 prior sigma away; within the prior's reach it found no second one along EI and
-// one along EA, whose fit still ended in another basin, docs/benchmarks.md.)
+// 0.3 % (docs/benchmarks.md, "Parameter identification").
 inline constexpr double kPriorReach = 3.0;
 std::vector<double> ScanCoordinates(const FitParameter& parameter, const FitPrior* prior,
                                     double current, int steps);

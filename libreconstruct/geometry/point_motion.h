@@ -4,10 +4,9 @@
 // it, or two whose rays meet at a shallow angle).
 //
 // At 179 frames/s a knot of the flying net moves a few millimetres a frame and its velocity
-// hardly changes from one frame to the next: on the rendered Net B at 0.8 m/s, folding over the
-// target, the true places of the two frames before predict the next to 0.05 px in a near camera
-// (docs/benchmarks.md). What a straight path cannot follow (a knot stopped by the target, a
-// jerk) shows in the fit's residuals.
+// hardly changes from one frame to the next (docs/benchmarks.md, labeling, "The defaults"). What
+// a straight path cannot follow (a knot stopped by the target, a jerk) shows in the fit's
+// residuals.
 //
 //   std::vector<TimedObservation> views = ...;  // frames t-5 .. t, every camera that labels it
 //   const PointEstimate at_t = FitConstantVelocity(rig, views, t);

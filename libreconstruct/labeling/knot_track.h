@@ -47,15 +47,13 @@ struct TrackOptions {
   // junction pass as for flow; 0: never.
   double max_neighbour_spread_px = 1.0;
   // An accepted knot's motion may differ from the motion its accepted neighbours make it
-  // expect by at most this (px); 0: not checked. On the rendered Net A (179 fps, 0.5 m/s) the
-  // true difference is under 0.6 px everywhere; the detector once put a knot 2.1 px off along a
-  // yarn, which tracking accepted before this check.
+  // expect by at most this (px; the truth's own differ by under 0.6 px on Net A); 0: not
+  // checked.
   double max_relative_motion_px = 1.2;
   // A junction one yarn short of the knot's degree (an inner knot with three yarns, an edge
   // knot with two; a dim dye fading into the background) is the knot when each of its yarns
   // leaves within this angle of the direction to a different labeled grid neighbour; 0: the
-  // degree must be met. On the knotless Net B (20 frames) a quarter of the person's fixes were
-  // such junctions, every one of them within 1 px of the truth.
+  // degree must be met.
   double max_yarn_angle_deg = 15.0;
   // Knotless nets: such a junction is the knot only where the colour of its straight pair of
   // yarns changes within this of it (px, Junction::colour_step): its lone yarn alone places it
@@ -65,15 +63,13 @@ struct TrackOptions {
   // A junction within this of the edge of a body behind the net (the target's outline,
   // KnotDetector::NearBackgroundEdge) is accepted only where it has the knot's degree and each
   // of its yarns leads to a different neighbour (max_yarn_angle_deg): the knot may have just
-  // passed behind the body, its yarns on this side making a junction at the edge (on Net B at
-  // 0.8 m/s a knot 1 px behind the box's edge was tracked onto such a junction, one yarn
-  // short). 0: not checked.
+  // passed behind the body, its yarns on this side making a junction at the edge. 0: not
+  // checked.
   double body_edge_px = 2.0;
   // Where the detector's rings find no junction at the flow's end, the knot's yarns fitted along
   // its links' directions in the frame before (all of its neighbours labeled there), from
-  // where the closest two are this far apart (px; KnotDetector::FitAlong). On Net B at
-  // 0.8 m/s, where the net folds, the rings find no junction at a third to a half of the knots
-  // whose links meet at less than 30 degrees in the image. 0: not tried.
+  // where the closest two are this far apart (px; KnotDetector::FitAlong): a crossing too acute
+  // for the rings (a folded net). 0: not tried.
   double fit_along_gap_px = 5.0;
   KnotDetectorOptions detector;
 };

@@ -100,11 +100,8 @@ struct LabelEngineOptions {
   // (the projection's standard deviation along its worst axis for label_sigma_px of noise in
   // each view), the knot's yarns leave that place along at least two of its links, it lies on
   // the scene's own background (not on the target or another body, which could hide it), and
-  // no other knot is within exclusion_px. Corners are left to their masses. 0: off. 0.5 placed
-  // 30 % more on the folded Net B than 0.35. Two views cannot see a label off along their
-  // epipolar line (a tracked label 2.0 px off gave a placement 1.55 px off at 0.4 px); keeping
-  // them to 0.35 cost a fifth more actions on Net B and let the brush's junction 2.1 px off be
-  // accepted where they no longer placed the knot (docs/benchmarks.md).
+  // no other knot is within exclusion_px. Corners are left to their masses. 0: off. Why 0.5:
+  // docs/benchmarks.md, labeling, "The defaults".
   double place_sigma_px = 0.5;
   // ... and where each of those views lies within this of their point (px).
   double place_residual_px = 0.5;
@@ -113,9 +110,7 @@ struct LabelEngineOptions {
   // to those views and to the knot's own labels (no placed ones) of every camera in up to
   // motion_frames frame rows before (else after; the adjacent one among them) (point_motion.h).
   // Each view must lie within place_residual_px of the path, and all together within chi^2's
-  // 99.9 % for label_sigma_px per view; then place_sigma_px applies as above. At 179 frames/s
-  // the true places of two frames predict the next within 0.05 px (Net B folding at 0.8 m/s).
-  // 0: off.
+  // 99.9 % for label_sigma_px per view; then place_sigma_px applies as above. 0: off.
   int motion_frames = 5;
   // ... and where no one of those views moves it by more than this (px in the camera placed):
   // the path fitted without each view in turn, where the rest still fix it, puts the knot

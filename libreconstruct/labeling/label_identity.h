@@ -81,8 +81,7 @@ struct IdentityCheckOptions {
   IdentifyOptions identify;
   // Each yarn is read out to this fraction of the shortest labeled link (image px), within
   // [identify.outer_radius_px, max_outer_radius_px]. A longer segment crosses more mosaic rows, so
-  // a yarn a few degrees off an image axis is still phase-averaged (docs/labeling.md: on the
-  // rendered 11 x 11 shot, true labels read consistent 1.6 % at 16 px, 29 % at 0.4 x link).
+  // a yarn a few degrees off an image axis is still phase-averaged (docs/labeling.md).
   // Sagging links leave the chord towards the neighbour in the middle: stay well short of it.
   double link_fraction = 0.4;
   double max_outer_radius_px = 60.0;
