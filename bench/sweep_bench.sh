@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The sweep's throughput (issue 20, part 4): one realistic short study -- Net A's first half
+# The sweep's throughput: one realistic short study -- Net A's first half
 # second of flight (scenarios/net_a_0.5.yaml, 11 x 11 knots, 880 segments), the drag coefficient
 # x the corner mass on a 3 x 3 grid -- run by `netlab sweep` with 1 and 2 threads and, when
 # netlab is built with MPI and mpirun is there, by 2 MPI ranks of 1 thread. Prints a table of

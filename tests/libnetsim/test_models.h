@@ -26,7 +26,7 @@ inline std::string IntegratorTestName(const ::testing::TestParamInfo<IntegratorT
   return IntegratorName(info.param);
 }
 
-// The polypropylene yarn of the paper's examples (values of issue #2's scenario example).
+// The polypropylene yarn of the paper's examples (the values of scenarios/pendulum.yaml).
 inline Material PpYarn() {
   Material m;
   m.name = "pp_yarn";

@@ -1,6 +1,6 @@
 // A run killed mid-way (SIGKILL: no handler, no cleanup; a full disk or an OOM kill looks the
 // same) leaves the previous output exactly as it was and nothing half-written under its name
-// (issue 21): simulate, label and triangulate each write into "<out>.partial" and rename.
+// (docs/bad_input.md): simulate, label and triangulate each write into "<out>.partial" and rename.
 
 #include <gtest/gtest.h>
 

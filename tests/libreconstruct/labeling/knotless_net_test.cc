@@ -1,4 +1,4 @@
-// The labeling tools on a small rendered knotless net (issue 19): Find Node, Find Path, Fill Grid
+// The labeling tools on a small rendered knotless net: Find Node, Find Path, Fill Grid
 // and tracking must never accept a wrong label (more than 2 px from its knot) where a knotless
 // net's junctions have no knot ball and its slack links buckle a few pixels from the knot.
 //
