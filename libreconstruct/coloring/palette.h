@@ -20,6 +20,10 @@ struct Candidate {
   std::array<double, 3> srgb{0, 0, 0};
 };
 
+// How brightly `netlab render` lights its scene: a white dye reads this fraction of sensor white
+// (headroom below saturation). The labeling's colour check assumes it unless told otherwise.
+inline constexpr double kRenderIllumination = 0.85;
+
 // How the cameras see a dye. seen_linear_bgr = clamp(exposure * gains_bgr * linear(srgb), 0, 1)
 // per channel (the sensor clips at white), then Lab relative to `white_xyz` (the camera's white;
 // D65 for a white-balanced camera).
