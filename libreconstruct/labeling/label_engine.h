@@ -81,8 +81,8 @@ struct LabelEngineOptions {
   double projection_tolerance_px = 1.5;
   // ... and no other knot's label or projection may be within this (px).
   double exclusion_px = 6.0;
-  // The labels' noise in each view, px (per axis; the bench's tracked labels: median 0.07 px,
-  // 99th percentile 0.4 px; kept above them for the rig's own error).
+  // The labels' noise in each view, px per axis: above the tracked labels' own, for the rig's
+  // error (docs/benchmarks.md, labeling, "The defaults").
   double label_sigma_px = 0.3;
   // Fill Grid: a junction is the knot only when its yarns leave towards the knot's neighbours
   // (each within this angle, deg) and their number is the knot's degree.
