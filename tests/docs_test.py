@@ -231,6 +231,9 @@ class Checker:
                 start = pending_line or n
                 pending, pending_line = "", 0
                 text = re.sub(r"^\$\s+", "", text)
+                # The executable by its path (build/app/netlab), or under mpirun.
+                text = re.sub(r"^(?:mpirun\s+-np\s+\S+\s+)?(?:\S*/)netlab\s", "netlab ", text)
+                text = re.sub(r"^mpirun\s+-np\s+\S+\s+netlab\s", "netlab ", text)
                 if text.startswith("netlab "):
                     self.check_command(doc, start, text)
                 for token in re.findall(r"(?<![\w/.-])((?:%s)/[\w./+-]*)" %
