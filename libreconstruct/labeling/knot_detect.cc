@@ -1214,23 +1214,42 @@ std::vector<Junction> KnotDetector::FindInCircle(const Eigen::Vector2d& centre,
 std::vector<Junction> KnotDetector::SolidsInCircle(const Eigen::Vector2d& centre,
                                                    double radius) const {
   std::vector<Junction> found;
-  for (const Solid& s : solids_) {
-    if ((s.centre - centre).norm() > radius) continue;
-    Junction j;
-    j.px = s.centre;
-    j.solid = true;
-    // The yarns leaving it: ridge peaks on a ring just outside its masked rim.
-    double weakest = 0.0;
-    j.branch_angles_rad =
-        Peaks(SampleRing(s.centre, s.radius + 2 * std::ceil(2 * o_.ridge_sigma_px) + 2), &weakest);
-    j.branches = static_cast<int>(j.branch_angles_rad.size());
-    j.contrast = weakest;
-    j.fit_rms_px = s.rms_px;
-    j.confidence = std::exp(-0.5 * (s.rms_px / 0.5) * (s.rms_px / 0.5));
-    j.solid_cut = !(s.rms_px <= o_.solid_round_px);
-    found.push_back(j);
-  }
+  for (const Solid& s : solids_)
+    if ((s.centre - centre).norm() <= radius) found.push_back(SolidJunction(s));
   return found;
+}
+
+Junction KnotDetector::SolidJunction(const Solid& s) const {
+  Junction j;
+  j.px = s.centre;
+  j.solid = true;
+  // The yarns leaving it: ridge peaks on a ring just outside its masked rim.
+  double weakest = 0.0;
+  j.branch_angles_rad =
+      Peaks(SampleRing(s.centre, s.radius + 2 * std::ceil(2 * o_.ridge_sigma_px) + 2), &weakest);
+  j.branches = static_cast<int>(j.branch_angles_rad.size());
+  j.contrast = weakest;
+  j.fit_rms_px = s.rms_px;
+  j.confidence = std::exp(-0.5 * (s.rms_px / 0.5) * (s.rms_px / 0.5));
+  j.solid_cut = !(s.rms_px <= o_.solid_round_px);
+  return j;
+}
+
+std::vector<Junction> KnotDetector::SolidsFor(const std::vector<Junction>& junctions) const {
+  std::vector<Junction> out;
+  std::vector<const Solid*> taken;
+  for (const Junction& j : junctions) {
+    const Solid* on = nullptr;
+    for (const Solid& s : solids_)
+      if (s.rms_px <= o_.solid_round_px && (s.centre - j.px).norm() <= s.radius) on = &s;
+    if (!on) {
+      out.push_back(j);
+    } else if (std::find(taken.begin(), taken.end(), on) == taken.end()) {
+      taken.push_back(on);
+      out.push_back(SolidJunction(*on));
+    }
+  }
+  return out;
 }
 
 cv::Rect FindNodeRegion(const Eigen::Vector2d& centre, double radius,
@@ -1270,15 +1289,16 @@ std::optional<Junction> FitAlongLinks(const cv::Mat& image, const Eigen::Vector2
 }
 
 FindNodeResult FindNode(const cv::Mat& image, const Eigen::Vector2d& centre, double radius,
-                        const KnotDetectorOptions& options) {
+                        const KnotDetectorOptions& options, bool corner_mass) {
   return FindNode(KnotDetector(image, FindNodeRegion(centre, radius, options), options), centre,
-                  radius);
+                  radius, corner_mass);
 }
 
 FindNodeResult FindNode(const KnotDetector& detector, const Eigen::Vector2d& centre,
-                        double radius) {
+                        double radius, bool corner_mass) {
   FindNodeResult result;
   result.candidates = detector.FindInCircle(centre, radius);
+  if (corner_mass) result.candidates = detector.SolidsFor(result.candidates);
   if (result.candidates.empty()) result.candidates = detector.SolidsInCircle(centre, radius);
   if (result.candidates.empty()) {
     result.status = FindNodeStatus::kNone;

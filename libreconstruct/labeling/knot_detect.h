@@ -96,7 +96,7 @@ struct KnotDetectorOptions {
   double lone_agree_px = 0.7;
   // The near fit overrules the default only when it fitted every yarn and places the junction
   // to this (px, the largest standard deviation from its lines' offsets): a dim yarn of one dye
-  // on its few pixels once took a 15 degree wrong turn and moved a right junction 2.2 px.
+  // on its few pixels can take a wrong turn (docs/benchmarks.md, labeling).
   double near_sigma_px = 0.15;
   // A fit whose junction still moves this much (px) on its last pass has not settled: refused.
   double settle_px = 0.1;
@@ -108,7 +108,7 @@ struct KnotDetectorOptions {
   double beside_significance = 8.0;
   double beside_fraction = 0.15;
   // Junction::colour_step of every edge junction (knotless nets; a knot ball moves the change).
-  // Off, it costs nothing; on, about 9 % of Find Node's time on Net A, 3 % on Net B.
+  // Off, it costs nothing; on, a few per cent of Find Node's time (docs/benchmarks.md).
   bool colour_step = false;
   double yarn_blur_px = 0.5;      // Gaussian blur of the yarn's edges in the model (pixel
                                   // footprint, lens, motion), px
@@ -142,9 +142,8 @@ struct Junction {
                              // branches: the yarns leaving it, fit_rms_px: its outline's RMS
                              // distance from the fitted circle
   // A solid whose outline is cut, so that its centre is uncertain: its outline is not round
-  // (RMS distance from its circle over KnotDetectorOptions::solid_round_px). A corner mass lying
-  // half over the target's face, a yarn across it, had its centre found 2.2-2.9 px off (outline
-  // RMS 1.0-1.2 px; 0.16-0.22 px for a mass in the clear).
+  // (RMS distance from its circle over KnotDetectorOptions::solid_round_px), as a corner mass
+  // lying half over the target's face is.
   bool solid_cut = false;
 };
 
@@ -162,6 +161,10 @@ class KnotDetector {
   // Every solid whose centre is inside the circle: its centre, the yarns leaving it as
   // branches (counted on a ring just outside it), solid = true.
   std::vector<Junction> SolidsInCircle(const Eigen::Vector2d& centre, double radius) const;
+  // Each junction on a round solid (within its radius; not solid_cut) replaced by the solid's
+  // centre, once per solid: such a junction is the yarns leaving the solid, their lines
+  // extrapolated into it, and meets at its centre only where the yarns leave it straight.
+  std::vector<Junction> SolidsFor(const std::vector<Junction>& junctions) const;
 
   // How many of the image angles (rad) a yarn leaves `px` along: a branch peak within
   // tolerance_rad of the angle on every ring but one (the rings of Examine). For a place known
@@ -197,6 +200,8 @@ class KnotDetector {
   // The ridge strength along the radius, R cos^2 of the angle between the ridge and the radius,
   // on a circle (bilinear samples from angle 0).
   std::vector<double> SampleRing(const Eigen::Vector2d& centre, double radius) const;
+  // A solid as a junction: its centre, the yarns leaving it as branches (SolidsInCircle).
+  Junction SolidJunction(const Solid& s) const;
   // Peak angles (rad, sub-sample) of a ring's profile above the threshold; the weakest peak
   // over the threshold in *weakest.
   std::vector<double> Peaks(const std::vector<double>& profile, double* weakest) const;
@@ -274,13 +279,16 @@ struct FindNodeResult {
 };
 
 // The knot inside the brush (centre, radius in px) of `image`: the one yarn junction there, or
-// when there is none, the one solid (corner mass) whose centre is there (Junction::solid).
-// About 2 ms for a 6 px brush (a 68 x 68 px region; 4.7 ms at most on a rendered shot).
+// when there is none, the one solid (corner mass) whose centre is there (Junction::solid). For
+// a corner knot (`corner_mass`), a junction on a round solid is that solid's centre
+// (KnotDetector::SolidsFor); elsewhere a small solid may be a knot ball, its yarns' junction
+// the better place. About 2 ms for a 6 px brush (a 68 x 68 px region; 4.7 ms at most on a
+// rendered shot).
 FindNodeResult FindNode(const cv::Mat& image, const Eigen::Vector2d& centre, double radius,
-                        const KnotDetectorOptions& options = {});
+                        const KnotDetectorOptions& options = {}, bool corner_mass = false);
 // The same with a detector built by the caller (FindNodeRegion: its ROI around the brush).
 FindNodeResult FindNode(const KnotDetector& detector, const Eigen::Vector2d& centre,
-                        double radius);
+                        double radius, bool corner_mass = false);
 cv::Rect FindNodeRegion(const Eigen::Vector2d& centre, double radius,
                         const KnotDetectorOptions& options);
 

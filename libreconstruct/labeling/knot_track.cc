@@ -88,7 +88,8 @@ bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot*
   const int degree = (r > 0) + (r + 1 < rows) + (c > 0) + (c + 1 < cols);
   const KnotDetector detector(
       to, FindNodeRegion(predicted, options.snap_radius_px, options.detector), options.detector);
-  std::vector<Junction> near = FindNode(detector, predicted, options.snap_radius_px).candidates;
+  std::vector<Junction> near =
+      FindNode(detector, predicted, options.snap_radius_px, degree == 2).candidates;
   if (near.empty())
     if (const std::optional<Junction> j = FitAlongLinks(i, degree, predicted)) near.push_back(*j);
   t->px = predicted;

@@ -532,7 +532,8 @@ FindNodeResult LabelEngine::FindNodeAt(int camera, int t, int knot, const Eigen:
     r.why = "the frame cannot be read";
     return r;
   }
-  FindNodeResult r = FindNode(image, centre, radius_px, o_.detector);
+  FindNodeResult r =
+      FindNode(image, centre, radius_px, o_.detector, Neighbours(knot).size() == 2);
   // Only a corner knot sits in a blob (its corner mass); elsewhere a blob is yarns bunched in a
   // fold (one once gave an inner knot 2.7 px off).
   if (r.status == FindNodeStatus::kFound && r.knot.solid && Neighbours(knot).size() != 2) {
@@ -1268,7 +1269,8 @@ std::optional<LabelEdit> LabelEngine::SearchAtProjection(FrameCheck* f, const Fi
   const Eigen::Vector2d q = f->projected[c][k];
   if (!view.Inside(q) || f->Repeat(c, k, q)) return std::nullopt;
   // The brush a little wider than the tolerance: the detector's seeds are 1.5 px apart.
-  const FindNodeResult r = FindNode(view.image, q, o_.projection_tolerance_px + 1.5, o_.detector);
+  const FindNodeResult r = FindNode(view.image, q, o_.projection_tolerance_px + 1.5, o_.detector,
+                                    Neighbours(k).size() == 2);
   if (r.status == FindNodeStatus::kFound && (r.knot.px - q).norm() <= o_.projection_tolerance_px &&
       !TakenNear(*f, c, k, r.knot.px) && ColourChangesAt(r.knot, o_.edge_colour_step_px) &&
       BranchesMatchLinks(r.knot, Slots(c, f->t, k, f->point), o_.branch_tolerance_deg))
@@ -1335,6 +1337,15 @@ std::optional<LabelEdit> LabelEngine::PlaceAtProjection(FrameCheck* f, const Fil
   if (!moved && tracked.present() && tracked.source == LabelSource::kTracked)
     moved = (tracked.px - *q).norm();
   if (!moved || *moved > o_.place_motion_px) return std::nullopt;
+  // And where its yarns, fitted along its links, meet (where they fit): the other cameras'
+  // labels may be a pixel or two off themselves in a fold, and the far pair sees their error
+  // magnified; a place off the yarns' meeting point by more than a junction may be is not placed.
+  std::vector<Eigen::Vector2d> link_vectors;
+  for (const std::optional<Eigen::Vector2d>& n : slots.px)
+    if (n) link_vectors.push_back(*n - *q);
+  const std::optional<Junction> fit =
+      FitAlongLinks(view.image, *q, link_vectors, o_.track.fit_along_gap_px, o_.detector);
+  if (fit && (fit->px - *q).norm() > o_.projection_tolerance_px) return std::nullopt;
   return LabelEdit{c, t, k, Made(*q, LabelSource::kProjected, 0.5, true)};
 }
 
@@ -1445,7 +1456,8 @@ std::optional<LabelEngine::FillCandidate> LabelEngine::SearchImageGrid(FrameChec
   const int c = view.camera;
   const std::optional<GridPrediction> g = PredictFromImageGrid(store_->labels(), c, f->t, k);
   if (!g || !view.Inside(g->px) || f->Repeat(c, k, g->px)) return std::nullopt;
-  const FindNodeResult r = FindNode(view.image, g->px, 0.3 * g->spacing, o_.detector);
+  const FindNodeResult r =
+      FindNode(view.image, g->px, 0.3 * g->spacing, o_.detector, Neighbours(k).size() == 2);
   if (r.status == FindNodeStatus::kFound && !TakenNear(*f, c, k, r.knot.px) &&
       ColourChangesAt(r.knot, o_.edge_colour_step_px) &&
       BranchesMatchLinks(r.knot, Slots(c, f->t, k, f->point), o_.branch_tolerance_deg))
