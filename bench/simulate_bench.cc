@@ -4,6 +4,20 @@
 //   bench_simulate --threads N [--window SECONDS] [CASE ...]   one thread against N
 //   bench_simulate --integrator implicit [--no-physical] [--substep-contact] [CASE ...]
 //                                                                    another integrator
+//   bench_simulate --sensitivity [--floor] [--keep-coupling] [--parameter NAME ...]
+//                  [--integrator NAME] [--dt-factor F] [--window SECONDS] [CASE ...]
+//
+// --sensitivity (default cases Net A and Net B at 0.5 m/s, the first 1 s of flight): whether the
+// scenario's integrator keeps the physics. For each material parameter of the flight nets (EA x0.5;
+// EI, GJ, c_s, c_b, c_t x4; the drag coefficient C_d x1.5, changed in every material), the
+// knots' response to the change (the changed run minus the nominal run, per knot and frame)
+// under the scenario's integrator and under the explicit step at its own automatic step (the
+// reference), and the relative error RMS(response - reference response) / RMS(reference
+// response). --floor adds the reference floor: the same relative difference between the
+// reference's response and that of the explicit step at half its step. --keep-coupling holds the
+// coupling penalty (kappa = 100 max(EI, GJ) / l^2, a numerical device of the explicit model) at
+// its nominal value when EI or GJ changes. Wall time and "x real time" are those of the changed
+// run under the tested integrator, in process CPU time (one core, whatever the machine's load).
 //
 // Per case: the scenario's run (its integrator, automatic dt, rotational inertia scaled) with its
 // segments, dt, steps, wall time, segment-steps/s and real-time factor; its error against a
@@ -22,7 +36,9 @@
 // --substep-contact resolves the implicit integrator's contact by substeps of the whole net
 // (SimulationOptions::implicit_contact = false) instead of implicitly.
 
+#include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -40,6 +56,7 @@ struct Trajectory {
   double dt = 0.0;
   long steps = 0;
   double wall_s = 0.0;
+  double cpu_s = 0.0;  // process CPU time of the run
   double sim_time = 0.0;
   bool stable = true;
 };
@@ -75,6 +92,7 @@ Trajectory Run(Scenario s, double window, int refine, double dt_factor, bool phy
     t.frames.push_back(frame);
   };
   const auto start = std::chrono::steady_clock::now();
+  const std::clock_t cpu_start = std::clock();
   sample();
   for (long k = 1; k <= total; ++k) {
     if (!sim.Step()) {
@@ -84,6 +102,7 @@ Trajectory Run(Scenario s, double window, int refine, double dt_factor, bool phy
     if (k % per_frame == 0) sample();
   }
   t.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  t.cpu_s = static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   t.steps = sim.steps_taken();
   t.sim_time = sim.state().time;
   return t;
@@ -110,6 +129,118 @@ Error Compare(const Trajectory& a, const Trajectory& b) {
   return e;
 }
 
+// One material or air parameter of the scene, changed by a factor in every material (or in the
+// drag).
+struct Parameter {
+  const char* name;
+  double factor;
+  double Material::*field;  // null: the drag coefficient
+};
+
+constexpr Parameter kParameters[] = {
+    {"EA", 0.5, &Material::stretch_stiffness}, {"EI", 4.0, &Material::bend_stiffness},
+    {"GJ", 4.0, &Material::twist_stiffness},   {"c_s", 4.0, &Material::stretch_damping},
+    {"c_b", 4.0, &Material::bend_damping},     {"c_t", 4.0, &Material::twist_damping},
+    {"C_d", 1.5, nullptr}};
+
+Scenario Changed(Scenario s, const Parameter& p) {
+  if (p.field) {
+    for (Material& m : s.materials) m.*(p.field) *= p.factor;
+  } else if (s.drag) {
+    s.drag->drag_coefficient *= p.factor;
+  }
+  return s;
+}
+
+// Per tracked point and frame, the change b - a (m).
+std::vector<std::vector<Vector3d>> Response(const Trajectory& a, const Trajectory& b) {
+  std::vector<std::vector<Vector3d>> r;
+  const size_t frames = std::min(a.frames.size(), b.frames.size());
+  for (size_t f = 0; f < frames; ++f) {
+    r.emplace_back();
+    for (size_t p = 0; p < a.frames[f].size() && p < b.frames[f].size(); ++p)
+      r.back().push_back(b.frames[f][p] - a.frames[f][p]);
+  }
+  return r;
+}
+
+double Rms(const std::vector<std::vector<Vector3d>>& r) {
+  double sum = 0.0;
+  long n = 0;
+  for (const auto& frame : r)
+    for (const Vector3d& d : frame) {
+      sum += d.squaredNorm();
+      ++n;
+    }
+  return n ? std::sqrt(sum / n) : 0.0;
+}
+
+// --sensitivity: per case and parameter, the knots' response to the parameter's change under the
+// scenario's own integrator and under the explicit reference at its own step, and how far apart
+// the two responses are.
+int Sensitivity(const std::string& dir, const std::vector<std::string>& cases, double window,
+                const char* integrator, const std::vector<std::string>& only, double dt_factor, bool with_floor,
+                bool keep_coupling) {
+  std::printf(
+      "| case | parameter | factor | reference response RMS / max (mm) | %s response RMS / max "
+      "(mm) | relative error | reference floor | %s CPU (s) | x real time | reference CPU (s) |\n"
+      "|---|---|---|---|---|---|---|---|---|---|\n",
+      integrator ? integrator : "default", integrator ? integrator : "default");
+  std::fflush(stdout);
+  for (const std::string& case_name : cases) {
+    const Scenario s = LoadScenario(dir + "/" + case_name + ".yaml");
+    const double w = std::min(window, s.duration);
+    const Trajectory ref = Run(s, w, 1, 1.0, false, 1, "explicit");
+    const Trajectory def = Run(s, w, 1, dt_factor, false, 1, integrator);
+    const Trajectory half = with_floor ? Run(s, w, 1, 0.5, false, 1, "explicit") : Trajectory{};
+    std::printf(
+        "| %s | nominal | 1 | – | %.3f / %.3f from the reference | – | – | %.2f | %.2f | %.2f |%s\n",
+        case_name.c_str(), Compare(def, ref).rms_mm, Compare(def, ref).max_mm, def.cpu_s,
+        def.sim_time / def.cpu_s, ref.cpu_s, ref.stable && def.stable ? "" : " UNSTABLE");
+    std::fflush(stdout);
+    for (const Parameter& p : kParameters) {
+      if (!only.empty() && std::find(only.begin(), only.end(), p.name) == only.end()) continue;
+      Scenario changed = Changed(s, p);
+      if (keep_coupling && !s.materials.empty()) {
+        // The coupling penalty follows max(EI, GJ) (ModelBuilderOptions): held where it was.
+        const Material& a = s.materials[0];
+        const Material& b = changed.materials[0];
+        changed.model.coupling_stiffness_ratio *= std::max(a.bend_stiffness, a.twist_stiffness) /
+                                                  std::max(b.bend_stiffness, b.twist_stiffness);
+      }
+      const Trajectory ref_p = Run(changed, w, 1, 1.0, false, 1, "explicit");
+      const Trajectory def_p = Run(changed, w, 1, dt_factor, false, 1, integrator);
+      const auto r_ref = Response(ref, ref_p), r_def = Response(def, def_p);
+      std::vector<std::vector<Vector3d>> diff = r_def;
+      double max_ref = 0.0, max_def = 0.0;
+      for (size_t f = 0; f < diff.size() && f < r_ref.size(); ++f)
+        for (size_t k = 0; k < diff[f].size() && k < r_ref[f].size(); ++k) {
+          diff[f][k] -= r_ref[f][k];
+          max_ref = std::max(max_ref, r_ref[f][k].norm());
+          max_def = std::max(max_def, r_def[f][k].norm());
+        }
+      const double rms_ref = Rms(r_ref);
+      double floor = -1.0;
+      if (with_floor) {
+        const Trajectory half_p = Run(changed, w, 1, 0.5, false, 1, "explicit");
+        std::vector<std::vector<Vector3d>> d = Response(half, half_p);
+        for (size_t f = 0; f < d.size() && f < r_ref.size(); ++f)
+          for (size_t k = 0; k < d[f].size() && k < r_ref[f].size(); ++k) d[f][k] -= r_ref[f][k];
+        floor = rms_ref > 0 ? Rms(d) / rms_ref : 0.0;
+      }
+      char floor_text[32] = "–";
+      if (floor >= 0.0) std::snprintf(floor_text, sizeof floor_text, "%.2f", floor);
+      std::printf("| %s | %s | %g | %.3f / %.2f | %.3f / %.2f | %.2f | %s | %.2f | %.2f | %.2f |%s\n",
+                  case_name.c_str(), p.name, p.factor, rms_ref * 1e3, max_ref * 1e3,
+                  Rms(r_def) * 1e3, max_def * 1e3, rms_ref > 0 ? Rms(diff) / rms_ref : 0.0,
+                  floor_text, def_p.cpu_s, def_p.sim_time / def_p.cpu_s, ref_p.cpu_s,
+                  ref_p.stable && def_p.stable ? "" : " UNSTABLE");
+      std::fflush(stdout);
+    }
+  }
+  return 0;
+}
+
 }  // namespace
 }  // namespace netlab::netsim
 
@@ -123,6 +254,11 @@ int main(int argc, char** argv) {
   const char* integrator = nullptr;
   bool physical_runs = true;
   bool substep_contact = false;
+  bool sensitivity = false;
+  bool floor = false;
+  bool keep_coupling = false;
+  double dt_factor = 1.0;
+  std::vector<std::string> only;
   std::vector<std::string> cases;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--quick")) {
@@ -136,6 +272,16 @@ int main(int argc, char** argv) {
       threads = std::max(1, std::atoi(argv[++i]));
     } else if (!std::strcmp(argv[i], "--substep-contact")) {
       substep_contact = true;
+    } else if (!std::strcmp(argv[i], "--sensitivity")) {
+      sensitivity = true;
+    } else if (!std::strcmp(argv[i], "--keep-coupling")) {
+      keep_coupling = true;
+    } else if (!std::strcmp(argv[i], "--floor")) {
+      floor = true;
+    } else if (!std::strcmp(argv[i], "--dt-factor") && i + 1 < argc) {
+      dt_factor = std::atof(argv[++i]);
+    } else if (!std::strcmp(argv[i], "--parameter") && i + 1 < argc) {
+      only.push_back(argv[++i]);
     } else if (!std::strcmp(argv[i], "--no-physical")) {
       physical_runs = false;
     } else if (!std::strcmp(argv[i], "--integrator") && i + 1 < argc) {
@@ -145,6 +291,10 @@ int main(int argc, char** argv) {
     } else {
       cases.push_back(argv[i]);
     }
+  }
+  if (sensitivity) {
+    if (cases.empty()) cases = {"net_a_0.5", "net_b_0.5"};
+    return Sensitivity(dir, cases, window, integrator, only, dt_factor, floor, keep_coupling);
   }
   if (cases.empty())
     cases = {"cantilever", "pendulum", "net_capture", "net_a_0.5", "net_a_0.8", "net_b_0.5",

@@ -13,9 +13,11 @@
 #include <thread>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <ceres/ceres.h>
 
 #include "common/yaml_util.h"
+#include "libreconstruct/geometry/camera_offsets.h"
 #include "libreconstruct/geometry/cost_functors.h"
 #include "libreconstruct/geometry/rig_refinement.h"
 
@@ -147,6 +149,8 @@ class SequenceSolver {
 
   // Summing up.
   void Finish(SequenceResult* result);
+  void FlagDegenerate(SequenceResult* result);
+  std::string DegenerateReason(size_t cell, double sigma, double bound, double* angle_deg) const;
   void SumUpPoints(SequenceResult* result) const;
   void InvertInformation(int k, SequenceResult* result) const;
 
@@ -227,8 +231,11 @@ std::vector<int> SequenceSolver::GridNeighbours(int k) const {
 }
 
 // Every label present into its knot-frame's observations; unreviewed ones only if asked for;
-// none placed from the other views (LabelSource::kProjected).
+// none placed from the other views (LabelSource::kProjected). A camera with a clock offset has
+// its labels moved to the frame time along their own track (camera_offsets.h); one that cannot
+// be moved (no label of the knot in a neighbouring frame) is left out.
 void SequenceSolver::Gather(SequenceResult* result) {
+  const std::vector<std::vector<uint8_t>> usable = UsableLabels(labels_, o_);
   for (int t = 0; t < t_; ++t)
     for (int k = 0; k < k_; ++k)
       for (size_t c = 0; c < labels_.cameras.size(); ++c) {
@@ -242,7 +249,17 @@ void SequenceSolver::Gather(SequenceResult* result) {
           ++result->projected_skipped;
           continue;
         }
-        cells_[Cell(t, k)].observations.push_back({camera_of_label_[c], l.px});
+        const int camera = camera_of_label_[c];
+        const double offset = static_cast<size_t>(camera) < o_.camera_offset_frames.size()
+                                  ? o_.camera_offset_frames[camera]
+                                  : 0.0;
+        Eigen::Vector2d px = l.px;
+        if (offset != 0.0 &&
+            !LabelAtFrameTime(labels_, static_cast<int>(c), t, k, offset, usable[c], &px)) {
+          ++result->offset_unshifted;
+          continue;
+        }
+        cells_[Cell(t, k)].observations.push_back({camera, px});
       }
 }
 
@@ -624,6 +641,90 @@ void SequenceSolver::Finish(SequenceResult* result) {
   result->rms_px.assign(n, kNaN);
   SumUpPoints(result);
   ParallelFor(k_, o_.threads, [&](int k) { InvertInformation(k, result); });
+  FlagDegenerate(result);
+}
+
+// The points whose largest sigma exceeds the bound (given, or a multiple of the sequence's
+// median): valid 0, flagged, each with its reason; their views are not outliers.
+void SequenceSolver::FlagDegenerate(SequenceResult* result) {
+  const size_t n = cells_.size();
+  result->degenerate.assign(n, 0);
+  std::vector<double> sigma(n, kNaN), all;
+  for (size_t i = 0; i < n; ++i) {
+    if (!result->valid[i]) continue;
+    const Eigen::Matrix3d& cov = result->covariance[i];
+    const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(
+                               cov, Eigen::EigenvaluesOnly).eigenvalues()[2];
+    sigma[i] = std::sqrt(std::max(largest, 0.0));
+    all.push_back(sigma[i]);
+  }
+  if (all.empty()) return;
+  auto mid = all.begin() + static_cast<long>(all.size() / 2);
+  std::nth_element(all.begin(), mid, all.end());
+  result->median_sigma_m = *mid;
+  char text[96];
+  if (o_.max_sigma_m > 0.0) {
+    result->max_sigma_m = o_.max_sigma_m;
+    result->max_sigma_from = "given";
+  } else {
+    result->max_sigma_m = o_.degenerate_sigma_factor * result->median_sigma_m;
+    std::snprintf(text, sizeof text, "%g x the median sigma (%.3f mm)",
+                  o_.degenerate_sigma_factor, result->median_sigma_m * 1e3);
+    result->max_sigma_from = text;
+  }
+  for (int t = 0; t < t_; ++t)
+    for (int k = 0; k < k_; ++k) {
+      const size_t i = Cell(t, k);
+      if (!result->valid[i] || !(sigma[i] > result->max_sigma_m)) continue;
+      DegeneratePoint d;
+      d.frame = labels_.frame_index[t];
+      d.knot = k;
+      d.sigma_m = sigma[i];
+      d.reason = DegenerateReason(i, sigma[i], result->max_sigma_m, &d.ray_angle_deg);
+      result->degenerate_points.push_back(d);
+      result->degenerate[i] = 1;
+      result->valid[i] = 0;
+      result->rms_px[i] = kNaN;
+      --result->triangulated;
+      result->two_view -= cells_[i].estimate.inliers.size() == 2;
+    }
+}
+
+// Why a point is degenerate: the pair of its cameras whose rays meet at the widest angle, that
+// angle (near 0: parallel; near 180: head-on), and its sigma against the bound.
+std::string SequenceSolver::DegenerateReason(size_t cell, double sigma, double bound,
+                                             double* angle_deg) const {
+  const KnotFrame& kf = cells_[cell];
+  const Eigen::Vector3d& p = positions_[cell];
+  double best_sin = -1.0;
+  int best_a = -1, best_b = -1;
+  const std::vector<int>& in = kf.estimate.inliers;
+  for (size_t a = 0; a < in.size(); ++a)
+    for (size_t b = a + 1; b < in.size(); ++b) {
+      const int ca = kf.observations[in[a]].camera, cb = kf.observations[in[b]].camera;
+      const Eigen::Vector3d ra = (p - rig_.cameras[ca].Center()).normalized();
+      const Eigen::Vector3d rb = (p - rig_.cameras[cb].Center()).normalized();
+      const double s = ra.cross(rb).norm();
+      if (s > best_sin) {
+        best_sin = s;
+        best_a = ca, best_b = cb;
+        // The angle between the rays as they arrive at the point from the two cameras.
+        *angle_deg = std::atan2(s, ra.dot(rb)) * 180.0 / M_PI;
+      }
+    }
+  char text[256];
+  if (best_a < 0) {
+    *angle_deg = 0.0;
+    std::snprintf(text, sizeof text, "sigma %.1f mm, over the bound %.2f mm", sigma * 1e3,
+                  bound * 1e3);
+    return text;
+  }
+  std::snprintf(text, sizeof text,
+                "the rays of %s and %s meet at %.2f deg (nearly %s): sigma %.1f mm, over the "
+                "bound %.2f mm",
+                rig_.cameras[best_a].name.c_str(), rig_.cameras[best_b].name.c_str(), *angle_deg,
+                *angle_deg > 90.0 ? "head-on" : "parallel", sigma * 1e3, bound * 1e3);
+  return text;
 }
 
 // Counts, outliers and residuals of every knot-frame, and each valid point's information (data

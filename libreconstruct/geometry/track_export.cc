@@ -38,18 +38,6 @@ bool TruthAt(const netsim::KnotTracks& truth, int k, double t, Eigen::Vector3d* 
   return true;
 }
 
-// RMS distance of the measured points from the true ones after the best rigid motion of the
-// former onto the latter (Umeyama, no scale); n >= 3 points.
-double AlignedRms(const std::vector<Eigen::Vector3d>& measured_points,
-                  const std::vector<Eigen::Vector3d>& true_points, int64_t n) {
-  const Eigen::Map<const Eigen::Matrix3Xd> measured(measured_points[0].data(), 3, n);
-  const Eigen::Map<const Eigen::Matrix3Xd> truth_xyz(true_points[0].data(), 3, n);
-  const Eigen::Matrix4d m = Eigen::umeyama(measured, truth_xyz, false);
-  const Eigen::Matrix3Xd moved =
-      (m.topLeftCorner<3, 3>() * measured).colwise() + m.topRightCorner<3, 1>();
-  return std::sqrt((moved - truth_xyz).colwise().squaredNorm().mean());
-}
-
 // The tracks' knot of each point P (index P - 1), or -1 where the tracks lack it.
 std::vector<int> KnotOfPoint(const netsim::KnotTracks& tracks, int rows, int cols) {
   tracks.CheckConsistent();
@@ -179,11 +167,14 @@ std::vector<std::vector<double>> ReadXyzRes(const std::string& path) {
   return residual;
 }
 
-netsim::KnotTracks TracksFromSequence(const SequenceResult& result, double fps,
+netsim::KnotTracks TracksFromSequence(const SequenceResult& result,
+                                      const std::vector<double>& time_s,
                                       const std::string& source) {
+  if (time_s.size() != result.frame_index.size())
+    throw std::invalid_argument("track export: one time per frame row needed");
   netsim::KnotTracks tracks;
   tracks.source = source;
-  for (int f : result.frame_index) tracks.time.push_back(f / fps);
+  tracks.time = time_s;
   tracks.frame_index = result.frame_index;
   for (int row = 0; row < result.rows; ++row)
     for (int col = 0; col < result.cols; ++col) tracks.grid.push_back({row, col});
@@ -194,34 +185,74 @@ netsim::KnotTracks TracksFromSequence(const SequenceResult& result, double fps,
   for (const auto& c : result.rig.cameras) tracks.camera_names.push_back(c.name);
   for (const auto& o : result.outliers)
     tracks.outliers.push_back({o.frame, o.knot, o.camera, o.residual_px});
+  tracks.degenerate = result.degenerate;
+  if (tracks.degenerate.empty() && !tracks.valid.empty())
+    tracks.degenerate.assign(tracks.valid.size(), 0);
+  for (const DegeneratePoint& d : result.degenerate_points)
+    tracks.degenerate_points.push_back({d.frame, d.knot, d.sigma_m, d.ray_angle_deg, d.reason});
+  tracks.degenerate_max_sigma_m = result.max_sigma_m;
+  tracks.degenerate_bound_from = result.max_sigma_from;
   return tracks;
+}
+
+netsim::KnotTracks TracksFromSequence(const SequenceResult& result, double fps,
+                                      const std::string& source) {
+  std::vector<double> time;
+  for (int f : result.frame_index) time.push_back(f / fps);
+  return TracksFromSequence(result, time, source);
 }
 
 TruthComparison CompareWithTruth(const netsim::KnotTracks& tracks,
                                  const netsim::KnotTracks& truth) {
-  // Per valid point with a true position: its 3D error and its Mahalanobis distance.
-  double truth_ss = 0.0, mahalanobis = 0.0;
+  // The valid points and the degenerate ones with their true positions.
   TruthComparison c;
-  std::vector<Eigen::Vector3d> measured_points, true_points;
+  std::vector<Eigen::Vector3d> measured, truth_of, degenerate, truth_of_degenerate;
+  std::vector<Eigen::Matrix3d> covariance;
   for (int t = 0; t < tracks.frames(); ++t)
     for (int k = 0; k < tracks.knots(); ++k) {
-      if (!tracks.Valid(t, k)) continue;
+      const bool valid = tracks.Valid(t, k), flagged = tracks.Degenerate(t, k);
+      if (!valid && !flagged) continue;
       const int tk = truth.FindKnot(tracks.grid[k][0], tracks.grid[k][1]);
       Eigen::Vector3d p;
       if (tk < 0 || !TruthAt(truth, tk, tracks.time[t], &p)) continue;
-      const Eigen::Vector3d e = tracks.Position(t, k) - p;
-      measured_points.push_back(tracks.Position(t, k));
-      true_points.push_back(p);
-      truth_ss += e.squaredNorm();
-      c.max_m = std::max(c.max_m, e.norm());
-      const Eigen::Matrix3d& cov = tracks.covariance[static_cast<size_t>(t) * tracks.knots() + k];
-      mahalanobis += e.dot(cov.ldlt().solve(e));
-      ++c.points;
+      if (valid) {
+        measured.push_back(tracks.Position(t, k));
+        truth_of.push_back(p);
+        covariance.push_back(tracks.covariance[static_cast<size_t>(t) * tracks.knots() + k]);
+      } else if (tracks.Position(t, k).allFinite()) {
+        degenerate.push_back(tracks.Position(t, k));
+        truth_of_degenerate.push_back(p);
+      }
     }
-  c.rms_m = c.points > 0 ? std::sqrt(truth_ss / c.points) : 0.0;
-  c.mean_mahalanobis2 = c.points > 0 ? mahalanobis / c.points : 0.0;
-  // The shape of the tracks, whatever the rig's world frame.
-  if (c.points >= 3) c.aligned_rms_m = AlignedRms(measured_points, true_points, c.points);
+  c.points = static_cast<int64_t>(measured.size());
+  c.degenerate_points = static_cast<int64_t>(degenerate.size());
+  if (c.points < 3) return c;
+  // truth_from_tracks, fitted to the valid points.
+  const Eigen::Map<const Eigen::Matrix3Xd> from(measured[0].data(), 3, c.points);
+  const Eigen::Map<const Eigen::Matrix3Xd> to(truth_of[0].data(), 3, c.points);
+  const Eigen::Matrix4d m = Eigen::umeyama(from, to, false);
+  const Eigen::Matrix3d r = m.topLeftCorner<3, 3>();
+  const Eigen::Vector3d shift = m.topRightCorner<3, 1>();
+  c.aligned = true;
+  c.rotation_deg = Eigen::AngleAxisd(r).angle() * 180.0 / M_PI;
+  c.translation_m = shift.norm();
+  double ss = 0.0, mahalanobis = 0.0;
+  for (int64_t i = 0; i < c.points; ++i) {
+    const Eigen::Vector3d e = r * measured[i] + shift - truth_of[i];
+    ss += e.squaredNorm();
+    c.max_m = std::max(c.max_m, e.norm());
+    const Eigen::Matrix3d cov = r * covariance[i] * r.transpose();
+    mahalanobis += e.dot(cov.ldlt().solve(e));
+  }
+  c.rms_m = std::sqrt(ss / static_cast<double>(c.points));
+  c.mean_mahalanobis2 = mahalanobis / static_cast<double>(c.points);
+  double dss = 0.0;
+  for (size_t i = 0; i < degenerate.size(); ++i) {
+    const double e = (r * degenerate[i] + shift - truth_of_degenerate[i]).norm();
+    dss += e * e;
+    c.degenerate_max_m = std::max(c.degenerate_max_m, e);
+  }
+  if (!degenerate.empty()) c.degenerate_rms_m = std::sqrt(dss / degenerate.size());
   return c;
 }
 
