@@ -62,7 +62,7 @@ void WriteGrid(hid_t knots, const std::vector<std::array<int, 2>>& grid, const s
 }
 
 // The factor that turns dataset `name`'s values into the SI unit netlab keeps in memory, from
-// its "units" attribute (DESIGN.md: honoured or refused, never ignored; millimetres read as
+// its "units" attribute (docs/bad_input.md: honoured or refused, never ignored; millimetres read as
 // metres made a net 1000 times larger). No attribute: the SI unit, as netlab writes it. Anything
 // else is refused, naming the file, the dataset, the attribute and the units read.
 double UnitsFactor(hid_t file, const std::string& path, const std::string& name,
@@ -91,6 +91,58 @@ const std::vector<std::pair<std::string, double>> kLengthUnits = {
 const std::vector<std::pair<std::string, double>> kAreaUnits = {
     {"m^2", 1.0}, {"m2", 1.0}, {"cm^2", 1e-4}, {"mm^2", 1e-6}, {"mm2", 1e-6}, {"um^2", 1e-12}};
 
+// /knots/degenerate and the /degenerate group, when the tracks carry the flags.
+void WriteDegenerate(hid_t file, hid_t knots, const KnotTracks& tracks) {
+  if (tracks.degenerate.empty()) return;
+  const hsize_t t = tracks.time.size(), k = tracks.grid.size(), n = tracks.degenerate_points.size();
+  h5::WriteDataset(knots, "degenerate", H5T_NATIVE_UINT8, {t, k}, tracks.degenerate.data(), 4);
+  h5::SetUnits(knots, "degenerate", "1");
+  h5::Id group = h5::CreateGroup(file, "degenerate");
+  std::vector<int32_t> point;
+  std::vector<double> sigma, angle;
+  std::vector<std::string> reasons;
+  for (const auto& d : tracks.degenerate_points) {
+    point.insert(point.end(), {d.frame, d.knot});
+    sigma.push_back(d.sigma_m);
+    angle.push_back(d.ray_angle_deg);
+    reasons.push_back(d.reason);
+  }
+  if (n > 0) {  // (an empty dataset is not written: the bound and the flags say it all)
+    h5::WriteDataset(group.get(), "point", H5T_NATIVE_INT32, {n, 2}, point.data());
+    h5::SetUnits(group.get(), "point", "(frame, knot)");
+    h5::WriteDataset(group.get(), "sigma_m", H5T_NATIVE_DOUBLE, {n}, sigma.data());
+    h5::SetUnits(group.get(), "sigma_m", "m");
+    h5::WriteDataset(group.get(), "ray_angle_deg", H5T_NATIVE_DOUBLE, {n}, angle.data());
+    h5::SetUnits(group.get(), "ray_angle_deg", "deg");
+    h5::WriteStringDataset(group.get(), "reason", JoinNames(reasons));
+  }
+  h5::WriteDataset(group.get(), "max_sigma_m", H5T_NATIVE_DOUBLE, {1},
+                   &tracks.degenerate_max_sigma_m);
+  h5::SetUnits(group.get(), "max_sigma_m", "m");
+  h5::Id bound(H5Dopen2(group.get(), "max_sigma_m", H5P_DEFAULT));
+  h5::WriteStringAttribute(bound.get(), "from", tracks.degenerate_bound_from);
+}
+
+// /frame_time_spread_s and /camera_offsets, when the tracks carry them.
+void WriteClocks(hid_t file, const KnotTracks& tracks) {
+  if (!tracks.frame_time_spread_s.empty()) {
+    h5::WriteDataset(file, "frame_time_spread_s", H5T_NATIVE_DOUBLE, {tracks.time.size()},
+                     tracks.frame_time_spread_s.data());
+    h5::SetUnits(file, "frame_time_spread_s", "s");
+  }
+  if (tracks.camera_offset_frames.empty()) return;
+  const hsize_t c = tracks.camera_offset_frames.size();
+  h5::Id group = h5::CreateGroup(file, "camera_offsets");
+  h5::WriteStringAttribute(group.get(), "cameras", JoinNames(tracks.camera_names));
+  h5::WriteStringAttribute(group.get(), "applied", tracks.camera_offsets_applied ? "yes" : "no");
+  h5::WriteDataset(group.get(), "frames", H5T_NATIVE_DOUBLE, {c},
+                   tracks.camera_offset_frames.data());
+  h5::SetUnits(group.get(), "frames", "frames");
+  h5::WriteDataset(group.get(), "sigma_frames", H5T_NATIVE_DOUBLE, {c},
+                   tracks.camera_offset_sigma_frames.data());
+  h5::SetUnits(group.get(), "sigma_frames", "frames");
+}
+
 }  // namespace
 
 int KnotTracks::FindKnot(int row, int col, int net_index) const {
@@ -111,6 +163,12 @@ void KnotTracks::CheckConsistent() const {
   if (!reprojection_error_px.empty() && reprojection_error_px.size() != cells)
     fail("reprojection_error_px size");
   if (!frame_index.empty() && frame_index.size() != time.size()) fail("frame_index size");
+  if (!degenerate.empty() && degenerate.size() != cells) fail("degenerate size");
+  if (!frame_time_spread_s.empty() && frame_time_spread_s.size() != time.size())
+    fail("frame_time_spread_s size");
+  if ((!camera_offset_frames.empty() && camera_offset_frames.size() != camera_names.size()) ||
+      camera_offset_sigma_frames.size() != camera_offset_frames.size())
+    fail("camera offsets must hold one entry per camera name");
   for (const Outlier& o : outliers)
     if (o.camera < 0 || o.camera >= static_cast<int>(camera_names.size()) || o.knot < 0 ||
         o.knot >= static_cast<int>(grid.size()))
@@ -165,12 +223,84 @@ void WriteKnotTracks(const std::string& path, const KnotTracks& tracks) {
         h5::SetUnits(outliers.get(), "residual_px", "px");
       }
     }
+    WriteDegenerate(file.get(), knots.get(), tracks);
+    WriteClocks(file.get(), tracks);
     if (!tracks.scenario.empty()) h5::WriteStringDataset(file.get(), "scenario", tracks.scenario);
     WriteContactStart(file.get(), tracks.contact_start_s);
     H5Fflush(file.get(), H5F_SCOPE_GLOBAL);
   }
   RenameInto(partial, path);
 }
+
+namespace {
+
+void ExpectDims(hid_t f, const std::string& path, const std::string& name,
+                const std::vector<hsize_t>& dims) {
+  if (h5::DatasetDims(f, name) == dims) return;
+  std::string shape;
+  for (hsize_t d : dims) shape += (shape.empty() ? "" : ",") + std::to_string(d);
+  throw std::runtime_error(path + ": " + name + " must have shape [" + shape + "]");
+}
+
+void ReadDegenerate(hid_t f, const std::string& path, KnotTracks* tracks) {
+  if (!h5::Exists(f, "/knots/degenerate")) return;
+  const hsize_t t = tracks->time.size(), k = tracks->grid.size();
+  ExpectDims(f, path, "/knots/degenerate", {t, k});
+  tracks->degenerate.resize(t * k);
+  h5::ReadDataset(f, "/knots/degenerate", H5T_NATIVE_UINT8, tracks->degenerate.data());
+  if (h5::Exists(f, "/degenerate/max_sigma_m")) {
+    ExpectDims(f, path, "/degenerate/max_sigma_m", {1});
+    h5::ReadDataset(f, "/degenerate/max_sigma_m", H5T_NATIVE_DOUBLE,
+                    &tracks->degenerate_max_sigma_m);
+    h5::Id bound(H5Dopen2(f, "/degenerate/max_sigma_m", H5P_DEFAULT));
+    tracks->degenerate_bound_from = h5::ReadStringAttribute(bound.get(), "from");
+  }
+  if (!h5::Exists(f, "/degenerate/point")) return;
+  const auto dims = h5::DatasetDims(f, "/degenerate/point");
+  if (dims.size() != 2 || dims[1] != 2)
+    throw std::runtime_error(path + ": /degenerate/point must be [N,2]");
+  const hsize_t n = dims[0];
+  ExpectDims(f, path, "/degenerate/sigma_m", {n});
+  ExpectDims(f, path, "/degenerate/ray_angle_deg", {n});
+  std::vector<int32_t> point(2 * n);
+  std::vector<double> sigma(n), angle(n);
+  h5::ReadDataset(f, "/degenerate/point", H5T_NATIVE_INT32, point.data());
+  h5::ReadDataset(f, "/degenerate/sigma_m", H5T_NATIVE_DOUBLE, sigma.data());
+  h5::ReadDataset(f, "/degenerate/ray_angle_deg", H5T_NATIVE_DOUBLE, angle.data());
+  std::vector<std::string> reasons;
+  if (h5::Exists(f, "/degenerate/reason"))
+    reasons = SplitNames(h5::ReadStringDataset(f, "/degenerate/reason"));
+  for (hsize_t i = 0; i < n; ++i)
+    tracks->degenerate_points.push_back(
+        {point[2 * i], point[2 * i + 1], sigma[i], angle[i], i < reasons.size() ? reasons[i] : ""});
+}
+
+void ReadClocks(hid_t f, const std::string& path, KnotTracks* tracks) {
+  if (h5::Exists(f, "/frame_time_spread_s")) {
+    ExpectDims(f, path, "/frame_time_spread_s", {tracks->time.size()});
+    tracks->frame_time_spread_s.resize(tracks->time.size());
+    h5::ReadDataset(f, "/frame_time_spread_s", H5T_NATIVE_DOUBLE,
+                    tracks->frame_time_spread_s.data());
+  }
+  if (!h5::Exists(f, "/camera_offsets/frames")) return;
+  h5::Id group(H5Gopen2(f, "/camera_offsets", H5P_DEFAULT));
+  const std::vector<std::string> names =
+      SplitNames(h5::ReadStringAttribute(group.get(), "cameras"));
+  if (!tracks->camera_names.empty() && names != tracks->camera_names)
+    throw std::runtime_error(path + ": /camera_offsets names other cameras than /outliers");
+  tracks->camera_names = names;
+  ExpectDims(f, path, "/camera_offsets/frames", {names.size()});
+  ExpectDims(f, path, "/camera_offsets/sigma_frames", {names.size()});
+  tracks->camera_offset_frames.resize(names.size());
+  tracks->camera_offset_sigma_frames.resize(names.size());
+  h5::ReadDataset(f, "/camera_offsets/frames", H5T_NATIVE_DOUBLE,
+                  tracks->camera_offset_frames.data());
+  h5::ReadDataset(f, "/camera_offsets/sigma_frames", H5T_NATIVE_DOUBLE,
+                  tracks->camera_offset_sigma_frames.data());
+  tracks->camera_offsets_applied = h5::ReadStringAttribute(group.get(), "applied") == "yes";
+}
+
+}  // namespace
 
 KnotTracks ReadKnotTracks(const std::string& path) {
   h5::Id file = h5::OpenFileReadOnly(path);
@@ -279,6 +409,8 @@ KnotTracks ReadKnotTracks(const std::string& path) {
         tracks.outliers.push_back({obs[3 * i], obs[3 * i + 1], obs[3 * i + 2], residual[i]});
     }
   }
+  ReadDegenerate(f, path, &tracks);
+  ReadClocks(f, path, &tracks);
   if (h5::Exists(f, "/scenario")) tracks.scenario = h5::ReadStringDataset(f, "/scenario");
   if (h5::Exists(f, "/contact_start")) {
     if (h5::DatasetDims(f, "/contact_start") != std::vector<hsize_t>{1})

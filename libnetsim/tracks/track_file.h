@@ -15,6 +15,23 @@
 //   /outliers/residual_px         [N]        float64  px, NaN where no point was triangulated
 //                                 (optional, measured tracks: observations left out; the group's
 //                                 attribute "cameras" names the camera indices, one per line)
+//   /knots/degenerate             [T,K]      uint8    1 where a point was triangulated but its rays
+//                                 meet too close to parallel or head-on to place it (its largest
+//                                 sigma over the bound): valid 0 there, position and covariance
+//                                 kept (optional: measured tracks)
+//   /degenerate/point             [N,2]      int32    (frame number, knot index) of each one
+//   /degenerate/sigma_m           [N]        float64  m: its largest standard deviation
+//   /degenerate/ray_angle_deg     [N]        float64  deg: the angle its best-crossing rays meet at
+//   /degenerate/reason            string     one line per point, the reason in words
+//   /degenerate/max_sigma_m       [1]        float64  m: the bound (attribute "from": how chosen)
+//   /frame_time_spread_s          [T]        float64  s: per frame, the largest minus the smallest
+//                                 of the cameras' timestamps (optional: measured tracks whose
+//                                 /time is the cameras' mean timestamp)
+//   /camera_offsets/frames        [C]        float64  frames: each camera's clock offset against
+//                                 the reference (NaN: not determined)  (optional: measured tracks)
+//   /camera_offsets/sigma_frames  [C]        float64  frames: its standard deviation; the group's
+//                                 attributes "cameras" (names, one per line) and "applied"
+//                                 ("yes": the labels were moved to the frame time, else "no")
 //   /nodes/position               [T,N,3]    float64  m         (optional: simulations)
 //   /probes/<name>                [T,3]      float64  m         (optional: simulations)
 //   /scenario                     string     the scenario YAML  (optional: simulations)
@@ -53,6 +70,19 @@ struct KnotTracks {
   };
   std::vector<Outlier> outliers;              // observations left out (measured tracks)
   std::vector<std::string> camera_names;      // non-empty: /outliers is written
+  std::vector<uint8_t> degenerate;            // [T*K], or empty: /knots/degenerate
+  struct Degenerate {
+    int frame = 0, knot = 0;  // frame number, knot index
+    double sigma_m = 0.0, ray_angle_deg = 0.0;
+    std::string reason;       // one line
+  };
+  std::vector<Degenerate> degenerate_points;  // written with `degenerate`
+  double degenerate_max_sigma_m = 0.0;
+  std::string degenerate_bound_from;          // e.g. "10 x the median sigma (0.123 mm)"
+  std::vector<double> frame_time_spread_s;    // [T], or empty
+  // Per camera_names entry, or empty: /camera_offsets.
+  std::vector<double> camera_offset_frames, camera_offset_sigma_frames;
+  bool camera_offsets_applied = false;
   std::string source;                         // e.g. "netlab simulate"
   std::string scenario;                       // scenario YAML, or empty
   // s: the simulation's first contact of the net with a body; NaN: none (or not a simulation)
@@ -65,6 +95,9 @@ struct KnotTracks {
   }
   bool Valid(int frame, int knot) const {
     return valid[static_cast<size_t>(frame) * grid.size() + knot] != 0;
+  }
+  bool Degenerate(int frame, int knot) const {
+    return !degenerate.empty() && degenerate[static_cast<size_t>(frame) * grid.size() + knot] != 0;
   }
   // Index of knot (row, col) of net `net`, or -1.
   int FindKnot(int row, int col, int net_index = 0) const;

@@ -256,18 +256,24 @@ double DesignEffect(const std::vector<double>& x, int frames, int knots) {
 
 double QuadArea(const Vector3d c[4]) { return 0.5 * (c[2] - c[0]).cross(c[3] - c[1]).norm(); }
 
-void AddRow(ScoreRow* row, double e2, double d2) {
+// A compared point into a row: d2 always, its error only when informative.
+void AddRow(ScoreRow* row, double e2, double d2, bool informative) {
   row->points++;
+  row->mean_d2 += d2;
+  if (!informative) {
+    row->left_out++;
+    return;
+  }
   row->rms_m += e2;  // sum of squares until Finish
   row->max_m = std::max(row->max_m, std::sqrt(e2));
-  row->mean_d2 += d2;
 }
 void FinishRow(ScoreRow* row) {
   if (row->points == 0) {
     row->rms_m = row->mean_d2 = kNaN;
     return;
   }
-  row->rms_m = std::sqrt(row->rms_m / row->points);
+  const int n = row->points - row->left_out;
+  row->rms_m = n > 0 ? std::sqrt(row->rms_m / n) : kNaN;
   row->mean_d2 /= row->points;
 }
 
@@ -626,8 +632,10 @@ FittedAlignment FitAlignment(const ScoreInput& in, const ScoreSummary& s, Scorer
   return fitted;
 }
 
-// Sums over the compared knot-frames that stage 3 turns into the summary's numbers.
+// Sums over the compared knot-frames that stage 3 turns into the summary's numbers (errors in
+// m over the informative points; d2 over all).
 struct ResidualSums {
+  double weighted_e2 = 0, weights = 0;      // sum w |r|^2, sum w (w = 3 / trace of the covariance)
   double d2 = 0, e2 = 0;                    // sum d2, sum |r|^2
   double interp_sq = 0, meas_var = 0;       // sum sigma_interp^2, sum trace(Sigma_meas) / 3
   double baseline_d2 = 0, baseline_e2 = 0;  // the straight-line flight's sum d2, sum |r|^2
@@ -637,13 +645,15 @@ struct ResidualSums {
 // r and d2 of every measured point at the fit ([T*K], NaN where not compared), and the
 // simulated positions in the measured frame. A point the simulation does not reach is masked.
 void ResidualsAtFit(const KnotTracks& meas, const Scorer& scorer, const Fit& fit,
-                    ScoreResult* result, std::vector<Vector3d>* sim_pos, ResidualSums* sums) {
+                    ScoreResult* result, std::vector<Vector3d>* sim_pos, ResidualSums* sums,
+                    std::vector<double>* sigma) {
   result->time = meas.time;
   result->grid = meas.grid;
   const size_t cells = static_cast<size_t>(meas.frames()) * meas.knots();
   result->residual.assign(cells, Vector3d::Constant(kNaN));
   result->d2.assign(cells, kNaN);
   result->compared.assign(cells, 0);
+  sigma->assign(cells, kNaN);
   sim_pos->assign(cells, Vector3d::Constant(kNaN));
   for (const Point& pt : scorer.points()) {
     Vector3d r, a;
@@ -663,8 +673,57 @@ void ResidualsAtFit(const KnotTracks& meas, const Scorer& scorer, const Fit& fit
     result->d2[i] = r.dot(w * r);
     result->compared[i] = 1;
     (*sim_pos)[i] = a;
+    (*sigma)[i] = std::sqrt(std::max(
+        0.0, Eigen::SelfAdjointEigenSolver<Matrix3d>(pt.meas_cov, Eigen::EigenvaluesOnly)
+                 .eigenvalues()[2]));
+    const double weight = 3.0 / w.inverse().trace();
+    sums->weighted_e2 += weight * r.squaredNorm();
+    sums->weights += weight;
     sums->interp_sq += error * error;
     sums->meas_var += pt.meas_cov.trace() / 3;
+  }
+}
+
+// The informative points: compared, with their largest sigma within the bound (given, or a
+// multiple of the median over the compared points); the bound, the count left out and the
+// spread of the informative sigmas into the summary.
+void MarkInformative(const ScoreOptions& options, const std::vector<double>& sigma,
+                     ScoreResult* result) {
+  ScoreSummary& s = result->summary;
+  result->informative.assign(result->compared.size(), 0);
+  std::vector<double> all;
+  for (size_t i = 0; i < sigma.size(); ++i)
+    if (result->compared[i]) all.push_back(sigma[i]);
+  if (all.empty()) return;
+  std::sort(all.begin(), all.end());
+  s.median_sigma_m = all[all.size() / 2];
+  std::ostringstream from;
+  if (options.max_sigma_m > 0) {
+    s.sigma_bound_m = options.max_sigma_m;
+    from << "given";
+  } else {
+    s.sigma_bound_m = options.informative_sigma_factor * s.median_sigma_m;
+    from.precision(3);
+    from << options.informative_sigma_factor << " x the median sigma (" << s.median_sigma_m * 1e3
+         << " mm)";
+  }
+  s.sigma_bound_from = from.str();
+  std::vector<double> kept;
+  for (size_t i = 0; i < sigma.size(); ++i) {
+    if (!result->compared[i]) continue;
+    if (sigma[i] <= s.sigma_bound_m) {
+      result->informative[i] = 1;
+      kept.push_back(sigma[i]);
+      continue;
+    }
+    ++s.left_out;
+    s.left_out_max_sigma_m = std::max(s.left_out_max_sigma_m, sigma[i]);
+    s.left_out_max_error_m = std::max(s.left_out_max_error_m, result->residual[i].norm());
+  }
+  if (kept.size() >= 2) {
+    std::sort(kept.begin(), kept.end());
+    const double p10 = kept[kept.size() / 10], p90 = kept[kept.size() * 9 / 10];
+    s.sigma_spread = p10 > 0 ? p90 / p10 : kNaN;
   }
 }
 
@@ -789,11 +848,13 @@ void TabulateFrame(int t, const KnotTracks& meas, const std::vector<Vector3d>& s
     if (!result->compared[i]) continue;
     const double e2 = result->residual[i].squaredNorm();
     const int knot_class = result->knot_class[k];
+    const bool informative = result->informative[i] != 0;
     sums->d2 += result->d2[i];
+    AddRow(&s.per_knot[k], e2, result->d2[i], informative);
+    AddRow(&s.per_class[knot_class], e2, result->d2[i], informative);
+    if (!informative) continue;  // its error in m says nothing: d2 only
     sums->e2 += e2;
     s.max_m = std::max(s.max_m, std::sqrt(e2));
-    AddRow(&s.per_knot[k], e2, result->d2[i]);
-    AddRow(&s.per_class[knot_class], e2, result->d2[i]);
     class_sq[knot_class] += e2;
     class_n[knot_class]++;
     cm += meas.Position(t, k);
@@ -824,7 +885,9 @@ void CornerPolygon(int t, const KnotTracks& meas, const SimInterpolant& interp, 
       all_m = all_s = false;
       continue;
     }
-    all_m = all_m && meas.Valid(t, k);
+    // A corner left out of the errors (its sigma beyond the bound) leaves the polygon out too.
+    const size_t i = static_cast<size_t>(t) * meas.knots() + k;
+    all_m = all_m && meas.Valid(t, k) && !(result->compared[i] && !result->informative[i]);
     pm[c] = meas.Position(t, k);
     Vector3d q;
     if (interp.At(meas.time[t] + fit.tau, k, &q, nullptr, nullptr))
@@ -870,7 +933,9 @@ ResidualSums CompareAtFit(const ScoreInput& in, const Scorer& scorer,
   const int frames = meas.frames(), knots = meas.knots();
   ResidualSums sums;
   std::vector<Vector3d> sim_pos;  // measured frame
-  ResidualsAtFit(meas, scorer, fit, result, &sim_pos, &sums);
+  std::vector<double> sigma;      // each compared point's largest sigma, m
+  ResidualsAtFit(meas, scorer, fit, result, &sim_pos, &sums, &sigma);
+  MarkInformative(in.options, sigma, result);
   const std::map<int, std::array<int, 2>> extent = NetExtents(meas);
   result->knot_class = KnotClasses(meas, extent);
   const int first_frame = FirstComparedFrame(*result, frames, knots);
@@ -905,9 +970,10 @@ void ConsistencyTest(const ScoreInput& in, const ResidualSums& sums, int paramet
       }
   for (uint8_t c : result->compared) s.points += c;
   if (s.points == 0) Fail(NoOverlapMessage(in));
-  const int n = s.points;
-  s.rms_m = std::sqrt(sums.e2 / n);
+  const int n = s.points, informative = s.points - s.left_out;
+  s.rms_m = informative > 0 ? std::sqrt(sums.e2 / informative) : kNaN;
   s.rms_percent_of_side = s.side_m > 0 ? 100.0 * s.rms_m / s.side_m : kNaN;
+  s.weighted_rms_m = sums.weights > 0 ? std::sqrt(sums.weighted_e2 / sums.weights) : kNaN;
   s.mean_d2 = sums.d2 / n;
   s.fitted_parameters = p;
   s.dof = 3.0 * n - p;
@@ -1063,11 +1129,45 @@ ScoreRow PhaseRow(const PhaseSpan& span, const KnotTracks& meas, const ScoreResu
     if (meas.time[t] < lo || meas.time[t] >= hi) continue;
     for (int k = 0; k < knots; ++k) {
       const size_t i = static_cast<size_t>(t) * knots + k;
-      if (result.compared[i]) AddRow(&row, result.residual[i].squaredNorm(), result.d2[i]);
+      if (result.compared[i])
+        AddRow(&row, result.residual[i].squaredNorm(), result.d2[i], result.informative[i]);
     }
   }
   FinishRow(&row);
   return row;
+}
+
+// The headline: the errors, over how many points, how many were left out and why, in one
+// sentence; the covariance-weighted RMS beside it when the sigmas differ strongly.
+std::string Headline(const ScoreSummary& s) {
+  std::ostringstream o;
+  o.setf(std::ios::fixed);
+  auto mm = [](double m) {
+    std::ostringstream v;
+    v.setf(std::ios::fixed);
+    const double x = m * 1e3;
+    v.precision(x >= 100 ? 0 : x >= 10 ? 1 : x >= 1 ? 2 : 3);
+    v << x << " mm";
+    return v.str();
+  };
+  const int informative = s.points - s.left_out;
+  o << "RMS " << mm(s.rms_m) << " and largest " << mm(s.max_m) << " over ";
+  if (s.left_out == 0) {
+    o << "all " << s.points << " compared knot-frames (every sigma within " << mm(s.sigma_bound_m)
+      << ")";
+  } else {
+    o << informative << " of the " << s.points << " compared knot-frames; " << s.left_out
+      << " left out of both because their own sigma (up to " << mm(s.left_out_max_sigma_m)
+      << ") exceeds " << mm(s.sigma_bound_m) << " (" << s.sigma_bound_from
+      << "): they count in d2 only";
+  }
+  if (s.degenerate > 0)
+    o << "; " << s.degenerate << (s.left_out > 0 ? " more" : "")
+      << " flagged degenerate by the triangulation (rays nearly parallel or head-on) are not "
+         "compared";
+  if (s.left_out > 0 || s.sigma_spread > 2.0) o << "; covariance-weighted RMS " << mm(s.weighted_rms_m);
+  o << ".";
+  return o.str();
 }
 
 // Stage 4: where the contact phase starts, and the per-phase table.
@@ -1125,6 +1225,7 @@ ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOpti
   ScoreResult result;
   ScoreSummary& s = result.summary;
   s.masked = c.masked;
+  for (uint8_t d : meas.degenerate) s.degenerate += d != 0;
   Scorer scorer(meas, sim, sim_knot, std::move(c.points), options);
   StartSummary(in, &s);
 
@@ -1141,6 +1242,7 @@ ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOpti
   SummariseAlignment(options, fitted, &s);
   CheckSampling(options, sums, &s);
   DescribeUncertainties(in, &s);
+  s.headline = Headline(s);
 
   // 4. Phases, from the simulated corner-polygon area: ejection until it first reaches half its
   // maximum, spreading until the maximum opening, opened after it, contact from contact_time_s.
@@ -1158,8 +1260,9 @@ std::string ScoreSummary::BriefReport() const {
   o.precision(4);
   o << "score: " << points << " knot-frames (" << frames << " frames x " << knots << " knots, "
     << masked << " masked), alignment " << AlignmentName(alignment) << "\n";
-  o << "  RMS " << rms_m * 1e3 << " mm (" << rms_percent_of_side << " % of the " << side_m
-    << " m side), max " << max_m * 1e3 << " mm; corner/edge/inner RMS " << per_class[0].rms_m * 1e3
+  o << "  " << headline << "\n";
+  o << "  RMS " << rms_percent_of_side << " % of the " << side_m
+    << " m side; corner/edge/inner RMS " << per_class[0].rms_m * 1e3
     << " / " << per_class[1].rms_m * 1e3 << " / " << per_class[2].rms_m * 1e3 << " mm\n";
   o << "  time offset " << time_offset_s * 1e3 << " +- " << time_offset_sigma_s * 1e3
     << " ms; Sigma_sim " << sim_uncertainty << "\n";

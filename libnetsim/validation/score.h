@@ -22,6 +22,15 @@
 // window) times the within-frame design effect; the scaled chi^2 of that inflation c
 // (sum d2 / c ~ chi^2(nu / c), Satterthwaite) gives the p-value, i.e. an effective sample size
 // N / c. The verdict is "consistent" when p >= significance.
+//
+// Errors in millimetres (RMS, maximum, per knot, class, phase and frame, the corner polygon and
+// the centroid) are over the informative points only: a measured point whose own standard
+// deviation (the square root of its covariance's largest eigenvalue) exceeds a bound (given, or
+// 10 x the median over the compared points) says nothing about the model in millimetres; d2
+// weighs it by its covariance, so it stays in the test. Points the triangulation flagged
+// degenerate (/knots/degenerate) are not measured: masked, and counted apart. Beside the RMS, a
+// covariance-weighted RMS (each point weighed by 1 / its mean variance) for tracks whose points
+// differ strongly in sigma.
 
 #include <array>
 #include <cstdint>
@@ -40,7 +49,7 @@ enum class Alignment { kNone, kTime, kRigid, kTimeAndRigid };
 bool ParseAlignment(const std::string& text, Alignment* alignment);
 std::string AlignmentName(Alignment alignment);
 
-enum class KnotClass { kCorner = 0, kEdge = 1, kInner = 2 };  // 2, 3, 4 links (DESIGN.md)
+enum class KnotClass { kCorner = 0, kEdge = 1, kInner = 2 };  // 2, 3, 4 links
 inline constexpr const char* kKnotClassNames[3] = {"corner", "edge", "inner"};
 
 struct ScoreOptions {
@@ -65,6 +74,10 @@ struct ScoreOptions {
   // The simulation's output is "too sparse" when its interpolation error (RMS) exceeds this
   // fraction of the measurement's RMS standard deviation.
   double max_interpolation_fraction = 0.1;
+  // m: a compared point whose largest measurement sigma exceeds this is left out of the errors
+  // in millimetres (not of d2). 0: informative_sigma_factor x the median over compared points.
+  double max_sigma_m = 0.0;
+  double informative_sigma_factor = 10.0;
 
   bool IsValid(std::string* error) const;
 };
@@ -73,8 +86,9 @@ struct ScoreOptions {
 struct ScoreRow {
   std::string name;
   int points = 0;          // knot-frames compared
-  double rms_m = 0.0;      // RMS of |r|, m (NaN when no points)
-  double max_m = 0.0;      // largest |r|, m
+  int left_out = 0;        // of those, not informative: out of rms_m and max_m (not of mean_d2)
+  double rms_m = 0.0;      // RMS of |r| over the informative points, m (NaN when none)
+  double max_m = 0.0;      // largest |r| of those, m
   double mean_d2 = 0.0;    // mean d2 (expected 3 when consistent)
   double start_s = 0.0;    // phases: measured time span [start_s, end_s)
   double end_s = 0.0;
@@ -86,11 +100,26 @@ struct ScoreSummary {
   int knots = 0;
   int points = 0;  // knot-frames compared
   int masked = 0;  // measured knot-frames not compared (invalid, or outside the simulation)
-  // Errors, measured frame.
+  int degenerate = 0;  // of the masked, flagged degenerate by the triangulation
+  // The informative points: the compared ones whose largest sigma is within the bound.
+  int left_out = 0;                  // compared points beyond it: in d2, not in the errors below
+  double sigma_bound_m = 0.0;        // the bound
+  std::string sigma_bound_from;      // "given", or "10 x the median sigma (0.12 mm)"
+  double median_sigma_m = 0.0;       // over the compared points
+  double left_out_max_sigma_m = 0.0;  // the largest sigma left out (0: none)
+  double left_out_max_error_m = 0.0;  // the largest error left out (0: none)
+  // Errors over the informative points, measured frame.
   double rms_m = 0.0;
   double rms_percent_of_side = 0.0;  // of the net's side (largest corner-to-corner edge at t0)
   double max_m = 0.0;
   double side_m = 0.0;
+  // sqrt(sum w |r|^2 / sum w), w = 3 / trace of the point's total covariance, over every
+  // compared point; and the spread of the informative points' sigma (90th / 10th percentile):
+  // above 2 the weighted RMS is given beside the RMS in the headline.
+  double weighted_rms_m = 0.0;
+  double sigma_spread = 1.0;
+  // One sentence: the RMS and maximum, over how many points, how many were left out and why.
+  std::string headline;
   // The consistency test.
   double mean_d2 = 0.0;
   double dof = 0.0;             // nu = 3 N - p
@@ -150,6 +179,7 @@ struct ScoreResult {
   std::vector<Eigen::Vector3d> residual;  // [T*K] m, measured frame
   std::vector<double> d2;           // [T*K]
   std::vector<uint8_t> compared;    // [T*K] 1 where r and d2 are defined
+  std::vector<uint8_t> informative;  // [T*K] 1 where compared and within the sigma bound
   std::vector<std::array<double, 3>> rms_per_class;  // [T] m, NaN where a class has no point
   std::vector<double> area_measured, area_simulated;  // [T] corner polygon, m^2 (NaN: a corner
                                                       // is missing)

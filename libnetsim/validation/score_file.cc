@@ -66,6 +66,10 @@ void WriteScore(const std::string& path, const ScoreResult& r) {
     Write(f, "d2", {t, k}, r.d2.data(), "1");
     h5::WriteDataset(f, "compared", H5T_NATIVE_UINT8, {t, k}, r.compared.data());
     h5::SetUnits(f, "compared", "1");
+    if (!r.informative.empty()) {
+      h5::WriteDataset(f, "informative", H5T_NATIVE_UINT8, {t, k}, r.informative.data());
+      h5::SetUnits(f, "informative", "1");
+    }
 
     h5::Id knots = h5::CreateGroup(f, "knots");
     std::vector<int32_t> grid;
@@ -120,6 +124,10 @@ void WriteScore(const std::string& path, const ScoreResult& r) {
     WriteScalar(g, "rms_mm", s.rms_m * 1e3, "mm");
     WriteScalar(g, "rms_percent_of_side", s.rms_percent_of_side, "%");
     WriteScalar(g, "max_mm", s.max_m * 1e3, "mm");
+    WriteScalar(g, "left_out_points", s.left_out, "knot-frames");
+    WriteScalar(g, "sigma_bound_mm", s.sigma_bound_m * 1e3, "mm");
+    WriteScalar(g, "weighted_rms_mm", s.weighted_rms_m * 1e3, "mm");
+    WriteScalar(g, "degenerate_points", s.degenerate, "knot-frames");
     WriteScalar(g, "side_m", s.side_m, "m");
     WriteScalar(g, "mean_d2", s.mean_d2, "1");
     WriteScalar(g, "dof", s.dof, "1");
@@ -138,6 +146,7 @@ void WriteScore(const std::string& path, const ScoreResult& r) {
     WriteScalar(g, "max_area_time_simulated_s", s.max_area_time_simulated_s, "s");
     WriteScalar(g, "contact_time_s", s.contact_time_s, "s");
     h5::WriteStringAttribute(g, "sim_uncertainty", s.sim_uncertainty);
+    h5::WriteStringAttribute(g, "headline", s.headline);
     h5::WriteStringAttribute(g, "contact_from", s.contact_from);
     H5Fflush(f, H5F_SCOPE_GLOBAL);
   }

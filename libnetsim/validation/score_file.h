@@ -6,6 +6,8 @@
 //   /residual                      [T,K,3]   m     measured - simulated, measured frame
 //   /d2                            [T,K]     1     Mahalanobis distance squared
 //   /compared                      [T,K]     1     1 where residual and d2 are defined
+//   /informative                   [T,K]     1     1 where compared and its sigma within the
+//                                                  bound: the points the errors in m are over
 //   /knots/grid                    [K,2]           (row, col)
 //   /knots/class                   [K]             0 corner, 1 edge, 2 inner
 //   /knots/rms_m, max_m, mean_d2, points   [K]     per knot

@@ -268,7 +268,7 @@ void WriteHead(std::ostringstream& o, const ScoreSummary& s) {
        "border-radius:6px;margin:16px 0}\n"
     << ".ok{background:#e3f4e8;border-left:6px solid #009e73}.bad{background:#fbe6dc;"
        "border-left:6px solid #d55e00}\n"
-    << ".numbers{display:grid;grid-template-columns:repeat(4,1fr);gap:8px;margin:12px 0}\n"
+    << ".numbers{display:grid;grid-template-columns:repeat(5,1fr);gap:8px;margin:12px 0}\n"
     << ".numbers div{background:#f4f4f4;border-radius:6px;padding:8px 12px}.numbers b{display:"
        "block;font-size:20px}\n"
     << ".grid2{display:grid;grid-template-columns:1fr 1fr;gap:18px}.caption{font-size:13px;"
@@ -278,6 +278,7 @@ void WriteHead(std::ostringstream& o, const ScoreSummary& s) {
     << "table{border-collapse:collapse;font-size:13px}td,th{border-bottom:1px solid #ddd;"
        "padding:3px 10px;text-align:right}th{background:#f4f4f4}td:first-child{text-align:left}\n"
     << ".notes{background:#fff8e1;padding:8px 16px;border-radius:6px;font-size:13px}\n"
+    << ".headline{font-size:15px;margin:8px 0}\n"
     << "</style></head><body>\n";
 }
 
@@ -292,20 +293,27 @@ void WriteVerdict(std::ostringstream& o, const ScoreSummary& s, const ReportInfo
     << "</b> with the measurement uncertainty: mean d² = " << Fixed(s.mean_d2, 2)
     << " where 3 is expected; the test rejects above " << Fixed(s.critical_mean_d2, 2)
     << " (p = " << Num(s.p_value, 3) << ").</div>\n";
+  const int informative = s.points - s.left_out;
   o << "<div class=\"numbers\">"
     << "<div>RMS error<b>" << Fixed(s.rms_m * 1e3, 2) << " mm</b>"
     << Fixed(s.rms_percent_of_side, 2) << " % of the " << Fixed(s.side_m, 2) << " m side</div>"
-    << "<div>largest error<b>" << Fixed(s.max_m * 1e3, 2) << " mm</b>over " << s.points
-    << " knot-frames</div>"
+    << "<div>largest error<b>" << Fixed(s.max_m * 1e3, 2) << " mm</b>over " << informative
+    << " knot-frames" << (s.left_out > 0 ? " (" + std::to_string(s.left_out) + " left out)" : "")
+    << "</div>"
+    << "<div>covariance-weighted RMS<b>" << Fixed(s.weighted_rms_m * 1e3, 2)
+    << " mm</b>each point weighed by 1 / its variance</div>"
     << "<div>time offset<b>" << Fixed(s.time_offset_s * 1e3, 3) << " ms</b>± "
     << Fixed(s.time_offset_sigma_s * 1e3, 3) << " ms (t_sim = t_measured + offset)</div>"
     << "<div>skill<b>" << Fixed(s.skill, 3) << "</b>1 = perfect, 0 = no better than straight-line "
     << "flight (" << Fixed(s.baseline_rms_m * 1e3, 1) << " mm)</div></div>\n";
+  o << "<p class=\"headline\">" << Escape(s.headline) << "</p>\n";
   o << "<p class=\"caption\">d² is each knot's squared error in units of its measurement "
        "covariance (Σ_sim: "
     << Escape(s.sim_uncertainty) << "); about 3 on average when the simulation is right. "
     << s.frames << " frames × " << s.knots << " knots, " << s.masked
-    << " knot-frames masked (not measured). Errors are correlated in time (τ_int "
+    << " knot-frames masked (not measured"
+    << (s.degenerate > 0 ? ", " + std::to_string(s.degenerate) + " of them degenerate" : "")
+    << "). Errors are correlated in time (τ_int "
     << Fixed(s.tau_int, 1) << " frames) and across a frame's knots (×" << Fixed(s.design_effect, 2)
     << "): the test counts " << Fixed(s.effective_points, 0) << " independent points.</p>\n";
 }

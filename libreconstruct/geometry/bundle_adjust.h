@@ -72,6 +72,18 @@ struct SequenceOptions {
   int threads = 2;
   // Labels in state "needs review" are left out unless this is set.
   bool use_unreviewed = false;
+  // A triangulated point whose largest standard deviation (the square root of its covariance's
+  // largest eigenvalue) exceeds the bound is degenerate: its rays meet too close to parallel (or
+  // anti-parallel) to place it. It is kept out of the valid points and reported with the reason.
+  // The bound is max_sigma_m when > 0, else degenerate_sigma_factor x the median over the
+  // sequence's points.
+  double max_sigma_m = 0.0;
+  double degenerate_sigma_factor = 10.0;
+  // Per rig camera: its sub-frame clock offset in frames (its frame t is exposed at frame time
+  // t + offset). Empty, or all zero: the cameras are taken as simultaneous. Otherwise every
+  // label of a camera with a non-zero offset is moved to the frame time along its own 2D track
+  // (CameraOffsets, camera_offsets.h) before triangulation.
+  std::vector<double> camera_offset_frames;
   std::function<void(const std::string& stage, double fraction)> progress;
 };
 
@@ -82,6 +94,17 @@ struct ObservationOutlier {
   double residual_px = 0.0;  // NaN where the point was not triangulated at all
 };
 
+// A triangulated point left out as degenerate (SequenceOptions::max_sigma_m).
+struct DegeneratePoint {
+  int frame = 0;              // frame number (labels' frame_index)
+  int knot = 0;               // row * cols + col
+  double sigma_m = 0.0;       // its largest standard deviation, m
+  // The angle (0..180 deg) at which its two best-crossing rays meet at the point: near 0 the
+  // cameras look along one line, near 180 they face each other across it.
+  double ray_angle_deg = 0.0;
+  std::string reason;         // one sentence: the cameras, the angle, sigma against the bound
+};
+
 struct SequenceResult {
   int rows = 0, cols = 0;
   std::vector<int> frame_index;         // [T]
@@ -90,10 +113,19 @@ struct SequenceResult {
   std::vector<Eigen::Matrix3d> covariance;  // [T*K] m^2
   std::vector<double> rms_px;             // [T*K] RMS inlier reprojection residual, NaN if invalid
   std::vector<ObservationOutlier> outliers;
+  // Degenerate points: valid 0, their position and covariance kept (degenerate[i] = 1).
+  std::vector<uint8_t> degenerate;        // [T*K]
+  std::vector<DegeneratePoint> degenerate_points;
+  double max_sigma_m = 0.0;               // the bound used
+  std::string max_sigma_from;             // "given" or "10 x the median sigma (0.43 mm)"
+  double median_sigma_m = 0.0;            // over the points before the degenerate were taken out
+  // Labels of a camera with a clock offset that could not be moved to the frame time (no label
+  // of the knot in a neighbouring frame of that camera): left out.
+  int64_t offset_unshifted = 0;
   calib::Rig rig;                         // as given, or refined (kRig)
 
   int64_t candidates = 0;     // knot-frames with two or more views
-  int64_t triangulated = 0;   // of those, valid
+  int64_t triangulated = 0;   // of those, valid (degenerate points not counted)
   int64_t two_view = 0;       // of those, from exactly two views: a mislabel along the epipolar
                               // line cannot be seen in them (the smoothness prior can)
   int64_t single_view = 0;    // knot-frames with exactly one view (left out)

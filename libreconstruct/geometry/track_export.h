@@ -23,28 +23,40 @@
 
 namespace netlab::recon {
 
-// The reconstruction as knot tracks: time = frame_index / fps (s), the knots of the rows x cols
-// net in row-major order, positions, validity, covariances, RMS reprojection residuals, the
-// outlier observations and the rig's camera names, the given source.
+// The reconstruction as knot tracks: time[t] the time of frame row t (s; frame_index / fps, or
+// the cameras' timestamps), the knots of the rows x cols net in row-major order, positions,
+// validity, covariances, RMS reprojection residuals, the outlier observations, the degenerate
+// points and the rig's camera names, the given source.
+netsim::KnotTracks TracksFromSequence(const SequenceResult& result,
+                                      const std::vector<double>& time_s,
+                                      const std::string& source);
+// The same with time = frame_index / fps.
 netsim::KnotTracks TracksFromSequence(const SequenceResult& result, double fps,
                                       const std::string& source);
 
-// Reconstructed tracks against true ones (e.g. the simulation that was rendered).
+// Reconstructed tracks against true ones (e.g. the simulation that was rendered), every number in
+// the truth's frame: the tracks are first moved by the best rigid motion onto the truth (a rig
+// calibrated from a foil or markers has its own world frame), fitted to the valid points.
 struct TruthComparison {
-  int64_t points = 0;         // valid knot-frames the truth has a position for
-  double rms_m = 0.0;         // RMS 3D error over those, m; 0 without any
-  double max_m = 0.0;         // largest 3D error, m
-  double aligned_rms_m = 0.0;  // RMS error after the best rigid motion onto the truth, m (needs
-                               // three points; 0 otherwise)
-  double mean_mahalanobis2 = 0.0;  // mean e' C^-1 e, C the point's covariance: 3 when the
-                                   // covariances are right; 0 without any
+  int64_t points = 0;        // valid knot-frames the truth has a position for
+  bool aligned = false;      // three points or more: the motion was fitted, the numbers below
+                             // are set (all 0 otherwise)
+  double rms_m = 0.0;        // RMS 3D error over the valid points, m
+  double max_m = 0.0;        // largest 3D error, m
+  double mean_mahalanobis2 = 0.0;  // mean e' C^-1 e, C the point's covariance turned into the
+                                   // truth's frame: 3 when the covariances are right
+  // The motion (truth_from_tracks): how far the tracks' frame is from the truth's.
+  double rotation_deg = 0.0, translation_m = 0.0;
+  // The degenerate points (/knots/degenerate) the truth has a position for, through the same
+  // motion: their RMS and largest error, m.
+  int64_t degenerate_points = 0;
+  double degenerate_rms_m = 0.0, degenerate_max_m = 0.0;
 };
 
 // Compares every valid point of `tracks` (which must carry covariances) with the truth's knot at
 // the same grid position, linearly interpolated to the point's time; points outside the truth's
-// time span, or where it lacks the knot or a valid position, are left out. The aligned RMS is
-// after the best rigid motion (Umeyama, no scale) of the points onto the truth: a rig calibrated
-// from a foil or markers has its own world frame.
+// time span, or where it lacks the knot or a valid position, are left out. The rigid motion is
+// Umeyama's (no scale) over the valid points; the degenerate points are compared apart.
 TruthComparison CompareWithTruth(const netsim::KnotTracks& tracks,
                                  const netsim::KnotTracks& truth);
 

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <random>
 #include <string>
+#include <utility>
 
 #include "calibration/rig.h"
 #include "libnetsim/tracks/track_file.h"
@@ -175,6 +176,158 @@ TEST_F(TriangulateCommand, TheOutlierThresholdFollowsTheNoiseOrAFixedOneWarns) {
   EXPECT_NEAR(automatic["outlier_threshold_px"].number(), 10.0, 1.5);
   EXPECT_LT(automatic["outliers"].number(), fixed["outliers"].number());
   EXPECT_GE(automatic["outliers"].number(), 1);
+}
+
+TEST_F(TriangulateCommand, ADegeneratePointIsCountedAndSaidNotValid) {
+  // Knot 15 of frame 3 seen only by cam0 and cam3, nearly on the line between them: head-on.
+  const Eigen::Vector3d head_on(1.0, 0.49, 0.49);
+  for (int c = 0; c < 4; ++c) labels_.at(c, 3, 15) = recon::Label{};
+  for (int c : {0, 3}) {
+    recon::Label& l = labels_.at(c, 3, 15);
+    l.px = rig_.cameras[c].ProjectWorld(head_on);
+    l.source = recon::LabelSource::kManual;
+    l.state = recon::LabelState::kAccepted;
+  }
+  recon::WriteLabels(Path("labels.h5"), labels_);
+  const auto r = RunNetlab(Base() + "--labels " + Path("labels.h5") + " --out " +
+                           Path("tracks.h5") + " --sigma-px 0.2 --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const Json json = LastJson(r.out);
+  EXPECT_EQ(json["degenerate_points"].number(), 1);
+  EXPECT_EQ(json["triangulated"].number(), kFrames * kRows * kCols - 2);
+  EXPECT_GT(json["max_sigma_m"].number(), 0.0);
+  EXPECT_NE(r.err.find("1 degenerate point left out: largest sigma over"), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("frame 3, knot (3,3): the rays of cam0 and cam3 meet at"),
+            std::string::npos)
+      << r.err;
+  const netlab::netsim::KnotTracks tracks = netlab::netsim::ReadKnotTracks(Path("tracks.h5"));
+  EXPECT_FALSE(tracks.Valid(3, 15));
+  EXPECT_TRUE(tracks.Degenerate(3, 15));
+  ASSERT_EQ(tracks.degenerate_points.size(), 1u);
+  EXPECT_NE(tracks.degenerate_points[0].reason.find("nearly head-on"), std::string::npos);
+  // A bound the user gives over its sigma keeps it.
+  const auto kept = RunNetlab(Base() + "--labels " + Path("labels.h5") + " --out " +
+                              Path("kept.h5") + " --sigma-px 0.2 --max-sigma-mm 100000 --json");
+  ASSERT_EQ(kept.status, 0) << kept.err;
+  EXPECT_EQ(LastJson(kept.out)["degenerate_points"].number(), 0);
+}
+
+// A net flying across the rig, turning: every camera sees its knots move a few px a frame.
+Eigen::Vector3d Moving(double frame, int k) {
+  const double s = frame / kFps;
+  const Eigen::Vector3d local(0.0, (k % kCols - 1.5) * 0.1, (k / kCols - 1.5) * 0.1);
+  const Eigen::Matrix3d turn =
+      Eigen::AngleAxisd(1.5 * s, Eigen::Vector3d(0.3, 0.2, 1.0).normalized()).toRotationMatrix();
+  return Eigen::Vector3d(0.9 + 0.5 * s, -0.1 + 0.35 * s, -0.05 + 0.25 * s) + turn * local;
+}
+
+TEST_F(TriangulateCommand, EstimatesAndAppliesACamerasClockOffset) {
+  // cam2 exposes each frame 0.3 frames late; the same labels of a synchronised rig beside them.
+  auto write = [&](const std::string& name, double late) {
+    std::mt19937_64 rng(2);
+    std::normal_distribution<double> noise(0.0, 0.1);
+    for (int c = 0; c < 4; ++c)
+      for (int t = 0; t < kFrames; ++t)
+        for (int k = 0; k < kRows * kCols; ++k)
+          labels_.at(c, t, k).px =
+              rig_.cameras[c].ProjectWorld(Moving(t + (c == 2 ? late : 0.0), k)) +
+              Eigen::Vector2d(noise(rng), noise(rng));
+    recon::WriteLabels(Path(name), labels_);
+  };
+  write("synchronised.h5", 0.0);
+  write("labels.h5", 0.3);
+  const std::string run = Base() + "--labels " + Path("labels.h5") + " --sigma-px 0.1 --json ";
+  auto r = RunNetlab(run + "--out " + Path("estimated.h5") + " --estimate-offsets");
+  ASSERT_EQ(r.status, 0) << r.err;
+  Json json = LastJson(r.out);
+  EXPECT_NEAR(json["camera_offsets_frames"]["cam2"].number(), 0.3, 0.05);
+  EXPECT_NEAR(json["camera_offsets_frames"]["cam1"].number(), 0.0, 0.05);
+  EXPECT_EQ(json["camera_offsets_frames"]["cam0"].number(), 0.0);
+  EXPECT_GT(json["camera_offsets_sigma_frames"]["cam2"].number(), 0.0);
+  EXPECT_LT(json["camera_offsets_sigma_frames"]["cam2"].number(), 0.05);
+  EXPECT_FALSE(json["camera_offsets_applied"].boolean());
+  EXPECT_NE(r.err.find("cam2: +0.3"), std::string::npos) << r.err;
+  r = RunNetlab(run + "--out " + Path("applied.h5") + " --apply-offsets");
+  ASSERT_EQ(r.status, 0) << r.err;
+  json = LastJson(r.out);
+  EXPECT_TRUE(json["camera_offsets_applied"].boolean());
+  // Moved to the frame time, the points are as good as the synchronised rig's.
+  ASSERT_EQ(RunNetlab(Base() + "--labels " + Path("synchronised.h5") +
+                      " --sigma-px 0.1 --quiet --out " + Path("synchronised_tracks.h5"))
+                .status,
+            0);
+  const auto synchronised = netlab::netsim::ReadKnotTracks(Path("synchronised_tracks.h5"));
+  const auto as_is = netlab::netsim::ReadKnotTracks(Path("estimated.h5"));
+  const auto applied = netlab::netsim::ReadKnotTracks(Path("applied.h5"));
+  EXPECT_TRUE(applied.camera_offsets_applied);
+  ASSERT_EQ(applied.camera_offset_frames.size(), 4u);
+  auto rms = [&](const netlab::netsim::KnotTracks& tracks) {
+    double ss = 0.0;
+    int n = 0;
+    for (int t = 0; t < kFrames; ++t)
+      for (int k = 0; k < kRows * kCols; ++k)
+        if (tracks.Valid(t, k)) ss += (tracks.Position(t, k) - Moving(t, k)).squaredNorm(), ++n;
+    return std::sqrt(ss / n);
+  };
+  EXPECT_LT(rms(applied), 1.1 * rms(synchronised)) << rms(applied) << " vs " << rms(synchronised);
+  EXPECT_GT(rms(as_is), 1.1 * rms(synchronised)) << rms(as_is) << " vs " << rms(synchronised);
+}
+
+TEST_F(TriangulateCommand, TimesComeFromTheRecordingsTimestamps) {
+  recon::WriteLabels(Path("labels.h5"), labels_);
+  // cam1 0.1 ms behind the others; cam3 without timestamps.
+  auto write = [&](const std::string& name, double late_s, int frames, bool backwards = false) {
+    std::ofstream out(Path(name));
+    out.precision(12);
+    out << "frame_index,time_s\n";
+    for (int f = 0; f < frames; ++f)
+      out << f << "," << (backwards && f == 5 ? 0.0 : 1.0 + f / kFps + late_s) << "\n";
+  };
+  write("cam0.csv", 0.0, kFrames);
+  write("cam1.csv", 1e-4, kFrames);
+  write("cam2.csv", 0.0, kFrames);
+  auto experiment = [&](const std::string& name, const std::string& cam2) {
+    std::ofstream out(Path(name));
+    out << "experiment: shot\nfps: 179\ncameras:\n";
+    for (const std::string c : {"cam0", "cam1", "cam2", "cam3"}) {
+      out << "  - name: " << c << "\n    frames: " << c << "/frame_%06d.pgm\n    bayer: none\n";
+      if (c == "cam2") out << "    timestamps: " << cam2 << "\n";
+      else if (c != "cam3") out << "    timestamps: " << c << ".csv\n";
+    }
+  };
+  experiment("experiment.yaml", "cam2.csv");
+  const std::string run = Base() + "--labels " + Path("labels.h5") + " --json --out " +
+                          Path("tracks.h5") + " --experiment ";
+  auto r = RunNetlab(run + Path("experiment.yaml"));
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(LastJson(r.out)["time_from"].string(), "timestamps");
+  EXPECT_NEAR(LastJson(r.out)["frame_time_spread_max_s"].number(), 1e-4, 1e-9);
+  EXPECT_NE(r.err.find("times from the timestamps of cam0, cam1, cam2"), std::string::npos)
+      << r.err;
+  const auto tracks = netlab::netsim::ReadKnotTracks(Path("tracks.h5"));
+  EXPECT_NEAR(tracks.time[4], 1.0 + 4 / kFps + 1e-4 / 3, 1e-9);
+  ASSERT_EQ(tracks.frame_time_spread_s.size(), static_cast<size_t>(kFrames));
+  EXPECT_NEAR(tracks.frame_time_spread_s[4], 1e-4, 1e-9);
+
+  // Too few frames, going backwards, more than a frame apart: refused, naming the file.
+  write("short.csv", 0.0, kFrames - 2);
+  write("backwards.csv", 0.0, kFrames, true);
+  write("late.csv", 1.5 / kFps, kFrames);
+  const std::pair<std::string, std::string> cases[] = {
+      {"short.csv", "lack 2 of the 12 labeled frames (frame 10 and more)"},
+      {"backwards.csv", "timestamps go backwards: frame 4 at"},
+      {"late.csv", "disagree by 1.5 frames"}};
+  for (const auto& [file, message] : cases) {
+    SCOPED_TRACE(file);
+    experiment("bad.yaml", file);
+    fs::remove(Path("tracks.h5"));
+    r = RunNetlab(run + Path("bad.yaml"));
+    EXPECT_EQ(r.status, 1);
+    EXPECT_NE(r.err.find(Path(file)), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(message), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(Path("tracks.h5")));
+  }
 }
 
 TEST_F(TriangulateCommand, BadInputIsNamed) {

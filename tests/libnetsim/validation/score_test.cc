@@ -224,6 +224,69 @@ TEST(Score, MissingKnotsAreMaskedNotFilled) {
   EXPECT_TRUE(std::isfinite(r.area_simulated[6]));
 }
 
+// The demo's case: two points whose rays met head-on, with a sigma of metres and an error to
+// match. d2 weighs them rightly; the errors in millimetres, the tables and the plots' series
+// leave them out, and the headline says how many and why. Degenerate points of the file are
+// masked and counted.
+TEST(Score, PointsOfHugeSigmaLeaveTheErrorsInMillimetresButNotTheTest) {
+  std::mt19937 rng(8);
+  const KnotTracks sim = MakeTracks(11, 11, 100, 0.0);
+  const Eigen::Matrix3d cov = Eigen::Matrix3d::Identity() * 1e-8;  // 0.1 mm
+  KnotTracks meas = Measure(11, 11, 80, 0.0, Eigen::Isometry3d::Identity(), cov, &rng);
+  // Knot (10,0) of frame 1 and (10,10) of frame 2: 2.5 m sigma along x, 2 m off along x.
+  const size_t a = 1 * 121 + 110, b = 2 * 121 + 120;
+  Eigen::Matrix3d huge = cov;
+  huge(0, 0) = 2.5 * 2.5;
+  for (size_t i : {a, b}) {
+    meas.covariance[i] = huge;
+    meas.position[i].x() += 2.0;
+  }
+  // Knot (5,5) of frame 3 flagged degenerate by the triangulation.
+  meas.degenerate.assign(meas.valid.size(), 0);
+  meas.degenerate[3 * 121 + 60] = 1;
+  meas.valid[3 * 121 + 60] = 0;
+  ScoreOptions options;
+  options.alignment = Alignment::kNone;
+  const ScoreResult r = Score(meas, sim, options);
+  const ScoreSummary& s = r.summary;
+  EXPECT_EQ(s.points, 80 * 121 - 1);
+  EXPECT_EQ(s.left_out, 2);
+  EXPECT_EQ(s.degenerate, 1);
+  EXPECT_EQ(s.masked, 1);
+  EXPECT_TRUE(r.compared[a]);
+  EXPECT_FALSE(r.informative[a]);
+  EXPECT_NEAR(s.median_sigma_m, 1e-4, 1e-9);
+  EXPECT_NEAR(s.sigma_bound_m, 1e-3, 1e-8);
+  EXPECT_NEAR(s.left_out_max_sigma_m, 2.5, 1e-9);
+  // The errors are the noise's: 0.1 mm per axis.
+  EXPECT_LT(s.rms_m, 2.5e-4);
+  EXPECT_LT(s.max_m, 1e-3);
+  EXPECT_LT(s.per_class[0].rms_m, 2.5e-4);  // (10,0) and (10,10) are corners
+  EXPECT_EQ(s.per_class[0].left_out, 2);
+  for (const auto& frame : r.rms_per_class) EXPECT_FALSE(frame[0] > 1e-3);
+  EXPECT_LT(s.weighted_rms_m, 2.5e-4);
+  // d2 keeps them, weighed by their covariance: consistent.
+  EXPECT_EQ(s.verdict, "consistent");
+  EXPECT_NEAR(s.mean_d2, 3.0, 0.2);
+  EXPECT_NE(s.headline.find("over 9677 of the 9679 compared knot-frames; 2 left out of both "
+                            "because their own sigma (up to 2500 mm) exceeds"),
+            std::string::npos)
+      << s.headline;
+  EXPECT_NE(s.headline.find("they count in d2 only; 1 more flagged degenerate"), std::string::npos)
+      << s.headline;
+  EXPECT_NE(s.headline.find("covariance-weighted RMS"), std::string::npos) << s.headline;
+  EXPECT_NE(s.BriefReport().find(s.headline), std::string::npos);
+
+  // Without any such point the headline says all were used.
+  const ScoreResult clean =
+      Score(Measure(11, 11, 80, 0.0, Eigen::Isometry3d::Identity(), cov, &rng), sim, options);
+  EXPECT_EQ(clean.summary.left_out, 0);
+  EXPECT_NE(clean.summary.headline.find("over all 9680 compared knot-frames (every sigma within"),
+            std::string::npos)
+      << clean.summary.headline;
+  EXPECT_EQ(clean.summary.headline.find("weighted"), std::string::npos) << clean.summary.headline;
+}
+
 // A wrong model: the real net (made by the simulator) against one with no air drag, measured
 // with 0.3 mm noise.
 TEST(Score, APerturbedSimulationIsRejectedAndTheRightOneIsNot) {

@@ -257,18 +257,39 @@ netsim::KnotTracks Measured(const std::vector<double>& times,
   return tracks;
 }
 
-TEST(CompareWithTruth, AnOffsetGivesItsLengthAndNothingAfterAlignment) {
-  // Every point 3 mm off along y, between the truth's samples; covariance (3 mm)^2 / 2 per axis.
+TEST(CompareWithTruth, AnOffsetIsTheFramesDifferenceNotAnError) {
+  // Every point 3 mm off along y, between the truth's samples: in the truth's frame no error,
+  // and the motion that takes the tracks there is the 3 mm.
   const Eigen::Vector3d offset(0.0, 0.003, 0.0);
   const netsim::KnotTracks tracks = Measured(
       {0.05, 0.125}, [&](const Eigen::Vector3d& p) { return Eigen::Vector3d(p + offset); },
       0.5 * 0.003 * 0.003);
   const TruthComparison c = CompareWithTruth(tracks, Truth());
   EXPECT_EQ(c.points, 2 * kRows * kCols);
-  EXPECT_NEAR(c.rms_m, 0.003, 1e-12);
-  EXPECT_NEAR(c.max_m, 0.003, 1e-12);
-  EXPECT_NEAR(c.aligned_rms_m, 0.0, 1e-9);
-  EXPECT_NEAR(c.mean_mahalanobis2, 2.0, 1e-6);
+  EXPECT_TRUE(c.aligned);
+  EXPECT_NEAR(c.rms_m, 0.0, 1e-9);
+  EXPECT_NEAR(c.max_m, 0.0, 1e-9);
+  EXPECT_NEAR(c.translation_m, 0.003, 1e-9);
+  EXPECT_NEAR(c.rotation_deg, 0.0, 1e-6);
+}
+
+TEST(CompareWithTruth, ErrorsAndMahalanobisInTheTruthsFrame) {
+  // Errors along z of 1, -2, 1 mm across each row of the flat net (z = 0): no rigid motion
+  // explains any of them (their mean and their moments along the rows and columns are zero), so
+  // they are the errors in the truth's frame. Covariance (3 mm)^2 / 2 per axis.
+  const double var = 0.5 * 0.003 * 0.003;
+  netsim::KnotTracks tracks =
+      Measured({0.05, 0.125}, [](const Eigen::Vector3d& p) { return p; }, var);
+  for (int t = 0; t < 2; ++t)
+    for (int k = 0; k < kRows * kCols; ++k)
+      tracks.position[static_cast<size_t>(t) * kRows * kCols + k].z() +=
+          (tracks.grid[k][1] == 1 ? -2e-3 : 1e-3);
+  const TruthComparison c = CompareWithTruth(tracks, Truth());
+  ASSERT_TRUE(c.aligned);
+  EXPECT_NEAR(c.rms_m, std::sqrt(2.0) * 1e-3, 1e-9);
+  EXPECT_NEAR(c.max_m, 2e-3, 1e-9);
+  EXPECT_NEAR(c.mean_mahalanobis2, 2e-6 / var, 1e-6);
+  EXPECT_NEAR(c.translation_m, 0.0, 1e-9);
 }
 
 TEST(CompareWithTruth, ARigidMotionVanishesAfterAlignment) {
@@ -282,8 +303,8 @@ TEST(CompareWithTruth, ARigidMotionVanishesAfterAlignment) {
       1e-6);
   const TruthComparison c = CompareWithTruth(tracks, Truth());
   EXPECT_EQ(c.points, 3 * kRows * kCols);
-  EXPECT_GT(c.rms_m, 0.5);
-  EXPECT_NEAR(c.aligned_rms_m, 0.0, 1e-9);
+  EXPECT_NEAR(c.rms_m, 0.0, 1e-9);
+  EXPECT_NEAR(c.rotation_deg, 0.1 * 180 / M_PI, 1e-6);
 }
 
 TEST(CompareWithTruth, LeavesOutPointsTheTruthCannotGive) {
@@ -297,16 +318,16 @@ TEST(CompareWithTruth, LeavesOutPointsTheTruthCannotGive) {
   truth.valid[2 * kRows * kCols + 2] = 0;
   const TruthComparison c = CompareWithTruth(tracks, truth);
   EXPECT_EQ(c.points, kRows * kCols - 3);
-  EXPECT_NEAR(c.rms_m, 0.0, 1e-12);
-  // Fewer than three points: no alignment; none at all: zeros.
+  EXPECT_NEAR(c.rms_m, 0.0, 1e-9);
+  // Fewer than three points: no frame to compare in, no numbers; none at all: zeros.
   tracks.valid.assign(tracks.valid.size(), 0);
   tracks.valid[kRows * kCols + 3] = tracks.valid[kRows * kCols + 4] = 1;
   tracks.position[kRows * kCols + 3].z() += 0.004;
   const TruthComparison two = CompareWithTruth(tracks, truth);
   EXPECT_EQ(two.points, 2);
-  EXPECT_NEAR(two.rms_m, 0.004 / std::sqrt(2.0), 1e-12);
-  EXPECT_NEAR(two.max_m, 0.004, 1e-12);
-  EXPECT_EQ(two.aligned_rms_m, 0.0);
+  EXPECT_FALSE(two.aligned);
+  EXPECT_EQ(two.rms_m, 0.0);
+  EXPECT_EQ(two.max_m, 0.0);
   tracks.valid.assign(tracks.valid.size(), 0);
   const TruthComparison none = CompareWithTruth(tracks, truth);
   EXPECT_EQ(none.points, 0);
