@@ -1,9 +1,13 @@
 // netlab render --sim result.h5 --out DIR [--rig rig.yaml] [--frames A:B] [--scale S]
 //               [--noise SIGMA] [--json] ...
 
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "app/cli/command_line.h"
 #include "app/cli/commands.h"
@@ -42,10 +46,48 @@ constexpr char kHelp[] =
     "  --calibration-views N  foil poses for calibration images (default 20; 0: none)\n"
     "  --coloring FILE        yarn colours per link (`netlab color-net`; default: six dyes cycled)\n"
     "  --seed N               noise and pose seed (default 1)\n"
+    "  --camera-time-offset CAM=D[,CAM=D...]\n"
+    "                         camera CAM exposes its frame k at (k + D) / fps, D in frames,\n"
+    "                         -1 < D < 1 (a trigger delay its timestamps do not show); written\n"
+    "                         into truth.h5 /camera_time_offset_frames\n"
     "  --threads N            rendering threads (default 2)\n"
     "  --json                 print one JSON summary object on stdout as the last output\n"
     "  --quiet                no progress on stderr\n\n"
     "exit status: 0 rendered, 1 bad input (named), 2 usage error.\n";
+
+// --camera-time-offset CAM=D[,CAM=D...]: one offset per rig camera (0 where not named).
+std::vector<double> ParseCameraOffsets(const std::string& text, const calib::Rig& rig) {
+  std::vector<double> offsets(rig.cameras.size(), 0.0);
+  std::stringstream items(text);
+  std::string item;
+  while (std::getline(items, item, ',')) {
+    const size_t eq = item.find('=');
+    const std::string name = item.substr(0, eq);
+    const int c = eq == std::string::npos ? -1 : rig.Find(name);
+    if (eq == std::string::npos)
+      throw UsageError("--camera-time-offset expects CAM=FRAMES[,CAM=FRAMES...], got '" + item +
+                       "'");
+    if (c < 0) {
+      std::string names;
+      for (const auto& camera : rig.cameras) names += (names.empty() ? "" : ", ") + camera.name;
+      throw UsageError("--camera-time-offset " + item + ": the rig has no camera '" + name +
+                       "' (cameras: " + names + ")");
+    }
+    const std::string value = item.substr(eq + 1);
+    size_t used = 0;
+    double d = 0.0;
+    try {
+      d = std::stod(value, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != value.size() || !std::isfinite(d) || !(std::abs(d) < 1.0))
+      throw UsageError("--camera-time-offset " + item +
+                       ": the offset must be a number of frames with -1 < D < 1");
+    offsets[c] = d;
+  }
+  return offsets;
+}
 
 void PrintJson(const recon::RenderSummary& s, const std::string& out) {
   JsonWriter json;
@@ -76,7 +118,8 @@ int RunRender(const std::vector<std::string>& args) {
     const CommandLine cl(args, {"json", "quiet", "help"},
                          {"sim", "out", "rig", "frames", "scale", "noise", "fps", "bit-depth",
                           "bayer", "background", "exposure", "blur-samples", "vignetting",
-                          "calibration-views", "seed", "threads", "coloring"});
+                          "calibration-views", "seed", "threads", "coloring",
+                          "camera-time-offset"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -113,6 +156,8 @@ int RunRender(const std::vector<std::string>& args) {
     else if (background != "black")
       throw UsageError("--background expects black or white, got '" + background + "'");
 
+    if (const auto offsets = cl.Option("camera-time-offset"))
+      job.camera_time_offset_frames = ParseCameraOffsets(*offsets, job.rig);
     if (const auto coloring = cl.Option("coloring")) {
       job.coloring = {recon::LoadYarnColoring(*coloring)};
       job.coloring_file = *coloring;

@@ -43,11 +43,15 @@ constexpr char kHelp[] =
     "  --contact-time S    simulated time of first contact with the target: starts the\n"
     "                      \"contact\" phase (default: the simulation's first contact, which\n"
     "                      netlab simulate stores; none: no contact phase)\n"
+    "  --max-sigma M       a measured point whose largest sigma exceeds M (m) is left out of the\n"
+    "                      errors in mm (RMS, maximum, tables, plots), not of d2 (default: 10x\n"
+    "                      the median sigma of the compared points)\n"
     "  --quiet             no summary on stderr\n"
     "  --json              print one JSON summary object on stdout as the last output: frames,\n"
     "                      knots, points, rms_mm, rms_percent_of_side, max_mm, mean_d2, dof,\n"
     "                      p_value, verdict, time_offset_s, time_offset_sigma_s, skill,\n"
-    "                      per_class (corner/edge/inner rms_mm), wall_s and more\n\n"
+    "                      per_class (corner/edge/inner rms_mm), headline, left_out_points,\n"
+    "                      weighted_rms_mm, degenerate_points, wall_s and more\n\n"
     "exit status: 0 scored (whatever the verdict), 1 bad input, 2 usage error.\n";
 
 void PrintJson(const netsim::ScoreSummary& s, const std::string& out, const std::string& report) {
@@ -61,6 +65,15 @@ void PrintJson(const netsim::ScoreSummary& s, const std::string& out, const std:
   json.Key("rms_percent_of_side").Number(s.rms_percent_of_side);
   json.Key("side_m").Number(s.side_m);
   json.Key("max_mm").Number(s.max_m * 1e3);
+  json.Key("headline").String(s.headline);
+  json.Key("left_out_points").Int(s.left_out);
+  json.Key("left_out_max_sigma_mm").Number(s.left_out_max_sigma_m * 1e3);
+  json.Key("sigma_bound_mm").Number(s.sigma_bound_m * 1e3);
+  json.Key("sigma_bound_from").String(s.sigma_bound_from);
+  json.Key("median_sigma_mm").Number(s.median_sigma_m * 1e3);
+  json.Key("weighted_rms_mm").Number(s.weighted_rms_m * 1e3);
+  json.Key("sigma_spread").Number(s.sigma_spread);
+  json.Key("degenerate_points").Int(s.degenerate);
   json.Key("mean_d2").Number(s.mean_d2);
   json.Key("dof").Number(s.dof);
   json.Key("fitted_parameters").Int(s.fitted_parameters);
@@ -107,7 +120,7 @@ int RunScore(const std::vector<std::string>& args) {
     const CommandLine cl(
         args, {"json", "quiet", "help"},
         {"measured", "sim", "out", "report", "align", "time-offset", "max-time-offset", "sim-sigma",
-         "meas-sigma", "significance", "contact-time"});
+         "meas-sigma", "significance", "contact-time", "max-sigma"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -127,6 +140,7 @@ int RunScore(const std::vector<std::string>& args) {
     options.sim_sigma_m = cl.DoubleOption("sim-sigma", 0.0, 0.0, 1e3);
     options.meas_sigma_m = cl.DoubleOption("meas-sigma", 0.0, 0.0, 1e3);
     options.significance = cl.DoubleOption("significance", 0.01, 1e-12, 0.5);
+    options.max_sigma_m = cl.DoubleOption("max-sigma", 0.0, 1e-12, 1e6);
     if (cl.Option("contact-time"))
       options.contact_time_s = cl.DoubleOption("contact-time", 0.0, -1e6, 1e6);
     std::string why;

@@ -1,11 +1,14 @@
 // netlab triangulate --rig rig.yaml --labels LABELS --knots ROWSxCOLS --fps F --out tracks.h5
-//                    [--csv PREFIX] [--ba none|points|rig] [--json]
+//                    [--csv PREFIX] [--ba none|points|rig] [--experiment FILE]
+//                    [--estimate-offsets] [--apply-offsets] [--json]
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <exception>
 #include <iostream>
+#include <limits>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <sstream>
@@ -20,15 +23,19 @@
 #include "common/yaml_util.h"
 #include "libnetsim/tracks/track_file.h"
 #include "libreconstruct/geometry/bundle_adjust.h"
+#include "libreconstruct/geometry/camera_offsets.h"
 #include "libreconstruct/geometry/track_export.h"
 #include "libreconstruct/labels/label_set.h"
+#include "libreconstruct/recording/experiment.h"
 
 namespace netlab::app {
 namespace {
 
 constexpr char kHelp[] =
     "usage: netlab triangulate --rig rig.yaml --labels LABELS --knots ROWSxCOLS --fps F\n"
-    "                          --out tracks.h5 [--csv PREFIX] [--ba none|points|rig] [--json]\n\n"
+    "                          --out tracks.h5 [--csv PREFIX] [--ba none|points|rig]\n"
+    "                          [--experiment FILE] [--estimate-offsets] [--apply-offsets]\n"
+    "                          [--json]\n\n"
     "Triangulates every labeled knot in every frame from the cameras that labeled it, with\n"
     "outlier rejection, optional bundle adjustment and priors, and writes 3D knot tracks with\n"
     "their covariance (docs/triangulation.md).\n\n"
@@ -38,7 +45,11 @@ constexpr char kHelp[] =
     "                      camera C is the rig's C-th camera and point P knot P-1 in row-major\n"
     "                      order (OpenCV pixels: origin at the centre of the top-left pixel)\n"
     "  --knots ROWSxCOLS   the net's knots, e.g. 11x11\n"
-    "  --fps F             frame rate: /time = frame / F\n"
+    "  --fps F             frame rate: /time = frame / F unless --experiment has timestamps\n"
+    "  --experiment FILE   the recording (experiment.yaml): /time of each frame is the mean of\n"
+    "                      its cameras' timestamps, their spread in /frame_time_spread_s\n"
+    "                      (checked: every labeled frame listed, increasing, the cameras within\n"
+    "                      one frame of each other)\n"
     "  --out FILE          the knot-track file (HDF5, the layout the simulator writes, plus\n"
     "                      /knots/covariance, /knots/reprojection_error_px and /outliers)\n"
     "  --csv PREFIX        also write PREFIXxyzpts.csv and PREFIXxyzres.csv (DLTdv8 style)\n"
@@ -57,14 +68,26 @@ constexpr char kHelp[] =
     "                      the adjusted rig is used only if they determine every camera to\n"
     "                      --rig-max-sigma-mm (default 2) and --rig-max-sigma-deg (0.02)\n"
     "  --use-unreviewed    also use labels still marked for review (default: accepted only)\n"
+    "  --max-sigma-mm S    a point whose largest sigma exceeds S mm is degenerate (its rays meet\n"
+    "                      too close to parallel or head-on): kept out of the valid points,\n"
+    "                      flagged with its reason in /knots/degenerate and /degenerate\n"
+    "                      (default: 10x the sequence's median sigma)\n"
+    "  --estimate-offsets  estimate each camera's sub-frame clock offset against the rig's first\n"
+    "                      camera from the knots' motion, with its sigma (not determined when\n"
+    "                      the sigma exceeds 0.05 frames: said so, no value)\n"
+    "  --apply-offsets     estimate them and move each camera's labels to the frame time along\n"
+    "                      their own track before triangulating\n"
     "  --truth FILE        knot tracks to compare with (e.g. the simulation that was rendered):\n"
-    "                      RMS error as is, and after the best rigid motion (a calibrated rig\n"
-    "                      has its own world frame)\n"
+    "                      every number in the truth's frame, the tracks moved onto it by the\n"
+    "                      best rigid motion (a calibrated rig has its own world frame); the\n"
+    "                      degenerate points apart\n"
     "  --threads N         worker threads (default 2)\n"
     "  --quiet             no progress or summary on stderr\n"
     "  --json              print one JSON summary object on stdout as the last output:\n"
     "                      frames, points (knots per frame), triangulated (knot-frames),\n"
-    "                      reprojection_rms_px, outliers, wall_s and more\n\n"
+    "                      degenerate_points, reprojection_rms_px, outliers, wall_s, with\n"
+    "                      offsets camera_offsets_frames and camera_offsets_sigma_frames, and\n"
+    "                      more\n\n"
     "exit status: 0 done, 1 bad input, 2 usage error.\n";
 
 // The command line, checked.
@@ -74,7 +97,9 @@ struct TriangulateArgs {
   double fps = 0.0;
   std::string ba;                              // as given: none, points or rig
   std::optional<std::string> csv, truth_path;  // --csv PREFIX, --truth FILE
+  std::optional<std::string> experiment_path;  // --experiment FILE
   bool quiet = false, json = false;
+  bool estimate_offsets = false, apply_offsets = false;
   recon::SequenceOptions options;              // without progress
 };
 
@@ -91,6 +116,9 @@ TriangulateArgs ParseArgs(const CommandLine& cl) {
   if (!cl.Option("fps")) throw UsageError("--fps is required");
   a.csv = cl.Option("csv");
   a.truth_path = cl.Option("truth");
+  a.experiment_path = cl.Option("experiment");
+  a.apply_offsets = cl.Flag("apply-offsets");
+  a.estimate_offsets = cl.Flag("estimate-offsets") || a.apply_offsets;
   recon::SequenceOptions& options = a.options;
   a.ba = cl.Option("ba").value_or("points");
   if (!recon::ParseAdjustment(a.ba, &options.adjustment))
@@ -108,6 +136,7 @@ TriangulateArgs ParseArgs(const CommandLine& cl) {
   options.rig_max_rotation_sigma_deg = cl.DoubleOption("rig-max-sigma-deg", 0.02, 1e-9, 360.0);
   options.threads = cl.IntOption("threads", 2, 1, 256);
   options.use_unreviewed = cl.Flag("use-unreviewed");
+  options.max_sigma_m = cl.DoubleOption("max-sigma-mm", 0.0, 1e-6, 1e9) * 1e-3;
   if (options.adjustment == recon::Adjustment::kNone &&
       (options.link_length_m > 0 || options.smoothness_sigma_m > 0))
     throw UsageError("the priors (--link-length, --smooth-sigma) need --ba points or rig");
@@ -117,7 +146,7 @@ TriangulateArgs ParseArgs(const CommandLine& cl) {
 // The truth must be the labels' net over the labels' frames: a 6 x 6 truth against 11 x 11 labels
 // matched the first 36 knots by (row, col) and reported "353 mm RMS" instead of refusing.
 void CheckTruthMatches(const netsim::KnotTracks& truth, const TriangulateArgs& a,
-                       const recon::LabelSet& labels) {
+                       const recon::LabelSet& labels, const std::vector<double>& times) {
   int rows = 0, cols = 0;
   for (const auto& [row, col] : truth.grid) {
     rows = std::max(rows, row + 1);
@@ -128,15 +157,39 @@ void CheckTruthMatches(const netsim::KnotTracks& truth, const TriangulateArgs& a
                      std::to_string(cols) + " net, the labels (--knots) are " +
                      std::to_string(a.rows) + "x" + std::to_string(a.cols));
   if (labels.frames() == 0 || truth.time.empty()) return;
-  const double first = labels.frame_index.front() / a.fps, last = labels.frame_index.back() / a.fps;
+  const double first = times.front(), last = times.back();
   if (last < truth.time.front() - 0.5 / a.fps || first > truth.time.back() + 0.5 / a.fps) {
     std::ostringstream os;
     os << "--truth " << *a.truth_path << ": covers " << truth.time.front() << ".."
        << truth.time.back() << " s, the labels' frames " << labels.frame_index.front() << ".."
-       << labels.frame_index.back() << " at --fps " << a.fps << " are " << first << ".." << last
-       << " s: no frame in common";
+       << labels.frame_index.back() << " are " << first << ".." << last << " s ("
+       << (a.experiment_path ? "the cameras' timestamps" : "at --fps " + std::to_string(a.fps))
+       << "): no frame in common";
     throw InputError(os.str());
   }
+}
+
+// The frames' times: from the recording's timestamps (--experiment) where it has them, else
+// frame / --fps.
+recon::FrameTimes FrameTimesOf(const TriangulateArgs& a, const calib::Rig& rig,
+                               const recon::LabelSet& labels) {
+  std::vector<std::string> names;
+  std::vector<std::map<int, double>> timestamps(rig.cameras.size());
+  std::vector<std::string> where(rig.cameras.size());
+  for (const auto& c : rig.cameras) names.push_back(c.name);
+  if (a.experiment_path) {
+    const recon::Experiment experiment = recon::LoadExperiment(*a.experiment_path);
+    for (size_t c = 0; c < rig.cameras.size(); ++c) {
+      const int e = experiment.Find(rig.cameras[c].name);
+      if (e < 0 || experiment.cameras[e].timestamps.empty()) continue;
+      where[c] = experiment.cameras[e].timestamps;
+      timestamps[c] = recon::ReadTimestamps(where[c]);
+      if (timestamps[c].empty())
+        throw InputError(where[c] + ": camera " + rig.cameras[c].name +
+                         "'s timestamps file lists no frame");
+    }
+  }
+  return recon::FrameTimesFromTimestamps(labels.frame_index, a.fps, names, timestamps, where);
 }
 
 // Progress on stderr: a line when a stage starts or reaches the next tenth (called from the
@@ -166,6 +219,9 @@ struct Outcome {
   int frames = 0;
   recon::SequenceResult result;
   std::optional<recon::TruthComparison> truth;  // with --truth
+  std::optional<recon::OffsetEstimate> offsets;  // with --estimate-offsets
+  bool result_offsets_applied = false;            // --apply-offsets
+  recon::FrameTimes times;
   std::string csv_pts, csv_res;                 // with --csv
   std::vector<std::string> warnings;
   double wall_s = 0.0;
@@ -196,20 +252,85 @@ void PrintRigSummary(const recon::SequenceResult& r) {
                  r.rig_rotation_change_deg[c], r.rig_rotation_sigma_deg[c]);
 }
 
+// The degenerate points: how many, the bound and whence, the first few with their reasons.
+void PrintDegenerate(const TriangulateArgs& a, const recon::SequenceResult& r) {
+  const size_t n = r.degenerate_points.size();
+  std::fprintf(stderr,
+               "%zu degenerate point%s left out: largest sigma over %.3f mm (%s; median %.3f "
+               "mm)%s\n",
+               n, n == 1 ? "" : "s", r.max_sigma_m * 1e3, r.max_sigma_from.c_str(),
+               r.median_sigma_m * 1e3, n > 0 ? ":" : "");
+  constexpr size_t kShown = 5;
+  for (size_t i = 0; i < std::min(n, kShown); ++i) {
+    const recon::DegeneratePoint& d = r.degenerate_points[i];
+    std::fprintf(stderr, "  frame %d, knot (%d,%d): %s\n", d.frame, d.knot / a.cols,
+                 d.knot % a.cols, d.reason.c_str());
+  }
+  if (n > kShown) std::fprintf(stderr, "  and %zu more (/degenerate/reason)\n", n - kShown);
+}
+
+// Where the times come from, and each camera's clock offset when estimated.
+void PrintClocks(const Outcome& o) {
+  if (!o.times.cameras.empty()) {
+    const double spread =
+        *std::max_element(o.times.spread_s.begin(), o.times.spread_s.end());
+    std::string names;
+    for (const std::string& c : o.times.cameras) names += (names.empty() ? "" : ", ") + c;
+    std::fprintf(stderr,
+                 "times from the timestamps of %s (mean per frame; spread up to %.4f ms)\n",
+                 names.c_str(), spread * 1e3);
+  }
+  if (!o.offsets) return;
+  std::fprintf(stderr, "camera clock offsets against %s (frames; %s):\n",
+               o.offsets->cameras.front().camera.c_str(),
+               o.result_offsets_applied ? "applied: each camera's labels moved to the frame time"
+                                        : "not applied (--apply-offsets)");
+  for (const recon::CameraOffset& c : o.offsets->cameras) {
+    if (c.determined)
+      std::fprintf(stderr, "  %s: %+.4f +- %.4f%s\n", c.camera.c_str(), c.offset_frames,
+                   c.sigma_frames, c.why.empty() ? "" : ("  (" + c.why + ")").c_str());
+    else
+      std::fprintf(stderr, "  %s: not determined (%s)\n", c.camera.c_str(), c.why.c_str());
+  }
+}
+
+// The comparison with the truth, in the truth's frame.
+void PrintTruth(const recon::TruthComparison& t) {
+  if (!t.aligned) {
+    std::fprintf(stderr,
+                 "against the truth: %lld valid points the truth has, fewer than the three "
+                 "that fit its frame: no comparison\n",
+                 static_cast<long long>(t.points));
+    return;
+  }
+  std::fprintf(stderr,
+               "against the truth, in its frame (the tracks moved %.4f deg and %.3f mm onto "
+               "it): %.3f mm RMS (max %.3f mm) over %lld valid points, mean d2 %.2f\n",
+               t.rotation_deg, t.translation_m * 1e3, t.rms_m * 1e3, t.max_m * 1e3,
+               static_cast<long long>(t.points), t.mean_mahalanobis2);
+  if (t.degenerate_points > 0)
+    std::fprintf(stderr, "  the %lld degenerate points: %.1f mm RMS (max %.1f mm)\n",
+                 static_cast<long long>(t.degenerate_points), t.degenerate_rms_m * 1e3,
+                 t.degenerate_max_m * 1e3);
+}
+
 // The summary on stderr: counts, each prior's and the rig's effect, the truth, the warnings.
 void PrintSummary(const TriangulateArgs& a, const Outcome& o) {
   const recon::SequenceResult& r = o.result;
-  const int64_t untriangulated = r.candidates - r.triangulated;
+  const long long degenerate = static_cast<long long>(r.degenerate_points.size());
+  const long long untriangulated = r.candidates - r.triangulated - degenerate;
   std::fprintf(stderr,
                "%d frames x %d knots: %lld knot-frames triangulated of %lld seen twice or "
-               "more (%lld not: see /outliers), %lld seen once; reprojection RMS %.3f px; "
-               "%zu outlier observations (threshold %.2f px); sigma %.3f px%s; --ba %s; "
-               "%.1f s\n",
+               "more (%lld not: see /outliers; %lld degenerate: see /degenerate), %lld seen "
+               "once; reprojection RMS %.3f px; %zu outlier observations (threshold %.2f px); "
+               "sigma %.3f px%s; --ba %s; %.1f s\n",
                o.frames, a.rows * a.cols, static_cast<long long>(r.triangulated),
-               static_cast<long long>(r.candidates), static_cast<long long>(untriangulated),
+               static_cast<long long>(r.candidates), untriangulated, degenerate,
                static_cast<long long>(r.single_view), r.reprojection_rms_px, r.outliers.size(),
                r.outlier_threshold_px, r.sigma_px, r.sigma_estimated ? " (estimated)" : "",
                a.ba.c_str(), o.wall_s);
+  PrintDegenerate(a, r);
+  PrintClocks(o);
   if (a.options.link_length_m > 0)
     std::fprintf(stderr, "link-length prior moved the points %.3f mm RMS (max %.3f mm)\n",
                  r.link_shift_rms_m * 1e3, r.link_shift_max_m * 1e3);
@@ -220,12 +341,7 @@ void PrintSummary(const TriangulateArgs& a, const Outcome& o) {
                  r.smoothness_shift_rms_m * 1e3, r.smoothness_shift_max_m * 1e3,
                  static_cast<long long>(r.track_outliers));
   if (a.options.adjustment == recon::Adjustment::kRig) PrintRigSummary(r);
-  if (o.truth)
-    std::fprintf(stderr,
-                 "against the truth: %.3f mm RMS (max %.3f mm) over %lld points; %.3f mm "
-                 "RMS after the best rigid motion (for a rig in its own world frame)\n",
-                 o.truth->rms_m * 1e3, o.truth->max_m * 1e3,
-                 static_cast<long long>(o.truth->points), o.truth->aligned_rms_m * 1e3);
+  if (o.truth) PrintTruth(*o.truth);
   for (const std::string& w : o.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   std::fprintf(stderr, "written %s%s%s\n", a.out.c_str(),
                o.csv_pts.empty() ? "" : (", " + o.csv_pts + ", " + o.csv_res).c_str(), "");
@@ -235,6 +351,31 @@ void JsonArray(JsonWriter* json, const std::string& key, const std::vector<doubl
   json->Key(key).BeginArray();
   for (double v : values) json->Number(v);
   json->EndArray();
+}
+
+// The times' source and, when estimated, the cameras' clock offsets (null where not determined).
+void PrintJsonClocks(const Outcome& o, JsonWriter* json) {
+  json->Key("time_from").String(o.times.cameras.empty() ? "fps" : "timestamps");
+  double spread = 0.0;
+  for (double v : o.times.spread_s) spread = std::max(spread, v);
+  json->Key("frame_time_spread_max_s").Number(spread);
+  if (!o.offsets) return;
+  json->Key("camera_offsets_frames").BeginObject();
+  for (const recon::CameraOffset& c : o.offsets->cameras) {
+    json->Key(c.camera);
+    if (c.determined) json->Number(c.offset_frames);
+    else json->Null();
+  }
+  json->EndObject();
+  json->Key("camera_offsets_sigma_frames").BeginObject();
+  for (const recon::CameraOffset& c : o.offsets->cameras)
+    json->Key(c.camera).Number(c.sigma_frames);
+  json->EndObject();
+  json->Key("camera_offsets_undetermined").BeginObject();
+  for (const recon::CameraOffset& c : o.offsets->cameras)
+    if (!c.determined) json->Key(c.camera).String(c.why);
+  json->EndObject();
+  json->Key("camera_offsets_applied").Bool(o.result_offsets_applied);
 }
 
 // The JSON summary on stdout (the contract: tests/app/cli/triangulate_command_test.cc).
@@ -248,7 +389,12 @@ void PrintJson(const TriangulateArgs& a, const Outcome& o) {
   json.Key("triangulated").Int(r.triangulated);
   json.Key("candidates").Int(r.candidates);
   json.Key("two_view").Int(r.two_view);
-  json.Key("untriangulated").Int(r.candidates - r.triangulated);
+  json.Key("untriangulated")
+      .Int(r.candidates - r.triangulated - static_cast<int64_t>(r.degenerate_points.size()));
+  json.Key("degenerate_points").Int(static_cast<int64_t>(r.degenerate_points.size()));
+  json.Key("max_sigma_m").Number(r.max_sigma_m);
+  json.Key("max_sigma_from").String(r.max_sigma_from);
+  json.Key("median_sigma_m").Number(r.median_sigma_m);
   json.Key("single_view").Int(r.single_view);
   json.Key("unreviewed_skipped").Int(r.unreviewed_skipped);
   json.Key("projected_skipped").Int(r.projected_skipped);
@@ -280,12 +426,22 @@ void PrintJson(const TriangulateArgs& a, const Outcome& o) {
     JsonArray(&json, "rig_rotation_sigma_deg", r.rig_rotation_sigma_deg);
   }
   // The truth, the warnings, the times.
+  PrintJsonClocks(o, &json);
   if (o.truth) {
+    // In the truth's frame (NaN, i.e. null, with fewer than three points);
+    // truth_aligned_rms_m is truth_rms_m.
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const bool aligned = o.truth->aligned;
     json.Key("truth_points").Int(o.truth->points);
-    json.Key("truth_rms_m").Number(o.truth->rms_m);
-    json.Key("truth_max_m").Number(o.truth->max_m);
-    json.Key("truth_aligned_rms_m").Number(o.truth->aligned_rms_m);
-    json.Key("truth_mean_mahalanobis2").Number(o.truth->mean_mahalanobis2);
+    json.Key("truth_rms_m").Number(aligned ? o.truth->rms_m : nan);
+    json.Key("truth_max_m").Number(aligned ? o.truth->max_m : nan);
+    json.Key("truth_aligned_rms_m").Number(aligned ? o.truth->rms_m : nan);
+    json.Key("truth_mean_mahalanobis2").Number(aligned ? o.truth->mean_mahalanobis2 : nan);
+    json.Key("truth_alignment_rotation_deg").Number(aligned ? o.truth->rotation_deg : nan);
+    json.Key("truth_alignment_translation_m").Number(aligned ? o.truth->translation_m : nan);
+    json.Key("truth_degenerate_points").Int(o.truth->degenerate_points);
+    json.Key("truth_degenerate_rms_m").Number(aligned ? o.truth->degenerate_rms_m : nan);
+    json.Key("truth_degenerate_max_m").Number(aligned ? o.truth->degenerate_max_m : nan);
   }
   json.Key("warnings").BeginArray();
   for (const std::string& w : o.warnings) json.String(w);
@@ -301,10 +457,13 @@ void PrintJson(const TriangulateArgs& a, const Outcome& o) {
 
 int RunTriangulate(const std::vector<std::string>& args) {
   return RunGuarded("triangulate", [&] {
-    const CommandLine cl(args, {"json", "quiet", "help", "use-unreviewed"},
+    const CommandLine cl(args,
+                         {"json", "quiet", "help", "use-unreviewed", "estimate-offsets",
+                          "apply-offsets"},
                          {"rig", "labels", "knots", "fps", "out", "csv", "ba", "outlier-px",
                           "sigma-px", "link-length", "link-sigma", "smooth-sigma", "rig-frames",
-                          "truth", "threads", "rig-max-sigma-mm", "rig-max-sigma-deg"});
+                          "truth", "threads", "rig-max-sigma-mm", "rig-max-sigma-deg",
+                          "max-sigma-mm", "experiment"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -315,7 +474,8 @@ int RunTriangulate(const std::vector<std::string>& args) {
     TriangulateArgs a = ParseArgs(cl);
     // Before any work: no output over an input or another output, every output's folder there.
     CheckOutputPaths({{"--rig", a.rig_path}, {"--labels", a.labels_path},
-                      {"--truth", a.truth_path.value_or("")}},
+                      {"--truth", a.truth_path.value_or("")},
+                      {"--experiment", a.experiment_path.value_or("")}},
                      {{"--out", a.out},
                       {"--csv", a.csv ? *a.csv + "xyzpts.csv" : ""},
                       {"--csv", a.csv ? *a.csv + "xyzres.csv" : ""}});
@@ -325,10 +485,12 @@ int RunTriangulate(const std::vector<std::string>& args) {
     std::vector<std::string> names;
     for (const auto& c : rig.cameras) names.push_back(c.name);
     const recon::LabelSet labels = recon::ReadLabelsAny(a.labels_path, a.rows, a.cols, names);
+    Outcome o;
+    o.times = FrameTimesOf(a, rig, labels);
     std::optional<netsim::KnotTracks> truth;
     if (a.truth_path) {
       truth = netsim::ReadKnotTracks(*a.truth_path);
-      CheckTruthMatches(*truth, a, labels);
+      CheckTruthMatches(*truth, a, labels, o.times.time_s);
     }
 
     // The reconstruction, with its progress on stderr.
@@ -336,8 +498,14 @@ int RunTriangulate(const std::vector<std::string>& args) {
     a.options.progress = [&progress](const std::string& stage, double fraction) {
       progress.Report(stage, fraction);
     };
-    Outcome o;
     o.frames = labels.frames();
+    if (a.estimate_offsets) {
+      o.offsets = recon::EstimateCameraOffsets(rig, labels, a.options);
+      if (a.apply_offsets) {
+        a.options.camera_offset_frames = o.offsets->Applicable();
+        o.result_offsets_applied = true;
+      }
+    }
     o.result = recon::ReconstructSequence(rig, labels, a.options);
     if (o.result.candidates == 0)
       throw InputError(a.labels_path + ": no knot is labeled in two cameras in any of its " +
@@ -351,12 +519,30 @@ int RunTriangulate(const std::vector<std::string>& args) {
                        "one rejected as an outlier: do the labels belong to this --rig?)");
 
     // The tracks written, compared with the truth, reported.
-    const netsim::KnotTracks tracks =
-        recon::TracksFromSequence(o.result, a.fps, "netlab triangulate");
+    netsim::KnotTracks tracks =
+        recon::TracksFromSequence(o.result, o.times.time_s, "netlab triangulate");
+    if (!o.times.cameras.empty()) tracks.frame_time_spread_s = o.times.spread_s;
+    if (o.offsets) {
+      for (const recon::CameraOffset& c : o.offsets->cameras) {
+        tracks.camera_offset_frames.push_back(
+            c.determined ? c.offset_frames : std::numeric_limits<double>::quiet_NaN());
+        tracks.camera_offset_sigma_frames.push_back(c.sigma_frames);
+      }
+      tracks.camera_offsets_applied = o.result_offsets_applied;
+    }
     WriteOutputs(a, tracks, &o);
     if (truth) o.truth = recon::CompareWithTruth(tracks, *truth);
     o.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     o.warnings = recon::SequenceWarnings(o.result);
+    if (o.offsets && o.result_offsets_applied)
+      for (const recon::CameraOffset& c : o.offsets->cameras)
+        if (!c.determined && c.why != "no labels of this camera")
+          o.warnings.push_back("the clock offset of " + c.camera +
+                               " is not determined; its labels were taken at the frame time");
+    if (o.result.offset_unshifted > 0)
+      o.warnings.push_back(std::to_string(o.result.offset_unshifted) +
+                           " labels of cameras with a clock offset have no label of their knot "
+                           "in a neighbouring frame to move them by: left out");
     if (!a.quiet) PrintSummary(a, o);
     if (a.json) PrintJson(a, o);
     return 0;

@@ -1165,7 +1165,8 @@ std::string Headline(const ScoreSummary& s) {
     o << "; " << s.degenerate << (s.left_out > 0 ? " more" : "")
       << " flagged degenerate by the triangulation (rays nearly parallel or head-on) are not "
          "compared";
-  if (s.left_out > 0 || s.sigma_spread > 2.0) o << "; covariance-weighted RMS " << mm(s.weighted_rms_m);
+  if (s.left_out > 0 || s.sigma_spread > 2.0)
+    o << "; covariance-weighted RMS " << mm(s.weighted_rms_m);
   o << ".";
   return o.str();
 }

@@ -109,7 +109,8 @@ FrameTimes FrameTimesFromTimestamps(const std::vector<int>& frame_index, double 
       std::ostringstream os;
       os.precision(12);
       os << where[hi_c] << ": the cameras' timestamps of frame " << frame_index[t]
-         << " disagree by " << Format("%.3g", (hi - lo) * fps) << " frames (" << cameras[lo_c] << " " << lo
+         << " disagree by " << Format("%.3g", (hi - lo) * fps) << " frames (" << cameras[lo_c]
+         << " " << lo
          << " s, " << cameras[hi_c] << " " << hi << " s), more than one frame at " << fps
          << " fps: not the same frame";
       throw InputError(os.str());

@@ -381,6 +381,13 @@ struct FrameRange {
   double Time(int k) const { return start_time + k / fps; }
 };
 
+// Camera c's clock offset, frames (0 without one).
+double OffsetOf(const RenderJob& job, int c) {
+  return static_cast<size_t>(c) < job.camera_time_offset_frames.size()
+             ? job.camera_time_offset_frames[c]
+             : 0.0;
+}
+
 }  // namespace
 
 void CheckOutsideOutput(const std::string& input, const std::string& option,
@@ -404,7 +411,25 @@ FrameRange FramesOf(const RenderJob& job, const SimulatedShot& shot) {
                      std::to_string(last) + " are outside the simulation's frames 0:" +
                      std::to_string(available) + " at " + std::to_string(job.fps) + " fps (" +
                      std::to_string(shot.end_time() - shot.start_time()) + " s of /time)");
-  return {shot.start_time(), job.fps, first, last};
+  const FrameRange range{shot.start_time(), job.fps, first, last};
+  // A camera's clock offset must keep its exposures within the simulation too.
+  if (!job.camera_time_offset_frames.empty() &&
+      job.camera_time_offset_frames.size() != job.rig.cameras.size())
+    throw std::invalid_argument("RenderJob: one clock offset per rig camera");
+  for (size_t c = 0; c < job.camera_time_offset_frames.size(); ++c) {
+    const double d = job.camera_time_offset_frames[c];
+    if (!(std::abs(d) < 1.0))
+      throw InputError("--camera-time-offset " + job.rig.cameras[c].name + "=" +
+                       std::to_string(d) +
+                       ": a clock offset is a fraction of a frame (-1 < d < 1)");
+    if (range.Time(first) + d / job.fps < shot.start_time() - 1e-9 ||
+        range.Time(last) + d / job.fps > shot.end_time() + 1e-9)
+      throw InputError("--camera-time-offset " + job.rig.cameras[c].name + "=" +
+                       std::to_string(d) + ": frames " + std::to_string(first) + ":" +
+                       std::to_string(last) + " of that camera would be exposed outside the "
+                       "simulation's time; render fewer frames");
+  }
+  return range;
 }
 
 // The experiment file's content, each camera's folder made and its timestamps.csv written.
@@ -462,8 +487,8 @@ void RenderFrame(const RenderJob& job, const SimulatedShot& shot, const FrameRan
   const calib::Camera& camera = job.rig.cameras[c];
   cv::Mat accumulator;
   for (int s = 0; s < samples; ++s) {
-    const double t =
-        range.Time(k) + ((s + 0.5) / samples - 0.5) * (samples > 1 ? job.exposure_s : 0.0);
+    const double t = range.Time(k) + OffsetOf(job, c) / range.fps +
+                     ((s + 0.5) / samples - 0.5) * (samples > 1 ? job.exposure_s : 0.0);
     Scene scene = shot.SceneAt(t, job.coloring, job.background);
     for (ThreadPolyline& yarn : scene.threads) yarn.colour *= job.illumination;
     for (Ball& ball : scene.balls) ball.colour *= job.illumination;
@@ -517,8 +542,9 @@ struct FrameTruth {
   std::vector<int> knots_visible_min;            // per camera
 };
 
-// The truth of the frames of `range` as `rig` sees them.
-FrameTruth TruthOf(const SimulatedShot& shot, const calib::Rig& rig, const FrameRange& range) {
+// The truth of the frames of `range` as `rig` sees them (each camera at its own clock).
+FrameTruth TruthOf(const SimulatedShot& shot, const RenderJob& job, const FrameRange& range) {
+  const calib::Rig& rig = job.rig;
   const int frames = range.count(), cameras = static_cast<int>(rig.cameras.size());
   FrameTruth truth;
   truth.tracks.grid = shot.tracks().grid;
@@ -543,15 +569,25 @@ FrameTruth TruthOf(const SimulatedShot& shot, const calib::Rig& rig, const Frame
       truth.tracks.position.push_back(x[j]);
       truth.tracks.valid.push_back(1);
     }
-    // Their pixels and visibility in each camera.
+    // Their pixels and visibility in each camera, at the camera's own time.
     const size_t row = k - range.first;
     for (int c = 0; c < cameras; ++c) {
       int visible = 0;
+      const double offset = OffsetOf(job, c);
+      std::vector<Eigen::Vector3d> x_c;
+      Scene solids_c;
+      if (offset != 0.0) {
+        const std::vector<Eigen::Vector3d> nodes_c = shot.NodesAt(t + offset / range.fps);
+        x_c = shot.KnotsAt(nodes_c);
+        solids_c = shot.SolidsAt(t + offset / range.fps, nodes_c);
+      }
+      const std::vector<Eigen::Vector3d>& seen = offset != 0.0 ? x_c : x;
+      const Scene& hiding = offset != 0.0 ? solids_c : solids;
       for (int j = 0; j < knots; ++j) {
-        const Eigen::Vector2d px = rig.cameras[c].ProjectWorld(x[j]);
+        const Eigen::Vector2d px = rig.cameras[c].ProjectWorld(seen[j]);
         truth.pixels[c][(row * knots + j) * 2] = px.x();
         truth.pixels[c][(row * knots + j) * 2 + 1] = px.y();
-        const uint8_t v = KnotVisibility(rig.cameras[c], x[j], solids);
+        const uint8_t v = KnotVisibility(rig.cameras[c], seen[j], hiding);
         truth.visibility[c][row * knots + j] = v;
         visible += v == 0;
       }
@@ -564,7 +600,8 @@ FrameTruth TruthOf(const SimulatedShot& shot, const calib::Rig& rig, const Frame
 
 // truth.h5 (see synthetic_experiment.h), written whole under another name first; the rig's text
 // is read back from out/rig_true.yaml.
-void WriteTruth(const fs::path& out, const calib::Rig& rig, const FrameTruth& truth) {
+void WriteTruth(const fs::path& out, const RenderJob& job, const FrameTruth& truth) {
+  const calib::Rig& rig = job.rig;
   const int frames = static_cast<int>(truth.frame_index.size());
   const int knots = truth.tracks.knots();
   const fs::path truth_path = out / "truth.h5";
@@ -590,6 +627,17 @@ void WriteTruth(const fs::path& out, const calib::Rig& rig, const FrameTruth& tr
     std::stringstream rig_text;
     rig_text << rig_file.rdbuf();
     h5::WriteStringDataset(file.get(), "rig", rig_text.str());
+    std::vector<double> offsets;
+    std::string names;
+    for (size_t c = 0; c < rig.cameras.size(); ++c) {
+      offsets.push_back(OffsetOf(job, static_cast<int>(c)));
+      names += (c ? "\n" : "") + rig.cameras[c].name;
+    }
+    h5::WriteDataset(file.get(), "camera_time_offset_frames", H5T_NATIVE_DOUBLE,
+                     {offsets.size()}, offsets.data());
+    h5::SetUnits(file.get(), "camera_time_offset_frames", "frames");
+    h5::Id dataset(H5Dopen2(file.get(), "camera_time_offset_frames", H5P_DEFAULT));
+    h5::WriteStringAttribute(dataset.get(), "cameras", names);
   }
   RenameInto(writing, truth_path.string());
 }
@@ -719,8 +767,8 @@ RenderSummary RenderExperiment(const RenderJob& job,
   WriteExperiment(experiment.path, experiment);
 
   // Truth: the knots at the frame times, their pixels and visibility per camera.
-  FrameTruth truth = TruthOf(shot, rig, range);
-  WriteTruth(out, rig, truth);
+  FrameTruth truth = TruthOf(shot, job, range);
+  WriteTruth(out, job, truth);
   WriteTrueLabels(out / "labels_true.h5", rig, truth.tracks.grid, truth.frame_index, truth.pixels,
                   truth.visibility);
 

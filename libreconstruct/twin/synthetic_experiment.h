@@ -21,9 +21,15 @@
 //     /cameras/<camera>/visibility  [T,K] uint8: 0 visible, 1 occluded by a solid (target body,
 //                                   corner mass), 2 out of view (outside the image or behind)
 //     /rig                          string, the rig file's text
+//     /camera_time_offset_frames    [C] float64, each camera's clock offset in frames (the
+//                                   group's cameras in the rig's order; attribute "cameras")
 //
 // Frame k is the camera frame at time k / fps of the simulation; its exposure is centred there
-// (motion blur samples the interval), and its truth is the state at that time.
+// (motion blur samples the interval), and its truth is the state at that time. A camera with a
+// clock offset d (RenderJob::camera_time_offset_frames) exposes its frame k at (k + d) / fps
+// instead, as a trigger delay would: its timestamps still read k / fps, its true pixels
+// (/cameras/<camera>/knots_px, labels_true.h5) are where it saw the knots, and the true tracks
+// stay at the frame times.
 
 #include <functional>
 #include <string>
@@ -32,6 +38,7 @@
 #include "calibration/rig.h"
 #include "libnetsim/scenario/scenario.h"
 #include "libnetsim/tracks/track_file.h"
+#include "libreconstruct/coloring/palette.h"
 #include "libreconstruct/coloring/yarn_coloring.h"
 #include "libreconstruct/twin/render.h"
 
@@ -85,10 +92,12 @@ struct RenderJob {
   int blur_samples = 3;       // renders averaged over the exposure
   SensorOptions sensor;       // Bayer pattern, bit depth, noise, vignetting
   Colour background{0.f, 0.f, 0.f};
-  double illumination = 0.85; // scene white in sensor units (headroom below saturation)
+  double illumination = kRenderIllumination;  // scene white in sensor units (palette.h)
   std::vector<YarnColoring> coloring;  // per net; empty: DefaultColoring
   std::string coloring_file;           // where `coloring` was read from, for messages
   int calibration_views = 20; // foil poses seen by all cameras (0: no calibration images)
+  // Per rig camera: its clock offset, frames, -1 < d < 1 (empty: all 0).
+  std::vector<double> camera_time_offset_frames;
   int threads = 2;
 };
 
