@@ -56,6 +56,7 @@
 #include "calibration/rig.h"
 #include "libreconstruct/coloring/net_coloring.h"
 #include "libreconstruct/labeling/label_engine.h"
+#include "libreconstruct/labeling/label_setup.h"
 #include "libreconstruct/labels/label_set.h"
 #include "libreconstruct/recording/experiment.h"
 #include "libreconstruct/recording/sequence.h"
@@ -625,8 +626,16 @@ int main(int argc, char** argv) {
     std::vector<Tally> tally(shot.n_cam());
     recon::LabelStore store(SeedCorners(shot, &tally));
     double read_s = 0.0;
-    recon::LabelEngineOptions engine_options;
-    if (o.knotless) engine_options.edge_colour_step_px = 1.0;
+    // The engine set up as netlab label sets it up, with the colour check when given a colouring.
+    recon::LabelingNet net;
+    net.knotless = o.knotless;
+    recon::NetColoring coloring;
+    if (!o.coloring_path.empty()) {
+      coloring = recon::ReadColoring(o.coloring_path, &net.dyes);
+      net.coloring = &coloring;
+      net.bayer = sequence.experiment().cameras.front().bayer;
+    }
+    const recon::LabelingSetup setup = recon::SetUpLabeling(net);
     recon::LabelEngine engine(
         &store, &rig,
         [&](int c, int t) {
@@ -635,14 +644,8 @@ int main(int argc, char** argv) {
           read_s += Since(t0);
           return image;
         },
-        engine_options);
-    if (!o.coloring_path.empty()) {
-      std::vector<std::array<int, 3>> dyes;
-      const recon::NetColoring coloring = recon::ReadColoring(o.coloring_path, &dyes);
-      recon::Lighting lighting;
-      lighting.exposure = 0.85;  // netlab render's illumination
-      engine.SetCodebook(recon::CodebookFromColoring(coloring, dyes, lighting));
-    }
+        setup.options);
+    setup.ApplyColourCheck(&engine);
     // The engine frame by frame, the person after each frame.
     ScriptedUser user{shot, engine, store, o.radius, tally, std::mt19937_64(o.seed)};
     user.fill_grid_between = o.fill_grid_between;
