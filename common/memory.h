@@ -1,6 +1,6 @@
 #pragma once
 // Sizing a job before allocating it: the memory the machine has free now, and the message a
-// command gives when a job cannot fit (issue 21: no std::bad_alloc reaches a user unexplained).
+// command gives when a job cannot fit (no std::bad_alloc reaches a user unexplained).
 
 #include <cstdio>
 #include <fstream>

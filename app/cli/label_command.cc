@@ -23,6 +23,7 @@
 #include "libreconstruct/coloring/net_coloring.h"
 #include "libreconstruct/labeling/label_engine.h"
 #include "libreconstruct/labeling/label_store.h"
+#include "libreconstruct/labeling/label_setup.h"
 #include "libreconstruct/labels/label_set.h"
 #include "libreconstruct/recording/experiment.h"
 #include "libreconstruct/recording/sequence.h"
@@ -154,17 +155,6 @@ recon::LabelSet SeededLabels(const LabelJob& job, const recon::LabelSet& seeds,
   return initial;
 }
 
-// The colour check against the net's colouring, as netlab render lights it (--illumination).
-void SetColourCheck(const CommandLine& cl, const recon::SynchronizedSequence& sequence,
-                    const recon::NetColoring& coloring,
-                    const std::vector<std::array<int, 3>>& dyes, recon::LabelEngine* engine) {
-  recon::Lighting lighting;
-  lighting.exposure = cl.DoubleOption("illumination", 0.85, 1e-3, 100.0);
-  recon::IdentityCheckOptions identity;
-  identity.identify.bayer = sequence.experiment().cameras.front().bayer;
-  engine->SetCodebook(recon::CodebookFromColoring(coloring, dyes, lighting), identity);
-}
-
 // Per camera: its labels, those for review, and its note (what went wrong: corners not seeded
 // in the first frame, frames unreadable).
 std::vector<CameraCounts> CountLabels(const LabelJob& job, const recon::LabelStore& store,
@@ -265,10 +255,19 @@ int RunLabel(const std::vector<std::string>& args) {
     LabelReport report;
     recon::LabelStore store(SeededLabels(job, seeds, cl.Required("seed"), rig, &report.seeded));
 
-    // The engine over the experiment's frames (the first unreadable one noted per camera).
-    recon::LabelEngineOptions options;
-    if (cl.Option("mesh")) options.link_length_m = cl.DoubleOption("mesh", 0.1, 1e-4, 10.0);
-    if (cl.Flag("knotless")) options.edge_colour_step_px = 1.0;
+    // The engine over the experiment's frames (the first unreadable one noted per camera), with
+    // the colour check against the net's colouring as netlab render lights it (--illumination).
+    recon::LabelingNet net;
+    if (cl.Option("mesh")) net.link_length_m = cl.DoubleOption("mesh", 0.1, 1e-4, 10.0);
+    net.knotless = cl.Flag("knotless");
+    if (!cl.Flag("no-colour-check")) {
+      net.coloring = &coloring;
+      net.dyes = dyes;
+      net.illumination =
+          cl.DoubleOption("illumination", recon::kRenderIllumination, 1e-3, 100.0);
+      net.bayer = sequence.experiment().cameras.front().bayer;
+    }
+    const recon::LabelingSetup setup = recon::SetUpLabeling(net);
     std::vector<std::string> notes(job.cameras.size());
     recon::LabelEngine engine(
         &store, &rig,
@@ -280,8 +279,8 @@ int RunLabel(const std::vector<std::string>& args) {
                         std::to_string(job.frame_index[t]) + " unreadable: " + error;
           return image;
         },
-        options);
-    if (!cl.Flag("no-colour-check")) SetColourCheck(cl, sequence, coloring, dyes, &engine);
+        setup.options);
+    setup.ApplyColourCheck(&engine);
     // Every frame labeled, with progress every ten frames.
     const int rows_t = static_cast<int>(job.frame_index.size());
     engine.LabelFrames(0, rows_t - 1, [&](int t) {

@@ -1,5 +1,5 @@
 #pragma once
-// The time stepper: a fixed Model, a changing State, a set of forces and an explicit integrator.
+// The time stepper: a fixed Model, a changing State, a set of forces and an integrator.
 //
 //   Simulation sim(std::move(model), std::move(state), std::move(forces), options);
 //   while (sim.state().time < t_end)
@@ -15,7 +15,7 @@
 //             segment's new tangent and by the small turn that balances bending and twist there,
 //             the coupling's torque implicit in it. The thread bends as a Kirchhoff rod and the
 //             step is set by bending through the nodes (16 EI / l^3 per node), not by the axial
-//             wave or the coupling: 40-50x explicit's on the flights. A step splits into
+//             wave or the coupling: 35x explicit's on the flights. A step splits into
 //             substeps while the tension's string stiffness or a contact needs it. First order;
 //             not symplectic: it loses energy, first order in dt.
 // Rotations follow the same schemes with the body-frame Euler equation

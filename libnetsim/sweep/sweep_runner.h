@@ -1,6 +1,6 @@
 #pragma once
 // Runs many variants of one scenario: a list of override sets in, one SweepRun per set out. The
-// engine of `netlab sweep`, and of the finite-difference runs of `netlab fit` to come.
+// engine of `netlab sweep`, and of the finite-difference runs of `netlab fit`.
 //
 // The runs go to a pool of `jobs` threads in this process (each run builds its own simulation;
 // nothing is shared but the scenario file) and, when the process is one rank of an MPI launch

@@ -58,7 +58,7 @@ Project LoadProject(const std::string& path) {
   p.coloring = Resolve(folder, root.String("coloring", ""));
   p.labels = Resolve(folder, root.String("labels"));
   if (root.Has("illumination")) {
-    p.illumination = root.Positive("illumination", 0.85, false);
+    p.illumination = root.Positive("illumination", recon::kRenderIllumination, false);
     if (p.illumination > 100.0)
       throw InputError(root.Where("illumination") + ": " + std::to_string(p.illumination) +
                        " is not an exposure (a white dye reads 0.85 of sensor white under "

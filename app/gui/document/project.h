@@ -19,6 +19,8 @@
 
 #include <string>
 
+#include "libreconstruct/coloring/palette.h"
+
 namespace netlab::gui {
 
 struct Project {
@@ -30,7 +32,7 @@ struct Project {
   int rows = 0, cols = 0;  // the net's knots
   double mesh_m = 0.0;     // link length, m; 0: estimated by the engine
   bool knotless = false;   // no knot balls: an edge knot is where its links' colours change
-  double illumination = 0.85;  // the colour check's exposure (netlab label --illumination)
+  double illumination = recon::kRenderIllumination;  // the colour check's exposure (--illumination)
 
   int knots() const { return rows * cols; }
 };

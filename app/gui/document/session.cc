@@ -4,7 +4,9 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
+#include <utility>
 
 #include "calibration/camera.h"
 #include "common/yaml_util.h"
@@ -12,6 +14,7 @@
 #include "libreconstruct/coloring/net_coloring.h"
 #include "libreconstruct/labeling/knot_detect.h"
 #include "libreconstruct/labeling/label_identity.h"
+#include "libreconstruct/labeling/label_setup.h"
 #include "libreconstruct/recording/experiment.h"
 
 namespace netlab::gui {
@@ -83,21 +86,26 @@ std::unique_ptr<Session> Session::Open(const Project& project,
     throw InputError(project.experiment + ": the recording has no frames");
   for (int f = s->sequence_->first_frame(); f <= s->sequence_->last_frame(); ++f)
     s->frame_numbers_.push_back(f);
-  // The colour check, when the project has the net's colouring.
+  // The engine set up as netlab label sets it up, with the colour check when the project has
+  // the net's colouring.
+  recon::LabelingNet net;
+  net.link_length_m = project.mesh_m;
+  net.knotless = project.knotless;
+  std::optional<recon::NetColoring> coloring;
   if (!project.coloring.empty()) {
-    std::vector<std::array<int, 3>> dyes;
-    const recon::NetColoring coloring = recon::ReadColoring(project.coloring, &dyes);
-    if (coloring.rows != project.rows || coloring.cols != project.cols)
-      throw InputError(project.coloring + ": a " + std::to_string(coloring.rows) + "x" +
-                       std::to_string(coloring.cols) + " net, the project's is " +
+    coloring = recon::ReadColoring(project.coloring, &net.dyes);
+    if (coloring->rows != project.rows || coloring->cols != project.cols)
+      throw InputError(project.coloring + ": a " + std::to_string(coloring->rows) + "x" +
+                       std::to_string(coloring->cols) + " net, the project's is " +
                        std::to_string(project.rows) + "x" + std::to_string(project.cols));
-    recon::Lighting lighting;  // as netlab label lights the codebook (--illumination)
-    lighting.exposure = project.illumination;
-    s->codebook_ = recon::CodebookFromColoring(coloring, dyes, lighting);
-    s->identity_.identify.bayer = s->sequence_->experiment().cameras.front().bayer;
+    net.coloring = &*coloring;
+    net.illumination = project.illumination;
+    net.bayer = s->sequence_->experiment().cameras.front().bayer;
   }
-  s->engine_options_.link_length_m = project.mesh_m;
-  if (project.knotless) s->engine_options_.edge_colour_step_px = 1.0;
+  recon::LabelingSetup setup = recon::SetUpLabeling(net);
+  s->codebook_ = std::move(setup.codebook);
+  s->identity_ = setup.identity;
+  s->engine_options_ = setup.options;
   s->cache_ = std::make_unique<recon::FrameCache>(*s->sequence_, cache_options);
   s->document_ = std::make_unique<LabelDocument>(
       OpenLabels(project, s->camera_names_, s->frame_numbers_), project.labels);
