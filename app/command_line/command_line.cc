@@ -1,11 +1,11 @@
-#include "app/cli/command_line.h"
+#include "app/command_line/command_line.h"
 
 #include <algorithm>
 #include <cstdio>
 #include <new>
 
+#include "common/errors.h"
 #include "common/memory.h"
-#include "common/yaml_util.h"
 
 namespace netlab::app {
 

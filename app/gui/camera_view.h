@@ -17,6 +17,8 @@
 #include <utility>
 #include <vector>
 
+#include "app/gui/document/view_overlay.h"
+
 namespace netlab::gui {
 
 // A frame as a view draws it, made off the GUI thread (MakeViewFrame): the image as the cache
@@ -38,41 +40,6 @@ cv::Mat ToneTable(double gain, double offset, double gamma);
 // at `screen_per_image` screen pixels per image pixel (the view's fit), toned by `tone` (or not,
 // when empty). Any thread.
 ViewFrame MakeViewFrame(const cv::Mat& image, double screen_per_image, const cv::Mat& tone);
-
-// What a view draws over its frame (filled by the window for the current frame and camera).
-struct ViewOverlay {
-  struct Mark {
-    int knot = -1;
-    Eigen::Vector2d px;
-    QColor colour;
-    bool review = false;
-  };
-  std::vector<Mark> labels;
-  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> links;  // between labeled neighbours
-  int selected_knot = -1;
-  std::vector<std::vector<Eigen::Vector2d>> epipolar;  // curves from the other cameras' labels
-  std::optional<Eigen::Vector2d> reprojected;          // the selected knot's triangulated point
-  // The selected knot missing in this view (no label, two other cameras see it): where they put
-  // it, drawn as a ring so it is found when zoomed out.
-  std::optional<Eigen::Vector2d> expected;
-  std::vector<Eigen::Vector2d> candidates;             // Find Node's when it found several
-  // A pending Fill Grid preview: what accepting it would do here, drawn dashed (not labels yet).
-  struct Ghost {
-    enum Kind {
-      kNew,       // a label where there is none: a dashed circle (accepted) or diamond (review)
-      kToReview,  // an accepted label the check would turn to review: a dashed diamond round it
-      kChanged,   // a label that would move or change state (one under review accepted, say):
-                  // dashed at its new place, with a line from where it is
-      kRemoved,   // a label that would be removed: a dashed cross
-    } kind = kNew;
-    int knot = -1;
-    Eigen::Vector2d px;  // where the label would be (the label's own place for kToReview)
-    Eigen::Vector2d from = Eigen::Vector2d::Constant(NAN);  // kChanged: where it is now
-    bool review = false;  // the label would be kept for review
-  };
-  std::vector<Ghost> ghosts;
-  QString caption;                                     // camera, frame, residual
-};
 
 class CameraView : public QWidget {
   Q_OBJECT

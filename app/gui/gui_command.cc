@@ -1,4 +1,5 @@
-// netlab gui [PROJECT.yaml [--frame N] [--review N] [--screenshot OUT.png [--keys KEYS]]]
+// netlab gui [PROJECT.yaml [--room ROOM] [--frame N] [--review N] [--screenshot OUT.png
+//            [--keys KEYS]]]
 // netlab gui EXPERIMENT.yaml --rig RIG --labels LABELS [--coloring C] [--knots RxC] [--knotless]
 //            [--project P]
 #include "app/gui/gui_command.h"
@@ -12,7 +13,7 @@
 #include <exception>
 #include <filesystem>
 
-#include "app/cli/command_line.h"
+#include "app/command_line/command_line.h"
 #include "app/gui/document/project.h"
 #include "app/gui/main_window.h"
 #include "app/gui/settings.h"
@@ -24,17 +25,21 @@ namespace netlab::gui {
 namespace {
 
 constexpr char kHelp[] =
-    "usage: netlab gui [PROJECT.yaml] [--frame N] [--review N] [--screenshot OUT.png [--keys KEYS]]\n"
+    "usage: netlab gui [PROJECT.yaml] [--room ROOM] [--frame N] [--review N]\n"
+    "                  [--screenshot OUT.png [--keys KEYS]]\n"
     "       netlab gui EXPERIMENT.yaml --rig rig.yaml --labels labels.h5 [--coloring C.yaml]\n"
     "                  [--knots RxC] [--knotless] [--project project.yaml]\n\n"
-    "The labeling workstation (docs/gui.md): four synchronized camera views, Find Node, Find\n"
-    "Path, Fill Grid and tracking as undoable steps, the review queue, autosave with recovery.\n"
+    "The workstation (docs/gui.md), in rooms: the recording (netlab ingest --check's findings\n"
+    "per camera, the cameras' timestamps), the calibration (the rig, a 3D sketch of it), the\n"
+    "labeling (four synchronized camera views, Find Node, Find Path, Fill Grid and tracking as\n"
+    "undoable steps, the review queue, autosave with recovery).\n"
     "  netlab gui                  an empty window: File > Open / New project, recent projects\n"
     "  netlab gui PROJECT.yaml     opens a project (experiment, rig, colouring, labels, net)\n"
     "  netlab gui EXPERIMENT.yaml --rig ... --labels ...\n"
     "                              makes a project of them (written to --project, default\n"
     "                              project.yaml beside the labels file) and opens it\n\n"
     "options:\n"
+    "  --room ROOM         open in this room: recording, calibration or labeling (the default)\n"
     "  --frame N           open at frame number N\n"
     "  --review N          open at the N-th item of the review queue (as Space N times: its\n"
     "                      frame, its camera maximised, zoomed on the knot)\n"
@@ -121,12 +126,13 @@ bool PressKeys(MainWindow* window, const std::string& keys) {
 }  // namespace
 
 int RunGui(const std::vector<std::string>& args) {
-  std::string project_path, screenshot, keys;
+  std::string project_path, screenshot, keys, room_name = "labeling";
   int frame = -1, review = 0;
   try {
     const app::CommandLine cl(
         args, {"help", "knotless"},
-        {"frame", "review", "screenshot", "keys", "rig", "labels", "coloring", "knots", "project"});
+        {"room", "frame", "review", "screenshot", "keys", "rig", "labels", "coloring", "knots",
+         "project"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -136,6 +142,12 @@ int RunGui(const std::vector<std::string>& args) {
     screenshot = cl.Option("screenshot").value_or("");
     keys = cl.Option("keys").value_or("");
     if (!keys.empty() && screenshot.empty()) throw app::UsageError("--keys needs --screenshot");
+    room_name = cl.Option("room").value_or("labeling");
+    if (room_name != "recording" && room_name != "calibration" && room_name != "labeling")
+      throw app::UsageError("--room expects recording, calibration or labeling, got '" +
+                            room_name + "'");
+    if (cl.Option("room") && cl.positional().empty())
+      throw app::UsageError("--room needs a project");
     frame = cl.IntOption("frame", -1, 0, 100000000);
     review = cl.IntOption("review", 0, 1, 10000);
     if (!cl.positional().empty()) {
@@ -204,12 +216,17 @@ int RunGui(const std::vector<std::string>& args) {
     }
     if (frame >= 0) window.SetFrame(frame - window.session()->frame_number(0));
     for (int i = 0; i < review; ++i) window.NextReview();
+    window.ShowRoom(room_name == "recording"     ? MainWindow::Room::kRecording
+                    : room_name == "calibration" ? MainWindow::Room::kCalibration
+                                                 : MainWindow::Room::kLabeling);
   }
   if (!screenshot.empty()) {
     window.resize(1600, 1000);
     window.show();
     if (!window.WaitForFrame())
       std::fprintf(stderr, "netlab gui: the frame did not load in time\n");
+    if (!window.WaitForIdle())
+      std::fprintf(stderr, "netlab gui: the room's work did not finish in time\n");
     if (!PressKeys(&window, keys)) return 2;
     // The layouts their results changed, settled as a person would see them (the preview
     // banner's second line was cut off in the screenshot, not in the window).

@@ -24,6 +24,7 @@
 #include <QSpinBox>
 #include <QStackedWidget>
 #include <QStatusBar>
+#include <QTabBar>
 #include <QTableView>
 #include <QTableWidget>
 #include <QTextBrowser>
@@ -37,8 +38,10 @@
 #include <cmath>
 #include <exception>
 
+#include "app/gui/calibration_room.h"
 #include "app/gui/camera_view.h"
 #include "app/gui/knot_grid.h"
+#include "app/gui/recording_room.h"
 #include "app/gui/settings.h"
 #include "app/gui/shortcut_editor.h"
 #include "app/gui/timeline.h"
@@ -46,7 +49,6 @@
 namespace netlab::gui {
 namespace {
 
-// Label colours: by state first (review: orange diamonds), then by where the label came from.
 // Runs the event loop until done() or timeout_ms, sleeping between events: a loop that spun
 // (processEvents with a time limit returns at once when nothing is pending) would take a whole
 // core from the loader and the prefetch on a 2-core machine.
@@ -61,56 +63,44 @@ void WaitUntil(const Done& done, int timeout_ms) {
   QCoreApplication::processEvents();
 }
 
-QColor LabelColour(const recon::Label& l) {
-  if (l.state == recon::LabelState::kNeedsReview) return QColor(255, 140, 0);
-  switch (l.source) {
-    case recon::LabelSource::kManual:
-      return QColor(0, 230, 255);
-    case recon::LabelSource::kFindNode:
-      return QColor(80, 255, 120);
-    case recon::LabelSource::kFindPath:
-      return QColor(170, 255, 60);
-    case recon::LabelSource::kFillGrid:
-      return QColor(255, 240, 80);
-    case recon::LabelSource::kTracked:
-      return QColor(60, 220, 60);
-    case recon::LabelSource::kProjected:  // placed from the other cameras: violet
-      return QColor(200, 150, 255);
-    default:
-      return QColor(200, 200, 255);
-  }
-}
-
 }  // namespace
 
 MainWindow::MainWindow() {
   setWindowTitle("netlab");
   resize(1400, 980);
-  stack_ = new QStackedWidget(this);
-  setCentralWidget(stack_);
+  auto* central = new QWidget(this);
+  auto* central_layout = new QVBoxLayout(central);
+  central_layout->setContentsMargins(0, 0, 0, 0);
+  central_layout->setSpacing(0);
+  rooms_ = new QTabBar;
+  rooms_->setObjectName("rooms");
+  central_layout->addWidget(rooms_);
+  stack_ = new QStackedWidget;
+  central_layout->addWidget(stack_, 1);
+  setCentralWidget(central);
   BuildWelcome();
   BuildWorkspace();
   BuildActions();
   BuildPreviewBanner();
+  BuildRooms();
   stack_->setCurrentWidget(welcome_);
   play_timer_ = new QTimer(this);
   play_timer_->setInterval(33);
   connect(play_timer_, &QTimer::timeout, this, [this] {
-    if (frame_ + 1 >= (session_ ? session_->frames() : 0))
+    if (frame() + 1 >= (session_ ? session_->frames() : 0))
       play_timer_->stop();
     else if (frame_shown_)
-      SetFrame(frame_ + 1);
+      SetFrame(frame() + 1);
   });
-  connect(&loader_, &QFutureWatcher<Loaded>::finished, this, &MainWindow::OnFrameLoaded);
-  connect(&colours_, &QFutureWatcher<ColoursRead>::finished, this, &MainWindow::OnColoursRead);
 }
 
 MainWindow::~MainWindow() {
-  cancel_ = true;
-  tracker_.waitForFinished();
-  loader_.waitForFinished();
-  colours_.waitForFinished();
-  previewer_.waitForFinished();
+  tracker_.Cancel();
+  tracker_.Wait();
+  checker_.Wait();
+  loader_.Wait();
+  colours_.Wait();
+  previewer_.Wait();
   review_table_->setModel(nullptr);
 }
 
@@ -173,6 +163,7 @@ void MainWindow::BuildWorkspace() {
   frame_box_->setToolTip("Click to type a frame number; Enter goes there and hands the keys back "
                          "to the view");
   timeline_ = new Timeline;
+  timeline_->setObjectName("labeling_timeline");
   bar->addWidget(frame_box_);
   bar->addWidget(timeline_, 1);
   layout->addLayout(bar);
@@ -306,6 +297,7 @@ void MainWindow::BuildActions() {
   file->addSeparator();
   AddAction(file, "Quit", "Ctrl+Q", &MainWindow::Quit);
 
+  const size_t first_labeling = actions_.size();
   QMenu* edit = menuBar()->addMenu("&Edit");
   AddAction(edit, "Undo", "Ctrl+Z", &MainWindow::Undo);
   AddAction(edit, "Redo", "Ctrl+Shift+Z;Ctrl+Y", &MainWindow::Redo);
@@ -378,6 +370,11 @@ void MainWindow::BuildActions() {
   for (QDockWidget* dock : findChildren<QDockWidget*>()) view->addAction(dock->toggleViewAction());
   for (QToolBar* bar : findChildren<QToolBar*>()) view->addAction(bar->toggleViewAction());
 
+  labeling_actions_.assign(actions_.begin() + static_cast<long>(first_labeling), actions_.end());
+  QMenu* rooms = menuBar()->addMenu("&Room");
+  AddAction(rooms, "Recording room", "Ctrl+1", &MainWindow::RecordingRoomAction);
+  AddAction(rooms, "Calibration room", "Ctrl+2", &MainWindow::CalibrationRoomAction);
+  AddAction(rooms, "Labeling room", "Ctrl+3", &MainWindow::LabelingRoomAction);
   QMenu* help = menuBar()->addMenu("&Help");
   AddAction(help, "Keyboard shortcuts", "F1;?", &MainWindow::ShowShortcuts);
   help->addAction("Manual (docs/gui.md)", this, &MainWindow::ShowManual);
@@ -422,13 +419,20 @@ bool MainWindow::OpenProject(const QString& path, bool ask, QString* error) {
     }
   }
   review_table_->setModel(nullptr);
+  presenter_.reset();
   review_model_.reset();
-  loader_.waitForFinished();  // the workers read the session being replaced
-  colours_.waitForFinished();
-  previewer_.waitForFinished();
+  // The workers read the session being replaced: their answers are dropped.
+  loader_.Drop();
+  colours_.Drop();
+  loader_.Wait();
+  colours_.Wait();
+  previewer_.Wait();
   DropPreview({});
   session_ = std::move(session);
   review_model_ = std::make_unique<ReviewModel>(&session_->document(), session_->frame_numbers());
+  const Project& p = session_->project();
+  cursor_.Reset(session_->frames(), session_->cameras(), p.rows, p.cols);
+  presenter_ = std::make_unique<LabelingPresenter>(session_.get(), review_model_.get(), &cursor_);
   review_proxy_ = new QSortFilterProxyModel(review_model_.get());
   review_proxy_->setSourceModel(review_model_.get());
   review_proxy_->setSortRole(Qt::EditRole);
@@ -449,7 +453,6 @@ bool MainWindow::OpenProject(const QString& path, bool ask, QString* error) {
           [this](bool modified) { setWindowModified(modified); });
   setWindowTitle(QString("netlab — %1[*]").arg(QFileInfo(path).fileName()));
   setWindowModified(session_->document().modified());  // recovered edits are unsaved
-  const Project& p = session_->project();
   row_box_->setRange(0, p.rows - 1);
   col_box_->setRange(0, p.cols - 1);
   knot_grid_->SetNet(p.rows, p.cols);
@@ -461,9 +464,22 @@ bool MainWindow::OpenProject(const QString& path, bool ask, QString* error) {
   for (int c = 0; c < 4; ++c) views_[c]->setVisible(c < session_->cameras());
   candidates_.assign(session_->cameras(), {});
   Settings::AddRecentProject(QFileInfo(path).absoluteFilePath());
-  stack_->setCurrentWidget(workspace_);
-  camera_ = 0, maximised_ = -1, previous_knot_ = -1;
-  frame_ = -1;  // no frame shown yet: SetFrame(0) loads it
+  // The other rooms' presenters: the recording's check runs when its room is first shown.
+  checker_.Drop();
+  checker_.Wait();
+  try {
+    recording_ = std::make_unique<RecordingPresenter>(p.experiment);
+  } catch (const std::exception& e) {
+    recording_.reset();
+    statusBar()->showMessage(QString("The recording room cannot open %1: %2")
+                                 .arg(QString::fromStdString(p.experiment),
+                                      QString::fromLocal8Bit(e.what())),
+                             10000);
+  }
+  calibration_ = std::make_unique<CalibrationPresenter>(&session_->rig(), p.rig);
+  rooms_->show();
+  ShowRoom(Room::kLabeling);
+  maximised_ = -1;  // the cursor shows no frame yet: SetFrame(0) loads it
   SetFrame(0);
   SetKnot(0);
   return true;
@@ -471,11 +487,10 @@ bool MainWindow::OpenProject(const QString& path, bool ask, QString* error) {
 
 void MainWindow::SetFrame(int t) {
   if (!session_) return;
-  t = std::clamp(t, 0, session_->frames() - 1);
-  if (t == frame_) return;
+  int direction = 0;
+  if (!cursor_.SetFrame(t, &direction)) return;
+  t = cursor_.frame();
   DropPreview("discarded: the frame changed");
-  const int direction = frame_ < 0 ? 0 : (t > frame_ ? 1 : -1);
-  frame_ = t;
   for (auto& c : candidates_) c.clear();
   ClearHint();
   session_->cache().SetPlayhead(session_->frame_number(t), direction, half_ ? 1 : 0);
@@ -490,14 +505,14 @@ void MainWindow::SetFrame(int t) {
 }
 
 void MainWindow::FocusView() {
-  if (!session_ || camera_ < 0 || camera_ >= session_->cameras() || camera_ >= 4) return;
+  if (!session_ || camera() < 0 || camera() >= session_->cameras() || camera() >= 4) return;
   // A spin box has the focus only when the person clicked into it: it keeps it until Enter or
   // Esc (its arrows step the frame). Anything else hands the keys to the view.
   if (qobject_cast<QAbstractSpinBox*>(QApplication::focusWidget()) != nullptr &&
       QApplication::focusWidget()->isVisible())
     return;
-  if (views_[camera_]->isVisible() && !views_[camera_]->hasFocus())
-    views_[camera_]->setFocus(Qt::OtherFocusReason);
+  if (views_[camera()]->isVisible() && !views_[camera()]->hasFocus())
+    views_[camera()]->setFocus(Qt::OtherFocusReason);
 }
 
 bool MainWindow::eventFilter(QObject* watched, QEvent* event) {
@@ -528,9 +543,9 @@ bool MainWindow::eventFilter(QObject* watched, QEvent* event) {
     if (session_) {
       const QSignalBlocker block(box);
       const int cols = session_->project().cols;
-      box->setValue(box == frame_box_ ? session_->frame_number(frame_)
-                    : box == row_box_ ? knot_ / cols
-                                      : knot_ % cols);
+      box->setValue(box == frame_box_ ? session_->frame_number(frame())
+                    : box == row_box_ ? knot() / cols
+                                      : knot() % cols);
     }
     box->clearFocus();
     FocusView();
@@ -549,17 +564,14 @@ void MainWindow::RequestFrame() {
   // Decoded, reduced to each view's size and toned off the GUI thread; a newer request makes this
   // one's answer stale.
   frame_shown_ = false;
-  const long request = ++request_;
-  const int t = frame_, level = half_ ? 1 : 0;
+  const int t = frame(), level = half_ ? 1 : 0;
   Session* session = session_.get();
-  if (loader_.isRunning()) return;  // OnFrameLoaded asks again for the newest frame
   std::array<double, 4> fit{};  // screen pixels per full-resolution pixel, per view
   for (int c = 0; c < session->cameras() && c < 4; ++c)
     fit[c] = views_[c]->FitScreenPerImage(session->rig_camera(c).intrinsics.width);
   const cv::Mat tone = ToneTable(gain_, 0, gamma_);
-  loader_.setFuture(QtConcurrent::run([session, request, t, level, fit, tone]() {
+  loader_.Request([session, t, level, fit, tone](const std::atomic<bool>&) {
     Loaded loaded;
-    loaded.request = request;
     loaded.t = t;
     for (int c = 0; c < session->cameras() && c < 4; ++c) {
       std::string error;
@@ -574,17 +586,11 @@ void MainWindow::RequestFrame() {
       }
     }
     return loaded;
-  }));
+  });
 }
 
-void MainWindow::OnFrameLoaded() {
-  Loaded loaded = loader_.result();
+void MainWindow::OnFrameLoaded(Loaded loaded) {
   if (!session_) return;
-  if (loaded.request != request_ || loaded.t != frame_) {  // the person moved on
-    --request_;
-    RequestFrame();
-    return;
-  }
   for (int c = 0; c < session_->cameras() && c < 4; ++c) {
     const calib::CameraIntrinsics& in = session_->rig_camera(c).intrinsics;
     views_[c]->SetFrame(std::move(loaded.frames[c]), in.width, in.height, loaded.problems[c]);
@@ -603,66 +609,25 @@ bool MainWindow::WaitForFrame(int timeout_ms) {
 void MainWindow::RefreshOverlays() {
   // While a frame loads, the views keep the last frame's image and labels (OnFrameLoaded draws
   // the new ones together).
-  if (!session_ || frame_ < 0 || !frame_shown_) return;
-  const LabelDocument& doc = session_->document();
-  const Project& p = session_->project();
-  const recon::PointEstimate point = session_->Triangulate(frame_, knot_);
-  for (int c = 0; c < session_->cameras() && c < 4; ++c) {
-    ViewOverlay o;
-    o.selected_knot = knot_;
-    int to_fix = 0;  // labels under review and missing knots: which camera to work first
-    for (int k = 0; k < p.knots(); ++k) {
-      const recon::Label& l = doc.at(c, frame_, k);
-      // (a missing knot has no label: its row's list is searched only for those)
-      to_fix += l.present() ? l.state == recon::LabelState::kNeedsReview
-                            : session_->missing().Find(c, frame_, k) != nullptr;
-      if (!l.present()) continue;
-      o.labels.push_back({k, l.px, LabelColour(l), l.state == recon::LabelState::kNeedsReview});
-      // Links to the right and down neighbours that are labeled.
-      for (const int n :
-           {k % p.cols + 1 < p.cols ? k + 1 : -1, k + p.cols < p.knots() ? k + p.cols : -1})
-        if (n >= 0 && doc.at(c, frame_, n).present())
-          o.links.emplace_back(l.px, doc.at(c, frame_, n).px);
-    }
-    // The selected knot: its epipolar curves from the other cameras' labels, its reprojection.
-    for (int other = 0; other < session_->cameras(); ++other) {
-      const recon::Label& l = doc.at(other, frame_, knot_);
-      if (other == c || !l.present()) continue;
-      for (auto& piece : session_->EpipolarCurve(other, l.px, c)) o.epipolar.push_back(piece);
-    }
-    QString residual;
-    if (point.valid) {
-      o.reprojected = session_->rig_camera(c).ProjectWorld(point.position);
-      if (doc.at(c, frame_, knot_).present())
-        residual = QString(" · residual %1 px")
-                       .arg((doc.at(c, frame_, knot_).px - *o.reprojected).norm(), 0, 'f', 2);
-    }
-    o.candidates = candidates_[c];
-    o.ghosts = PreviewGhosts(c);
-    o.caption = QString("%1 · frame %2 · %3 · knot %4%5")
-                    .arg(QString::fromStdString(session_->camera_names()[c]))
-                    .arg(session_->frame_number(frame_))
-                    .arg(to_fix > 0 ? QString("%1 to fix").arg(to_fix) : QString("nothing to fix"))
-                    .arg(KnotName(knot_), residual);
-    MarkExpected(c, &o);
-    views_[c]->SetOverlay(std::move(o));
-  }
+  if (!session_ || frame() < 0 || !frame_shown_) return;
+  for (int c = 0; c < session_->cameras() && c < 4; ++c)
+    views_[c]->SetOverlay(presenter_->Overlay(c, candidates_[c], fill_grid_preview()));
   RefreshKnotGrid();
 }
 
 void MainWindow::RefreshKnotGrid() {
-  if (!session_ || frame_ < 0) return;
+  if (!session_ || frame() < 0) return;
   const LabelDocument& doc = session_->document();
   std::vector<KnotGrid::Cell> cells(session_->project().knots());
   for (int k = 0; k < static_cast<int>(cells.size()); ++k) {
-    const recon::Label& l = doc.at(camera_, frame_, k);
+    const recon::Label& l = doc.at(camera(), frame(), k);
     if (l.state == recon::LabelState::kHidden)
       cells[k].hidden = true;
     else if (l.present())
       cells[k].label = LabelColour(l);
   }
   knot_grid_->SetCells(std::move(cells));
-  knot_grid_->SetSelected(knot_);
+  knot_grid_->SetSelected(knot());
 }
 
 void MainWindow::ClearHint() {
@@ -681,7 +646,7 @@ void MainWindow::IdentifyAtCursor() {
   const int c = cursor_camera_;
   SetCamera(c);
   const Session::JunctionHint hint =
-      session_->IdentifyJunction(c, frame_, cursor_px_, views_[c]->brush_radius());
+      session_->IdentifyJunction(c, frame(), cursor_px_, views_[c]->brush_radius());
   const bool identified = hint.reading.status == recon::IdentifyStatus::kIdentified;
   knot_grid_->SetOffered(hint.reading.knots, identified);
   hint_camera_ = c;
@@ -692,7 +657,7 @@ void MainWindow::IdentifyAtCursor() {
   } else if (identified) {
     SetKnot(hint.reading.knots.front());
     message = QString("Identify: the colours say knot %1 (picked; click the junction to label it) — %2")
-                  .arg(KnotName(knot_), why);
+                  .arg(KnotName(knot()), why);
   } else if (!hint.reading.knots.empty()) {
     message = QString("Identify: %1 knots possible, ringed in the Net grid: pick one there — %2")
                   .arg(hint.reading.knots.size())
@@ -704,112 +669,50 @@ void MainWindow::IdentifyAtCursor() {
 }
 
 void MainWindow::RefreshStatus() {
-  if (!session_ || frame_ < 0) return;
-  status_frame_->setText(QString("frame %1 (%2 of %3) · t = %4 s · %5")
-                             .arg(session_->frame_number(frame_))
-                             .arg(frame_ + 1)
-                             .arg(session_->frames())
-                             .arg(session_->frame_number(frame_) / session_->fps(), 0, 'f', 4)
-                             .arg(QString::fromStdString(session_->camera_names()[camera_])));
-  const recon::PointEstimate point = session_->Triangulate(frame_, knot_);
-  status_knot_->setText(
-      QString("knot %1%2")
-          .arg(KnotName(knot_), point.valid
-                                    ? QString(" · RMS residual %1 px").arg(point.rms_px, 0, 'f', 2)
-                                    : QString()));
+  if (!session_ || frame() < 0) return;
+  status_frame_->setText(presenter_->FrameStatus());
+  status_knot_->setText(presenter_->KnotStatus());
   colours_timer_->start();
 }
 
 void MainWindow::RequestColours() {
-  if (!session_ || frame_ < 0 || !colours_label_->isVisible()) return;
-  const recon::Label& label = session_->document().at(camera_, frame_, knot_);
-  const QString where = QString("knot %1 in %2, frame %3")
-                            .arg(KnotName(knot_))
-                            .arg(QString::fromStdString(session_->camera_names()[camera_]))
-                            .arg(session_->frame_number(frame_));
-  ++colours_request_;
+  if (!session_ || frame() < 0 || !colours_label_->isVisible()) return;
+  const int c = camera(), t = frame(), k = knot();
+  const recon::Label& label = session_->document().at(c, t, k);
   if (!label.present()) {
-    colours_label_->setText(QString("<b>%1</b>: no label.").arg(where));
+    colours_.Drop();
+    colours_label_->setText(QString("<b>%1</b>: no label.").arg(presenter_->Where()));
     return;
   }
-  if (colours_.isRunning()) {  // OnColoursRead asks again for the newest selection
-    colours_again_ = true;
-    return;
-  }
-  colours_label_->setText(QString("<b>%1</b>: reading the yarns…").arg(where));
+  colours_label_->setText(QString("<b>%1</b>: reading the yarns…").arg(presenter_->Where()));
   const Session* session = session_.get();
-  const long request = colours_request_;
-  const int c = camera_, t = frame_, k = knot_;
   const Eigen::Vector2d px = label.px;
   const recon::YarnDirections yarns =
       recon::AcceptedNeighbourYarns(session_->document().labels(), c, t, k);
-  colours_.setFuture(QtConcurrent::run([session, request, c, t, k, px, yarns] {
-    return ColoursRead{request, session->CheckKnotColours(c, t, k, px, yarns)};
-  }));
+  colours_.Request([session, c, t, k, px, yarns](const std::atomic<bool>&) {
+    return session->CheckKnotColours(c, t, k, px, yarns);
+  });
 }
 
-void MainWindow::OnColoursRead() {
-  const ColoursRead read = colours_.result();
-  if (!session_) return;
-  if (colours_again_ || read.request != colours_request_) {  // the selection moved on
-    colours_again_ = false;
-    RequestColours();
-    return;
-  }
-  if (!read.colours) {
-    colours_label_->setText("No colouring in the project, or the frame cannot be read.");
-    return;
-  }
-  const Session::KnotColours& k = *read.colours;
-  QString text = QString("<b>knot %1 in %2, frame %3</b><br>expected, by link:<br>")
-                     .arg(KnotName(knot_))
-                     .arg(QString::fromStdString(session_->camera_names()[camera_]))
-                     .arg(session_->frame_number(frame_));
-  for (const auto& link : k.expected)
-    text += QString("<span style=\"background-color:rgb(%1,%2,%3)\">&nbsp;&nbsp;&nbsp;&nbsp;"
-                    "</span> %4 towards %5<br>")
-                .arg(std::lround(link.srgb[0]))
-                .arg(std::lround(link.srgb[1]))
-                .arg(std::lround(link.srgb[2]))
-                .arg(QString::fromStdString(link.dye), QString::fromStdString(link.side));
-  const char* colour = k.verdict == "consistent" ? "#1b7837"
-                       : k.verdict == "mismatch" ? "#b2182b"
-                                                 : "#555555";
-  const char* meaning = k.verdict == "consistent" ? "the label's knot"
-                        : k.verdict == "mismatch"   ? "not the label's knot: check it"
-                                                    : "too few yarns read for sure: no evidence "
-                                                      "either way";
-  text += QString("<br>the yarns say: <b style=\"color:%1\">%2</b> (%3)")
-              .arg(colour, QString::fromStdString(k.verdict), meaning);
-  if (!k.knots_read.empty() && k.knots_read.size() <= 3) {
-    QStringList names;
-    for (int n : k.knots_read) names << KnotName(n);
-    text += QString(" · they fit %1").arg(names.join(", "));
-  }
-  if (!k.why.empty()) text += "<br><small>" + QString::fromStdString(k.why).toHtmlEscaped() + "</small>";
-  colours_label_->setText(text);
+void MainWindow::OnColoursRead(std::optional<Session::KnotColours> colours) {
+  if (session_) colours_label_->setText(presenter_->ColoursText(colours));
 }
 
 void MainWindow::OnLabelsChanged(const QList<int>& frames) {
   DropPreview("discarded: the labels changed");
   timeline_->SetReviewFrames(session_->document().ReviewFrames());
-  if (frames.contains(frame_)) {
+  if (frames.contains(frame())) {
     RefreshOverlays();
     RefreshStatus();
   }
 }
 
-QString MainWindow::KnotName(int knot) const {
-  if (!session_) return {};
-  return QString("(%1, %2)")
-      .arg(knot / session_->project().cols)
-      .arg(knot % session_->project().cols);
-}
+QString MainWindow::KnotName(int knot) const { return session_ ? cursor_.KnotName(knot) : QString(); }
 
 void MainWindow::SetCamera(int c) {
   if (!session_ || c < 0 || c >= session_->cameras()) return;
   if (c != hint_camera_) ClearHint();
-  camera_ = c;
+  cursor_.SetCamera(c);
   // One camera shown alone: the camera acted on is the one shown.
   if (maximised_ >= 0 && maximised_ != c) Maximise(c);
   RefreshKnotGrid();
@@ -819,9 +722,8 @@ void MainWindow::SetCamera(int c) {
 
 void MainWindow::SetKnot(int knot) {
   if (!session_) return;
-  knot = std::clamp(knot, 0, session_->project().knots() - 1);
-  if (knot != knot_) previous_knot_ = knot_;
-  knot_ = knot;
+  cursor_.SetKnot(knot);
+  knot = cursor_.knot();
   {
     const QSignalBlocker a(row_box_), b(col_box_);
     row_box_->setValue(knot / session_->project().cols);
@@ -835,50 +737,30 @@ void MainWindow::SetKnot(int knot) {
 void MainWindow::OnClick(int camera, const Eigen::Vector2d& px, Qt::KeyboardModifiers modifiers) {
   if (!session_ || busy()) return;
   SetCamera(camera);
-  const LabelKey key{camera, frame_, knot_};
-  const bool was_review = InQueue(camera, frame_, knot_);  // a review item or a missing knot
+  const LabelKey key{camera, frame(), knot()};
+  const bool was_review = InQueue(camera, frame(), knot());  // a review item or a missing knot
   if (modifiers & Qt::ShiftModifier) {  // exactly where clicked: the person's own label
-    session_->PlaceLabel(camera, frame_, knot_, px, "Place " + KnotName(knot_).toStdString());
-    statusBar()->showMessage(QString("Placed knot %1 by hand").arg(KnotName(knot_)), 4000);
+    session_->PlaceLabel(camera, frame(), knot(), px, "Place " + KnotName(knot()).toStdString());
+    statusBar()->showMessage(QString("Placed knot %1 by hand").arg(KnotName(knot())), 4000);
     AdvanceAfterFix(key, was_review);
     return;
   }
   const recon::FindNodeResult r =
-      session_->FindNode(camera, frame_, knot_, px, views_[camera]->brush_radius());
+      session_->FindNode(camera, frame(), knot(), px, views_[camera]->brush_radius());
   candidates_[camera].clear();
-  switch (r.status) {
-    case recon::FindNodeStatus::kFound: {
-      const bool review =
-          session_->document().at(camera, frame_, knot_).state == recon::LabelState::kNeedsReview;
-      // The reason without its own "Find Node: ", which the message already leads with.
-      QString reason = QString::fromStdString(session_->document().Reason(camera, frame_, knot_));
-      if (reason.startsWith("Find Node: ")) reason.remove(0, 11);
-      const QString how = r.projected ? "accepted: " + QString::fromStdString(r.why)
-                          : review    ? "found, kept for review: " + reason
-                                      : "found and accepted";
-      statusBar()->showMessage(QString("Find Node: knot %1 %2").arg(KnotName(knot_), how), 6000);
-      if (!review) AdvanceAfterFix(key, was_review);
-      break;
-    }
-    case recon::FindNodeStatus::kNone:
-      statusBar()->showMessage("Find Node: no knot in the brush (" + QString::fromStdString(r.why) +
-                                   "); Shift+click places the label exactly",
-                               8000);
-      break;
-    case recon::FindNodeStatus::kSeveral:
-      for (const recon::Junction& j : r.candidates) candidates_[camera].push_back(j.px);
-      statusBar()->showMessage(QString("Find Node: %1 junctions in the brush (red crosses); "
-                                       "click closer with a smaller brush (-), or Shift+click")
-                                   .arg(r.candidates.size()),
-                               8000);
-      RefreshOverlays();
-      break;
+  const int timeout = r.status == recon::FindNodeStatus::kFound ? 6000 : 8000;
+  statusBar()->showMessage(presenter_->FindNodeMessage(camera, r), timeout);
+  if (r.status == recon::FindNodeStatus::kFound) {
+    if (!presenter_->walk().UnderReview(camera, frame(), knot())) AdvanceAfterFix(key, was_review);
+  } else if (r.status == recon::FindNodeStatus::kSeveral) {
+    for (const recon::Junction& j : r.candidates) candidates_[camera].push_back(j.px);
+    RefreshOverlays();
   }
 }
 
 void MainWindow::OnDrag(int camera, int knot, const Eigen::Vector2d& px) {
   if (!session_ || busy()) return;
-  session_->PlaceLabel(camera, frame_, knot, px, "Move " + KnotName(knot).toStdString());
+  session_->PlaceLabel(camera, frame(), knot, px, "Move " + KnotName(knot).toStdString());
 }
 
 void MainWindow::OnSelect(int camera, int knot) {
@@ -984,7 +866,7 @@ void MainWindow::GoToFrame() {
   if (!session_) return;
   bool ok = false;
   const int f = QInputDialog::getInt(
-      this, "Go to frame", "Frame number:", session_->frame_number(frame_),
+      this, "Go to frame", "Frame number:", session_->frame_number(frame()),
       session_->frame_number(0), session_->frame_number(session_->frames() - 1), 1, &ok);
   if (ok) SetFrame(f - session_->frame_number(0));
 }
@@ -997,12 +879,13 @@ void MainWindow::TogglePlay() {
 }
 
 void MainWindow::NextReview(bool backwards) {
-  if (!session_ || !review_model_ || review_model_->rowCount() == 0) {
+  const int row = presenter_ ? presenter_->walk().NextRow({camera(), frame(), knot()}, backwards)
+                             : -1;
+  if (row < 0) {
     statusBar()->showMessage("Nothing to review", 3000);
     return;
   }
-  const LabelKey here{camera_, frame_, knot_};
-  ShowReviewRow(backwards ? review_model_->Previous(here) : review_model_->Next(here));
+  ShowReviewRow(row);
 }
 
 void MainWindow::FirstReviewItem() {
@@ -1015,8 +898,7 @@ void MainWindow::FirstReviewItem() {
 
 void MainWindow::ShowReviewRow(int row) {
   const auto [c, t, k] = review_model_->items()[row];
-  reviewing_ = LabelKey{c, t, k};
-  reviewing_missing_ = review_model_->IsMissing(row);
+  presenter_->walk().TookTo(row);
   SetFrame(t);
   SetCamera(c);
   SetKnot(k);
@@ -1024,79 +906,48 @@ void MainWindow::ShowReviewRow(int row) {
   ZoomOnKnot();
   const QModelIndex index = review_proxy_->mapFromSource(review_model_->index(row, 0));
   review_table_->selectRow(index.row());
-  if (review_model_->IsMissing(row)) {
-    ShowMissingItem(row);
-    return;
-  }
-  statusBar()->showMessage(
-      QString("Review %1 of %2: %3 — A accepts, a click fixes with Find Node, D deletes")
-          .arg(row + 1)
-          .arg(review_model_->rowCount())
-          .arg(review_model_->index(row, ReviewModel::kReason).data().toString()),
-      10000);
+  statusBar()->showMessage(presenter_->ReviewMessage(row),
+                           review_model_->IsMissing(row) ? 15000 : 10000);
 }
 
 void MainWindow::AcceptSelected() {
   if (!session_ || busy()) return;
-  const bool was_review = InQueue(camera_, frame_, knot_);
-  session_->AcceptLabel(camera_, frame_, knot_);
-  AdvanceAfterFix({camera_, frame_, knot_}, was_review);
+  const int c = camera(), t = frame(), k = knot();
+  const bool was_review = InQueue(c, t, k);
+  session_->AcceptLabel(c, t, k);
+  AdvanceAfterFix({c, t, k}, was_review);
 }
 
 void MainWindow::DeleteSelected() {
   if (!session_ || busy()) return;
-  const bool was_queued = InQueue(camera_, frame_, knot_);
-  if (!session_->document().at(camera_, frame_, knot_).present())
+  const int c = camera(), t = frame(), k = knot();
+  const bool was_queued = InQueue(c, t, k);
+  if (!session_->document().at(c, t, k).present())
     HideSelected();  // no label here: the person says the knot is not visible
   else
-    session_->DeleteLabel(camera_, frame_, knot_);
-  AdvanceAfterFix({camera_, frame_, knot_}, was_queued);
-}
-
-bool MainWindow::UnderReview(int camera, int t, int knot) const {
-  const recon::Label& l = session_->document().at(camera, t, knot);
-  return l.present() && l.state == recon::LabelState::kNeedsReview;
+    session_->DeleteLabel(c, t, k);
+  AdvanceAfterFix({c, t, k}, was_queued);
 }
 
 bool MainWindow::InQueue(int camera, int t, int knot) const {
-  return UnderReview(camera, t, knot) || session_->missing().Find(camera, t, knot);
+  return presenter_->walk().InQueue(camera, t, knot);
 }
 
 void MainWindow::AdvanceAfterFix(const LabelKey& key, bool was_queued) {
-  const auto [c, t, k] = key;
-  // Only an item the window took the person to (Space, Ctrl+Home, a run's stop): a knot the
-  // person labels on their own (a corner they seed) does not move the window.
-  if (!was_queued || reviewing_ != key || !advance_->isChecked() || InQueue(c, t, k) ||
-      review_model_->rowCount() == 0)
-    return;
-  // The frame's next label for review first; its missing knots (mostly the target's shadow,
-  // marked hidden a run at a time with Shift+D once tracking is done) only after a missing knot.
-  const std::vector<LabelKey>& items = review_model_->items();
-  const int start = review_model_->Next(key), n = static_cast<int>(items.size());
-  int label_row = -1, missing_row = -1;
-  for (int i = 0; i < n && label_row < 0; ++i) {
-    const int row = (start + i) % n;
-    if (std::get<1>(items[row]) != t) continue;
-    if (!review_model_->IsMissing(row))
-      label_row = row;
-    else if (missing_row < 0)
-      missing_row = row;
-  }
-  if (label_row >= 0)
-    ShowReviewRow(label_row);
-  else if (reviewing_missing_ && missing_row >= 0)
-    ShowReviewRow(missing_row);
+  if (!advance_->isChecked()) return;
+  const int row = presenter_->walk().AdvanceRow(key, was_queued);
+  if (row >= 0) ShowReviewRow(row);
 }
 
 void MainWindow::Nudge(double dx, double dy) {
   if (!session_ || busy()) return;
-  const recon::Label& l = session_->document().at(camera_, frame_, knot_);
+  const recon::Label& l = session_->document().at(camera(), frame(), knot());
   if (!l.present()) return;
   // Half a pixel when a pixel is a screen pixel or larger; scaled up when zoomed out, so a nudge
   // is always visible.
-  const double factor = std::max(1.0, 1.0 / std::max(views_[camera_]->scale(), 1e-3));
-  session_->PlaceLabel(camera_, frame_, knot_, l.px + Eigen::Vector2d(dx, dy) * factor,
-                       "Nudge " + KnotName(knot_).toStdString());
+  const double factor = std::max(1.0, 1.0 / std::max(views_[camera()]->scale(), 1e-3));
+  session_->PlaceLabel(camera(), frame(), knot(), l.px + Eigen::Vector2d(dx, dy) * factor,
+                       "Nudge " + KnotName(knot()).toStdString());
 }
 
 void MainWindow::FindPathCorners() {
@@ -1105,11 +956,11 @@ void MainWindow::FindPathCorners() {
 }
 
 void MainWindow::FindPathToPrevious() {
-  if (!session_ || busy() || previous_knot_ < 0) return;
-  const std::string why = session_->FindPathBetween(camera_, frame_, previous_knot_, knot_);
+  if (!session_ || busy() || cursor_.previous_knot() < 0) return;
+  const std::string why = session_->FindPathBetween(camera(), frame(), cursor_.previous_knot(), knot());
   statusBar()->showMessage(
       why.empty()
-          ? QString("Find Path %1 → %2: done").arg(KnotName(previous_knot_), KnotName(knot_))
+          ? QString("Find Path %1 → %2: done").arg(KnotName(cursor_.previous_knot()), KnotName(knot()))
           : "Find Path refused: " + QString::fromStdString(why),
       8000);
 }
@@ -1129,17 +980,16 @@ void MainWindow::TrackToFrame() {
   bool ok = false;
   const int f = QInputDialog::getInt(
       this, "Track to frame", "Track up to frame number:",
-      session_->frame_number(std::min(frame_ + 30, session_->frames() - 1)),
+      session_->frame_number(std::min(frame() + 30, session_->frames() - 1)),
       session_->frame_number(0), session_->frame_number(session_->frames() - 1), 1, &ok);
   if (ok) TrackTo(f - session_->frame_number(0), false, -1);  // the range asked for, in one run
 }
 
 void MainWindow::TrackTo(int to, bool wait, int max_review) {
-  if (!session_ || busy() || to == frame_) return;
+  if (!session_ || busy() || to == frame()) return;
   DropPreview("discarded: a tracking run started");
   // A snapshot on the GUI thread; the run never touches the document.
-  const int from = frame_;
-  cancel_ = false;
+  const int from = frame();
   auto* progress = new QProgressDialog(QString("Tracking from frame %1 to %2 …")
                                            .arg(session_->frame_number(from))
                                            .arg(session_->frame_number(to)),
@@ -1147,8 +997,9 @@ void MainWindow::TrackTo(int to, bool wait, int max_review) {
   progress->setWindowModality(Qt::WindowModal);
   progress->setMinimumDuration(300);
   progress->setAttribute(Qt::WA_DeleteOnClose);
-  connect(progress, &QProgressDialog::canceled, this, [this] { cancel_ = true; });
-  Session* session = session_.get();
+  connect(progress, &QProgressDialog::canceled, this, [this] { tracker_.Cancel(); });
+  progress_ = progress;
+  const Session* session = session_.get();
   QPointer<QProgressDialog> bar(progress);
   auto report = [this, bar](int done, int) {
     QMetaObject::invokeMethod(
@@ -1158,55 +1009,43 @@ void MainWindow::TrackTo(int to, bool wait, int max_review) {
         },
         Qt::QueuedConnection);
   };
-  disconnect(&tracker_, nullptr, this, nullptr);
-  connect(&tracker_, &QFutureWatcher<Session::TrackRun>::finished, this, [this, bar] {
-    tracking_ = false;
-    if (bar) bar->close();
-    // The closed progress dialog may leave no window active (Qt's offscreen platform does):
-    // the keys would go nowhere.
-    activateWindow();
-    if (QApplication::activeWindow() != this) QApplication::setActiveWindow(this);
-    if (!session_) return;
-    const Session::TrackRun run = tracker_.result();
-    const int changed = session_->ApplyTrackRun(run);
-    statusBar()->showMessage(
-        QString("Tracked to frame %1: %2 labels%3")
-            .arg(session_->frame_number(run.last_done))
-            .arg(changed)
-            .arg(run.cancelled            ? " (cancelled)"
-                 : run.stopped_for_review ? QString(" (stopped: labels for review in this frame)")
-                                          : QString()),
-        10000);
-    SetFrame(run.last_done);
-    // Stopped where the person is needed: that frame's first label for review (what stopped
-    // the run; the frame's missing knots wait, as after a fix), else its first item.
-    if (run.stopped_for_review) {
-      int first = -1, label = -1;
-      for (int row = 0; row < review_model_->rowCount() && label < 0; ++row) {
-        if (std::get<1>(review_model_->items()[row]) != run.last_done) continue;
-        if (first < 0) first = row;
-        if (!review_model_->IsMissing(row)) label = row;
-      }
-      if (label >= 0 || first >= 0) ShowReviewRow(label >= 0 ? label : first);
-    }
-  });
   tracking_ = true;
-  tracker_.setFuture(QtConcurrent::run(
-      [session, snapshot = session_->document().labels(), from, to, report, max_review, this]() {
-        return session->Track(snapshot, from, to, &cancel_, report, max_review);
-      }));
+  tracker_.Request([session, snapshot = session_->document().labels(), from, to, report,
+                    max_review](const std::atomic<bool>& cancel) {
+    return session->Track(snapshot, from, to, &cancel, report, max_review);
+  });
   if (wait) {
     while (busy()) QCoreApplication::processEvents(QEventLoop::AllEvents, 20);
     QCoreApplication::processEvents();
   }
 }
 
+void MainWindow::OnTracked(Session::TrackRun run) {
+  tracking_ = false;
+  if (progress_) progress_->close();
+  // The closed progress dialog may leave no window active (Qt's offscreen platform does):
+  // the keys would go nowhere.
+  activateWindow();
+  if (QApplication::activeWindow() != this) QApplication::setActiveWindow(this);
+  if (!session_) return;
+  const int changed = session_->ApplyTrackRun(run);
+  statusBar()->showMessage(TrackMessage(run, session_->frame_number(run.last_done), changed),
+                           10000);
+  SetFrame(run.last_done);
+  // Stopped where the person is needed: that frame's first label for review (what stopped
+  // the run; the frame's missing knots wait, as after a fix), else its first item.
+  if (run.stopped_for_review) {
+    const int row = presenter_->walk().StopRow(run.last_done);
+    if (row >= 0) ShowReviewRow(row);
+  }
+}
+
 void MainWindow::ZoomOnKnot() {
   if (!session_) return;
   // Every view onto the knot: its label, else its reprojected point.
-  const recon::PointEstimate point = session_->Triangulate(frame_, knot_);
+  const recon::PointEstimate point = session_->Triangulate(frame(), knot());
   for (int c = 0; c < session_->cameras(); ++c) {
-    const recon::Label& l = session_->document().at(c, frame_, knot_);
+    const recon::Label& l = session_->document().at(c, frame(), knot());
     if (l.present())
       views_[c]->ZoomTo(l.px, 80);
     else if (point.valid)
@@ -1221,7 +1060,7 @@ void MainWindow::FitAll() {
 void MainWindow::SetHalfResolution(bool half) {
   half_ = half;
   if (session_) {
-    session_->cache().SetPlayhead(session_->frame_number(frame_), 0, half_ ? 1 : 0);
+    session_->cache().SetPlayhead(session_->frame_number(frame()), 0, half_ ? 1 : 0);
     RequestFrame();
   }
   statusBar()->showMessage(half_ ? "Half resolution" : "Full resolution", 2000);
@@ -1236,7 +1075,7 @@ void MainWindow::Maximise(int c) {
   FocusView();
 }
 
-void MainWindow::ToggleMaximise() { Maximise(maximised_ >= 0 ? -1 : camera_); }
+void MainWindow::ToggleMaximise() { Maximise(maximised_ >= 0 ? -1 : camera()); }
 
 void MainWindow::Tone(double gain, double offset, double gamma) {
   gain_ *= gain;
@@ -1387,59 +1226,36 @@ void MainWindow::OnMissingChanged() {
   timeline_->SetMissingFrames(session_->missing().Frames());
 }
 
-void MainWindow::ShowMissingItem(int row) {
-  const auto [c, t, k] = review_model_->items()[row];
-  statusBar()->showMessage(
-      QString("Missing %1 of %2: %3 — click: label it · D: hidden here · Shift+D: and onwards")
-          .arg(row + 1)
-          .arg(review_model_->rowCount())
-          .arg(QString::fromStdString(session_->missing().Reason(c, t, k))),
-      15000);
-}
-
-void MainWindow::MarkExpected(int c, ViewOverlay* overlay) const {
-  const recon::Label& l = session_->document().at(c, frame_, knot_);
-  if (l.hidden()) {
-    overlay->caption += " · marked hidden here";
-  } else if (const MissingKnot* m = session_->missing().Find(c, frame_, knot_)) {
-    overlay->expected = m->expected_px;
-    overlay->caption += " · no label: expected in the magenta ring";
-  }
-}
-
 void MainWindow::HideSelected() {
   if (!session_ || busy()) return;
-  const QString where = QString("knot %1 in %2, frame %3")
-                            .arg(KnotName(knot_))
-                            .arg(QString::fromStdString(session_->camera_names()[camera_]))
-                            .arg(session_->frame_number(frame_));
-  if (session_->document().at(camera_, frame_, knot_).hidden()) {
+  const QString where = presenter_->Where();
+  if (session_->document().at(camera(), frame(), knot()).hidden()) {
     statusBar()->showMessage(where + " is already marked hidden; a click labels it", 6000);
     return;
   }
-  session_->MarkHidden(camera_, frame_, knot_);
+  session_->MarkHidden(camera(), frame(), knot());
   statusBar()->showMessage(
       "Marked " + where + " hidden: the tools will not label it there (Ctrl+Z undoes)", 8000);
 }
 
 void MainWindow::HideSelectedOnwards() {
   if (!session_ || busy()) return;
-  if (!session_->missing().Find(camera_, frame_, knot_)) {
+  if (!session_->missing().Find(camera(), frame(), knot())) {
     statusBar()->showMessage(
         QString("Shift+D marks a missing knot hidden through the frames it is missing in; knot "
                 "%1 is not missing in %2 here (D marks this frame only)")
-            .arg(KnotName(knot_), QString::fromStdString(session_->camera_names()[camera_])),
+            .arg(KnotName(knot()), QString::fromStdString(session_->camera_names()[camera()])),
         8000);
     return;
   }
-  const int last = session_->MarkHiddenRun(camera_, frame_, knot_);
+  const int last = session_->MarkHiddenRun(camera(), frame(), knot());
   statusBar()->showMessage(
       QString("Marked knot %1 hidden in %2, frames %3-%4 (%5 frames): the tools will not label "
               "it there (Ctrl+Z undoes)")
-          .arg(KnotName(knot_), QString::fromStdString(session_->camera_names()[camera_]))
-          .arg(session_->frame_number(frame_))
+          .arg(KnotName(knot()), QString::fromStdString(session_->camera_names()[camera()]))
+          .arg(session_->frame_number(frame()))
           .arg(session_->frame_number(last))
-          .arg(last - frame_ + 1),
+          .arg(last - frame() + 1),
       10000);
 }
 
@@ -1472,72 +1288,45 @@ void MainWindow::BuildPreviewBanner() {
   qobject_cast<QVBoxLayout*>(workspace_->layout())->insertWidget(0, banner);
   accept_preview_->setEnabled(false);
   discard_preview_->setEnabled(false);
-  connect(&previewer_, &QFutureWatcher<PreviewRun>::finished, this, &MainWindow::OnPreviewReady);
-}
-
-QString MainWindow::PreviewName() const {
-  return preview_corners_ ? "Find Path and Fill Grid preview" : "Fill Grid preview";
 }
 
 void MainWindow::StartPreview(bool from_corners) {
-  // A new request replaces any other; one still running is asked again when it ends.
+  // A new request replaces any other (a running one's answer is dropped).
   DropPreview({});
-  ++preview_request_;
-  preview_frame_ = frame_;
+  preview_frame_ = frame();
   preview_corners_ = from_corners;
   preview_text_->setText(QString("<b>%1, frame %2:</b> %3…")
-                             .arg(PreviewName())
-                             .arg(session_->frame_number(frame_))
+                             .arg(PreviewName(from_corners))
+                             .arg(session_->frame_number(frame()))
                              .arg(from_corners ? "Find Path from the seeded corners, then the "
                                                  "epipolar check and Fill Grid"
                                                : "searching"));
   preview_banner_->show();
   discard_preview_->setEnabled(true);
-  if (previewer_.isRunning())
-    preview_again_ = true;
-  else
-    LaunchPreview();
-}
-
-void MainWindow::LaunchPreview() {
   // The snapshot on the GUI thread; the worker never touches the document.
-  const Session* session = session_.get();
-  previewer_.setFuture(QtConcurrent::run(
-      [session, snapshot = session_->document().labels(), t = preview_frame_,
-       request = preview_request_, corners = preview_corners_] {
-        return PreviewRun{request, session->PreviewFillGrid(snapshot, t, corners)};
-      }));
+  previewer_.Request([session = static_cast<const Session*>(session_.get()),
+                      snapshot = session_->document().labels(), t = preview_frame_,
+                      corners = from_corners](const std::atomic<bool>&) {
+    return session->PreviewFillGrid(snapshot, t, corners);
+  });
 }
 
-void MainWindow::OnPreviewReady() {
-  if (preview_again_ && preview_frame_ >= 0) {  // an older one ended: compute the wanted one
-    preview_again_ = false;
-    LaunchPreview();
-    return;
-  }
-  const PreviewRun run = previewer_.result();
-  if (!session_ || run.request != preview_request_ || preview_frame_ < 0) return;  // dropped
-  if (run.preview.empty()) {
+void MainWindow::OnPreviewReady(Session::FillGridPreview preview) {
+  if (!session_ || preview_frame_ < 0) return;  // dropped
+  if (preview.empty()) {
     const int frame = preview_frame_;
     DropPreview({});
     statusBar()->showMessage(
-        run.preview.from_corners
-            ? QString("Find Path from the corners, frame %1: nothing found; seed three or four "
-                      "corners in a camera first (pick the knot, click it)")
-                  .arg(session_->frame_number(frame))
-            : QString("Fill Grid, frame %1: nothing to add or change; no preview pending")
-                  .arg(session_->frame_number(frame)),
-        8000);
+        EmptyPreviewMessage(preview.from_corners, session_->frame_number(frame)), 8000);
     return;
   }
-  preview_ = run.preview;
+  preview_ = std::move(preview);
   accept_preview_->setEnabled(true);
   ShowPreviewBanner();
   RefreshOverlays();
 }
 
 void MainWindow::ShowPreviewBanner() {
-  const Session::FillGridPreview& p = *preview_;
   // The first key of an action, as the keyboard names it (Qt's "Return" is the Enter key).
   const auto keys = [](const QAction* a) {
     if (a->shortcuts().isEmpty()) return QString("(no key)");
@@ -1545,29 +1334,8 @@ void MainWindow::ShowPreviewBanner() {
     return k == QKeySequence(Qt::Key_Return) ? QString("Enter")
                                              : k.toString(QKeySequence::NativeText);
   };
-  QStringList parts;
-  parts << QString("%1 new label%2 (%3 for review)")
-               .arg(p.added)
-               .arg(p.added == 1 ? "" : "s")
-               .arg(p.added_review);
-  if (p.confirmed > 0)
-    parts << QString("%1 label%2 under review accepted")
-                 .arg(p.confirmed)
-                 .arg(p.confirmed == 1 ? "" : "s");
-  if (p.to_review > 0)
-    parts << QString("%1 label%2 to review").arg(p.to_review).arg(p.to_review == 1 ? "" : "s");
-  if (p.moved > 0)
-    parts << QString("%1 label%2 moved").arg(p.moved).arg(p.moved == 1 ? "" : "s");
-  if (p.changed > 0)
-    parts << QString("%1 other change%2").arg(p.changed).arg(p.changed == 1 ? "" : "s");
-  const QString text =
-      QString("<b>%1, frame %2:</b> %3 — dashed pink marks, not labels yet. "
-              "<b>%4</b> accepts (%5), <b>%6</b> discards")
-          .arg(PreviewName())
-          .arg(session_->frame_number(p.t))
-          .arg(parts.join(", "), keys(accept_preview_),
-               p.from_corners ? "two undo steps: Find Path, Fill Grid" : "one undo step",
-               keys(discard_preview_));
+  const QString text = PreviewSummary(*preview_, session_->frame_number(preview_->t),
+                                      keys(accept_preview_), keys(discard_preview_));
   preview_text_->setText(text);
   preview_banner_->show();
   statusBar()->showMessage(QTextDocumentFragment::fromHtml(text).toPlainText(), 8000);
@@ -1580,60 +1348,113 @@ void MainWindow::AcceptPreview() {
   DropPreview({});
   const int changed = session_->ApplyFillGridPreview(preview);
   statusBar()->showMessage(
-      QString("%1, frame %2: %3 labels set (%4 new, %5 of them for review; %6 under "
-              "review accepted; %7 to review)")
-          .arg(preview.from_corners ? "Find Path from the corners and Fill Grid" : "Fill Grid")
-          .arg(session_->frame_number(preview.t))
-          .arg(changed)
-          .arg(preview.added)
-          .arg(preview.added_review)
-          .arg(preview.confirmed)
-          .arg(preview.to_review),
-      8000);
+      AppliedPreviewMessage(preview, session_->frame_number(preview.t), changed), 8000);
 }
 
 void MainWindow::DropPreview(const QString& why) {
   if (preview_frame_ < 0) return;
-  ++preview_request_;  // a result still on its way is dropped
+  previewer_.Drop();  // a result still on its way is dropped
   preview_frame_ = -1;
-  preview_again_ = false;
   preview_.reset();
   preview_banner_->hide();
   accept_preview_->setEnabled(false);
   discard_preview_->setEnabled(false);
   RefreshOverlays();
-  if (!why.isEmpty()) statusBar()->showMessage(PreviewName() + " " + why, 6000);
-}
-
-std::vector<ViewOverlay::Ghost> MainWindow::PreviewGhosts(int c) const {
-  std::vector<ViewOverlay::Ghost> ghosts;
-  if (!preview_ || preview_->t != frame_) return ghosts;
-  for (const recon::LabelEdit& e : preview_->edits) {
-    if (e.camera != c || e.t != frame_) continue;
-    const recon::Label& now = session_->document().at(c, e.t, e.knot);
-    ViewOverlay::Ghost g;
-    g.knot = e.knot;
-    g.px = e.label.present() ? e.label.px : now.px;
-    g.review = e.label.state == recon::LabelState::kNeedsReview;
-    if (!e.label.present())
-      g.kind = ViewOverlay::Ghost::kRemoved;
-    else if (!now.present())
-      g.kind = ViewOverlay::Ghost::kNew;
-    else if (now.accepted() && g.review && now.px == e.label.px)
-      g.kind = ViewOverlay::Ghost::kToReview;
-    else
-      g.kind = ViewOverlay::Ghost::kChanged, g.from = now.px;
-    ghosts.push_back(g);
-  }
-  return ghosts;
+  if (!why.isEmpty()) statusBar()->showMessage(PreviewName(preview_corners_) + " " + why, 6000);
 }
 
 bool MainWindow::WaitForIdle(int timeout_ms) {
   const auto idle = [this] {
-    return frame_shown_ && !previewing() && !previewer_.isRunning() && !busy();
+    return frame_shown_ && !previewing() && !previewer_.running() && !busy() &&
+           !checker_.pending();
   };
   WaitUntil(idle, timeout_ms);
   return idle();
+}
+
+// ---------------------------------------------------------------------------------------------
+// The rooms: recording, calibration, labeling.
+
+void MainWindow::BuildRooms() {
+  for (const char* name : {"Recording", "Calibration", "Labeling"}) rooms_->addTab(name);
+  rooms_->setCurrentIndex(static_cast<int>(Room::kLabeling));
+  rooms_->hide();  // until a project is open
+  connect(rooms_, &QTabBar::currentChanged, this,
+          [this](int index) { ShowRoom(static_cast<Room>(index)); });
+  recording_room_ = new RecordingRoom;
+  stack_->addWidget(recording_room_);
+  connect(recording_room_, &RecordingRoom::goToFrame, this, [this](int frame_number) {
+    if (!session_) return;
+    ShowRoom(Room::kLabeling);
+    SetFrame(frame_number - session_->frame_number(0));
+  });
+  calibration_room_ = new CalibrationRoom;
+  stack_->addWidget(calibration_room_);
+  for (QDockWidget* dock : findChildren<QDockWidget*>()) labeling_bars_.push_back(dock);
+  for (QToolBar* bar : findChildren<QToolBar*>()) labeling_bars_.push_back(bar);
+}
+
+void MainWindow::ShowRoom(Room room) {
+  if (!session_) return;
+  const bool was_labeling = stack_->currentWidget() == workspace_;
+  const bool labeling = room == Room::kLabeling;
+  room_ = room;
+  {
+    const QSignalBlocker block(rooms_);
+    rooms_->setCurrentIndex(static_cast<int>(room));
+  }
+  // The labeling room's docks and tool bar leave with it and come back as they were.
+  if (was_labeling && !labeling) {
+    labeling_bars_shown_.clear();
+    for (QWidget* bar : labeling_bars_) {
+      labeling_bars_shown_.push_back(!bar->isHidden());
+      bar->hide();
+    }
+  } else if (!was_labeling && labeling && !labeling_bars_shown_.empty()) {
+    for (size_t i = 0; i < labeling_bars_.size(); ++i)
+      labeling_bars_[i]->setVisible(labeling_bars_shown_[i]);
+  }
+  for (QAction* action : labeling_actions_) action->setEnabled(labeling);
+  if (labeling) {  // the preview's answers only while one is pending
+    accept_preview_->setEnabled(preview_.has_value());
+    discard_preview_->setEnabled(preview_frame_ >= 0);
+  }
+  switch (room) {
+    case Room::kRecording:
+      stack_->setCurrentWidget(recording_room_);
+      recording_room_->Show(recording_.get());
+      if (recording_ && !recording_->report() && !checker_.pending()) StartCheck();
+      break;
+    case Room::kCalibration:
+      stack_->setCurrentWidget(calibration_room_);
+      calibration_room_->Show(calibration_.get());
+      break;
+    case Room::kLabeling:
+      stack_->setCurrentWidget(workspace_);
+      FocusView();
+      break;
+  }
+}
+
+void MainWindow::StartCheck() {
+  const RecordingPresenter* recording = recording_.get();
+  if (recording == nullptr) return;
+  statusBar()->showMessage("Checking every frame's header (netlab ingest --check)…", 4000);
+  checker_.Request([recording](const std::atomic<bool>&) {
+    try {
+      return RecordingPresenter::Check(recording->sequence(), false);
+    } catch (const std::exception& e) {
+      recon::CheckReport failed;
+      failed.warnings.push_back(std::string("the check failed: ") + e.what());
+      return failed;
+    }
+  });
+}
+
+void MainWindow::OnChecked(recon::CheckReport report) {
+  if (!recording_) return;
+  recording_->SetReport(std::move(report));
+  if (room_ == Room::kRecording) recording_room_->Show(recording_.get());
 }
 
 }  // namespace netlab::gui

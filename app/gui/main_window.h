@@ -1,13 +1,15 @@
 #pragma once
 // The labeling workstation's window: four camera views sharing one frame index, the timeline,
-// the review queue, the tools and their shortcuts. It draws the Session's state and forwards the
-// person's actions to it; everything it changes goes through the document's undo stack.
+// the review queue, the tools and their shortcuts. It lays out and paints what the labeling
+// presenter (document/labeling_presenter.h) makes of the Session's state, and forwards the
+// person's actions to the Session; everything it changes goes through the document's undo stack.
 //
 // Frames are decoded off the GUI thread (the frame cache's prefetch, and a worker for a frame
-// not yet cached); a tracking run runs on a worker with progress and Cancel.
+// not yet cached); a tracking run runs on a worker with progress and Cancel. Each kind of
+// background work goes through one LatestRequest (document/latest_request.h).
 
-#include <QFutureWatcher>
 #include <QMainWindow>
+#include <QPointer>
 #include <array>
 #include <atomic>
 #include <memory>
@@ -16,21 +18,30 @@
 #include <vector>
 
 #include "app/gui/camera_view.h"
+#include "app/gui/document/calibration_presenter.h"
+#include "app/gui/document/cursor.h"
+#include "app/gui/document/labeling_presenter.h"
+#include "app/gui/document/latest_request.h"
+#include "app/gui/document/recording_presenter.h"
 #include "app/gui/document/review_model.h"
 #include "app/gui/document/session.h"
 
 class QLabel;
+class QProgressDialog;
 class QSortFilterProxyModel;
 class QSpinBox;
 class QStackedWidget;
+class QTabBar;
 class QTableView;
 class QTimer;
 class QGridLayout;
 
 namespace netlab::gui {
 
+class CalibrationRoom;
 class CameraView;
 class KnotGrid;
+class RecordingRoom;
 class Timeline;
 struct ViewOverlay;
 
@@ -53,10 +64,22 @@ class MainWindow : public QMainWindow {
   bool OpenProject(const QString& path, bool ask = true, QString* error = nullptr);
   Session* session() { return session_.get(); }
 
+  // The rooms of an open project, in the order of the work: the recording (ingest check), the
+  // calibration (the rig), the labeling. The tab bar above them and the Room menu switch them;
+  // the labeling room's docks, tool bar and keys belong to it alone.
+  enum class Room { kRecording, kCalibration, kLabeling };
+  void ShowRoom(Room room);
+  Room room() const { return room_; }
+  RecordingRoom* recording_room() const { return recording_room_; }
+  CalibrationRoom* calibration_room() const { return calibration_room_; }
+  const RecordingPresenter* recording() const { return recording_.get(); }
+  const CalibrationPresenter* calibration() const { return calibration_.get(); }
+
   // The current frame row, camera (the one the person works in) and knot (the knot picker).
-  int frame() const { return frame_; }
-  int camera() const { return camera_; }
-  int knot() const { return knot_; }
+  int frame() const { return cursor_.frame(); }
+  int camera() const { return cursor_.camera(); }
+  int knot() const { return cursor_.knot(); }
+  const Cursor& cursor() const { return cursor_; }
   void SetFrame(int t);
   void SetCamera(int c);
   void SetKnot(int knot);
@@ -105,12 +128,25 @@ class MainWindow : public QMainWindow {
 
  private:
   void BuildWelcome();
+  void BuildRooms();
+  // The recording room's check on a worker (once per project), and its answer.
+  void StartCheck();
+  void OnChecked(recon::CheckReport report);
+  void RecordingRoomAction() { ShowRoom(Room::kRecording); }
+  void CalibrationRoomAction() { ShowRoom(Room::kCalibration); }
+  void LabelingRoomAction() { ShowRoom(Room::kLabeling); }
   void BuildWorkspace();
   void BuildActions();
   QAction* AddAction(QMenu* menu, const QString& name, const QString& keys,
                      void (MainWindow::*slot)());
+  // The frame being loaded: decoded, reduced to each view's size and toned on a worker.
+  struct Loaded {
+    int t = 0;
+    std::array<ViewFrame, 4> frames;
+    std::array<QString, 4> problems;
+  };
   void RequestFrame();
-  void OnFrameLoaded();
+  void OnFrameLoaded(Loaded loaded);
   // Gives the keyboard focus to the current camera's view (after a change of camera or frame),
   // unless the person is typing into a spin box they clicked: the labeling keys reach the view.
   void FocusView();
@@ -122,12 +158,13 @@ class MainWindow : public QMainWindow {
   // again and no longer in doubt): the same frame's next label for review, when "Advance after a
   // fix" is on; its next missing knot only after a missing knot.
   void AdvanceAfterFix(const LabelKey& key, bool was_queued);
-  bool UnderReview(int camera, int t, int knot) const;
   // In the review queue: a label for review or a missing knot.
   bool InQueue(int camera, int t, int knot) const;
   // The selected knot's colour check in the current camera, on a worker; OnColoursRead shows it.
   void RequestColours();
-  void OnColoursRead();
+  void OnColoursRead(std::optional<Session::KnotColours> colours);
+  // The tracking run's result applied (GUI thread).
+  void OnTracked(Session::TrackRun run);
   void OnLabelsChanged(const QList<int>& frames);
   // The person's actions.
   void OnClick(int camera, const Eigen::Vector2d& px, Qt::KeyboardModifiers modifiers);
@@ -144,10 +181,10 @@ class MainWindow : public QMainWindow {
   void Undo();
   void Redo();
   void Quit() { close(); }
-  void NextFrame() { SetFrame(frame_ + 1); }
-  void PreviousFrame() { SetFrame(frame_ - 1); }
-  void Forward10() { SetFrame(frame_ + 10); }
-  void Back10() { SetFrame(frame_ - 10); }
+  void NextFrame() { SetFrame(frame() + 1); }
+  void PreviousFrame() { SetFrame(frame() - 1); }
+  void Forward10() { SetFrame(frame() + 10); }
+  void Back10() { SetFrame(frame() - 10); }
   void FirstFrame() { SetFrame(0); }
   void LastFrame();
   void GoToFrame();
@@ -156,8 +193,8 @@ class MainWindow : public QMainWindow {
   void PickCamera2() { SetCamera(1); }
   void PickCamera3() { SetCamera(2); }
   void PickCamera4() { SetCamera(3); }
-  void NextKnot() { SetKnot(knot_ + 1); }
-  void PreviousKnot() { SetKnot(knot_ - 1); }
+  void NextKnot() { SetKnot(knot() + 1); }
+  void PreviousKnot() { SetKnot(knot() - 1); }
   void NextReviewItem() { NextReview(false); }
   void PreviousReviewItem() { NextReview(true); }
   void AcceptSelected();
@@ -195,25 +232,17 @@ class MainWindow : public QMainWindow {
   void BuildPreviewBanner();
   // from_corners: Find Path from the corners first (Ctrl+P), applied as its own step.
   void StartPreview(bool from_corners = false);
-  QString PreviewName() const;  // "Fill Grid preview" or "Find Path and Fill Grid preview"
-  void LaunchPreview();
-  void OnPreviewReady();
+  void OnPreviewReady(Session::FillGridPreview preview);
   void AcceptPreview();
   void DiscardPreview() { DropPreview("discarded"); }
   // Forgets a pending or computing preview (nothing when there is none); the status bar then says
   // "Fill Grid preview <why>" ("discarded: the frame changed"), unless `why` is empty.
   void DropPreview(const QString& why);
   void ShowPreviewBanner();
-  // What accepting the preview would do in camera c, as the view draws it.
-  std::vector<ViewOverlay::Ghost> PreviewGhosts(int c) const;
 
   // Missing knots (the review queue's second kind) and hidden marks.
   void ConnectMissing();      // the review model and the timeline follow the session's list
   void OnMissingChanged();
-  void ShowMissingItem(int row);  // the status bar for a missing item of the queue
-  // The selected knot when it has no label in camera c: where the other cameras put it (a
-  // magenta ring), or that the person marked it hidden, into c's overlay.
-  void MarkExpected(int c, ViewOverlay* overlay) const;
   void HideSelected();        // D with no label selected: a hidden mark here
   void HideSelectedOnwards(); // Shift+D: here and in the following frames it is missing in
 
@@ -225,9 +254,18 @@ class MainWindow : public QMainWindow {
 
   std::unique_ptr<Session> session_;
   std::unique_ptr<ReviewModel> review_model_;
+  Cursor cursor_;
+  std::unique_ptr<LabelingPresenter> presenter_;  // over session_, review_model_ and cursor_
   QSortFilterProxyModel* review_proxy_ = nullptr;
   QTableView* review_table_ = nullptr;
   QStackedWidget* stack_ = nullptr;
+  QTabBar* rooms_ = nullptr;  // Recording, Calibration, Labeling (hidden on the welcome page)
+  Room room_ = Room::kLabeling;
+  RecordingRoom* recording_room_ = nullptr;
+  CalibrationRoom* calibration_room_ = nullptr;
+  std::vector<QAction*> labeling_actions_;  // enabled in the labeling room only
+  std::vector<QWidget*> labeling_bars_;     // its docks and tool bar, hidden in the other rooms
+  std::vector<bool> labeling_bars_shown_;   // ... and whether each was shown when it left
   QWidget* welcome_ = nullptr;
   QWidget* workspace_ = nullptr;
   QGridLayout* grid_ = nullptr;
@@ -246,53 +284,40 @@ class MainWindow : public QMainWindow {
   QTimer* play_timer_ = nullptr;
   std::vector<QAction*> actions_;
   QAction* advance_ = nullptr;  // Go > Advance to the frame's next review item after a fix
-  std::optional<LabelKey> reviewing_;  // the queue's item the window last took the person to
-  bool reviewing_missing_ = false;     // ... a missing knot (else a label for review)
   QMenu* recent_menu_ = nullptr;
 
-  int frame_ = 0, camera_ = 0, knot_ = 0, previous_knot_ = -1;
   int maximised_ = -1;
   bool half_ = false;
   bool show_labels_ = true, show_links_ = true, show_epipolar_ = true;
   double gain_ = 1.0, gamma_ = 1.0;
-  // The frame being loaded: a request id, so that a late answer for another frame is dropped.
-  struct Loaded {
-    long request = 0;
-    int t = 0;
-    std::array<ViewFrame, 4> frames;
-    std::array<QString, 4> problems;
-  };
-  long request_ = 0;
-  QFutureWatcher<Loaded> loader_;
+  // The background work, each the latest request only (declared after session_: destroyed
+  // first, waiting for its worker).
+  LatestRequest<Loaded> loader_{this, [this](Loaded loaded) { OnFrameLoaded(std::move(loaded)); }};
   bool frame_shown_ = false;
   std::vector<std::vector<Eigen::Vector2d>> candidates_;  // per camera, Find Node's several
   // The knot colours panel: what the selected label's yarns say against its code.
-  struct ColoursRead {
-    long request = 0;
-    std::optional<Session::KnotColours> colours;
-  };
   QLabel* colours_label_ = nullptr;
   // Restarted by every change of frame, camera or knot: the check (a level-0 frame, decoded if
   // need be) runs once the person stops there, not for every frame scrubbed past.
   QTimer* colours_timer_ = nullptr;
-  long colours_request_ = 0;
-  bool colours_again_ = false;  // asked again while one was running
-  QFutureWatcher<ColoursRead> colours_;
+  LatestRequest<std::optional<Session::KnotColours>> colours_{
+      this, [this](std::optional<Session::KnotColours> c) { OnColoursRead(std::move(c)); }};
   // The tracking run on a worker.
-  QFutureWatcher<Session::TrackRun> tracker_;
+  LatestRequest<Session::TrackRun> tracker_{
+      this, [this](Session::TrackRun run) { OnTracked(std::move(run)); }};
   bool tracking_ = false;  // from the run's start until its result is applied
-  std::atomic<bool> cancel_{false};
-  // The Fill Grid preview: the request that is wanted (bumped by every new one and every
-  // discard: a late answer of another is dropped), its frame (-1: none wanted), the answer.
-  struct PreviewRun {
-    long request = 0;
-    Session::FillGridPreview preview;
-  };
-  QFutureWatcher<PreviewRun> previewer_;
-  long preview_request_ = 0;
+  QPointer<QProgressDialog> progress_;
+  // The Fill Grid preview: its frame (-1: none wanted), whether it runs Find Path from the
+  // corners first, the answer (a late answer of a dropped one never comes: LatestRequest).
+  LatestRequest<Session::FillGridPreview> previewer_{
+      this, [this](Session::FillGridPreview p) { OnPreviewReady(std::move(p)); }};
   int preview_frame_ = -1;
-  bool preview_corners_ = false;  // the wanted one runs Find Path from the corners first
-  bool preview_again_ = false;  // wanted anew while an older one was still running
+  // The recording room's presenter (over its own sequence of the project's experiment) and check.
+  std::unique_ptr<RecordingPresenter> recording_;
+  std::unique_ptr<CalibrationPresenter> calibration_;  // over session_'s rig
+  LatestRequest<recon::CheckReport> checker_{
+      this, [this](recon::CheckReport report) { OnChecked(std::move(report)); }};
+  bool preview_corners_ = false;
   std::optional<Session::FillGridPreview> preview_;
   QWidget* preview_banner_ = nullptr;
   QLabel* preview_text_ = nullptr;

@@ -6,41 +6,13 @@
 #include <filesystem>
 #include <sstream>
 
-#include "common/yaml_util.h"
+#include "common/errors.h"
+#include "libreconstruct/labeling/label_journal.h"
 
 namespace netlab::gui {
 namespace {
 
 namespace fs = std::filesystem;
-
-constexpr char kJournalMagic[] = "netlab-journal";
-
-// The journal's first line: what label set it belongs to.
-std::string JournalHeader(const recon::LabelSet& set) {
-  std::string cameras;
-  for (const std::string& c : set.cameras) cameras += (cameras.empty() ? "" : ",") + c;
-  return std::string(kJournalMagic) + " 1 " + std::to_string(set.rows) + " " +
-         std::to_string(set.cols) + " " + std::to_string(set.frames()) + " " + cameras;
-}
-
-const char* ChangeName(recon::LabelStore::Change change) {
-  switch (change) {
-    case recon::LabelStore::Change::kApplied:
-      return "applied";
-    case recon::LabelStore::Change::kUndone:
-      return "undone";
-    case recon::LabelStore::Change::kRedone:
-      return "redone";
-  }
-  return "?";
-}
-
-std::string Number(double v) {
-  if (!std::isfinite(v)) return "nan";
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.17g", v);
-  return buffer;
-}
 
 }  // namespace
 
@@ -117,14 +89,9 @@ void LabelDocument::Journal(recon::LabelStore::Change change, const std::string&
                             const std::vector<recon::LabelEdit>& now) {
   if (!journal_.is_open()) {
     journal_.open(JournalPath(labels_path_), std::ios::trunc);
-    journal_ << JournalHeader(store_.labels()) << "\n";
+    journal_ << recon::LabelJournalHeader(store_.labels()) << "\n";
   }
-  journal_ << "step " << ChangeName(change) << " " << step << "\n";
-  for (const recon::LabelEdit& e : now)
-    journal_ << e.camera << " " << e.t << " " << e.knot << " " << Number(e.label.px.x()) << " "
-             << Number(e.label.px.y()) << " " << static_cast<int>(e.label.source) << " "
-             << Number(e.label.confidence) << " " << static_cast<int>(e.label.state) << "\n";
-  journal_ << "end\n";
+  recon::WriteLabelJournalStep(journal_, change, step, now);
   journal_.flush();
   // A journal that cannot be written protects nothing: say so, once.
   if (!journal_ && !journal_failed_) {
@@ -179,51 +146,7 @@ bool LabelDocument::HasJournal(const std::string& labels_path) {
 
 int LabelDocument::Recover() {
   const std::string path = JournalPath(labels_path_);
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open the journal");
-  std::string line;
-  std::getline(in, line);
-  if (line != JournalHeader(store_.labels()))
-    throw InputError(path + ":1: the journal is of another label set (" + line + ", this is " +
-                     JournalHeader(store_.labels()) + ")");
-  // Every complete step's labels as they ended up; a step cut short by the crash is left out.
-  std::map<LabelKey, recon::Label> last;
-  std::vector<std::pair<LabelKey, recon::Label>> pending;
-  const recon::LabelSet& set = store_.labels();
-  for (int line_no = 2; std::getline(in, line); ++line_no) {
-    if (line.rfind("step ", 0) == 0) {
-      pending.clear();
-    } else if (line == "end") {
-      for (const auto& [key, label] : pending) last[key] = label;
-      pending.clear();
-    } else {
-      std::istringstream fields(line);
-      int c, t, k, source, state;
-      std::string x, y, confidence;
-      if (!(fields >> c >> t >> k >> x >> y >> source >> confidence >> state) || c < 0 ||
-          c >= static_cast<int>(set.cameras.size()) || t < 0 || t >= set.frames() || k < 0 ||
-          k >= set.knots())
-        throw InputError(path + ":" + std::to_string(line_no) +
-                         ": not a label of this set: " + line);
-      recon::Label label;
-      label.px = {std::stod(x), std::stod(y)};
-      label.source = static_cast<recon::LabelSource>(source);
-      label.confidence = std::stof(confidence);
-      label.state = static_cast<recon::LabelState>(state);
-      // A source, state or hidden mark no label can have: the journal is damaged.
-      if (source < 0 || source > static_cast<int>(recon::LabelSource::kProjected) || state < 0 ||
-          state > static_cast<int>(recon::LabelState::kHidden) ||
-          (label.hidden() && !(std::isnan(label.px.x()) && std::isnan(label.px.y()))))
-        throw InputError(path + ":" + std::to_string(line_no) +
-                         ": not a label (source, state, or a hidden mark with a position): " +
-                         line);
-      pending.emplace_back(LabelKey{c, t, k}, label);
-    }
-  }
-  in.close();
-  std::vector<recon::LabelEdit> edits;
-  for (const auto& [key, label] : last)
-    edits.push_back({std::get<0>(key), std::get<1>(key), std::get<2>(key), label});
+  const std::vector<recon::LabelEdit> edits = recon::ReadLabelJournal(path, store_.labels());
   // The old journal stays until the recovered step is in the new one.
   const std::string kept = path + ".recovering";
   fs::rename(path, kept);

@@ -10,7 +10,8 @@
 //
 // Every change of the store, whoever made it (the person, or an engine tool run on the GUI
 // thread through store()), becomes one QUndoStack command and is appended to the journal
-// ("<labels>.journal") before labelsChanged is emitted. After a crash the journal replays every
+// ("<labels>.journal"; its format: libreconstruct/labeling/label_journal.h) before labelsChanged
+// is emitted. After a crash the journal replays every
 // edit since the last save (Recover); Save empties it. Not thread-safe: GUI thread only.
 
 #include <QObject>
@@ -23,6 +24,7 @@
 #include <vector>
 
 #include "libreconstruct/labeling/label_engine.h"
+#include "libreconstruct/labeling/label_journal.h"
 #include "libreconstruct/labeling/label_store.h"
 #include "libreconstruct/labels/label_set.h"
 
@@ -66,7 +68,7 @@ class LabelDocument : public QObject {
   // The journal beside the labels file, and whether one is left from a session that ended
   // without saving.
   static std::string JournalPath(const std::string& labels_path) {
-    return labels_path + ".journal";
+    return recon::LabelJournalPath(labels_path);
   }
   static bool HasJournal(const std::string& labels_path);
   // Replays the journal left by an earlier session as one step "Recover unsaved edits"; returns

@@ -380,7 +380,7 @@ TEST_F(MainWindowTest, SpaceReachesAMissingKnotAndAFindNodeClickLabelsIt) {
   const MissingKnot* m = s->missing().Find(c, t, k);
   ASSERT_NE(m, nullptr) << "not listed as missing";
   EXPECT_LT((m->expected_px - where).norm(), 0.5);
-  const auto* timeline = w.findChild<Timeline*>();
+  const auto* timeline = w.findChild<Timeline*>("labeling_timeline");
   ASSERT_NE(timeline, nullptr);
   EXPECT_TRUE(timeline->missing_frames().count(t));
   // Space reaches it: its camera alone, the ring at the expected place, the reason said.
