@@ -663,7 +663,7 @@ TEST_F(MainWindowTest, AfterAFixTheWindowGoesOnToTheFramesNextItem) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Keys and the camera a person acts on (issue 41): keys typed as a keyboard types them, to the
+// Keys and the camera a person acts on: keys typed as a keyboard types them, to the
 // widget that has the focus, not sent to the window.
 
 // Types `key` where the keyboard's keys go: the focus widget (the window when none has it).
