@@ -1455,6 +1455,12 @@ void MainWindow::OnChecked(recon::CheckReport report) {
   if (!recording_) return;
   recording_->SetReport(std::move(report));
   if (room_ == Room::kRecording) recording_room_->Show(recording_.get());
+  const size_t rows = recording_->Findings().size();
+  statusBar()->showMessage(rows == 0 ? QString("Recording checked: every camera whole")
+                                     : QString("Recording checked: %1 finding%2 (the table)")
+                                           .arg(rows)
+                                           .arg(rows == 1 ? "" : "s"),
+                           6000);
 }
 
 }  // namespace netlab::gui

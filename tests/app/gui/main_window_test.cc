@@ -43,9 +43,11 @@
 #include <string>
 #include <vector>
 
+#include "app/gui/calibration_room.h"
 #include "app/gui/camera_view.h"
 #include "app/gui/document/project.h"
 #include "app/gui/knot_grid.h"
+#include "app/gui/recording_room.h"
 #include "app/gui/settings.h"
 #include "app/gui/shortcut_editor.h"
 #include "app/gui/timeline.h"
@@ -1648,6 +1650,56 @@ TEST_F(MainWindowTest, TheScreenshotCanPressGFirstAndNamesAKeyNoActionHas) {
 
 // netlab gui EXPERIMENT.yaml ... --knotless makes the project of a knotless net (Net B), and
 // opens it.
+// The recording room on the shot with one frame file of cam2 removed: the check lists it as
+// missing in cam2, the room's timeline marks it, the screenshot is drawn, and a click on its row
+// takes the person to that frame in the labeling room. The calibration room lists the rig's four
+// cameras with their baselines.
+TEST_F(MainWindowTest, TheRecordingRoomListsAMissingFrameAndAClickGoesToIt) {
+  const fs::path shot = Dir() / "shot_damaged";
+  fs::remove_all(shot);
+  fs::copy(Dir() / "shot", shot, fs::copy_options::recursive);
+  ASSERT_TRUE(fs::remove(shot / "cam2/frame_000005.pgm"));
+  const std::string d = Dir().string(), project = d + "/damaged.yaml";
+  fs::remove(d + "/damaged.h5");
+  SaveProject(MakeProject((shot / "experiment.yaml").string(), (shot / "rig_true.yaml").string(),
+                          d + "/coloring.yaml", d + "/damaged.h5", 0, 0),
+              project);
+  MainWindow w;
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, project));
+  EXPECT_EQ(w.room(), MainWindow::Room::kLabeling);
+  w.ShowRoom(MainWindow::Room::kRecording);
+  ASSERT_TRUE(w.WaitForIdle());
+  ASSERT_NE(w.recording(), nullptr);
+  ASSERT_TRUE(w.recording()->report().has_value());
+  QTableWidget* table = w.recording_room()->table();
+  int row = -1;
+  for (int r = 0; r < table->rowCount(); ++r)
+    if (table->item(r, 0)->text() == "cam2" && table->item(r, 1)->text() == "missing") row = r;
+  ASSERT_GE(row, 0) << "no row says cam2 misses a frame";
+  EXPECT_EQ(table->item(row, 2)->text(), "5 (1 frame)");
+  EXPECT_TRUE(w.recording_room()->timeline()->review_frames().count(5 - w.session()->frame_number(0)));
+  // The labeling room's docks and keys are not the recording room's.
+  EXPECT_FALSE(w.findChild<QDockWidget*>("review_dock")->isVisible());
+  const QImage image = w.grab().toImage();
+  image.save(QString::fromStdString(d + "/recording_room.png"));
+  std::set<QRgb> colours;
+  for (int y = 0; y < image.height(); y += 7)
+    for (int x = 0; x < image.width(); x += 7) colours.insert(image.pixel(x, y));
+  EXPECT_GT(colours.size(), 20u) << "the screenshot is (nearly) blank";
+  // A click on the row: the labeling room at frame 5.
+  QTest::mouseClick(table->viewport(), Qt::LeftButton, Qt::NoModifier,
+                    table->visualItemRect(table->item(row, 0)).center());
+  EXPECT_EQ(w.room(), MainWindow::Room::kLabeling);
+  EXPECT_EQ(w.session()->frame_number(w.frame()), 5);
+  EXPECT_TRUE(w.findChild<QDockWidget*>("review_dock")->isVisible());
+  // The calibration room: one row per rig camera, the baselines said.
+  w.ShowRoom(MainWindow::Room::kCalibration);
+  QTableWidget* rig = w.calibration_room()->table();
+  ASSERT_EQ(rig->rowCount(), w.session()->cameras());
+  EXPECT_EQ(rig->item(0, 0)->text(), QString::fromStdString(w.session()->rig().cameras[0].name));
+  EXPECT_TRUE(w.findChild<QLabel*>("calibration_summary")->text().contains("baselines"));
+}
+
 TEST_F(MainWindowTest, TheCommandLineMakesAKnotlessProject) {
   const std::string d = Dir().string();
   const std::string project = d + "/knotless_cli.yaml";
