@@ -14,6 +14,9 @@
 namespace netlab::gui {
 namespace {
 
+constexpr double kFrustumDepthM = 0.4;  // how deep a camera's frustum is drawn
+constexpr double kAxisM = 0.5;          // the world axes' length
+
 QColor CameraColour(int i) {
   static const QColor colours[] = {QColor(31, 119, 180), QColor(255, 127, 14),
                                    QColor(44, 160, 44), QColor(214, 39, 40)};
@@ -50,6 +53,40 @@ void RigSketch::mouseMoveEvent(QMouseEvent* event) {
   SetView(azimuth_ - d.x() * 0.01, elevation_ + d.y() * 0.01);
 }
 
+RigSketch::Fit RigSketch::MakeFit() const {
+  Fit fit;
+  // The screen's right and up in the world for this azimuth and elevation (z up).
+  const double ca = std::cos(azimuth_), sa = std::sin(azimuth_);
+  const double ce = std::cos(elevation_), se = std::sin(elevation_);
+  fit.right = Eigen::Vector3d(-sa, ca, 0);
+  fit.up = Eigen::Vector3d(-se * ca, -se * sa, ce);
+  std::vector<Eigen::Vector3d> all = {Eigen::Vector3d::Zero(), Eigen::Vector3d(kAxisM, 0, 0),
+                                      Eigen::Vector3d(0, kAxisM, 0), Eigen::Vector3d(0, 0, kAxisM)};
+  if (presenter_ != nullptr)
+    for (int c = 0; c < static_cast<int>(presenter_->rig().cameras.size()); ++c) {
+      const auto f = presenter_->Frustum(c, kFrustumDepthM);
+      all.insert(all.end(), f.begin(), f.end());
+    }
+  double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
+  for (const Eigen::Vector3d& p : all) {
+    x0 = std::min(x0, p.dot(fit.right)), x1 = std::max(x1, p.dot(fit.right));
+    y0 = std::min(y0, p.dot(fit.up)), y1 = std::max(y1, p.dot(fit.up));
+  }
+  const QRectF area(30, 30, width() - 60, height() - 60);
+  fit.scale = std::min(area.width() / std::max(x1 - x0, 1e-6),
+                       area.height() / std::max(y1 - y0, 1e-6));
+  fit.middle = area.center();
+  fit.mx = (x0 + x1) / 2, fit.my = (y0 + y1) / 2;
+  return fit;
+}
+
+QPointF RigSketch::Place(const Fit& fit, const Eigen::Vector3d& p) {
+  return QPointF(fit.middle.x() + (p.dot(fit.right) - fit.mx) * fit.scale,
+                 fit.middle.y() - (p.dot(fit.up) - fit.my) * fit.scale);
+}
+
+QPointF RigSketch::ToScreen(const Eigen::Vector3d& p) const { return Place(MakeFit(), p); }
+
 void RigSketch::paintEvent(QPaintEvent*) {
   QPainter painter(this);
   painter.setRenderHint(QPainter::Antialiasing);
@@ -58,36 +95,16 @@ void RigSketch::paintEvent(QPaintEvent*) {
                    "The rig: cameras as frusta (0.4 m deep), world axes x red, y green, z blue "
                    "(0.5 m) — drag to turn");
   if (presenter_ == nullptr || presenter_->rig().cameras.empty()) return;
-  // The screen's right and up in the world for this azimuth and elevation (z up).
-  const double ca = std::cos(azimuth_), sa = std::sin(azimuth_);
-  const double ce = std::cos(elevation_), se = std::sin(elevation_);
-  const Eigen::Vector3d right(-sa, ca, 0), up(-se * ca, -se * sa, ce);
   std::vector<std::array<Eigen::Vector3d, 5>> frusta;
-  std::vector<Eigen::Vector3d> all = {Eigen::Vector3d::Zero(), Eigen::Vector3d(0.5, 0, 0),
-                                      Eigen::Vector3d(0, 0.5, 0), Eigen::Vector3d(0, 0, 0.5)};
-  for (int c = 0; c < static_cast<int>(presenter_->rig().cameras.size()); ++c) {
-    frusta.push_back(presenter_->Frustum(c, 0.4));
-    all.insert(all.end(), frusta.back().begin(), frusta.back().end());
-  }
-  double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
-  for (const Eigen::Vector3d& p : all) {
-    x0 = std::min(x0, p.dot(right)), x1 = std::max(x1, p.dot(right));
-    y0 = std::min(y0, p.dot(up)), y1 = std::max(y1, p.dot(up));
-  }
-  const QRectF area(30, 30, width() - 60, height() - 60);
-  const double scale = std::min(area.width() / std::max(x1 - x0, 1e-6),
-                                area.height() / std::max(y1 - y0, 1e-6));
-  const QPointF middle = area.center();
-  const double mx = (x0 + x1) / 2, my = (y0 + y1) / 2;
-  const auto map = [&](const Eigen::Vector3d& p) {
-    return QPointF(middle.x() + (p.dot(right) - mx) * scale,
-                   middle.y() - (p.dot(up) - my) * scale);
-  };
+  for (int c = 0; c < static_cast<int>(presenter_->rig().cameras.size()); ++c)
+    frusta.push_back(presenter_->Frustum(c, kFrustumDepthM));
+  const Fit fit = MakeFit();
+  const auto map = [&fit](const Eigen::Vector3d& p) { return Place(fit, p); };
   // The world frame.
   const QColor axes[] = {QColor(220, 40, 40), QColor(40, 170, 40), QColor(40, 80, 230)};
   for (int i = 0; i < 3; ++i) {
     painter.setPen(QPen(axes[i], 2.5));
-    painter.drawLine(map(Eigen::Vector3d::Zero()), map(0.5 * Eigen::Vector3d::Unit(i)));
+    painter.drawLine(map(Eigen::Vector3d::Zero()), map(kAxisM * Eigen::Vector3d::Unit(i)));
   }
   // The cameras.
   for (int c = 0; c < static_cast<int>(frusta.size()); ++c) {

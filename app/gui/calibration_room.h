@@ -26,6 +26,9 @@ class RigSketch : public QWidget {
   double azimuth() const { return azimuth_; }
   double elevation() const { return elevation_; }
   QSize sizeHint() const override { return {600, 420}; }
+  // Where a world point (m) is drawn in the widget, for the current view and size (the rig, the
+  // frusta and the axes fitted into it).
+  QPointF ToScreen(const Eigen::Vector3d& p_in_world) const;
 
  protected:
   void paintEvent(QPaintEvent* event) override;
@@ -33,6 +36,15 @@ class RigSketch : public QWidget {
   void mouseMoveEvent(QMouseEvent* event) override;
 
  private:
+  // The screen's right and up in the world, the fitted scale (px/m) and centre, for this view.
+  struct Fit {
+    Eigen::Vector3d right, up;
+    double scale = 1.0, mx = 0.0, my = 0.0;
+    QPointF middle;
+  };
+  Fit MakeFit() const;
+  static QPointF Place(const Fit& fit, const Eigen::Vector3d& p_in_world);
+
   const CalibrationPresenter* presenter_ = nullptr;
   double azimuth_ = -0.6, elevation_ = 0.45;
   QPointF last_;

@@ -1027,7 +1027,8 @@ TEST(MainWindowHelp, TheManualIsInTheHelpMenu) {
   EXPECT_TRUE(dialog->isVisible());
   auto* browser = dialog->findChild<QTextBrowser*>();
   ASSERT_NE(browser, nullptr);
-  EXPECT_TRUE(browser->toPlainText().contains("The labeling workstation"));
+  EXPECT_TRUE(browser->toPlainText().contains("The workstation: netlab gui"));
+  EXPECT_TRUE(browser->toPlainText().contains("The recording room"));
   EXPECT_TRUE(browser->toPlainText().contains("Where the keys go"));
   dialog->close();
 }
@@ -1698,6 +1699,29 @@ TEST_F(MainWindowTest, TheRecordingRoomListsAMissingFrameAndAClickGoesToIt) {
   ASSERT_EQ(rig->rowCount(), w.session()->cameras());
   EXPECT_EQ(rig->item(0, 0)->text(), QString::fromStdString(w.session()->rig().cameras[0].name));
   EXPECT_TRUE(w.findChild<QLabel*>("calibration_summary")->text().contains("baselines"));
+  // The sketch draws every camera where it places its centre (a frustum's apex), and turns.
+  RigSketch* sketch = w.calibration_room()->sketch();
+  const QImage drawn = sketch->grab().toImage();
+  const QRgb background = drawn.pixel(drawn.width() - 3, drawn.height() - 3);
+  const auto drawn_near = [&](const QPointF& at) {
+    for (int dy = -2; dy <= 2; ++dy)
+      for (int dx = -2; dx <= 2; ++dx) {
+        const QPoint p = at.toPoint() + QPoint(dx, dy);
+        if (drawn.rect().contains(p) && drawn.pixel(p) != background) return true;
+      }
+    return false;
+  };
+  for (const calib::Camera& camera : w.session()->rig().cameras)
+    EXPECT_TRUE(drawn_near(sketch->ToScreen(camera.Center()))) << camera.name << " not drawn";
+  EXPECT_FALSE(drawn_near(QPointF(drawn.width() - 8, drawn.height() - 8)));
+  const QPointF before = sketch->ToScreen(w.session()->rig().cameras[0].Center());
+  QTest::mousePress(sketch, Qt::LeftButton, Qt::NoModifier, QPoint(100, 100));
+  QMouseEvent drag(QEvent::MouseMove, QPointF(160, 110), QPointF(160, 110), Qt::NoButton,
+                   Qt::LeftButton, Qt::NoModifier);
+  QApplication::sendEvent(sketch, &drag);
+  EXPECT_GT((sketch->ToScreen(w.session()->rig().cameras[0].Center()) - before).manhattanLength(),
+            5.0)
+      << "dragging did not turn the rig";
 }
 
 TEST_F(MainWindowTest, TheCommandLineMakesAKnotlessProject) {
