@@ -35,6 +35,17 @@ inline std::string Key(const std::string& path) {
   return (error ? std::filesystem::path(path) : absolute).lexically_normal().string();
 }
 
+// The files whose writing failed where the writer could not throw (an HDF5 file whose close
+// could not write its last data: the Id closing it is a destructor).
+struct FailedWrites {
+  std::mutex mutex;
+  std::vector<std::string> paths;  // Key()s
+};
+inline FailedWrites& FailedWriteList() {
+  static FailedWrites failed;
+  return failed;
+}
+
 // Renames `from` onto `to` now (the last step of RenameInto).
 inline void RenameNow(const std::string& from, const std::string& to) {
   namespace fs = std::filesystem;
@@ -56,8 +67,27 @@ inline void RenameNow(const std::string& from, const std::string& to) {
 // rename onto a character device or a FIFO would replace the device's node with a file (`--out
 // /dev/null` run as root). The commands refuse such an output before any work
 // (common/output_paths.h); this is the last line.
-// An output an OutputSet holds is not renamed here but parked until the set commits.
+// Notes that writing `path` failed where no exception could say so (a destructor closing it):
+// RenameInto will not put it in place.
+inline void ReportFailedWrite(const std::string& path) {
+  files_internal::FailedWrites& failed = files_internal::FailedWriteList();
+  std::lock_guard<std::mutex> lock(failed.mutex);
+  failed.paths.push_back(files_internal::Key(path));
+}
+
+// An output an OutputSet holds is not renamed here but parked until the set commits. A `from`
+// whose writing failed (ReportFailedWrite: a full disk) is removed, and `to` left as it was.
 inline void RenameInto(const std::string& from, const std::string& to) {
+  {
+    files_internal::FailedWrites& failed = files_internal::FailedWriteList();
+    std::lock_guard<std::mutex> lock(failed.mutex);
+    for (const std::string& path : failed.paths)
+      if (path == files_internal::Key(from)) {
+        std::remove(from.c_str());
+        throw std::runtime_error(to + ": writing " + from + " failed (is the disk full?); " + to +
+                                 " is left as it was");
+      }
+  }
   {
     files_internal::Parked& parked = files_internal::ParkedOutputs();
     std::lock_guard<std::mutex> lock(parked.mutex);
@@ -73,8 +103,9 @@ inline void RenameInto(const std::string& from, const std::string& to) {
 // The outputs of one run, put in place together once every one is complete. While a set lives,
 // a writer's final rename of one of its outputs (RenameInto) is held back, the complete
 // "<output>.partial" left where it is; Commit() renames them all into place, in the order given.
-// A set destroyed without Commit (the run failed on a later output) removes the partials it holds,
-// so a run with several outputs that fails leaves every existing output as it was:
+// A set destroyed without Commit (the run failed, on a later output or half way through one: a
+// full disk) removes the partials it holds and every "<output>.partial" a writer left, so a run
+// that fails leaves every existing output as it was and no partial file beside it:
 //
 //   OutputSet outputs({out, report});
 //   WriteTracks(out, ...);       // complete in out.partial
@@ -99,9 +130,13 @@ class OutputSet {
   OutputSet(const OutputSet&) = delete;
   OutputSet& operator=(const OutputSet&) = delete;
   ~OutputSet() {
+    const bool committed = keys_.empty();
     const std::vector<std::string> partials = Release();
-    for (const std::string& partial : partials)
-      if (!partial.empty()) std::remove(partial.c_str());
+    if (committed) return;
+    for (size_t i = 0; i < outputs_.size(); ++i) {
+      if (!partials[i].empty()) std::remove(partials[i].c_str());
+      std::remove((outputs_[i] + ".partial").c_str());  // a writer that failed half way
+    }
   }
 
   // Renames every output written so far into place (an output never written is skipped).

@@ -3,11 +3,22 @@
 #include <mutex>
 #include <numeric>
 #include <stdexcept>
+#include <string>
+
+#include "common/files.h"
 
 namespace netlab::h5 {
 namespace {
 
 [[noreturn]] void Fail(const std::string& message) { throw std::runtime_error(message); }
+
+// No clean-up of the library at exit: a file whose last write failed (a full disk) cannot be
+// closed, and the library's exit handler crashed on it (a segmentation fault after netlab's own
+// error). Every file netlab writes is closed (Id) before the program ends.
+const bool kNoExitHandler = [] {
+  H5dont_atexit();
+  return true;
+}();
 
 std::string ObjectName(hid_t obj) {
   char buffer[512] = {0};
@@ -22,7 +33,15 @@ std::string ObjectName(hid_t obj) {
 void Id::Reset() {
   if (id_ < 0) return;
   switch (H5Iget_type(id_)) {
-    case H5I_FILE: H5Fclose(id_); break;
+    case H5I_FILE: {
+      // A close that fails could not write the file's last data: the file is incomplete, and
+      // RenameInto refuses to put it in place of an output.
+      const ssize_t length = H5Fget_name(id_, nullptr, 0);
+      std::string name(length > 0 ? static_cast<size_t>(length) : 0, '\0');
+      if (length > 0) H5Fget_name(id_, name.data(), name.size() + 1);
+      if (H5Fclose(id_) < 0 && !name.empty()) ReportFailedWrite(name);
+      break;
+    }
     case H5I_GROUP: H5Gclose(id_); break;
     case H5I_DATASET: H5Dclose(id_); break;
     case H5I_DATASPACE: H5Sclose(id_); break;
@@ -41,7 +60,11 @@ void SilenceErrors() {
 
 Id CreateFile(const std::string& path) {
   SilenceErrors();
-  Id file(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT));
+  // Closing the file closes every object still open in it and writes all it holds, so that a
+  // write that fails there (a full disk) fails the close, which Id reports.
+  Id access(H5Pcreate(H5P_FILE_ACCESS));
+  H5Pset_fclose_degree(access.get(), H5F_CLOSE_STRONG);
+  Id file(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, access.get()));
   if (!file.valid()) Fail(path + ": cannot create HDF5 file");
   return file;
 }
@@ -273,6 +296,28 @@ void ReadFrame(hid_t dataset, hid_t type, hsize_t frame, void* data) {
 std::mutex& Mutex() {
   static std::mutex mutex;
   return mutex;
+}
+
+const UnitFactors kSeconds = {
+    {"s", 1.0}, {"ms", 1e-3}, {"us", 1e-6}, {"\u00b5s", 1e-6}, {"ns", 1e-9}};
+const UnitFactors kPixels = {{"px", 1.0}};
+
+double UnitsFactor(hid_t file, const std::string& path, const std::string& name,
+                   const UnitFactors& known) {
+  Id dataset(H5Dopen2(file, name.c_str(), H5P_DEFAULT));
+  if (!dataset.valid()) Fail(path + ": missing dataset " + name);
+  std::string units = ReadStringAttribute(dataset.get(), "units");
+  const size_t a = units.find_first_not_of(" \t"), b = units.find_last_not_of(" \t");
+  units = a == std::string::npos ? "" : units.substr(a, b - a + 1);
+  if (units.empty()) return 1.0;
+  std::string names;
+  for (const auto& [unit, factor] : known) {
+    if (units == unit) return factor;
+    names += (names.empty() ? "" : ", ") + unit;
+  }
+  Fail(path + ":" + name + " has units '" + units + "' (its \"units\" attribute); netlab reads " +
+       names + (known.size() > 1 ? ", converted to " + known.front().first : std::string()) +
+       ": convert the file or fix the attribute");
 }
 
 }  // namespace netlab::h5

@@ -69,6 +69,19 @@ std::string ReadStringDataset(hid_t loc, const std::string& name);
 // Sets the "units" attribute of dataset `name` under `loc`.
 void SetUnits(hid_t loc, const std::string& name, const std::string& units);
 
+// A unit a reader accepts and the factor that turns it into the unit netlab keeps in memory
+// (the first of the list).
+using UnitFactors = std::vector<std::pair<std::string, double>>;
+extern const UnitFactors kSeconds;  // s, ms, us, ns
+extern const UnitFactors kPixels;   // px
+
+// The factor that turns dataset `name`'s values (in file `path`) into the unit netlab keeps in
+// memory, from its "units" attribute: a unit a file states is converted or refused, never
+// ignored. No attribute: the first unit, as netlab writes it. Any unit not in `known` is refused
+// (std::runtime_error naming the file, the dataset and the units read).
+double UnitsFactor(hid_t file, const std::string& path, const std::string& name,
+                   const UnitFactors& known);
+
 }  // namespace netlab::h5
 
 namespace netlab::h5 {

@@ -109,16 +109,16 @@ inline YAML::Node LoadYamlString(const std::string& text, const std::string& ori
   return documents[0];
 }
 
-// Reads and parses a YAML file (LoadYamlString); a missing or unreadable file, a folder, or one
-// larger than 64 MiB (a device such as /dev/zero) becomes InputError naming it.
-inline YAML::Node LoadYamlFile(const std::string& path) {
+// The text of a YAML file; a missing or unreadable file, a folder, or one larger than 64 MiB (a
+// device such as /dev/zero) becomes InputError naming it: "x.yaml: cannot open <kind>".
+inline std::string ReadYamlText(const std::string& path, const std::string& kind = "file") {
   using namespace yaml_util_internal;
   namespace fs = std::filesystem;
   std::error_code error;
   const fs::file_status status = fs::status(path, error);
-  if (fs::is_directory(status)) throw InputError(path + ": is a folder, not a YAML file");
+  if (fs::is_directory(status)) throw InputError(path + ": is a folder, not a YAML " + kind);
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open file");
+  if (!in) throw InputError(path + ": cannot open " + kind);
   std::string text;
   char buffer[1 << 16];
   while (in.read(buffer, sizeof(buffer)) || in.gcount() > 0) {
@@ -126,8 +126,13 @@ inline YAML::Node LoadYamlFile(const std::string& path) {
     if (text.size() > kMaxYamlBytes)
       throw InputError(path + ": more than 64 MiB; not a YAML file netlab reads (a device?)");
   }
-  if (in.bad()) throw InputError(path + ": cannot read file");
-  return LoadYamlString(text, path);
+  if (in.bad()) throw InputError(path + ": cannot read " + kind);
+  return text;
+}
+
+// Reads and parses a YAML file: ReadYamlText, then LoadYamlString.
+inline YAML::Node LoadYamlFile(const std::string& path) {
+  return LoadYamlString(ReadYamlText(path), path);
 }
 
 class YamlMap {

@@ -146,6 +146,14 @@ TEST_F(FolderReplacementTest, AnOutputSetPutsItsOutputsInPlaceOnlyTogether) {
   }
   EXPECT_EQ(Contents(dir_), (std::map<std::string, std::string>{{"out.h5", "new out"},
                                                                  {"report.html", "new report"}}));
+  {
+    // A writer that fails half way leaves its partial: the set removes it.
+    OutputSet outputs({(dir_ / "out.h5").string(), (dir_ / "report.html").string()});
+    WriteThroughPartial(dir_ / "out.h5", "half a new out");
+    std::ofstream((dir_ / "report.html.partial").string()) << "half a new report";
+  }
+  EXPECT_EQ(Contents(dir_), (std::map<std::string, std::string>{{"out.h5", "new out"},
+                                                                 {"report.html", "new report"}}));
   // Without a set, a rename happens at once; an output the set never saw written is skipped.
   WriteThroughPartial(dir_ / "out.h5", "newer out");
   EXPECT_EQ(Contents(dir_).at("out.h5"), "newer out");
