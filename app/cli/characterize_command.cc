@@ -1,5 +1,6 @@
 // netlab characterize TEST.yaml --out material.yaml [--json]
 
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <string>
@@ -8,6 +9,7 @@
 #include "app/cli/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "common/errors.h"
 #include "common/output_paths.h"
 #include "libnetsim/characterization/bench_file.h"
 #include "libnetsim/characterization/characterize.h"
@@ -74,6 +76,12 @@ int RunCharacterize(const std::vector<std::string>& args) {
     CheckOutputPaths({{"test", cl.positional()[0]}}, {{"--out", out}});
     const netsim::BenchTest test = netsim::ReadBenchTest(cl.positional()[0]);
     const netsim::Characterization c = netsim::Characterize(test);
+    // A fit that overflowed (forces of 1e300 N) would write .nan into the material file.
+    for (const netsim::ParameterEstimate& e : c.estimates)
+      if (!std::isfinite(e.value) || !std::isfinite(e.sigma))
+        throw InputError(test.path + ": samples: cannot be fitted: " + e.key + " comes out as " +
+                         std::to_string(e.value) + " +- " + std::to_string(e.sigma) +
+                         " (are the samples in SI units, within a physical range?)");
     netsim::WriteMaterialFile(out, c.estimates,
                               "netlab characterize: " + test.kind + " test from " + test.path +
                                   "\nmaterial " + test.material +

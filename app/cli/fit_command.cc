@@ -14,9 +14,9 @@
 #include "app/cli/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "common/errors.h"
 #include "common/files.h"
 #include "common/output_paths.h"
-#include "common/yaml_util.h"
 #include "libnetsim/characterization/material_file.h"
 #include "libnetsim/identification/shot_fit.h"
 
@@ -292,6 +292,10 @@ void PrintJson(const netsim::FitResult& r, const std::string& out) {
 
 // A comma-separated list of file names; an empty item is a usage error naming the option.
 std::vector<std::string> SplitList(const std::string& list, const std::string& option) {
+  // getline yields no item after a trailing comma: that empty name is refused as the others are.
+  if (!list.empty() && list.back() == ',')
+    throw UsageError("--" + option + " '" + list + "': an empty file name in the list (a "
+                     "trailing comma)");
   std::vector<std::string> items;
   std::istringstream in(list);
   std::string item;
@@ -315,6 +319,12 @@ std::vector<netsim::FitPrior> ReadPriors(const std::string& list,
     for (const netsim::ParameterEstimate& e : netsim::ReadMaterialFile(file)) {
       netsim::FitPrior prior{"materials." + e.material + "." + e.key, e.value, e.sigma,
                              file + " (" + e.test + " test)"};
+      // A sigma of 1e300 is no prior at all: said, not taken silently.
+      if (e.sigma > 100.0 * std::abs(e.value))
+        throw InputError(file + ": uncertainty." + e.material + "." + e.key + ".sigma: " +
+                         Number(e.sigma) + " is over 100 times the value " + Number(e.value) +
+                         ": a prior that constrains nothing; fix it or leave the file out of "
+                         "--prior");
       for (const netsim::FitParameter& p : parameters) used += p.name == prior.name;
       priors.push_back(prior);
     }

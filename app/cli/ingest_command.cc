@@ -16,8 +16,8 @@
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
 #include "app/cli/progress_bar.h"
+#include "common/files.h"
 #include "common/output_paths.h"
-#include "common/yaml_util.h"
 #include "libreconstruct/recording/frame_store.h"
 #include "libreconstruct/recording/sequence.h"
 
@@ -188,9 +188,12 @@ int RunIngest(const std::vector<std::string>& args) {
     if (to_hdf5) {
       const auto start = std::chrono::steady_clock::now();
       ProgressBar bar("converting", !quiet);
+      // The store and its experiment file put in place together once both are complete.
+      OutputSet outputs({*to_hdf5, recon::FrameStoreExperimentPath(*to_hdf5)});
       const recon::Experiment stored = recon::ConvertToFrameStore(
           sequence, *to_hdf5, {compress}, [&](int done, int total) { bar.Update(done, total); });
       recon::WriteExperiment(stored.path, stored);
+      outputs.Commit();
       conversion.output = *to_hdf5;
       conversion.experiment_file = stored.path;
       conversion.frames = sequence.last_frame() - sequence.first_frame() + 1;

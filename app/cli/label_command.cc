@@ -18,12 +18,13 @@
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
 #include "calibration/rig.h"
+#include "common/errors.h"
+#include "common/files.h"
 #include "common/output_paths.h"
-#include "common/yaml_util.h"
 #include "libreconstruct/coloring/net_coloring.h"
 #include "libreconstruct/labeling/label_engine.h"
-#include "libreconstruct/labeling/label_store.h"
 #include "libreconstruct/labeling/label_setup.h"
+#include "libreconstruct/labeling/label_store.h"
 #include "libreconstruct/labels/label_set.h"
 #include "libreconstruct/recording/experiment.h"
 #include "libreconstruct/recording/sequence.h"
@@ -289,8 +290,13 @@ int RunLabel(const std::vector<std::string>& args) {
     // Counted, written, reported.
     report.counts = CountLabels(job, store, notes);
     store.SetReasons(engine.reasons());
-    store.Save(out);
-    if (const auto xypts = cl.Option("xypts")) recon::WriteXyPts(*xypts, store.labels());
+    {
+      // Both put in place together once both are complete.
+      OutputSet outputs({out, cl.Option("xypts").value_or("")});
+      store.Save(out);
+      if (const auto xypts = cl.Option("xypts")) recon::WriteXyPts(*xypts, store.labels());
+      outputs.Commit();
+    }
     for (const auto& c : report.counts)
       report.labeled += c.labeled, report.needs_review += c.needs_review;
     report.wall_s =

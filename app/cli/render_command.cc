@@ -13,7 +13,6 @@
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
 #include "app/cli/progress_bar.h"
-#include "common/yaml_util.h"
 #include "libreconstruct/twin/synthetic_experiment.h"
 
 namespace netlab::app {

@@ -1,14 +1,21 @@
 // netlab score --measured tracks.h5 --sim sim.h5 --out score.h5 [--report report.html]
 //              [--align none|time|rigid|time+rigid] [--json]
 
+#include <algorithm>
+#include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <iostream>
+#include <map>
 
 #include "app/cli/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "common/errors.h"
+#include "common/files.h"
+#include "common/hdf5_util.h"
 #include "common/output_paths.h"
 #include "libnetsim/tracks/track_file.h"
 #include "libnetsim/validation/score.h"
@@ -53,6 +60,89 @@ constexpr char kHelp[] =
     "                      per_class (corner/edge/inner rms_mm), headline, left_out_points,\n"
     "                      weighted_rms_mm, degenerate_points, wall_s and more\n\n"
     "exit status: 0 scored (whatever the verdict), 1 bad input, 2 usage error.\n";
+
+// The variances a knot-track file may state, m^2: a standard deviation of 1e-20 m to 1 km (netlab's
+// own triangulation of noise-free synthetic labels states ~1e-32 m^2). Outside, d^2 = e^T C^-1 e
+// and the weights built from it overflow or vanish (1e300 m^2 everywhere read as "consistent").
+constexpr double kMinVariance = 1e-40, kMaxVariance = 1e6;
+
+// Refuses a covariance of a valid knot-frame with a variance outside [kMinVariance,
+// kMaxVariance], naming the file, frame and knot.
+void CheckCovariances(const netsim::KnotTracks& tracks, const std::string& path) {
+  if (tracks.covariance.empty()) return;
+  const int knots = tracks.knots();
+  for (size_t i = 0; i < tracks.covariance.size(); ++i) {
+    if (i < tracks.valid.size() && !tracks.valid[i]) continue;
+    for (int a = 0; a < 3; ++a) {
+      const double v = tracks.covariance[i](a, a);
+      if (v >= kMinVariance && v <= kMaxVariance) continue;
+      char text[160];
+      std::snprintf(text, sizeof(text), "variance %.3g m^2 (sigma %.3g m)", v,
+                    std::sqrt(std::max(v, 0.0)));
+      throw InputError(path + ":/knots/covariance: frame " + std::to_string(i / knots) +
+                       ", knot " + std::to_string(i % knots) + ": " + text +
+                       " is outside 1e-40..1e6 m^2 (sigma 1e-20 m to 1 km): no position is "
+                       "measured so; fix the file, or give --meas-sigma / --sim-sigma for a file "
+                       "without covariances");
+    }
+  }
+}
+
+// Refuses a file that holds nothing to compare: a measurement of one frame (no span of time to
+// align or compare; it read "no overlap in time"), or every knot invalid in every frame.
+void CheckSomethingToCompare(const netsim::KnotTracks& tracks, const std::string& path,
+                             bool measured) {
+  if (measured && tracks.frames() < 2)
+    throw InputError(path + ": " + std::to_string(tracks.frames()) +
+                     (tracks.frames() == 1 ? " frame" : " frames") +
+                     ": a score compares a flight over time, at least 2 frames");
+  for (uint8_t valid : tracks.valid)
+    if (valid) return;
+  throw InputError(path + ": no knot is valid in any of its " + std::to_string(tracks.frames()) +
+                   " frames (/knots/valid all 0): nothing to compare");
+}
+
+// Refuses a /knots/grid that lists a knot twice (and so leaves another out): the knots would be
+// compared with the wrong ones.
+void CheckGrid(const netsim::KnotTracks& tracks, const std::string& path) {
+  std::map<std::array<int, 3>, int> first;  // (net, row, col) -> its first index
+  for (int k = 0; k < tracks.knots(); ++k) {
+    const int net = tracks.net.empty() ? 0 : tracks.net[k];
+    const auto [it, fresh] = first.emplace(std::array<int, 3>{net, tracks.grid[k][0],
+                                                              tracks.grid[k][1]}, k);
+    if (!fresh)
+      throw InputError(path + ":/knots/grid: knots " + std::to_string(it->second) + " and " +
+                       std::to_string(k) + " are both (" + std::to_string(tracks.grid[k][0]) +
+                       ", " + std::to_string(tracks.grid[k][1]) + ")" +
+                       (tracks.net.empty() ? "" : " of net " + std::to_string(net)) +
+                       ": each knot must be listed once");
+  }
+}
+
+// Refuses a /contact_start that is there but holds no time (NaN, infinite): netlab leaves the
+// dataset out when the simulation had no contact, so a NaN one is a broken file, not "none".
+void CheckContactStartDataset(const std::string& path) {
+  const h5::Id file = h5::OpenFileReadOnly(path);
+  if (!h5::Exists(file.get(), "/contact_start")) return;
+  double t = 0.0;
+  h5::ReadDataset(file.get(), "/contact_start", H5T_NATIVE_DOUBLE, &t);
+  if (!std::isfinite(t))
+    throw InputError(path + ":/contact_start is " + std::to_string(t) +
+                     ", not a time (a simulation without contact has no /contact_start)");
+}
+
+// Refuses a contact time (given, or the simulation's /contact_start) outside the simulation's
+// time: the contact phase would start before the first frame or after the last.
+void CheckContactTime(double t, const std::string& what, const netsim::KnotTracks& sim,
+                      const std::string& sim_path) {
+  if (!std::isfinite(t) || sim.time.empty()) return;
+  if (t >= sim.time.front() && t <= sim.time.back()) return;
+  char span[120];
+  std::snprintf(span, sizeof(span), "%.6g s is outside the time of the simulation ", t);
+  char range[80];
+  std::snprintf(range, sizeof(range), ", [%.6g, %.6g] s", sim.time.front(), sim.time.back());
+  throw InputError(what + " " + span + sim_path + range);
+}
 
 void PrintJson(const netsim::ScoreSummary& s, const std::string& out, const std::string& report) {
   JsonWriter json;
@@ -154,17 +244,32 @@ int RunScore(const std::vector<std::string>& args) {
       std::fprintf(stderr, "reading %s and %s\n", measured_path.c_str(), sim_path.c_str());
     const netsim::KnotTracks measured = netsim::ReadKnotTracks(measured_path);
     const netsim::KnotTracks sim = netsim::ReadKnotTracks(sim_path);
+    CheckSomethingToCompare(measured, measured_path, true);
+    CheckSomethingToCompare(sim, sim_path, false);
+    CheckGrid(measured, measured_path);
+    CheckGrid(sim, sim_path);
+    CheckCovariances(measured, measured_path);
+    CheckCovariances(sim, sim_path);
+    CheckContactTime(options.contact_time_s, "--contact-time", sim, sim_path);
+    CheckContactStartDataset(sim_path);
+    if (!std::isfinite(options.contact_time_s))
+      CheckContactTime(sim.contact_start_s, sim_path + ":/contact_start", sim, sim_path);
     if (!quiet)
       std::fprintf(stderr, "scoring %d x %d knot-frames against %d simulated frames\n",
                    measured.frames(), measured.knots(), sim.frames());
     netsim::ScoreResult result = netsim::Score(measured, sim, options, measured_path, sim_path);
-    netsim::WriteScore(out, result);
-    if (!report.empty()) {
-      netsim::ReportInfo info;
-      info.measured_path = measured_path;
-      info.sim_path = sim_path;
-      info.score_path = out;
-      netsim::WriteScoreReport(report, result, info);
+    {
+      // Both put in place together once both are complete.
+      OutputSet outputs({out, report});
+      netsim::WriteScore(out, result);
+      if (!report.empty()) {
+        netsim::ReportInfo info;
+        info.measured_path = measured_path;
+        info.sim_path = sim_path;
+        info.score_path = out;
+        netsim::WriteScoreReport(report, result, info);
+      }
+      outputs.Commit();
     }
     result.summary.wall_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -11,9 +11,9 @@
 #include "app/cli/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "common/files.h"
 #include "common/log.h"
 #include "common/output_paths.h"
-#include "common/yaml_util.h"
 #include "libnetsim/scenario/run_scenario.h"
 #include "libnetsim/scenario/scenario_override.h"
 
@@ -104,7 +104,11 @@ int RunSimulate(const std::vector<std::string>& args) {
         std::fflush(stderr);
       };
     }
+    // A run that throws (a full disk) leaves no partial file; one that blows up keeps its
+    // frames up to the failure in OUT.partial (RunScenario names it), and OUT as it was.
+    OutputSet outputs({out});
     const netsim::RunSummary summary = netsim::RunScenario(scenario, options);
+    outputs.Commit();
     if (show_progress) std::fprintf(stderr, "\r");
     if (!quiet || !cl.Flag("json")) std::cerr << summary.BriefReport();
     if (!summary.stable) {

@@ -7,16 +7,19 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "app/cli/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "common/errors.h"
+#include "common/files.h"
 #include "common/output_paths.h"
-#include "common/yaml_util.h"
 #include "libnetsim/scenario/scenario_override.h"
 #include "libnetsim/sweep/sweep_file.h"
 #include "libnetsim/sweep/sweep_grid.h"
@@ -60,8 +63,8 @@ constexpr char kHelp[] =
     "outputs per run: max_area (m^2, net 0's corner polygon, largest), max_area_time (s),\n"
     "max_penetration (m, deepest contact), centroid_drift (m, the knots' centroid, first to last\n"
     "frame).\n\n"
-    "exit status: 0 SWEEP.h5 written (whatever runs failed: see \"failed\"), 1 bad scenario,\n"
-    "parameter path or output, 2 usage error.\n";
+    "exit status: 0 SWEEP.h5 written (some runs may have failed: see \"failed\"), 1 bad\n"
+    "scenario, parameter path or output, or every run failed (nothing written), 2 usage error.\n";
 
 // Progress on stderr: a bar redrawn in place on a terminal, a line per 10 % otherwise.
 class SweepProgress {
@@ -247,7 +250,11 @@ int RunSweep(const std::vector<std::string>& args) {
     std::vector<std::vector<netsim::ScenarioOverride>> sets;
     for (const netsim::SweepPoint& point : grid) sets.push_back(point.overrides);
 
-    // Rank 0 writes the file; an error there must end every rank, or they would wait for it.
+    // Rank 0 writes the file and the report, put in place together when both are complete and
+    // some run succeeded; on any failure neither is, and no partial file is left.
+    std::optional<OutputSet> outputs;
+    if (root) outputs.emplace(std::vector<std::string>{out, report});
+    // An error in writing must end every rank, or they would wait for rank 0.
     std::unique_ptr<netsim::SweepFileWriter> writer;
     if (root) {
       try {
@@ -307,19 +314,24 @@ int RunSweep(const std::vector<std::string>& args) {
     progress.Break();
 
     const auto sensitivity = netsim::ComputeSensitivities(parameters, result.runs);
+    // A study of which no run succeeded has no result: --out and --report are left as they were
+    // (each run's error is named above and in the JSON).
+    if (failed == static_cast<int>(result.runs.size()) && failed > 0) {
+      writer.reset();  // closes the partial file, which `outputs` removes
+      if (cl.Flag("json")) PrintJson(scenario_path, parameters, grid, result, sensitivity, "", "");
+      std::fprintf(stderr, "netlab sweep: error: all %d runs failed (each named above); %s was "
+                   "not written%s\n", failed, out.c_str(),
+                   std::filesystem::exists(out) ? ", the existing file is as it was" : "");
+      return 1;
+    }
     writer->Commit(result, sensitivity);
     if (!report.empty())
       netsim::WriteSweepReport(report, parameters, grid, result, sensitivity,
                                {scenario_path, out, fixed});
+    outputs->Commit();
     if (!quiet) PrintSummary(parameters, result, sensitivity, out, report);
     if (cl.Flag("json"))
       PrintJson(scenario_path, parameters, grid, result, sensitivity, out, report);
-    // A study of which no run succeeded has no result, even with the file that says why.
-    if (failed == static_cast<int>(result.runs.size()) && failed > 0) {
-      std::fprintf(stderr, "netlab sweep: error: all %d runs failed (each named above; %s holds "
-                   "their errors)\n", failed, out.c_str());
-      return 1;
-    }
     return 0;
   });
 }

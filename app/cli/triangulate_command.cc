@@ -19,8 +19,9 @@
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
 #include "calibration/rig.h"
+#include "common/errors.h"
+#include "common/files.h"
 #include "common/output_paths.h"
-#include "common/yaml_util.h"
 #include "libnetsim/tracks/track_file.h"
 #include "libreconstruct/geometry/bundle_adjust.h"
 #include "libreconstruct/geometry/camera_offsets.h"
@@ -228,14 +229,19 @@ struct Outcome {
 };
 
 // The knot-track file, and with --csv the DLTdv8-style files (their paths into `outcome`).
+// All are put in place together once every one is complete (a failure leaves each as it was).
 void WriteOutputs(const TriangulateArgs& a, const netsim::KnotTracks& tracks, Outcome* outcome) {
-  netsim::WriteKnotTracks(a.out, tracks);
   if (a.csv) {
     outcome->csv_pts = *a.csv + "xyzpts.csv";
     outcome->csv_res = *a.csv + "xyzres.csv";
+  }
+  OutputSet outputs({a.out, outcome->csv_pts, outcome->csv_res});
+  netsim::WriteKnotTracks(a.out, tracks);
+  if (a.csv) {
     recon::WriteXyzPts(outcome->csv_pts, tracks, a.rows, a.cols);
     recon::WriteXyzRes(outcome->csv_res, tracks, a.rows, a.cols);
   }
+  outputs.Commit();
 }
 
 // The rig adjustment's lines of the summary: the verdict, then per camera its change.

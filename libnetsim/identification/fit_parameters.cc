@@ -124,6 +124,10 @@ std::vector<FitParameter> ParseFreeParameters(const std::string& free_list,
                                               double time_offset_start) {
   std::vector<FitParameter> parameters;
   const int shots = static_cast<int>(scenario_paths.size());
+  // getline yields no item after a trailing comma: that empty name is refused as the others are.
+  const size_t last = free_list.find_last_not_of(" \t");
+  if (last != std::string::npos && free_list[last] == ',')
+    throw InputError("--free '" + free_list + "': an empty name in the list (a trailing comma)");
   std::istringstream items(free_list);
   std::string item;
   while (std::getline(items, item, ',')) {

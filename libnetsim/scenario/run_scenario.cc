@@ -9,8 +9,8 @@
 #include <memory>
 #include <sstream>
 
+#include "common/errors.h"
 #include "common/memory.h"
-#include "common/yaml_util.h"
 #include "libnetsim/tracks/track_file.h"
 
 namespace netlab::netsim {
@@ -127,12 +127,34 @@ RunSummary RunScenario(const Scenario& scenario, const RunOptions& options) {
     os << ") would take " << steps_needed << " steps of " << model.num_segments()
        << " segments to reach duration " << scenario.duration
        << " s: check the materials' stiffness, damping and linear density (or integrator.dt)";
+    // The step falls with the segments' length: name the key that made them short.
+    int shortest = -1;
+    for (size_t n = 0; n < scenario.nets.size(); ++n)
+      if (shortest < 0 || scenario.nets[n].mesh / scenario.nets[n].segments_per_link <
+                              scenario.nets[shortest].mesh /
+                                  scenario.nets[shortest].segments_per_link)
+        shortest = static_cast<int>(n);
+    if (shortest >= 0 && scenario.nets[shortest].segments_per_link > 1) {
+      const NetSpec& net = scenario.nets[shortest];
+      os << ", and nets." << shortest << ".segments_per_link " << net.segments_per_link
+         << " (segments of " << net.mesh / net.segments_per_link << " m)";
+    }
     throw InputError(os.str());
   }
   // Output frames every `steps_per_frame` steps; an automatic dt divides the interval exactly.
   const long steps_per_frame =
       std::max(1L, std::lround(scenario.output_interval / sim.dt()));
   const long total_steps = std::lround(scenario.duration / sim.dt());
+  // A step longer than the run (integrator.dt 10 s of a 0.01 s run) ran 0 steps and was
+  // reported stable.
+  if (total_steps < 1) {
+    std::ostringstream os;
+    os << std::setprecision(3)
+       << (scenario.source_path.empty() ? scenario.name : scenario.source_path)
+       << ": integrator.dt " << sim.dt() << " s is longer than the duration " << scenario.duration
+       << " s: the run would take no step; shorten integrator.dt (or leave it auto)";
+    throw InputError(os.str());
+  }
 
   std::unique_ptr<TrackFileWriter> writer;
   if (!options.out_path.empty()) {

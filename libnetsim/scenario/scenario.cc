@@ -386,11 +386,7 @@ class Parser {
 }  // namespace
 
 std::string ReadScenarioText(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open scenario file");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
+  return ReadYamlText(path, "scenario file");
 }
 
 Scenario LoadScenario(const std::string& path) {

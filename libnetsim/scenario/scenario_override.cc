@@ -69,7 +69,7 @@ std::string Kind(const YAML::Node& n) {
   if (n.IsMap()) return "a section";
   if (IsNumber(n)) return "a number";
   if (IsBool(n)) return "true or false";
-  return "'" + n.Scalar() + "'";
+  return "'" + YamlMap::Shown(n.Scalar()) + "'";
 }
 
 // The entry `part` of a list, by index or by its name; `where` and `walked` (the path to the list)
@@ -107,7 +107,7 @@ ScenarioOverride ParseOverride(const std::string& arg) {
 }
 
 void ApplyOverride(const ScenarioOverride& o, const std::string& origin, YAML::Node root) {
-  const std::string where = origin + ": --set " + o.Text() + ": ";
+  const std::string where = origin + ": --set " + YamlMap::Shown(o.Text()) + ": ";
   const std::vector<std::string> parts = Split(o.path);
   YAML::Node node;
   node.reset(root);
@@ -149,9 +149,15 @@ void ApplyOverride(const ScenarioOverride& o, const std::string& origin, YAML::N
     }
     YAML::Node value;
     try {
-      value = Fresh(YAML::Load(o.value));
+      // Checked as a file is (a key twice, a tag, an alias bomb) before Fresh expands it.
+      value = Fresh(LoadYamlString(o.value, "the value"));
     } catch (const YAML::Exception& e) {
       throw InputError(where + "the value is not YAML (" + e.msg + ")");
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      throw InputError(where + (what.find("YAML syntax error") != std::string::npos
+                                    ? "the value is not YAML (" + what + ")"
+                                    : what));
     }
     if (found) {
       // The kind the scenario has there.

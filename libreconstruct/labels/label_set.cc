@@ -16,9 +16,9 @@
 #include <stdexcept>
 #include <utility>
 
+#include "common/errors.h"
 #include "common/files.h"
 #include "common/hdf5_util.h"
-#include "common/yaml_util.h"
 #include "libreconstruct/labels/csv_table.h"
 
 namespace netlab::recon {
@@ -282,6 +282,7 @@ LabelSet ReadLabelsFile(const std::string& path, hid_t f) {
     const std::string prefix = "/cameras/" + name + "/";
     for (const char* dataset : {"source", "confidence", "state"}) expect(prefix + dataset, {t, k});
     expect(prefix + "position_px", {t, k, 2});
+    h5::UnitsFactor(f, path, prefix + "position_px", h5::kPixels);  // px, or refused
     std::vector<double> position(2 * cells);
     std::vector<uint8_t> source(cells), state(cells);
     std::vector<float> confidence(cells);

@@ -103,11 +103,8 @@ Experiment ParseExperiment(const std::string& text, const std::string& origin,
 }
 
 Experiment LoadExperiment(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open experiment file");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return ParseExperiment(buffer.str(), path, std::filesystem::path(path).parent_path().string());
+  return ParseExperiment(ReadYamlText(path, "experiment file"), path,
+                         std::filesystem::path(path).parent_path().string());
 }
 
 void WriteExperiment(const std::string& path, const Experiment& e) {

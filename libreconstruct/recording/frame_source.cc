@@ -12,8 +12,8 @@
 #include <opencv2/videoio/registry.hpp>
 #include <regex>
 
+#include "common/errors.h"
 #include "common/hdf5_util.h"
-#include "common/yaml_util.h"
 
 namespace netlab::recon {
 namespace {
@@ -311,6 +311,9 @@ class Hdf5FrameSource final : public FrameSource {
     if (HasPerFrame("_timestamps")) {
       std::vector<double> t(dims_[0]);
       h5::ReadDataset(file_.get(), times, H5T_NATIVE_DOUBLE, t.data());
+      // In seconds: a unit the file states is converted (ms, us, ns) or refused.
+      const double to_s = h5::UnitsFactor(file_.get(), file_path_, times, h5::kSeconds);
+      for (double& time : t) time *= to_s;
       for (int index : indices_)
         if (std::isfinite(t[index - first])) timestamps_[index] = t[index - first];
     }

@@ -1,5 +1,5 @@
 #pragma once
-// The bad-input suite's table (issue 21): each row is one input a new user could give a command,
+// The bad-input suite's table: each row is one input a new user could give a command,
 // with the exit status it must end in and the fragments its message must hold (the file, the key
 // or frame, what was expected). Every row is also checked for what no bad input may do: end in a
 // signal or an unexplained std::bad_alloc, or bury netlab's own line under a library's noise
@@ -7,8 +7,12 @@
 // must leave as they were (an output never replaces an input, a failed run leaves every
 // existing output unchanged).
 
+#include <signal.h>
+#include <sys/resource.h>
+
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -28,6 +32,34 @@ struct BadInput {
   // a failed run must not touch. A regular file byte for byte; a FIFO, device or folder stays
   // one (and is not read); a missing file stays missing.
   std::vector<std::string> unchanged = {};
+  // When > 0, the run may write no file past this many bytes (RLIMIT_FSIZE, SIGXFSZ ignored: a
+  // write past it fails with EFBIG as a write to a full disk fails with ENOSPC), and no
+  // "<unchanged>.partial" may be left behind.
+  long file_limit = 0;
+};
+
+// A limit on the size of every file this process and its children write, restored on
+// destruction. SIGXFSZ is ignored (and stays ignored across exec), so the write that crosses the
+// limit fails with EFBIG instead of killing the writer.
+class FileSizeLimit {
+ public:
+  explicit FileSizeLimit(long bytes) {
+    getrlimit(RLIMIT_FSIZE, &old_);
+    old_handler_ = signal(SIGXFSZ, SIG_IGN);
+    rlimit limit = old_;
+    limit.rlim_cur = static_cast<rlim_t>(bytes);
+    setrlimit(RLIMIT_FSIZE, &limit);
+  }
+  FileSizeLimit(const FileSizeLimit&) = delete;
+  FileSizeLimit& operator=(const FileSizeLimit&) = delete;
+  ~FileSizeLimit() {
+    setrlimit(RLIMIT_FSIZE, &old_);
+    signal(SIGXFSZ, old_handler_);
+  }
+
+ private:
+  rlimit old_;
+  sighandler_t old_handler_;
 };
 
 // What ExpectBadInput compares of an `unchanged` file: its kind and, for a regular file, its bytes.
@@ -66,7 +98,16 @@ inline void ExpectBadInput(const BadInput& input, const std::string& dir) {
   SCOPED_TRACE(input.what + ": netlab " + Substitute(input.args, dir));
   std::vector<std::string> before;
   for (const std::string& file : input.unchanged) before.push_back(Snapshot(Substitute(file, dir)));
+  std::optional<FileSizeLimit> limit;
+  if (input.file_limit > 0) limit.emplace(input.file_limit);
   const NetlabResult r = RunNetlab(Substitute(input.args, dir));
+  limit.reset();
+  if (input.file_limit > 0) {
+    for (const std::string& file : input.unchanged) {
+      EXPECT_FALSE(std::filesystem::exists(Substitute(file, dir) + ".partial"))
+          << Substitute(file, dir) << ".partial was left behind";
+    }
+  }
   for (size_t i = 0; i < input.unchanged.size(); ++i)
     EXPECT_TRUE(Snapshot(Substitute(input.unchanged[i], dir)) == before[i])
         << Substitute(input.unchanged[i], dir) << " was changed by the run";

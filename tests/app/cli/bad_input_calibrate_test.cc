@@ -1,4 +1,4 @@
-// The bad-input suite of `netlab calibrate` (issue 21): each row one kind of bad input, the exit
+// The bad-input suite of `netlab calibrate`: each row one kind of bad input, the exit
 // status it must end in and what its message must name (tests/app/cli/bad_input.h). The images
 // are written at run time: blank ones (no board in them), a text file named .png, a truncated
 // PNG.
@@ -71,7 +71,7 @@ TEST_F(BadInputCalibrate, EachKindEndsInAClearError) {
            1, {"{dir}/missing.yaml"}},
           {"empty --out", board + "--images cam0='{dir}/blank/*.png' --out ''", 2,
            {"--out needs a non-empty value"}},
-          // Issue 49: the rig over one of the run's inputs.
+          // The rig over one of the run's inputs.
           {"--out is the --fix-intrinsics file",
            board + "--images cam0='{dir}/blank/*.png' --out {dir}/board.yaml --fix-intrinsics "
                    "{dir}/board.yaml",

@@ -1,10 +1,11 @@
-// The bad-input suite of `netlab characterize` (issue 22, tests/app/cli/bad_input.h): each row one
+// The bad-input suite of `netlab characterize` (tests/app/cli/bad_input.h): each row one
 // kind of broken bench-test file, the exit status and what its message must name (the file, the
 // line where there is one, the key). The fixtures are written at run time from a good torsion test.
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -27,11 +28,14 @@ std::string Torsion(bool oscillating = true) {
   return text;
 }
 
-std::string Tensile(bool moving) {
+std::string Tensile(bool moving, double force_scale = 1.0) {
   std::string text = "test: tensile\nmaterial: m\ngauge_length: 0.1\nsamples:\n";
-  for (int i = 0; i < 20; ++i)
+  char force[32];
+  for (int i = 0; i < 20; ++i) {
+    std::snprintf(force, sizeof(force), "%g", 0.1 * i * force_scale);
     text += "  - [" + std::to_string(0.01 * i) + ", " + (moving ? std::to_string(1e-5 * i) : "0") +
-            ", " + std::to_string(0.1 * i) + "]\n";
+            ", " + force + "]\n";
+  }
   return text;
 }
 
@@ -56,6 +60,7 @@ class BadInputCharacterize : public CommandTest {
     Write("flat.yaml", Torsion(false));
     Write("unknown_test.yaml", Replace(Torsion(), "test: torsion", "test: bending"));
     Write("tensile_static.yaml", Tensile(false));
+    Write("tensile_huge.yaml", Tensile(true, 1e300));
     Write("cantilever_unweighed.yaml",
           "test: cantilever\nmaterial: m\nlength: 0.5\ntip_deflection: {vertical: 0.1, sigma: "
           "1e-3}\n");
@@ -64,6 +69,12 @@ class BadInputCharacterize : public CommandTest {
           "weighing: {mass: 1e-3, mass_sigma: 1e-6, length: 1, length_sigma: 1e-3}\n"
           "tip_deflection: {vertical: 0.6, sigma: 1e-3}\n");
     Write("no_material.yaml", Replace(Torsion(), "material: nylon_1mm\n", ""));
+    // What a YAML reader takes without a word and netlab would misread.
+    Write("twice.yaml", Replace(Torsion(), "material: nylon_1mm\n",
+                                "material: nylon_1mm\ntest: tensile\n"));
+    Write("tagged.yaml", Replace(Torsion(), "length: 0.18", "length: !!str 0.18"));
+    Write("two_documents.yaml", Torsion() + "---\ntest: tensile\n");
+    std::filesystem::create_directory(Path("folder.yaml"));
   }
   void Write(const std::string& name, const std::string& text) {
     std::ofstream(Path(name)) << text;
@@ -152,11 +163,41 @@ TEST_F(BadInputCharacterize, EachKindEndsInAClearError) {
            "characterize {dir}/cantilever_too_deep.yaml" + out,
            1,
            {"{dir}/cantilever_too_deep.yaml:5: tip_deflection.vertical: must be below"}},
+          {"forces of 1e300 N",
+           "characterize {dir}/tensile_huge.yaml" + out,
+           1,
+           {"{dir}/tensile_huge.yaml", "cannot be fitted"}},
+          {"a key given twice",
+           "characterize {dir}/twice.yaml" + out,
+           1,
+           {"{dir}/twice.yaml:3: test: given twice, at lines 1 and 3"}},
+          {"a tag on a number",
+           "characterize {dir}/tagged.yaml" + out,
+           1,
+           {"{dir}/tagged.yaml:3: length: the tag '!!str'"}},
+          {"a second document",
+           "characterize {dir}/two_documents.yaml" + out,
+           1,
+           {"{dir}/two_documents.yaml:38: a second YAML document"}},
+          {"a folder as the test file",
+           "characterize {dir}/folder.yaml" + out,
+           1,
+           {"{dir}/folder.yaml: is a folder"}},
       },
       dir_.string());
   // No bad input leaves an output behind.
   EXPECT_FALSE(std::filesystem::exists(Path("material.yaml")));
   EXPECT_FALSE(std::filesystem::exists(Path("material.yaml.partial")));
+}
+
+// A disk that fills while the material file is written (a file-size limit of 400 bytes, below
+// the file's 522 and above the message's, stands in for it): exit 1 naming the file, the previous file byte for byte, no partial file beside it.
+TEST_F(BadInputCharacterize, AFullDiskLeavesThePreviousMaterialFile) {
+  Write("previous.yaml", "the previous material file");
+  ExpectBadInput({"characterize onto a full disk", "characterize {dir}/good.yaml --out "
+                  "{dir}/previous.yaml", 1, {"{dir}/previous.yaml: cannot write"}, {"{dir}/previous.yaml"},
+                  400},
+                 dir_.string());
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// `netlab color-net` under bad input (issue 21): each row is one kind of mistake a user can make,
+// `netlab color-net` under bad input: each row is one kind of mistake a user can make,
 // with the exit status and the words the message must hold. Nothing here may end in a signal or
 // an unexplained std::bad_alloc (checked by ExpectBadInputs on every row).
 
@@ -73,7 +73,7 @@ TEST_F(BadInputColorNet, EveryKindEndsInANamedError) {
        1,
        {"{dir}/no/such/c.yaml"}},
       // More knots than 64 colours can tell apart: refused from the lower bound, before any
-      // search (this took all memory and was killed, issue 21).
+      // search (this took all memory and was killed).
       {"a net no 64-colour palette can identify",
        "color-net --knots 1000x1000" + out,
        1,

@@ -1,4 +1,4 @@
-// The bad-input suite of `netlab ingest` (issue 21): every kind of bad experiment file, recording
+// The bad-input suite of `netlab ingest`: every kind of bad experiment file, recording
 // or frame store ends in a message naming the file and the key, camera or frame, before any
 // library's noise (OpenCV, GStreamer); frames that are only suspicious are reported, each with
 // its file.
@@ -125,6 +125,11 @@ TEST_F(BadInputIngest, EveryBadInputIsNamed) {
     text.replace(text.find("bayer: RGGB"), 11, "bayer: RGBG");
     std::ofstream(Path("bayer.yaml")) << text;
   }
+  // What a YAML reader takes without a word and netlab would misread: fps twice (179, then -5),
+  // a tag on a number, a second document.
+  Experiment("fps_twice.yaml", "", "experiment: bad\nfps: 179\nfps: -5\n");
+  Experiment("fps_tagged.yaml", "", "experiment: bad\nfps: !fps 179\n");
+  std::ofstream(Path("two_documents.yaml")) << whole << "---\nfps: 5\n";
   // Videos OpenCV cannot open: an empty file and random bytes.
   std::ofstream(Path("empty.avi")).close();
   {
@@ -154,6 +159,14 @@ TEST_F(BadInputIngest, EveryBadInputIsNamed) {
   ExpectBadInputs(
       {
           {"missing experiment", "ingest {dir}/missing.yaml" + check, 1, {"{dir}/missing.yaml"}},
+          {"fps given twice", "ingest {dir}/fps_twice.yaml" + check, 1,
+           {"{dir}/fps_twice.yaml:3: fps: given twice, at lines 2 and 3"}},
+          {"a tag on fps", "ingest {dir}/fps_tagged.yaml" + check, 1,
+           {"{dir}/fps_tagged.yaml:2: fps: the tag '!fps'"}},
+          {"a second document", "ingest {dir}/two_documents.yaml" + check, 1,
+           {"{dir}/two_documents.yaml:", "a second YAML document"}},
+          {"a folder as the experiment", "ingest {dir}/cam0" + check, 1,
+           {"{dir}/cam0: is a folder, not a YAML experiment file"}},
           {"empty experiment", "ingest {dir}/empty.yaml" + check, 1, {"{dir}/empty.yaml"}},
           {"truncated experiment", "ingest {dir}/cut.yaml" + check, 1, {"{dir}/cut.yaml"}},
           {"binary experiment", "ingest {dir}/binary.yaml" + check, 1, {"{dir}/binary.yaml"}},
@@ -208,7 +221,7 @@ TEST_F(BadInputIngest, EveryBadInputIsNamed) {
           {"--threads 0", "ingest {dir}/experiment.yaml --check --threads 0", 2, {"--threads"}},
           {"no EXPERIMENT", "ingest --check", 2, {"EXPERIMENT.yaml"}},
           {"neither --check nor --to-hdf5", "ingest {dir}/experiment.yaml", 2, {"--check"}},
-          // Issue 49: the store, or the experiment file written beside it, over an input.
+          // The store, or the experiment file written beside it, over an input.
           {"--to-hdf5 is the experiment file",
            "ingest {dir}/experiment.yaml --quiet --to-hdf5 {dir}/experiment.yaml", 1,
            {"--to-hdf5 {dir}/experiment.yaml", "the experiment file {dir}/experiment.yaml"},
@@ -225,6 +238,18 @@ TEST_F(BadInputIngest, EveryBadInputIsNamed) {
       },
       dir_.string());
   EXPECT_FALSE(fs::exists(Path("o.h5")));
+}
+
+// A disk that fills while the frame store is written (a file-size limit stands in for it): exit 1
+// naming the store, the previous store and its experiment file byte for byte, no partial file.
+TEST_F(BadInputIngest, AFullDiskLeavesThePreviousStore) {
+  Experiment("experiment.yaml");
+  std::ofstream(Path("old.h5")) << "the previous store";
+  std::ofstream(Path("old.yaml")) << "the previous experiment file";
+  ExpectBadInput({"ingest --to-hdf5 onto a full disk",
+                  "ingest {dir}/experiment.yaml --quiet --to-hdf5 {dir}/old.h5", 1,
+                  {"{dir}/old.h5"}, {"{dir}/old.h5", "{dir}/old.yaml"}, 4096},
+                 dir_.string());
 }
 
 TEST_F(BadInputIngest, APngNamedPgmIsUnreadableInTheCheckAndTheDecode) {

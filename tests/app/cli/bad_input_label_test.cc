@@ -1,4 +1,4 @@
-// The bad-input suite of `netlab label` (issue 21): each row one kind of bad input, the exit
+// The bad-input suite of `netlab label`: each row one kind of bad input, the exit
 // status it must end in and what its message must name (tests/app/cli/bad_input.h). The fixture,
 // a rendered shot of the small 6 x 6 net with its true labels as seeds, is made at run time.
 
@@ -78,7 +78,7 @@ TEST_F(BadInputLabel, EachKindEndsInAClearError) {
           {"empty --out", seeded + "--out ''", 2, {"--out needs a non-empty value"}},
           {"--out in a folder that is a file", seeded + "--out {dir}/coloring.yaml/l.h5", 1,
            {"{dir}/coloring.yaml/l.h5"}},
-          // Issue 49.
+          // An output over an input, another output or a special file.
           {"--out is the --seed file", seeded + "--out {dir}/shot/labels_true.h5", 1,
            {"--out {dir}/shot/labels_true.h5", "the --seed file {dir}/shot/labels_true.h5"},
            {"{dir}/shot/labels_true.h5"}},

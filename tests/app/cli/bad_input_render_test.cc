@@ -1,4 +1,4 @@
-// The bad-input suite of `netlab render` (issue 21): every kind of bad input ends in a message
+// The bad-input suite of `netlab render`: every kind of bad input ends in a message
 // naming the file and the key or frame, and a render never loses the shot it replaces: the whole
 // folder is written as DIR.partial and put in place of DIR only when complete.
 

@@ -1,4 +1,4 @@
-// The bad-input suite of `netlab simulate` and `netlab sweep` (issue 21): each row one kind of bad
+// The bad-input suite of `netlab simulate` and `netlab sweep`: each row one kind of bad
 // input a new user could give, the exit status it must end in and what its message must name
 // (tests/app/cli/bad_input.h). The fixtures are written at run time.
 
@@ -42,6 +42,16 @@ class BadInputSimulate : public CommandTest {
           Replace(Replace(kSmallShotScenario, "output_interval: 0.005586592178770949",
                           "output_interval: 1e-9"),
                   "duration: 0.06", "duration: 6"));
+    // What a YAML reader takes without a word and netlab would misread.
+    Write("twice.yaml", std::string(kSmallShotScenario) + "duration: -3\n");
+    Write("materials_twice.yaml",
+          std::string(kSmallShotScenario) + "materials:\n  nylon: {diameter: 1.0e-3}\n");
+    Write("tagged.yaml",
+          Replace(kSmallShotScenario, "duration: 0.06", "duration: !!str 0.06"));
+    Write("custom_tag.yaml",
+          Replace(kSmallShotScenario, "duration: 0.06", "duration: !seconds 0.06"));
+    Write("two_documents.yaml", std::string(kSmallShotScenario) + "---\nduration: 5\n");
+    std::filesystem::create_directory(Path("folder.yaml"));
     std::ofstream(Path("previous.h5")) << "the previous output";
     std::filesystem::create_symlink(Path("scene.yaml"), Path("link_to_scene.h5"));
     mkfifo(Path("fifo").c_str(), 0644);
@@ -123,7 +133,7 @@ TEST_F(BadInputSimulate, EachKindEndsInAClearError) {
            "simulate {dir}/scene.yaml --out {dir}/a.h5 --bogus",
            2,
            {"unknown option --bogus"}},
-          // Issue 49.
+          // An output over an input, another output or a special file.
           {"--out is the scenario",
            "simulate {dir}/scene.yaml --out {dir}/scene.yaml",
            1,
@@ -139,6 +149,57 @@ TEST_F(BadInputSimulate, EachKindEndsInAClearError) {
            1,
            {"--out {dir}/fifo", "a FIFO", "not a regular file"},
            {"{dir}/fifo"}},
+          {"segments so short the step never ends",
+           "simulate {dir}/scene.yaml --out {dir}/a.h5 --set nets.0.segments_per_link=2000",
+           1,
+           {"{dir}/scene.yaml: dt", "nets.0.segments_per_link 2000 (segments of 5e-05 m)"}},
+          {"a step longer than the run",
+           "simulate {dir}/scene.yaml --out {dir}/a.h5 --set integrator.dt=10",
+           1,
+           {"{dir}/scene.yaml: integrator.dt 10 s is longer than the duration 0.06 s",
+            "no step"}},
+          {"a key given twice",
+           "simulate {dir}/twice.yaml --out {dir}/previous.h5",
+           1,
+           {"{dir}/twice.yaml:15: duration: given twice, at lines 2 and 15", "keep one"},
+           {"{dir}/previous.h5"}},
+          {"a section given twice",
+           "simulate {dir}/materials_twice.yaml --out {dir}/a.h5",
+           1,
+           {"{dir}/materials_twice.yaml:15: materials: given twice, at lines 6 and 15"}},
+          {"a tag on a number",
+           "simulate {dir}/tagged.yaml --out {dir}/a.h5",
+           1,
+           {"{dir}/tagged.yaml:2: duration: the tag '!!str' is not read by netlab"}},
+          {"a custom tag on a number",
+           "simulate {dir}/custom_tag.yaml --out {dir}/a.h5",
+           1,
+           {"{dir}/custom_tag.yaml:2: duration: the tag '!seconds'"}},
+          {"a second document",
+           "simulate {dir}/two_documents.yaml --out {dir}/a.h5",
+           1,
+           {"{dir}/two_documents.yaml:16: a second YAML document", "one document per file"}},
+          {"a folder as the scenario",
+           "simulate {dir}/folder.yaml --out {dir}/a.h5",
+           1,
+           {"{dir}/folder.yaml: is a folder, not a YAML scenario file"}},
+          {"a device as the scenario",
+           "simulate /dev/zero --out {dir}/a.h5",
+           1,
+           {"/dev/zero: more than 64 MiB"}},
+          {"a --set value with a key twice",
+           "simulate {dir}/scene.yaml --out {dir}/a.h5 --set 'integrator={type: explicit, type: "
+           "implicit}'",
+           1,
+           {"{dir}/scene.yaml: --set integrator=", "type: given twice"}},
+          {"an alias bomb in a --set value",
+           "simulate {dir}/scene.yaml --out {dir}/a.h5 --set 'gravity=[&a [1,1,1,1,1,1,1,1], &b "
+           "[*a,*a,*a,*a,*a,*a,*a,*a], &c [*b,*b,*b,*b,*b,*b,*b,*b], &d "
+           "[*c,*c,*c,*c,*c,*c,*c,*c], &e [*d,*d,*d,*d,*d,*d,*d,*d], &f "
+           "[*e,*e,*e,*e,*e,*e,*e,*e], &g [*f,*f,*f,*f,*f,*f,*f,*f], "
+           "[*g,*g,*g,*g,*g,*g,*g,*g]]'",
+           1,
+           {"{dir}/scene.yaml: --set gravity=", "aliases", "expand to more values"}},
       },
       dir_.string());
   // Nothing was written under the outputs' names, and no partial file was left.
@@ -169,7 +230,7 @@ TEST_F(BadInputSimulate, SweepEndsInAClearError) {
           {"out-of-range --jobs",
            "sweep {dir}/scene.yaml --vary duration=0.01:0.02:2 --out {dir}/s.h5 --jobs 0", 2,
            {"--jobs"}},
-          // Issue 49.
+          // An output over an input, another output or a special file.
           {"--out is the scenario",
            "sweep {dir}/scene.yaml --vary duration=0.01:0.02:2 --out {dir}/scene.yaml", 1,
            {"--out {dir}/scene.yaml", "the scenario file {dir}/scene.yaml"}, {"{dir}/scene.yaml"}},
@@ -187,13 +248,57 @@ TEST_F(BadInputSimulate, SweepEndsInAClearError) {
       dir_.string());
   EXPECT_FALSE(std::filesystem::exists(dir_ / "s.h5"));
   EXPECT_FALSE(std::filesystem::exists(dir_ / "s.h5.partial"));
-  // Every run rejecting its value is an error, not a study: the file still says why.
-  ExpectBadInput({"every run's value rejected",
-                  "sweep {dir}/scene.yaml --vary materials.nylon.linear_density=-2:-1:2 --out "
-                  "{dir}/s.h5 --quiet",
-                  1,
-                  {"run 0", "materials.nylon.linear_density", "all 2 runs failed", "{dir}/s.h5"}},
-                 dir_.string());
+  // Every run rejecting its value is an error, not a study: each run's error is named, and
+  // nothing is written; an existing output and report are left as they were.
+  std::ofstream(Path("previous.html")) << "the previous report";
+  ExpectBadInputs({{"every run's value rejected",
+                    "sweep {dir}/scene.yaml --vary materials.nylon.linear_density=-2:-1:2 --out "
+                    "{dir}/s.h5 --quiet",
+                    1,
+                    {"run 0", "materials.nylon.linear_density", "all 2 runs failed",
+                     "{dir}/s.h5 was not written"},
+                    {"{dir}/s.h5"}},
+                   {"every run's value rejected, over an existing output",
+                    "sweep {dir}/scene.yaml --vary materials.nylon.linear_density=-2:-1:2 --out "
+                    "{dir}/previous.h5 --report {dir}/previous.html --quiet",
+                    1,
+                    {"run 1", "all 2 runs failed", "{dir}/previous.h5 was not written, the "
+                     "existing file is as it was"},
+                    {"{dir}/previous.h5", "{dir}/previous.html"}}},
+                  dir_.string());
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "s.h5.partial"));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "previous.h5.partial"));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "previous.html.partial"));
+}
+
+// A disk that fills while the output is written (a file-size limit stands in for it): the run
+// ends in exit 1 naming the output, the previous output is left byte for byte and no partial
+// file stays beside it; a sweep's --out and --report alike.
+TEST_F(BadInputSimulate, AFullDiskLeavesThePreviousOutput) {
+  std::ofstream(Path("previous.html")) << "the previous report";
+  ExpectBadInputs(
+      {
+          {"simulate onto a full disk",
+           "simulate {dir}/scene.yaml --out {dir}/previous.h5 --quiet",
+           1,
+           {"{dir}/previous.h5: writing {dir}/previous.h5.partial failed (is the disk full?)"},
+           {"{dir}/previous.h5"},
+           4096},
+          {"sweep onto a full disk",
+           "sweep {dir}/scene.yaml --vary duration=0.01:0.02:2 --out {dir}/previous.h5 --report "
+           "{dir}/previous.html --quiet",
+           1,
+           {"{dir}/previous.", "is the disk full?"},
+           {"{dir}/previous.h5", "{dir}/previous.html"},
+           4096},
+          {"sweep without a report onto a full disk",
+           "sweep {dir}/scene.yaml --vary duration=0.01:0.02:2 --out {dir}/previous.h5 --quiet",
+           1,
+           {"{dir}/previous.h5: writing {dir}/previous.h5.partial failed (is the disk full?)"},
+           {"{dir}/previous.h5"},
+           4096},
+      },
+      dir_.string());
 }
 
 // An output_interval that asks for more frames than the disk (simulate) or the memory (sweep,

@@ -1,4 +1,4 @@
-// The bad-input suite of `netlab triangulate` and `netlab score` (issue 21): each row one kind of
+// The bad-input suite of `netlab triangulate` and `netlab score`: each row one kind of
 // bad input, the exit status it must end in and what its message must name
 // (tests/app/cli/bad_input.h). The fixtures (a rig, labels of a 4 x 4 net seen by its four
 // cameras, the net's true tracks) are written at run time, then broken (tests/app/cli/h5_edit.h).
@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "calibration/rig.h"
@@ -145,6 +146,38 @@ class BadInputTriangulate : public CommandTest {
     std::filesystem::create_symlink("/dev/null", Path("link_to_null"));
     ASSERT_EQ(mkfifo(Path("fifo").c_str(), 0644), 0);
     std::ofstream(Path("old_score.h5")) << "the previous score";
+    std::ofstream(Path("old_report.html")) << "the previous report";
+    std::ofstream(Path("old_xyzpts.csv")) << "the previous points";
+    std::ofstream(Path("old_xyzres.csv")) << "the previous residuals";
+    // Numbers no measurement has: variances of 1e-300 and 1e300 m^2, a contact time stored as NaN
+    // or a billion seconds before the flight, a grid that lists knot (1,0) twice and (1,1) not.
+    for (const auto& [name, variance] : {std::pair<const char*, double>{"cov_tiny.h5", 1e-300},
+                                         {"cov_huge.h5", 1e300}}) {
+      netsim::KnotTracks tracks = Truth(kRows, kCols);
+      tracks.covariance.assign(tracks.position.size(), Eigen::Matrix3d::Identity() * variance);
+      netsim::WriteKnotTracks(Path(name), tracks);
+    }
+    std::filesystem::copy_file(Path("truth.h5"), Path("contact_nan.h5"));
+    {
+      h5::Id file = h5::OpenFileReadWrite(Path("contact_nan.h5"));
+      const double nan = NAN;
+      h5::WriteDataset(file.get(), "contact_start", H5T_NATIVE_DOUBLE, {1}, &nan);
+    }
+    netsim::KnotTracks early = Truth(kRows, kCols);
+    early.contact_start_s = -1e9;
+    netsim::WriteKnotTracks(Path("contact_early.h5"), early);
+    netsim::KnotTracks one_frame = Truth(kRows, kCols);
+    one_frame.time.resize(1);
+    one_frame.position.resize(kRows * kCols);
+    one_frame.valid.resize(kRows * kCols);
+    netsim::WriteKnotTracks(Path("one_frame.h5"), one_frame);
+    netsim::KnotTracks all_lost = Truth(kRows, kCols);
+    all_lost.valid.assign(all_lost.valid.size(), 0);
+    all_lost.position.assign(all_lost.position.size(), Eigen::Vector3d::Constant(NAN));
+    netsim::WriteKnotTracks(Path("all_lost.h5"), all_lost);
+    netsim::KnotTracks twice = Truth(kRows, kCols);
+    twice.grid[5] = twice.grid[4];
+    netsim::WriteKnotTracks(Path("grid_twice.h5"), twice);
   }
   std::string Base() const {
     return "triangulate --rig " + Path("rig.yaml") + " --knots 4x4 --fps 179 ";
@@ -194,7 +227,7 @@ TEST_F(BadInputTriangulate, EachKindEndsInAClearError) {
           {"empty --out", good + "--out ''", 2, {"--out needs a non-empty value"}},
           {"--out in a folder that is a file", good + "--out {dir}/rig.yaml/t.h5", 1,
            {"{dir}/rig.yaml/t.h5"}},
-          // Issue 49: an output over an input or the other output, or where no file can go.
+          // An output over an input or the other output, or where no file can go.
           {"--out is the --labels file", good + "--out {dir}/labels.h5", 1,
            {"--out {dir}/labels.h5", "the --labels file {dir}/labels.h5"}, {"{dir}/labels.h5"}},
           {"--out is the --rig file", good + "--out {dir}/rig.yaml", 1,
@@ -233,7 +266,7 @@ TEST_F(BadInputTriangulate, ScoreEndsInAClearError) {
            {"--out needs a non-empty value"}},
           {"empty --report", base + "--sim {dir}/truth.h5 --out {dir}/s.h5 --report ''", 2,
            {"--report needs a non-empty value"}},
-          // Issue 49: an output over an input or the other output, or where no file can go.
+          // An output over an input or the other output, or where no file can go.
           {"--out is the --measured file", base + "--sim {dir}/truth.h5 --out {dir}/measured.h5",
            1, {"--out {dir}/measured.h5", "the --measured file {dir}/measured.h5"},
            {"{dir}/measured.h5"}},
@@ -255,10 +288,53 @@ TEST_F(BadInputTriangulate, ScoreEndsInAClearError) {
           {"positions in unknown units", "score --measured {dir}/measured_furlong.h5 --sim "
                                          "{dir}/truth.h5 --out {dir}/s.h5", 1,
            {"{dir}/measured_furlong.h5:/knots/position has units 'furlong'", "mm"}},
+          {"variances of 1e-300 m^2", "score --measured {dir}/cov_tiny.h5 --sim {dir}/truth.h5 "
+                                      "--out {dir}/s.h5", 1,
+           {"{dir}/cov_tiny.h5:/knots/covariance: frame 0, knot 0: variance 1e-300 m^2",
+            "outside 1e-40..1e6 m^2"}},
+          {"variances of 1e300 m^2", "score --measured {dir}/measured.h5 --sim {dir}/cov_huge.h5 "
+                                     "--out {dir}/s.h5", 1,
+           {"{dir}/cov_huge.h5:/knots/covariance: frame 0, knot 0: variance 1e+300 m^2"}},
+          {"a contact time before the simulation", base + "--sim {dir}/truth.h5 --out {dir}/s.h5 "
+                                                          "--contact-time -5", 1,
+           {"--contact-time -5 s is outside the time of the simulation {dir}/truth.h5"}},
+          {"a /contact_start of NaN", base + "--sim {dir}/contact_nan.h5 --out {dir}/s.h5", 1,
+           {"{dir}/contact_nan.h5:/contact_start is nan, not a time"}},
+          {"a /contact_start a billion seconds early",
+           base + "--sim {dir}/contact_early.h5 --out {dir}/s.h5", 1,
+           {"{dir}/contact_early.h5:/contact_start -1e+09 s is outside the time of the "
+            "simulation"}},
+          {"a measurement of one frame", "score --measured {dir}/one_frame.h5 --sim "
+                                         "{dir}/truth.h5 --meas-sigma 0.001 --out {dir}/s.h5", 1,
+           {"{dir}/one_frame.h5: 1 frame: a score compares a flight over time"}},
+          {"a simulation with every knot lost", base + "--sim {dir}/all_lost.h5 --out {dir}/s.h5",
+           1, {"{dir}/all_lost.h5: no knot is valid in any of its 12 frames"}},
+          {"a grid with a knot twice", "score --measured {dir}/grid_twice.h5 --sim "
+                                       "{dir}/truth.h5 --out {dir}/s.h5", 1,
+           {"{dir}/grid_twice.h5:/knots/grid: knots 4 and 5 are both (1, 0)"}},
       },
       dir_.string());
   EXPECT_FALSE(std::filesystem::exists(dir_ / "s.h5"));
   EXPECT_FALSE(std::filesystem::exists(dir_ / "old_score.h5.partial"));
+}
+
+// A disk that fills while the outputs are written (a file-size limit stands in for it): exit 1
+// naming the output, every previous output byte for byte, no partial file beside any.
+TEST_F(BadInputTriangulate, AFullDiskLeavesThePreviousOutputs) {
+  const std::string good = Base() + "--labels {dir}/labels.h5 --quiet ";
+  ExpectBadInputs(
+      {
+          {"triangulate onto a full disk", good + "--out {dir}/old_score.h5", 1,
+           {"{dir}/old_score.h5"}, {"{dir}/old_score.h5"}, 4096},
+          {"triangulate with --csv onto a full disk",
+           good + "--out {dir}/old_score.h5 --csv {dir}/old_", 1, {"{dir}/old_"},
+           {"{dir}/old_score.h5", "{dir}/old_xyzpts.csv", "{dir}/old_xyzres.csv"}, 4096},
+          {"score onto a full disk",
+           "score --measured {dir}/measured.h5 --sim {dir}/truth.h5 --out {dir}/old_score.h5 "
+           "--report {dir}/old_report.html --quiet",
+           1, {"{dir}/old_"}, {"{dir}/old_score.h5", "{dir}/old_report.html"}, 4096},
+      },
+      dir_.string());
 }
 
 // A simulation with knots lost (NaN where /knots/valid is 0), and a triangulated file given as

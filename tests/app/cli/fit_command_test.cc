@@ -143,6 +143,9 @@ TEST_F(FitCommand, APriorDeterminesWhatTheFlightCannot) {
 TEST_F(FitCommand, BadInputsAreNamed) {
   std::ofstream(Path("zero_sigma.yaml"))
       << std::string(kPrior).replace(std::string(kPrior).find("sigma: 1.0e-11"), 14, "sigma: 0");
+  std::ofstream(Path("huge_sigma.yaml"))
+      << std::string(kPrior).replace(std::string(kPrior).find("sigma: 1.0e-11"), 14,
+                                     "sigma: 1e300");
   ASSERT_EQ(RunNetlab("simulate " + Path("shot.yaml") + " --set nets.0.knots=[4,4] --out " +
                       Path("other_net.h5"))
                 .status,
@@ -159,7 +162,7 @@ TEST_F(FitCommand, BadInputsAreNamed) {
   }
   const std::string shot = "fit {dir}/shot.yaml --out {dir}/fit.yaml ";
   const std::string free = " --free time_offset";
-  const std::vector<netlab::testing::BadInput> issue49 = {
+  const std::vector<netlab::testing::BadInput> outputs_and_time = {
       // These simulated 100 s of flight for every trial, for hours, before any message.
       {"a measurement 100 s after the launch",
        shot + "--measured {dir}/late.h5" + free,
@@ -187,7 +190,7 @@ TEST_F(FitCommand, BadInputsAreNamed) {
        {"{dir}/prior.yaml"}},
   };
   const auto start = std::chrono::steady_clock::now();
-  netlab::testing::ExpectBadInputs(issue49, dir_.string());
+  netlab::testing::ExpectBadInputs(outputs_and_time, dir_.string());
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 60.0);
   const std::vector<netlab::testing::BadInput> table = {
       {"no --free", shot + "--measured {dir}/measured.h5", 2, {"--free"}},
@@ -222,6 +225,19 @@ TEST_F(FitCommand, BadInputsAreNamed) {
               "materials.nylon.twist_damping --prior {dir}/zero_sigma.yaml",
        1,
        {"zero_sigma.yaml", "twist_damping", "sigma > 0"}},
+      {"--free with a trailing comma",
+       shot + "--measured {dir}/measured.h5 --free time_offset,",
+       1,
+       {"--free 'time_offset,'", "an empty name"}},
+      {"--measured with a trailing comma",
+       shot + "--measured {dir}/measured.h5, --free time_offset",
+       2,
+       {"--measured '{dir}/measured.h5,'", "an empty file name"}},
+      {"a prior of sigma 1e300",
+       shot + "--measured {dir}/measured.h5 --free "
+              "materials.nylon.twist_damping --prior {dir}/huge_sigma.yaml",
+       1,
+       {"{dir}/huge_sigma.yaml: uncertainty.nylon.twist_damping.sigma", "over 100 times"}},
       {"fewer track files than shots",
        "fit {dir}/shot.yaml {dir}/shot.yaml --out {dir}/fit.yaml "
        "--measured {dir}/measured.h5 --free time_offset",
