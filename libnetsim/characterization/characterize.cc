@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <sstream>
 
-#include "common/yaml_util.h"
+#include "common/errors.h"
 #include "libnetsim/characterization/damped_oscillator.h"
 #include "libnetsim/characterization/heavy_cantilever.h"
 

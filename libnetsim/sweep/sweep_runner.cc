@@ -12,7 +12,7 @@
 #include <thread>
 #include <type_traits>
 
-#include "common/yaml_util.h"
+#include "common/errors.h"
 #include "libnetsim/sweep/sweep_mpi.h"
 
 namespace netlab::netsim {

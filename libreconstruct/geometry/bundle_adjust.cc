@@ -16,7 +16,7 @@
 #include <Eigen/Eigenvalues>
 #include <ceres/ceres.h>
 
-#include "common/yaml_util.h"
+#include "common/errors.h"
 #include "libreconstruct/geometry/camera_offsets.h"
 #include "libreconstruct/geometry/cost_functors.h"
 #include "libreconstruct/geometry/rig_refinement.h"

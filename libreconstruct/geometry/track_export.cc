@@ -16,7 +16,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 
-#include "common/yaml_util.h"
+#include "common/errors.h"
 #include "libreconstruct/labels/csv_table.h"
 
 namespace netlab::recon {

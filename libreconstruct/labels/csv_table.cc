@@ -7,8 +7,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "common/errors.h"
 #include "common/files.h"
-#include "common/yaml_util.h"
 
 namespace netlab::recon {
 

@@ -10,7 +10,7 @@
 #include <sstream>
 #include <thread>
 
-#include "common/yaml_util.h"
+#include "common/errors.h"
 
 namespace netlab::recon {
 namespace {

@@ -9,7 +9,7 @@
 #include <utility>
 
 #include "calibration/camera.h"
-#include "common/yaml_util.h"
+#include "common/errors.h"
 #include "libreconstruct/coloring/colour_science.h"
 #include "libreconstruct/coloring/net_coloring.h"
 #include "libreconstruct/labeling/knot_detect.h"
