@@ -35,6 +35,9 @@ constexpr char kHelp[] =
     "undoable steps, the review queue, autosave with recovery).\n"
     "  netlab gui                  an empty window: File > Open / New project, recent projects\n"
     "  netlab gui PROJECT.yaml     opens a project (experiment, rig, colouring, labels, net)\n"
+    "  netlab gui EXPERIMENT.yaml --room recording\n"
+    "                              the recording alone, in the recording room (no rig or\n"
+    "                              labels yet)\n"
     "  netlab gui EXPERIMENT.yaml --rig ... --labels ...\n"
     "                              makes a project of them (written to --project, default\n"
     "                              project.yaml beside the labels file) and opens it\n\n"
@@ -68,7 +71,8 @@ std::string NotAProject(const std::string& path) {
                                                 : "has no key netlab_project";
   return path + " " + holds +
          ": not a netlab project (a mapping with netlab_project: 1; docs/gui.md). To make a "
-         "project of an experiment, give --rig and --labels with it";
+         "project of an experiment, give --rig and --labels with it; to check a recording "
+         "alone, --room recording";
 }
 
 // Writes `image` to `path` through "<path>.partial" and a rename: `path` is either what it was
@@ -126,7 +130,7 @@ bool PressKeys(MainWindow* window, const std::string& keys) {
 }  // namespace
 
 int RunGui(const std::vector<std::string>& args) {
-  std::string project_path, screenshot, keys, room_name = "labeling";
+  std::string project_path, experiment_path, screenshot, keys, room_name = "labeling";
   int frame = -1, review = 0;
   try {
     const app::CommandLine cl(
@@ -154,6 +158,11 @@ int RunGui(const std::vector<std::string>& args) {
       const std::string& file = cl.positional()[0];
       if (IsProjectFile(file)) {
         project_path = file;
+      } else if (room_name == "recording" && !cl.Option("rig") && !cl.Option("labels")) {
+        experiment_path = file;  // a recording alone
+        if (frame >= 0 || review > 0 || !keys.empty())
+          throw app::UsageError("--frame, --review and --keys need a project, not a recording");
+        CheckOutputPaths({{"experiment", experiment_path}}, {{"--screenshot", screenshot}});
       } else if (!cl.Option("rig") && !cl.Option("labels")) {
         throw std::runtime_error(NotAProject(file));
       } else {
@@ -205,6 +214,14 @@ int RunGui(const std::vector<std::string>& args) {
   QApplication::setOrganizationName("netlab");
   QApplication::setApplicationName("netlab-gui");
   MainWindow window;
+  if (!experiment_path.empty()) {
+    QString error;
+    if (!window.OpenRecording(QString::fromStdString(experiment_path), &error)) {
+      std::fprintf(stderr, "netlab gui: cannot open the recording: %s\n",
+                   error.toLocal8Bit().constData());
+      return 1;
+    }
+  }
   if (!project_path.empty()) {
     // A start that fails says why on stderr (and, in a window, in a dialog too); a screenshot
     // never waits on a dialog.
@@ -223,7 +240,7 @@ int RunGui(const std::vector<std::string>& args) {
   if (!screenshot.empty()) {
     window.resize(1600, 1000);
     window.show();
-    if (!window.WaitForFrame())
+    if (!project_path.empty() && !window.WaitForFrame())
       std::fprintf(stderr, "netlab gui: the frame did not load in time\n");
     if (!window.WaitForIdle())
       std::fprintf(stderr, "netlab gui: the room's work did not finish in time\n");

@@ -287,6 +287,8 @@ void MainWindow::BuildActions() {
   QMenu* file = menuBar()->addMenu("&File");
   AddAction(file, "New project…", "Ctrl+N", &MainWindow::NewProject);
   AddAction(file, "Open project…", "Ctrl+O", &MainWindow::OpenDialog);
+  AddAction(file, "Open recording (experiment.yaml)…", "Ctrl+Shift+O",
+            &MainWindow::OpenRecordingDialog);
   recent_menu_ = file->addMenu("Open recent");
   connect(recent_menu_, &QMenu::aboutToShow, this, [this] {
     recent_menu_->clear();
@@ -478,6 +480,7 @@ bool MainWindow::OpenProject(const QString& path, bool ask, QString* error) {
   }
   calibration_ = std::make_unique<CalibrationPresenter>(&session_->rig(), p.rig);
   rooms_->show();
+  for (int i = 0; i < rooms_->count(); ++i) rooms_->setTabEnabled(i, true);
   ShowRoom(Room::kLabeling);
   maximised_ = -1;  // the cursor shows no frame yet: SetFrame(0) loads it
   SetFrame(0);
@@ -1365,7 +1368,7 @@ void MainWindow::DropPreview(const QString& why) {
 
 bool MainWindow::WaitForIdle(int timeout_ms) {
   const auto idle = [this] {
-    return frame_shown_ && !previewing() && !previewer_.running() && !busy() &&
+    return (frame_shown_ || !session_) && !previewing() && !previewer_.running() && !busy() &&
            !checker_.pending();
   };
   WaitUntil(idle, timeout_ms);
@@ -1384,7 +1387,13 @@ void MainWindow::BuildRooms() {
   recording_room_ = new RecordingRoom;
   stack_->addWidget(recording_room_);
   connect(recording_room_, &RecordingRoom::goToFrame, this, [this](int frame_number) {
-    if (!session_) return;
+    if (!session_) {
+      statusBar()->showMessage(
+          "Frame " + QString::number(frame_number) +
+              ": the labeling room opens with a project (File > New project)",
+          6000);
+      return;
+    }
     ShowRoom(Room::kLabeling);
     SetFrame(frame_number - session_->frame_number(0));
   });
@@ -1395,24 +1404,23 @@ void MainWindow::BuildRooms() {
 }
 
 void MainWindow::ShowRoom(Room room) {
-  if (!session_) return;
-  const bool was_labeling = stack_->currentWidget() == workspace_;
+  if (!session_ && !(room == Room::kRecording && recording_)) return;
   const bool labeling = room == Room::kLabeling;
   room_ = room;
   {
     const QSignalBlocker block(rooms_);
     rooms_->setCurrentIndex(static_cast<int>(room));
   }
-  // The labeling room's docks and tool bar leave with it and come back as they were.
-  if (was_labeling && !labeling) {
-    labeling_bars_shown_.clear();
-    for (QWidget* bar : labeling_bars_) {
-      labeling_bars_shown_.push_back(!bar->isHidden());
-      bar->hide();
-    }
-  } else if (!was_labeling && labeling && !labeling_bars_shown_.empty()) {
+  // The labeling room's docks and tool bar leave with it (also when the window opened on another
+  // room) and come back as they were.
+  if (!labeling) {
+    if (labeling_bars_shown_.empty())
+      for (QWidget* bar : labeling_bars_) labeling_bars_shown_.push_back(!bar->isHidden());
+    for (QWidget* bar : labeling_bars_) bar->hide();
+  } else if (!labeling_bars_shown_.empty()) {
     for (size_t i = 0; i < labeling_bars_.size(); ++i)
       labeling_bars_[i]->setVisible(labeling_bars_shown_[i]);
+    labeling_bars_shown_.clear();
   }
   for (QAction* action : labeling_actions_) action->setEnabled(labeling);
   if (labeling) {  // the preview's answers only while one is pending
@@ -1434,6 +1442,53 @@ void MainWindow::ShowRoom(Room room) {
       FocusView();
       break;
   }
+}
+
+bool MainWindow::OpenRecording(const QString& experiment, QString* error) {
+  if (session_ && !MaybeSave()) return false;
+  std::unique_ptr<RecordingPresenter> recording;
+  try {
+    recording = std::make_unique<RecordingPresenter>(experiment.toStdString());
+  } catch (const std::exception& e) {
+    const QString why = QString::fromLocal8Bit(e.what());
+    if (error != nullptr)
+      *error = why.contains(experiment) ? why : QString("%1: %2").arg(experiment, why);
+    else
+      QMessageBox::critical(this, "Cannot open the recording",
+                            QString("%1\n\n%2").arg(experiment, why));
+    return false;
+  }
+  // The project (if any) closes: its rooms wait for the next one.
+  checker_.Drop();
+  checker_.Wait();
+  if (session_) {
+    review_table_->setModel(nullptr);
+    presenter_.reset();
+    review_model_.reset();
+    loader_.Drop();
+    colours_.Drop();
+    loader_.Wait();
+    colours_.Wait();
+    previewer_.Wait();
+    tracker_.Wait();
+    DropPreview({});
+    calibration_.reset();
+    session_.reset();
+    setWindowModified(false);
+  }
+  recording_ = std::move(recording);
+  setWindowTitle(QString("netlab — %1").arg(QFileInfo(experiment).fileName()));
+  rooms_->show();
+  for (int i = 0; i < rooms_->count(); ++i)
+    rooms_->setTabEnabled(i, i == static_cast<int>(Room::kRecording));
+  ShowRoom(Room::kRecording);
+  return true;
+}
+
+void MainWindow::OpenRecordingDialog() {
+  const QString path = QFileDialog::getOpenFileName(this, "Open a recording", {},
+                                                    "Experiment (experiment.yaml *.yaml)");
+  if (!path.isEmpty()) OpenRecording(path);
 }
 
 void MainWindow::StartCheck() {

@@ -68,7 +68,12 @@ class MainWindow : public QMainWindow {
   // calibration (the rig), the labeling. The tab bar above them and the Room menu switch them;
   // the labeling room's docks, tool bar and keys belong to it alone.
   enum class Room { kRecording, kCalibration, kLabeling };
+  // Shows a room; without a project only the recording room of an opened recording.
   void ShowRoom(Room room);
+  // Opens a recording alone (experiment.yaml, no rig or labels yet) in the recording room; the
+  // other rooms wait for a project. False with the reason (naming the file) in `error` when
+  // given, else in a dialog.
+  bool OpenRecording(const QString& experiment, QString* error = nullptr);
   Room room() const { return room_; }
   RecordingRoom* recording_room() const { return recording_room_; }
   CalibrationRoom* calibration_room() const { return calibration_room_; }
@@ -177,6 +182,7 @@ class MainWindow : public QMainWindow {
   // Actions (slots without arguments, for QAction).
   void NewProject();
   void OpenDialog();
+  void OpenRecordingDialog();
   void Save();
   void Undo();
   void Redo();
@@ -265,7 +271,7 @@ class MainWindow : public QMainWindow {
   CalibrationRoom* calibration_room_ = nullptr;
   std::vector<QAction*> labeling_actions_;  // enabled in the labeling room only
   std::vector<QWidget*> labeling_bars_;     // its docks and tool bar, hidden in the other rooms
-  std::vector<bool> labeling_bars_shown_;   // ... and whether each was shown when it left
+  std::vector<bool> labeling_bars_shown_;   // ... whether each was shown (empty: they are out)
   QWidget* welcome_ = nullptr;
   QWidget* workspace_ = nullptr;
   QGridLayout* grid_ = nullptr;

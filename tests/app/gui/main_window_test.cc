@@ -24,6 +24,7 @@
 #include <QSettings>
 #include <QSpinBox>
 #include <QStatusBar>
+#include <QTabBar>
 #include <QTableView>
 #include <QTableWidget>
 #include <QTextBrowser>
@@ -1722,6 +1723,45 @@ TEST_F(MainWindowTest, TheRecordingRoomListsAMissingFrameAndAClickGoesToIt) {
   EXPECT_GT((sketch->ToScreen(w.session()->rig().cameras[0].Center()) - before).manhattanLength(),
             5.0)
       << "dragging did not turn the rig";
+}
+
+// A recording alone (no rig, no labels): the recording room checks it, the other rooms wait for
+// a project; from the command line too (--room recording --screenshot).
+TEST_F(MainWindowTest, ARecordingAloneOpensInTheRecordingRoom) {
+  const fs::path shot = Dir() / "shot_alone";
+  fs::remove_all(shot);
+  fs::copy(Dir() / "shot", shot, fs::copy_options::recursive);
+  ASSERT_TRUE(fs::remove(shot / "cam1/frame_000007.pgm"));
+  MainWindow w;
+  w.resize(1400, 1000);
+  w.show();
+  QString error;
+  ASSERT_TRUE(w.OpenRecording(QString::fromStdString((shot / "experiment.yaml").string()), &error))
+      << error.toStdString();
+  ASSERT_TRUE(w.WaitForIdle(20000));
+  EXPECT_EQ(w.room(), MainWindow::Room::kRecording);
+  EXPECT_EQ(w.session(), nullptr);
+  QTableWidget* table = w.recording_room()->table();
+  ASSERT_EQ(table->rowCount(), 1);
+  EXPECT_EQ(table->item(0, 0)->text(), "cam1");
+  EXPECT_EQ(table->item(0, 2)->text(), "7 (1 frame)");
+  auto* rooms = w.findChild<QTabBar*>("rooms");
+  ASSERT_NE(rooms, nullptr);
+  EXPECT_FALSE(rooms->isTabEnabled(static_cast<int>(MainWindow::Room::kLabeling)));
+  EXPECT_FALSE(w.findChild<QDockWidget*>("review_dock")->isVisible())
+      << "the labeling room's docks without a labeling room";
+  w.ShowRoom(MainWindow::Room::kLabeling);
+  EXPECT_EQ(w.room(), MainWindow::Room::kRecording) << "no labeling room without a project";
+  EXPECT_FALSE(w.OpenRecording("/nonexistent/experiment.yaml", &error));
+  EXPECT_TRUE(error.contains("/nonexistent/experiment.yaml")) << error.toStdString();
+  const std::string png = (Dir() / "alone.png").string();
+  const auto run = RunNetlab("gui " + (shot / "experiment.yaml").string() +
+                             " --room recording --screenshot " + png);
+  EXPECT_EQ(run.status, 0) << run.err;
+  EXPECT_TRUE(fs::exists(png));
+  const auto refused = RunNetlab("gui " + (shot / "experiment.yaml").string() + " --frame 3");
+  EXPECT_EQ(refused.status, 1);
+  EXPECT_NE(refused.err.find("--room recording"), std::string::npos) << refused.err;
 }
 
 TEST_F(MainWindowTest, TheCommandLineMakesAKnotlessProject) {
