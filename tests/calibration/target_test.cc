@@ -6,8 +6,6 @@
 #include <filesystem>
 #include <fstream>
 
-#include "common/yaml_util.h"
-
 namespace netlab::calib {
 namespace {
 

@@ -14,7 +14,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
-#include "common/yaml_util.h"
+#include "common/errors.h"
 
 namespace netlab::recon::testing {
 

@@ -14,7 +14,7 @@
 #include <string>
 
 #include "app/gui/document/project.h"
-#include "common/yaml_util.h"
+#include "common/errors.h"
 
 namespace netlab::gui {
 namespace {

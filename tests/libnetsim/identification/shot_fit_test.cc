@@ -11,7 +11,7 @@
 #include <fstream>
 #include <limits>
 
-#include "common/yaml_util.h"
+#include "common/errors.h"
 #include "libnetsim/sweep/sweep_runner.h"
 #include "tests/libnetsim/identification/twin_shot.h"
 

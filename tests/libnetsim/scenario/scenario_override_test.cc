@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "common/yaml_util.h"
+#include "common/errors.h"
 
 namespace netlab::netsim {
 namespace {

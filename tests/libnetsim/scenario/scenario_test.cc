@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "common/yaml_util.h"
+#include "common/errors.h"
 #include "libnetsim/scenario/run_scenario.h"
 #include "libnetsim/tracks/track_file.h"
 

@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "common/yaml_util.h"
+#include "common/errors.h"
 
 namespace netlab::netsim {
 namespace {

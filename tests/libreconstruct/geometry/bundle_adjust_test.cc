@@ -5,7 +5,7 @@
 #include <cmath>
 #include <random>
 
-#include "common/yaml_util.h"
+#include "common/errors.h"
 
 namespace netlab::recon {
 namespace {

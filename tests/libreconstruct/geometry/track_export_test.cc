@@ -15,7 +15,6 @@
 #include <Eigen/Geometry>
 
 #include "calibration/rig.h"
-#include "common/yaml_util.h"
 #include "tests/libreconstruct/test_files.h"
 
 namespace netlab::recon {

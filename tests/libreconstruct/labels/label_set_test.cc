@@ -17,7 +17,6 @@
 #include <vector>
 
 #include "common/hdf5_util.h"
-#include "common/yaml_util.h"
 #include "tests/libreconstruct/test_files.h"
 
 namespace netlab::recon {

@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <string>
 
-#include "common/yaml_util.h"
+#include "common/errors.h"
 #include "tests/libreconstruct/test_files.h"
 
 namespace netlab::recon {

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "common/errors.h"
 #include "common/hdf5_util.h"
-#include "common/yaml_util.h"
 #include "libreconstruct/recording/frame_store.h"
 #include "libreconstruct/recording/sequence.h"
 #include "tests/libreconstruct/test_files.h"

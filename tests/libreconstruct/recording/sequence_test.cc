@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "common/yaml_util.h"
+#include "common/errors.h"
 #include "tests/libreconstruct/test_files.h"
 
 namespace netlab::recon {
