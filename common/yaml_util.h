@@ -64,7 +64,8 @@ inline void CheckTree(const YAML::Node& node, const std::string& origin, const s
   if (node.IsMap()) {
     std::vector<std::pair<std::string, int>> seen;  // key, line
     for (auto it = node.begin(); it != node.end(); ++it) {
-      const YAML::Node& key = it->first;
+      // Copies: `it->first` is a member of a temporary the iterator returns.
+      const YAML::Node key = it->first, value = it->second;
       const std::string name = key.IsScalar() ? key.Scalar() : std::string("(complex key)");
       if (key.IsScalar())
         for (const auto& [other, line] : seen)
@@ -75,7 +76,7 @@ inline void CheckTree(const YAML::Node& node, const std::string& origin, const s
                 " (a YAML reader keeps one of them silently); keep one");
       seen.emplace_back(name, key.Mark().line);
       CheckTree(key, origin, Child(path, name), budget);
-      CheckTree(it->second, origin, Child(path, name), budget);
+      CheckTree(value, origin, Child(path, name), budget);
     }
   } else if (node.IsSequence()) {
     for (std::size_t i = 0; i < node.size(); ++i)
