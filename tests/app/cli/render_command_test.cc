@@ -77,6 +77,50 @@ TEST_F(RenderCommand, TheExperimentReadsWithIngest) {
   }
 }
 
+TEST_F(RenderCommand, ACameraRunningLateSeesTheKnotsLaterAndTheTruthSaysSo) {
+  const std::string base = "render --sim " + Path("sim.h5") +
+                           " --scale 0.25 --frames 2:5 --calibration-views 0 --quiet --out ";
+  const auto r = RunNetlab(base + Path("late") + " --camera-time-offset cam2=0.3");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const netlab::calib::Rig rig = netlab::calib::ReadRig(Path("late/rig_true.yaml"));
+  const netlab::netsim::KnotTracks sim = netlab::netsim::ReadKnotTracks(Path("sim.h5"));
+  h5::Id file = h5::OpenFileReadOnly(Path("late/truth.h5"));
+  std::vector<double> offsets(4);
+  h5::ReadDataset(file.get(), "camera_time_offset_frames", H5T_NATIVE_DOUBLE, offsets.data());
+  EXPECT_EQ(offsets, (std::vector<double>{0.0, 0.0, 0.3, 0.0}));
+  double moved = 0.0;
+  for (int c : {0, 2}) {
+    std::vector<double> px(4 * 36 * 2);
+    h5::ReadDataset(file.get(), "cameras/" + rig.cameras[c].name + "/knots_px", H5T_NATIVE_DOUBLE,
+                    px.data());
+    for (int k = 0; k < 36; ++k) {
+      // Frame 3 (row 1): the simulation's output 3; cam2 sees it 0.3 frames on.
+      const Eigen::Vector3d at_frame = sim.Position(3, k);
+      const Eigen::Vector3d late = 0.7 * sim.Position(3, k) + 0.3 * sim.Position(4, k);
+      const Eigen::Vector2d got(px[(36 + k) * 2], px[(36 + k) * 2 + 1]);
+      const Eigen::Vector2d expected = rig.cameras[c].ProjectWorld(c == 2 ? late : at_frame);
+      EXPECT_LT((got - expected).norm(), c == 2 ? 0.02 : 1e-9) << c << " " << k;
+      if (c == 2) moved = std::max(moved, (got - rig.cameras[c].ProjectWorld(at_frame)).norm());
+    }
+  }
+  EXPECT_GT(moved, 0.1);
+  // Its timestamps do not show it.
+  std::ifstream stamps(Path("late/cam2/timestamps.csv"));
+  std::string header, row;
+  std::getline(stamps, header);
+  std::getline(stamps, row);
+  EXPECT_EQ(row.substr(0, 2), "2,");
+  EXPECT_NEAR(std::stod(row.substr(2)), 2 / 179.0, 1e-9);
+  // A camera the rig lacks, or more than a frame: usage errors naming them.
+  auto bad = RunNetlab(base + Path("bad") + " --camera-time-offset cam9=0.3");
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("the rig has no camera 'cam9'"), std::string::npos) << bad.err;
+  bad = RunNetlab(base + Path("bad") + " --camera-time-offset cam2=1.5");
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_NE(bad.err.find("-1 < D < 1"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(Path("bad")));
+}
+
 TEST_F(RenderCommand, TruePixelsAreTheProjectionsOfTheTrueKnots) {
   ASSERT_EQ(render_.status, 0) << render_.err;
   const netlab::calib::Rig rig = netlab::calib::ReadRig(Path("shot/rig_true.yaml"));
