@@ -8,7 +8,7 @@
 #include <iostream>
 #include <new>
 
-#include "app/cli/command_line.h"
+#include "app/command_line/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
 #include "common/memory.h"

@@ -12,7 +12,7 @@
 #include <iostream>
 #include <thread>
 
-#include "app/cli/command_line.h"
+#include "app/command_line/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
 #include "app/cli/progress_bar.h"
