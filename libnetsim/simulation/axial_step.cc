@@ -51,8 +51,7 @@ AxialStep::AxialStep(const Model& model) {
 }
 
 bool AxialStep::Apply(const Model& model, double h, const std::vector<Vector3d>& x,
-                      const std::vector<Vector3d>& v_before, std::vector<Vector3d>& v) {
-  constexpr double P = kBeta, Q = kBeta - kGamma + 0.5;  // weights of h v+ and h v-
+                      std::vector<Vector3d>& v) {
   const int n = size();
   if (n == 0) return true;
   double* values = matrix_.valuePtr();
@@ -62,15 +61,13 @@ bool AxialStep::Apply(const Model& model, double h, const std::vector<Vector3d>&
     const Vector3d& va = v[s.node_a];
     const Vector3d& vb = v[s.node_b];
     const Vector3d e0 = x[s.node_b] - x[s.node_a];
-    // The Newmark point of the segment, predicted with the kicked velocities: x_n + h (P v* - Q v-).
-    const Vector3d e =
-        e0 + h * (P * (vb - va) - Q * (v_before[s.node_b] - v_before[s.node_a]));
+    const Vector3d e = e0 + h * (vb - va);  // predicted
     const double length = e.norm();
-    const Vector3d t = e0.normalized();
+    const Vector3d t = (e0 + e).normalized();  // the step's midpoint direction
     tangent_[r] = t;
     length_[r] = length;
     const double u = t.dot(vb - va);
-    const double stiff = P * h * s.stretch_stiffness + s.stretch_damping;  // (P h EA + c), N s
+    const double stiff = h * s.stretch_stiffness + s.stretch_damping;  // (h EA + c), N s
     rhs_[r] = (s.stretch_stiffness * (length - s.rest_length) + s.stretch_damping * u) / stiff;
     values[diagonal_[r]] =
         model.node_inv_mass[s.node_a] + model.node_inv_mass[s.node_b] + s.rest_length / (h * stiff);

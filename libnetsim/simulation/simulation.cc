@@ -407,7 +407,6 @@ bool Simulation::ImplicitSubstep(double h) {
   const double limit2 = options_.max_speed * options_.max_speed;
   const int threads = options_.threads;
   // Nodes: the explicit kick, the implicit stretching and contact, the drift.
-  if (axial_) before_ = state_.v;
   int bad_node = n;
 #pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static) \
     reduction(min                                                               \
@@ -418,7 +417,7 @@ bool Simulation::ImplicitSubstep(double h) {
     if (!(v.squaredNorm() <= limit2) && i < bad_node) bad_node = i;
   }
   if (bad_node < n) return BlowUp(bad_node, -1);
-  if (axial_ && !axial_->Apply(model_, h, state_.x, before_, state_.v)) {
+  if (axial_ && !axial_->Apply(model_, h, state_.x, state_.v)) {
     Failure failure;
     failure.time = state_.time;
     failure.quantity = "tension";

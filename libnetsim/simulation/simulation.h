@@ -17,9 +17,7 @@
 //             step is set by bending through the nodes (16 EI / l^3 per node), not by the axial
 //             wave or the coupling: 35x explicit's on the flights. A step splits into
 //             substeps while the tension's string stiffness or a contact needs it. First order;
-//             the stretching's Newmark step (axial_step.h) damps the modes it resolves by
-//             0.01 omega h only, so an undamped pendulum keeps its energy within 0.11 % of what
-//             it releases over 0.5 s, up and down.
+//             not symplectic: it loses energy, first order in dt.
 // Rotations follow the same schemes with the body-frame Euler equation
 // I dw/dt = tau - w x (I w) and q <- q Exp(w dt).
 //
@@ -184,7 +182,6 @@ class Simulation {
   bool skip_joints_ = false;
   bool skip_contact_ = false;  // implicit contact: resolved by the stepper, not in the kick
   std::vector<Quaterniond> turned_;          // scratch: frames turned to the new tangents
-  std::vector<Vector3d> before_;             // scratch: the velocities before the kick
   std::vector<double> node_step_;            // implicit: per node, min(dt, its static stable step)
   std::vector<double> frame_damping_;        // per segment, its joints' bending damping, N m s
   std::vector<double> frame_twist_;          // ... their twist stiffness, N m

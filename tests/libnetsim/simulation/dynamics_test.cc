@@ -59,10 +59,8 @@ TEST_P(Dynamics, PendulumConservesEnergyWithoutDamping) {
   }
   ASSERT_GT(released, 1e-6);  // it did fall: ~7e-6 J of 0.5 * m g L
   if (GetParam() == IntegratorType::kImplicit) {
-    // Newmark's tension (axial_step.h) keeps the energy as the explicit step does, up and down:
-    // measured 0.11 % of the energy released at most, 0.073 % above the start.
-    EXPECT_LT(worst / released, 0.005);
-    EXPECT_LT(gained / released, 0.002);
+    EXPECT_LT(worst / released, 0.02);
+    EXPECT_LT(gained / released, 1e-4);
   } else {
     EXPECT_LT(worst / released, 0.01);
   }
