@@ -1276,12 +1276,6 @@ std::optional<LabelEdit> LabelEngine::SearchAtProjection(FrameCheck* f, const Fi
       BranchesMatchLinks(r.knot, Slots(c, f->t, k, f->point), o_.branch_tolerance_deg))
     return LabelEdit{c, f->t, k,
                      Made(r.knot.px, LabelSource::kFillGrid, r.knot.confidence, true)};
-  // One junction there whose yarns run along the knot's links, beyond the tolerance: the image
-  // puts the knot elsewhere than the other cameras' labels (a pixel or two off themselves in a
-  // fold, their error magnified in the far pair); neither is taken.
-  if (r.status == FindNodeStatus::kFound &&
-      BranchesMatchLinks(r.knot, Slots(c, f->t, k, f->point), o_.branch_tolerance_deg))
-    return std::nullopt;
   return PlaceAtProjection(f, view, k);
 }
 
