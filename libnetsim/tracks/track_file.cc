@@ -61,29 +61,6 @@ void WriteGrid(hid_t knots, const std::vector<std::array<int, 2>>& grid, const s
   h5::WriteStringAttribute(dataset.get(), "names", JoinNames(net_names));
 }
 
-// The factor that turns dataset `name`'s values into the SI unit netlab keeps in memory, from
-// its "units" attribute (docs/bad_input.md: honoured or refused, never ignored; millimetres read as
-// metres made a net 1000 times larger). No attribute: the SI unit, as netlab writes it. Anything
-// else is refused, naming the file, the dataset, the attribute and the units read.
-double UnitsFactor(hid_t file, const std::string& path, const std::string& name,
-                   const std::vector<std::pair<std::string, double>>& known) {
-  h5::Id dataset(H5Dopen2(file, name.c_str(), H5P_DEFAULT));
-  if (!dataset.valid()) throw std::runtime_error(path + ": missing dataset " + name);
-  std::string units = h5::ReadStringAttribute(dataset.get(), "units");
-  const size_t a = units.find_first_not_of(" \t"), b = units.find_last_not_of(" \t");
-  units = a == std::string::npos ? "" : units.substr(a, b - a + 1);
-  if (units.empty()) return 1.0;
-  std::string names;
-  for (const auto& [unit, factor] : known) {
-    if (units == unit) return factor;
-    names += (names.empty() ? "" : ", ") + unit;
-  }
-  throw std::runtime_error(path + ":" + name + " has units '" + units +
-                           "' (its \"units\" attribute); netlab reads " + names +
-                           ", converted to " + known.front().first +
-                           ": convert the file or fix the attribute");
-}
-
 const std::vector<std::pair<std::string, double>> kTimeUnits = {
     {"s", 1.0}, {"ms", 1e-3}, {"us", 1e-6}, {"\u00b5s", 1e-6}, {"ns", 1e-9}};
 const std::vector<std::pair<std::string, double>> kLengthUnits = {
@@ -335,7 +312,7 @@ KnotTracks ReadKnotTracks(const std::string& path) {
 
   tracks.time.resize(t);
   h5::ReadDataset(f, "/time", H5T_NATIVE_DOUBLE, tracks.time.data());
-  if (const double to_s = UnitsFactor(f, path, "/time", kTimeUnits); to_s != 1.0)
+  if (const double to_s = h5::UnitsFactor(f, path, "/time", kTimeUnits); to_s != 1.0)
     for (double& time : tracks.time) time *= to_s;
   // A time that stands still or runs back (a decreasing /time read as "frames 0:-8") is refused
   // here, for every reader: render, triangulate --truth, score.
@@ -360,7 +337,7 @@ KnotTracks ReadKnotTracks(const std::string& path) {
   }
   tracks.position.resize(t * k);
   h5::ReadDataset(f, "/knots/position", H5T_NATIVE_DOUBLE, tracks.position.data());
-  if (const double to_m = UnitsFactor(f, path, "/knots/position", kLengthUnits); to_m != 1.0)
+  if (const double to_m = h5::UnitsFactor(f, path, "/knots/position", kLengthUnits); to_m != 1.0)
     for (Eigen::Vector3d& p : tracks.position) p *= to_m;
   tracks.valid.resize(t * k);
   h5::ReadDataset(f, "/knots/valid", H5T_NATIVE_UINT8, tracks.valid.data());
@@ -373,7 +350,8 @@ KnotTracks ReadKnotTracks(const std::string& path) {
     expect("/knots/covariance", {t, k, 3, 3});
     tracks.covariance.resize(t * k);
     h5::ReadDataset(f, "/knots/covariance", H5T_NATIVE_DOUBLE, tracks.covariance.data());
-    if (const double to_m2 = UnitsFactor(f, path, "/knots/covariance", kAreaUnits); to_m2 != 1.0)
+    if (const double to_m2 = h5::UnitsFactor(f, path, "/knots/covariance", kAreaUnits);
+        to_m2 != 1.0)
       for (Eigen::Matrix3d& c : tracks.covariance) c *= to_m2;
   }
   if (h5::Exists(f, "/knots/reprojection_error_px")) {
@@ -416,7 +394,7 @@ KnotTracks ReadKnotTracks(const std::string& path) {
     if (h5::DatasetDims(f, "/contact_start") != std::vector<hsize_t>{1})
       fail("/contact_start must hold one time (s)");
     h5::ReadDataset(f, "/contact_start", H5T_NATIVE_DOUBLE, &tracks.contact_start_s);
-    tracks.contact_start_s *= UnitsFactor(f, path, "/contact_start", kTimeUnits);
+    tracks.contact_start_s *= h5::UnitsFactor(f, path, "/contact_start", kTimeUnits);
   }
   return tracks;
 }
@@ -430,7 +408,7 @@ std::vector<std::vector<Eigen::Vector3d>> ReadNodePositions(const std::string& p
     throw std::runtime_error(path + ": /nodes/position must be [T,N,3]");
   std::vector<Eigen::Vector3d> flat(dims[0] * dims[1]);
   h5::ReadDataset(file.get(), "/nodes/position", H5T_NATIVE_DOUBLE, flat.data());
-  if (const double to_m = UnitsFactor(file.get(), path, "/nodes/position", kLengthUnits);
+  if (const double to_m = h5::UnitsFactor(file.get(), path, "/nodes/position", kLengthUnits);
       to_m != 1.0)
     for (Eigen::Vector3d& p : flat) p *= to_m;
   for (hsize_t i = 0; i < dims[0]; ++i)
