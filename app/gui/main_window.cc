@@ -420,16 +420,7 @@ bool MainWindow::OpenProject(const QString& path, bool ask, QString* error) {
       QMessageBox::warning(this, "Cannot recover", QString::fromLocal8Bit(e.what()));
     }
   }
-  review_table_->setModel(nullptr);
-  presenter_.reset();
-  review_model_.reset();
-  // The workers read the session being replaced: their answers are dropped.
-  loader_.Drop();
-  colours_.Drop();
-  loader_.Wait();
-  colours_.Wait();
-  previewer_.Wait();
-  DropPreview({});
+  StopSessionWorkers();
   session_ = std::move(session);
   review_model_ = std::make_unique<ReviewModel>(&session_->document(), session_->frame_numbers());
   const Project& p = session_->project();
@@ -1444,6 +1435,20 @@ void MainWindow::ShowRoom(Room room) {
   }
 }
 
+void MainWindow::StopSessionWorkers() {
+  review_table_->setModel(nullptr);
+  presenter_.reset();
+  review_model_.reset();
+  // The workers read the session being replaced or closed: their answers are dropped.
+  loader_.Drop();
+  colours_.Drop();
+  loader_.Wait();
+  colours_.Wait();
+  previewer_.Wait();
+  tracker_.Wait();
+  DropPreview({});
+}
+
 bool MainWindow::OpenRecording(const QString& experiment, QString* error) {
   if (session_ && !MaybeSave()) return false;
   std::unique_ptr<RecordingPresenter> recording;
@@ -1462,16 +1467,7 @@ bool MainWindow::OpenRecording(const QString& experiment, QString* error) {
   checker_.Drop();
   checker_.Wait();
   if (session_) {
-    review_table_->setModel(nullptr);
-    presenter_.reset();
-    review_model_.reset();
-    loader_.Drop();
-    colours_.Drop();
-    loader_.Wait();
-    colours_.Wait();
-    previewer_.Wait();
-    tracker_.Wait();
-    DropPreview({});
+    StopSessionWorkers();
     calibration_.reset();
     session_.reset();
     setWindowModified(false);

@@ -244,6 +244,9 @@ class MainWindow : public QMainWindow {
   // Forgets a pending or computing preview (nothing when there is none); the status bar then says
   // "Fill Grid preview <why>" ("discarded: the frame changed"), unless `why` is empty.
   void DropPreview(const QString& why);
+  // Before the session is replaced or closed: the views' models let go and every worker that
+  // reads it stopped (a tracking run too; it is window-modal, so normally there is none).
+  void StopSessionWorkers();
   void ShowPreviewBanner();
 
   // Missing knots (the review queue's second kind) and hidden marks.
