@@ -57,10 +57,12 @@ python3 "$NETLAB_ROOT/scripts/seed_corners.py" "$out/shot/truth.h5" 11x11 "$out/
 echo "== 5/6 triangulate the labels with the calibrated rig" >&2
 # --sigma-px 0.09: the labels' accuracy on the twin (RMS 0.074 px per coordinate against the
 # truth, with a tail to 0.33 px at the 99th percentile: docs/labeling.md); the reprojection
-# residuals alone (0.068 px) miss the error the cameras of a pair share.
+# residuals alone (0.068 px) miss the error the cameras of a pair share. --experiment: the frames'
+# times from the cameras' timestamps; --estimate-offsets: each camera's sub-frame clock offset
+# from the knots' motion, reported (the twin's cameras are synchronised: all within 0.02 frames).
 "$netlab" triangulate --rig "$out/rig_calibrated.yaml" --labels "$out/labels.h5" \
   --knots 11x11 --fps 179 --sigma-px 0.09 --out "$out/tracks.h5" --csv "$out/" \
-  --truth "$out/sim.h5"
+  --truth "$out/sim.h5" --experiment "$out/shot/experiment.yaml" --estimate-offsets
 
 echo "== 6/6 score the tracks against the true simulation and against the one without drag" >&2
 # The calibrated rig has the foil's world frame, not the scenario's: fit one rigid motion (and the

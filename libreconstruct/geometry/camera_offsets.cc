@@ -47,6 +47,10 @@ struct OffsetSums {
   }
 };
 
+// The knots are split into this many groups (knot k in group k % kKnotGroups) for the
+// jackknife of the offsets' sigma.
+constexpr int kKnotGroups = 10;
+
 }  // namespace
 
 std::vector<double> OffsetEstimate::Applicable() const {
@@ -196,7 +200,6 @@ OffsetEstimate EstimateCameraOffsets(const calib::Rig& rig, const LabelSet& labe
       estimate.cameras[c].why = "the reference";
     }
   }
-  std::vector<double> offset(cameras, 0.0);
   TriangulationOptions tri = options.triangulation;
   if (options.sigma_px > 0.0 && options.auto_threshold) {
     tri.outlier_threshold_px = std::max(options.min_threshold_px, options.outlier_sigmas *
@@ -204,16 +207,18 @@ OffsetEstimate EstimateCameraOffsets(const calib::Rig& rig, const LabelSet& labe
     tri.huber_px = std::max(2.0 * options.sigma_px, 0.4 * options.min_threshold_px);
   }
 
-  // The sums of camera c's step at the current offsets: every knot-frame it labels, against the
-  // point the other cameras (their labels moved by their offsets) put there.
-  auto sums_of = [&](int c) {
+  // The sums of camera c's step at the offsets `at`: every knot-frame it labels, against the
+  // point the other cameras (their labels moved by their offsets) put there; the knots of group
+  // `left_out` (-1: none) are not used.
+  auto sums_of = [&](int c, const std::vector<double>& at, int left_out) {
     std::vector<OffsetSums> per_frame(frames);
     const int lc = label_of[c];
     ForEachFrame(frames, options.threads, [&](int t) {
       OffsetSums& s = per_frame[t];
       for (int k = 0; k < knots; ++k) {
+        if (k % kKnotGroups == left_out) continue;
         Eigen::Vector2d px, u;
-        if (!LabelAtFrameTime(labels, lc, t, k, offset[c], usable[lc], &px, &u)) continue;
+        if (!LabelAtFrameTime(labels, lc, t, k, at[c], usable[lc], &px, &u)) continue;
         std::vector<Observation> others;
         for (int o = 0; o < cameras; ++o) {
           if (o == c || label_of[o] < 0) continue;
@@ -221,8 +226,7 @@ OffsetEstimate EstimateCameraOffsets(const calib::Rig& rig, const LabelSet& labe
           const size_t i = static_cast<size_t>(t) * knots + k;
           if (!usable[lo][i]) continue;
           Eigen::Vector2d q = labels.labels[lo][i].px;
-          if (offset[o] != 0.0 &&
-              !LabelAtFrameTime(labels, lo, t, k, offset[o], usable[lo], &q))
+          if (at[o] != 0.0 && !LabelAtFrameTime(labels, lo, t, k, at[o], usable[lo], &q))
             continue;
           others.push_back({o, q});
         }
@@ -241,7 +245,11 @@ OffsetEstimate EstimateCameraOffsets(const calib::Rig& rig, const LabelSet& labe
         s.h += u.dot(w * u);
         s.g += u.dot(w * r);
         s.ss += d2;
-        s.motion2 += u.squaredNorm();
+        // The motion as the labels show it (at the frame's own time, not at the offset: a track
+        // of noise extrapolated by a wrong offset would look like motion).
+        Eigen::Vector2d at_label, motion;
+        LabelAtFrameTime(labels, lc, t, k, 0.0, usable[lc], &at_label, &motion);
+        s.motion2 += motion.squaredNorm();
         ++s.n;
       }
     });
@@ -250,21 +258,53 @@ OffsetEstimate EstimateCameraOffsets(const calib::Rig& rig, const LabelSet& labe
     return total;
   };
 
-  std::vector<OffsetSums> last(cameras);
-  for (int sweep = 0; sweep < offset_options.max_sweeps; ++sweep) {
-    double change = 0.0;
-    for (int c = 0; c < cameras; ++c) {
-      if (c == reference || label_of[c] < 0) continue;
-      const OffsetSums s = sums_of(c);
-      last[c] = s;
-      if (s.n < offset_options.min_observations || !(s.h > 0.0)) continue;
-      const double step = -s.g / s.h;
-      offset[c] += step;
-      change = std::max(change, std::abs(step));
+  // Gauss-Newton on each camera in turn from `offset` until no offset changes by the tolerance;
+  // `last`, when given, gets each camera's sums of the last sweep. The number of sweeps.
+  auto solve = [&](std::vector<double>& offset, int left_out, std::vector<OffsetSums>* last) {
+    int sweeps = 0;
+    while (sweeps < offset_options.max_sweeps) {
+      ++sweeps;
+      double change = 0.0;
+      for (int c = 0; c < cameras; ++c) {
+        if (c == reference || label_of[c] < 0) continue;
+        const OffsetSums s = sums_of(c, offset, left_out);
+        if (last) (*last)[c] = s;
+        if (s.n < offset_options.min_observations || !(s.h > 0.0)) continue;
+        const double step = -s.g / s.h;
+        offset[c] += step;
+        change = std::max(change, std::abs(step));
+      }
+      if (change < offset_options.tolerance_frames) break;
     }
-    estimate.sweeps = sweep + 1;
-    if (change < offset_options.tolerance_frames) break;
-  }
+    return sweeps;
+  };
+
+  std::vector<double> offset(cameras, 0.0);
+  std::vector<OffsetSums> last(cameras);
+  estimate.sweeps = solve(offset, -1, &last);
+
+  // The delete-a-group jackknife over the knots: the whole estimate again with each group of
+  // knots left out (from the full one), the spread of those estimates scaled by
+  // (groups - 1) / groups. A knot's label errors that persist from frame to frame (a junction
+  // misplaced the same way while it looks the same), in this camera or in the cameras that place
+  // the point, do not average out over the frames; the scatter of the residuals alone then
+  // understates the doubt (3-6 fold on the rendered shots of docs/triangulation.md).
+  const int groups = std::min(knots, kKnotGroups);
+  std::vector<std::vector<double>> left_out_offsets;
+  if (groups >= 2)
+    for (int g = 0; g < groups; ++g) {
+      std::vector<double> o = offset;
+      solve(o, g, nullptr);
+      left_out_offsets.push_back(o);
+    }
+  auto jackknife_sigma = [&](int c) {
+    const double m = static_cast<double>(left_out_offsets.size());
+    if (m < 2) return 0.0;
+    double mean = 0.0, spread = 0.0;
+    for (const auto& o : left_out_offsets) mean += o[c] / m;
+    for (const auto& o : left_out_offsets) spread += (o[c] - mean) * (o[c] - mean);
+    return std::sqrt((m - 1.0) / m * spread);
+  };
 
   for (int c = 0; c < cameras; ++c) {
     if (c == reference || label_of[c] < 0) continue;
@@ -284,7 +324,8 @@ OffsetEstimate EstimateCameraOffsets(const calib::Rig& rig, const LabelSet& labe
     // The residual scatter at the estimate (per component, weighted) sets the noise.
     const double ss = std::max(0.0, s.ss - s.g * s.g / s.h);
     const double noise2 = s.n > 1 ? ss / (2.0 * s.n - 1.0) : 1.0;
-    out.sigma_frames = std::sqrt(noise2 / s.h);
+    const double sigma_scatter = std::sqrt(noise2 / s.h);
+    out.sigma_frames = std::max(sigma_scatter, jackknife_sigma(c));
     // The motion is read off the labels themselves: where it is not well above their scatter,
     // it is mostly that scatter, and the sigma above understates the doubt.
     const double scatter = std::sqrt(noise2);

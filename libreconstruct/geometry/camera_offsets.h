@@ -14,11 +14,14 @@
 // (EstimateCameraOffsets): every knot-frame the other cameras triangulate is projected into the
 // camera, and d is the value that brings the camera's moved labels onto those projections
 // (Gauss-Newton on the reprojection residual against d, weighted by the projection's own
-// uncertainty; the cameras in turn until the offsets settle). The rig's first camera is the
-// reference (d = 0); the others are relative to it. With too little motion across the image
-// (a net at rest, a camera that sees it head-on) the offset is not determined: its standard
-// deviation exceeds max_sigma_frames, or the motion is not well above the labels' scatter, and
-// no value is given.
+// uncertainty; the cameras in turn until the offsets settle). Its standard deviation is the
+// larger of the residual scatter's and a jackknife's over ten groups of knots (a knot's label
+// errors persist from frame to frame and do not average out over the frames); a calibration
+// error, a near-constant image shift while the knots move one way, is not in it. The rig's first
+// camera is the reference (d = 0); the others are relative to it. With too little motion across
+// the image (a net at rest, a camera that sees it head-on) the offset is not determined: its
+// standard deviation exceeds max_sigma_frames, or the motion (read at the labels' own times) is
+// not well above the labels' scatter, and no value is given.
 
 #include <cstdint>
 #include <map>
@@ -76,7 +79,7 @@ struct CameraOffset {
   std::string camera;
   bool determined = false;  // false: no value (offset_frames NaN; why says so)
   double offset_frames = 0.0;
-  double sigma_frames = 0.0;  // standard deviation, frames (inflated by the residual scatter)
+  double sigma_frames = 0.0;  // standard deviation, frames (residual scatter or jackknife)
   int observations = 0;       // views of moving knots it rests on
   double motion_px = 0.0;     // their RMS image motion, px per frame
   std::string why;            // when not determined
