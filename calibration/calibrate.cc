@@ -9,6 +9,7 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <mutex>
 #include <numeric>
 #include <opencv2/calib3d.hpp>
@@ -20,6 +21,7 @@
 
 #include "calibration/cost_functions.h"
 #include "calibration/detect.h"
+#include "calibration/ray.h"
 
 namespace netlab::calib {
 namespace {
@@ -107,16 +109,11 @@ std::vector<cv::Point2f> ImagePoints(const Observation& o) {
 // Linear triangulation (DLT) of one point from two calibrated views.
 Eigen::Vector3d Triangulate(const Camera& a, const Eigen::Vector2d& pa, const Camera& b,
                             const Eigen::Vector2d& pb) {
-  const Eigen::Vector2d xa = UndistortPoint(a.intrinsics, pa);
-  const Eigen::Vector2d xb = UndistortPoint(b.intrinsics, pb);
-  Eigen::Matrix<double, 3, 4> pa_m, pb_m;
-  pa_m << a.cam_from_world.RotationMatrix(), a.cam_from_world.translation;
-  pb_m << b.cam_from_world.RotationMatrix(), b.cam_from_world.translation;
+  Eigen::Matrix<double, 2, 4> ra, rb;
+  if (!RayEquations(a, pa, &ra) || !RayEquations(b, pb, &rb))
+    return Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   Eigen::Matrix4d m;
-  m.row(0) = xa.x() * pa_m.row(2) - pa_m.row(0);
-  m.row(1) = xa.y() * pa_m.row(2) - pa_m.row(1);
-  m.row(2) = xb.x() * pb_m.row(2) - pb_m.row(0);
-  m.row(3) = xb.y() * pb_m.row(2) - pb_m.row(1);
+  m << ra, rb;
   const Eigen::Vector4d h = Eigen::JacobiSVD<Eigen::Matrix4d>(m, Eigen::ComputeFullV).matrixV().col(3);
   return h.head<3>() / h.w();
 }

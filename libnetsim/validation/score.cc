@@ -4,7 +4,6 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <Eigen/LU>
-#include <Eigen/SVD>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -133,7 +132,8 @@ class Scorer {
     return e;
   }
 
-  // Least-squares rigid motion meas_from_sim (Kabsch) at offset tau, over every stride-th point.
+  // Least-squares rigid motion meas_from_sim (Umeyama's, without scale) at offset tau, over
+  // every stride-th point.
   bool Kabsch(Fit* fit, int stride) const {
     std::vector<Vector3d> a, b;
     for (size_t i = 0; i < points_.size(); i += stride) {
@@ -145,17 +145,11 @@ class Scorer {
       b.push_back(meas_.Position(points_[i].frame, points_[i].knot));
     }
     if (a.size() < 3) return false;
-    Vector3d ca = Vector3d::Zero(), cb = Vector3d::Zero();
-    for (size_t i = 0; i < a.size(); ++i) ca += a[i], cb += b[i];
-    ca /= a.size();
-    cb /= b.size();
-    Matrix3d h = Matrix3d::Zero();
-    for (size_t i = 0; i < a.size(); ++i) h += (a[i] - ca) * (b[i] - cb).transpose();
-    Eigen::JacobiSVD<Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    Matrix3d d = Matrix3d::Identity();
-    if ((svd.matrixV() * svd.matrixU().transpose()).determinant() < 0) d(2, 2) = -1;
-    fit->rotation = svd.matrixV() * d * svd.matrixU().transpose();
-    fit->translation = cb - fit->rotation * ca;
+    Eigen::Matrix3Xd from(3, a.size()), to(3, b.size());
+    for (size_t i = 0; i < a.size(); ++i) from.col(i) = a[i], to.col(i) = b[i];
+    const Eigen::Matrix4d m = Eigen::umeyama(from, to, /*with_scaling=*/false);
+    fit->rotation = m.topLeftCorner<3, 3>();
+    fit->translation = m.topRightCorner<3, 1>();
     return true;
   }
 

@@ -5,6 +5,8 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 
+#include "calibration/ray.h"
+
 namespace netlab::recon {
 namespace {
 
@@ -20,7 +22,7 @@ bool LinearPath(const calib::Rig& rig, const std::vector<TimedObservation>& view
   int rows = 0;
   for (const TimedObservation& o : views) {
     Eigen::Matrix<double, 2, 4> ray;
-    if (!RayEquations(rig.cameras[o.view.camera], o.view.px, &ray)) continue;
+    if (!calib::RayEquations(rig.cameras[o.view.camera], o.view.px, &ray)) continue;
     const double d = o.time - time;
     for (int j = 0; j < 2; ++j) {
       const Eigen::RowVector4d row = ray.row(j);

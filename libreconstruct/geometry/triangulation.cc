@@ -9,6 +9,8 @@
 #include <Eigen/SVD>
 #include <ceres/jet.h>
 
+#include "calibration/ray.h"
+
 namespace netlab::recon {
 namespace {
 
@@ -101,17 +103,6 @@ double ReprojectionResidual(const calib::Rig& rig, const Observation& observatio
   return (px - observation.px).norm();
 }
 
-bool RayEquations(const calib::Camera& camera, const Eigen::Vector2d& px,
-                  Eigen::Matrix<double, 2, 4>* rows) {
-  const Eigen::Vector2d xy = calib::UndistortPoint(camera.intrinsics, px);
-  if (!xy.allFinite()) return false;
-  Eigen::Matrix<double, 3, 4> p;
-  p.leftCols<3>() = camera.cam_from_world.RotationMatrix();
-  p.col(3) = camera.cam_from_world.translation;
-  for (int j = 0; j < 2; ++j) rows->row(j) = xy[j] * p.row(2) - p.row(j);
-  return true;
-}
-
 bool TriangulateLinear(const calib::Rig& rig, const std::vector<Observation>& observations,
                        Eigen::Vector3d* position) {
   // Each view's RayEquations, in normalised undistorted coordinates (so every view weighs alike
@@ -120,7 +111,7 @@ bool TriangulateLinear(const calib::Rig& rig, const std::vector<Observation>& ob
   int rows = 0;
   for (const Observation& o : observations) {
     Eigen::Matrix<double, 2, 4> ray;
-    if (!RayEquations(rig.cameras[o.camera], o.px, &ray)) continue;
+    if (!calib::RayEquations(rig.cameras[o.camera], o.px, &ray)) continue;
     for (int j = 0; j < 2; ++j) {
       const Eigen::RowVector4d row = ray.row(j);
       const double norm = row.norm();

@@ -54,12 +54,6 @@ struct PointEstimate {
   std::vector<double> residual_px;  // per observation (all of them), px; NaN behind a camera
 };
 
-// The two linear equations a view puts on a homogeneous world point X, rows x P3 - P1 and
-// y P3 - P2 of its camera's [R | t] in undistorted normalised coordinates (x, y): rows * X = 0.
-// False where the pixel does not undistort.
-bool RayEquations(const calib::Camera& camera, const Eigen::Vector2d& px,
-                  Eigen::Matrix<double, 2, 4>* rows);
-
 // Linear triangulation. False when fewer than two observations can be undistorted or the
 // solution is at infinity.
 bool TriangulateLinear(const calib::Rig& rig, const std::vector<Observation>& observations,
