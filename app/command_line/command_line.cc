@@ -6,6 +6,7 @@
 
 #include "common/errors.h"
 #include "common/memory.h"
+#include "common/yaml_util.h"
 
 namespace netlab::app {
 
@@ -41,7 +42,7 @@ CommandLine::CommandLine(const std::vector<std::string>& args,
       if (value.empty()) throw UsageError("--" + name + " needs a non-empty value");
       values_[name].push_back(value);
     } else {
-      throw UsageError("unknown option --" + name);
+      throw UsageError("unknown option --" + YamlMap::Shown(name));
     }
   }
 }
@@ -77,7 +78,7 @@ int CommandLine::IntOption(const std::string& name, int fallback, int min, int m
   }
   if (used == 0 || used != value->size() || parsed < min || parsed > max)
     throw UsageError("--" + name + " expects an integer in " + std::to_string(min) + ".." +
-                     std::to_string(max) + ", got '" + *value + "'");
+                     std::to_string(max) + ", got '" + YamlMap::Shown(*value) + "'");
   return static_cast<int>(parsed);
 }
 
@@ -95,7 +96,8 @@ double CommandLine::DoubleOption(const std::string& name, double fallback, doubl
   if (used == 0 || used != value->size() || !(parsed >= min && parsed <= max)) {
     char range[96];
     std::snprintf(range, sizeof(range), "[%g, %g]", min, max);
-    throw UsageError("--" + name + " expects a number in " + range + ", got '" + *value + "'");
+    throw UsageError("--" + name + " expects a number in " + range + ", got '" +
+                     YamlMap::Shown(*value) + "'");
   }
   return parsed;
 }
@@ -110,7 +112,8 @@ void CommandLine::Knots(const std::string& name, int* rows, int* cols) const {
     *cols = std::stoi(text.substr(x + 1), &used_c);
     if (used_r != x || used_c != text.size() - x - 1) throw std::invalid_argument("junk");
   } catch (const std::exception&) {
-    throw UsageError("--" + name + " expects ROWSxCOLS, e.g. 11x11, got '" + text + "'");
+    throw UsageError("--" + name + " expects ROWSxCOLS, e.g. 11x11, got '" +
+                     YamlMap::Shown(text) + "'");
   }
   if (*rows < 2 || *cols < 2 || *rows > 1000 || *cols > 1000)
     throw UsageError("--" + name + " " + text + ": need 2..1000 knots per side");
@@ -141,7 +144,8 @@ bool CommandLine::FrameRange(const std::string& name, int* first, int* last) con
     b = std::stoi(text.substr(colon + 1), &used_b);
     if (used_a != colon || used_b != text.size() - colon - 1) throw std::invalid_argument("junk");
   } catch (const std::exception&) {
-    throw UsageError("--" + name + " expects A:B (first and last frame), got '" + text + "'");
+    throw UsageError("--" + name + " expects A:B (first and last frame), got '" +
+                     YamlMap::Shown(text) + "'");
   }
   if (a < 0 || b < a) throw UsageError("--" + name + " " + text + ": need 0 <= A <= B");
   *first = a;

@@ -100,7 +100,7 @@ ScenarioOverride ParseOverride(const std::string& arg) {
     o.value = Trim(arg.substr(eq + 1));
   }
   if (o.path.empty() || o.value.empty())
-    throw InputError("--set '" + arg +
+    throw InputError("--set '" + YamlMap::Shown(arg) +
                      "': expected PATH=VALUE, e.g. integrator.type=implicit or "
                      "materials.nylon_1mm.bend_stiffness=2e-4");
   return o;
@@ -191,7 +191,7 @@ Scenario LoadScenario(const std::string& path, const std::vector<ScenarioOverrid
   std::string set;
   for (const ScenarioOverride& o : overrides) {
     ApplyOverride(o, path, tree);
-    set += " --set " + o.Text();
+    set += " --set " + YamlMap::Shown(o.Text());
   }
   YAML::Emitter out;
   out << tree;

@@ -133,6 +133,18 @@ TEST_F(BadInputSimulate, EachKindEndsInAClearError) {
            "simulate {dir}/scene.yaml --out {dir}/a.h5 --bogus",
            2,
            {"unknown option --bogus"}},
+          // A value of a hundred thousand digits is quoted by its start and its length, not
+          // echoed whole (AHugeValueGivesAOneLineMessage below checks the message's length).
+          {"a number of a hundred thousand digits",
+           "simulate {dir}/scene.yaml --out {dir}/a.h5 --duration " + std::string(100000, '9'),
+           2,
+           {"--duration expects a number", "'9999999999999999999999999999999999999999... (100000 "
+                                            "characters)'"}},
+          {"--set with a value of a hundred thousand digits",
+           "simulate {dir}/scene.yaml --out {dir}/a.h5 --set drag.coefficient=" +
+               std::string(100000, '9'),
+           1,
+           {"drag.coefficient: unknown key", "(100017 characters)"}},
           // An output over an input, another output or a special file.
           {"--out is the scenario",
            "simulate {dir}/scene.yaml --out {dir}/scene.yaml",
@@ -304,6 +316,22 @@ TEST_F(BadInputSimulate, AFullDiskLeavesThePreviousOutput) {
 // An output_interval that asks for more frames than the disk (simulate) or the memory (sweep,
 // which keeps each run's tracks) holds is refused before the first step, naming the key and the
 // size: these ran for days.
+// A value a hundred thousand characters long (a paste gone wrong) is named by its start and its
+// length: the message stays a line or two, whichever option or --set carries it.
+TEST_F(BadInputSimulate, AHugeValueGivesAOneLineMessage) {
+  const std::string huge(100000, '9');
+  for (const std::string& args :
+       {"--duration " + huge, "--set duration=" + huge, "--set drag.coefficient=" + huge,
+        "--set " + huge, "--" + huge}) {
+    SCOPED_TRACE(args.substr(0, 30));
+    const NetlabResult r = RunNetlab("simulate " + Path("scene.yaml") + " --out " +
+                                     Path("a.h5") + " " + args);
+    EXPECT_NE(r.status, 0);
+    EXPECT_NE(r.err.find("(1000"), std::string::npos) << r.err.substr(0, 300);
+    EXPECT_LT(r.err.size(), 600u) << r.err.substr(0, 300);
+  }
+}
+
 TEST_F(BadInputSimulate, AnOutputTooLargeIsRefusedBeforeAnyStep) {
   const auto start = std::chrono::steady_clock::now();
   ExpectBadInputs(
