@@ -1,54 +1,124 @@
 #pragma once
-// Visible knots with no label: where a camera has nothing of a knot that the others place.
+// Visible knots with no label: where a camera has nothing of a knot that it should see.
 //
 // Knot k of frame row t is *missing* in camera c when c has neither a label of it nor a hidden
-// mark (LabelState::kHidden), while two or more other cameras have accepted labels of it that
-// triangulate consistently (TriangulatePoint; every view's reprojection residual within
-// max_residual_px: an inconsistent pair never says where the knot should be) to a point in front
-// of c whose projection lies inside c's image by margin_px (and is no artefact of the lens model
-// folding a point far outside the field of view back into the image). Only the labels are used,
-// never an image, and the target's shape is not known here: a knot the target hides from c is
-// listed as well, until a person marks it hidden.
+// mark (LabelState::kHidden), and a point of the knot is known that lies in front of c, inside
+// c's image by margin_px (and is no artefact of the lens model folding a point far outside the
+// field of view back into the image), and that the target does not hide from c (the segment from
+// c's centre to the point passes through none of the target's solids). The point, first found
+// first taken:
+//   1. the other cameras' labels: two or more, accepted ones or, where those are too few, those
+//      under review as well, that triangulate consistently (TriangulatePoint; every view's
+//      reprojection residual within max_residual_px: an inconsistent pair never says where the
+//      knot should be) and with a usable ray geometry (UsableGeometry: two cameras facing each
+//      other, with the knot near the line between them, have rays 0 deg apart and place it
+//      nowhere);
+//   2. its grid neighbours' points (as 1.): along each grid line through the knot, the midpoint
+//      of the two neighbours, or the line carried on from two neighbours on one side; where
+//      both grid lines give one, they must agree within neighbour_agreement of a link;
+//   3. its own points (as 1.) in the frame rows around t: between the rows before and after, or
+//      carried on from two rows on one side.
+// Where one camera alone has a label of the knot (the others lost it, or the target hides it
+// from them), the point of 2. or 3. is moved onto that label's ray when the ray passes within
+// their tolerance (else the label is taken for a wrong one and 2. or 3. stands alone).
+// Only the labels, the rig and the target are used, never an image. Without a target (no
+// solids) a knot the target hides from c is listed as well, until a person marks it hidden.
 //
-//   for (const MissingKnot& m : FindMissingKnots(labels, rig, rig_index, t))
+//   MissingKnotsOptions options;
+//   options.target = target;  // the target's solids in the rig's world frame, and the frame rate
+//   for (const MissingKnot& m : FindMissingKnots(labels, rig, rig_index, t, options))
 //     MissingReason(m, labels.cameras);
 //     // "no label; seen in cam0, cam2; expected near (812.4, 1033.0)"
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <string>
 #include <vector>
 
 #include "calibration/rig.h"
+#include "libreconstruct/geometry/triangulation.h"
 #include "libreconstruct/labels/label_set.h"
 
 namespace netlab::recon {
 
+// One solid of the target (a box or a ball), moving at constant velocity: as a scenario's body
+// (netsim::RigidBody) is at time s, centre + s * velocity.
+struct TargetSolid {
+  enum class Shape { kBox, kSphere };
+  Shape shape = Shape::kBox;
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();    // m, at time 0
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // m/s
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  // box axes to world
+  Eigen::Vector3d half_extents = Eigen::Vector3d::Zero();           // box, m
+  double radius = 0.0;                                              // sphere, m
+};
+
+// The target as the cameras see it: its solids in the rig's world frame (the scenario's frame:
+// a true rig, or one calibrated with the target's marker map), frame number f at time f / fps.
+struct Target {
+  std::vector<TargetSolid> solids;
+  double fps = 179.0;
+  bool empty() const { return solids.empty(); }
+};
+
+// Whether the segment from `from` to `to` passes through one of the target's solids at time
+// `time_s` (s), each grown by `grow_m` (m; negative: shrunk).
+bool TargetHides(const Target& target, const Eigen::Vector3d& from, const Eigen::Vector3d& to,
+                 double time_s, double grow_m = 0.0);
+
+// The largest standard deviation (m) of a triangulated point for `label_sigma_px` px of label
+// noise per axis in each view (the square root of its covariance's largest eigenvalue), as
+// `netlab triangulate --max-sigma-mm` bounds it; infinite when the estimate is not valid.
+double LargestSigmaM(const PointEstimate& estimate, double label_sigma_px);
+
+// Whether views placing a point within `max_sigma_m` at `label_sigma_px`: a usable ray geometry.
+// Two cameras facing each other with the point near the line between their centres (rays 0 deg
+// apart) fail it: their point may lie anywhere along that line.
+bool UsableGeometry(const PointEstimate& estimate, double label_sigma_px, double max_sigma_m);
+
 struct MissingKnotsOptions {
-  // Each accepted view's reprojection residual at the triangulated point at most this (px): the
+  // Each view's reprojection residual at the triangulated point at most this (px): the
   // engine's epipolar tolerance (LabelEngineOptions::epipolar_tolerance_px).
   double max_residual_px = 2.0;
-  // The expected point at least this far inside the image (px): a knot at the very edge cannot
-  // be labeled there anyway (the detector's rings need ~20 px).
-  double margin_px = 20.0;
-  // Only where c has a label (any state) of one of the knot's grid neighbours. Off: a knot the
-  // target hides is listed until a person marks it hidden (the workstation: D, or Shift+D
-  // for the frames after it too), and so is every knot the labels expect. On: a knot none of whose neighbours c
-  // has labeled (inside the target's shadow, or a patch c lost) is not listed until one is.
-  // bench_missing on the demo shot: its labels.h5 lists 8 (all truly visible) off, 6 on; its
-  // complete labels (labels_true.h5: every listed knot is behind the target) 1081 in 32 runs of
-  // frames off, 502 in 18 on. Off by default: the list is there so that no visible knot goes
-  // unasked.
+  // The ray geometry: a point whose largest sigma exceeds max_sigma_mm for label_sigma_px of
+  // label noise places nothing (UsableGeometry). On the demo shot the labels' points have
+  // 0.02-0.2 mm; the knots near the line between two facing cameras metres.
+  double label_sigma_px = 0.1;
+  double max_sigma_mm = 5.0;
+  // The expected point at least this far inside the image (px).
+  double margin_px = 0.0;
+  // A point from the neighbours (2.): the two grid lines through the knot put it within this
+  // fraction of their mean link length of each other, and one camera's ray passes within half
+  // of it to be taken.
+  double neighbour_agreement = 0.35;
+  // A point from the knot's own motion (3.): from rows at most this far from t, trusted to
+  // neighbour_agreement / 2 of its motion between them plus this (m).
+  int motion_rows = 2;
+  double motion_tolerance_m = 0.005;
+  // The target: knots it hides are not missing. Empty: nothing is known to hide a knot.
+  Target target;
+  // The target's solids grown by this (m) for the test: a knot just beside its edge counts as
+  // hidden (the knot's ball, the point's error).
+  double target_grow_m = 0.0;
+  // Only where c has a label (any state) of one of the knot's grid neighbours.
   bool need_labeled_neighbour = false;
 
   // False with `why` when a value is out of range.
   bool IsValid(std::string* why) const;
 };
 
+// Where the knot's point came from.
+enum class MissingBasis { kCameras, kNeighbours, kMotion };
+
 struct MissingKnot {
   int camera = 0, t = 0, knot = 0;   // store camera, frame row, knot
-  Eigen::Vector2d expected_px;       // where the other cameras put it in `camera` (px)
-  std::vector<int> seen_in;          // the store cameras whose accepted labels place it
-  double rms_px = 0.0;               // the triangulation's RMS residual (px)
+  Eigen::Vector2d expected_px;       // where the point projects in `camera` (px)
+  MissingBasis basis = MissingBasis::kCameras;
+  std::vector<int> seen_in;          // the store cameras whose labels place it (kNeighbours and
+                                     // kMotion: the one whose ray it is on, or none)
+  std::vector<int> under_review;     // of those, the ones whose label is under review
+  std::vector<int> rows;             // kMotion: the frame rows whose points place it
+  double rms_px = 0.0;               // kCameras: the triangulation's RMS residual (px)
 };
 
 // The missing knots of frame row t, in (camera, knot) order. `rig_index[c]`: the rig camera of
@@ -57,7 +127,11 @@ std::vector<MissingKnot> FindMissingKnots(const recon::LabelSet& labels, const c
                                           const std::vector<int>& rig_index, int t,
                                           const MissingKnotsOptions& options = {});
 
-// "no label; seen in cam0, cam2; expected near (812.4, 1033.0)".
-std::string MissingReason(const MissingKnot& missing, const std::vector<std::string>& cameras);
+// What the person reads, e.g. "no label; seen in cam0, cam2; expected near (812.4, 1033.0)",
+// "no label; seen in cam0, cam2 (cam2 under review); expected near ...", "no label; seen in cam3,
+// at the depth its grid neighbours give; expected near ...", "no label; its points in frames 11
+// and 13 put it near ..." (frame numbers: `frame_index`, else frame rows).
+std::string MissingReason(const MissingKnot& missing, const std::vector<std::string>& cameras,
+                          const std::vector<int>& frame_index = {});
 
 }  // namespace netlab::recon

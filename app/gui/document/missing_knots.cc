@@ -1,8 +1,63 @@
 #include "app/gui/document/missing_knots.h"
 
 #include <stdexcept>
+#include <yaml-cpp/yaml.h>
+
+#include "common/errors.h"
+#include "libnetsim/scenario/scenario.h"
+#include "libnetsim/tracks/track_file.h"
 
 namespace netlab::gui {
+
+recon::Target LoadTarget(const std::string& path, double fps) {
+  // The scenario's text: the file itself, or a simulation result's /scenario.
+  const bool result = path.size() > 3 && path.compare(path.size() - 3, 3, ".h5") == 0;
+  std::string text;
+  try {
+    text = result ? netsim::ReadKnotTracks(path).scenario : netsim::ReadScenarioText(path);
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError(path + ": cannot be read as the target (" + e.what() + ")");
+  }
+  if (text.empty())
+    throw InputError(path + ": no /scenario (the target is a scenario file or a netlab simulate "
+                            "result)");
+  // Only the bodies matter: the data files the scenario names (gravity, frame rotation, drag)
+  // are not read.
+  const std::string origin = result ? path + ":/scenario" : path;
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw InputError(origin + ": " + e.what());
+  }
+  if (!root.IsMap()) throw InputError(origin + ": not a scenario (expected a mapping)");
+  for (const char* key : {"gravity", "rotating_frame", "drag"}) root.remove(key);
+  YAML::Emitter emitter;
+  emitter << root;
+  const netsim::Scenario scenario = netsim::ParseScenario(emitter.c_str(), origin, "");
+  recon::Target target;
+  target.fps = fps;
+  for (const netsim::RigidBody& body : scenario.bodies) {
+    recon::TargetSolid solid;
+    solid.center = body.center;
+    solid.velocity = body.velocity;
+    if (body.shape == netsim::RigidBody::Shape::kBox) {
+      solid.orientation = body.orientation;
+      solid.half_extents = body.half_extents;
+    } else if (body.shape == netsim::RigidBody::Shape::kSphere) {
+      solid.shape = recon::TargetSolid::Shape::kSphere;
+      solid.radius = body.radius;
+    } else {
+      continue;  // a plane (a wall, a floor) is no target
+    }
+    target.solids.push_back(solid);
+  }
+  if (target.empty())
+    throw InputError(origin + ": no box or sphere among its bodies: nothing to be the target");
+  return target;
+}
 
 MissingKnots::MissingKnots(const LabelDocument* document, const calib::Rig* rig,
                            std::vector<int> rig_index, MissingKnotsOptions options,
@@ -27,13 +82,19 @@ MissingKnots::MissingKnots(const LabelDocument* document, const calib::Rig* rig,
 }
 
 void MissingKnots::Recount(const QList<int>& frames) {
-  for (int t : frames) {
-    if (t < 0 || t >= static_cast<int>(by_row_.size())) continue;
+  // A row's points also place the knots of the rows around it (their motion).
+  std::set<int> rows;
+  for (int t : frames)
+    for (int s = t - options_.motion_rows; s <= t + options_.motion_rows; ++s)
+      if (s >= 0 && s < static_cast<int>(by_row_.size())) rows.insert(s);
+  QList<int> counted;
+  for (int t : rows) {
     size_ -= static_cast<int>(by_row_[t].size());
     by_row_[t] = FindMissingKnots(document_->labels(), *rig_, rig_index_, t, options_);
     size_ += static_cast<int>(by_row_[t].size());
+    counted.append(t);
   }
-  emit changed(frames);
+  emit changed(counted);
 }
 
 std::vector<LabelKey> MissingKnots::Items() const {
@@ -53,7 +114,7 @@ const MissingKnot* MissingKnots::Find(int camera, int t, int knot) const {
 
 std::string MissingKnots::Reason(int camera, int t, int knot) const {
   const MissingKnot* m = Find(camera, t, knot);
-  return m ? MissingReason(*m, document_->labels().cameras) : "";
+  return m ? MissingReason(*m, document_->labels().cameras, document_->labels().frame_index) : "";
 }
 
 std::set<int> MissingKnots::Frames() const {

@@ -1,17 +1,20 @@
 #pragma once
-// The review queue's second kind of item: visible knots with no label where two or more other
-// cameras place them (recon::FindMissingKnots, libreconstruct/labeling/missing_knots.h), kept up
-// to date with the document. The person then labels such a knot (a Find Node click) or marks it
-// hidden (D); either way it leaves the list.
+// The review queue's second kind of item: visible knots with no label where the other cameras,
+// the knot's grid neighbours or its motion place them, and the target does not hide them
+// (recon::FindMissingKnots, libreconstruct/labeling/missing_knots.h), kept up to date with the
+// document. The person then labels such a knot (a Find Node click) or marks it hidden (D);
+// either way it leaves the list.
 //
-//   MissingKnots missing(&document, &rig, rig_index);   // every frame row counted now
+//   MissingKnotsOptions options;
+//   options.target = LoadTarget("sim.h5", 179.0);        // the project's target, if any
+//   MissingKnots missing(&document, &rig, rig_index, options);  // every frame row counted now
 //   missing.Items();                                     // (camera, t, knot), queue order
 //   missing.Reason(c, t, k);  // "no label; seen in cam0, cam2; expected near (812.4, 1033.0)"
 //
-// After every labelsChanged only the frame rows it names are counted again, then `changed` is
-// emitted. A knot the target hides from c is listed until the person marks it hidden (on the demo
-// shot's complete labels, 1081 knot-views behind the target in 32 runs of consecutive frames:
-// RunFrom gives such a run, to mark in one step). Not thread-safe (GUI thread).
+// After every labelsChanged the frame rows it names are counted again, with the rows whose points
+// they give (options.motion_rows either side), then `changed` is emitted. Without a target a knot
+// the target hides from c is listed until the person marks it hidden (RunFrom gives the run of
+// frames it is missing in, to mark in one step). Not thread-safe (GUI thread).
 
 #include <QList>
 #include <QObject>
@@ -30,6 +33,12 @@ using recon::FindMissingKnots;
 using recon::MissingKnot;
 using recon::MissingKnotsOptions;
 using recon::MissingReason;
+
+// The target of a project (project.yaml's `target`): the boxes and balls among the bodies of a
+// scenario file (.yaml) or of a `netlab simulate` result (.h5, its /scenario), in the rig's world
+// frame, frame number f at time f / fps. InputError naming the file when it cannot be read or
+// has no box or ball.
+recon::Target LoadTarget(const std::string& path, double fps);
 
 class MissingKnots : public QObject {
   Q_OBJECT
@@ -54,7 +63,8 @@ class MissingKnots : public QObject {
   std::vector<int> RunFrom(int camera, int t, int knot) const;
 
  signals:
-  // After every labelsChanged of the document, once `frames` are counted again.
+  // After every labelsChanged of the document, once the rows it names (`frames`) and their
+  // neighbours are counted again.
   void changed(const QList<int>& frames);
 
  private:

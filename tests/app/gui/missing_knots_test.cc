@@ -1,8 +1,9 @@
 // The review queue's missing knots without a window (app/gui/document/missing_knots.h): a 3 x 3
 // net 1.5 m in front of three cameras that label it exactly, a fourth that sees part of it and a
-// fifth that looks away. Listed where two other cameras put the knot, never from one camera or a
-// disagreeing pair, off the list once labeled or marked hidden, back on undo; the incremental
-// count always equals a count from scratch.
+// fifth that looks away. Listed where two other cameras put the knot, where one camera's ray and
+// the grid neighbours do, never where a disagreeing pair or two facing cameras alone would, nor
+// where the target hides it; off the list once labeled or marked hidden, back on undo; the
+// incremental count always equals a count from scratch.
 
 #include "app/gui/document/missing_knots.h"
 
@@ -19,7 +20,7 @@ namespace netlab::gui {
 namespace {
 
 constexpr int kRows = 3, kCols = 3, kKnots = kRows * kCols, kFrames = 4;
-constexpr double kMargin = 20.0;  // MissingKnotsOptions::margin_px's default
+constexpr double kMargin = 0.0;  // MissingKnotsOptions::margin_px's default
 
 // Cameras a, b, c see the whole net; "edge" is aimed 0.2 m beside it (its far column falls
 // outside the picture); "back" stands beyond the net looking away from it.
@@ -121,11 +122,13 @@ TEST(MissingKnots, ALabelOrAHiddenMarkTakesItOffTheListAndUndoPutsItBack) {
   const MissingKnots missing(&doc, &scene.rig, kRigIndex);
   QSignalSpy changed(&missing, &MissingKnots::changed);
   ASSERT_NE(missing.Find(2, 1, 4), nullptr);
-  // Labeled (where the other cameras put it): off the list; only row 1 counted again.
+  // Labeled (where the other cameras put it): off the list; row 1 counted again, and the rows
+  // whose points its motion gives (motion_rows either side: all four here).
   doc.Apply("Find Node", {{2, 1, 4, Scene::Accepted(scene.Truth(2, 1, 4))}});
   EXPECT_EQ(missing.Find(2, 1, 4), nullptr);
   ASSERT_EQ(changed.count(), 1);
-  EXPECT_EQ(changed.last().at(0).value<QList<int>>(), QList<int>({1}));
+  EXPECT_EQ(changed.last().at(0).value<QList<int>>(), QList<int>({0, 1, 2, 3}));
+  EXPECT_EQ(missing.Items(), FromScratch(doc, scene.rig));
   doc.undo_stack()->undo();
   EXPECT_NE(missing.Find(2, 1, 4), nullptr);
   // Marked hidden: off the list; undo puts it back.
@@ -142,30 +145,141 @@ TEST(MissingKnots, ALabelOrAHiddenMarkTakesItOffTheListAndUndoPutsItBack) {
   EXPECT_EQ(missing.Items(), FromScratch(doc, scene.rig));
 }
 
-TEST(MissingKnots, OneOtherCameraOrADisagreeingPairSaysNothing) {
+TEST(MissingKnots, AKnotOneCameraSeesIsListedOnItsRayWhereItsNeighboursPutIt) {
   const Scene scene;
   recon::LabelSet labels = scene.Labels();
-  // Knot 4 of row 0 seen by camera a alone: nothing expected in b, c or edge.
+  // Knot 4 of row 0 labeled by camera a alone (b and c lost it): a's ray at the depth of its
+  // neighbours, where it is (the net is flat: the midpoints are exact).
   labels.at(1, 0, 4) = labels.at(2, 0, 4) = recon::Label{};
+  LabelDocument doc(labels, "/nonexistent/labels.h5");
+  const MissingKnots missing(&doc, &scene.rig, kRigIndex);
+  for (int c : {1, 2, 3}) {
+    const MissingKnot* m = missing.Find(c, 0, 4);
+    ASSERT_NE(m, nullptr) << "camera " << c;
+    EXPECT_EQ(m->basis, recon::MissingBasis::kNeighbours);
+    EXPECT_EQ(m->seen_in, (std::vector<int>{0}));
+    EXPECT_LT((m->expected_px - scene.Truth(c, 0, 4)).norm(), 1e-6) << "camera " << c;
+  }
+  EXPECT_EQ(missing.Find(4, 0, 4), nullptr);  // the back camera looks away
+  const std::string reason = missing.Reason(1, 0, 4);
+  EXPECT_EQ(reason.rfind("no label; seen in a, at the depth its grid neighbours give; expected "
+                         "near (", 0),
+            0u)
+      << reason;
+}
+
+TEST(MissingKnots, ADisagreeingPairPlacesNothingItsNeighboursDo) {
+  const Scene scene;
+  recon::LabelSet labels = scene.Labels();
   // Knot 3 of row 2: c lost it, and b's label is 8 px off a's epipolar line (b's image y; the
   // pair's baseline runs along image x).
   labels.at(2, 2, 3) = recon::Label{};
   labels.at(1, 2, 3).px.y() += 8.0;
-  // Knot 7 of row 3: a, b, c label it, c 8 px off: the edge camera is not told where it is.
+  // Knot 7 of row 3: a, b, c label it, c 8 px off: the edge camera is not told where they put it.
   ASSERT_TRUE(scene.InsideByMargin(3, 3, 7));
   labels.at(2, 3, 7).px.y() += 8.0;
   LabelDocument doc(labels, "/nonexistent/labels.h5");
   const MissingKnots missing(&doc, &scene.rig, kRigIndex);
-  for (int c : {1, 2, 3}) EXPECT_EQ(missing.Find(c, 0, 4), nullptr) << "camera " << c;
-  EXPECT_EQ(missing.Find(2, 2, 3), nullptr);
-  EXPECT_EQ(missing.Find(3, 3, 7), nullptr);
-  // The same labels agreeing: each listed.
-  recon::LabelSet agreeing = scene.Labels();
-  agreeing.at(2, 2, 3) = recon::Label{};
-  LabelDocument agreeing_doc(agreeing, "/nonexistent/labels.h5");
-  const MissingKnots agreeing_missing(&agreeing_doc, &scene.rig, kRigIndex);
-  EXPECT_NE(agreeing_missing.Find(2, 2, 3), nullptr);
-  EXPECT_NE(agreeing_missing.Find(3, 3, 7), nullptr);
+  // Both listed where the grid neighbours put them (knot 3 is an edge knot: one grid line).
+  for (const auto& [c, t, k] : {LabelKey{2, 2, 3}, LabelKey{3, 3, 7}}) {
+    const MissingKnot* m = missing.Find(c, t, k);
+    ASSERT_NE(m, nullptr) << "camera " << c << " knot " << k;
+    EXPECT_EQ(m->basis, recon::MissingBasis::kNeighbours);
+    EXPECT_LT((m->expected_px - scene.Truth(c, t, k)).norm(), 1e-6);
+  }
+  EXPECT_EQ(missing.Reason(3, 3, 7).rfind("no label; its grid neighbours put it near (", 0), 0u);
+}
+
+TEST(MissingKnots, NothingPlacesAKnotOfANetOnlyOneCameraLabeled) {
+  const Scene scene;
+  recon::LabelSet labels = scene.Labels();
+  for (int t = 0; t < kFrames; ++t)
+    for (int k = 0; k < kKnots; ++k) labels.at(1, t, k) = labels.at(2, t, k) = recon::Label{};
+  LabelDocument doc(labels, "/nonexistent/labels.h5");
+  const MissingKnots missing(&doc, &scene.rig, kRigIndex);
+  EXPECT_EQ(missing.size(), 0);
+}
+
+// Two cameras facing each other, the knot 2 mm from the line between their centres: their rays
+// are 0.15 deg from head-on and place it anywhere along that line; the other cameras are not
+// told to look for it there.
+TEST(MissingKnots, TwoFacingCamerasAloneDoNotPlaceAKnotOnTheLineBetweenThem) {
+  calib::Rig rig;
+  rig.cameras = {calib::LookAtCamera("a", {-1.5, 0.0, 0.0}, {0, 0, 0}, 16.0, 5.5, 1024),
+                 calib::LookAtCamera("facing", {1.5, 0.0, 0.0}, {0, 0, 0}, 16.0, 5.5, 1024),
+                 calib::LookAtCamera("b", {-1.4, 0.55, 0.1}, {0, 0, 0}, 16.0, 5.5, 1024)};
+  const Eigen::Vector3d knot(0.0, 0.002, 0.0);
+  recon::LabelSet labels = recon::LabelSet::Empty(1, 1, {"a", "facing", "b"}, {0});
+  // Labeled 0.3 px off the truth in each facing camera, as a person would.
+  labels.at(0, 0, 0) = Scene::Accepted(rig.cameras[0].ProjectWorld(knot) + Eigen::Vector2d(0.3, 0));
+  labels.at(1, 0, 0) = Scene::Accepted(rig.cameras[1].ProjectWorld(knot) + Eigen::Vector2d(0, 0.3));
+  // The pair triangulates, valid and within the residual tolerance: only its geometry says it
+  // is no point.
+  std::vector<recon::Observation> views = {{0, labels.at(0, 0, 0).px}, {1, labels.at(1, 0, 0).px}};
+  const recon::PointEstimate e = recon::TriangulatePoint(rig, views);
+  const MissingKnotsOptions defaults;
+  ASSERT_TRUE(e.valid) << e.why;
+  for (double r : e.residual_px) EXPECT_LT(r, defaults.max_residual_px);
+  EXPECT_GT(recon::LargestSigmaM(e, defaults.label_sigma_px), 4 * defaults.max_sigma_mm * 1e-3);
+  EXPECT_FALSE(recon::UsableGeometry(e, defaults.label_sigma_px, defaults.max_sigma_mm * 1e-3));
+  LabelDocument doc(labels, "/nonexistent/labels.h5");
+  const MissingKnots missing(&doc, &rig, {0, 1, 2});
+  EXPECT_EQ(missing.Find(2, 0, 0), nullptr);
+  // Without the check, b would be sent to look for it far from where it is.
+  MissingKnotsOptions unchecked;
+  unchecked.max_sigma_mm = 1e6;
+  const MissingKnots misled(&doc, &rig, {0, 1, 2}, unchecked);
+  const MissingKnot* wrong = misled.Find(2, 0, 0);
+  ASSERT_NE(wrong, nullptr);
+  EXPECT_GT((wrong->expected_px - rig.cameras[2].ProjectWorld(knot)).norm(), 5.0);
+  // a and b (rays 20 deg apart) place it: the facing camera is told where it is.
+  labels.at(1, 0, 0) = recon::Label{};
+  labels.at(2, 0, 0) = Scene::Accepted(rig.cameras[2].ProjectWorld(knot));
+  LabelDocument usable(labels, "/nonexistent/labels.h5");
+  const MissingKnots listed(&usable, &rig, {0, 1, 2});
+  const MissingKnot* m = listed.Find(1, 0, 0);
+  ASSERT_NE(m, nullptr);
+  EXPECT_EQ(m->basis, recon::MissingBasis::kCameras);
+  EXPECT_LT((m->expected_px - rig.cameras[1].ProjectWorld(knot)).norm(), 1.0);
+}
+
+// The target (a box between camera c and the centre knot) hides that knot from c: not missing
+// there, though a and b place it; still missing in the edge camera, which sees past the box.
+TEST(MissingKnots, AKnotTheTargetHidesIsNotMissing) {
+  const Scene scene;
+  recon::LabelSet labels = scene.Labels();
+  labels.at(2, 1, 4) = recon::Label{};  // c has nothing of the centre knot in row 1
+  const Eigen::Vector3d c_centre = scene.rig.cameras[2].Center();
+  // A 4 cm box halfway along c's line of sight at frame 1 (time 1 / 100 s), moving 1 m/s along y:
+  // at frame 3 it is 2 cm further, beside the line.
+  recon::Target target;
+  target.fps = 100.0;
+  recon::TargetSolid box;
+  box.velocity = Eigen::Vector3d(0.0, 1.0, 0.0);
+  box.center = 0.5 * (c_centre + scene.knots[1][4]) - 0.01 * box.velocity;
+  box.half_extents = Eigen::Vector3d::Constant(0.02);
+  target.solids = {box};
+  EXPECT_TRUE(recon::TargetHides(target, c_centre, scene.knots[1][4], 0.01));
+  EXPECT_FALSE(recon::TargetHides(target, c_centre, scene.knots[1][4], 0.06));  // moved on
+  EXPECT_FALSE(recon::TargetHides(target, scene.rig.cameras[0].Center(), scene.knots[1][4], 0.01));
+  EXPECT_TRUE(recon::TargetHides(target, c_centre, scene.knots[1][4], 0.03, 0.02));  // grown
+  MissingKnotsOptions options;
+  options.target = target;
+  LabelDocument doc(labels, "/nonexistent/labels.h5");
+  const MissingKnots with_target(&doc, &scene.rig, kRigIndex, options);
+  const MissingKnots without(&doc, &scene.rig, kRigIndex);
+  EXPECT_NE(without.Find(2, 1, 4), nullptr);
+  EXPECT_EQ(with_target.Find(2, 1, 4), nullptr);
+  EXPECT_EQ(with_target.Items().size(), without.Items().size() - 1);
+  // A ball hides as well.
+  recon::TargetSolid ball;
+  ball.shape = recon::TargetSolid::Shape::kSphere;
+  ball.center = 0.5 * (c_centre + scene.knots[1][4]);
+  ball.radius = 0.01;
+  options.target.solids = {ball};
+  const MissingKnots with_ball(&doc, &scene.rig, kRigIndex, options);
+  EXPECT_EQ(with_ball.Find(2, 1, 4), nullptr);
+  EXPECT_EQ(with_ball.Items().size(), without.Items().size() - 1);
 }
 
 TEST(MissingKnots, WithTheNeighbourRuleAKnotAmongUnlabeledNeighboursWaits) {
