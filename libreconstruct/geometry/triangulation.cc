@@ -81,8 +81,21 @@ std::optional<ProjectedPoint> ProjectAgreeingViews(const calib::Rig& rig, int ca
                                                    const std::vector<Observation>& views,
                                                    const TriangulationOptions& options) {
   const PointEstimate e = TriangulatePoint(rig, views, options);
-  if (!e.outliers.empty()) return std::nullopt;
+  if (!e.outliers.empty() || !UsableGeometry(e)) return std::nullopt;
   return ProjectEstimate(rig, camera, e);
+}
+
+double LargestSigmaM(const PointEstimate& estimate, double label_sigma_px) {
+  if (!estimate.valid) return std::numeric_limits<double>::infinity();
+  const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(
+                             estimate.unit_covariance, Eigen::EigenvaluesOnly)
+                             .eigenvalues()[2];
+  if (!std::isfinite(largest)) return std::numeric_limits<double>::infinity();
+  return label_sigma_px * std::sqrt(std::max(largest, 0.0));
+}
+
+bool UsableGeometry(const PointEstimate& estimate, double max_unit_sigma_m) {
+  return LargestSigmaM(estimate) <= max_unit_sigma_m;
 }
 
 std::optional<ProjectedPoint> ProjectEstimate(const calib::Rig& rig, int camera,

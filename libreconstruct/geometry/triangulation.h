@@ -74,11 +74,27 @@ PointEstimate TriangulatePoint(const calib::Rig& rig, const std::vector<Observat
 Eigen::Matrix3d PointInformation(const calib::Rig& rig, const std::vector<int>& cameras,
                                  const Eigen::Vector3d& position);
 
+// A point's largest standard deviation (m) for `label_sigma_px` px of label noise per axis in
+// each view: the square root of the largest eigenvalue of its covariance, as `netlab triangulate
+// --max-sigma-mm` bounds it (bundle_adjust.h); infinite when the estimate is not valid.
+double LargestSigmaM(const PointEstimate& estimate, double label_sigma_px = 1.0);
+
+// A usable ray geometry: the point's largest standard deviation at most `max_unit_sigma_m` for
+// 1 px of label noise. Views whose rays meet nearly parallel or head-on fail it: two cameras
+// facing each other, the knot near the line between them (rays 0.00 deg from head-on), fit
+// any point along that line, and the one their solver returns is meaningless (on the demo shot
+// 2.8-3.1 m at 0.1 px, projected 1260-1556 px from a correct label). The default,
+// kMaxUnitSigmaM, is 50 mm per px: 5 mm at the labels' 0.1 px; the demo rig's points have
+// 1-3 mm per px.
+constexpr double kMaxUnitSigmaM = 0.05;
+bool UsableGeometry(const PointEstimate& estimate, double max_unit_sigma_m = kMaxUnitSigmaM);
+
 // Where views that agree with each other put a point in another camera: their point (no
 // outlier among them) projected into rig camera `camera`, and that projection's covariance for
 // 1 px of noise per axis in each view (J C J^T, C the point's unit covariance, J the
-// projection's Jacobian). Nullopt where they do not triangulate without an outlier or the
-// point is behind that camera.
+// projection's Jacobian). Nullopt where they do not triangulate without an outlier, their ray
+// geometry is not usable (UsableGeometry: the first-order covariance does not say how far off
+// such a point is) or the point is behind that camera.
 struct ProjectedPoint {
   Eigen::Vector2d px = Eigen::Vector2d::Zero();
   Eigen::Matrix2d unit_covariance = Eigen::Matrix2d::Zero();  // px^2 per px^2 of label noise

@@ -14,8 +14,6 @@
 namespace netlab::recon {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
 // Does the segment from `from` to `to` pass through the box (strictly before `to`)?
 bool SegmentHitsBox(const Eigen::Vector3d& from, const Eigen::Vector3d& to,
                     const Eigen::Vector3d& center, const Eigen::Quaterniond& orientation,
@@ -51,7 +49,7 @@ bool Consistent(const PointEstimate& e, size_t views, const MissingKnotsOptions&
   if (!e.valid || !e.outliers.empty() || e.residual_px.size() != views) return false;
   for (double r : e.residual_px)
     if (!(r <= o.max_residual_px)) return false;  // NaN (behind a camera) fails too
-  return UsableGeometry(e, o.label_sigma_px, o.max_sigma_mm * 1e-3);
+  return UsableGeometry(e, o.max_unit_sigma_mm * 1e-3);
 }
 
 // Where `camera` sees the world point p: in front of it, inside its image by `margin` px, and
@@ -286,30 +284,13 @@ bool TargetHides(const Target& target, const Eigen::Vector3d& from, const Eigen:
   return false;
 }
 
-double LargestSigmaM(const PointEstimate& estimate, double label_sigma_px) {
-  if (!estimate.valid) return kInf;
-  const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(
-                             estimate.unit_covariance, Eigen::EigenvaluesOnly)
-                             .eigenvalues()[2];
-  if (!std::isfinite(largest)) return kInf;
-  return label_sigma_px * std::sqrt(std::max(largest, 0.0));
-}
-
-bool UsableGeometry(const PointEstimate& estimate, double label_sigma_px, double max_sigma_m) {
-  return LargestSigmaM(estimate, label_sigma_px) <= max_sigma_m;
-}
-
 bool MissingKnotsOptions::IsValid(std::string* why) const {
   if (!(max_residual_px > 0.0)) {
     *why = "max_residual_px must be > 0 (px)";
     return false;
   }
-  if (!(label_sigma_px > 0.0)) {
-    *why = "label_sigma_px must be > 0 (px)";
-    return false;
-  }
-  if (!(max_sigma_mm > 0.0)) {
-    *why = "max_sigma_mm must be > 0 (mm)";
+  if (!(max_unit_sigma_mm > 0.0)) {
+    *why = "max_unit_sigma_mm must be > 0 (mm)";
     return false;
   }
   if (!(margin_px >= 0.0)) {

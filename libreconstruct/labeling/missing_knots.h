@@ -10,9 +10,9 @@
 //   1. the other cameras' labels: two or more, accepted ones or, where those are too few, those
 //      under review as well, that triangulate consistently (TriangulatePoint; every view's
 //      reprojection residual within max_residual_px: an inconsistent pair never says where the
-//      knot should be) and with a usable ray geometry (UsableGeometry: two cameras facing each
-//      other, with the knot near the line between them, have rays 0 deg apart and place it
-//      nowhere);
+//      knot should be) and with a usable ray geometry (UsableGeometry, triangulation.h: two
+//      cameras facing each other, with the knot near the line between them, have rays 0 deg
+//      from head-on and place it nowhere);
 //   2. its grid neighbours' points (as 1.): along each grid line through the knot, the midpoint
 //      of the two neighbours, or the line carried on from two neighbours on one side; where
 //      both grid lines give one, they must agree within neighbour_agreement of a link;
@@ -66,25 +66,13 @@ struct Target {
 bool TargetHides(const Target& target, const Eigen::Vector3d& from, const Eigen::Vector3d& to,
                  double time_s, double grow_m = 0.0);
 
-// The largest standard deviation (m) of a triangulated point for `label_sigma_px` px of label
-// noise per axis in each view (the square root of its covariance's largest eigenvalue), as
-// `netlab triangulate --max-sigma-mm` bounds it; infinite when the estimate is not valid.
-double LargestSigmaM(const PointEstimate& estimate, double label_sigma_px);
-
-// Whether views placing a point within `max_sigma_m` at `label_sigma_px`: a usable ray geometry.
-// Two cameras facing each other with the point near the line between their centres (rays 0 deg
-// apart) fail it: their point may lie anywhere along that line.
-bool UsableGeometry(const PointEstimate& estimate, double label_sigma_px, double max_sigma_m);
-
 struct MissingKnotsOptions {
   // Each view's reprojection residual at the triangulated point at most this (px): the
   // engine's epipolar tolerance (LabelEngineOptions::epipolar_tolerance_px).
   double max_residual_px = 2.0;
-  // The ray geometry: a point whose largest sigma exceeds max_sigma_mm for label_sigma_px of
-  // label noise places nothing (UsableGeometry). On the demo shot the labels' points have
-  // 0.02-0.2 mm; the knots near the line between two facing cameras metres.
-  double label_sigma_px = 0.1;
-  double max_sigma_mm = 5.0;
+  // The ray geometry: a point whose largest standard deviation for 1 px of label noise exceeds
+  // this (mm) places nothing (UsableGeometry of triangulation.h, whose bound it is by default).
+  double max_unit_sigma_mm = kMaxUnitSigmaM * 1e3;
   // The expected point at least this far inside the image (px).
   double margin_px = 0.0;
   // A point from the neighbours (2.): the two grid lines through the knot put it within this

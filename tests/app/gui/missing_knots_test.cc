@@ -220,14 +220,14 @@ TEST(MissingKnots, TwoFacingCamerasAloneDoNotPlaceAKnotOnTheLineBetweenThem) {
   const MissingKnotsOptions defaults;
   ASSERT_TRUE(e.valid) << e.why;
   for (double r : e.residual_px) EXPECT_LT(r, defaults.max_residual_px);
-  EXPECT_GT(recon::LargestSigmaM(e, defaults.label_sigma_px), 4 * defaults.max_sigma_mm * 1e-3);
-  EXPECT_FALSE(recon::UsableGeometry(e, defaults.label_sigma_px, defaults.max_sigma_mm * 1e-3));
+  EXPECT_GT(recon::LargestSigmaM(e), 4 * recon::kMaxUnitSigmaM);
+  EXPECT_FALSE(recon::UsableGeometry(e));
   LabelDocument doc(labels, "/nonexistent/labels.h5");
   const MissingKnots missing(&doc, &rig, {0, 1, 2});
   EXPECT_EQ(missing.Find(2, 0, 0), nullptr);
   // Without the check, b would be sent to look for it far from where it is.
   MissingKnotsOptions unchecked;
-  unchecked.max_sigma_mm = 1e6;
+  unchecked.max_unit_sigma_mm = 1e9;
   const MissingKnots misled(&doc, &rig, {0, 1, 2}, unchecked);
   const MissingKnot* wrong = misled.Find(2, 0, 0);
   ASSERT_NE(wrong, nullptr);

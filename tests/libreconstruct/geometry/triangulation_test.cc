@@ -112,6 +112,54 @@ TEST(Triangulation, NearParallelViewsStayConsistentWithTheirLargeUncertainty) {
   EXPECT_FALSE(est.why.empty());
 }
 
+// The paper's rig has two pairs facing each other: a knot near the line between a camera and
+// the facing one (rays 0.00 deg from head-on) is fitted anywhere along that line. Such a pair
+// must not say where the knot is in a third camera (the workstation once flagged a correct
+// label there 1555.8 px off); a pair with a usable geometry does.
+TEST(Triangulation, TwoFacingCamerasDoNotPlaceAKnotNearTheLineBetweenThem) {
+  const calib::Rig rig = calib::PaperRig();
+  // The camera facing camera 0: the one whose view direction is most nearly opposite.
+  int facing = -1;
+  for (int c = 1; c < static_cast<int>(rig.cameras.size()); ++c)
+    if (facing < 0 || rig.cameras[c].ViewDirection().dot(rig.cameras[0].ViewDirection()) <
+                          rig.cameras[facing].ViewDirection().dot(rig.cameras[0].ViewDirection()))
+      facing = c;
+  const Eigen::Vector3d a = rig.cameras[0].Center(), b = rig.cameras[facing].Center();
+  // 1 mm beside the line, where every camera sees it.
+  const Eigen::Vector3d side = (b - a).cross(Eigen::Vector3d::UnitZ()).normalized();
+  Eigen::Vector3d p;
+  std::vector<int> third;
+  for (double s = 0.3; s <= 0.7 && third.empty(); s += 0.01) {
+    p = a + s * (b - a) + 0.001 * side;
+    for (int c = 1; c < static_cast<int>(rig.cameras.size()); ++c) {
+      const Eigen::Vector2d q = rig.cameras[c].ProjectWorld(p);
+      const bool inside = (rig.cameras[c].cam_from_world * p).z() > 0 && q.minCoeff() > 0 &&
+                          q.maxCoeff() < rig.cameras[c].intrinsics.width - 1;
+      if (c != facing && inside) third.push_back(c);
+    }
+    if (!rig.cameras[0].ProjectWorld(p).allFinite()) third.clear();
+  }
+  ASSERT_FALSE(third.empty());
+  std::mt19937_64 rng(7);
+  const std::vector<Observation> pair = Project(rig, p, {0, facing}, 0.1, &rng);
+  const PointEstimate e = TriangulatePoint(rig, pair);
+  if (e.valid) {
+    EXPECT_GT(LargestSigmaM(e), 10 * kMaxUnitSigmaM);  // at 0.1 px: decimetres
+    EXPECT_FALSE(UsableGeometry(e));
+  }
+  for (int c : third) EXPECT_FALSE(ProjectAgreeingViews(rig, c, pair)) << "camera " << c;
+  // Camera 0 with a camera beside it (not facing) places it, within a pixel.
+  const int beside = third.front();
+  const std::vector<Observation> good = Project(rig, p, {0, beside}, 0.1, &rng);
+  const PointEstimate g = TriangulatePoint(rig, good);
+  ASSERT_TRUE(g.valid) << g.why;
+  EXPECT_TRUE(UsableGeometry(g));
+  EXPECT_LT(LargestSigmaM(g, 0.1), 5e-3);
+  const auto q = ProjectAgreeingViews(rig, facing, good);
+  ASSERT_TRUE(q);
+  EXPECT_LT((q->px - rig.cameras[facing].ProjectWorld(p)).norm(), 1.0);
+}
+
 TEST(Triangulation, AGrossOutlierInOneViewIsFlaggedAndLeftOutOrTheAmbiguityReported) {
   const calib::Rig rig = calib::PaperRig();
   std::mt19937_64 rng(3);
