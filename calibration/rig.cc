@@ -17,10 +17,11 @@ int Rig::Find(const std::string& name) const {
 }
 
 void WriteRig(const std::string& path, const Rig& rig) {
-  const std::string partial = path + ".partial";
+  // Written in memory, then through common/files.h's WriteTextFile: OpenCV's file writer does not
+  // report a write that fails (a full disk), and would leave a truncated rig in place.
+  cv::FileStorage fs(path, cv::FileStorage::WRITE | cv::FileStorage::MEMORY |
+                               cv::FileStorage::FORMAT_YAML);
   {
-    cv::FileStorage fs(partial, cv::FileStorage::WRITE | cv::FileStorage::FORMAT_YAML);
-    if (!fs.isOpened()) throw std::runtime_error(path + ": cannot write rig file");
     fs << "cameras" << "[";
     for (const Camera& c : rig.cameras) {
       cv::Mat rotation, translation;
@@ -32,9 +33,8 @@ void WriteRig(const std::string& path, const Rig& rig) {
          << rotation << "translation" << translation << "}";
     }
     fs << "]";
-    fs.release();
   }
-  RenameInto(partial, path);
+  WriteTextFile(path, fs.releaseAndGetString());
 }
 
 Rig ReadRig(const std::string& path) {

@@ -184,7 +184,8 @@ inline void WriteTextFile(const std::string& path, const std::string& text) {
     out.close();
     if (!out) {
       std::remove(partial.c_str());
-      throw std::runtime_error(path + ": cannot write " + partial);
+      throw std::runtime_error(path + ": cannot write " + partial +
+                               " (is the disk full, or the folder not writable?)");
     }
   }
   RenameInto(partial, path);

@@ -143,7 +143,7 @@ void AppendFrame(hid_t dataset, hid_t type, const void* data, hsize_t frame) {
                       nullptr);
   Id memory_space(H5Screate_simple(rank, count.data(), nullptr));
   if (H5Dwrite(dataset, type, memory_space.get(), file_space.get(), H5P_DEFAULT, data) < 0)
-    Fail(ObjectName(dataset) + ": write failed (disk full?)");
+    Fail(ObjectName(dataset) + ": write failed (is the disk full?)");
 }
 
 void WriteDataset(hid_t loc, const std::string& name, hid_t type, const std::vector<hsize_t>& dims,
@@ -161,7 +161,7 @@ void WriteDataset(hid_t loc, const std::string& name, hid_t type, const std::vec
                         H5P_DEFAULT));
   if (!dataset.valid()) Fail(ObjectName(loc) + ": cannot create dataset " + name);
   if (elements > 0 && H5Dwrite(dataset.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
-    Fail(ObjectName(dataset.get()) + ": write failed (disk full?)");
+    Fail(ObjectName(dataset.get()) + ": write failed (is the disk full?)");
 }
 
 std::vector<hsize_t> DatasetDims(hid_t loc, const std::string& name) {

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -422,14 +421,7 @@ void WriteSweepReport(const std::string& path, const std::vector<SweepParameter>
                       const std::vector<SweepPoint>& grid, const SweepResult& result,
                       const std::vector<std::vector<Sensitivity>>& sensitivity,
                       const SweepReportInfo& info) {
-  const std::string partial = path + ".partial";
-  {
-    std::ofstream out(partial);
-    if (!out) throw std::runtime_error(path + ": cannot write " + partial);
-    out << SweepReportHtml(parameters, grid, result, sensitivity, info);
-    if (!out) throw std::runtime_error(partial + ": write failed (disk full?)");
-  }
-  RenameInto(partial, path);
+  WriteTextFile(path, SweepReportHtml(parameters, grid, result, sensitivity, info));
 }
 
 }  // namespace netlab::netsim

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 #include <stdexcept>
 
@@ -426,14 +425,7 @@ std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info) {
 }
 
 void WriteScoreReport(const std::string& path, const ScoreResult& result, const ReportInfo& info) {
-  const std::string partial = path + ".partial";
-  {
-    std::ofstream out(partial);
-    if (!out) throw std::runtime_error(path + ": cannot write " + partial);
-    out << ScoreReportHtml(result, info);
-    if (!out) throw std::runtime_error(partial + ": write failed (disk full?)");
-  }
-  RenameInto(partial, path);
+  WriteTextFile(path, ScoreReportHtml(result, info));
 }
 
 }  // namespace netlab::netsim

@@ -181,7 +181,7 @@ void WriteLabelsFile(const std::string& file_path, const LabelSet& labels) {
     h5::WriteStringDataset(f, "review_reasons", text);
   }
   if (H5Fflush(f, H5F_SCOPE_GLOBAL) < 0)
-    throw std::runtime_error(file_path + ": cannot flush (disk full?)");
+    throw std::runtime_error(file_path + ": cannot flush (is the disk full?)");
 }
 
 // /review_reasons: "camera<TAB>t<TAB>knot<TAB>reason" lines, each address inside the set.

@@ -122,13 +122,7 @@ void WriteExperiment(const std::string& path, const Experiment& e) {
       os << "    white_balance: [" << c.white_balance_rgb[0] << ", " << c.white_balance_rgb[1]
          << ", " << c.white_balance_rgb[2] << "]\n";
   }
-  const std::string partial = path + ".partial";
-  {
-    std::ofstream out(partial);
-    out << os.str();
-    if (!out) throw std::runtime_error(path + ": cannot write experiment file");
-  }
-  RenameInto(partial, path);
+  WriteTextFile(path, os.str());
 }
 
 std::map<int, double> ReadTimestamps(const std::string& path) {

@@ -141,15 +141,6 @@ Eigen::Vector3d AimPoint(const calib::Rig& rig) {
   return a.ldlt().solve(b);
 }
 
-void WriteTextFile(const fs::path& path, const std::string& text) {
-  const fs::path partial = path.string() + ".partial";
-  {
-    std::ofstream out(partial);
-    out << text;
-    if (!out) throw std::runtime_error(path.string() + ": cannot write");
-  }
-  RenameInto(partial.string(), path.string());
-}
 
 
 // Writes an image (the format from the extension); std::runtime_error naming the file if not.
@@ -445,7 +436,7 @@ Experiment PrepareExperiment(const RenderJob& job, const FrameRange& range, cons
     times << "frame_index,time_s\n";
     times.precision(12);
     for (int k = range.first; k <= range.last; ++k) times << k << "," << range.Time(k) << "\n";
-    WriteTextFile(out / camera.name / "timestamps.csv", times.str());
+    WriteTextFile((out / camera.name / "timestamps.csv").string(), times.str());
     CameraSpec spec;
     spec.name = camera.name;
     spec.frames = camera.name + "/frame_%06d.pgm";
@@ -712,7 +703,7 @@ int RenderMarkerViews(const RenderJob& job, const SimulatedShot& shot, const fs:
   const auto markers =
       TargetMarkers(shot.SolidsAt(shot.start_time(), shot.NodesAt(shot.start_time())), job.rig);
   if (markers.empty()) return 0;
-  WriteTextFile(out / "calibration" / "markers.yaml", MarkerMapYaml(markers));
+  WriteTextFile((out / "calibration" / "markers.yaml").string(), MarkerMapYaml(markers));
   const calib::CalibrationTarget map = calib::CalibrationTarget::MarkerMap("DICT_4X4_50", markers);
   const auto map_prints = calib::MakeTargetPrints(map);
   int images = 0;
@@ -733,7 +724,7 @@ int RenderMarkerViews(const RenderJob& job, const SimulatedShot& shot, const fs:
 int RenderCalibrationImages(const RenderJob& job, const SimulatedShot& shot, const fs::path& out) {
   const calib::CalibrationTarget foil = Foil();
   fs::create_directories(out / "calibration");
-  WriteTextFile(out / "calibration" / "foil.yaml", kFoilYaml);
+  WriteTextFile((out / "calibration" / "foil.yaml").string(), kFoilYaml);
   const std::vector<calib::Rigid3d> poses = FoilPoses(job, foil);
   const int foil_images = RenderFoilViews(job, foil, poses, out);
   return foil_images + RenderMarkerViews(job, shot, out);

@@ -87,7 +87,14 @@ TEST_F(BadInputColorNet, EveryKindEndsInANamedError) {
        "color-net --knots 1000x1000 --radius 999" + out,
        1,
        {"--knots 1000x1000 --radius 999", "the colouring search needs ~", "TB", "available"}},
+      {"a full disk (the colouring of 11 x 11 knots is ~9 KiB, the limit 1 KiB)",
+       "color-net --knots 11x11 --out {dir}/previous.yaml --quiet",
+       1,
+       {"{dir}/previous.yaml: cannot write {dir}/previous.yaml.partial"},
+       {"{dir}/previous.yaml"},
+       1024},
   };
+  std::ofstream(Path("previous.yaml")) << "the previous colouring";
   netlab::testing::ExpectBadInputs(rows, dir_.string());
   EXPECT_FALSE(std::filesystem::exists(Path("c.yaml")));
 }

@@ -41,6 +41,7 @@ class BadInputLabel : public CommandTest {
     PokeH5(Path("inf.h5"), "/cameras/cam0/position_px", 0, INFINITY);
     PokeH5(Path("inf.h5"), "/cameras/cam0/position_px", 1, 1e300);
     std::ofstream(Path("previous.h5")) << "the previous labels";
+    std::ofstream(Path("previous.csv")) << "the previous table";
   }
 };
 
@@ -89,6 +90,13 @@ TEST_F(BadInputLabel, EachKindEndsInAClearError) {
           {"--xypts in a folder that does not exist",
            seeded + "--out {dir}/previous.h5 --xypts {dir}/no/such/x.csv", 1,
            {"--xypts {dir}/no/such/x.csv", "does not exist"}, {"{dir}/previous.h5"}},
+          // A full disk (a file size limit of 4 KiB): the labels and the table are left as they
+          // were, no partial file beside them.
+          {"a full disk", seeded + "--out {dir}/previous.h5", 1,
+           {"{dir}/previous.h5", "is the disk full?"}, {"{dir}/previous.h5"}, 4096},
+          {"a full disk, with --xypts", seeded + "--out {dir}/previous.h5 --xypts {dir}/previous.csv",
+           1, {"{dir}/previous.", "is the disk full?"}, {"{dir}/previous.h5", "{dir}/previous.csv"},
+           4096},
       },
       dir_.string());
   EXPECT_FALSE(std::filesystem::exists(dir_ / "l.h5"));

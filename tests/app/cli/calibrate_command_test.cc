@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "calibration/rig.h"
+#include "tests/app/cli/bad_input.h"
 #include "tests/app/cli/run_netlab.h"
 #include "tests/calibration/synthetic_dataset.h"
 
@@ -84,6 +85,21 @@ TEST_F(CalibrateCommand, WritesTheRigAndTheJsonSummary) {
   const calib::Rig rig = calib::ReadRig(out);
   ASSERT_EQ(rig.cameras.size(), 2u);
   EXPECT_NEAR((rig.cameras[0].Center() - rig.cameras[1].Center()).norm(), 1.0, 0.005);
+}
+
+// A full disk (a file size limit of 1 KiB, below the rig file's ~2 KiB): the calibration fails
+// naming the file, and the previous rig is left whole. OpenCV's own writer reported no error and
+// left a rig cut off at 1 KiB in place.
+TEST_F(CalibrateCommand, AFullDiskLeavesThePreviousRig) {
+  std::ofstream((dir_ / "previous.yaml").string()) << "the previous rig";
+  netlab::testing::ExpectBadInput(
+      {"calibrate onto a full disk",
+       "calibrate --board chessboard:9x6:0.06 " + Images() + " --out {dir}/previous.yaml",
+       1,
+       {"{dir}/previous.yaml: cannot write {dir}/previous.yaml.partial"},
+       {"{dir}/previous.yaml"},
+       1024},
+      dir_.string());
 }
 
 TEST_F(CalibrateCommand, FixedIntrinsicsComeFromARigFile) {
