@@ -469,7 +469,7 @@ bool MainWindow::OpenProject(const QString& path, bool ask, QString* error) {
                                       QString::fromLocal8Bit(e.what())),
                              10000);
   }
-  calibration_ = std::make_unique<CalibrationPresenter>(&session_->rig(), p.rig);
+  calibration_ = std::make_unique<CalibrationPresenter>(&session_->rig(), p.rig, p.path);
   rooms_->show();
   for (int i = 0; i < rooms_->count(); ++i) rooms_->setTabEnabled(i, true);
   ShowRoom(Room::kLabeling);
@@ -1390,6 +1390,13 @@ void MainWindow::BuildRooms() {
   });
   calibration_room_ = new CalibrationRoom;
   stack_->addWidget(calibration_room_);
+  connect(calibration_room_, &CalibrationRoom::rigSaved, this, [this](const QString& rig) {
+    statusBar()->showMessage(
+        QString("Rig saved to %1 and named in the project: the labeling room uses it once the "
+                "project is opened again (File > Open recent)")
+            .arg(rig),
+        15000);
+  });
   for (QDockWidget* dock : findChildren<QDockWidget*>()) labeling_bars_.push_back(dock);
   for (QToolBar* bar : findChildren<QToolBar*>()) labeling_bars_.push_back(bar);
 }
