@@ -77,7 +77,8 @@ class Parser {
 
   void ParseIntegrator(const YamlMap& m, Scenario* s) {
     m.AllowOnly({"type", "dt", "safety", "rotational_inertia", "coupling_stiffness_ratio",
-                 "contact_frequency_ratio", "kinetic_damping", "max_speed", "threads"});
+                 "contact_frequency_ratio", "kinetic_damping", "max_speed", "threads",
+                 "stretching"});
     SimulationOptions& o = s->simulation;
     const std::string type = m.String("type", "explicit");
     if (!ParseIntegratorType(type, &o.integrator))
@@ -102,6 +103,10 @@ class Parser {
         m.Positive("coupling_stiffness_ratio", s->model.coupling_stiffness_ratio);
     o.contact_frequency_ratio = m.Positive("contact_frequency_ratio", o.contact_frequency_ratio);
     if (o.contact_frequency_ratio > 1.0) m.Fail("contact_frequency_ratio", "must be in (0, 1]");
+    const std::string stretching = m.String("stretching", "backward_euler");
+    if (!ParseStretchingScheme(stretching, &o.stretching))
+      m.Fail("stretching",
+             "unknown stretching step '" + stretching + "' (expected backward_euler or sdirk2)");
     o.kinetic_damping = m.Bool("kinetic_damping", false);
     o.max_speed = m.Positive("max_speed", o.max_speed);
     o.threads = m.Int("threads", o.threads);

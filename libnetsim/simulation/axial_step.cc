@@ -51,7 +51,7 @@ AxialStep::AxialStep(const Model& model) {
 }
 
 bool AxialStep::Apply(const Model& model, double h, const std::vector<Vector3d>& x,
-                      std::vector<Vector3d>& v) {
+                      std::vector<Vector3d>& v, bool end_direction) {
   const int n = size();
   if (n == 0) return true;
   double* values = matrix_.valuePtr();
@@ -63,7 +63,8 @@ bool AxialStep::Apply(const Model& model, double h, const std::vector<Vector3d>&
     const Vector3d e0 = x[s.node_b] - x[s.node_a];
     const Vector3d e = e0 + h * (vb - va);  // predicted
     const double length = e.norm();
-    const Vector3d t = (e0 + e).normalized();  // the step's midpoint direction
+    // The direction predicted for the end of the stage, or the stage's midpoint direction.
+    const Vector3d t = end_direction ? Vector3d(e / length) : (e0 + e).normalized();
     tangent_[r] = t;
     length_[r] = length;
     const double u = t.dot(vb - va);
@@ -91,6 +92,23 @@ bool AxialStep::Apply(const Model& model, double h, const std::vector<Vector3d>&
     geometric_[s.node_a] += k;
     geometric_[s.node_b] += k;
   }
+  return true;
+}
+
+bool AxialStep::Step(const Model& model, double h, const std::vector<Vector3d>& x,
+                     std::vector<Vector3d>& v, std::vector<Vector3d>& drift) {
+  constexpr double g = kGamma;
+  const size_t nodes = v.size();
+  kicked_ = v;
+  drift = v;
+  if (!Apply(model, g * h, x, drift, true)) return false;  // stage 1: V1 in drift
+  base_.resize(nodes);
+  for (size_t i = 0; i < nodes; ++i) {
+    base_[i] = x[i] + ((1.0 - g) * h) * drift[i];
+    v[i] = kicked_[i] + ((1.0 - g) / g) * (drift[i] - kicked_[i]);
+  }
+  if (!Apply(model, g * h, base_, v, true)) return false;  // stage 2: V2 in v
+  for (size_t i = 0; i < nodes; ++i) drift[i] = (1.0 - g) * drift[i] + g * v[i];
   return true;
 }
 

@@ -26,6 +26,22 @@ std::string IntegratorName(IntegratorType type) {
   return "explicit";
 }
 
+std::string StretchingName(StretchingScheme scheme) {
+  return scheme == StretchingScheme::kSdirk2 ? "sdirk2" : "backward_euler";
+}
+
+bool ParseStretchingScheme(const std::string& text, StretchingScheme* scheme) {
+  if (text == "backward_euler") {
+    *scheme = StretchingScheme::kBackwardEuler;
+    return true;
+  }
+  if (text == "sdirk2") {
+    *scheme = StretchingScheme::kSdirk2;
+    return true;
+  }
+  return false;
+}
+
 bool ParseIntegratorType(const std::string& text, IntegratorType* type) {
   if (text == "explicit" || text == "symplectic_euler") {
     *type = IntegratorType::kSymplecticEuler;
@@ -330,10 +346,14 @@ bool Simulation::Step() {
 // order, one node at a time: the same bits for any thread count.
 void Simulation::ImplicitContact(double h) {
   const int n = model_.num_nodes();
+  // Under the two-stage stretching drift_ holds the drift, state_.v the end velocities.
+  const bool apart = axial_ && options_.stretching == StretchingScheme::kSdirk2;
   for (int i = 0; i < n; ++i) {
     if (model_.node_inv_mass[i] == 0.0) continue;
-    const double depth =
-        contact_->ResolveImplicit(model_, i, state_.x[i], state_.time, h, &state_.v[i]);
+    Vector3d& drift = apart ? drift_[i] : state_.v[i];
+    const Vector3d before = drift;
+    const double depth = contact_->ResolveImplicit(model_, i, state_.x[i], state_.time, h, &drift);
+    if (apart) state_.v[i] += drift - before;
     if (depth > max_penetration_) {
       max_penetration_ = depth;
       max_penetration_node_ = i;
@@ -406,7 +426,9 @@ bool Simulation::ImplicitSubstep(double h) {
   const int s = model_.num_segments();
   const double limit2 = options_.max_speed * options_.max_speed;
   const int threads = options_.threads;
-  // Nodes: the explicit kick, the implicit stretching and contact, the drift.
+  // Nodes: the explicit kick, the implicit stretching (backward Euler, or with the drift in two
+  // stages: axial_step.h) and contact (on the drift, its change added to the velocities), the
+  // drift.
   int bad_node = n;
 #pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static) \
     reduction(min                                                               \
@@ -417,7 +439,9 @@ bool Simulation::ImplicitSubstep(double h) {
     if (!(v.squaredNorm() <= limit2) && i < bad_node) bad_node = i;
   }
   if (bad_node < n) return BlowUp(bad_node, -1);
-  if (axial_ && !axial_->Apply(model_, h, state_.x, state_.v)) {
+  const bool two_stage = options_.stretching == StretchingScheme::kSdirk2;
+  if (axial_ && !(two_stage ? axial_->Step(model_, h, state_.x, state_.v, drift_)
+                            : axial_->Apply(model_, h, state_.x, state_.v))) {
     Failure failure;
     failure.time = state_.time;
     failure.quantity = "tension";
@@ -431,8 +455,9 @@ bool Simulation::ImplicitSubstep(double h) {
     return false;
   }
   if (contact_ && options_.implicit_contact) ImplicitContact(h);
+  const std::vector<Vector3d>& drift = axial_ && two_stage ? drift_ : state_.v;
 #pragma omp parallel for num_threads(threads) if (threads > 1) schedule(static)
-  for (int i = 0; i < n; ++i) state_.x[i] += h * state_.v[i];
+  for (int i = 0; i < n; ++i) state_.x[i] += h * drift[i];
 
   // Frames. Each is first turned by the minimal rotation onto its segment's new tangent (exact:
   // the frame follows its centreline within the step instead of swinging about it), then by the

@@ -11,13 +11,17 @@
 //   verlet    velocity Verlet (kick-drift-kick). Second order for conservative forces; damping
 //             forces are evaluated with the half-step velocity, so they keep first order.
 //   implicit  symplectic Euler for the nodes, with stretching (axial force and damping) solved
-//             linearly implicitly (axial_step.h); then each frame turned exactly onto its
+//             linearly implicitly (axial_step.h: backward Euler, or with the drift in two
+//             stages of an L-stable SDIRK, SimulationOptions::stretching); then each frame turned
+//             exactly onto its
 //             segment's new tangent and by the small turn that balances bending and twist there,
 //             the coupling's torque implicit in it. The thread bends as a Kirchhoff rod and the
 //             step is set by bending through the nodes (16 EI / l^3 per node), not by the axial
 //             wave or the coupling: 35x explicit's on the flights. A step splits into
-//             substeps while the tension's string stiffness or a contact needs it. First order;
-//             not symplectic: it loses energy, first order in dt.
+//             substeps while the tension's string stiffness or a contact needs it. First order
+//             (the split). Backward Euler damps every mode the step resolves (ratio omega h / 2:
+//             an axial damping of h EA); the two-stage step keeps them (~0.004 (omega h)^3), and
+//             both damp away the axial waves the step does not resolve.
 // Rotations follow the same schemes with the body-frame Euler equation
 // I dw/dt = tau - w x (I w) and q <- q Exp(w dt).
 //
@@ -42,11 +46,16 @@ class ContactForce;
 class SegmentForce;
 
 enum class IntegratorType { kSymplecticEuler, kVelocityVerlet, kImplicit };
+// The implicit integrator's stretching step (axial_step.h).
+enum class StretchingScheme { kBackwardEuler, kSdirk2 };
 
 // "explicit" / "verlet" / "implicit".
 std::string IntegratorName(IntegratorType type);
 // Parses "explicit" (also "symplectic_euler"), "verlet" or "implicit"; false on anything else.
 bool ParseIntegratorType(const std::string& text, IntegratorType* type);
+// "backward_euler" / "sdirk2", and back; false on anything else.
+std::string StretchingName(StretchingScheme scheme);
+bool ParseStretchingScheme(const std::string& text, StretchingScheme* scheme);
 
 struct SimulationOptions {
   IntegratorType integrator = IntegratorType::kSymplecticEuler;
@@ -65,6 +74,14 @@ struct SimulationOptions {
   // (output frames land exactly on multiples of it).
   double align_interval = 0.0;
   bool scale_rotational_inertia = true;  // stability.h
+  // The implicit integrator's stretching step. backward_euler damps the modes the step resolves
+  // (Net A's response to a 4x bending stiffness: 0.92 relative error against the explicit
+  // step); sdirk2 keeps them there (0.04) at 1.3x the CPU time, but not everywhere: the
+  // tension's substeps switch on and off with the vibration it keeps, so a run is not smooth in
+  // its parameters (the fit's 5 x 5 twin: the drag's cost rough, the fit fails), and a 5 x 5 net
+  // flying as the flights do strays from the explicit step's response after 0.4 s.
+  // docs/simulator.md.
+  StretchingScheme stretching = StretchingScheme::kBackwardEuler;
   double contact_frequency_ratio = 0.3;  // contact_force.h
   // Implicit integrator: the contact's penalty is taken implicitly, node by node, within the whole
   // step; false: the whole net takes the substeps that resolve it as the explicit step does
@@ -182,6 +199,7 @@ class Simulation {
   bool skip_joints_ = false;
   bool skip_contact_ = false;  // implicit contact: resolved by the stepper, not in the kick
   std::vector<Quaterniond> turned_;          // scratch: frames turned to the new tangents
+  std::vector<Vector3d> drift_;              // implicit: each node's mean velocity over the step
   std::vector<double> node_step_;            // implicit: per node, min(dt, its static stable step)
   std::vector<double> frame_damping_;        // per segment, its joints' bending damping, N m s
   std::vector<double> frame_twist_;          // ... their twist stiffness, N m
