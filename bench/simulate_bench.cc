@@ -5,7 +5,8 @@
 //   bench_simulate --integrator implicit [--no-physical] [--substep-contact] [CASE ...]
 //                                                                    another integrator
 //   bench_simulate --sensitivity [--floor] [--keep-coupling] [--parameter NAME ...]
-//                  [--integrator NAME] [--dt-factor F] [--window SECONDS] [CASE ...]
+//                  [--integrator NAME] [--stretching NAME] [--dt-factor F] [--window SECONDS]
+//                  [CASE ...]
 //
 // --sensitivity (default cases Net A and Net B at 0.5 m/s, the first 1 s of flight): whether the
 // scenario's integrator keeps the physics. For each material parameter of the flight nets (EA x0.5;
@@ -16,7 +17,8 @@
 // response). --floor adds the reference floor: the same relative difference between the
 // reference's response and that of the explicit step at half its step. --keep-coupling holds the
 // coupling penalty (kappa = 100 max(EI, GJ) / l^2, a numerical device of the explicit model) at
-// its nominal value when EI or GJ changes. Wall time and "x real time" are those of the changed
+// its nominal value when EI or GJ changes. --stretching sets the implicit integrator's stretching
+// step (backward_euler, sdirk2) of the tested runs. Wall time and "x real time" are those of the changed
 // run under the tested integrator, in process CPU time (one core, whatever the machine's load).
 //
 // Per case: the scenario's run (its integrator, automatic dt, rotational inertia scaled) with its
@@ -180,7 +182,7 @@ double Rms(const std::vector<std::vector<Vector3d>>& r) {
 // the two responses are.
 int Sensitivity(const std::string& dir, const std::vector<std::string>& cases, double window,
                 const char* integrator, const std::vector<std::string>& only, double dt_factor, bool with_floor,
-                bool keep_coupling) {
+                bool keep_coupling, const char* stretching) {
   std::printf(
       "| case | parameter | factor | reference response RMS / max (mm) | %s response RMS / max "
       "(mm) | relative error | reference floor | %s CPU (s) | x real time | reference CPU (s) |\n"
@@ -188,7 +190,12 @@ int Sensitivity(const std::string& dir, const std::vector<std::string>& cases, d
       integrator ? integrator : "default", integrator ? integrator : "default");
   std::fflush(stdout);
   for (const std::string& case_name : cases) {
-    const Scenario s = LoadScenario(dir + "/" + case_name + ".yaml");
+    Scenario s = LoadScenario(dir + "/" + case_name + ".yaml");
+    if (stretching && !ParseStretchingScheme(stretching, &s.simulation.stretching)) {
+      std::fprintf(stderr, "--stretching: expected backward_euler or sdirk2, got '%s'\n",
+                   stretching);
+      return 2;
+    }
     const double w = std::min(window, s.duration);
     const Trajectory ref = Run(s, w, 1, 1.0, false, 1, "explicit");
     const Trajectory def = Run(s, w, 1, dt_factor, false, 1, integrator);
@@ -252,6 +259,7 @@ int main(int argc, char** argv) {
   int repeat = 3;
   int threads = 0;
   const char* integrator = nullptr;
+  const char* stretching = nullptr;
   bool physical_runs = true;
   bool substep_contact = false;
   bool sensitivity = false;
@@ -276,6 +284,8 @@ int main(int argc, char** argv) {
       sensitivity = true;
     } else if (!std::strcmp(argv[i], "--keep-coupling")) {
       keep_coupling = true;
+    } else if (!std::strcmp(argv[i], "--stretching") && i + 1 < argc) {
+      stretching = argv[++i];
     } else if (!std::strcmp(argv[i], "--floor")) {
       floor = true;
     } else if (!std::strcmp(argv[i], "--dt-factor") && i + 1 < argc) {
@@ -294,7 +304,8 @@ int main(int argc, char** argv) {
   }
   if (sensitivity) {
     if (cases.empty()) cases = {"net_a_0.5", "net_b_0.5"};
-    return Sensitivity(dir, cases, window, integrator, only, dt_factor, floor, keep_coupling);
+    return Sensitivity(dir, cases, window, integrator, only, dt_factor, floor, keep_coupling,
+                       stretching);
   }
   if (cases.empty())
     cases = {"cantilever", "pendulum", "net_capture", "net_a_0.5", "net_a_0.8", "net_b_0.5",
