@@ -28,7 +28,7 @@ constexpr char kHelp[] =
     "usage: netlab gui [PROJECT.yaml] [--room ROOM] [--frame N] [--review N]\n"
     "                  [--screenshot OUT.png [--keys KEYS]]\n"
     "       netlab gui EXPERIMENT.yaml --rig rig.yaml --labels labels.h5 [--coloring C.yaml]\n"
-    "                  [--knots RxC] [--knotless] [--project project.yaml]\n\n"
+    "                  [--knots RxC] [--knotless] [--target SIM.h5] [--project project.yaml]\n\n"
     "The workstation (docs/gui.md), in rooms: the recording (netlab ingest --check's findings\n"
     "per camera, the cameras' timestamps), the calibration (the rig, a 3D sketch of it), the\n"
     "labeling (four synchronized camera views, Find Node, Find Path, Fill Grid and tracking as\n"
@@ -53,7 +53,10 @@ constexpr char kHelp[] =
     "                      they start (not keys that open a dialog: F1, Ctrl+G, Ctrl+T, ...)\n"
     "  --rig, --labels, --coloring FILE, --knots RxC (without a colouring), --project FILE\n"
     "  --knotless          the net has no knot balls (Net B): an edge knot must lie where its\n"
-    "                      straight links' colours change (the project's net: {knotless: true})\n\n"
+    "                      straight links' colours change (the project's net: {knotless: true})\n"
+    "  --target FILE       the target's bodies (a scenario, or a netlab simulate result) in the\n"
+    "                      rig's world frame: the knots it hides are not listed as missing (the\n"
+    "                      project's target:)\n\n"
     "Keys: F1 in the window lists them all. exit status: 0, 1 bad input, 2 usage error.\n";
 
 bool IsProjectFile(const std::string& path) {
@@ -136,7 +139,7 @@ int RunGui(const std::vector<std::string>& args) {
     const app::CommandLine cl(
         args, {"help", "knotless"},
         {"room", "frame", "review", "screenshot", "keys", "rig", "labels", "coloring", "knots",
-         "project"});
+         "project", "target"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -173,6 +176,8 @@ int RunGui(const std::vector<std::string>& args) {
         Project project = MakeProject(file, cl.Required("rig"), cl.Option("coloring").value_or(""),
                                       labels, rows, cols);
         project.knotless = cl.Flag("knotless");
+        if (const auto target = cl.Option("target"))
+          project.target = std::filesystem::absolute(*target).lexically_normal().string();
         project_path = cl.Option("project").value_or(
             (std::filesystem::absolute(labels).parent_path() / "project.yaml").string());
         SaveProject(project, project_path);
@@ -189,6 +194,7 @@ int RunGui(const std::vector<std::string>& args) {
                         {"experiment", project.experiment},
                         {"rig", project.rig},
                         {"coloring", project.coloring},
+                        {"target", project.target},
                         {"labels", project.labels}},
                        {{"--screenshot", screenshot}});
     }

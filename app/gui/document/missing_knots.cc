@@ -36,7 +36,12 @@ recon::Target LoadTarget(const std::string& path, double fps) {
   for (const char* key : {"gravity", "rotating_frame", "drag"}) root.remove(key);
   YAML::Emitter emitter;
   emitter << root;
-  const netsim::Scenario scenario = netsim::ParseScenario(emitter.c_str(), origin, "");
+  netsim::Scenario scenario;
+  try {
+    scenario = netsim::ParseScenario(emitter.c_str(), origin, "");
+  } catch (const InputError& e) {
+    throw InputError(std::string("the target is no scenario: ") + e.what());
+  }
   recon::Target target;
   target.fps = fps;
   for (const netsim::RigidBody& body : scenario.bodies) {

@@ -47,7 +47,8 @@ Project LoadProject(const std::string& path) {
   if (root.node()["net"] && root.node()["net"].IsMap())
     RefuseDuplicateKeys(root.node()["net"], path, "net.");
   root.AllowOnly(
-      {"netlab_project", "experiment", "rig", "coloring", "labels", "net", "illumination"});
+      {"netlab_project", "experiment", "rig", "coloring", "target", "labels", "net",
+       "illumination"});
   if (root.Int("netlab_project") != 1)
     throw InputError(root.Where("netlab_project") + ": version 1 expected");
   Project p;
@@ -56,6 +57,7 @@ Project LoadProject(const std::string& path) {
   p.experiment = Resolve(folder, root.String("experiment"));
   p.rig = Resolve(folder, root.String("rig"));
   p.coloring = Resolve(folder, root.String("coloring", ""));
+  p.target = Resolve(folder, root.String("target", ""));
   p.labels = Resolve(folder, root.String("labels"));
   if (root.Has("illumination")) {
     p.illumination = root.Positive("illumination", recon::kRenderIllumination, false);
@@ -93,6 +95,8 @@ void SaveProject(const Project& project, const std::string& path) {
   out << YAML::Key << "rig" << YAML::Value << Relative(folder, project.rig);
   if (!project.coloring.empty())
     out << YAML::Key << "coloring" << YAML::Value << Relative(folder, project.coloring);
+  if (!project.target.empty())
+    out << YAML::Key << "target" << YAML::Value << Relative(folder, project.target);
   out << YAML::Key << "labels" << YAML::Value << Relative(folder, project.labels);
   out << YAML::Key << "net" << YAML::Value << YAML::Flow << YAML::BeginMap;
   out << YAML::Key << "rows" << YAML::Value << project.rows;

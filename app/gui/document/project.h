@@ -7,6 +7,11 @@
 //   experiment: shot/experiment.yaml    # the four camera streams (recording/experiment.h)
 //   rig: rig.yaml                       # the calibrated rig; its cameras include the experiment's
 //   coloring: coloring.yaml             # optional: the yarn colours (netlab color-net)
+//   target: sim.h5                      # optional: the target, so that the knots it hides are
+//                                       # not listed missing: the bodies of a scenario (.yaml)
+//                                       # or of a netlab simulate result (.h5), in the rig's
+//                                       # world frame (a true rig, or one calibrated with the
+//                                       # target's marker map)
 //   labels: labels.h5                   # created on the first save when it does not exist
 //   net: {rows: 11, cols: 11, mesh: 0.1}  # the grid; mesh (m, knot to knot) optional; and
 //                                       # knotless: true for a net without knot balls (Net B)
@@ -28,6 +33,7 @@ struct Project {
   std::string experiment;  // absolute paths, resolved against the project's folder
   std::string rig;
   std::string coloring;  // "" when none
+  std::string target;    // "" when none
   std::string labels;
   int rows = 0, cols = 0;  // the net's knots
   double mesh_m = 0.0;     // link length, m; 0: estimated by the engine

@@ -109,7 +109,12 @@ std::unique_ptr<Session> Session::Open(const Project& project,
   s->cache_ = std::make_unique<recon::FrameCache>(*s->sequence_, cache_options);
   s->document_ = std::make_unique<LabelDocument>(
       OpenLabels(project, s->camera_names_, s->frame_numbers_), project.labels);
-  s->missing_ = std::make_unique<MissingKnots>(s->document_.get(), &s->rig_, s->rig_index_);
+  // The missing knots, without those the target hides when the project knows it.
+  MissingKnotsOptions missing_options;
+  if (!project.target.empty())
+    missing_options.target = LoadTarget(project.target, s->sequence_->experiment().fps);
+  s->missing_ = std::make_unique<MissingKnots>(s->document_.get(), &s->rig_, s->rig_index_,
+                                               missing_options);
   return s;
 }
 

@@ -6,12 +6,15 @@
 // incremental count always equals a count from scratch.
 
 #include "app/gui/document/missing_knots.h"
+#include "app/gui/document/project.h"
+#include "common/errors.h"
 
 #include <gtest/gtest.h>
 
 #include <QCoreApplication>
 #include <QSignalSpy>
 #include <cstdio>
+#include <filesystem>
 #include <set>
 #include <string>
 #include <vector>
@@ -280,6 +283,44 @@ TEST(MissingKnots, AKnotTheTargetHidesIsNotMissing) {
   const MissingKnots with_ball(&doc, &scene.rig, kRigIndex, options);
   EXPECT_EQ(with_ball.Find(2, 1, 4), nullptr);
   EXPECT_EQ(with_ball.Items().size(), without.Items().size() - 1);
+}
+
+// The target of a project: the scenario's box (Net A's satellite mock-up, 0.4 x 0.3 x 0.3 m at
+// x = 2.2 m), named by the project file relative to its folder; a file without a box or a ball,
+// or none at all, refused by name.
+TEST(MissingKnots, TheTargetIsTheScenariosBodyTheProjectNames) {
+  const std::string scenario = std::string(NETLAB_SOURCE_DIR) + "/scenarios/net_a_0.5.yaml";
+  const recon::Target target = LoadTarget(scenario, 179.0);
+  ASSERT_EQ(target.solids.size(), 1u);
+  EXPECT_EQ(target.solids[0].shape, recon::TargetSolid::Shape::kBox);
+  EXPECT_LT((target.solids[0].center - Eigen::Vector3d(2.2, 0, 0)).norm(), 1e-12);
+  EXPECT_LT((target.solids[0].half_extents - Eigen::Vector3d(0.2, 0.15, 0.15)).norm(), 1e-12);
+  EXPECT_EQ(target.fps, 179.0);
+  for (const std::string& bad : {std::string(NETLAB_SOURCE_DIR) + "/scenarios/pendulum.yaml",
+                                 std::string("/nonexistent/sim.h5")}) {
+    try {
+      LoadTarget(bad, 179.0);
+      ADD_FAILURE() << "took " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+    }
+  }
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / "netlab_missing_knots_project";
+  std::filesystem::create_directories(dir);
+  Project p;
+  p.experiment = (dir / "shot/experiment.yaml").string();
+  p.rig = (dir / "shot/rig_true.yaml").string();
+  p.labels = (dir / "labels.h5").string();
+  p.target = (dir / "sim.h5").string();
+  p.rows = p.cols = 11;
+  const std::string path = (dir / "project.yaml").string();
+  SaveProject(p, path);
+  EXPECT_EQ(LoadProject(path).target, p.target);
+  p.target.clear();
+  SaveProject(p, path);
+  EXPECT_EQ(LoadProject(path).target, "");
+  std::filesystem::remove_all(dir);
 }
 
 TEST(MissingKnots, WithTheNeighbourRuleAKnotAmongUnlabeledNeighboursWaits) {
