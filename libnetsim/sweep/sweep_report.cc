@@ -99,7 +99,7 @@ std::vector<Line> LinesAlong(const std::vector<SweepParameter>& parameters, size
   return lines;
 }
 
-constexpr double kWidth = 400, kHeight = 260, kLeft = 64, kRight = 14, kTop = 14, kBottom = 44;
+constexpr html::PlotFrame kFrame{400, 260, 64, 14, 14, 44, 14};
 
 // One output against one parameter: a line per Line, a dot per finished run, a red cross on the
 // bottom axis where a run failed.
@@ -129,31 +129,17 @@ std::string Plot(const std::string& id, const std::vector<double>& x_values,
   if (x1 <= x0) x0 -= 0.5 * std::max(1.0, std::abs(x0)), x1 = x0 + std::max(1.0, std::abs(x0));
   const double xpad = 0.04 * (x1 - x0);
   x0 -= xpad, x1 += xpad;
-  auto px = [&](double x) { return kLeft + (x - x0) / (x1 - x0) * (kWidth - kLeft - kRight); };
-  auto py = [&](double y) {
-    return kHeight - kBottom - (y - y0) / (y1 - y0) * (kHeight - kTop - kBottom);
-  };
+  auto px = [&](double x) { return kFrame.X(x, x0, x1); };
+  auto py = [&](double y) { return kFrame.Y(y, y0, y1); };
   std::ostringstream o;
-  o << "<svg id=\"" << id << "\" class=\"plot\" viewBox=\"0 0 " << kWidth << " " << kHeight
-    << "\" width=\"" << kWidth << "\" height=\"" << kHeight << "\">\n<g class=\"axes\">\n";
+  o << "<svg id=\"" << id << "\" class=\"plot\" viewBox=\"0 0 " << kFrame.width << " "
+    << kFrame.height << "\" width=\"" << kFrame.width << "\" height=\"" << kFrame.height
+    << "\">\n";
   const std::vector<double> y_ticks = Ticks(y0, y1, 4), x_ticks = Ticks(x0, x1, 4);
-  for (double t : y_ticks)
-    o << "<line x1=\"" << kLeft << "\" x2=\"" << kWidth - kRight << "\" y1=\"" << Fixed(py(t), 1)
-      << "\" y2=\"" << Fixed(py(t), 1) << "\" class=\"grid\"/><text x=\"" << kLeft - 6 << "\" y=\""
-      << Fixed(py(t) + 4, 1) << "\" text-anchor=\"end\">" << TickText(t, TickStep(y_ticks))
-      << "</text>\n";
-  for (double t : x_ticks)
-    o << "<line y1=\"" << kTop << "\" y2=\"" << kHeight - kBottom << "\" x1=\"" << Fixed(px(t), 1)
-      << "\" x2=\"" << Fixed(px(t), 1) << "\" class=\"grid\"/><text x=\"" << Fixed(px(t), 1)
-      << "\" y=\"" << kHeight - kBottom + 16 << "\" text-anchor=\"middle\">"
-      << TickText(t, TickStep(x_ticks)) << "</text>\n";
-  o << "<rect x=\"" << kLeft << "\" y=\"" << kTop << "\" width=\"" << kWidth - kLeft - kRight
-    << "\" height=\"" << kHeight - kTop - kBottom << "\" class=\"frame\"/>\n";
-  o << "<text x=\"" << (kLeft + kWidth - kRight) / 2 << "\" y=\"" << kHeight - 8
-    << "\" text-anchor=\"middle\" class=\"label\">" << Escape(x_label) << "</text>\n";
-  o << "<text transform=\"translate(14," << (kTop + kHeight - kBottom) / 2
-    << ") rotate(-90)\" text-anchor=\"middle\" class=\"label\">" << kDisplay[output].unit
-    << "</text>\n</g>\n";
+  html::PlotAxes(
+      o, kFrame, x0, x1, y0, y1, x_ticks, y_ticks,
+      [&](double t) { return TickText(t, TickStep(x_ticks)); },
+      [&](double t) { return TickText(t, TickStep(y_ticks)); }, x_label, kDisplay[output].unit);
   for (size_t l = 0; l < lines.size(); ++l) {
     const Line& line = lines[l];
     const char* colour = kColours[l % kMaxSeries];
@@ -183,7 +169,7 @@ std::string Plot(const std::string& id, const std::vector<double>& x_values,
           << "\"><title>run " << run.index << ": " << Short(run.outputs.*field * scale) << " "
           << kDisplay[output].unit << "</title></circle>";
       } else if (!run.ok()) {
-        const double y = kHeight - kBottom - 6;
+        const double y = kFrame.height - kFrame.bottom - 6;
         o << "<path class=\"failed\" d=\"M" << Fixed(x - 5, 1) << "," << Fixed(y - 5, 1) << " L"
           << Fixed(x + 5, 1) << "," << Fixed(y + 5, 1) << " M" << Fixed(x - 5, 1) << ","
           << Fixed(y + 5, 1) << " L" << Fixed(x + 5, 1) << "," << Fixed(y - 5, 1)

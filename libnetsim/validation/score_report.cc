@@ -59,15 +59,13 @@ class LinePlot {
     if (x1 <= x0) x1 = x0 + 1;
     if (y1 <= y0) y1 = y0 + 1;
     y1 += 0.05 * (y1 - y0);
-    auto px = [&](double x) { return kLeft + (x - x0) / (x1 - x0) * (kWidth - kLeft - kRight); };
-    auto py = [&](double y) {
-      return kHeight - kBottom - (y - y0) / (y1 - y0) * (kHeight - kTop - kBottom);
-    };
+    auto px = [&](double x) { return kFrame.X(x, x0, x1); };
+    auto py = [&](double y) { return kFrame.Y(y, y0, y1); };
     std::ostringstream o;
-    o << "<svg id=\"" << id << "\" class=\"plot\" viewBox=\"0 0 " << kWidth << " " << kHeight
-      << "\" width=\"" << kWidth << "\" height=\"" << kHeight << "\" data-times=\"" << Values(times)
-      << "\">\n";
-    Axes(o, x0, x1, y0, y1, px, py, x_label, y_label);
+    o << "<svg id=\"" << id << "\" class=\"plot\" viewBox=\"0 0 " << kFrame.width << " "
+      << kFrame.height << "\" width=\"" << kFrame.width << "\" height=\"" << kFrame.height
+      << "\" data-times=\"" << Values(times) << "\">\n";
+    Axes(o, x0, x1, y0, y1, x_label, y_label);
     for (const auto& s : series_) {
       o << "<path data-series=\"" << s.name << "\" data-values=\"" << Values(s.data)
         << "\" fill=\"none\" stroke=\"" << s.colour << "\" stroke-width=\"1.8\""
@@ -88,42 +86,24 @@ class LinePlot {
     return o.str();
   }
 
-  static constexpr double kWidth = 560, kHeight = 300, kLeft = 62, kRight = 14, kTop = 30,
-                          kBottom = 44;
+  static constexpr html::PlotFrame kFrame{};
 
-  template <typename Px, typename Py>
-  static void Axes(std::ostringstream& o, double x0, double x1, double y0, double y1, Px px, Py py,
+  // The axes over [x0, x1] x [y0, y1]: about five y ticks and six x ticks, four digits each.
+  static void Axes(std::ostream& o, double x0, double x1, double y0, double y1,
                    const std::string& x_label, const std::string& y_label) {
-    o << "<g class=\"axes\">\n";
-    for (double t : Ticks(y0, y1)) {
-      o << "<line x1=\"" << kLeft << "\" x2=\"" << kWidth - kRight << "\" y1=\"" << Fixed(py(t), 1)
-        << "\" y2=\"" << Fixed(py(t), 1) << "\" class=\"grid\"/>"
-        << "<text x=\"" << kLeft - 6 << "\" y=\"" << Fixed(py(t) + 4, 1)
-        << "\" text-anchor=\"end\">" << Num(t, 4) << "</text>\n";
-    }
-    for (double t : Ticks(x0, x1, 6)) {
-      o << "<line y1=\"" << kTop << "\" y2=\"" << kHeight - kBottom << "\" x1=\"" << Fixed(px(t), 1)
-        << "\" x2=\"" << Fixed(px(t), 1) << "\" class=\"grid\"/>"
-        << "<text x=\"" << Fixed(px(t), 1) << "\" y=\"" << kHeight - kBottom + 16
-        << "\" text-anchor=\"middle\">" << Num(t, 4) << "</text>\n";
-    }
-    o << "<rect x=\"" << kLeft << "\" y=\"" << kTop << "\" width=\"" << kWidth - kLeft - kRight
-      << "\" height=\"" << kHeight - kTop - kBottom << "\" class=\"frame\"/>\n";
-    o << "<text x=\"" << (kLeft + kWidth - kRight) / 2 << "\" y=\"" << kHeight - 8
-      << "\" text-anchor=\"middle\" class=\"label\">" << x_label << "</text>\n";
-    o << "<text transform=\"translate(16," << (kTop + kHeight - kBottom) / 2
-      << ") rotate(-90)\" text-anchor=\"middle\" class=\"label\">" << y_label << "</text>\n";
-    o << "</g>\n";
+    const auto text = [](double t) { return Num(t, 4); };
+    html::PlotAxes(o, kFrame, x0, x1, y0, y1, Ticks(x0, x1, 6), Ticks(y0, y1), text, text,
+                   x_label, y_label);
   }
 
  private:
   void Legend(std::ostringstream& o) const {
-    double x = kLeft + 12;
+    double x = kFrame.left + 12;
     for (const auto& s : series_) {
-      o << "<line x1=\"" << x << "\" x2=\"" << x + 22 << "\" y1=\"" << kTop - 14 << "\" y2=\""
-        << kTop - 14 << "\" stroke=\"" << s.colour << "\" stroke-width=\"3\""
+      o << "<line x1=\"" << x << "\" x2=\"" << x + 22 << "\" y1=\"" << kFrame.top - 14
+        << "\" y2=\"" << kFrame.top - 14 << "\" stroke=\"" << s.colour << "\" stroke-width=\"3\""
         << (s.dashed ? " stroke-dasharray=\"6 4\"" : "") << "/><text x=\"" << x + 27 << "\" y=\""
-        << kTop - 10 << "\">" << s.name << "</text>\n";
+        << kFrame.top - 10 << "\">" << s.name << "</text>\n";
       x += 40 + 8 * s.name.size();
     }
   }
@@ -220,20 +200,19 @@ std::string KnotMap(const ScoreResult& r) {
 }
 
 std::string Histogram(const ScoreResult& r) {
-  const double w = LinePlot::kWidth, h = LinePlot::kHeight;
-  const double left = LinePlot::kLeft, right = LinePlot::kRight, top = LinePlot::kTop,
-               bottom = LinePlot::kBottom;
+  const html::PlotFrame& frame = LinePlot::kFrame;
+  const double w = frame.width, h = frame.height, left = frame.left, top = frame.top;
   const size_t bins = r.d2_counts.size();
   double y1 = 1;
   for (size_t b = 0; b < bins; ++b) y1 = std::max({y1, r.d2_counts[b], r.d2_expected[b]});
   y1 *= 1.05;
   const double x0 = 0, x1 = r.d2_edges.empty() ? 1 : r.d2_edges.back();
-  auto px = [&](double x) { return left + (x - x0) / (x1 - x0) * (w - left - right); };
-  auto py = [&](double y) { return h - bottom - y / y1 * (h - top - bottom); };
+  auto px = [&](double x) { return frame.X(x, x0, x1); };
+  auto py = [&](double y) { return frame.Y(y, 0, y1); };
   std::ostringstream o;
   o << "<svg id=\"d2-histogram\" class=\"plot\" viewBox=\"0 0 " << w << " " << h << "\" width=\""
     << w << "\" height=\"" << h << "\">\n";
-  LinePlot::Axes(o, x0, x1, 0, y1, px, py, "d² (the last bin holds everything above)",
+  LinePlot::Axes(o, x0, x1, 0, y1, "d² (the last bin holds everything above)",
                  "knot-frames per bin");
   o << "<g data-series=\"counts\" data-values=\"" << Values(r.d2_counts) << "\" fill=\"#56b4e9\">";
   for (size_t b = 0; b < bins; ++b)
