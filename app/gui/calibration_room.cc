@@ -88,7 +88,7 @@ RigSketch::Fit RigSketch::MakeFit() const {
     x0 = std::min(x0, p.dot(fit.right)), x1 = std::max(x1, p.dot(fit.right));
     y0 = std::min(y0, p.dot(fit.up)), y1 = std::max(y1, p.dot(fit.up));
   }
-  const QRectF area(30, 30, width() - 60, height() - 60);
+  const QRectF area(30, 44, width() - 60, height() - 74);
   fit.scale = std::min(area.width() / std::max(x1 - x0, 1e-6),
                        area.height() / std::max(y1 - y0, 1e-6));
   fit.middle = area.center();
@@ -107,7 +107,7 @@ void RigSketch::paintEvent(QPaintEvent*) {
   QPainter painter(this);
   painter.setRenderHint(QPainter::Antialiasing);
   painter.setPen(Qt::black);
-  painter.drawText(QRectF(0, 4, width(), 18), Qt::AlignHCenter,
+  painter.drawText(QRectF(4, 4, width() - 8, 34), Qt::AlignHCenter | Qt::TextWordWrap,
                    "The rig: cameras as frusta (0.4 m deep), world axes x red, y green, z blue "
                    "(0.5 m) — drag to turn");
   if (presenter_ == nullptr || presenter_->rig().cameras.empty()) return;
@@ -174,12 +174,12 @@ void CalibrationImageView::Set(const CalibrationPresenter* presenter, std::optio
   presenter_ = presenter;
   key_ = key;
   // One scale for every image of a result: a bad image's arrows are seen to be long. The
-  // calibration's RMS is drawn 1.5 % of the image's width.
+  // calibration's RMS is drawn (up to) 4 % of the image's width.
   residual_scale_ = 0.0;
   if (presenter_ != nullptr && presenter_->result() != nullptr && key_) {
     const CalibrationImage& i = presenter_->image(*key_);
     const double rms = presenter_->result()->summary.rms_px;
-    if (rms > 0 && i.width > 0) residual_scale_ = NiceBelow(0.015 * i.width / rms);
+    if (rms > 0 && i.width > 0) residual_scale_ = NiceBelow(0.04 * i.width / rms);
   }
   update();
 }
@@ -198,7 +198,7 @@ QRectF CalibrationImageView::ImageRect() const {
     if (i.width > 0) w = i.width, h = i.height;
   }
   if (w <= 0 || h <= 0) return {};
-  const QRectF area = QRectF(rect()).adjusted(4, 4, -4, -24);
+  const QRectF area = QRectF(rect()).adjusted(4, 4, -4, -40);
   const double s = std::min(area.width() / w, area.height() / h);
   return QRectF(area.center().x() - w * s / 2, area.center().y() - h * s / 2, w * s, h * s);
 }
@@ -216,7 +216,7 @@ void CalibrationImageView::paintEvent(QPaintEvent*) {
   QPainter painter(this);
   painter.setRenderHint(QPainter::Antialiasing);
   const QRectF r = ImageRect();
-  const QRectF legend(6, height() - 22, width() - 12, 20);
+  const QRectF legend(6, height() - 38, width() - 12, 36);
   painter.setPen(QColor(230, 230, 230));
   if (presenter_ == nullptr || !key_) {
     painter.drawText(rect(), Qt::AlignCenter, "Select an image in the list");
@@ -234,9 +234,9 @@ void CalibrationImageView::paintEvent(QPaintEvent*) {
         const int n = grid.at(x, y);
         // Empty cells blue (the distortion is not constrained there), the others from yellow
         // (few points) to red (the most).
-        const QColor colour = n == 0 ? QColor(40, 90, 255, 110)
+        const QColor colour = n == 0 ? QColor(40, 90, 255, 80)
                                      : QColor(255, static_cast<int>(220 * (1.0 - double(n) / most)),
-                                              0, 110);
+                                              0, 80);
         painter.fillRect(QRectF(r.left() + x * cw, r.top() + y * ch, cw, ch), colour);
       }
   }
@@ -273,7 +273,7 @@ void CalibrationImageView::paintEvent(QPaintEvent*) {
   if (coverage_)
     parts << "coverage of the camera's images: blue no point, yellow few, red most";
   painter.setPen(QColor(230, 230, 230));
-  painter.drawText(legend, Qt::AlignLeft | Qt::AlignVCenter, parts.join(" · "));
+  painter.drawText(legend, Qt::AlignLeft | Qt::AlignVCenter | Qt::TextWordWrap, parts.join(" · "));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -355,7 +355,7 @@ CalibrationRoom::CalibrationRoom(QWidget* parent)
   auto* split = new QSplitter(Qt::Horizontal);
   images_ = new QTableWidget(0, 6);
   images_->setObjectName("calibration_images");
-  images_->setHorizontalHeaderLabels({"Camera", "Image", "Status", "Points", "RMS (px)", "Used"});
+  images_->setHorizontalHeaderLabels({"Camera", "Image", "Used", "RMS (px)", "Points", "Status"});
   images_->horizontalHeader()->setStretchLastSection(true);
   images_->verticalHeader()->setVisible(false);
   images_->verticalHeader()->setDefaultSectionSize(20);
@@ -364,6 +364,7 @@ CalibrationRoom::CalibrationRoom(QWidget* parent)
   images_->setSelectionMode(QAbstractItemView::SingleSelection);
   images_->setToolTip("A click on Used excludes or includes the image and calibrates again "
                       "(Ctrl+Z undoes)");
+  images_->horizontalHeaderItem(kUsedColumn)->setToolTip("Click to leave the image out or take it in");
   split->addWidget(images_);
 
   auto* middle = new QWidget;
@@ -429,7 +430,7 @@ CalibrationRoom::CalibrationRoom(QWidget* parent)
   split->setStretchFactor(0, 3);
   split->setStretchFactor(1, 4);
   split->setStretchFactor(2, 4);
-  split->setSizes({400, 560, 600});
+  split->setSizes({520, 500, 580});
   layout->addWidget(split, 1);
 
   progress_timer_ = new QTimer(this);
@@ -659,7 +660,9 @@ bool CalibrationRoom::SaveTo(const QString& path) {
     return false;
   }
   Refresh();
-  status_->setText(QString("Rig written to %1; the project names it").arg(path));
+  status_->setText(presenter_->has_project()
+                       ? QString("Rig written to %1; the project names it").arg(path)
+                       : QString("Rig written to %1").arg(path));
   emit rigSaved(path);
   return true;
 }
@@ -696,6 +699,7 @@ void CalibrationRoom::SelectImage(int row) {
 void CalibrationRoom::RefreshImages() {
   const std::vector<CalibrationImage>& images =
       Alive() ? presenter_->images() : std::vector<CalibrationImage>{};
+  images_->clearSpans();
   images_->setRowCount(static_cast<int>(images.size()));
   for (int row = 0; row < static_cast<int>(images.size()); ++row) {
     const CalibrationImage& image = images[row];
@@ -718,12 +722,17 @@ void CalibrationRoom::RefreshImages() {
         if (presenter_->is_excluded(key)) colour = QColor(130, 130, 130);
         break;
     }
-    const QStringList cells = {QString::fromStdString(presenter_->camera_name(image.camera)),
-                               ImageName(image), status, points, rms, used};
+    QStringList cells = {QString::fromStdString(presenter_->camera_name(image.camera)),
+                         ImageName(image), used, rms, points, status};
+    // A failed image's reason over the columns it has no values for.
+    if (image.status == CalibrationImage::Status::kFailed) {
+      cells = {cells[0], cells[1], status, "", "", ""};
+      images_->setSpan(row, kUsedColumn, 1, 4);
+    }
     for (int column = 0; column < cells.size(); ++column) {
       auto* item = new QTableWidgetItem(cells[column]);
       item->setForeground(colour);
-      if (column == 2 && image.status == CalibrationImage::Status::kFailed)
+      if (column == kUsedColumn && image.status == CalibrationImage::Status::kFailed)
         item->setToolTip(cells[column]);
       images_->setItem(row, column, item);
     }
@@ -732,7 +741,7 @@ void CalibrationRoom::RefreshImages() {
   if (Alive())
     if (const auto worst = presenter_->WorstImage()) {
       const int row = worst->first * presenter_->frames() + worst->second;
-      if (QTableWidgetItem* item = images_->item(row, 4)) {
+      if (QTableWidgetItem* item = images_->item(row, 3)) {
         QFont bold = item->font();
         bold.setBold(true);
         item->setFont(bold);
@@ -740,6 +749,8 @@ void CalibrationRoom::RefreshImages() {
       }
     }
   images_->resizeColumnsToContents();
+  // Not as wide as a failed image's reason, which spans it and the columns after it.
+  images_->setColumnWidth(kUsedColumn, images_->fontMetrics().horizontalAdvance("✗ excluded") + 12);
 }
 
 void CalibrationRoom::Refresh() {

@@ -3,8 +3,8 @@
 // (document/calibration_presenter.h) says. Along the top the inputs, as `netlab calibrate` takes
 // them: the target (a spec or a board/foil/marker-map YAML) and each camera's images (NAME and
 // GLOB; "Images folder…" fills them from a folder of camN/ sub-folders and its target file), then
-// Detect (progress, Cancel), Calibrate and Save rig…. Below, left to right: the images (status,
-// points, RMS; a click on the "Used" cell excludes or includes the image and re-runs, Ctrl+Z
+// Detect (progress, Cancel), Calibrate and Save rig…. Below, left to right: the images (used,
+// RMS, points, status; a click on the "Used" cell excludes or includes the image and re-runs, Ctrl+Z
 // undoes), the selected image with its detected corners, its residual vectors (scaled, the scale
 // written) and the coverage heat map of its camera, and the results: the calibration's text
 // (RMS, baselines, metric check, warnings), a row per camera, the rig's table and its 3D sketch
@@ -121,7 +121,7 @@ class CalibrationRoom : public QWidget {
   QTableWidget* table() const { return table_; }
   RigSketch* sketch() const { return sketch_; }
   // The images table's column a click on excludes or includes the row's image.
-  static constexpr int kUsedColumn = 5;
+  static constexpr int kUsedColumn = 2;
   // Detection, calibration or an image load is under way.
   bool busy() const;
   // Fills the inputs from a folder (GlobsInFolder), as "Images folder…" does after its dialog.

@@ -433,11 +433,12 @@ QString CalibrationPresenter::CalibrationText() const {
   if (!r->result) return "The calibration failed: " + QString::fromStdString(r->error);
   const calib::CalibrationSummary& s = r->result->summary;
   QStringList lines;
-  lines << QString("RMS %1 px over %2 points (%3 dropped as outliers), %4 images left out · %5 s")
+  lines << QString("RMS %1 px over %2 points (%3 dropped as outliers), %4 left out · %5 s")
                .arg(s.rms_px, 0, 'f', 3)
                .arg(s.observations)
                .arg(s.outliers)
-               .arg(r->excluded.size())
+               .arg(r->excluded.size() == 1 ? QString("1 image")
+                                             : QString("%1 images").arg(r->excluded.size()))
                .arg(r->wall_s, 0, 'f', 1);
   QStringList baselines, metric;
   for (const calib::PairCheck& p : s.pairs) {

@@ -206,6 +206,7 @@ class CalibrationPresenter {
   // (written through its own ".partial").
   void Save(const std::string& path);
   const std::string& rig_path() const { return rig_path_; }
+  bool has_project() const { return !project_path_.empty(); }
   bool saved() const { return saved_; }
   // Expires with the presenter: a worker's answer checks it before it is delivered.
   std::weak_ptr<const int> lifetime() const { return alive_; }
