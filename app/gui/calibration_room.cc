@@ -219,7 +219,8 @@ void CalibrationImageView::paintEvent(QPaintEvent*) {
   const QRectF legend(6, height() - 38, width() - 12, 36);
   painter.setPen(QColor(230, 230, 230));
   if (presenter_ == nullptr || !key_) {
-    painter.drawText(rect(), Qt::AlignCenter, "Select an image in the list");
+    painter.drawText(rect(), Qt::AlignCenter | Qt::TextWordWrap,
+                     "No image selected: Detect, then click an image in the list");
     return;
   }
   const CalibrationImage& image = presenter_->image(*key_);
