@@ -599,14 +599,15 @@ bool CalibrationRoom::ApplyInputs() {
               "camera's name and glob per row");
     return false;
   }
+  // Read again at every Detect: a changed target file or a new image is taken in.
   try {
-    if (!presenter_->has_target() || presenter_->target_spec() != spec) presenter_->SetTarget(spec);
+    presenter_->SetTarget(spec);
   } catch (const std::exception& e) {
     ShowError("Target: " + QString::fromLocal8Bit(e.what()));
     return false;
   }
   try {
-    if (presenter_->globs() != globs) presenter_->SetImages(globs);
+    presenter_->SetImages(globs);
   } catch (const std::exception& e) {
     ShowError("Images: " + QString::fromLocal8Bit(e.what()));
     return false;

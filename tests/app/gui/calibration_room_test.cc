@@ -174,6 +174,38 @@ TEST(CalibrationRoom, APersonCalibratesExcludesTheWorstImageUndoesAndSaves) {
   fs::remove_all(shot.dir);
 }
 
+// Inputs that cannot be used are said, naming what is wrong, and nothing runs.
+TEST(CalibrationRoom, BadInputsAreSaidAndNothingRuns) {
+  const fs::path dir = fs::temp_directory_path() / ("netlab_calibration_bad_" + std::to_string(getpid()));
+  fs::create_directories(dir / "cam0");
+  CalibrationPresenter presenter(nullptr, "");
+  CalibrationRoom room;
+  room.resize(1200, 800);
+  room.show();
+  room.Show(&presenter);
+  ASSERT_TRUE(QTest::qWaitForWindowExposed(&room));
+  room.FillFromFolder(QString::fromStdString(dir.string()));  // no images in cam0/
+  EXPECT_TRUE(room.status_label()->text().contains("no sub-folder with images"))
+      << room.status_label()->text().toStdString();
+  QTest::keyClicks(room.target_edit(), "chessboard:9x6");
+  Click(room.detect_button());
+  EXPECT_TRUE(room.status_label()->text().startsWith("Choose the images first"))
+      << room.status_label()->text().toStdString();
+  room.globs_table()->insertRow(0);
+  room.globs_table()->setItem(0, 0, new QTableWidgetItem("cam0"));
+  room.globs_table()->setItem(0, 1, new QTableWidgetItem(QString::fromStdString((dir / "cam0/*.png").string())));
+  Click(room.detect_button());
+  EXPECT_TRUE(room.status_label()->text().startsWith("Target: ")) << room.status_label()->text().toStdString();
+  room.target_edit()->setText("chessboard:9x6:0.06");
+  Click(room.detect_button());
+  EXPECT_TRUE(room.status_label()->text().contains("matches no file"))
+      << room.status_label()->text().toStdString();
+  EXPECT_FALSE(room.busy());
+  EXPECT_FALSE(room.calibrate_button()->isEnabled());
+  room.Show(nullptr);
+  fs::remove_all(dir);
+}
+
 // The twin's foil images (see the top of this file): skipped unless NETLAB_CALIBRATION_TWIN is set.
 TEST(CalibrationRoom, TheTwinsFoilImages) {
   const char* twin = std::getenv("NETLAB_CALIBRATION_TWIN");
