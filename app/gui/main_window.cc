@@ -1390,11 +1390,21 @@ void MainWindow::BuildRooms() {
   });
   calibration_room_ = new CalibrationRoom;
   stack_->addWidget(calibration_room_);
+  // The project names the saved rig now: it is opened again so that the labeling room works with
+  // the rig (unsaved labels asked about first); the calibration room keeps its work.
   connect(calibration_room_, &CalibrationRoom::rigSaved, this, [this](const QString& rig) {
+    if (!session_ || !calibration_) return;
+    std::unique_ptr<CalibrationPresenter> work = std::move(calibration_);
+    const bool reopened = OpenProject(QString::fromStdString(session_->project().path));
+    if (reopened) work->SetProjectRig(&session_->rig(), session_->project().rig);
+    calibration_ = std::move(work);
+    ShowRoom(Room::kCalibration);
     statusBar()->showMessage(
-        QString("Rig saved to %1 and named in the project: the labeling room uses it once the "
-                "project is opened again (File > Open recent)")
-            .arg(rig),
+        reopened ? QString("Rig saved to %1: the project names it, the labeling room works with it")
+                       .arg(rig)
+                 : QString("Rig saved to %1 and named in the project: the labeling room uses it "
+                           "once the project is opened again")
+                       .arg(rig),
         15000);
   });
   for (QDockWidget* dock : findChildren<QDockWidget*>()) labeling_bars_.push_back(dock);

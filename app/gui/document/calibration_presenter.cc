@@ -555,6 +555,11 @@ void CalibrationPresenter::ToggleExcluded(ImageKey key) {
 
 // ---- Save.
 
+void CalibrationPresenter::SetProjectRig(const calib::Rig* rig, std::string rig_path) {
+  rig_ = rig;
+  rig_path_ = std::move(rig_path);
+}
+
 void CalibrationPresenter::Save(const std::string& path) {
   const calib::CalibrationResult* r = result();
   if (r == nullptr) throw std::logic_error("nothing calibrated to save");

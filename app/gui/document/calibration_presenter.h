@@ -206,6 +206,8 @@ class CalibrationPresenter {
   // (written through its own ".partial").
   void Save(const std::string& path);
   const std::string& rig_path() const { return rig_path_; }
+  // The project's rig is now `rig` (a project opened again, e.g. after Save); the work stays.
+  void SetProjectRig(const calib::Rig* rig, std::string rig_path);
   bool has_project() const { return !project_path_.empty(); }
   bool saved() const { return saved_; }
   // Expires with the presenter: a worker's answer checks it before it is delivered.

@@ -5,10 +5,11 @@
 // calibrate`'s code path gives for the same images. The image view draws the corners and the
 // residual arrows where the image's points are.
 //
-// With NETLAB_CALIBRATION_TWIN=SHOT (a rendered twin's shot folder: calibration/camN/*.png,
-// calibration/foil.yaml, rig_true.yaml) the same session runs on its images: the detection and
-// calibration times, and the saved rig against the true one, are printed; with
-// NETLAB_CALIBRATION_SCREENSHOT=OUT.png the room is saved as the person sees it.
+// With NETLAB_CALIBRATION_TWIN=SHOT (a rendered twin's shot folder: experiment.yaml,
+// calibration/camN/*.png, calibration/foil.yaml, rig_true.yaml) the same session runs in the
+// window on a project over it: the detection and calibration times, and the saved rig against the
+// true one, are printed; with NETLAB_CALIBRATION_SCREENSHOT=OUT.png the window is saved as the
+// person sees it.
 
 #include <gtest/gtest.h>
 
@@ -26,6 +27,9 @@
 #include <cstdlib>
 
 #include "app/gui/calibration_room.h"
+#include "app/gui/document/project.h"
+#include "app/gui/document/session.h"
+#include "app/gui/main_window.h"
 #include "calibration/rig_compare.h"
 #include "tests/app/gui/foil_shot.h"
 
@@ -51,6 +55,8 @@ bool WaitIdle(const CalibrationRoom& room, int timeout_ms) {
   return !room.busy();
 }
 
+std::pair<double, double> RunDetectAndCalibrate(CalibrationRoom& room, int timeout_ms);
+
 // The person's session up to the exclusion: the target typed, one row per camera added and its
 // glob typed, Detect, Calibrate. Returns the seconds detection and calibration took.
 std::pair<double, double> DetectAndCalibrate(CalibrationRoom& room, const std::string& target,
@@ -73,6 +79,11 @@ std::pair<double, double> DetectAndCalibrate(CalibrationRoom& room, const std::s
     QTest::keyClick(editor, Qt::Key_Return);
   }
   EXPECT_EQ(room.globs_table()->rowCount(), static_cast<int>(globs.size()));
+  return RunDetectAndCalibrate(room, timeout_ms);
+}
+
+// Detect, then Calibrate, each waited for: the seconds they took.
+std::pair<double, double> RunDetectAndCalibrate(CalibrationRoom& room, int timeout_ms) {
   QElapsedTimer clock;
   clock.start();
   Click(room.detect_button());
@@ -206,23 +217,35 @@ TEST(CalibrationRoom, BadInputsAreSaidAndNothingRuns) {
   fs::remove_all(dir);
 }
 
-// The twin's foil images (see the top of this file): skipped unless NETLAB_CALIBRATION_TWIN is set.
-TEST(CalibrationRoom, TheTwinsFoilImages) {
+// The twin's foil images (see the top of this file), in the window: a project over the twin's
+// recording opens in the calibration room with the images and the foil filled in; Detect,
+// Calibrate, the worst image left out, Save; the project is opened again with the saved rig and
+// the room keeps its work.
+TEST(CalibrationRoom, TheTwinsFoilImagesInTheWindow) {
   const char* twin = std::getenv("NETLAB_CALIBRATION_TWIN");
   if (twin == nullptr) GTEST_SKIP() << "NETLAB_CALIBRATION_TWIN not set";
   const fs::path shot = twin;
-  std::string target;
-  const auto globs = CalibrationPresenter::GlobsInFolder((shot / "calibration").string(), &target);
-  ASSERT_FALSE(globs.empty());
   const calib::Rig truth = calib::ReadRig((shot / "rig_true.yaml").string());
-  const fs::path out = fs::temp_directory_path() / ("netlab_twin_rig_" + std::to_string(getpid()) + ".yaml");
-  CalibrationPresenter presenter(&truth, (shot / "rig_true.yaml").string());
-  CalibrationRoom room;
-  room.resize(1600, 1000);
-  room.show();
-  room.Show(&presenter);
-  ASSERT_TRUE(QTest::qWaitForWindowExposed(&room));
-  const auto [detect_s, calibrate_s] = DetectAndCalibrate(room, target, globs, 600000);
+  const fs::path dir = fs::temp_directory_path() / ("netlab_twin_project_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  fs::copy_file(shot / "rig_true.yaml", dir / "rig_before.yaml");
+  const std::string project = (dir / "project.yaml").string();
+  SaveProject(MakeProject((shot / "experiment.yaml").string(), (dir / "rig_before.yaml").string(),
+                          "", (dir / "labels.h5").string(), 11, 11),
+              project);
+  MainWindow w;
+  w.resize(1600, 1000);
+  w.show();
+  QString error;
+  ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), false, &error)) << error.toStdString();
+  ASSERT_TRUE(QTest::qWaitForWindowExposed(&w));
+  w.ShowRoom(MainWindow::Room::kCalibration);
+  CalibrationRoom& room = *w.calibration_room();
+  ASSERT_EQ(room.globs_table()->rowCount(), 4);  // shot/calibration/camN/*.png
+  ASSERT_TRUE(room.target_edit()->text().endsWith("foil.yaml"));
+  const auto [detect_s, calibrate_s] = RunDetectAndCalibrate(room, 600000);
+  const CalibrationPresenter& presenter = *w.calibration();
   ASSERT_NE(presenter.result(), nullptr) << room.results_label()->text().toStdString();
   std::printf("twin: %s\n", presenter.DetectionSummary().toStdString().c_str());
   for (const CalibrationImage& image : presenter.images())
@@ -243,9 +266,20 @@ TEST(CalibrationRoom, TheTwinsFoilImages) {
   ASSERT_NE(presenter.result(), nullptr);
   std::printf("twin: without it, calibration %.1f s, RMS %.3f px\n", clock.elapsed() / 1000.0,
               presenter.result()->summary.rms_px);
-  ASSERT_TRUE(room.SaveTo(QString::fromStdString(out.string())));
-  const calib::Rig rig = calib::ReadRig(out.string());
-  std::vector<std::string> names;
+
+  const std::string saved = (dir / "rig.yaml").string();
+  ASSERT_TRUE(room.SaveTo(QString::fromStdString(saved)));
+  // The project names the rig, the window works with it, the room kept its work.
+  EXPECT_EQ(LoadProject(project).rig, saved);
+  ASSERT_NE(w.session(), nullptr);
+  EXPECT_EQ(w.session()->project().rig, saved);
+  const calib::Rig rig = calib::ReadRig(saved);
+  ExpectSameRig(w.session()->rig(), rig);
+  EXPECT_EQ(w.room(), MainWindow::Room::kCalibration);
+  ASSERT_EQ(w.calibration(), &presenter);
+  ASSERT_NE(presenter.result(), nullptr);
+  EXPECT_TRUE(presenter.saved());
+
   calib::Rig true_cameras;
   for (const calib::Camera& c : rig.cameras) true_cameras.cameras.push_back(truth.cameras[truth.Find(c.name)]);
   const calib::RigComparison comparison = calib::CompareRigs(rig, true_cameras, false);
@@ -255,17 +289,16 @@ TEST(CalibrationRoom, TheTwinsFoilImages) {
                 1000 * comparison.cameras[c].centre_error_m, 1000 * sigma);
     EXPECT_LT(comparison.cameras[c].centre_error_m, 3 * sigma) << rig.cameras[c].name;
   }
-  fs::remove(out);
   if (const char* screenshot = std::getenv("NETLAB_CALIBRATION_SCREENSHOT")) {
-    // The worst image left out, the knocked camera's next image shown with its coverage.
+    // The knocked camera's next image shown with its coverage.
     ClickCell(room.images_table(), worst.first * presenter.frames() + (worst.second + 1) % presenter.frames(), 1);
     for (QCheckBox* box : room.findChildren<QCheckBox*>())
       if (box->text() == "Coverage") Click(box);
     ASSERT_TRUE(WaitIdle(room, 10000));
-    ASSERT_TRUE(room.grab().save(screenshot));
+    ASSERT_TRUE(w.grab().save(screenshot));
     std::printf("twin: wrote %s\n", screenshot);
   }
-  room.Show(nullptr);
+  fs::remove_all(dir);
 }
 
 }  // namespace
