@@ -1,6 +1,7 @@
 // The calibration room driven by a person's mouse and keys (Qt's offscreen platform), on the
 // rendered foil images of tests/app/gui/foil_shot.h: type the target, add the cameras and type
-// their globs, Detect, Calibrate, click the worst image's Used cell (it is excluded and the rig
+// their globs, Detect and Cancel (the answer says cancelled, Calibrate waits), Detect, Calibrate,
+// click the worst image's Used cell (it is excluded and the rig
 // calibrated again), Ctrl+Z and Ctrl+Shift+Z, Save. The saved rig equals what `netlab
 // calibrate`'s code path gives for the same images. The image view draws the corners and the
 // residual arrows where the image's points are.
@@ -79,6 +80,14 @@ std::pair<double, double> DetectAndCalibrate(CalibrationRoom& room, const std::s
     QTest::keyClick(editor, Qt::Key_Return);
   }
   EXPECT_EQ(room.globs_table()->rowCount(), static_cast<int>(globs.size()));
+  // Detect, then Cancel at once: the images reached are kept, Calibrate waits for all.
+  Click(room.detect_button());
+  EXPECT_TRUE(room.cancel_button()->isEnabled());
+  Click(room.cancel_button());
+  EXPECT_TRUE(WaitIdle(room, timeout_ms));
+  EXPECT_TRUE(room.status_label()->text().contains("(cancelled)"))
+      << room.status_label()->text().toStdString();
+  EXPECT_FALSE(room.calibrate_button()->isEnabled());
   return RunDetectAndCalibrate(room, timeout_ms);
 }
 
@@ -113,6 +122,8 @@ TEST(CalibrationRoom, APersonCalibratesExcludesTheWorstImageUndoesAndSaves) {
   DetectAndCalibrate(room, (shot.dir / "foil.yaml").string(), shot.globs, 60000);
   ASSERT_NE(presenter.result(), nullptr) << room.results_label()->text().toStdString();
   EXPECT_EQ(room.images_table()->rowCount(), 4 * kFrames);
+  EXPECT_EQ(room.progress()->maximum(), 4 * kFrames);
+  EXPECT_EQ(room.progress()->value(), 4 * kFrames);
   // The blank image is listed failed, with why.
   EXPECT_EQ(room.images_table()->item(3 * kFrames + kFrames - 1, CalibrationRoom::kUsedColumn)->text(),
             "failed: no chessboard of 9x6 inner corners found");
