@@ -1,10 +1,9 @@
 // The calibration room driven by a person's mouse and keys (Qt's offscreen platform), on the
 // rendered foil images of tests/app/gui/foil_shot.h: type the target, add the cameras and type
 // their globs, Detect and Cancel (the answer says cancelled, Calibrate waits), Detect, Calibrate,
-// click the worst image's Used cell (it is excluded and the rig
-// calibrated again), Ctrl+Z and Ctrl+Shift+Z, Save. The saved rig equals what `netlab
-// calibrate`'s code path gives for the same images. The image view draws the corners and the
-// residual arrows where the image's points are.
+// click the worst image's Used cell (it is excluded and the rig calibrated again), Ctrl+Z and
+// Ctrl+Shift+Z, Save. The saved rig equals what `netlab calibrate`'s code path gives for the same
+// images. The image view draws the corners and the residual arrows where the image's points are.
 //
 // With NETLAB_CALIBRATION_TWIN=SHOT (a rendered twin's shot folder: experiment.yaml,
 // calibration/camN/*.png, calibration/foil.yaml, rig_true.yaml) the same session runs in the
