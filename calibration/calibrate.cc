@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <glob.h>
 #include <iomanip>
 #include <limits>
 #include <mutex>
@@ -913,6 +914,17 @@ CalibrationResult CalibrateRig(const CalibrationTarget& target, const Calibratio
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   result.summary = s.summary;
   return result;
+}
+
+std::vector<std::string> ImagesMatching(const std::string& pattern) {
+  glob_t g{};
+  const int status = glob(pattern.c_str(), GLOB_TILDE | GLOB_BRACE, nullptr, &g);
+  std::vector<std::string> files;
+  if (status == 0)
+    for (size_t i = 0; i < g.gl_pathc; ++i) files.push_back(g.gl_pathv[i]);
+  globfree(&g);
+  std::sort(files.begin(), files.end());
+  return files;
 }
 
 CalibrationInput DetectInImages(const std::vector<std::string>& camera_names,

@@ -116,6 +116,10 @@ struct CalibrationResult {
 CalibrationResult CalibrateRig(const CalibrationTarget& target, const CalibrationInput& input,
                                const CalibrationOptions& options);
 
+// The files a glob pattern names (~ and {a,b} expanded), sorted: the order DetectInImages
+// takes them in. Empty when none match.
+std::vector<std::string> ImagesMatching(const std::string& pattern);
+
 // Image files per camera (sorted: the index is the frame) -> detections. Throws
 // std::runtime_error naming the file on an unreadable image or one whose size differs from its
 // camera's first; and naming the camera and images when the target is found in none of them.

@@ -1,7 +1,6 @@
 // netlab calibrate --board BOARD --images NAME=GLOB [--images NAME=GLOB ...] --out rig.yaml
 //                  [--json] [--fix-intrinsics rig.yaml] [--rational] [--truth rig.yaml] [--quiet]
 
-#include <glob.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -43,17 +42,6 @@ constexpr char kHelp[] =
     "                         Cameras match by name; true ones not calibrated are ignored\n"
     "  --json                 print one JSON summary object on stdout as the last output\n"
     "  --quiet                no progress on stderr\n";
-
-std::vector<std::string> Glob(const std::string& pattern) {
-  glob_t g{};
-  const int status = glob(pattern.c_str(), GLOB_TILDE | GLOB_BRACE, nullptr, &g);
-  std::vector<std::string> files;
-  if (status == 0)
-    for (size_t i = 0; i < g.gl_pathc; ++i) files.push_back(g.gl_pathv[i]);
-  globfree(&g);
-  std::sort(files.begin(), files.end());
-  return files;
-}
 
 // The "truth" object of the --json summary.
 void WriteTruthJson(JsonWriter& json, const calib::RigComparison& comparison) {
@@ -156,7 +144,7 @@ int RunCalibrate(const std::vector<std::string>& args) {
       const std::string name = spec.substr(0, eq), pattern = spec.substr(eq + 1);
       if (std::find(names.begin(), names.end(), name) != names.end())
         throw UsageError("camera '" + name + "' given twice");
-      std::vector<std::string> matched = Glob(pattern);
+      std::vector<std::string> matched = calib::ImagesMatching(pattern);
       if (matched.empty())
         throw std::runtime_error("--images " + spec + ": the pattern matches no file");
       names.push_back(name);

@@ -1,6 +1,5 @@
 #include "app/gui/document/calibration_presenter.h"
 
-#include <glob.h>
 
 #include <QFileInfo>
 #include <QStringList>
@@ -20,18 +19,6 @@
 
 namespace netlab::gui {
 namespace {
-
-// The files a pattern names, sorted (as `netlab calibrate --images`).
-std::vector<std::string> Glob(const std::string& pattern) {
-  glob_t g{};
-  const int status = glob(pattern.c_str(), GLOB_TILDE | GLOB_BRACE, nullptr, &g);
-  std::vector<std::string> files;
-  if (status == 0)
-    for (size_t i = 0; i < g.gl_pathc; ++i) files.push_back(g.gl_pathv[i]);
-  globfree(&g);
-  std::sort(files.begin(), files.end());
-  return files;
-}
 
 // What the target is, for "not found" reasons.
 std::string TargetName(const calib::CalibrationTarget& target) {
@@ -176,7 +163,7 @@ void CalibrationPresenter::SetImages(
     if (name.empty()) throw std::runtime_error("images '" + pattern + "': the camera has no name");
     if (std::find(names.begin(), names.end(), name) != names.end())
       throw std::runtime_error("camera '" + name + "' given twice");
-    std::vector<std::string> matched = Glob(pattern);
+    std::vector<std::string> matched = calib::ImagesMatching(pattern);
     if (matched.empty())
       throw std::runtime_error("images of " + name + ": the pattern '" + pattern +
                                "' matches no file");
