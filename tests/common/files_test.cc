@@ -7,8 +7,6 @@
 
 #include <gtest/gtest.h>
 
-#include <signal.h>
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -19,6 +17,8 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "tests/file_size_limit.h"
 
 namespace netlab {
 namespace {
@@ -166,31 +166,10 @@ TEST_F(FolderReplacementTest, AnOutputSetPutsItsOutputsInPlaceOnlyTogether) {
                                                                  {"report.html", "new report"}}));
 }
 
-// A file size limit (RLIMIT_FSIZE, with SIGXFSZ ignored) makes a write past it fail with EFBIG, as
-// a full disk fails it with ENOSPC; restored on destruction.
-class FileSizeLimit {
- public:
-  explicit FileSizeLimit(rlim_t bytes) {
-    getrlimit(RLIMIT_FSIZE, &old_);
-    old_handler_ = signal(SIGXFSZ, SIG_IGN);
-    rlimit limit = old_;
-    limit.rlim_cur = bytes;
-    setrlimit(RLIMIT_FSIZE, &limit);
-  }
-  ~FileSizeLimit() {
-    setrlimit(RLIMIT_FSIZE, &old_);
-    signal(SIGXFSZ, old_handler_);
-  }
-
- private:
-  rlimit old_;
-  sighandler_t old_handler_;
-};
-
 TEST_F(FolderReplacementTest, AWriteThatRunsOutOfSpaceLeavesTheFileAsItWas) {
   Write(dir_ / "material.yaml", "the previous file");
   try {
-    FileSizeLimit limit(4096);
+    testing::FileSizeLimit limit(4096);
     WriteTextFile((dir_ / "material.yaml").string(), std::string(100000, 'x'));
     ADD_FAILURE() << "a write past the limit succeeded";
   } catch (const std::runtime_error& e) {

@@ -7,8 +7,6 @@
 // must leave as they were (an output never replaces an input, a failed run leaves every
 // existing output unchanged).
 
-#include <signal.h>
-#include <sys/resource.h>
 
 #include <filesystem>
 #include <fstream>
@@ -20,6 +18,7 @@
 #include <gtest/gtest.h>
 
 #include "tests/app/cli/run_netlab.h"
+#include "tests/file_size_limit.h"
 
 namespace netlab::testing {
 
@@ -36,30 +35,6 @@ struct BadInput {
   // write past it fails with EFBIG as a write to a full disk fails with ENOSPC), and no
   // "<unchanged>.partial" may be left behind.
   long file_limit = 0;
-};
-
-// A limit on the size of every file this process and its children write, restored on
-// destruction. SIGXFSZ is ignored (and stays ignored across exec), so the write that crosses the
-// limit fails with EFBIG instead of killing the writer.
-class FileSizeLimit {
- public:
-  explicit FileSizeLimit(long bytes) {
-    getrlimit(RLIMIT_FSIZE, &old_);
-    old_handler_ = signal(SIGXFSZ, SIG_IGN);
-    rlimit limit = old_;
-    limit.rlim_cur = static_cast<rlim_t>(bytes);
-    setrlimit(RLIMIT_FSIZE, &limit);
-  }
-  FileSizeLimit(const FileSizeLimit&) = delete;
-  FileSizeLimit& operator=(const FileSizeLimit&) = delete;
-  ~FileSizeLimit() {
-    setrlimit(RLIMIT_FSIZE, &old_);
-    signal(SIGXFSZ, old_handler_);
-  }
-
- private:
-  rlimit old_;
-  sighandler_t old_handler_;
 };
 
 // What ExpectBadInput compares of an `unchanged` file: its kind and, for a regular file, its bytes.
