@@ -219,6 +219,15 @@ void CameraView::DrawOverlay(QPainter& painter) const {
     painter.setPen(QPen(QColor(120, 200, 255, 140), 1.0));
     for (const auto& [a, b] : overlay_.links) painter.drawLine(ToWidget(a), ToWidget(b));
   }
+  if (!overlay_.simulated.empty() || !overlay_.simulated_links.empty()) {
+    painter.setPen(QPen(overlay_.simulated_colour, 1.2));
+    for (const auto& [a, b] : overlay_.simulated_links) painter.drawLine(ToWidget(a), ToWidget(b));
+    // Larger than a label's circle, so that a simulated knot on its label rings it.
+    const double h = std::clamp(scale_ * 3.0, 3.0, 9.0) + 2.5;
+    painter.setBrush(Qt::NoBrush);
+    for (const ViewOverlay::Mark& m : overlay_.simulated)
+      painter.drawRect(QRectF(ToWidget(m.px) - QPointF(h, h), QSizeF(2 * h, 2 * h)));
+  }
   if (show_labels_) {
     const double r = std::clamp(scale_ * 3.0, 3.0, 9.0);
     for (const ViewOverlay::Mark& m : overlay_.labels) {

@@ -42,6 +42,7 @@
 #include "app/gui/camera_view.h"
 #include "app/gui/knot_grid.h"
 #include "app/gui/recording_room.h"
+#include "app/gui/simulation_room.h"
 #include "app/gui/settings.h"
 #include "app/gui/shortcut_editor.h"
 #include "app/gui/timeline.h"
@@ -95,6 +96,7 @@ MainWindow::MainWindow() {
 }
 
 MainWindow::~MainWindow() {
+  simulation_room_->Show(nullptr, nullptr);  // its frame loader reads the session
   tracker_.Cancel();
   tracker_.Wait();
   checker_.Wait();
@@ -377,6 +379,7 @@ void MainWindow::BuildActions() {
   AddAction(rooms, "Recording room", "Ctrl+1", &MainWindow::RecordingRoomAction);
   AddAction(rooms, "Calibration room", "Ctrl+2", &MainWindow::CalibrationRoomAction);
   AddAction(rooms, "Labeling room", "Ctrl+3", &MainWindow::LabelingRoomAction);
+  AddAction(rooms, "Simulation room", "Ctrl+4", &MainWindow::SimulationRoomAction);
   QMenu* help = menuBar()->addMenu("&Help");
   AddAction(help, "Keyboard shortcuts", "F1;?", &MainWindow::ShowShortcuts);
   help->addAction("Manual (docs/gui.md)", this, &MainWindow::ShowManual);
@@ -470,6 +473,8 @@ bool MainWindow::OpenProject(const QString& path, bool ask, QString* error) {
                              10000);
   }
   calibration_ = std::make_unique<CalibrationPresenter>(&session_->rig(), p.rig, p.path);
+  reconstruction_ = std::make_unique<ReconstructionPresenter>(session_.get());
+  simulation_ = std::make_unique<SimulationPresenter>(session_.get(), reconstruction_.get());
   rooms_->show();
   for (int i = 0; i < rooms_->count(); ++i) rooms_->setTabEnabled(i, true);
   ShowRoom(Room::kLabeling);
@@ -1370,7 +1375,8 @@ bool MainWindow::WaitForIdle(int timeout_ms) {
 // The rooms: recording, calibration, labeling.
 
 void MainWindow::BuildRooms() {
-  for (const char* name : {"Recording", "Calibration", "Labeling"}) rooms_->addTab(name);
+  for (const char* name : {"Recording", "Calibration", "Labeling", "Simulation"})
+    rooms_->addTab(name);
   rooms_->setCurrentIndex(static_cast<int>(Room::kLabeling));
   rooms_->hide();  // until a project is open
   connect(rooms_, &QTabBar::currentChanged, this,
@@ -1406,6 +1412,11 @@ void MainWindow::BuildRooms() {
                            "once the project is opened again")
                        .arg(rig),
         15000);
+  });
+  simulation_room_ = new SimulationRoom;
+  stack_->addWidget(simulation_room_);
+  connect(simulation_room_, &SimulationRoom::frameChanged, this, [this](int t) {
+    if (session_ && room_ == Room::kSimulation) SetFrame(t);
   });
   for (QDockWidget* dock : findChildren<QDockWidget*>()) labeling_bars_.push_back(dock);
   for (QToolBar* bar : findChildren<QToolBar*>()) labeling_bars_.push_back(bar);
@@ -1449,10 +1460,18 @@ void MainWindow::ShowRoom(Room room) {
       stack_->setCurrentWidget(workspace_);
       FocusView();
       break;
+    case Room::kSimulation:
+      stack_->setCurrentWidget(simulation_room_);
+      simulation_room_->Show(simulation_.get(), reconstruction_.get());
+      simulation_room_->SetFrame(frame());
+      break;
   }
 }
 
 void MainWindow::StopSessionWorkers() {
+  simulation_room_->Show(nullptr, nullptr);
+  simulation_.reset();
+  reconstruction_.reset();
   review_table_->setModel(nullptr);
   presenter_.reset();
   review_model_.reset();

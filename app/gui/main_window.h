@@ -22,9 +22,11 @@
 #include "app/gui/document/cursor.h"
 #include "app/gui/document/labeling_presenter.h"
 #include "app/gui/document/latest_request.h"
+#include "app/gui/document/reconstruction_presenter.h"
 #include "app/gui/document/recording_presenter.h"
 #include "app/gui/document/review_model.h"
 #include "app/gui/document/session.h"
+#include "app/gui/document/simulation_presenter.h"
 
 class QLabel;
 class QProgressDialog;
@@ -42,6 +44,7 @@ class CalibrationRoom;
 class CameraView;
 class KnotGrid;
 class RecordingRoom;
+class SimulationRoom;
 class Timeline;
 struct ViewOverlay;
 
@@ -65,9 +68,10 @@ class MainWindow : public QMainWindow {
   Session* session() { return session_.get(); }
 
   // The rooms of an open project, in the order of the work: the recording (ingest check), the
-  // calibration (the rig), the labeling. The tab bar above them and the Room menu switch them;
-  // the labeling room's docks, tool bar and keys belong to it alone.
-  enum class Room { kRecording, kCalibration, kLabeling };
+  // calibration (the rig), the labeling, the simulation (the simulated net over the footage and
+  // the score's verdict). The tab bar above them and the Room menu switch them; the labeling
+  // room's docks, tool bar and keys belong to it alone.
+  enum class Room { kRecording, kCalibration, kLabeling, kSimulation };
   // Shows a room; without a project only the recording room of an opened recording.
   void ShowRoom(Room room);
   // Opens a recording alone (experiment.yaml, no rig or labels yet) in the recording room; the
@@ -77,8 +81,11 @@ class MainWindow : public QMainWindow {
   Room room() const { return room_; }
   RecordingRoom* recording_room() const { return recording_room_; }
   CalibrationRoom* calibration_room() const { return calibration_room_; }
+  SimulationRoom* simulation_room() const { return simulation_room_; }
   const RecordingPresenter* recording() const { return recording_.get(); }
   const CalibrationPresenter* calibration() const { return calibration_.get(); }
+  SimulationPresenter* simulation() const { return simulation_.get(); }
+  ReconstructionPresenter* reconstruction() const { return reconstruction_.get(); }
 
   // The current frame row, camera (the one the person works in) and knot (the knot picker).
   int frame() const { return cursor_.frame(); }
@@ -140,6 +147,7 @@ class MainWindow : public QMainWindow {
   void RecordingRoomAction() { ShowRoom(Room::kRecording); }
   void CalibrationRoomAction() { ShowRoom(Room::kCalibration); }
   void LabelingRoomAction() { ShowRoom(Room::kLabeling); }
+  void SimulationRoomAction() { ShowRoom(Room::kSimulation); }
   void BuildWorkspace();
   void BuildActions();
   QAction* AddAction(QMenu* menu, const QString& name, const QString& keys,
@@ -272,6 +280,7 @@ class MainWindow : public QMainWindow {
   Room room_ = Room::kLabeling;
   RecordingRoom* recording_room_ = nullptr;
   CalibrationRoom* calibration_room_ = nullptr;
+  SimulationRoom* simulation_room_ = nullptr;
   std::vector<QAction*> labeling_actions_;  // enabled in the labeling room only
   std::vector<QWidget*> labeling_bars_;     // its docks and tool bar, hidden in the other rooms
   std::vector<bool> labeling_bars_shown_;   // ... whether each was shown (empty: they are out)
@@ -324,6 +333,9 @@ class MainWindow : public QMainWindow {
   // The recording room's presenter (over its own sequence of the project's experiment) and check.
   std::unique_ptr<RecordingPresenter> recording_;
   std::unique_ptr<CalibrationPresenter> calibration_;  // over session_'s rig
+  // The simulation room's presenters, over session_ (the labels triangulated, the simulations).
+  std::unique_ptr<ReconstructionPresenter> reconstruction_;
+  std::unique_ptr<SimulationPresenter> simulation_;
   LatestRequest<recon::CheckReport> checker_{
       this, [this](recon::CheckReport report) { OnChecked(std::move(report)); }};
   bool preview_corners_ = false;

@@ -1,8 +1,8 @@
 #pragma once
 // What a camera view draws over its frame: the labels, the links, the selected knot's epipolar
 // curves and reprojection, the expected place of a missing knot, Find Node's candidates, a
-// pending preview's ghosts and the caption. Made by the labeling presenter without a window
-// (labeling_presenter.h); CameraView paints it.
+// pending preview's ghosts, a simulated net and the caption. Made without a window by the
+// labeling presenter (labeling_presenter.h) and the simulation room; CameraView paints it.
 
 #include <Eigen/Core>
 #include <QColor>
@@ -46,6 +46,11 @@ struct ViewOverlay {
     bool review = false;  // the label would be kept for review
   };
   std::vector<Ghost> ghosts;
+  // A simulated net over the frame (the simulation room): its knots as squares and its links as
+  // lines, in their mark's colour, drawn under the labels.
+  std::vector<Mark> simulated;
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> simulated_links;
+  QColor simulated_colour = QColor(0, 230, 255);
   QString caption;                                     // camera, frame, residual
 };
 

@@ -1,0 +1,148 @@
+#include "app/gui/document/reconstruction_presenter.h"
+
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+#include "app/gui/document/session.h"
+#include "common/errors.h"
+#include "common/files.h"
+#include "libreconstruct/geometry/camera_offsets.h"
+#include "libreconstruct/geometry/track_export.h"
+#include "libreconstruct/recording/experiment.h"
+
+namespace netlab::gui {
+
+ReconstructionPresenter::ReconstructionPresenter(const Session* session) : session_(session) {}
+
+TriangulationJob ReconstructionPresenter::MakeJob(const TriangulationOptions& options) const {
+  if (options.adjustment == recon::Adjustment::kNone &&
+      (options.link_length_m > 0 || options.smooth_sigma_m > 0))
+    throw std::invalid_argument(
+        "the priors (link length, smoothing) need bundle adjustment of the points or the rig");
+  const Session& s = *session_;
+  TriangulationJob job;
+  job.rig = s.rig();
+  job.labels = s.document().labels();
+  job.rows = s.project().rows;
+  job.cols = s.project().cols;
+  recon::SequenceOptions& o = job.options;
+  o.adjustment = options.adjustment;
+  o.sigma_px = options.sigma_px;
+  o.link_length_m = options.link_length_m;
+  o.smoothness_sigma_m = options.smooth_sigma_m;
+  o.use_unreviewed = options.use_unreviewed;
+  o.threads = 2;  // as netlab triangulate
+  // The frames' times: the cameras' timestamps where the recording has them (--experiment).
+  const recon::Experiment& experiment = s.sequence().experiment();
+  std::vector<std::string> names;
+  std::vector<std::map<int, double>> timestamps(job.rig.cameras.size());
+  std::vector<std::string> where(job.rig.cameras.size());
+  for (size_t c = 0; c < job.rig.cameras.size(); ++c) {
+    names.push_back(job.rig.cameras[c].name);
+    const int e = experiment.Find(job.rig.cameras[c].name);
+    if (e < 0 || experiment.cameras[e].timestamps.empty()) continue;
+    where[c] = experiment.cameras[e].timestamps;
+    timestamps[c] = recon::ReadTimestamps(where[c]);
+  }
+  job.time_s = recon::FrameTimesFromTimestamps(job.labels.frame_index, s.fps(), names, timestamps,
+                                               where)
+                   .time_s;
+  return job;
+}
+
+TriangulationRun ReconstructionPresenter::Triangulate(
+    const TriangulationJob& job, const std::atomic<bool>& cancel,
+    const std::function<void(const std::string&, double)>& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  TriangulationRun run;
+  if (cancel) {
+    run.cancelled = true;
+    return run;
+  }
+  try {
+    recon::SequenceOptions options = job.options;
+    options.progress = progress;
+    recon::SequenceResult result = recon::ReconstructSequence(job.rig, job.labels, options);
+    if (cancel) {
+      run.cancelled = true;
+    } else if (result.candidates == 0) {
+      run.error = "no knot is labeled in two cameras in any frame: nothing to triangulate" +
+                  std::string(job.options.use_unreviewed
+                                  ? ""
+                                  : " (labels still marked for review are left out)");
+    } else if (result.triangulated == 0) {
+      run.error = "none of the " + std::to_string(result.candidates) +
+                  " knot-frames labeled in two or more cameras could be triangulated (every one "
+                  "rejected as an outlier: do the labels belong to this rig?)";
+    } else {
+      run.tracks = recon::TracksFromSequence(result, job.time_s, "netlab gui");
+      run.warnings = recon::SequenceWarnings(result);
+      run.result = std::move(result);
+    }
+  } catch (const std::exception& e) {
+    run.error = e.what();
+  }
+  run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return run;
+}
+
+void ReconstructionPresenter::SetRun(TriangulationRun run) {
+  if (run.cancelled) return;  // the tracks before it stay
+  run_ = std::move(run);
+}
+
+const netsim::KnotTracks* ReconstructionPresenter::tracks() const {
+  return run_ && run_->result ? &run_->tracks : nullptr;
+}
+
+int ReconstructionPresenter::TrackRow(int t) const {
+  const netsim::KnotTracks* tracks = this->tracks();
+  if (tracks == nullptr || t < 0 || t >= session_->frames()) return -1;
+  const int number = session_->frame_number(t);
+  const std::vector<int>& index = tracks->frame_index;
+  for (size_t i = 0; i < index.size(); ++i)
+    if (index[i] == number) return static_cast<int>(i);
+  return -1;
+}
+
+QString ReconstructionPresenter::Summary() const {
+  if (!run_) return "Not triangulated yet.";
+  if (!run_->result) return "Triangulation failed: " + QString::fromStdString(run_->error);
+  const recon::SequenceResult& r = *run_->result;
+  QString text = QString(
+                     "%1 knot-frames triangulated of %2 seen twice or more (%3 degenerate), %4 "
+                     "seen once; reprojection RMS %5 px; %6 outlier observations (threshold %7 "
+                     "px); sigma %8 px%9; %10 s")
+                     .arg(r.triangulated)
+                     .arg(r.candidates)
+                     .arg(r.degenerate_points.size())
+                     .arg(r.single_view)
+                     .arg(r.reprojection_rms_px, 0, 'f', 3)
+                     .arg(r.outliers.size())
+                     .arg(r.outlier_threshold_px, 0, 'f', 2)
+                     .arg(r.sigma_px, 0, 'f', 3)
+                     .arg(r.sigma_estimated ? " (estimated)" : "")
+                     .arg(run_->wall_s, 0, 'f', 1);
+  for (const std::string& w : run_->warnings) text += "\nwarning: " + QString::fromStdString(w);
+  return text;
+}
+
+void ReconstructionPresenter::Export(const std::string& tracks_path,
+                                     const std::string& csv_prefix) const {
+  const netsim::KnotTracks* tracks = this->tracks();
+  if (tracks == nullptr) throw std::logic_error("no tracks to export: triangulate first");
+  const int rows = session_->project().rows, cols = session_->project().cols;
+  const std::string pts = csv_prefix.empty() ? "" : csv_prefix + "xyzpts.csv";
+  const std::string res = csv_prefix.empty() ? "" : csv_prefix + "xyzres.csv";
+  OutputSet outputs({tracks_path, pts, res});
+  netsim::WriteKnotTracks(tracks_path, *tracks);
+  if (!pts.empty()) {
+    recon::WriteXyzPts(pts, *tracks, rows, cols);
+    recon::WriteXyzRes(res, *tracks, rows, cols);
+  }
+  outputs.Commit();
+}
+
+}  // namespace netlab::gui

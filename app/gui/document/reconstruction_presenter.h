@@ -1,0 +1,96 @@
+#pragma once
+// The reconstruction without a window: the session's labels triangulated into 3D knot tracks
+// with `netlab triangulate`'s engine (recon::ReconstructSequence and recon::TracksFromSequence,
+// docs/triangulation.md) and its options, on a worker; the tracks as the CLI writes them.
+//
+// The frames' times are the CLI's with --experiment: the mean of the cameras' timestamps where
+// the recording has them, else frame / fps.
+//
+//   ReconstructionPresenter reconstruction(&session);
+//   TriangulationOptions options;                          // --ba points, sigma from residuals
+//   reconstruction.SetRun(ReconstructionPresenter::Triangulate(reconstruction.MakeJob(options),
+//                                                              cancel));
+//   const netsim::KnotTracks* tracks = reconstruction.tracks();
+//   reconstruction.Export("tracks.h5", "out/");            // tracks.h5, out/xyzpts.csv, ...
+
+#include <QString>
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "calibration/rig.h"
+#include "libnetsim/tracks/track_file.h"
+#include "libreconstruct/geometry/bundle_adjust.h"
+#include "libreconstruct/labels/label_set.h"
+
+namespace netlab::gui {
+
+class Session;
+
+// The options a person chooses, as `netlab triangulate` names them.
+struct TriangulationOptions {
+  recon::Adjustment adjustment = recon::Adjustment::kPoints;  // --ba none | points | rig
+  double sigma_px = 0.0;        // --sigma-px: the labels' noise; 0: from the residuals
+  double link_length_m = 0.0;   // --link-length; 0: off
+  double smooth_sigma_m = 0.0;  // --smooth-sigma; 0: off
+  bool use_unreviewed = false;  // --use-unreviewed
+};
+
+// What a triangulation needs (copied: it runs on a worker) and what it answers.
+struct TriangulationJob {
+  calib::Rig rig;
+  recon::LabelSet labels;
+  std::vector<double> time_s;  // [labels.frames()]
+  recon::SequenceOptions options;
+  int rows = 0, cols = 0;
+};
+struct TriangulationRun {
+  std::optional<recon::SequenceResult> result;
+  netsim::KnotTracks tracks;          // valid with a result
+  std::vector<std::string> warnings;  // recon::SequenceWarnings
+  std::string error;                  // why there is no result
+  bool cancelled = false;
+  double wall_s = 0.0;
+};
+
+class ReconstructionPresenter {
+ public:
+  // `session` must outlive the presenter.
+  explicit ReconstructionPresenter(const Session* session);
+
+  // The job for the current labels (GUI thread). InputError naming the timestamps file when the
+  // recording's times cannot be used (as netlab triangulate --experiment), std::invalid_argument
+  // naming the option for a prior without adjustment.
+  TriangulationJob MakeJob(const TriangulationOptions& options) const;
+  // Any thread. progress(stage, fraction) from the engine's threads. A set `cancel` is honoured
+  // between the engine's stages only: the answer then says cancelled and holds nothing.
+  static TriangulationRun Triangulate(
+      const TriangulationJob& job, const std::atomic<bool>& cancel,
+      const std::function<void(const std::string&, double)>& progress = {});
+  void SetRun(TriangulationRun run);
+  const TriangulationRun* run() const { return run_ ? &*run_ : nullptr; }
+  // The tracks of the last run (null: none yet).
+  const netsim::KnotTracks* tracks() const;
+  // The run in a few lines (counts, reprojection RMS, outliers, degenerate points, warnings).
+  QString Summary() const;
+  // The tracks' row of frame row t of the session (-1: none).
+  int TrackRow(int t) const;
+
+  // Writes the tracks as netlab triangulate --out does, and with a non-empty `csv_prefix`
+  // PREFIXxyzpts.csv and PREFIXxyzres.csv as its --csv (all put in place together).
+  // std::logic_error without tracks, std::runtime_error naming a file that cannot be written.
+  void Export(const std::string& tracks_path, const std::string& csv_prefix) const;
+
+  const Session& session() const { return *session_; }
+  std::weak_ptr<const int> lifetime() const { return alive_; }
+
+ private:
+  const Session* session_;
+  std::optional<TriangulationRun> run_;
+  std::shared_ptr<const int> alive_ = std::make_shared<const int>(0);
+};
+
+}  // namespace netlab::gui

@@ -1,0 +1,299 @@
+#include "app/gui/document/simulation_presenter.h"
+
+#include <QFileInfo>
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <stdexcept>
+
+#include "app/gui/document/reconstruction_presenter.h"
+#include "app/gui/document/session.h"
+#include "common/errors.h"
+#include "common/files.h"
+#include "libnetsim/scenario/run_scenario.h"
+#include "libnetsim/validation/score_file.h"
+#include "libnetsim/validation/score_report.h"
+
+namespace netlab::gui {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Thrown from the run's progress call to stop it (never leaves Simulate).
+struct Cancelled {};
+
+// A name for files: the simulation's file name without its extension, safe characters only.
+std::string Stem(const std::string& path) {
+  std::string stem = std::filesystem::path(path).stem().string();
+  for (char& ch : stem)
+    if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '_' && ch != '-') ch = '_';
+  return stem.empty() ? "sim" : stem;
+}
+
+}  // namespace
+
+std::optional<Eigen::Vector2d> SimulatedView::Find(int knot) const {
+  for (size_t i = 0; i < knots.size(); ++i)
+    if (knots[i] == knot) return px[i];
+  return std::nullopt;
+}
+
+SimulationPresenter::SimulationPresenter(const Session* session,
+                                         const ReconstructionPresenter* reconstruction)
+    : session_(session), reconstruction_(reconstruction) {}
+
+SimulationJob SimulationPresenter::MakeSimulationJob(const std::string& scenario_path,
+                                                     const std::vector<std::string>& overrides,
+                                                     const std::string& out_path,
+                                                     double duration_s) {
+  SimulationJob job;
+  job.scenario_path = scenario_path;
+  for (const std::string& text : overrides) job.overrides.push_back(netsim::ParseOverride(text));
+  job.out_path = out_path;
+  job.duration_s = duration_s;
+  return job;
+}
+
+SimulationRun SimulationPresenter::Simulate(const SimulationJob& job,
+                                            const std::atomic<bool>& cancel,
+                                            const std::function<void(double)>& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  SimulationRun run;
+  run.path = job.out_path;
+  try {
+    netsim::Scenario scenario = netsim::LoadScenario(job.scenario_path, job.overrides);
+    if (job.duration_s > 0) scenario.duration = job.duration_s;
+    netsim::RunOptions options;
+    options.out_path = job.out_path;
+    options.progress = [&](double fraction) {
+      if (cancel) throw Cancelled{};
+      if (progress) progress(fraction);
+    };
+    // A cancelled or failed run leaves no file (and job.out_path as it was).
+    OutputSet outputs({job.out_path});
+    const netsim::RunSummary summary = netsim::RunScenario(scenario, options);
+    if (!summary.stable) {
+      run.error = job.scenario_path + ": the run stopped: " + summary.error;
+    } else {
+      outputs.Commit();
+      run.tracks = netsim::ReadKnotTracks(job.out_path);
+    }
+  } catch (const Cancelled&) {
+    run.cancelled = true;
+  } catch (const std::exception& e) {
+    run.error = e.what();
+  }
+  run.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return run;
+}
+
+SimulationRun SimulationPresenter::Load(const std::string& path) {
+  SimulationRun run;
+  run.path = path;
+  try {
+    run.tracks = netsim::ReadKnotTracks(path);
+  } catch (const std::exception& e) {
+    run.error = e.what();
+  }
+  return run;
+}
+
+int SimulationPresenter::Add(SimulationRun run) {
+  if (!run.tracks) return -1;
+  Simulation s;
+  s.path = run.path;
+  s.name = std::filesystem::path(run.path).filename().string();
+  s.tracks = std::move(*run.tracks);
+  simulations_.push_back(std::move(s));
+  return simulations() - 1;
+}
+
+const netsim::KnotTracks* SimulationPresenter::measured() const {
+  return reconstruction_ ? reconstruction_->tracks() : nullptr;
+}
+
+ScoreJob SimulationPresenter::MakeScoreJob(int i, netsim::Alignment alignment) const {
+  if (measured() == nullptr) throw std::logic_error("no measured tracks: triangulate first");
+  ScoreJob job;
+  job.index = i;
+  job.measured = *measured();
+  job.sim = simulations_.at(i).tracks;
+  job.options.alignment = alignment;
+  job.measured_name = "the triangulated labels";
+  job.sim_name = simulations_[i].path;
+  return job;
+}
+
+ScoreRun SimulationPresenter::RunScore(const ScoreJob& job) {
+  ScoreRun run;
+  run.index = job.index;
+  try {
+    const auto start = std::chrono::steady_clock::now();
+    run.result =
+        netsim::Score(job.measured, job.sim, job.options, job.measured_name, job.sim_name);
+    run.result->summary.wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  } catch (const std::exception& e) {
+    run.error = e.what();
+  }
+  return run;
+}
+
+void SimulationPresenter::SetScore(ScoreRun run, const std::string& folder) {
+  if (run.index < 0 || run.index >= simulations()) return;
+  Simulation& s = simulations_[run.index];
+  s.score = std::move(run.result);
+  s.score_error = run.error;
+  s.score_path.clear();
+  s.report_path.clear();
+  if (!s.score || folder.empty()) return;
+  const std::string stem = (std::filesystem::path(folder) / ("score_" + Stem(s.path))).string();
+  try {
+    OutputSet outputs({stem + ".h5", stem + ".html"});
+    netsim::WriteScore(stem + ".h5", *s.score);
+    netsim::ReportInfo info;
+    info.measured_path = "the labels of " + session_->project().labels + ", triangulated";
+    info.sim_path = s.path;
+    info.score_path = stem + ".h5";
+    netsim::WriteScoreReport(stem + ".html", *s.score, info);
+    outputs.Commit();
+    s.score_path = stem + ".h5";
+    s.report_path = stem + ".html";
+  } catch (const std::exception& e) {
+    s.score_error = std::string("scored, but the files could not be written: ") + e.what();
+  }
+}
+
+QString SimulationPresenter::Verdict(int i) const {
+  const Simulation& s = simulations_.at(i);
+  if (!s.score) {
+    if (!s.score_error.empty()) return "Not scored: " + QString::fromStdString(s.score_error);
+    return "Not scored yet.";
+  }
+  const netsim::ScoreSummary& m = s.score->summary;
+  const bool consistent = m.verdict == "consistent";
+  QString text =
+      QString("%1: %2 (mean d² %3 %4 the critical %5, p = %6, over %7 knot-frames).")
+          .arg(QString::fromStdString(m.verdict))
+          .arg(consistent ? "the simulated net lies where the cameras saw the real one, within "
+                            "the measurement's uncertainty"
+                          : "the simulated net is not where the cameras saw the real one: the "
+                            "differences are larger than the measurement's uncertainty allows")
+          .arg(m.mean_d2, 0, 'g', 3)
+          .arg(consistent ? "within" : "above")
+          .arg(m.critical_mean_d2, 0, 'g', 3)
+          .arg(m.p_value, 0, 'g', 2)
+          .arg(m.points);
+  text += "\n" + QString::fromStdString(m.headline);
+  QString aligned = QString("Aligned: %1, time offset %2 ms")
+                        .arg(QString::fromStdString(netsim::AlignmentName(m.alignment)))
+                        .arg(m.time_offset_s * 1e3, 0, 'f', 2);
+  if (m.alignment == netsim::Alignment::kRigid || m.alignment == netsim::Alignment::kTimeAndRigid)
+    aligned += QString(", moved %1 mm").arg(m.translation.norm() * 1e3, 0, 'f', 1);
+  text += "\n" + aligned + ".";
+  if (!s.score_error.empty()) text += "\n" + QString::fromStdString(s.score_error);
+  return text;
+}
+
+double SimulationPresenter::FrameTime(int t) const {
+  const netsim::KnotTracks* m = measured();
+  const int row = reconstruction_ ? reconstruction_->TrackRow(t) : -1;
+  if (m != nullptr && row >= 0) return m->time[row];
+  return session_->frame_number(t) / session_->fps();
+}
+
+double SimulationPresenter::time_offset_s(int i) const {
+  const Simulation& s = simulations_.at(i);
+  return s.score ? s.score->summary.time_offset_s : 0.0;
+}
+
+std::vector<Eigen::Vector3d> SimulationPresenter::KnotsAt(int i, double time_s) const {
+  const Simulation& s = simulations_.at(i);
+  const netsim::KnotTracks& sim = s.tracks;
+  const int rows = session_->project().rows, cols = session_->project().cols;
+  std::vector<Eigen::Vector3d> out(rows * cols, Eigen::Vector3d::Constant(kNaN));
+  const int n = sim.frames();
+  if (n == 0 || time_s < sim.time.front() || time_s > sim.time.back()) return out;
+  // The score's interpolant: 4-point Lagrange on the stored frames around the time (fewer at
+  // the ends of the run).
+  const int upper = static_cast<int>(
+      std::upper_bound(sim.time.begin(), sim.time.end(), time_s) - sim.time.begin());
+  const int points = std::min(4, n);
+  const int first = std::clamp(upper - 2, 0, n - points);
+  std::vector<double> weight(points);
+  for (int a = 0; a < points; ++a) {
+    double w = 1.0;
+    for (int b = 0; b < points; ++b)
+      if (b != a)
+        w *= (time_s - sim.time[first + b]) / (sim.time[first + a] - sim.time[first + b]);
+    weight[a] = w;
+  }
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  if (s.score) {
+    rotation = s.score->summary.rotation;
+    translation = s.score->summary.translation;
+  }
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) {
+      const int k = sim.FindKnot(r, c);
+      if (k < 0) continue;
+      Eigen::Vector3d p = Eigen::Vector3d::Zero();
+      bool valid = true;
+      for (int a = 0; a < points; ++a) {
+        valid = valid && sim.Valid(first + a, k);
+        p += weight[a] * sim.Position(first + a, k);
+      }
+      if (valid) out[r * cols + c] = rotation * p + translation;
+    }
+  return out;
+}
+
+SimulatedView SimulationPresenter::Project(int i, int c, int t) const {
+  SimulatedView view;
+  view.sim_time_s = FrameTime(t) + time_offset_s(i);
+  const std::vector<Eigen::Vector3d> knots = KnotsAt(i, view.sim_time_s);
+  const calib::Camera& camera = session_->rig_camera(c);
+  const int rows = session_->project().rows, cols = session_->project().cols;
+  std::vector<std::optional<Eigen::Vector2d>> px(knots.size());
+  for (size_t k = 0; k < knots.size(); ++k) {
+    if (!knots[k].allFinite()) continue;
+    if ((camera.cam_from_world * knots[k]).z() <= 1e-6) continue;  // behind the camera
+    const Eigen::Vector2d p = camera.ProjectWorld(knots[k]);
+    if (!p.allFinite()) continue;
+    px[k] = p;
+    view.knots.push_back(static_cast<int>(k));
+    view.px.push_back(p);
+  }
+  for (int r = 0; r < rows; ++r)
+    for (int col = 0; col < cols; ++col) {
+      const int k = r * cols + col;
+      if (!px[k]) continue;
+      if (col + 1 < cols && px[k + 1]) view.links.emplace_back(*px[k], *px[k + 1]);
+      if (r + 1 < rows && px[k + cols]) view.links.emplace_back(*px[k], *px[k + cols]);
+    }
+  return view;
+}
+
+std::optional<double> SimulationPresenter::LabelDistancePx(int i, int c, int t, int knot) const {
+  const recon::Label& label = session_->document().labels().at(c, t, knot);
+  if (!label.present()) return std::nullopt;
+  const std::optional<Eigen::Vector2d> sim = Project(i, c, t).Find(knot);
+  if (!sim) return std::nullopt;
+  return (label.px - *sim).norm();
+}
+
+std::optional<double> SimulationPresenter::ResidualM(int i, int t, int knot) const {
+  const Simulation& s = simulations_.at(i);
+  const int row = reconstruction_ ? reconstruction_->TrackRow(t) : -1;
+  if (!s.score || row < 0) return std::nullopt;
+  const netsim::ScoreResult& r = *s.score;
+  const size_t index = static_cast<size_t>(row) * r.grid.size() + knot;
+  if (index >= r.compared.size() || !r.compared[index]) return std::nullopt;
+  return r.residual[index].norm();
+}
+
+}  // namespace netlab::gui

@@ -1,0 +1,150 @@
+#pragma once
+// The simulation room without a window: simulations (a scenario run with `netlab simulate`'s
+// engine on a worker, or a knot-track file loaded), each scored against the measured tracks with
+// `netlab score`'s engine (netsim::Score, docs/score.md), and the simulated net as each camera
+// sees it: the simulated knots aligned in time and space as the score aligns them, projected
+// through the rig into the camera's image over the recorded frame.
+//
+// The alignment of a simulation: t_sim = t_measured + tau and x_world = R x_sim + t (the score's
+// fitted time offset and rigid motion; tau = 0 and the identity before it is scored). The
+// simulated knots at t_sim are the score's cubic (4-point Lagrange) interpolant of the stored
+// frames; a link is drawn straight between its knots' images.
+//
+//   SimulationPresenter simulation(&session, &reconstruction);
+//   simulation.Add(SimulationPresenter::Simulate(SimulationPresenter::MakeSimulationJob(
+//       "net_a.yaml", {"drag.drag_coefficient=1.0"}, "sim.h5"), cancel));
+//   simulation.SetScore(SimulationPresenter::RunScore(simulation.MakeScoreJob(0)));
+//   simulation.Verdict(0);                    // "consistent: ..."
+//   simulation.Project(0, camera, t);         // the simulated net in that view
+
+#include <Eigen/Core>
+#include <QString>
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "libnetsim/scenario/scenario_override.h"
+#include "libnetsim/tracks/track_file.h"
+#include "libnetsim/validation/score.h"
+
+namespace netlab::gui {
+
+class ReconstructionPresenter;
+class Session;
+
+// A scenario to run: the file, `--set`'s dotted overrides, the output file, `--duration`.
+struct SimulationJob {
+  std::string scenario_path;
+  std::vector<netsim::ScenarioOverride> overrides;
+  std::string out_path;
+  double duration_s = 0.0;  // 0: the scenario's
+};
+// A simulation, run or loaded.
+struct SimulationRun {
+  std::string path;                     // the knot-track file
+  std::optional<netsim::KnotTracks> tracks;
+  std::string error;                    // why there are no tracks
+  bool cancelled = false;
+  double wall_s = 0.0;
+};
+// A score to compute (copied: it runs on a worker) and its answer.
+struct ScoreJob {
+  int index = 0;  // the simulation's
+  netsim::KnotTracks measured, sim;
+  netsim::ScoreOptions options;
+  std::string measured_name, sim_name;
+};
+struct ScoreRun {
+  int index = 0;
+  std::optional<netsim::ScoreResult> result;
+  std::string error;
+};
+
+// A simulation in the room.
+struct Simulation {
+  std::string name;  // the file's name
+  std::string path;
+  netsim::KnotTracks tracks;
+  std::optional<netsim::ScoreResult> score;
+  std::string score_error;
+  std::string score_path, report_path;  // written with the score ("" until then)
+};
+
+// One camera's view of a simulation at one frame: the simulated knots (the labels' knot index,
+// (row, col) row-major) and links as image pixels; knots behind the camera left out.
+struct SimulatedView {
+  double sim_time_s = 0.0;
+  std::vector<int> knots;
+  std::vector<Eigen::Vector2d> px;  // [knots.size()]
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> links;
+  // The pixel of a knot (nullopt: not drawn).
+  std::optional<Eigen::Vector2d> Find(int knot) const;
+};
+
+class SimulationPresenter {
+ public:
+  // Both must outlive the presenter; the measured tracks are `reconstruction`'s.
+  SimulationPresenter(const Session* session, const ReconstructionPresenter* reconstruction);
+
+  // ---- Simulations.
+  // `overrides` as `netlab simulate --set` takes them (PATH=VALUE); InputError naming the one
+  // that cannot be read.
+  static SimulationJob MakeSimulationJob(const std::string& scenario_path,
+                                         const std::vector<std::string>& overrides,
+                                         const std::string& out_path, double duration_s = 0.0);
+  // Runs the scenario (any thread), writing out_path as netlab simulate does; progress(fraction)
+  // about every 2 % of the run. A set `cancel` stops it at the next progress call: the answer
+  // says cancelled and no file is left. A scenario that cannot be built, or a run that blows up,
+  // answers the reason.
+  static SimulationRun Simulate(const SimulationJob& job, const std::atomic<bool>& cancel,
+                                const std::function<void(double)>& progress = {});
+  // Reads a knot-track file (a netlab simulate result); the error names the file.
+  static SimulationRun Load(const std::string& path);
+  // Adds a run with tracks (GUI thread); returns its index (-1: none added, no tracks).
+  int Add(SimulationRun run);
+  int simulations() const { return static_cast<int>(simulations_.size()); }
+  const Simulation& simulation(int i) const { return simulations_[i]; }
+
+  // ---- Scores. The measured tracks are the reconstruction's (null: not triangulated yet).
+  const netsim::KnotTracks* measured() const;
+  // std::logic_error without measured tracks. `alignment` as --align.
+  ScoreJob MakeScoreJob(int i, netsim::Alignment alignment = netsim::Alignment::kTimeAndRigid) const;
+  static ScoreRun RunScore(const ScoreJob& job);  // any thread
+  // The answer (GUI thread). With `folder` non-empty, score_NAME.h5 and score_NAME.html are
+  // written there as netlab score --out --report writes them (their paths kept).
+  void SetScore(ScoreRun run, const std::string& folder = "");
+  // The verdict in words: "consistent: ..." / "inconsistent: ...", the numbers behind it and
+  // the RMS; "not scored yet" or the reason it could not be.
+  QString Verdict(int i) const;
+
+  // ---- The simulated net over the footage.
+  // The time of frame row t (s): the measured tracks' time of its frame, else frame / fps.
+  double FrameTime(int t) const;
+  // The alignment used to draw simulation i: the score's, else none.
+  double time_offset_s(int i) const;
+  // Knot positions of simulation i at simulated time `time_s`, in the rig's world frame (the
+  // score's rigid motion applied), indexed by the labels' knot (NaN where the simulation has no
+  // such knot, or outside its time).
+  std::vector<Eigen::Vector3d> KnotsAt(int i, double time_s) const;
+  // Simulation i in store camera c at frame row t.
+  SimulatedView Project(int i, int c, int t) const;
+  // The pixel distance between the label of `knot` in (c, t) and its simulated knot (nullopt:
+  // no label or not drawn).
+  std::optional<double> LabelDistancePx(int i, int c, int t, int knot) const;
+  // The score's 3D residual |measured - simulated| at (t, knot), m (nullopt: not compared).
+  std::optional<double> ResidualM(int i, int t, int knot) const;
+
+  std::weak_ptr<const int> lifetime() const { return alive_; }
+
+ private:
+  const Session* session_;
+  const ReconstructionPresenter* reconstruction_;
+  std::vector<Simulation> simulations_;
+  std::shared_ptr<const int> alive_ = std::make_shared<const int>(0);
+};
+
+}  // namespace netlab::gui

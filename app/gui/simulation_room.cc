@@ -1,0 +1,616 @@
+#include "app/gui/simulation_room.h"
+
+#include <QCheckBox>
+#include <QComboBox>
+#include <QDesktopServices>
+#include <QDoubleSpinBox>
+#include <QFileDialog>
+#include <QFileInfo>
+#include <QGridLayout>
+#include <QHBoxLayout>
+#include <QHeaderView>
+#include <QLabel>
+#include <QLineEdit>
+#include <QProgressBar>
+#include <QPushButton>
+#include <QSlider>
+#include <QSplitter>
+#include <QTableWidget>
+#include <QTimer>
+#include <QUrl>
+#include <QVBoxLayout>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+
+#include "app/gui/document/session.h"
+
+namespace netlab::gui {
+namespace {
+
+// The labels in this room: one colour, apart from the simulated net's cyan.
+const QColor kLabelColour(255, 150, 0);
+
+QString Number(double v, int digits = 3) { return QString::number(v, 'g', digits); }
+
+// A file in `folder` named `stem`.h5, or stem_2.h5, stem_3.h5, ... when it exists.
+std::string FreshPath(const std::string& folder, const std::string& stem) {
+  namespace fs = std::filesystem;
+  fs::path path = fs::path(folder) / (stem + ".h5");
+  for (int n = 2; fs::exists(path); ++n)
+    path = fs::path(folder) / (stem + "_" + std::to_string(n) + ".h5");
+  return path.string();
+}
+
+}  // namespace
+
+SimulationRoom::SimulationRoom(QWidget* parent)
+    : QWidget(parent),
+      triangulator_(this,
+                    [this](TriangulationRun run) {
+                      if (run.result) *fraction_ = 1.0;
+                      StopProgress();
+                      if (!Alive()) return;
+                      const bool cancelled = run.cancelled;
+                      const QString error = QString::fromStdString(run.error);
+                      reconstruction_->SetRun(std::move(run));
+                      measured_->setText(reconstruction_->Summary());
+                      status_->setText(cancelled ? "Triangulation cancelled."
+                                       : error.isEmpty() ? "Labels triangulated."
+                                                         : "Triangulation failed: " + error);
+                      const bool score = score_after_triangulation_ && !cancelled &&
+                                         reconstruction_->tracks() != nullptr;
+                      score_after_triangulation_ = false;
+                      RefreshButtons();
+                      RefreshOverlays();
+                      if (score) Score();
+                    }),
+      simulator_(this,
+                 [this](SimulationRun run) {
+                   if (run.tracks) *fraction_ = 1.0;
+                   StopProgress();
+                   if (!Alive()) return;
+                   if (run.cancelled) {
+                     status_->setText("Simulation cancelled (no file written).");
+                   } else if (!run.tracks) {
+                     status_->setText("Simulation failed: " + QString::fromStdString(run.error));
+                   } else {
+                     status_->setText(QString("Simulated in %1 s: %2")
+                                          .arg(run.wall_s, 0, 'f', 1)
+                                          .arg(QString::fromStdString(run.path)));
+                     const int i = simulation_->Add(std::move(run));
+                     RefreshTable();
+                     Select(i);
+                   }
+                   RefreshButtons();
+                 }),
+      scorer_(this,
+              [this](ScoreRun run) {
+                StopProgress();
+                if (!Alive()) return;
+                const int i = run.index;
+                const std::string folder =
+                    QFileInfo(QString::fromStdString(reconstruction_->session().project().path))
+                        .absolutePath()
+                        .toStdString();
+                simulation_->SetScore(std::move(run), folder);
+                status_->setText(simulation_->simulation(i).score ? "Scored." : "Not scored.");
+                RefreshTable();
+                Select(i);
+                RefreshButtons();
+              }),
+      loader_(this, [this](Loaded loaded) {
+        if (!Alive() || loaded.t != frame_) return;
+        for (int c = 0; c < 4; ++c)
+          if (views_[c])
+            views_[c]->SetFrame(std::move(loaded.frames[c]), loaded.width[c], loaded.height[c],
+                                loaded.problems[c]);
+        shown_frame_ = loaded.t;
+        RefreshOverlays();
+      }) {
+  auto* layout = new QVBoxLayout(this);
+
+  // The measured tracks.
+  auto* measured_row = new QHBoxLayout;
+  measured_row->addWidget(new QLabel("Labels' σ (px)"));
+  sigma_ = new QDoubleSpinBox;
+  sigma_->setObjectName("simulation_sigma");
+  sigma_->setRange(0.0, 10.0);
+  sigma_->setDecimals(3);
+  sigma_->setSingleStep(0.01);
+  sigma_->setSpecialValueText("from the residuals");
+  sigma_->setToolTip("The labels' noise for the tracks' covariances (netlab triangulate "
+                     "--sigma-px); 0: estimated from the reprojection residuals");
+  measured_row->addWidget(sigma_);
+  triangulate_button_ = new QPushButton("Triangulate labels");
+  triangulate_button_->setToolTip(
+      "The labels triangulated into 3D knot tracks (netlab triangulate's engine, --ba points)");
+  measured_row->addWidget(triangulate_button_);
+  measured_ = new QLabel("Not triangulated yet.");
+  measured_->setWordWrap(true);
+  measured_row->addWidget(measured_, 1);
+  layout->addLayout(measured_row);
+
+  // The simulations: a scenario run, or a file loaded.
+  auto* sim_row = new QHBoxLayout;
+  sim_row->addWidget(new QLabel("Scenario"));
+  scenario_edit_ = new QLineEdit;
+  scenario_edit_->setObjectName("simulation_scenario");
+  scenario_edit_->setPlaceholderText("scenario.yaml (docs/scenarios.md)");
+  sim_row->addWidget(scenario_edit_, 2);
+  scenario_button_ = new QPushButton("…");
+  scenario_button_->setToolTip("Choose the scenario file");
+  sim_row->addWidget(scenario_button_);
+  overrides_edit_ = new QLineEdit;
+  overrides_edit_->setObjectName("simulation_overrides");
+  overrides_edit_->setPlaceholderText(
+      "--set PATH=VALUE …, separated by spaces: drag.drag_coefficient=1.0 integrator.dt=1e-5");
+  sim_row->addWidget(overrides_edit_, 3);
+  simulate_button_ = new QPushButton("Simulate");
+  sim_row->addWidget(simulate_button_);
+  load_button_ = new QPushButton("Load simulation…");
+  load_button_->setToolTip("A knot-track file written by netlab simulate");
+  sim_row->addWidget(load_button_);
+  cancel_button_ = new QPushButton("Cancel");
+  sim_row->addWidget(cancel_button_);
+  progress_ = new QProgressBar;
+  progress_->setRange(0, 1000);
+  progress_->setTextVisible(true);
+  progress_->setFormat("");
+  progress_->setMaximumWidth(220);
+  sim_row->addWidget(progress_);
+  layout->addLayout(sim_row);
+
+  status_ = new QLabel("Load a simulation, or choose a scenario and Simulate.");
+  status_->setObjectName("simulation_status");
+  status_->setWordWrap(true);
+  layout->addWidget(status_);
+
+  // The four cameras and the frame slider; on the right the simulations and the verdict.
+  auto* splitter = new QSplitter(Qt::Horizontal);
+  auto* views_box = new QWidget;
+  auto* views_layout = new QVBoxLayout(views_box);
+  views_layout->setContentsMargins(0, 0, 0, 0);
+  auto* grid = new QGridLayout;
+  grid->setSpacing(2);
+  for (int c = 0; c < 4; ++c) {
+    views_[c] = new CameraView(c);
+    views_[c]->setMinimumSize(200, 160);
+    views_[c]->SetShowEpipolar(false);
+    grid->addWidget(views_[c], c / 2, c % 2);
+    connect(views_[c], &CameraView::cursorMoved, this,
+            [this](int camera, Eigen::Vector2d px, QString) { OnCursor(camera, px); });
+  }
+  views_layout->addLayout(grid, 1);
+  auto* slider_row = new QHBoxLayout;
+  slider_ = new QSlider(Qt::Horizontal);
+  slider_->setObjectName("simulation_frame");
+  slider_row->addWidget(slider_, 1);
+  frame_label_ = new QLabel;
+  frame_label_->setMinimumWidth(200);
+  slider_row->addWidget(frame_label_);
+  views_layout->addLayout(slider_row);
+  hover_ = new QLabel("Point at a knot: its label's distance to its simulated knot.");
+  hover_->setObjectName("simulation_hover");
+  views_layout->addWidget(hover_);
+  splitter->addWidget(views_box);
+
+  auto* side = new QWidget;
+  auto* side_layout = new QVBoxLayout(side);
+  side_layout->setContentsMargins(4, 0, 0, 0);
+  table_ = new QTableWidget(0, 5);
+  table_->setObjectName("simulation_table");
+  table_->setHorizontalHeaderLabels({"Simulation", "Verdict", "RMS (mm)", "mean d²", "p"});
+  table_->horizontalHeader()->setSectionResizeMode(0, QHeaderView::Stretch);
+  table_->setSelectionBehavior(QAbstractItemView::SelectRows);
+  table_->setSelectionMode(QAbstractItemView::SingleSelection);
+  table_->setEditTriggers(QAbstractItemView::NoEditTriggers);
+  table_->verticalHeader()->hide();
+  side_layout->addWidget(table_, 1);
+  auto* score_row = new QHBoxLayout;
+  score_row->addWidget(new QLabel("Align"));
+  alignment_ = new QComboBox;
+  alignment_->addItems({"time+rigid", "time", "rigid", "none"});
+  alignment_->setToolTip(
+      "As netlab score --align: the launch-time offset and/or one rigid motion fitted (a rig "
+      "calibrated from a foil has its own world frame: time+rigid)");
+  score_row->addWidget(alignment_);
+  score_button_ = new QPushButton("Score");
+  score_button_->setToolTip("The selected simulation against the triangulated labels (netlab "
+                            "score's engine; the labels are triangulated first when need be)");
+  score_row->addWidget(score_button_);
+  report_button_ = new QPushButton("Open report");
+  score_row->addWidget(report_button_);
+  side_layout->addLayout(score_row);
+  show_simulated_ = new QCheckBox("Simulated net over the frames");
+  show_simulated_->setChecked(true);
+  side_layout->addWidget(show_simulated_);
+  auto* legend = new QLabel(
+      "<span style='color:#ff9600'>○ labels</span> &nbsp; "
+      "<span style='color:#00e6ff'>□ simulated knots and links</span>");
+  side_layout->addWidget(legend);
+  verdict_ = new QLabel("Not scored yet.");
+  verdict_->setObjectName("simulation_verdict");
+  verdict_->setWordWrap(true);
+  verdict_->setTextInteractionFlags(Qt::TextSelectableByMouse);
+  verdict_->setMinimumWidth(320);
+  verdict_->setAlignment(Qt::AlignTop | Qt::AlignLeft);
+  side_layout->addWidget(verdict_, 1);
+  splitter->addWidget(side);
+  splitter->setStretchFactor(0, 3);
+  splitter->setStretchFactor(1, 1);
+  layout->addWidget(splitter, 1);
+
+  progress_timer_ = new QTimer(this);
+  progress_timer_->setInterval(100);
+  connect(progress_timer_, &QTimer::timeout, this,
+          [this] { progress_->setValue(static_cast<int>(1000 * fraction_->load())); });
+
+  connect(triangulate_button_, &QPushButton::clicked, this, [this] { Triangulate(false); });
+  connect(simulate_button_, &QPushButton::clicked, this, &SimulationRoom::Simulate);
+  connect(load_button_, &QPushButton::clicked, this, [this] {
+    const QString path = QFileDialog::getOpenFileName(this, "Load a simulation", {},
+                                                      "Knot tracks (*.h5);;All files (*)");
+    if (!path.isEmpty()) LoadSimulation(path);
+  });
+  connect(scenario_button_, &QPushButton::clicked, this, [this] {
+    const QString path = QFileDialog::getOpenFileName(this, "Scenario", {},
+                                                      "Scenarios (*.yaml *.yml);;All files (*)");
+    if (!path.isEmpty()) scenario_edit_->setText(path);
+  });
+  connect(cancel_button_, &QPushButton::clicked, this, &SimulationRoom::Cancel);
+  connect(score_button_, &QPushButton::clicked, this, &SimulationRoom::Score);
+  connect(report_button_, &QPushButton::clicked, this, &SimulationRoom::OpenReport);
+  connect(show_simulated_, &QCheckBox::toggled, this, [this] { RefreshOverlays(); });
+  connect(slider_, &QSlider::valueChanged, this, [this](int t) { SetFrame(t); });
+  connect(table_, &QTableWidget::itemSelectionChanged, this, [this] {
+    const QList<QTableWidgetItem*> items = table_->selectedItems();
+    if (!items.isEmpty() && items.front()->row() != selected_) Select(items.front()->row());
+  });
+  RefreshButtons();
+}
+
+SimulationRoom::~SimulationRoom() = default;
+
+bool SimulationRoom::Alive() const {
+  return simulation_ != nullptr && !alive_.expired();
+}
+
+void SimulationRoom::Show(SimulationPresenter* simulation, ReconstructionPresenter* reconstruction) {
+  if (simulation == simulation_ && reconstruction == reconstruction_) {
+    RefreshButtons();
+    if (simulation_) RequestFrame();
+    return;
+  }
+  triangulator_.Drop();
+  simulator_.Drop();
+  scorer_.Drop();
+  loader_.Drop();
+  loader_.Wait();  // it reads the old session's frames
+  StopProgress();
+  simulation_ = simulation;
+  reconstruction_ = reconstruction;
+  alive_ = simulation ? simulation->lifetime() : std::weak_ptr<const int>();
+  selected_ = -1;
+  shown_frame_ = -1;
+  frame_ = 0;
+  if (simulation_) {
+    const Session& s = reconstruction_->session();
+    slider_->blockSignals(true);
+    slider_->setRange(0, std::max(0, s.frames() - 1));
+    slider_->setValue(0);
+    slider_->blockSignals(false);
+    measured_->setText(reconstruction_->Summary());
+    RefreshTable();
+    if (simulation_->simulations() > 0) Select(0);
+    RequestFrame();
+  }
+  RefreshButtons();
+}
+
+bool SimulationRoom::busy() const {
+  return triangulator_.pending() || simulator_.pending() || scorer_.pending() ||
+         loader_.pending();
+}
+
+void SimulationRoom::SetFrame(int t) {
+  if (!simulation_) return;
+  const int frames = reconstruction_->session().frames();
+  t = std::clamp(t, 0, std::max(0, frames - 1));
+  if (slider_->value() != t) {
+    slider_->blockSignals(true);
+    slider_->setValue(t);
+    slider_->blockSignals(false);
+  }
+  if (t == frame_ && shown_frame_ == t) return;
+  frame_ = t;
+  RequestFrame();
+  emit frameChanged(t);
+}
+
+void SimulationRoom::RequestFrame() {
+  if (!simulation_) return;
+  const Session* session = &reconstruction_->session();
+  const int t = frame_;
+  std::array<double, 4> fit{};
+  for (int c = 0; c < 4; ++c) fit[c] = views_[c]->FitScreenPerImage(2048);
+  loader_.Request([session, t, fit](const std::atomic<bool>&) {
+    Loaded loaded;
+    loaded.t = t;
+    for (int c = 0; c < std::min(4, session->cameras()); ++c) {
+      std::string error;
+      const cv::Mat image = session->Image(c, t, &error);
+      if (image.empty()) {
+        loaded.problems[c] = QString::fromStdString(error);
+        continue;
+      }
+      loaded.width[c] = image.cols;
+      loaded.height[c] = image.rows;
+      const double screen_per_image = fit[c] * 2048.0 / std::max(1, image.cols);
+      loaded.frames[c] = MakeViewFrame(image, screen_per_image, cv::Mat());
+    }
+    return loaded;
+  });
+  RefreshOverlays();
+}
+
+void SimulationRoom::Select(int i) {
+  if (!simulation_ || i < 0 || i >= simulation_->simulations()) return;
+  selected_ = i;
+  if (table_->currentRow() != i) {
+    table_->blockSignals(true);
+    table_->selectRow(i);
+    table_->blockSignals(false);
+  }
+  verdict_->setText("<b>" + QString::fromStdString(simulation_->simulation(i).name) + "</b><br>" +
+                    simulation_->Verdict(i).toHtmlEscaped().replace("\n", "<br>"));
+  const auto& score = simulation_->simulation(i).score;
+  const QString colour = !score ? "palette(window)"
+                         : score->summary.verdict == "consistent" ? "#d8f5d0"
+                                                                  : "#f8d4d0";
+  verdict_->setStyleSheet("QLabel { background: " + colour + "; padding: 6px; }");
+  RefreshOverlays();
+  RefreshButtons();
+}
+
+void SimulationRoom::RefreshTable() {
+  if (!simulation_) return;
+  table_->blockSignals(true);
+  table_->setRowCount(simulation_->simulations());
+  for (int i = 0; i < simulation_->simulations(); ++i) {
+    const Simulation& s = simulation_->simulation(i);
+    auto set = [&](int column, const QString& text) {
+      auto* item = new QTableWidgetItem(text);
+      if (column > 0) item->setTextAlignment(Qt::AlignRight | Qt::AlignVCenter);
+      table_->setItem(i, column, item);
+    };
+    set(0, QString::fromStdString(s.name));
+    set(1, s.score ? QString::fromStdString(s.score->summary.verdict)
+                   : s.score_error.empty() ? "—" : "error");
+    set(2, s.score ? Number(s.score->summary.rms_m * 1e3) : "");
+    set(3, s.score ? Number(s.score->summary.mean_d2) : "");
+    set(4, s.score ? Number(s.score->summary.p_value, 2) : "");
+    if (s.score)
+      table_->item(i, 1)->setForeground(s.score->summary.verdict == "consistent"
+                                            ? QColor(0, 130, 0)
+                                            : QColor(190, 0, 0));
+  }
+  table_->resizeColumnsToContents();
+  table_->horizontalHeader()->setSectionResizeMode(0, QHeaderView::Stretch);
+  table_->setToolTip("A row per simulation: its score against the triangulated labels");
+  for (int i = 0; i < table_->rowCount(); ++i)
+    table_->item(i, 0)->setToolTip(QString::fromStdString(simulation_->simulation(i).path));
+  table_->blockSignals(false);
+}
+
+void SimulationRoom::RefreshButtons() {
+  const bool open = simulation_ != nullptr;
+  const bool working = triangulator_.pending() || simulator_.pending() || scorer_.pending();
+  triangulate_button_->setEnabled(open && !working);
+  simulate_button_->setEnabled(open && !working);
+  load_button_->setEnabled(open && !working);
+  cancel_button_->setEnabled(working);
+  score_button_->setEnabled(open && !working && selected_ >= 0);
+  report_button_->setEnabled(open && selected_ >= 0 &&
+                             !simulation_->simulation(selected_).report_path.empty());
+}
+
+void SimulationRoom::StartProgress(const QString& what) {
+  *fraction_ = 0.0;
+  progress_->setRange(0, 1000);
+  progress_->setValue(0);
+  progress_->setFormat(what + " %p%");
+  progress_timer_->start();
+  RefreshButtons();
+}
+
+void SimulationRoom::StopProgress() {
+  progress_timer_->stop();
+  progress_->setRange(0, 1000);
+  progress_->setValue(static_cast<int>(1000 * fraction_->load()));
+  QTimer::singleShot(0, this, [this] { RefreshButtons(); });
+}
+
+void SimulationRoom::Triangulate(bool then_score) {
+  if (!simulation_) return;
+  TriangulationOptions options;
+  options.sigma_px = sigma_->value();
+  TriangulationJob job;
+  try {
+    job = reconstruction_->MakeJob(options);
+  } catch (const std::exception& e) {
+    status_->setText(QString("Cannot triangulate: ") + e.what());
+    return;
+  }
+  score_after_triangulation_ = then_score;
+  status_->setText("Triangulating the labels…");
+  auto fraction = fraction_;
+  triangulator_.Request([job = std::move(job), fraction](const std::atomic<bool>& cancel) {
+    return ReconstructionPresenter::Triangulate(
+        job, cancel, [fraction](const std::string&, double f) { *fraction = f; });
+  });
+  StartProgress("triangulate");
+}
+
+void SimulationRoom::Simulate() {
+  if (!simulation_) return;
+  const std::string scenario = scenario_edit_->text().trimmed().toStdString();
+  if (scenario.empty()) {
+    status_->setText("Choose a scenario file first (or Load simulation…).");
+    return;
+  }
+  std::vector<std::string> overrides;
+  for (const QString& part : overrides_edit_->text().split(' ', Qt::SkipEmptyParts))
+    overrides.push_back(part.toStdString());
+  const std::string folder =
+      QFileInfo(QString::fromStdString(reconstruction_->session().project().path))
+          .absolutePath()
+          .toStdString();
+  SimulationJob job;
+  try {
+    job = SimulationPresenter::MakeSimulationJob(
+        scenario, overrides,
+        FreshPath(folder, "sim_" + std::filesystem::path(scenario).stem().string()));
+  } catch (const std::exception& e) {
+    status_->setText(QString("Cannot simulate: ") + e.what());
+    return;
+  }
+  status_->setText("Simulating " + QString::fromStdString(scenario) + "…");
+  auto fraction = fraction_;
+  simulator_.Request([job = std::move(job), fraction](const std::atomic<bool>& cancel) {
+    return SimulationPresenter::Simulate(job, cancel, [fraction](double f) { *fraction = f; });
+  });
+  StartProgress("simulate");
+}
+
+void SimulationRoom::LoadSimulation(const QString& path) {
+  if (!simulation_) return;
+  SimulationRun run = SimulationPresenter::Load(path.toStdString());
+  if (!run.tracks) {
+    status_->setText("Cannot load the simulation: " + QString::fromStdString(run.error));
+    return;
+  }
+  const int i = simulation_->Add(std::move(run));
+  status_->setText("Loaded " + path + ".");
+  RefreshTable();
+  Select(i);
+}
+
+void SimulationRoom::Score() {
+  if (!simulation_ || selected_ < 0) return;
+  if (simulation_->measured() == nullptr) {  // the labels first
+    Triangulate(true);
+    return;
+  }
+  netsim::Alignment alignment = netsim::Alignment::kTimeAndRigid;
+  netsim::ParseAlignment(alignment_->currentText().toStdString(), &alignment);
+  ScoreJob job = simulation_->MakeScoreJob(selected_, alignment);
+  status_->setText("Scoring " + QString::fromStdString(simulation_->simulation(selected_).name) +
+                   "…");
+  scorer_.Request([job = std::move(job)](const std::atomic<bool>&) {
+    return SimulationPresenter::RunScore(job);
+  });
+  progress_->setRange(0, 0);  // the score has no progress to tell: busy
+  RefreshButtons();
+}
+
+void SimulationRoom::OpenReport() {
+  if (!simulation_ || selected_ < 0) return;
+  const std::string& report = simulation_->simulation(selected_).report_path;
+  if (!report.empty()) QDesktopServices::openUrl(QUrl::fromLocalFile(QString::fromStdString(report)));
+}
+
+void SimulationRoom::Cancel() {
+  triangulator_.Cancel();
+  simulator_.Cancel();
+  // A score is not cancellable inside: its answer is dropped.
+  if (scorer_.pending()) {
+    scorer_.Drop();
+    StopProgress();
+    status_->setText("Score cancelled.");
+  }
+  if (triangulator_.pending()) {
+    // The engine stops only between its stages: forget the answer now.
+    triangulator_.Drop();
+    score_after_triangulation_ = false;
+    StopProgress();
+    status_->setText("Triangulation cancelled.");
+  }
+}
+
+void SimulationRoom::RefreshOverlays() {
+  if (!simulation_) return;
+  const Session& session = reconstruction_->session();
+  const recon::LabelSet& labels = session.document().labels();
+  const int t = frame_;
+  const bool draw = show_simulated_->isChecked() && selected_ >= 0;
+  for (int c = 0; c < 4; ++c) {
+    ViewOverlay overlay;
+    simulated_[c] = SimulatedView();
+    if (c >= session.cameras()) {
+      views_[c]->SetOverlay(overlay);
+      continue;
+    }
+    for (int k = 0; k < labels.knots(); ++k) {
+      const recon::Label& l = labels.at(c, t, k);
+      if (!l.present()) continue;
+      overlay.labels.push_back({k, l.px, kLabelColour, l.state == recon::LabelState::kNeedsReview});
+    }
+    QString caption = QString("%1 · frame %2").arg(QString::fromStdString(session.camera_names()[c]))
+                          .arg(session.frame_number(t));
+    if (draw) {
+      simulated_[c] = simulation_->Project(selected_, c, t);
+      for (size_t i = 0; i < simulated_[c].knots.size(); ++i)
+        overlay.simulated.push_back({simulated_[c].knots[i], simulated_[c].px[i], {}, false});
+      overlay.simulated_links = simulated_[c].links;
+      caption += QString(" · simulated t = %1 s").arg(simulated_[c].sim_time_s, 0, 'f', 4);
+    }
+    overlay.caption = caption;
+    views_[c]->SetOverlay(std::move(overlay));
+  }
+  frame_label_->setText(QString("frame %1 (row %2 of %3)")
+                            .arg(session.frame_number(t))
+                            .arg(t)
+                            .arg(session.frames()));
+}
+
+void SimulationRoom::OnCursor(int camera, const Eigen::Vector2d& px) {
+  if (!simulation_ || camera >= reconstruction_->session().cameras()) return;
+  const Session& session = reconstruction_->session();
+  const int t = frame_;
+  // The knot nearest the cursor among the labels and the simulated knots, within 12 screen px.
+  const double reach = 12.0 / std::max(1e-9, views_[camera]->scale());
+  int best = -1;
+  double best_d = reach;
+  const recon::LabelSet& labels = session.document().labels();
+  for (int k = 0; k < labels.knots(); ++k) {
+    const recon::Label& l = labels.at(camera, t, k);
+    if (l.present() && (l.px - px).norm() < best_d) best_d = (l.px - px).norm(), best = k;
+  }
+  const SimulatedView& sim = simulated_[camera];
+  for (size_t i = 0; i < sim.knots.size(); ++i)
+    if ((sim.px[i] - px).norm() < best_d) best_d = (sim.px[i] - px).norm(), best = sim.knots[i];
+  if (best < 0) {
+    hover_->setText("Point at a knot: its label's distance to its simulated knot.");
+    return;
+  }
+  const int cols = session.project().cols;
+  QString text = QString("%1, frame %2, knot (%3,%4): ")
+                     .arg(QString::fromStdString(session.camera_names()[camera]))
+                     .arg(session.frame_number(t))
+                     .arg(best / cols)
+                     .arg(best % cols);
+  if (selected_ < 0) {
+    text += "no simulation";
+  } else if (const auto d = simulation_->LabelDistancePx(selected_, camera, t, best)) {
+    text += QString("label to simulated knot %1 px").arg(*d, 0, 'f', 2);
+  } else {
+    text += labels.at(camera, t, best).present() ? "not simulated here" : "no label";
+  }
+  if (selected_ >= 0)
+    if (const auto r = simulation_->ResidualM(selected_, t, best))
+      text += QString("; in 3D, measured to simulated %1 mm").arg(*r * 1e3, 0, 'f', 2);
+  hover_->setText(text);
+}
+
+}  // namespace netlab::gui

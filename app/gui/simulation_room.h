@@ -1,0 +1,133 @@
+#pragma once
+// The simulation room: does the simulated net lie where the cameras saw the real one? As
+// SimulationPresenter (document/simulation_presenter.h) says. Along the top the measured tracks
+// (the labels triangulated with `netlab triangulate`'s engine: the labels' sigma, Triangulate),
+// then the simulations: a scenario with `--set`'s dotted overrides and Simulate (progress,
+// Cancel), or Load simulation…; the simulations' table (a row each, its score side by side with
+// the others'); Score (the alignment as `netlab score --align`), Open report, and the toggle of
+// the simulated net. Below, the four cameras at one frame (a slider): the labels in orange, the
+// selected simulation's knots (squares) and links in cyan, aligned in time and space as its score
+// aligns them; the mouse over a knot says the distance between its label and its simulated knot.
+// On the right the verdict in words.
+
+#include <QWidget>
+#include <array>
+#include <atomic>
+#include <memory>
+
+#include "app/gui/camera_view.h"
+#include "app/gui/document/latest_request.h"
+#include "app/gui/document/reconstruction_presenter.h"
+#include "app/gui/document/simulation_presenter.h"
+
+class QCheckBox;
+class QComboBox;
+class QDoubleSpinBox;
+class QLabel;
+class QLineEdit;
+class QProgressBar;
+class QPushButton;
+class QSlider;
+class QTableWidget;
+class QTimer;
+
+namespace netlab::gui {
+
+class SimulationRoom : public QWidget {
+  Q_OBJECT
+
+ public:
+  explicit SimulationRoom(QWidget* parent = nullptr);
+  ~SimulationRoom() override;
+  // Shows the presenters (null: nothing open); new ones drop the old ones' work.
+  void Show(SimulationPresenter* simulation, ReconstructionPresenter* reconstruction);
+
+  // The parts a person (and a test) works with.
+  QDoubleSpinBox* sigma_box() const { return sigma_; }
+  QPushButton* triangulate_button() const { return triangulate_button_; }
+  QLineEdit* scenario_edit() const { return scenario_edit_; }
+  QLineEdit* overrides_edit() const { return overrides_edit_; }
+  QPushButton* simulate_button() const { return simulate_button_; }
+  QPushButton* load_button() const { return load_button_; }
+  QPushButton* cancel_button() const { return cancel_button_; }
+  QProgressBar* progress() const { return progress_; }
+  QTableWidget* simulations_table() const { return table_; }
+  QComboBox* alignment_box() const { return alignment_; }
+  QPushButton* score_button() const { return score_button_; }
+  QPushButton* report_button() const { return report_button_; }
+  QCheckBox* overlay_box() const { return show_simulated_; }
+  QLabel* status_label() const { return status_; }
+  QLabel* verdict_label() const { return verdict_; }
+  QLabel* hover_label() const { return hover_; }
+  QSlider* frame_slider() const { return slider_; }
+  CameraView* view(int c) const { return views_[c]; }
+  int frame() const { return frame_; }
+  void SetFrame(int t);
+  // The simulation drawn and scored (-1: none).
+  int selected() const { return selected_; }
+  void Select(int i);
+  // Load simulation… without its dialog.
+  void LoadSimulation(const QString& path);
+  // Work (a triangulation, a simulation, a score or a frame) is under way.
+  bool busy() const;
+  // The current frame is drawn in every view.
+  bool frame_shown() const { return shown_frame_ == frame_; }
+
+ signals:
+  // The frame row shown changed (the window's frame follows).
+  void frameChanged(int t);
+
+ private:
+  struct Loaded {
+    int t = 0;
+    std::array<ViewFrame, 4> frames;
+    std::array<int, 4> width{}, height{};
+    std::array<QString, 4> problems;
+  };
+  void Triangulate(bool then_score);
+  void Simulate();
+  void Score();
+  void OpenReport();
+  void Cancel();
+  void RequestFrame();
+  void RefreshOverlays();
+  void RefreshTable();
+  void RefreshButtons();
+  void OnCursor(int camera, const Eigen::Vector2d& px);
+  void StartProgress(const QString& what);
+  void StopProgress();
+  bool Alive() const;
+
+  SimulationPresenter* simulation_ = nullptr;
+  ReconstructionPresenter* reconstruction_ = nullptr;
+  std::weak_ptr<const int> alive_;
+  int frame_ = 0, shown_frame_ = -1, selected_ = -1;
+  bool score_after_triangulation_ = false;
+
+  QDoubleSpinBox* sigma_ = nullptr;
+  QPushButton* triangulate_button_ = nullptr;
+  QLabel* measured_ = nullptr;
+  QLineEdit* scenario_edit_ = nullptr;
+  QLineEdit* overrides_edit_ = nullptr;
+  QPushButton *scenario_button_ = nullptr, *simulate_button_ = nullptr, *load_button_ = nullptr,
+              *cancel_button_ = nullptr, *score_button_ = nullptr, *report_button_ = nullptr;
+  QProgressBar* progress_ = nullptr;
+  QTableWidget* table_ = nullptr;
+  QComboBox* alignment_ = nullptr;
+  QCheckBox* show_simulated_ = nullptr;
+  QLabel* status_ = nullptr;
+  QLabel* verdict_ = nullptr;
+  QLabel* hover_ = nullptr;
+  QSlider* slider_ = nullptr;
+  QLabel* frame_label_ = nullptr;
+  std::array<CameraView*, 4> views_{};
+  std::array<SimulatedView, 4> simulated_;  // what each view draws of the selected simulation
+  QTimer* progress_timer_ = nullptr;
+  std::shared_ptr<std::atomic<double>> fraction_ = std::make_shared<std::atomic<double>>(0.0);
+  LatestRequest<TriangulationRun> triangulator_;
+  LatestRequest<SimulationRun> simulator_;
+  LatestRequest<ScoreRun> scorer_;
+  LatestRequest<Loaded> loader_;
+};
+
+}  // namespace netlab::gui

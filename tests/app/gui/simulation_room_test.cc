@@ -1,0 +1,214 @@
+// The simulation room in the window (Qt's offscreen platform), driven by mouse and keys, on a
+// shot rendered by `netlab render` from a simulation with air drag (the command tests' small
+// 6 x 6-knot net, drag added, 0.15 s): the project's labels are the render's true labels and its
+// rig the true rig. A person loads the true simulation and scores it (the labels are triangulated
+// first): "consistent" in the window's verdict, and the simulated net drawn over frame 20 lies
+// within 1 px of the true labels in every camera (the overlay's geometry, not a screenshot's
+// pixels). The same scenario without drag, simulated from the room (cancelled once, then run to
+// the end) and scored: "inconsistent".
+
+#include <gtest/gtest.h>
+
+#include <QApplication>
+#include <QCheckBox>
+#include <QComboBox>
+#include <QDoubleSpinBox>
+#include <QElapsedTimer>
+#include <QLabel>
+#include <QLineEdit>
+#include <QPushButton>
+#include <QTableWidget>
+#include <QTest>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "app/gui/camera_view.h"
+#include "app/gui/document/project.h"
+#include "app/gui/main_window.h"
+#include "app/gui/simulation_room.h"
+#include "libreconstruct/labels/label_set.h"
+#include "tests/app/cli/run_netlab.h"
+#include "tests/app/cli/small_shot.h"
+
+namespace netlab::gui {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::RunNetlab;
+
+constexpr int kLastFrame = 26;  // frames 0..26 rendered (0.15 s at 179 fps)
+
+// The small shot with air drag strong enough to bend the net in 0.15 s, and the same without.
+std::string Scenario(bool drag) {
+  std::string scenario = testing::kSmallShotScenario;
+  const std::string from = "duration: 0.06", to = "duration: 0.15";
+  scenario.replace(scenario.find(from), from.size(), to);
+  if (drag) scenario += "drag: {air_density: 10.0, drag_coefficient: 1.2}\n";
+  return scenario;
+}
+
+const fs::path& Dir() {
+  static const fs::path dir =
+      fs::temp_directory_path() / ("netlab_simulation_room_" + std::to_string(getpid()));
+  return dir;
+}
+
+void Click(QWidget* widget) { QTest::mouseClick(widget, Qt::LeftButton); }
+
+bool WaitIdle(const SimulationRoom& room, int timeout_ms) {
+  QElapsedTimer clock;
+  clock.start();
+  while (room.busy() && clock.elapsed() < timeout_ms) QTest::qWait(20);
+  QTest::qWait(20);
+  return !room.busy();
+}
+
+class SimulationRoomTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    fs::remove_all(Dir());
+    fs::create_directories(Dir());
+    const std::string d = Dir().string();
+    std::ofstream(d + "/shot.yaml") << Scenario(true);
+    std::ofstream(d + "/no_drag.yaml") << Scenario(false);
+    ASSERT_EQ(RunNetlab("simulate " + d + "/shot.yaml --out " + d + "/sim.h5 --quiet").status, 0);
+    ASSERT_EQ(RunNetlab("color-net --knots 6x6 --out " + d + "/coloring.yaml --quiet").status, 0);
+    const auto render = RunNetlab("render --sim " + d + "/sim.h5 --out " + d +
+                                  "/shot --frames 0:" + std::to_string(kLastFrame) +
+                                  " --scale 0.25 --calibration-views 0 --coloring " + d +
+                                  "/coloring.yaml --quiet");
+    ASSERT_EQ(render.status, 0) << render.err;
+    fs::copy_file(d + "/shot/labels_true.h5", d + "/labels.h5");
+    SaveProject(MakeProject(d + "/shot/experiment.yaml", d + "/shot/rig_true.yaml",
+                            d + "/coloring.yaml", d + "/labels.h5", 0, 0),
+                d + "/project.yaml");
+  }
+  static void TearDownTestSuite() {
+    if (!getenv("NETLAB_KEEP_TEST_FILES")) fs::remove_all(Dir());
+  }
+};
+
+// Score the selected simulation by mouse; the verdict's text once done.
+std::string ScoreSelected(SimulationRoom* room) {
+  Click(room->score_button());
+  EXPECT_TRUE(WaitIdle(*room, 120000)) << room->status_label()->text().toStdString();
+  return room->verdict_label()->text().toStdString();
+}
+
+TEST_F(SimulationRoomTest, TheTrueSimulationLiesOnTheLabelsAndIsConsistentTheNoDragOneIsNot) {
+  const std::string d = Dir().string();
+  MainWindow w;
+  w.resize(1500, 1000);
+  w.show();
+  ASSERT_TRUE(w.OpenProject(QString::fromStdString(d + "/project.yaml"), false));
+  ASSERT_TRUE(w.WaitForFrame());
+  QTest::keyClick(&w, Qt::Key_4, Qt::ControlModifier);  // Room > Simulation room
+  ASSERT_EQ(w.room(), MainWindow::Room::kSimulation);
+  SimulationRoom* room = w.simulation_room();
+  ASSERT_TRUE(room->isVisible());
+
+  // The labels' sigma typed (the true labels are exact: the stated accuracy of a good labeler).
+  QDoubleSpinBox* sigma = room->sigma_box();
+  sigma->selectAll();
+  QTest::keyClicks(sigma, "0.100");
+  QTest::keyClick(sigma, Qt::Key_Return);
+  EXPECT_DOUBLE_EQ(sigma->value(), 0.1);
+
+  // The rig is the true one, in the scenario's world frame: only the launch time is aligned.
+  room->alignment_box()->setCurrentText("time");
+  ASSERT_EQ(room->alignment_box()->currentText(), "time");
+
+  // The true simulation loaded and scored: the labels are triangulated first.
+  room->LoadSimulation(QString::fromStdString(d + "/sim.h5"));
+  ASSERT_EQ(room->simulations_table()->rowCount(), 1);
+  ASSERT_EQ(room->selected(), 0);
+  const std::string verdict = ScoreSelected(room);
+  EXPECT_EQ(verdict.find("inconsistent"), std::string::npos) << verdict;
+  EXPECT_NE(verdict.find("consistent"), std::string::npos) << verdict;
+  std::printf("true simulation: %s\n", verdict.c_str());
+  EXPECT_TRUE(room->report_button()->isEnabled());
+  EXPECT_TRUE(fs::exists(Dir() / "score_sim.html"));
+  EXPECT_TRUE(fs::exists(Dir() / "score_sim.h5"));
+
+  // Frame 20: every simulated knot drawn within 1 px of its true label, in every camera.
+  room->SetFrame(20);
+  ASSERT_TRUE(WaitIdle(*room, 20000));
+  ASSERT_TRUE(room->frame_shown());
+  const recon::LabelSet truth = recon::ReadLabels(d + "/shot/labels_true.h5");
+  Session* s = w.session();
+  int compared = 0;
+  double worst = 0.0;
+  for (int c = 0; c < s->cameras(); ++c) {
+    const ViewOverlay& overlay = room->view(c)->overlay();
+    EXPECT_GT(overlay.simulated.size(), 20u) << "camera " << c;
+    EXPECT_FALSE(overlay.simulated_links.empty());
+    const int tc = truth.FindCamera(s->camera_names()[c]);
+    for (const ViewOverlay::Mark& m : overlay.simulated) {
+      const recon::Label& l = truth.at(tc, 20, m.knot);
+      if (!l.present()) continue;
+      ++compared;
+      worst = std::max(worst, (l.px - m.px).norm());
+    }
+  }
+  EXPECT_GT(compared, 60);
+  EXPECT_LT(worst, 1.0) << "over " << compared << " labels";
+  std::printf("frame 20: %d simulated knots within %.3f px of their true labels\n", compared,
+              worst);
+
+  // The toggle takes the simulated net off the views and puts it back.
+  Click(room->overlay_box());
+  EXPECT_TRUE(room->view(0)->overlay().simulated.empty());
+  Click(room->overlay_box());
+  EXPECT_FALSE(room->view(0)->overlay().simulated.empty());
+
+  // The mouse over a label: its distance to its simulated knot.
+  const ViewOverlay::Mark mark = room->view(0)->overlay().simulated.front();
+  QTest::mouseMove(room->view(0), room->view(0)->ToWidget(mark.px).toPoint());
+  QTest::qWait(20);
+  EXPECT_TRUE(room->hover_label()->text().contains("label to simulated knot"))
+      << room->hover_label()->text().toStdString();
+
+  // The scenario without drag, simulated from the room: Cancel at once, then to the end.
+  QTest::mouseClick(room->scenario_edit(), Qt::LeftButton);
+  QTest::keyClicks(room->scenario_edit(), QString::fromStdString(d + "/no_drag.yaml"));
+  Click(room->simulate_button());
+  EXPECT_TRUE(room->cancel_button()->isEnabled());
+  Click(room->cancel_button());
+  ASSERT_TRUE(WaitIdle(*room, 120000));
+  EXPECT_TRUE(room->status_label()->text().contains("cancelled"))
+      << room->status_label()->text().toStdString();
+  EXPECT_EQ(room->simulations_table()->rowCount(), 1);
+  EXPECT_FALSE(fs::exists(Dir() / "sim_no_drag.h5"));
+  Click(room->simulate_button());
+  ASSERT_TRUE(WaitIdle(*room, 120000));
+  ASSERT_EQ(room->simulations_table()->rowCount(), 2)
+      << room->status_label()->text().toStdString();
+  EXPECT_TRUE(fs::exists(Dir() / "sim_no_drag.h5"));
+  ASSERT_EQ(room->selected(), 1);
+  const std::string no_drag = ScoreSelected(room);
+  EXPECT_NE(no_drag.find("inconsistent"), std::string::npos) << no_drag;
+  std::printf("no-drag simulation: %s\n", no_drag.c_str());
+  // Side by side in the table.
+  EXPECT_EQ(room->simulations_table()->item(0, 1)->text(), "consistent");
+  EXPECT_EQ(room->simulations_table()->item(1, 1)->text(), "inconsistent");
+
+  if (const char* out = getenv("NETLAB_SIMULATION_SCREENSHOT")) {
+    room->Select(1);
+    room->SetFrame(20);
+    ASSERT_TRUE(WaitIdle(*room, 20000));
+    ASSERT_TRUE(w.grab().save(out));
+    std::printf("wrote %s\n", out);
+  }
+}
+
+}  // namespace
+}  // namespace netlab::gui
+
+int main(int argc, char** argv) {
+  if (qEnvironmentVariableIsEmpty("QT_QPA_PLATFORM")) qputenv("QT_QPA_PLATFORM", "offscreen");
+  QApplication app(argc, argv);
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
