@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <exception>
 #include <iostream>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -38,7 +39,10 @@ constexpr char kHelp[] =
     "  --fps F                camera frame rate (default 179)\n"
     "  --bit-depth N          8, 10, 12 or 16 (default 8; deeper in 16-bit PGM)\n"
     "  --bayer P              RGGB, BGGR, GRBG, GBRG or none (default RGGB)\n"
-    "  --background B         black or white (default black)\n"
+    "  --background B         black, white or textile (default black; textile: a black cloth\n"
+    "                         panel with folds and weave)\n"
+    "  --frame-clutter        with --background textile: the rig's structure along the\n"
+    "                         frame's edges\n"
     "  --exposure S           exposure time for motion blur, s (default 0.001)\n"
     "  --blur-samples N       renders averaged over the exposure (default 3; 1: no blur)\n"
     "  --vignetting V         0..1 of the lens's cos^4 fall-off (default 0.5)\n"
@@ -49,6 +53,22 @@ constexpr char kHelp[] =
     "                         camera CAM exposes its frame k at (k + D) / fps, D in frames,\n"
     "                         -1 < D < 1 (a trigger delay its timestamps do not show); written\n"
     "                         into truth.h5 /camera_time_offset_frames\n"
+    "  --flicker HZ:DEPTH[:DUTY]\n"
+    "                         the light's intensity 1 + DEPTH cos(2 pi HZ t) (mains ripple:\n"
+    "                         100:0.3), or with DUTY a PWM LED on for DUTY of each period at\n"
+    "                         1 - DEPTH when off; each frame gets its mean over the exposure\n"
+    "  --f-number N           thin-lens depth of field at f-number N (with --focus-distance)\n"
+    "  --focus-distance M     the distance in focus, m (camera depth)\n"
+    "  --pixel-pitch UM       the sensor's pixel pitch at --scale 1, um (default 5.5)\n"
+    "  --camera-variation SIGMA\n"
+    "                         cameras that differ: white balance, gain, gamma, fixed-pattern\n"
+    "                         noise and hot pixels drawn with --seed at relative spread SIGMA\n"
+    "  --camera-response FILE per-camera responses (cameras: {cam0: {white_balance: [R, G, B],\n"
+    "                         gain, gamma, prnu, dsnu, hot_pixels, seed}})\n"
+    "  --camera-motion CAM=AMPLITUDE_MM[:HZ][,CAM=...]\n"
+    "                         camera CAM's centre vibrating by AMPLITUDE_MM at HZ along a seeded\n"
+    "                         direction, or without HZ jumping by it in the middle of the\n"
+    "                         frames; its pose per frame is written into truth.h5\n"
     "  --threads N            rendering threads (default 2)\n"
     "  --json                 print one JSON summary object on stdout as the last output\n"
     "  --quiet                no progress on stderr\n\n"
@@ -88,6 +108,74 @@ std::vector<double> ParseCameraOffsets(const std::string& text, const calib::Rig
   return offsets;
 }
 
+// A number from `text` (the whole of it), or UsageError naming `option` and `what`.
+double Number(const std::string& text, const std::string& option, const std::string& what) {
+  size_t used = 0;
+  double value = 0.0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !std::isfinite(value))
+    throw UsageError(option + ": " + what + " must be a number, got '" + text + "'");
+  return value;
+}
+
+// --flicker HZ:DEPTH[:DUTY].
+recon::Flicker ParseFlicker(const std::string& text) {
+  std::vector<std::string> parts;
+  std::stringstream items(text);
+  for (std::string part; std::getline(items, part, ':');) parts.push_back(part);
+  if (parts.size() < 2 || parts.size() > 3)
+    throw UsageError("--flicker expects HZ:DEPTH or HZ:DEPTH:DUTY, got '" + text + "'");
+  recon::Flicker flicker;
+  flicker.hz = Number(parts[0], "--flicker " + text, "the frequency HZ");
+  flicker.depth = Number(parts[1], "--flicker " + text, "the depth");
+  if (parts.size() == 3) flicker.duty = Number(parts[2], "--flicker " + text, "the duty cycle");
+  if (!(flicker.hz > 0.0))
+    throw UsageError("--flicker " + text + ": the frequency must be > 0 Hz");
+  if (!(flicker.depth >= 0.0 && flicker.depth <= 1.0))
+    throw UsageError("--flicker " + text + ": the depth must be in [0, 1]");
+  if (parts.size() == 3 && !(flicker.duty > 0.0 && flicker.duty < 1.0))
+    throw UsageError("--flicker " + text + ": the duty cycle must be in (0, 1)");
+  return flicker;
+}
+
+// --camera-motion CAM=AMPLITUDE_MM[:HZ][,...]: one motion per rig camera (still where not named).
+std::vector<recon::CameraMotion> ParseCameraMotion(const std::string& text, const calib::Rig& rig,
+                                                   uint64_t seed) {
+  std::vector<recon::CameraMotion> motion(rig.cameras.size());
+  std::stringstream items(text);
+  std::string item;
+  while (std::getline(items, item, ',')) {
+    const size_t eq = item.find('=');
+    if (eq == std::string::npos)
+      throw UsageError("--camera-motion expects CAM=AMPLITUDE_MM[:HZ][,...], got '" + item + "'");
+    const std::string name = item.substr(0, eq);
+    const int c = rig.Find(name);
+    if (c < 0) {
+      std::string names;
+      for (const auto& camera : rig.cameras) names += (names.empty() ? "" : ", ") + camera.name;
+      throw UsageError("--camera-motion " + item + ": the rig has no camera '" + name +
+                       "' (cameras: " + names + ")");
+    }
+    const std::string value = item.substr(eq + 1);
+    const size_t colon = value.find(':');
+    const double mm = Number(value.substr(0, colon), "--camera-motion " + item, "the amplitude");
+    double hz = 0.0;
+    if (colon != std::string::npos)
+      hz = Number(value.substr(colon + 1), "--camera-motion " + item, "the frequency");
+    if (!(mm > 0.0 && mm <= 1000.0))
+      throw UsageError("--camera-motion " + item + ": the amplitude must be in (0, 1000] mm");
+    if (colon != std::string::npos && !(hz > 0.0))
+      throw UsageError("--camera-motion " + item + ": the frequency must be > 0 Hz");
+    motion[c] = recon::DrawCameraMotion(1e-3 * mm, hz, std::numeric_limits<double>::quiet_NaN(),
+                                        seed, c);
+  }
+  return motion;
+}
+
 void PrintJson(const recon::RenderSummary& s, const std::string& out) {
   JsonWriter json;
   json.BeginObject();
@@ -114,11 +202,12 @@ void PrintJson(const recon::RenderSummary& s, const std::string& out) {
 
 int RunRender(const std::vector<std::string>& args) {
   return RunGuarded("render", [&] {
-    const CommandLine cl(args, {"json", "quiet", "help"},
+    const CommandLine cl(args, {"json", "quiet", "help", "frame-clutter"},
                          {"sim", "out", "rig", "frames", "scale", "noise", "fps", "bit-depth",
                           "bayer", "background", "exposure", "blur-samples", "vignetting",
                           "calibration-views", "seed", "threads", "coloring",
-                          "camera-time-offset"});
+                          "camera-time-offset", "flicker", "f-number", "focus-distance",
+                          "pixel-pitch", "camera-variation", "camera-response", "camera-motion"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -152,8 +241,39 @@ int RunRender(const std::vector<std::string>& args) {
     const std::string background = cl.Option("background").value_or("black");
     if (background == "white")
       job.background = recon::Colour(1.f, 1.f, 1.f);
+    else if (background == "textile")
+      job.textile_background = true;
     else if (background != "black")
-      throw UsageError("--background expects black or white, got '" + background + "'");
+      throw UsageError("--background expects black, white or textile, got '" + background + "'");
+    job.background_clutter = cl.Flag("frame-clutter");
+    if (job.background_clutter && !job.textile_background)
+      throw UsageError("--frame-clutter goes with --background textile");
+
+    if (const auto flicker = cl.Option("flicker")) job.flicker = ParseFlicker(*flicker);
+    if (cl.Option("f-number") || cl.Option("focus-distance")) {
+      if (!cl.Option("f-number") || !cl.Option("focus-distance"))
+        throw UsageError("--f-number and --focus-distance go together");
+      job.depth_of_field.f_number = cl.DoubleOption("f-number", 4.0, 0.5, 64.0);
+      job.depth_of_field.focus_distance_m = cl.DoubleOption("focus-distance", 3.0, 0.05, 1e4);
+      job.depth_of_field.pixel_pitch_m = 1e-6 * cl.DoubleOption("pixel-pitch", 5.5, 0.1, 100.0) /
+                                         scale;
+      for (const calib::Camera& camera : job.rig.cameras) {
+        const double f = camera.intrinsics.fx * job.depth_of_field.pixel_pitch_m;
+        if (!(job.depth_of_field.focus_distance_m > 2.0 * f))
+          throw UsageError("--focus-distance must be beyond twice the focal length (" +
+                           std::to_string(f * 1e3) + " mm for " + camera.name + ")");
+      }
+    }
+    if (cl.Option("camera-variation") && cl.Option("camera-response"))
+      throw UsageError("--camera-variation and --camera-response exclude each other");
+    if (cl.Option("camera-variation"))
+      job.responses = recon::DrawCameraResponses(
+          static_cast<int>(job.rig.cameras.size()),
+          cl.DoubleOption("camera-variation", 0.0, 0.0, 1.0), job.sensor.seed);
+    if (const auto file = cl.Option("camera-response"))
+      job.responses = recon::ReadCameraResponses(*file, job.rig);
+    if (const auto motion = cl.Option("camera-motion"))
+      job.camera_motion = ParseCameraMotion(*motion, job.rig, job.sensor.seed);
 
     if (const auto offsets = cl.Option("camera-time-offset"))
       job.camera_time_offset_frames = ParseCameraOffsets(*offsets, job.rig);
@@ -161,7 +281,7 @@ int RunRender(const std::vector<std::string>& args) {
       job.coloring = {recon::LoadYarnColoring(*coloring)};
       job.coloring_file = *coloring;
     }
-    for (const char* input : {"rig", "coloring"})
+    for (const char* input : {"rig", "coloring", "camera-response"})
       if (const auto path = cl.Option(input))
         recon::CheckOutsideOutput(*path, std::string("--") + input, job.out_dir);
     ProgressBar bar("rendering", !cl.Flag("quiet"));

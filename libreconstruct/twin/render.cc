@@ -170,13 +170,16 @@ struct Tile {
   std::array<float, kPixels> thread_distance;
   std::array<float, kPixels> thread_alpha;
   std::array<float, kPixels> thread_depth;
+  int tx = 0, ty = 0;  // where the tile is in the image (tiles)
 };
 
 // The image being rendered, in tiles allocated when first touched (a pool kept between renders).
 class Canvas {
  public:
   // An untouched canvas of the given size: every pixel shows `background`.
-  void Reset(int width, int height, const Colour& background) {
+  void Reset(int width, int height, const Colour& background,
+             const cv::Mat* background_image = nullptr) {
+    background_image_ = background_image;
     width_ = width;
     height_ = height;
     tiles_x_ = (width + Tile::kMask) >> Tile::kShift;
@@ -196,7 +199,18 @@ class Canvas {
       }
       slot = static_cast<int>(used_++);
       Tile& tile = *pool_[slot];
-      tile.colour.fill(background_);
+      tile.tx = tx;
+      tile.ty = ty;
+      if (background_image_ == nullptr) {
+        tile.colour.fill(background_);
+      } else {
+        const int x0 = tx << Tile::kShift, y0 = ty << Tile::kShift;
+        for (int y = y0; y < std::min(height_, y0 + Tile::kSize); ++y) {
+          const cv::Vec3f* row = background_image_->ptr<cv::Vec3f>(y);
+          for (int x = x0; x < std::min(width_, x0 + Tile::kSize); ++x)
+            tile.colour[Tile::Index(x, y)] = row[x];
+        }
+      }
       tile.solid_alpha.fill(0.0f);
     }
     return *pool_[slot];
@@ -221,6 +235,11 @@ class Canvas {
   int tiles_x() const { return tiles_x_; }
   int tiles_y() const { return tiles_y_; }
   const Colour& background() const { return background_; }
+  // The background at pixel (x, y).
+  Colour BackgroundAt(int x, int y) const {
+    return background_image_ == nullptr ? background_ : background_image_->at<cv::Vec3f>(y, x);
+  }
+  const cv::Mat* background_image() const { return background_image_; }
 
  private:
   int width_ = 0, height_ = 0, tiles_x_ = 0, tiles_y_ = 0;
@@ -229,6 +248,7 @@ class Canvas {
   size_t used_ = 0;
   uint32_t stamp_ = 0;
   Colour background_;
+  const cv::Mat* background_image_ = nullptr;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -450,8 +470,7 @@ class SolidCaster {
         rays_(rays),
         canvas_(canvas),
         supersample_(options.solid_supersample),
-        inv_samples_(1.0f / static_cast<float>(supersample_ * supersample_)),
-        background_(canvas.background()) {}
+        inv_samples_(1.0f / static_cast<float>(supersample_ * supersample_)) {}
 
   // Casts the solids into every tile that one of their rectangles overlaps.
   void Draw() {
@@ -660,7 +679,7 @@ class SolidCaster {
     tile.solid[i] = sum * inv_samples_;
     tile.solid_alpha[i] = static_cast<float>(hits) * inv_samples_;
     tile.solid_depth[i] = static_cast<float>(min_depth);
-    tile.colour[i] = tile.solid[i] + background_ * (1.0f - tile.solid_alpha[i]);
+    tile.colour[i] = tile.solid[i] + canvas_.BackgroundAt(x, y) * (1.0f - tile.solid_alpha[i]);
   }
 
   const std::vector<Solid>& solids_;
@@ -670,7 +689,6 @@ class SolidCaster {
   Canvas& canvas_;
   const int supersample_;    // samples per side of a supersampled pixel
   const float inv_samples_;  // 1 / supersample_^2
-  const Colour background_;
   // The tile being drawn: its solids (indices in solids_), the part of it they cover, and that
   // part's corner grid (cw_ x ch_ corners, row by row).
   std::vector<int> list_;
@@ -739,8 +757,9 @@ class PixelFootprint {
 class ThreadDrawer {
  public:
   ThreadDrawer(const calib::Camera& camera, const SceneRenderOptions& options, RayGrid& rays,
-               Canvas& canvas)
-      : camera_(camera),
+               Canvas& canvas, cv::Mat* depth)
+      : depth_(depth),
+        camera_(camera),
         params_(camera.intrinsics.ToParameters()),
         options_(options),
         rays_(rays),
@@ -787,6 +806,11 @@ class ThreadDrawer {
         pixel += alpha * ((1.0f - solid_alpha) * colour - (pixel - tile->solid[i]));
       } else {
         pixel += alpha * (colour - pixel);
+      }
+      if (depth_ != nullptr) {
+        float& d = depth_->at<float>((tile->ty << Tile::kShift) | (i >> Tile::kShift),
+                                     (tile->tx << Tile::kShift) | (i & Tile::kMask));
+        d = std::min(d, tile->thread_depth[i]);
       }
     }
   }
@@ -870,6 +894,7 @@ class ThreadDrawer {
       }
   }
 
+  cv::Mat* depth_;  // null, or where to keep the least depth per pixel
   const calib::Camera& camera_;
   const std::array<double, calib::kNumIntrinsics> params_;
   const SceneRenderOptions& options_;
@@ -928,6 +953,12 @@ bool SceneRenderOptions::IsValid(std::string* error) const {
 
 void RenderScene(const calib::Camera& camera, const Scene& scene,
                  const SceneRenderOptions& options, float weight, cv::Mat* accumulator) {
+  RenderScene(camera, scene, options, weight, accumulator, nullptr);
+}
+
+void RenderScene(const calib::Camera& camera, const Scene& scene,
+                 const SceneRenderOptions& options, float weight, cv::Mat* accumulator,
+                 cv::Mat* depth) {
   std::string error;
   if (!options.IsValid(&error)) throw std::invalid_argument("RenderScene: " + error);
   const calib::CameraIntrinsics& k = camera.intrinsics;
@@ -946,10 +977,25 @@ void RenderScene(const calib::Camera& camera, const Scene& scene,
        << accumulator->cols << "x" << accumulator->rows;
     throw std::invalid_argument(os.str());
   }
+  const cv::Mat* background_image = options.background_image;
+  if (background_image != nullptr &&
+      (background_image->type() != CV_32FC3 || background_image->cols != k.width ||
+       background_image->rows != k.height))
+    throw std::invalid_argument("RenderScene: the background image must be CV_32FC3 of the "
+                                "camera's size (camera " + camera.name + ")");
+  if (depth != nullptr) {
+    if (depth->empty()) {
+      depth->create(k.height, k.width, CV_32F);
+      depth->setTo(cv::Scalar::all(std::numeric_limits<float>::infinity()));
+    }
+    if (depth->type() != CV_32F || depth->cols != k.width || depth->rows != k.height)
+      throw std::invalid_argument("RenderScene: the depth map must be CV_32F of the camera's "
+                                  "size (camera " + camera.name + ")");
+  }
   CheckScene(scene);
 
   thread_local Canvas canvas;
-  canvas.Reset(k.width, k.height, scene.background);
+  canvas.Reset(k.width, k.height, scene.background, background_image);
   RayGrid& rays = RaysOf(k);
   const Eigen::Vector3d light =
       camera.cam_from_world.rotation * options.light_direction.normalized();
@@ -967,12 +1013,12 @@ void RenderScene(const calib::Camera& camera, const Scene& scene,
     order.emplace_back(-z / t.points.size(), i);
   }
   std::sort(order.begin(), order.end());
-  ThreadDrawer drawer(camera, options, rays, canvas);
+  ThreadDrawer drawer(camera, options, rays, canvas, depth);
   for (const auto& [negative_depth, i] : order) drawer.Draw(scene.threads[i]);
 
   // Accumulate: the touched tiles, and the background elsewhere, as flat float spans of one
   // tile row (3 x 32 floats) so that the loops vectorise.
-  const bool black = scene.background == Colour(0, 0, 0);
+  const bool black = scene.background == Colour(0, 0, 0) && background_image == nullptr;
   std::array<float, 3 * Tile::kSize> background;
   for (int x = 0; x < Tile::kSize; ++x)
     for (int c = 0; c < 3; ++c) background[3 * x + c] = scene.background[c] * weight;
@@ -985,12 +1031,24 @@ void RenderScene(const calib::Camera& camera, const Scene& scene,
       const int y1 = std::min(k.height, y0 + Tile::kSize);
       for (int y = y0; y < y1; ++y) {
         float* out = accumulator->ptr<float>(y) + 3 * x0;
+        if (tile == nullptr && background_image != nullptr) {
+          const float* in = background_image->ptr<float>(y) + 3 * x0;
+          for (int i = 0; i < n; ++i) out[i] += weight * in[i];
+          continue;
+        }
         if (tile == nullptr) {
           for (int i = 0; i < n; ++i) out[i] += background[i];
           continue;
         }
         const float* in = &tile->colour[(y & Tile::kMask) << Tile::kShift][0];
         for (int i = 0; i < n; ++i) out[i] += weight * in[i];
+        if (depth != nullptr) {
+          float* d = depth->ptr<float>(y) + x0;
+          const int row = (y & Tile::kMask) << Tile::kShift;
+          for (int i = 0; i < n / 3; ++i)
+            if (tile->solid_alpha[row + i] > 0.0f)
+              d[i] = std::min(d[i], tile->solid_depth[row + i]);
+        }
       }
     }
 }
@@ -1004,6 +1062,32 @@ cv::Mat RenderScene(const calib::Camera& camera, const Scene& scene,
 
 double SensorOptions::white() const { return std::ldexp(1.0, bit_depth) - 1.0; }
 
+bool CameraResponse::IsIdentity() const {
+  return white_balance == std::array<double, 3>{1.0, 1.0, 1.0} && gain == 1.0 && gamma == 1.0 &&
+         prnu == 0.0 && dsnu == 0.0 && hot_pixels == 0.0;
+}
+
+bool CameraResponse::IsValid(std::string* error) const {
+  std::ostringstream os;
+  for (double w : white_balance)
+    if (!(w > 0.0) || !std::isfinite(w)) os << "white_balance " << w << " must be > 0";
+  if (!os.str().empty()) {
+  } else if (!(gain > 0.0) || !std::isfinite(gain)) {
+    os << "gain " << gain << " must be > 0";
+  } else if (!(gamma > 0.0 && gamma <= 4.0)) {
+    os << "gamma " << gamma << " must be in (0, 4]";
+  } else if (!(prnu >= 0.0 && prnu <= 1.0)) {
+    os << "prnu " << prnu << " must be in [0, 1]";
+  } else if (!(dsnu >= 0.0 && dsnu <= 255.0)) {
+    os << "dsnu " << dsnu << " must be in [0, 255]";
+  } else if (!(hot_pixels >= 0.0 && hot_pixels <= 1.0)) {
+    os << "hot_pixels " << hot_pixels << " must be in [0, 1]";
+  }
+  if (os.str().empty()) return true;
+  if (error) *error = os.str();
+  return false;
+}
+
 bool SensorOptions::IsValid(std::string* error) const {
   std::ostringstream os;
   if (bit_depth != 8 && bit_depth != 10 && bit_depth != 12 && bit_depth != 16)
@@ -1014,6 +1098,8 @@ bool SensorOptions::IsValid(std::string* error) const {
     os << "vignetting " << vignetting << " must be in [0, 1]";
   else if (!(black_level >= 0.0 && black_level < white()))
     os << "black_level " << black_level << " must be in [0, " << white() << ")";
+  else if (std::string reason; !response.IsValid(&reason))
+    os << "response: " << reason;
   if (os.str().empty()) return true;
   if (error) *error = os.str();
   return false;
@@ -1051,6 +1137,25 @@ cv::Mat Expose(const cv::Mat& linear_bgr, const calib::CameraIntrinsics& intrins
     x2[x] = static_cast<float>(n * n);
   }
   const float v = static_cast<float>(options.vignetting);
+  // The camera's response: its fixed patterns, drawn with its own seed (the same every frame).
+  const CameraResponse& response = options.response;
+  const bool respond = !response.IsIdentity();
+  cv::Mat prnu, dsnu, hot;
+  if (respond) {
+    cv::RNG pattern(response.pattern_seed);
+    if (response.prnu > 0.0) {
+      prnu.create(height, width, CV_32F);
+      pattern.fill(prnu, cv::RNG::NORMAL, 1.0, response.prnu);
+    }
+    if (response.dsnu > 0.0) {
+      dsnu.create(height, width, CV_32F);
+      pattern.fill(dsnu, cv::RNG::NORMAL, 0.0, response.dsnu * span / 255.0);
+    }
+    if (response.hot_pixels > 0.0) {
+      hot.create(height, width, CV_32F);
+      pattern.fill(hot, cv::RNG::UNIFORM, 0.0, 1.0);
+    }
+  }
 
   cv::Mat out(height, width, options.bit_depth == 8 ? CV_8U : CV_16U);
   std::vector<float> raw(width);
@@ -1086,10 +1191,32 @@ cv::Mat Expose(const cv::Mat& linear_bgr, const calib::CameraIntrinsics& intrins
         if (!std::isfinite(raw[x]))
           throw std::invalid_argument("Expose: the image has a non-finite value at (x " +
                                       std::to_string(x) + ", y " + std::to_string(y) + ")");
+    if (respond) {
+      // Site gains (a mono sensor takes the green one), pixel gains, the response curve.
+      const float g0 = static_cast<float>(response.gain * response.white_balance[c0 < 0 ? 1 : c0]);
+      const float g1 = static_cast<float>(response.gain * response.white_balance[c1 < 0 ? 1 : c1]);
+      const float* p = prnu.empty() ? nullptr : prnu.ptr<float>(y);
+      const float gamma = static_cast<float>(response.gamma);
+      for (int x = 0; x < width; ++x) {
+        float value = std::max(0.0f, raw[x] * ((x & 1) ? g1 : g0) * (p ? p[x] : 1.0f));
+        if (gamma != 1.0f) value = std::pow(value, gamma);
+        raw[x] = value;
+      }
+      if (!dsnu.empty()) {
+        const float* o = dsnu.ptr<float>(y);
+        for (int x = 0; x < width; ++x) raw[x] += o[x] / span;
+      }
+    }
     const float* n = noise.empty() ? nullptr : noise.ptr<float>(y);
     for (int x = 0; x < width; ++x) {
       // Rounded half up, clamped to [0, white].
       raw[x] = std::clamp(black + raw[x] * span + (n ? n[x] : 0.0f) + 0.5f, 0.0f, white + 0.5f);
+    }
+    if (!hot.empty()) {
+      const float* h = hot.ptr<float>(y);
+      const float fraction = static_cast<float>(response.hot_pixels);
+      for (int x = 0; x < width; ++x)
+        if (h[x] < fraction) raw[x] = white;
     }
     if (options.bit_depth == 8) {
       uint8_t* o = out.ptr<uint8_t>(y);

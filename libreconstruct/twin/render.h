@@ -39,6 +39,7 @@
 // grid of one ray every 8 pixels, interpolated bilinearly: < 0.01 px error for the paper's
 // lenses). RenderScene is thread-safe: several threads may render different cameras at once.
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -99,6 +100,9 @@ struct SceneRenderOptions {
   // angle; false, the interval [-1/2, 1/2] across the thread whatever its angle (the same along
   // the image axes; across a diagonal thin thread rows then sum to 0.85..1.1 of its area).
   bool square_pixel_footprint = true;
+  // A background that varies per pixel (CV_32FC3 of the camera's size, linear), shown instead
+  // of scene.background where no solid is seen; null: the uniform scene.background.
+  const cv::Mat* background_image = nullptr;
 
   // True when every field is in range; else false with the reason in *error.
   bool IsValid(std::string* error) const;
@@ -110,9 +114,34 @@ struct SceneRenderOptions {
 // the wrong type or size.
 void RenderScene(const calib::Camera& camera, const Scene& scene,
                  const SceneRenderOptions& options, float weight, cv::Mat* accumulator);
+// The same, also keeping in *depth (CV_32F of the camera's size, created +inf if empty) the
+// least depth (camera z, m) of what each pixel sees: the nearest thread drawn there (not behind
+// a solid covering the whole pixel) or solid; +inf where only the background is seen.
+void RenderScene(const calib::Camera& camera, const Scene& scene,
+                 const SceneRenderOptions& options, float weight, cv::Mat* accumulator,
+                 cv::Mat* depth);
 // The rendered linear image (CV_32FC3, weight 1).
 cv::Mat RenderScene(const calib::Camera& camera, const Scene& scene,
                     const SceneRenderOptions& options);
+
+// How one camera's sensor and electronics differ from the ideal (the identity by default):
+// a linear value v (after vignetting) at a site of colour c records as
+//   (gain white_balance[c] (1 + prnu_xy) v)^gamma (white + black level + dsnu_xy + noise),
+// prnu_xy ~ N(0, prnu) and dsnu_xy ~ N(0, dsnu grey levels of 8 bits) fixed per pixel (drawn
+// with pattern_seed, the same every frame), and a hot_pixels fraction of the pixels reading
+// white whatever the light. A mono sensor (kNone) takes the green gain.
+struct CameraResponse {
+  std::array<double, 3> white_balance{1.0, 1.0, 1.0};  // B, G, R gains
+  double gain = 1.0;
+  double gamma = 1.0;
+  double prnu = 0.0;        // relative sigma of the pixels' gains
+  double dsnu = 0.0;        // sigma of the pixels' dark offsets, grey levels of 8 bits
+  double hot_pixels = 0.0;  // fraction of pixels, in [0, 1]
+  uint64_t pattern_seed = 1;
+
+  bool IsIdentity() const;
+  bool IsValid(std::string* error) const;
+};
 
 struct SensorOptions {
   // The colour filter array; kNone: a mono sensor recording luminance (Rec. 709 weights on the
@@ -131,6 +160,8 @@ struct SensorOptions {
   double black_level = 0.0;
   // Noise seed (the caller passes one per camera and frame).
   uint64_t seed = 1;
+  // The camera's response (identity: the ideal sensor above).
+  CameraResponse response;
 
   // 2^bit_depth - 1: the raw value of linear 1.
   double white() const;

@@ -379,6 +379,18 @@ double OffsetOf(const RenderJob& job, int c) {
              : 0.0;
 }
 
+// Camera c of the rig at time t (where its motion, if any, has taken it).
+calib::Camera CameraAt(const RenderJob& job, int c, double t) {
+  return static_cast<size_t>(c) < job.camera_motion.size()
+             ? job.camera_motion[c].At(job.rig.cameras[c], t)
+             : job.rig.cameras[c];
+}
+
+// Camera c's response (the identity without one).
+CameraResponse ResponseOf(const RenderJob& job, int c) {
+  return static_cast<size_t>(c) < job.responses.size() ? job.responses[c] : CameraResponse();
+}
+
 }  // namespace
 
 void CheckOutsideOutput(const std::string& input, const std::string& option,
@@ -421,6 +433,27 @@ FrameRange FramesOf(const RenderJob& job, const SimulatedShot& shot) {
                        "simulation's time; render fewer frames");
   }
   return range;
+}
+
+// The job with its effects checked (InputError naming the option) and a camera's step without
+// a time (NaN) put half a frame before the middle frame of the range.
+RenderJob WithEffectsChecked(const RenderJob& given, const FrameRange& range) {
+  RenderJob job = given;
+  std::string error;
+  if (!job.flicker.IsValid(&error)) throw InputError("--flicker: " + error);
+  if (!job.depth_of_field.IsValid(&error)) throw InputError("--f-number: " + error);
+  const size_t cameras = job.rig.cameras.size();
+  if (!job.responses.empty() && job.responses.size() != cameras)
+    throw std::invalid_argument("RenderJob: one response per rig camera");
+  for (size_t c = 0; c < job.responses.size(); ++c)
+    if (!job.responses[c].IsValid(&error))
+      throw InputError("camera " + job.rig.cameras[c].name + "'s response: " + error);
+  if (!job.camera_motion.empty() && job.camera_motion.size() != cameras)
+    throw std::invalid_argument("RenderJob: one camera motion per rig camera");
+  for (CameraMotion& motion : job.camera_motion)
+    if (motion.enabled() && motion.hz == 0.0 && !std::isfinite(motion.step_time))
+      motion.step_time = range.Time(range.first + range.count() / 2) - 0.5 / range.fps;
+  return job;
 }
 
 // The experiment file's content, each camera's folder made and its timestamps.csv written.
@@ -471,22 +504,34 @@ void RunOnThreads(int threads, const std::function<void()>& work) {
 
 // Renders frame k of camera c: the scene averaged over the exposure (blur samples), exposed by
 // the sensor, written as out/<camera>/frame_%06d.pgm.
+// `backgrounds`: per camera, the textile panel it sees (empty without one).
 void RenderFrame(const RenderJob& job, const SimulatedShot& shot, const FrameRange& range,
-                 const fs::path& out, int k, int c) {
-  const SceneRenderOptions render_options;
+                 const fs::path& out, int k, int c, const std::vector<cv::Mat>& backgrounds) {
+  SceneRenderOptions render_options;
+  if (static_cast<size_t>(c) < backgrounds.size() && !backgrounds[c].empty())
+    render_options.background_image = &backgrounds[c];
   const int samples = std::max(1, job.blur_samples);
   const calib::Camera& camera = job.rig.cameras[c];
-  cv::Mat accumulator;
+  const double frame_time = range.Time(k) + OffsetOf(job, c) / range.fps;
+  const bool blur = job.depth_of_field.enabled();
+  cv::Mat accumulator, depth;
   for (int s = 0; s < samples; ++s) {
-    const double t = range.Time(k) + OffsetOf(job, c) / range.fps +
-                     ((s + 0.5) / samples - 0.5) * (samples > 1 ? job.exposure_s : 0.0);
+    const double t =
+        frame_time + ((s + 0.5) / samples - 0.5) * (samples > 1 ? job.exposure_s : 0.0);
     Scene scene = shot.SceneAt(t, job.coloring, job.background);
     for (ThreadPolyline& yarn : scene.threads) yarn.colour *= job.illumination;
     for (Ball& ball : scene.balls) ball.colour *= job.illumination;
     for (Box& box : scene.boxes) box.colour *= job.illumination;
-    RenderScene(camera, scene, render_options, 1.0f / samples, &accumulator);
+    RenderScene(CameraAt(job, c, t), scene, render_options, 1.0f / samples, &accumulator,
+                blur ? &depth : nullptr);
   }
+  // The light of the exposure (the whole scene is lit by the flickering lamps), then the lens.
+  if (job.flicker.enabled())
+    accumulator *= job.flicker.MeanOverExposure(frame_time, job.exposure_s);
+  if (blur)
+    accumulator = ApplyDepthOfField(accumulator, depth, camera.intrinsics.fx, job.depth_of_field);
   SensorOptions sensor = job.sensor;
+  sensor.response = ResponseOf(job, c);
   sensor.seed = job.sensor.seed * 1000003ull + static_cast<uint64_t>(k) * 16 + c;
   const cv::Mat raw = Expose(accumulator, camera.intrinsics, sensor);
   char name[32];
@@ -499,6 +544,12 @@ void RenderFrame(const RenderJob& job, const SimulatedShot& shot, const FrameRan
 void RenderFrames(const RenderJob& job, const SimulatedShot& shot, const FrameRange& range,
                   const fs::path& out, const std::function<void(int, int)>& progress) {
   const int cameras = static_cast<int>(job.rig.cameras.size());
+  std::vector<cv::Mat> backgrounds(cameras);
+  if (job.textile_background)
+    for (int c = 0; c < cameras; ++c)
+      backgrounds[c] = TextileBackground(job.rig.cameras[c].intrinsics,
+                                         kTextileAlbedo * job.illumination,
+                                         job.background_clutter, job.sensor.seed * 31 + c);
   const int total = range.count() * cameras;
   std::atomic<int> next{0}, done{0};
   std::mutex mutex;
@@ -506,7 +557,8 @@ void RenderFrames(const RenderJob& job, const SimulatedShot& shot, const FrameRa
   RunOnThreads(job.threads, [&] {
     for (int task; (task = next++) < total;) {
       try {
-        RenderFrame(job, shot, range, out, range.first + task / cameras, task % cameras);
+        RenderFrame(job, shot, range, out, range.first + task / cameras, task % cameras,
+                    backgrounds);
       } catch (const std::exception& e) {
         std::lock_guard<std::mutex> lock(mutex);
         if (failure.empty()) failure = e.what();
@@ -531,6 +583,8 @@ struct FrameTruth {
   std::vector<std::vector<uint8_t>> visibility;  // [camera][T * K] (KnotVisibility's codes)
   std::vector<double> knots_visible_mean;        // per camera: visible knots per frame, mean
   std::vector<int> knots_visible_min;            // per camera
+  std::vector<std::vector<double>> rotation;     // [camera][T * 9] cam_from_world, row-major
+  std::vector<std::vector<double>> translation;  // [camera][T * 3] m
 };
 
 // The truth of the frames of `range` as `rig` sees them (each camera at its own clock).
@@ -548,6 +602,8 @@ FrameTruth TruthOf(const SimulatedShot& shot, const RenderJob& job, const FrameR
   truth.visibility.assign(cameras, std::vector<uint8_t>(size_t(frames) * knots));
   truth.knots_visible_mean.assign(cameras, 0.0);
   truth.knots_visible_min.assign(cameras, knots);
+  truth.rotation.assign(cameras, {});
+  truth.translation.assign(cameras, {});
   for (int k = range.first; k <= range.last; ++k) {
     // The knots at the frame time, and the solids that can hide them.
     const double t = range.Time(k);
@@ -574,11 +630,18 @@ FrameTruth TruthOf(const SimulatedShot& shot, const RenderJob& job, const FrameR
       }
       const std::vector<Eigen::Vector3d>& seen = offset != 0.0 ? x_c : x;
       const Scene& hiding = offset != 0.0 ? solids_c : solids;
+      // The camera where it was at its own time.
+      const calib::Camera camera = CameraAt(job, c, t + offset / range.fps);
+      const Eigen::Matrix3d r = camera.cam_from_world.RotationMatrix();
+      for (int a = 0; a < 3; ++a) {
+        for (int b = 0; b < 3; ++b) truth.rotation[c].push_back(r(a, b));
+        truth.translation[c].push_back(camera.cam_from_world.translation[a]);
+      }
       for (int j = 0; j < knots; ++j) {
-        const Eigen::Vector2d px = rig.cameras[c].ProjectWorld(seen[j]);
+        const Eigen::Vector2d px = camera.ProjectWorld(seen[j]);
         truth.pixels[c][(row * knots + j) * 2] = px.x();
         truth.pixels[c][(row * knots + j) * 2 + 1] = px.y();
-        const uint8_t v = KnotVisibility(rig.cameras[c], seen[j], hiding);
+        const uint8_t v = KnotVisibility(camera, seen[j], hiding);
         truth.visibility[c][row * knots + j] = v;
         visible += v == 0;
       }
@@ -587,6 +650,28 @@ FrameTruth TruthOf(const SimulatedShot& shot, const RenderJob& job, const FrameR
     }
   }
   return truth;
+}
+
+// The effects a job films with, as YAML (truth.h5 /effects).
+std::string EffectsYaml(const RenderJob& job) {
+  std::ostringstream os;
+  os.precision(10);
+  os << "flicker: {hz: " << job.flicker.hz << ", depth: " << job.flicker.depth
+     << ", duty: " << job.flicker.duty << "}\n";
+  os << "depth_of_field: {f_number: " << job.depth_of_field.f_number
+     << ", focus_distance_m: " << job.depth_of_field.focus_distance_m
+     << ", pixel_pitch_m: " << job.depth_of_field.pixel_pitch_m << "}\n";
+  os << "background: " << (job.textile_background ? "textile" : "plain")
+     << "\nbackground_clutter: " << (job.background_clutter ? "true" : "false") << "\n";
+  os << "camera_motion:\n";
+  for (size_t c = 0; c < job.rig.cameras.size(); ++c) {
+    const CameraMotion m = c < job.camera_motion.size() ? job.camera_motion[c] : CameraMotion();
+    os << "  " << job.rig.cameras[c].name << ": {amplitude_m: " << m.amplitude_m
+       << ", hz: " << m.hz << ", direction: [" << m.direction.x() << ", " << m.direction.y()
+       << ", " << m.direction.z() << "], phase: " << m.phase << ", step_time: " << m.step_time
+       << "}\n";
+  }
+  return os.str();
 }
 
 // truth.h5 (see synthetic_experiment.h), written whole under another name first; the rig's text
@@ -613,7 +698,26 @@ void WriteTruth(const fs::path& out, const RenderJob& job, const FrameTruth& tru
       h5::WriteDataset(camera.get(), "visibility", H5T_NATIVE_UINT8,
                        {static_cast<hsize_t>(frames), static_cast<hsize_t>(knots)},
                        truth.visibility[c].data());
+      h5::WriteDataset(camera.get(), "cam_from_world_rotation", H5T_NATIVE_DOUBLE,
+                       {static_cast<hsize_t>(frames), 3, 3}, truth.rotation[c].data());
+      h5::WriteDataset(camera.get(), "cam_from_world_translation", H5T_NATIVE_DOUBLE,
+                       {static_cast<hsize_t>(frames), 3}, truth.translation[c].data());
+      h5::SetUnits(camera.get(), "cam_from_world_translation", "m");
+      const CameraResponse response = ResponseOf(job, static_cast<int>(c));
+      h5::Id group_r = h5::CreateGroup(camera.get(), "response");
+      h5::WriteDataset(group_r.get(), "white_balance", H5T_NATIVE_DOUBLE, {3},
+                       response.white_balance.data());
+      h5::WriteStringAttribute(h5::Id(H5Dopen2(group_r.get(), "white_balance", H5P_DEFAULT)).get(),
+                               "order", "B,G,R");
+      const std::pair<const char*, double> values[] = {
+          {"gain", response.gain},   {"gamma", response.gamma},
+          {"prnu", response.prnu},   {"dsnu", response.dsnu},
+          {"hot_pixels", response.hot_pixels},
+          {"pattern_seed", static_cast<double>(response.pattern_seed)}};
+      for (const auto& [name, value] : values)
+        h5::WriteDataset(group_r.get(), name, H5T_NATIVE_DOUBLE, {1}, &value);
     }
+    h5::WriteStringDataset(file.get(), "effects", EffectsYaml(job));
     std::ifstream rig_file(out / "rig_true.yaml");
     std::stringstream rig_text;
     rig_text << rig_file.rdbuf();
@@ -732,15 +836,16 @@ int RenderCalibrationImages(const RenderJob& job, const SimulatedShot& shot, con
 
 }  // namespace
 
-RenderSummary RenderExperiment(const RenderJob& job,
+RenderSummary RenderExperiment(const RenderJob& given,
                                const std::function<void(int, int)>& progress) {
   const auto start = std::chrono::steady_clock::now();
   // Check the job against the simulation.
-  const SimulatedShot shot(job.simulation);
-  CheckColouring(job.coloring, job.coloring_file, shot.model());
-  const calib::Rig& rig = job.rig;
+  const SimulatedShot shot(given.simulation);
+  CheckColouring(given.coloring, given.coloring_file, shot.model());
+  const calib::Rig& rig = given.rig;
   if (rig.cameras.empty()) throw InputError("the rig has no cameras");
-  const FrameRange range = FramesOf(job, shot);
+  const FrameRange range = FramesOf(given, shot);
+  const RenderJob job = WithEffectsChecked(given, range);
   CheckOutsideOutput(job.simulation, "--sim", job.out_dir);
 
   // The whole folder is written as out_dir.partial and replaces out_dir only when complete: a

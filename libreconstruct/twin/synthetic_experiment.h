@@ -23,6 +23,11 @@
 //     /rig                          string, the rig file's text
 //     /camera_time_offset_frames    [C] float64, each camera's clock offset in frames (the
 //                                   group's cameras in the rig's order; attribute "cameras")
+//     /cameras/<camera>/cam_from_world_rotation  [T,3,3], cam_from_world_translation [T,3]:
+//                                   the camera's pose at each row's frame (its own clock)
+//     /cameras/<camera>/response/   the camera's response (white_balance [3] B,G,R, gain,
+//                                   gamma, prnu, dsnu, hot_pixels, pattern_seed)
+//     /effects                      string, the effects the frames were filmed with (YAML)
 //
 // Frame k is the camera frame at time k / fps of the simulation; its exposure is centred there
 // (motion blur samples the interval), and its truth is the state at that time. A camera with a
@@ -40,6 +45,7 @@
 #include "libnetsim/tracks/track_file.h"
 #include "libreconstruct/coloring/palette.h"
 #include "libreconstruct/coloring/yarn_coloring.h"
+#include "libreconstruct/twin/flight_effects.h"
 #include "libreconstruct/twin/render.h"
 
 namespace netlab::recon {
@@ -98,6 +104,13 @@ struct RenderJob {
   int calibration_views = 20; // foil poses seen by all cameras (0: no calibration images)
   // Per rig camera: its clock offset, frames, -1 < d < 1 (empty: all 0).
   std::vector<double> camera_time_offset_frames;
+  // The flight's acquisition effects (flight_effects.h), all off by default.
+  Flicker flicker;                          // the light's intensity over time
+  DepthOfField depth_of_field;              // the thin lens (the same for every camera)
+  std::vector<CameraResponse> responses;    // per rig camera (empty: the ideal sensor)
+  bool textile_background = false;         // a textile panel instead of `background`
+  bool background_clutter = false;          // the rig's structure along the frame's edges
+  std::vector<CameraMotion> camera_motion;  // per rig camera (empty: all still)
   int threads = 2;
 };
 
