@@ -137,12 +137,20 @@ struct YarnFit {
 
 // The least-squares areas and offsets of each channel for a fixed line and width (the model is
 // linear in them), into p; returns the sum of squared residuals.
+// The yarn model's parameters (3 + 2 channels, at most three channels): on the stack, as the fit
+// runs for every yarn of every knot in every frame.
+constexpr int kMaxYarnChannels = 3;
+constexpr int kMaxYarnParams = 3 + 2 * kMaxYarnChannels;
+using YarnParams = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxYarnParams, 1>;
+using YarnNormal = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxYarnParams,
+                                 kMaxYarnParams>;
+
 double SolveLinear(const std::vector<YarnSample>& samples, int channels, double blur,
-                   Eigen::VectorXd* p) {
+                   YarnParams* p) {
   struct Sums {
     double n = 0, g = 0, gg = 0, v = 0, gv = 0, vv = 0;
   };
-  std::vector<Sums> sums(channels);
+  std::array<Sums, kMaxYarnChannels> sums{};
   for (const YarnSample& s : samples) {
     const double g = StripValue(s.v - (*p)(0) - (*p)(1) * s.u, (*p)(2), blur);
     Sums& m = sums[s.channel];
@@ -178,8 +186,9 @@ YarnFit FitYarn(const std::vector<YarnSample>& samples, int channels, double blu
   constexpr double kMinHalfWidth = 0.05;
   YarnFit fit;
   const int np = 3 + 2 * channels;
-  if (static_cast<int>(samples.size()) < 4 * np) return fit;
-  Eigen::VectorXd p = Eigen::VectorXd::Zero(np), trial = p;
+  if (channels < 1 || channels > kMaxYarnChannels || static_cast<int>(samples.size()) < 4 * np)
+    return fit;
+  YarnParams p = YarnParams::Zero(np), trial = p;
   p(2) = half_width;
   if (search) {
     // A search in offset alone, then in turn, once put a line 1.8 px off at the knot: the turn
@@ -196,11 +205,11 @@ YarnFit FitYarn(const std::vector<YarnSample>& samples, int channels, double blu
   } else {
     SolveLinear(samples, channels, blur, &p);
   }
-  auto cost = [&](const Eigen::VectorXd& q) {
-    double sum = 0.0, dd, dh;
+  auto cost = [&](const YarnParams& q) {
+    double sum = 0.0;
     for (const YarnSample& s : samples) {
       const double r = q(3 + channels + s.channel) +
-                       q(3 + s.channel) * Strip(s.v - q(0) - q(1) * s.u, q(2), blur, &dd, &dh) -
+                       q(3 + s.channel) * StripValue(s.v - q(0) - q(1) * s.u, q(2), blur) -
                        s.value;
       sum += r * r;
     }
@@ -210,23 +219,22 @@ YarnFit FitYarn(const std::vector<YarnSample>& samples, int channels, double blu
   // bound, held there from then on (its width is not seen; letting it go and come back
   // zig-zags).
   bool held = false;
-  auto normal_equations = [&](const Eigen::VectorXd& q, Eigen::MatrixXd* jtj,
-                              Eigen::VectorXd* jtr) {
+  // A sample's Jacobian row has five nonzero entries: the line (0, 1), the width (2), and its
+  // channel's area and offset; only those products are summed.
+  auto normal_equations = [&](const YarnParams& q, YarnNormal* jtj, YarnParams* jtr) {
     jtj->setZero(np, np);
     jtr->setZero(np);
-    Eigen::VectorXd j(np);
     for (const YarnSample& s : samples) {
       double dd, dh;
       const double a = q(3 + s.channel);
       const double g = Strip(s.v - q(0) - q(1) * s.u, q(2), blur, &dd, &dh);
-      j.setZero();
-      j(0) = -a * dd;
-      j(1) = -a * dd * s.u;
-      j(2) = a * dh;
-      j(3 + s.channel) = g;
-      j(3 + channels + s.channel) = 1.0;
-      jtj->selfadjointView<Eigen::Lower>().rankUpdate(j);
-      *jtr += j * (q(3 + channels + s.channel) + a * g - s.value);
+      const std::array<int, 5> at = {0, 1, 2, 3 + s.channel, 3 + channels + s.channel};
+      const std::array<double, 5> j = {-a * dd, -a * dd * s.u, a * dh, g, 1.0};
+      const double r = q(3 + channels + s.channel) + a * g - s.value;
+      for (int m = 0; m < 5; ++m) {
+        for (int n = 0; n <= m; ++n) (*jtj)(at[m], at[n]) += j[m] * j[n];
+        (*jtr)(at[m]) += j[m] * r;
+      }
     }
     *jtj = jtj->selfadjointView<Eigen::Lower>();
     held = held || q(2) <= kMinHalfWidth;
@@ -239,14 +247,14 @@ YarnFit FitYarn(const std::vector<YarnSample>& samples, int channels, double blu
   };
   double current = cost(p), lambda = 1e-3, last_step = std::numeric_limits<double>::infinity();
   bool converged = false;
-  Eigen::MatrixXd jtj;
-  Eigen::VectorXd jtr;
+  YarnNormal jtj;
+  YarnParams jtr;
   for (int iteration = 0; iteration < 30 && !converged; ++iteration) {
     normal_equations(p, &jtj, &jtr);
     for (int tries = 0; tries < 8; ++tries) {
-      Eigen::MatrixXd a = jtj;
-      a.diagonal() += lambda * jtj.diagonal() + Eigen::VectorXd::Constant(np, 1e-12);
-      Eigen::VectorXd next = p + a.ldlt().solve(-jtr);
+      YarnNormal a = jtj;
+      a.diagonal() += lambda * jtj.diagonal() + YarnParams::Constant(np, 1e-12);
+      YarnParams next = p + a.ldlt().solve(-jtr);
       next(2) = std::clamp(next(2), kMinHalfWidth, 4.0);
       const double c = next.allFinite() ? cost(next) : std::numeric_limits<double>::infinity();
       if (c < current) {
@@ -265,14 +273,16 @@ YarnFit FitYarn(const std::vector<YarnSample>& samples, int channels, double blu
   // the solution and the residuals.
   normal_equations(p, &jtj, &jtr);
   const double dof = std::max(1.0, static_cast<double>(samples.size()) - np);
-  const Eigen::MatrixXd cov = jtj.ldlt().solve(Eigen::MatrixXd::Identity(np, np));
+  const YarnNormal cov = jtj.ldlt().solve(YarnNormal::Identity(np, np));
   const double var = cov(0, 0) + 2 * u_knot * cov(0, 1) + u_knot * u_knot * cov(1, 1);
   fit.sigma_rho = std::sqrt(std::max(0.0, var) * current / dof);
   fit.rho = p(0) + p(1) * u_knot;
   fit.params = p;
   fit.kappa = p(1);
   fit.half_width = p(2);
-  fit.snr = p.segment(3, channels).norm() / std::max(std::sqrt(current / samples.size()), 1e-9);
+  double area2 = 0.0;
+  for (int c = 0; c < channels; ++c) area2 += p(3 + c) * p(3 + c);
+  fit.snr = std::sqrt(area2) / std::max(std::sqrt(current / samples.size()), 1e-9);
   // The line settled to a hundredth of a pixel (the width of a yarn thinner than the blur
   // need not).
   fit.ok = (converged || last_step < 1e-2) && p.allFinite() && std::isfinite(fit.sigma_rho);
