@@ -1365,7 +1365,9 @@ void MainWindow::DropPreview(const QString& why) {
 bool MainWindow::WaitForIdle(int timeout_ms) {
   const auto idle = [this] {
     return (frame_shown_ || !session_) && !previewing() && !previewer_.running() && !busy() &&
-           !checker_.pending();
+           !checker_.pending() &&
+           !(room_ == Room::kSimulation && (simulation_room_->busy() ||
+                                             !simulation_room_->frame_shown()));
   };
   WaitUntil(idle, timeout_ms);
   return idle();

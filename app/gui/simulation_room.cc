@@ -54,16 +54,29 @@ SimulationRoom::SimulationRoom(QWidget* parent)
                       const bool cancelled = run.cancelled;
                       const QString error = QString::fromStdString(run.error);
                       reconstruction_->SetRun(std::move(run));
+                      QString saved;
+                      if (!cancelled && error.isEmpty()) {
+                        try {
+                          reconstruction_->SaveToProject();
+                          saved = " Written to " +
+                                  QString::fromStdString(reconstruction_->tracks_path()) +
+                                  " (the project's tracks).";
+                        } catch (const std::exception& e) {
+                          saved = QString(" Not saved: ") + e.what();
+                        }
+                      }
                       measured_->setText(reconstruction_->Summary());
                       status_->setText(cancelled ? "Triangulation cancelled."
-                                       : error.isEmpty() ? "Labels triangulated."
+                                       : error.isEmpty() ? "Labels triangulated." + saved
                                                          : "Triangulation failed: " + error);
-                      const bool score = score_after_triangulation_ && !cancelled &&
-                                         reconstruction_->tracks() != nullptr;
-                      score_after_triangulation_ = false;
+                      if (reconstruction_->tracks() == nullptr) to_score_.clear();
                       RefreshButtons();
                       RefreshOverlays();
-                      if (score) Score();
+                      if (!to_score_.empty()) {
+                        const int next = to_score_.front();
+                        to_score_.erase(to_score_.begin());
+                        Score(next);
+                      }
                     }),
       simulator_(this,
                  [this](SimulationRun run) {
@@ -79,6 +92,11 @@ SimulationRoom::SimulationRoom(QWidget* parent)
                                           .arg(run.wall_s, 0, 'f', 1)
                                           .arg(QString::fromStdString(run.path)));
                      const int i = simulation_->Add(std::move(run));
+                     try {
+                       simulation_->AddToProject(i);
+                     } catch (const std::exception& e) {
+                       status_->setText(status_->text() + " Not named in the project: " + e.what());
+                     }
                      RefreshTable();
                      Select(i);
                    }
@@ -94,9 +112,18 @@ SimulationRoom::SimulationRoom(QWidget* parent)
                         .absolutePath()
                         .toStdString();
                 simulation_->SetScore(std::move(run), folder);
-                status_->setText(simulation_->simulation(i).score ? "Scored." : "Not scored.");
+                status_->setText(
+                    simulation_->simulation(i).score
+                        ? "Scored " + QString::fromStdString(simulation_->simulation(i).name) + "."
+                        : "Not scored.");
+                scoring_ = -1;
                 RefreshTable();
                 Select(i);
+                if (!to_score_.empty()) {
+                  const int next = to_score_.front();
+                  to_score_.erase(to_score_.begin());
+                  Score(next);
+                }
                 RefreshButtons();
               }),
       loader_(this, [this](Loaded loaded) {
@@ -246,7 +273,7 @@ SimulationRoom::SimulationRoom(QWidget* parent)
   connect(progress_timer_, &QTimer::timeout, this,
           [this] { progress_->setValue(static_cast<int>(1000 * fraction_->load())); });
 
-  connect(triangulate_button_, &QPushButton::clicked, this, [this] { Triangulate(false); });
+  connect(triangulate_button_, &QPushButton::clicked, this, [this] { Triangulate(); });
   connect(simulate_button_, &QPushButton::clicked, this, &SimulationRoom::Simulate);
   connect(load_button_, &QPushButton::clicked, this, [this] {
     const QString path = QFileDialog::getOpenFileName(this, "Load a simulation", {},
@@ -259,7 +286,7 @@ SimulationRoom::SimulationRoom(QWidget* parent)
     if (!path.isEmpty()) scenario_edit_->setText(path);
   });
   connect(cancel_button_, &QPushButton::clicked, this, &SimulationRoom::Cancel);
-  connect(score_button_, &QPushButton::clicked, this, &SimulationRoom::Score);
+  connect(score_button_, &QPushButton::clicked, this, [this] { Score(selected_); });
   connect(report_button_, &QPushButton::clicked, this, &SimulationRoom::OpenReport);
   connect(show_simulated_, &QCheckBox::toggled, this, [this] { RefreshOverlays(); });
   connect(slider_, &QSlider::valueChanged, this, [this](int t) { SetFrame(t); });
@@ -294,7 +321,17 @@ void SimulationRoom::Show(SimulationPresenter* simulation, ReconstructionPresent
   selected_ = -1;
   shown_frame_ = -1;
   frame_ = 0;
+  to_score_.clear();
+  scoring_ = -1;
   if (simulation_) {
+    // The project's tracks and simulations, each scored: the room opens on their verdicts.
+    const int before = simulation_->simulations();
+    const std::vector<std::string> errors = simulation_->OpenFromProject(reconstruction_);
+    QString text;
+    for (const std::string& e : errors) text += QString::fromStdString(e) + "\n";
+    if (!text.isEmpty()) status_->setText("Cannot read: " + text.trimmed());
+    if (reconstruction_->tracks() != nullptr)
+      for (int i = before; i < simulation_->simulations(); ++i) to_score_.push_back(i);
     const Session& s = reconstruction_->session();
     slider_->blockSignals(true);
     slider_->setRange(0, std::max(0, s.frames() - 1));
@@ -304,6 +341,11 @@ void SimulationRoom::Show(SimulationPresenter* simulation, ReconstructionPresent
     RefreshTable();
     if (simulation_->simulations() > 0) Select(0);
     RequestFrame();
+    if (!to_score_.empty()) {
+      const int next = to_score_.front();
+      to_score_.erase(to_score_.begin());
+      Score(next);
+    }
   }
   RefreshButtons();
 }
@@ -431,7 +473,7 @@ void SimulationRoom::StopProgress() {
   QTimer::singleShot(0, this, [this] { RefreshButtons(); });
 }
 
-void SimulationRoom::Triangulate(bool then_score) {
+void SimulationRoom::Triangulate() {
   if (!simulation_) return;
   TriangulationOptions options;
   options.sigma_px = sigma_->value();
@@ -442,7 +484,6 @@ void SimulationRoom::Triangulate(bool then_score) {
     status_->setText(QString("Cannot triangulate: ") + e.what());
     return;
   }
-  score_after_triangulation_ = then_score;
   status_->setText("Triangulating the labels…");
   auto fraction = fraction_;
   triangulator_.Request([job = std::move(job), fraction](const std::atomic<bool>& cancel) {
@@ -492,21 +533,31 @@ void SimulationRoom::LoadSimulation(const QString& path) {
   }
   const int i = simulation_->Add(std::move(run));
   status_->setText("Loaded " + path + ".");
+  try {
+    simulation_->AddToProject(i);
+  } catch (const std::exception& e) {
+    status_->setText(status_->text() + " Not named in the project: " + e.what());
+  }
   RefreshTable();
   Select(i);
 }
 
-void SimulationRoom::Score() {
-  if (!simulation_ || selected_ < 0) return;
+void SimulationRoom::Score(int i) {
+  if (!simulation_ || i < 0 || i >= simulation_->simulations()) return;
+  if (scoring_ >= 0 || triangulator_.pending()) {  // its turn comes
+    to_score_.push_back(i);
+    return;
+  }
   if (simulation_->measured() == nullptr) {  // the labels first
-    Triangulate(true);
+    to_score_.insert(to_score_.begin(), i);
+    Triangulate();
     return;
   }
   netsim::Alignment alignment = netsim::Alignment::kTimeAndRigid;
   netsim::ParseAlignment(alignment_->currentText().toStdString(), &alignment);
-  ScoreJob job = simulation_->MakeScoreJob(selected_, alignment);
-  status_->setText("Scoring " + QString::fromStdString(simulation_->simulation(selected_).name) +
-                   "…");
+  ScoreJob job = simulation_->MakeScoreJob(i, alignment);
+  scoring_ = i;
+  status_->setText("Scoring " + QString::fromStdString(simulation_->simulation(i).name) + "…");
   scorer_.Request([job = std::move(job)](const std::atomic<bool>&) {
     return SimulationPresenter::RunScore(job);
   });
@@ -524,15 +575,16 @@ void SimulationRoom::Cancel() {
   triangulator_.Cancel();
   simulator_.Cancel();
   // A score is not cancellable inside: its answer is dropped.
+  to_score_.clear();
   if (scorer_.pending()) {
     scorer_.Drop();
+    scoring_ = -1;
     StopProgress();
     status_->setText("Score cancelled.");
   }
   if (triangulator_.pending()) {
     // The engine stops only between its stages: forget the answer now.
     triangulator_.Drop();
-    score_after_triangulation_ = false;
     StopProgress();
     status_->setText("Triangulation cancelled.");
   }
@@ -559,7 +611,7 @@ void SimulationRoom::RefreshOverlays() {
     QString caption = QString("%1 · frame %2").arg(QString::fromStdString(session.camera_names()[c]))
                           .arg(session.frame_number(t));
     if (draw) {
-      simulated_[c] = simulation_->Project(selected_, c, t);
+      simulated_[c] = simulation_->InCamera(selected_, c, t);
       for (size_t i = 0; i < simulated_[c].knots.size(); ++i)
         overlay.simulated.push_back({simulated_[c].knots[i], simulated_[c].px[i], {}, false});
       overlay.simulated_links = simulated_[c].links;

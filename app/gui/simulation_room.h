@@ -14,6 +14,7 @@
 #include <array>
 #include <atomic>
 #include <memory>
+#include <vector>
 
 #include "app/gui/camera_view.h"
 #include "app/gui/document/latest_request.h"
@@ -84,9 +85,11 @@ class SimulationRoom : public QWidget {
     std::array<int, 4> width{}, height{};
     std::array<QString, 4> problems;
   };
-  void Triangulate(bool then_score);
+  void Triangulate();
   void Simulate();
-  void Score();
+  // Scores simulation i on a worker (the labels triangulated first when there are no tracks);
+  // a score asked for while one runs waits its turn.
+  void Score(int i);
   void OpenReport();
   void Cancel();
   void RequestFrame();
@@ -102,7 +105,8 @@ class SimulationRoom : public QWidget {
   ReconstructionPresenter* reconstruction_ = nullptr;
   std::weak_ptr<const int> alive_;
   int frame_ = 0, shown_frame_ = -1, selected_ = -1;
-  bool score_after_triangulation_ = false;
+  std::vector<int> to_score_;  // asked for, after the running one (or the triangulation)
+  int scoring_ = -1;
 
   QDoubleSpinBox* sigma_ = nullptr;
   QPushButton* triangulate_button_ = nullptr;

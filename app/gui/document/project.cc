@@ -48,7 +48,7 @@ Project LoadProject(const std::string& path) {
     RefuseDuplicateKeys(root.node()["net"], path, "net.");
   root.AllowOnly(
       {"netlab_project", "experiment", "rig", "coloring", "target", "labels", "net",
-       "illumination"});
+       "illumination", "tracks", "simulations"});
   if (root.Int("netlab_project") != 1)
     throw InputError(root.Where("netlab_project") + ": version 1 expected");
   Project p;
@@ -59,6 +59,18 @@ Project LoadProject(const std::string& path) {
   p.coloring = Resolve(folder, root.String("coloring", ""));
   p.target = Resolve(folder, root.String("target", ""));
   p.labels = Resolve(folder, root.String("labels"));
+  p.tracks = Resolve(folder, root.String("tracks", ""));
+  if (root.Has("simulations")) {
+    const YAML::Node list = root.Get("simulations");
+    if (!list.IsSequence())
+      throw InputError(root.Where("simulations") +
+                       ": a list of knot-track files expected ([sim.h5, sim_no_drag.h5])");
+    for (const YAML::Node& item : list) {
+      if (!item.IsScalar() || item.as<std::string>().empty())
+        throw InputError(root.Where("simulations") + ": each entry must be a file name");
+      p.simulations.push_back(Resolve(folder, item.as<std::string>()));
+    }
+  }
   if (root.Has("illumination")) {
     p.illumination = root.Positive("illumination", recon::kRenderIllumination, false);
     if (p.illumination > 100.0)
@@ -98,6 +110,13 @@ void SaveProject(const Project& project, const std::string& path) {
   if (!project.target.empty())
     out << YAML::Key << "target" << YAML::Value << Relative(folder, project.target);
   out << YAML::Key << "labels" << YAML::Value << Relative(folder, project.labels);
+  if (!project.tracks.empty())
+    out << YAML::Key << "tracks" << YAML::Value << Relative(folder, project.tracks);
+  if (!project.simulations.empty()) {
+    out << YAML::Key << "simulations" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    for (const std::string& s : project.simulations) out << Relative(folder, s);
+    out << YAML::EndSeq;
+  }
   out << YAML::Key << "net" << YAML::Value << YAML::Flow << YAML::BeginMap;
   out << YAML::Key << "rows" << YAML::Value << project.rows;
   out << YAML::Key << "cols" << YAML::Value << project.cols;

@@ -13,6 +13,10 @@
 //                                       # world frame (a true rig, or one calibrated with the
 //                                       # target's marker map)
 //   labels: labels.h5                   # created on the first save when it does not exist
+//   tracks: tracks.h5                   # optional: the labels triangulated (netlab triangulate
+//                                       # --out; the simulation room writes it)
+//   simulations: [sim.h5, sim_no_drag.h5]  # optional: netlab simulate results, scored against
+//                                       # the tracks in the simulation room
 //   net: {rows: 11, cols: 11, mesh: 0.1}  # the grid; mesh (m, knot to knot) optional; and
 //                                       # knotless: true for a net without knot balls (Net B)
 //   illumination: 0.85                  # optional: how brightly the yarns are lit, for the colour
@@ -23,6 +27,7 @@
 // line and key.
 
 #include <string>
+#include <vector>
 
 #include "libreconstruct/coloring/palette.h"
 
@@ -35,6 +40,8 @@ struct Project {
   std::string coloring;  // "" when none
   std::string target;    // "" when none
   std::string labels;
+  std::string tracks;                    // "" when none
+  std::vector<std::string> simulations;  // absolute
   int rows = 0, cols = 0;  // the net's knots
   double mesh_m = 0.0;     // link length, m; 0: estimated by the engine
   bool knotless = false;   // no knot balls: an edge knot is where its links' colours change

@@ -2,9 +2,11 @@
 
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <stdexcept>
 
+#include "app/gui/document/project.h"
 #include "app/gui/document/session.h"
 #include "common/errors.h"
 #include "common/files.h"
@@ -91,10 +93,36 @@ TriangulationRun ReconstructionPresenter::Triangulate(
 void ReconstructionPresenter::SetRun(TriangulationRun run) {
   if (run.cancelled) return;  // the tracks before it stay
   run_ = std::move(run);
+  tracks_path_.clear();
+}
+
+void ReconstructionPresenter::LoadTracks(const std::string& path) {
+  netsim::KnotTracks tracks = netsim::ReadKnotTracks(path);
+  const int rows = session_->project().rows, cols = session_->project().cols;
+  if (tracks.knots() != rows * cols)
+    throw InputError(path + ": " + std::to_string(tracks.knots()) + " knots, the project's net " +
+                     std::to_string(rows) + "x" + std::to_string(cols) + " has " +
+                     std::to_string(rows * cols));
+  TriangulationRun run;
+  run.tracks = std::move(tracks);
+  run_ = std::move(run);
+  tracks_path_ = path;
 }
 
 const netsim::KnotTracks* ReconstructionPresenter::tracks() const {
-  return run_ && run_->result ? &run_->tracks : nullptr;
+  return run_ && (run_->result || !run_->tracks.time.empty()) ? &run_->tracks : nullptr;
+}
+
+void ReconstructionPresenter::SaveToProject(std::string path) {
+  Project project = LoadProject(session_->project().path);
+  if (path.empty())
+    path = !project.tracks.empty()
+               ? project.tracks
+               : (std::filesystem::path(project.path).parent_path() / "tracks.h5").string();
+  Export(path, "");
+  project.tracks = path;
+  SaveProject(project, project.path);
+  tracks_path_ = path;
 }
 
 int ReconstructionPresenter::TrackRow(int t) const {
@@ -109,6 +137,12 @@ int ReconstructionPresenter::TrackRow(int t) const {
 
 QString ReconstructionPresenter::Summary() const {
   if (!run_) return "Not triangulated yet.";
+  if (!run_->result && run_->error.empty())
+    return QString("Tracks read from %1: %2 frames x %3 knots (triangulate to renew them from "
+                   "the labels).")
+        .arg(QString::fromStdString(tracks_path_))
+        .arg(run_->tracks.frames())
+        .arg(run_->tracks.knots());
   if (!run_->result) return "Triangulation failed: " + QString::fromStdString(run_->error);
   const recon::SequenceResult& r = *run_->result;
   QString text = QString(

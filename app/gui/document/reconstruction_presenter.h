@@ -72,8 +72,17 @@ class ReconstructionPresenter {
       const std::function<void(const std::string&, double)>& progress = {});
   void SetRun(TriangulationRun run);
   const TriangulationRun* run() const { return run_ ? &*run_ : nullptr; }
-  // The tracks of the last run (null: none yet).
+  // Tracks written before (netlab triangulate --out, or the project's `tracks`) in place of a
+  // run; the error names the file, or a net other than the project's.
+  void LoadTracks(const std::string& path);
+  // The tracks of the last run or file (null: none yet).
   const netsim::KnotTracks* tracks() const;
+  // Where they were read from or last saved ("" : not saved).
+  const std::string& tracks_path() const { return tracks_path_; }
+  // Writes them to `path` (as Export, without the CSV files; "": the project's `tracks`, else
+  // tracks.h5 beside the project) and names it in the project file as its `tracks`.
+  // std::runtime_error naming the file that cannot be written.
+  void SaveToProject(std::string path = "");
   // The run in a few lines (counts, reprojection RMS, outliers, degenerate points, warnings).
   QString Summary() const;
   // The tracks' row of frame row t of the session (-1: none).
@@ -90,6 +99,7 @@ class ReconstructionPresenter {
  private:
   const Session* session_;
   std::optional<TriangulationRun> run_;
+  std::string tracks_path_;
   std::shared_ptr<const int> alive_ = std::make_shared<const int>(0);
 };
 

@@ -9,6 +9,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "app/gui/document/project.h"
 #include "app/gui/document/reconstruction_presenter.h"
 #include "app/gui/document/session.h"
 #include "common/errors.h"
@@ -109,6 +110,42 @@ int SimulationPresenter::Add(SimulationRun run) {
   s.tracks = std::move(*run.tracks);
   simulations_.push_back(std::move(s));
   return simulations() - 1;
+}
+
+void SimulationPresenter::AddToProject(int i) const {
+  Project project = LoadProject(session_->project().path);
+  const std::string path = std::filesystem::absolute(simulations_.at(i).path).lexically_normal();
+  for (const std::string& s : project.simulations)
+    if (s == path) return;
+  project.simulations.push_back(path);
+  SaveProject(project, project.path);
+}
+
+std::vector<std::string> SimulationPresenter::OpenFromProject(
+    ReconstructionPresenter* reconstruction) {
+  std::vector<std::string> errors;
+  Project project;
+  try {
+    project = LoadProject(session_->project().path);  // as saved now
+  } catch (const std::exception& e) {
+    return {e.what()};
+  }
+  if (!project.tracks.empty() && reconstruction->tracks() == nullptr) {
+    try {
+      reconstruction->LoadTracks(project.tracks);
+    } catch (const std::exception& e) {
+      errors.push_back(e.what());
+    }
+  }
+  for (const std::string& path : project.simulations) {
+    bool here = false;
+    for (const Simulation& s : simulations_) here = here || s.path == path;
+    if (here) continue;
+    SimulationRun run = Load(path);
+    if (!run.tracks) errors.push_back(run.error);
+    Add(std::move(run));
+  }
+  return errors;
 }
 
 const netsim::KnotTracks* SimulationPresenter::measured() const {
@@ -252,7 +289,7 @@ std::vector<Eigen::Vector3d> SimulationPresenter::KnotsAt(int i, double time_s) 
   return out;
 }
 
-SimulatedView SimulationPresenter::Project(int i, int c, int t) const {
+SimulatedView SimulationPresenter::InCamera(int i, int c, int t) const {
   SimulatedView view;
   view.sim_time_s = FrameTime(t) + time_offset_s(i);
   const std::vector<Eigen::Vector3d> knots = KnotsAt(i, view.sim_time_s);
@@ -281,7 +318,7 @@ SimulatedView SimulationPresenter::Project(int i, int c, int t) const {
 std::optional<double> SimulationPresenter::LabelDistancePx(int i, int c, int t, int knot) const {
   const recon::Label& label = session_->document().labels().at(c, t, knot);
   if (!label.present()) return std::nullopt;
-  const std::optional<Eigen::Vector2d> sim = Project(i, c, t).Find(knot);
+  const std::optional<Eigen::Vector2d> sim = InCamera(i, c, t).Find(knot);
   if (!sim) return std::nullopt;
   return (label.px - *sim).norm();
 }

@@ -15,7 +15,7 @@
 //       "net_a.yaml", {"drag.drag_coefficient=1.0"}, "sim.h5"), cancel));
 //   simulation.SetScore(SimulationPresenter::RunScore(simulation.MakeScoreJob(0)));
 //   simulation.Verdict(0);                    // "consistent: ..."
-//   simulation.Project(0, camera, t);         // the simulated net in that view
+//   simulation.InCamera(0, camera, t);        // the simulated net in that view
 
 #include <Eigen/Core>
 #include <QString>
@@ -107,6 +107,12 @@ class SimulationPresenter {
   // Adds a run with tracks (GUI thread); returns its index (-1: none added, no tracks).
   int Add(SimulationRun run);
   int simulations() const { return static_cast<int>(simulations_.size()); }
+  // Names simulation i's file in the project file's `simulations` (once). std::runtime_error
+  // naming the project when it cannot be written.
+  void AddToProject(int i) const;
+  // The project's tracks and simulations read (those not yet here); the reasons of the files
+  // that cannot be read, one line each.
+  std::vector<std::string> OpenFromProject(ReconstructionPresenter* reconstruction);
   const Simulation& simulation(int i) const { return simulations_[i]; }
 
   // ---- Scores. The measured tracks are the reconstruction's (null: not triangulated yet).
@@ -131,7 +137,7 @@ class SimulationPresenter {
   // such knot, or outside its time).
   std::vector<Eigen::Vector3d> KnotsAt(int i, double time_s) const;
   // Simulation i in store camera c at frame row t.
-  SimulatedView Project(int i, int c, int t) const;
+  SimulatedView InCamera(int i, int c, int t) const;
   // The pixel distance between the label of `knot` in (c, t) and its simulated knot (nullopt:
   // no label or not drawn).
   std::optional<double> LabelDistancePx(int i, int c, int t, int knot) const;

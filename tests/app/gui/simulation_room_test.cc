@@ -194,6 +194,14 @@ TEST_F(SimulationRoomTest, TheTrueSimulationLiesOnTheLabelsAndIsConsistentTheNoD
   EXPECT_EQ(room->simulations_table()->item(0, 1)->text(), "consistent");
   EXPECT_EQ(room->simulations_table()->item(1, 1)->text(), "inconsistent");
 
+  // Everything in the project, in the CLI's files: the tracks and both simulations named.
+  const Project saved = LoadProject(d + "/project.yaml");
+  EXPECT_EQ(saved.tracks, (Dir() / "tracks.h5").string());
+  EXPECT_TRUE(fs::exists(saved.tracks));
+  ASSERT_EQ(saved.simulations.size(), 2u);
+  EXPECT_EQ(saved.simulations[0], (Dir() / "sim.h5").string());
+  EXPECT_EQ(saved.simulations[1], (Dir() / "sim_no_drag.h5").string());
+
   if (const char* out = getenv("NETLAB_SIMULATION_SCREENSHOT")) {
     room->Select(1);
     room->SetFrame(20);
@@ -201,6 +209,40 @@ TEST_F(SimulationRoomTest, TheTrueSimulationLiesOnTheLabelsAndIsConsistentTheNoD
     ASSERT_TRUE(w.grab().save(out));
     std::printf("wrote %s\n", out);
   }
+}
+
+// The project the room left, opened again in the simulation room (netlab gui PROJECT --room
+// simulation): the tracks and simulations read and scored with no click, the verdicts shown.
+TEST_F(SimulationRoomTest, AProjectWithTracksAndSimulationsOpensOnTheirVerdicts) {
+  const std::string d = Dir().string();
+  const std::string project = d + "/verdicts.yaml";
+  Project p = LoadProject(d + "/project.yaml");
+  ASSERT_EQ(RunNetlab("triangulate --rig " + p.rig + " --labels " + p.labels +
+                      " --knots 6x6 --fps 179 --sigma-px 0.1 --out " + d + "/cli_tracks.h5 --quiet")
+                .status,
+            0);
+  ASSERT_EQ(RunNetlab("simulate " + d + "/no_drag.yaml --out " + d + "/cli_no_drag.h5 --quiet")
+                .status,
+            0);
+  p.tracks = d + "/cli_tracks.h5";
+  p.simulations = {d + "/sim.h5", d + "/cli_no_drag.h5"};
+  SaveProject(p, project);
+  MainWindow w;
+  w.resize(1500, 1000);
+  w.show();
+  ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), false));
+  SimulationRoom* room = w.simulation_room();
+  // The true rig: the launch time alone aligned (with a rigid motion too, the 0.15 s flight's
+  // drag is absorbed to 0.79 mm RMS against the points' median sigma of 0.70 mm).
+  room->alignment_box()->setCurrentText("time");
+  w.ShowRoom(MainWindow::Room::kSimulation);
+  ASSERT_TRUE(w.WaitForIdle());
+  QTableWidget* table = room->simulations_table();
+  ASSERT_EQ(table->rowCount(), 2);
+  EXPECT_EQ(table->item(0, 1)->text(), "consistent");
+  EXPECT_EQ(table->item(1, 1)->text(), "inconsistent");
+  EXPECT_TRUE(room->verdict_label()->text().contains("consistent"));
+  EXPECT_TRUE(room->frame_shown());
 }
 
 }  // namespace
