@@ -53,6 +53,10 @@ constexpr char kHelp[] =
     "                         camera CAM exposes its frame k at (k + D) / fps, D in frames,\n"
     "                         -1 < D < 1 (a trigger delay its timestamps do not show); written\n"
     "                         into truth.h5 /camera_time_offset_frames\n"
+    "  --lamps paper|FILE     point lamps instead of the directional light: paper, one beside\n"
+    "                         each camera (the target glossy); or a file {ambient, glossy,\n"
+    "                         shininess, lamps: [{position: [x, y, z], power}]}; the target\n"
+    "                         casts shadows where it hides a lamp\n"
     "  --flicker HZ:DEPTH[:DUTY]\n"
     "                         the light's intensity 1 + DEPTH cos(2 pi HZ t) (mains ripple:\n"
     "                         100:0.3), or with DUTY a PWM LED on for DUTY of each period at\n"
@@ -207,7 +211,8 @@ int RunRender(const std::vector<std::string>& args) {
                           "bayer", "background", "exposure", "blur-samples", "vignetting",
                           "calibration-views", "seed", "threads", "coloring",
                           "camera-time-offset", "flicker", "f-number", "focus-distance",
-                          "pixel-pitch", "camera-variation", "camera-response", "camera-motion"});
+                          "pixel-pitch", "camera-variation", "camera-response", "camera-motion",
+                          "lamps"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -249,6 +254,12 @@ int RunRender(const std::vector<std::string>& args) {
     if (job.background_clutter && !job.textile_background)
       throw UsageError("--frame-clutter goes with --background textile");
 
+    if (const auto lamps = cl.Option("lamps")) {
+      if (*lamps == "paper")
+        job.paper_lamps = true;
+      else
+        job.lamps = recon::ReadLamps(*lamps);
+    }
     if (const auto flicker = cl.Option("flicker")) job.flicker = ParseFlicker(*flicker);
     if (cl.Option("f-number") || cl.Option("focus-distance")) {
       if (!cl.Option("f-number") || !cl.Option("focus-distance"))
@@ -281,8 +292,8 @@ int RunRender(const std::vector<std::string>& args) {
       job.coloring = {recon::LoadYarnColoring(*coloring)};
       job.coloring_file = *coloring;
     }
-    for (const char* input : {"rig", "coloring", "camera-response"})
-      if (const auto path = cl.Option(input))
+    for (const char* input : {"rig", "coloring", "camera-response", "lamps"})
+      if (const auto path = cl.Option(input); path && *path != "paper")
         recon::CheckOutsideOutput(*path, std::string("--") + input, job.out_dir);
     ProgressBar bar("rendering", !cl.Flag("quiet"));
     const recon::RenderSummary summary =

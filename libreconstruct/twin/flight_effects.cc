@@ -240,6 +240,63 @@ std::vector<CameraResponse> ReadCameraResponses(const std::string& path, const c
   return responses;
 }
 
+LampRig PaperLamps(const calib::Rig& rig, const Eigen::Vector3d& aim) {
+  LampRig rig_lamps;
+  rig_lamps.glossy = 0.25;
+  double sum = 0.0;
+  for (const calib::Camera& camera : rig.cameras) {
+    const Eigen::Vector3d c = camera.Center();
+    Lamp lamp;
+    lamp.position = c + Eigen::Vector3d(0.0, c.y() < 0.0 ? -0.15 : 0.15, 0.0);
+    sum += 1.0 / (lamp.position - aim).squaredNorm();
+    rig_lamps.lamps.push_back(lamp);
+  }
+  for (Lamp& lamp : rig_lamps.lamps) lamp.power = (1.0 - rig_lamps.ambient) / sum;
+  return rig_lamps;
+}
+
+LampRig ReadLamps(const std::string& path) {
+  const YAML::Node root = LoadYamlFile(path);
+  LampRig rig;
+  auto number = [&](const YAML::Node& node, const std::string& key, double* value) {
+    if (!node[key]) return;
+    try {
+      *value = node[key].as<double>();
+    } catch (const YAML::Exception&) {
+      throw InputError(path + ": " + key + ": expected a number");
+    }
+    if (!std::isfinite(*value)) throw InputError(path + ": " + key + ": expected a number");
+  };
+  if (!root.IsMap()) throw InputError(path + ": expected a map with 'lamps:'");
+  number(root, "ambient", &rig.ambient);
+  number(root, "glossy", &rig.glossy);
+  number(root, "shininess", &rig.shininess);
+  if (!(rig.ambient >= 0.0 && rig.ambient <= 1.0))
+    throw InputError(path + ": ambient must be in [0, 1]");
+  if (!(rig.glossy >= 0.0)) throw InputError(path + ": glossy must be >= 0");
+  if (!(rig.shininess > 0.0)) throw InputError(path + ": shininess must be > 0");
+  const YAML::Node lamps = root["lamps"];
+  if (!lamps || !lamps.IsSequence() || lamps.size() == 0)
+    throw InputError(path + ": lamps: expected a list of {position: [x, y, z], power}");
+  for (size_t i = 0; i < lamps.size(); ++i) {
+    const std::string where = "lamps[" + std::to_string(i) + "]";
+    const YAML::Node position = lamps[i]["position"];
+    Lamp lamp;
+    if (!position || !position.IsSequence() || position.size() != 3)
+      throw InputError(path + ": " + where + ": expected {position: [x, y, z], power}");
+    try {
+      for (int a = 0; a < 3; ++a) lamp.position[a] = position[a].as<double>();
+      lamp.power = lamps[i]["power"] ? lamps[i]["power"].as<double>() : 1.0;
+    } catch (const YAML::Exception&) {
+      throw InputError(path + ": " + where + ": expected {position: [x, y, z], power}");
+    }
+    if (!lamp.position.allFinite() || !(lamp.power >= 0.0) || !std::isfinite(lamp.power))
+      throw InputError(path + ": " + where + ": the position must be finite, the power >= 0");
+    rig.lamps.push_back(lamp);
+  }
+  return rig;
+}
+
 Eigen::Vector3d CameraMotion::Displacement(double t) const {
   if (!enabled()) return Eigen::Vector3d::Zero();
   if (hz > 0.0) return amplitude_m * std::sin(2.0 * kPi * hz * t + phase) * direction;

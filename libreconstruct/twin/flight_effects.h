@@ -95,6 +95,25 @@ struct CameraMotion {
 CameraMotion DrawCameraMotion(double amplitude_m, double hz, double step_time, uint64_t seed,
                               int c);
 
+// The lamps of a shot (SceneRenderOptions::lamps and its shading constants).
+struct LampRig {
+  std::vector<Lamp> lamps;  // empty: the directional light
+  double ambient = 0.15;    // of a surface's colour seen without a lamp
+  double glossy = 0.0;      // the target's specular weight (0: matte)
+  double shininess = 60.0;  // its Blinn-Phong exponent
+
+  bool enabled() const { return !lamps.empty(); }
+};
+
+// The paper's four lamps as an example: one beside each camera of `rig` (15 cm outboard of it,
+// across the flight axis, at its height), of equal power such that the lamps together light a
+// face turned to each at `aim` to 1 - ambient (the scene's white); the target glossy (0.25).
+LampRig PaperLamps(const calib::Rig& rig, const Eigen::Vector3d& aim);
+
+// A --lamps file: {ambient, glossy, shininess, lamps: [{position: [x, y, z], power}, ...]}
+// (world, m). InputError naming the file and key.
+LampRig ReadLamps(const std::string& path);
+
 // The mean reflectance of the textile panel (black cloth), of the scene's white.
 inline constexpr double kTextileAlbedo = 0.1;
 

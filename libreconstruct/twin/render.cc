@@ -170,6 +170,7 @@ struct Tile {
   std::array<float, kPixels> thread_distance;
   std::array<float, kPixels> thread_alpha;
   std::array<float, kPixels> thread_depth;
+  std::array<float, kPixels> thread_shade;  // with lamps: the thread's shading there
   int tx = 0, ty = 0;  // where the tile is in the image (tiles)
 };
 
@@ -282,6 +283,8 @@ PixelRect RectAround(const std::vector<Eigen::Vector2d>& pixels, double margin, 
   return r;
 }
 
+class Lighting;
+
 // A ball or a box in the camera frame, with its shading.
 struct Solid {
   bool is_ball = true;
@@ -342,14 +345,108 @@ struct Solid {
     return true;
   }
 
+  // The shade of the point of `face` at `depth` along `ray`: by the lamps of `lighting` when
+  // there is one, else by the directional light.
   Colour Shade(const Eigen::Vector3d& ray, double depth, int face, const Eigen::Vector3d& light,
-               double ambient) const {
+               double ambient, const Lighting* lighting) const;
+  Colour ShadeDirectional(const Eigen::Vector3d& ray, double depth, int face,
+                          const Eigen::Vector3d& light, double ambient) const {
     if (!is_ball) return face_colours[face];
     const Eigen::Vector3d normal = (depth * ray - center) / radius;
     const double lambert = ambient + (1.0 - ambient) * std::max(0.0, normal.dot(light));
     return colour * static_cast<float>(lambert);
   }
 };
+
+// The lamps of a scene in the camera frame, and the boxes that can hide them (see
+// SceneRenderOptions::lamps).
+class Lighting {
+ public:
+  Lighting(const calib::Camera& camera, const SceneRenderOptions& options,
+           const std::vector<Solid>& solids)
+      : ambient_(options.ambient), glossy_(options.glossy), shininess_(options.shininess) {
+    for (const Lamp& lamp : options.lamps)
+      lamps_.push_back({camera.cam_from_world * lamp.position, lamp.power});
+    for (const Solid& solid : solids)
+      if (!solid.is_ball) boxes_.push_back(&solid);
+  }
+
+  // A surface point p (camera frame) of unit normal n: its colour; `glossy` adds the lamps'
+  // highlights.
+  Colour Surface(const Colour& colour, const Eigen::Vector3d& p, const Eigen::Vector3d& n,
+                 bool glossy) const {
+    const Eigen::Vector3d view = -p.normalized();
+    double diffuse = ambient_, specular = 0.0;
+    for (const auto& [position, power] : lamps_) {
+      const Eigen::Vector3d d = position - p;
+      const double r2 = d.squaredNorm();
+      const Eigen::Vector3d l = d / std::sqrt(r2);
+      const double cosine = n.dot(l);
+      if (!(cosine > 0.0) || Hidden(p + 1e-7 * n, position)) continue;
+      diffuse += power * cosine / r2;
+      if (glossy && glossy_ > 0.0) {
+        const double nh = std::max(0.0, n.dot((l + view).normalized()));
+        specular += power * std::pow(nh, shininess_) / r2;
+      }
+    }
+    const float s = static_cast<float>(glossy_ * specular);
+    return colour * static_cast<float>(diffuse) + Colour(s, s, s);
+  }
+
+  // The shading of a thread of unit tangent t at p (camera frame): a Lambertian cylinder.
+  float Thread(const Eigen::Vector3d& p, const Eigen::Vector3d& t) const {
+    double shade = ambient_;
+    for (const auto& [position, power] : lamps_) {
+      const Eigen::Vector3d d = position - p;
+      const double r2 = d.squaredNorm();
+      const double along = t.dot(d) / std::sqrt(r2);
+      if (Hidden(p, position)) continue;
+      shade += power * std::sqrt(std::max(0.0, 1.0 - along * along)) / r2;
+    }
+    return static_cast<float>(shade);
+  }
+
+  // Does the segment from p to the lamp at q (camera frame) pass through a box?
+  bool Hidden(const Eigen::Vector3d& p, const Eigen::Vector3d& q) const {
+    for (const Solid* box : boxes_) {
+      const Eigen::Vector3d a = box->box_from_cam * p + box->camera_in_box;
+      const Eigen::Vector3d d = box->box_from_cam * (q - p);
+      double t0 = 0.0, t1 = 1.0;
+      bool miss = false;
+      for (int i = 0; i < 3 && !miss; ++i) {
+        const double h = box->half_extents[i];
+        if (std::abs(d[i]) < 1e-15) {
+          miss = std::abs(a[i]) > h;
+          continue;
+        }
+        double ta = (-h - a[i]) / d[i], tb = (h - a[i]) / d[i];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+        miss = t0 > t1;
+      }
+      if (!miss) return true;
+    }
+    return false;
+  }
+
+ private:
+  std::vector<std::pair<Eigen::Vector3d, double>> lamps_;  // camera frame, power
+  std::vector<const Solid*> boxes_;
+  double ambient_, glossy_, shininess_;
+};
+
+Colour Solid::Shade(const Eigen::Vector3d& ray, double depth, int face,
+                    const Eigen::Vector3d& light, double ambient,
+                    const Lighting* lighting) const {
+  if (lighting == nullptr) return ShadeDirectional(ray, depth, face, light, ambient);
+  const Eigen::Vector3d p = depth * ray;
+  if (is_ball) return lighting->Surface(colour, p, (p - center) / radius, false);
+  const int axis = face / 2;
+  const Eigen::Vector3d normal =
+      (face % 2 ? -1.0 : 1.0) * box_from_cam.row(axis).transpose();
+  return lighting->Surface(colour, p, normal, true);
+}
 
 Colour Lambert(const Colour& colour, const Eigen::Vector3d& normal, const Eigen::Vector3d& light,
                double ambient) {
@@ -411,6 +508,7 @@ std::vector<Solid> CameraSolids(const calib::Camera& camera, const Scene& scene,
     s.box_from_cam = cam_from_box.transpose();
     s.camera_in_box = -(s.box_from_cam * center);
     s.half_extents = box.half_extents;
+    s.colour = box.colour;
     if ((s.camera_in_box.cwiseAbs() - s.half_extents).maxCoeff() < 0.0) continue;  // inside
     for (int axis = 0; axis < 3; ++axis) {
       s.face_colours[2 * axis] = Lambert(box.colour, cam_from_box.col(axis), light,
@@ -463,8 +561,10 @@ std::vector<Solid> CameraSolids(const calib::Camera& camera, const Scene& scene,
 class SolidCaster {
  public:
   SolidCaster(const std::vector<Solid>& solids, const SceneRenderOptions& options,
-              const Eigen::Vector3d& light, RayGrid& rays, Canvas& canvas)
-      : solids_(solids),
+              const Eigen::Vector3d& light, const Lighting* lighting, RayGrid& rays,
+              Canvas& canvas)
+      : lighting_(lighting),
+        solids_(solids),
         options_(options),
         light_(light),
         rays_(rays),
@@ -582,7 +682,7 @@ class SolidCaster {
     const int tile_x0 = tx << Tile::kShift, tile_y0 = ty << Tile::kShift;
     const int tile_x1 = std::min(tile_x0 + Tile::kMask, canvas_.width() - 1);
     const int tile_y1 = std::min(tile_y0 + Tile::kMask, canvas_.height() - 1);
-    if (!(list_.size() == 1 && !first.is_ball && !first.supersample_all && region_.x0 == tile_x0 &&
+    if (!(lighting_ == nullptr && list_.size() == 1 && !first.is_ball && !first.supersample_all && region_.x0 == tile_x0 &&
           region_.y0 == tile_y0 && region_.x1 == tile_x1 && region_.y1 == tile_y1))
       return false;
     // The rays through the corners on the border: top, bottom, left, right.
@@ -642,7 +742,8 @@ class SolidCaster {
                                         corner_rays_[c + cw_] + corner_rays_[c + cw_ + 1]);
     if (solid.is_ball && !Nearest(ray, &depth, &hit)) return;
     const int i = Tile::Index(x, y);
-    tile.colour[i] = solids_[hit / 8].Shade(ray, depth, hit % 8, light_, options_.ambient);
+    tile.colour[i] =
+        solids_[hit / 8].Shade(ray, depth, hit % 8, light_, options_.ambient, lighting_);
     tile.solid_alpha[i] = 1.0f;
     tile.solid_depth[i] = static_cast<float>(depth);
   }
@@ -669,7 +770,7 @@ class SolidCaster {
         double depth;
         int hit;
         if (!Nearest(ray, &depth, &hit)) continue;
-        sum += solids_[hit / 8].Shade(ray, depth, hit % 8, light_, options_.ambient);
+        sum += solids_[hit / 8].Shade(ray, depth, hit % 8, light_, options_.ambient, lighting_);
         ++hits;
         min_depth = std::min(min_depth, depth);
       }
@@ -682,6 +783,7 @@ class SolidCaster {
     tile.colour[i] = tile.solid[i] + canvas_.BackgroundAt(x, y) * (1.0f - tile.solid_alpha[i]);
   }
 
+  const Lighting* lighting_;  // null: the directional light
   const std::vector<Solid>& solids_;
   const SceneRenderOptions& options_;
   const Eigen::Vector3d& light_;  // camera frame
@@ -702,8 +804,9 @@ class SolidCaster {
 
 // Ray casts the solids into the canvas (see SolidCaster).
 void DrawSolids(const std::vector<Solid>& solids, const SceneRenderOptions& options,
-                const Eigen::Vector3d& light, RayGrid& rays, Canvas& canvas) {
-  SolidCaster(solids, options, light, rays, canvas).Draw();
+                const Eigen::Vector3d& light, const Lighting* lighting, RayGrid& rays,
+                Canvas& canvas) {
+  SolidCaster(solids, options, light, lighting, rays, canvas).Draw();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -716,6 +819,7 @@ struct ThreadVertex {
   Eigen::Vector2d normalised;  // X/Z, Y/Z
   double width = 0.0;        // px
   bool valid = false;        // where the camera model is one-to-one
+  float shade = 1.0f;        // with lamps: the thread's shading here
 };
 
 // The fraction of a pixel covered by a straight strip: the pixel's footprint across the strip.
@@ -757,8 +861,9 @@ class PixelFootprint {
 class ThreadDrawer {
  public:
   ThreadDrawer(const calib::Camera& camera, const SceneRenderOptions& options, RayGrid& rays,
-               Canvas& canvas, cv::Mat* depth)
+               Canvas& canvas, cv::Mat* depth, const Lighting* lighting)
       : depth_(depth),
+        lighting_(lighting),
         camera_(camera),
         params_(camera.intrinsics.ToParameters()),
         options_(options),
@@ -779,6 +884,7 @@ class ThreadDrawer {
       if (a.z() < near && b.z() < near) continue;
       if (a.z() < near) a = b + (a - b) * ((b.z() - near) / (b.z() - a.z()));
       if (b.z() < near) b = a + (b - a) * ((a.z() - near) / (a.z() - b.z()));
+      if (lighting_ != nullptr) tangent_ = (b - a).normalized();
       const ThreadVertex va = Vertex(a), vb = Vertex(b);
       // Split into pieces of about max_piece_px first, then bisect where that was not enough.
       int n = 1;
@@ -794,10 +900,11 @@ class ThreadDrawer {
       }
     }
     // Composite: over the canvas, or behind the solids nearer than the thread.
-    const Colour colour = thread.colour;
     for (const auto& [tile, i] : touched_) {
       const float alpha = tile->thread_alpha[i];
       if (alpha <= 0.0f) continue;
+      const Colour colour =
+          lighting_ == nullptr ? thread.colour : thread.colour * tile->thread_shade[i];
       cv::Vec3f& pixel = tile->colour[i];
       const float solid_alpha = tile->solid_alpha[i];
       if (solid_alpha > 0.0f && tile->solid_depth[i] < tile->thread_depth[i]) {
@@ -825,6 +932,7 @@ class ThreadDrawer {
     calib::Distort(params_.data() + 4, v.normalised.x(), v.normalised.y(), &xd, &yd);
     v.pixel = Eigen::Vector2d(params_[0] * xd + params_[2], params_[1] * yd + params_[3]);
     v.width = 2.0 * radius_ * params_[0] / in_cam.z();
+    if (lighting_ != nullptr) v.shade = lighting_->Thread(in_cam, tangent_);
     return v;
   }
 
@@ -891,10 +999,14 @@ class ThreadDrawer {
         tile.thread_distance[i] = static_cast<float>(d);
         tile.thread_alpha[i] = static_cast<float>(footprint.Coverage(d, w));
         tile.thread_depth[i] = static_cast<float>(za + t * (zb - za));
+        if (lighting_ != nullptr)
+          tile.thread_shade[i] = static_cast<float>(a.shade + t * (b.shade - a.shade));
       }
   }
 
   cv::Mat* depth_;  // null, or where to keep the least depth per pixel
+  const Lighting* lighting_;  // null: threads unshaded
+  Eigen::Vector3d tangent_ = Eigen::Vector3d::UnitX();  // of the piece being drawn, with lamps
   const calib::Camera& camera_;
   const std::array<double, calib::kNumIntrinsics> params_;
   const SceneRenderOptions& options_;
@@ -946,6 +1058,14 @@ bool SceneRenderOptions::IsValid(std::string* error) const {
     os << "solid_supersample " << solid_supersample << " must be in [1, 64]";
   else if (!(near_plane > 0.0) || !std::isfinite(near_plane))
     os << "near_plane " << near_plane << " must be positive";
+  else if (!(glossy >= 0.0) || !std::isfinite(glossy))
+    os << "glossy " << glossy << " must be >= 0";
+  else if (!(shininess > 0.0) || !std::isfinite(shininess))
+    os << "shininess " << shininess << " must be positive";
+  for (const Lamp& lamp : lamps)
+    if (os.str().empty() && (!lamp.position.allFinite() || !(lamp.power >= 0.0) ||
+                             !std::isfinite(lamp.power)))
+      os << "a lamp needs a finite position and a power >= 0";
   if (os.str().empty()) return true;
   if (error) *error = os.str();
   return false;
@@ -1001,7 +1121,10 @@ void RenderScene(const calib::Camera& camera, const Scene& scene,
       camera.cam_from_world.rotation * options.light_direction.normalized();
 
   // Solids first: the depth buffer the threads are tested against.
-  DrawSolids(CameraSolids(camera, scene, options, light), options, light, rays, canvas);
+  const std::vector<Solid> solids = CameraSolids(camera, scene, options, light);
+  std::unique_ptr<Lighting> lighting;
+  if (!options.lamps.empty()) lighting = std::make_unique<Lighting>(camera, options, solids);
+  DrawSolids(solids, options, light, lighting.get(), rays, canvas);
 
   // Threads far to near (by the mean depth of their points).
   std::vector<std::pair<double, int>> order;
@@ -1013,7 +1136,7 @@ void RenderScene(const calib::Camera& camera, const Scene& scene,
     order.emplace_back(-z / t.points.size(), i);
   }
   std::sort(order.begin(), order.end());
-  ThreadDrawer drawer(camera, options, rays, canvas, depth);
+  ThreadDrawer drawer(camera, options, rays, canvas, depth, lighting.get());
   for (const auto& [negative_depth, i] : order) drawer.Draw(scene.threads[i]);
 
   // Accumulate: the touched tiles, and the background elsewhere, as flat float spans of one

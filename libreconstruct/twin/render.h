@@ -83,6 +83,13 @@ struct Scene {
   Colour background{0, 0, 0};  // where no solid is seen
 };
 
+// A point lamp: irradiance power / r^2 at distance r face-on, in units of the scene's white
+// (power 1 lights a face 1 m away, turned to it, to exactly its colour above the ambient).
+struct Lamp {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // world, m
+  double power = 1.0;
+};
+
 struct SceneRenderOptions {
   // Towards the light (world, need not be unit length), for the Lambert shading of balls and
   // boxes. The default lights from above, behind the ejector and to the side.
@@ -103,6 +110,18 @@ struct SceneRenderOptions {
   // A background that varies per pixel (CV_32FC3 of the camera's size, linear), shown instead
   // of scene.background where no solid is seen; null: the uniform scene.background.
   const cv::Mat* background_image = nullptr;
+  // Point lamps instead of light_direction (empty: the directional light). A point p of normal
+  // n (balls, boxes) shows
+  //   colour (ambient + sum_l power_l max(0, n . l) / r_l^2 [lamp l not hidden by a box])
+  //   + glossy sum_l power_l max(0, n . h_l)^shininess / r_l^2 (boxes only, white),
+  // l the unit vector to the lamp, r its distance, h the half vector of l and the view; a thread
+  // of unit tangent t, a Lambertian cylinder, shows
+  //   colour (ambient + sum_l power_l sqrt(1 - (t . l)^2) / r_l^2 [not hidden]),
+  // taken at its points and interpolated along the pieces. Shadow rays are tested against the
+  // scene's boxes (the target), so the target casts its shadow on the net and the knots.
+  std::vector<Lamp> lamps;
+  double glossy = 0.0;      // >= 0, the specular weight of boxes
+  double shininess = 60.0;  // > 0, the Blinn-Phong exponent
 
   // True when every field is in range; else false with the reason in *error.
   bool IsValid(std::string* error) const;

@@ -450,6 +450,10 @@ RenderJob WithEffectsChecked(const RenderJob& given, const FrameRange& range) {
       throw InputError("camera " + job.rig.cameras[c].name + "'s response: " + error);
   if (!job.camera_motion.empty() && job.camera_motion.size() != cameras)
     throw std::invalid_argument("RenderJob: one camera motion per rig camera");
+  if (job.paper_lamps) job.lamps = PaperLamps(job.rig, AimPoint(job.rig));
+  for (const Lamp& lamp : job.lamps.lamps)
+    if (!lamp.position.allFinite() || !(lamp.power >= 0.0))
+      throw InputError("--lamps: a lamp needs a finite position and a power >= 0");
   for (CameraMotion& motion : job.camera_motion)
     if (motion.enabled() && motion.hz == 0.0 && !std::isfinite(motion.step_time))
       motion.step_time = range.Time(range.first + range.count() / 2) - 0.5 / range.fps;
@@ -510,6 +514,12 @@ void RenderFrame(const RenderJob& job, const SimulatedShot& shot, const FrameRan
   SceneRenderOptions render_options;
   if (static_cast<size_t>(c) < backgrounds.size() && !backgrounds[c].empty())
     render_options.background_image = &backgrounds[c];
+  if (job.lamps.enabled()) {
+    render_options.lamps = job.lamps.lamps;
+    render_options.ambient = job.lamps.ambient;
+    render_options.glossy = job.lamps.glossy * job.illumination;
+    render_options.shininess = job.lamps.shininess;
+  }
   const int samples = std::max(1, job.blur_samples);
   const calib::Camera& camera = job.rig.cameras[c];
   const double frame_time = range.Time(k) + OffsetOf(job, c) / range.fps;
@@ -661,6 +671,14 @@ std::string EffectsYaml(const RenderJob& job) {
   os << "depth_of_field: {f_number: " << job.depth_of_field.f_number
      << ", focus_distance_m: " << job.depth_of_field.focus_distance_m
      << ", pixel_pitch_m: " << job.depth_of_field.pixel_pitch_m << "}\n";
+  os << "lamps: {ambient: " << job.lamps.ambient << ", glossy: " << job.lamps.glossy
+     << ", shininess: " << job.lamps.shininess << ", lamps: [";
+  for (size_t i = 0; i < job.lamps.lamps.size(); ++i) {
+    const Lamp& lamp = job.lamps.lamps[i];
+    os << (i ? ", " : "") << "{position: [" << lamp.position.x() << ", " << lamp.position.y()
+       << ", " << lamp.position.z() << "], power: " << lamp.power << "}";
+  }
+  os << "]}\n";
   os << "background: " << (job.textile_background ? "textile" : "plain")
      << "\nbackground_clutter: " << (job.background_clutter ? "true" : "false") << "\n";
   os << "camera_motion:\n";

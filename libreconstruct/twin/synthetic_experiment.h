@@ -105,6 +105,8 @@ struct RenderJob {
   // Per rig camera: its clock offset, frames, -1 < d < 1 (empty: all 0).
   std::vector<double> camera_time_offset_frames;
   // The flight's acquisition effects (flight_effects.h), all off by default.
+  LampRig lamps;                            // point lamps (empty: the directional light)
+  bool paper_lamps = false;                 // lamps: PaperLamps of the rig (set when rendering)
   Flicker flicker;                          // the light's intensity over time
   DepthOfField depth_of_field;              // the thin lens (the same for every camera)
   std::vector<CameraResponse> responses;    // per rig camera (empty: the ideal sensor)

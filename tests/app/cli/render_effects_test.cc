@@ -146,6 +146,24 @@ TEST_F(RenderEffects, TheCamerasResponsesAreInTheTruth) {
   EXPECT_FALSE(fs::exists(Path("bad")));
 }
 
+TEST_F(RenderEffects, LampsLightTheShotAndABadLampFileIsNamed) {
+  const auto plain = Render("unlit", 0.1, "--noise 0");
+  const auto r = Render("lamps", 0.1, "--noise 0 --lamps paper");
+  ASSERT_EQ(r.status, 0) << r.err;
+  ASSERT_EQ(plain.status, 0) << plain.err;
+  EXPECT_GT(cv::norm(Frame("lamps", "cam2", 5), Frame("unlit", "cam2", 5), cv::NORM_INF), 0.0);
+  h5::Id file = h5::OpenFileReadOnly(Path("lamps/truth.h5"));
+  const std::string effects = h5::ReadStringDataset(file.get(), "effects");
+  EXPECT_NE(effects.find("glossy: 0.25"), std::string::npos) << effects;
+  EXPECT_NE(effects.find("position: [4, -0.65, 0.5]"), std::string::npos) << effects;
+  std::ofstream(Path("lamps.yaml")) << "ambient: 0.2\nlamps:\n  - {position: [1, 2], power: 3}\n";
+  const auto bad = Render("bad", 0.1, "--lamps " + Path("lamps.yaml"));
+  EXPECT_EQ(bad.status, 1);
+  EXPECT_NE(bad.err.find("lamps.yaml: lamps[0]: expected {position: [x, y, z], power}"),
+            std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(Path("bad")));
+}
+
 TEST_F(RenderEffects, AMovingCamerasPosesAreInTheTruthAndItsPixelsFollowThem) {
   const auto r = Render("moving", 0.25, "--camera-motion cam0=4:60,cam2=3");
   ASSERT_EQ(r.status, 0) << r.err;

@@ -93,6 +93,62 @@ TEST(DepthOfField, TheBlurCircleOfAPointFollowsTheThinLens) {
   }
 }
 
+TEST(Lamps, TheTargetsShadowEdgeIsWhereTheLampsRayGrazesTheBox) {
+  // Camera at the origin looking along +z; a 0.2 m cube at z = 2.5; a lamp 1 m to its -x side;
+  // a thick thread along y at x = 0.5 beside the cube. The segment from the thread's point
+  // (0.5, y, 2.5) to the lamp (-1, 0, 2.5) leaves the cube's far face x = -0.1 at 0.6 of the
+  // way, at height 0.6 y: it grazes the cube's edge at |y| = 0.1 / 0.6, the shadow's edges.
+  const calib::Camera camera = Pinhole(300.0);
+  Scene scene;
+  Box box;
+  box.center = {0.0, 0.0, 2.5};
+  box.half_extents = {0.1, 0.1, 0.1};
+  box.colour = {0.5f, 0.5f, 0.5f};
+  scene.boxes.push_back(box);
+  scene.threads.push_back({{{0.5, -0.4, 2.5}, {0.5, 0.4, 2.5}}, 0.005, {1, 1, 1}});
+  SceneRenderOptions options;
+  options.ambient = 0.1;
+  options.lamps.push_back({Eigen::Vector3d(-1.0, 0.0, 2.5), 1.0});
+  // The shading is taken at the ends of the thread's pieces: 1/2 px pieces resolve the edge.
+  options.max_piece_px = 0.5;
+  const cv::Mat image = RenderScene(camera, scene, options);
+  // The thread's light per row (its image is the column u = 159.5, 1.2 px wide).
+  std::vector<double> row_light(200, 0.0);
+  for (int v = 0; v < 200; ++v)
+    for (int u = 155; u <= 164; ++u) row_light[v] += image.at<cv::Vec3f>(v, u)[1];
+  // Lit at row 60 (y = -0.329 m): 0.1 + sqrt(1 - (t . l)^2) / r^2 of the colour; shadowed: 0.1.
+  const double lit = row_light[60], dark = row_light[100];
+  const Eigen::Vector3d to_lamp = Eigen::Vector3d(-1.0, 0.0, 2.5) -
+                                  Eigen::Vector3d(0.5, (60 - 99.5) / 300.0 * 2.5, 2.5);
+  const double along = to_lamp.normalized().y();
+  EXPECT_NEAR(dark / lit,
+              0.1 / (0.1 + std::sqrt(1.0 - along * along) / to_lamp.squaredNorm()), 0.002);
+  // Where the light crosses half way between the two, from the top and from the bottom.
+  const double half = 0.5 * (lit + dark);
+  auto crossing = [&](int from, int step) {
+    for (int v = from;; v += step)
+      if (row_light[v + step] < half)
+        return v + step * (row_light[v] - half) / (row_light[v] - row_light[v + step]);
+  };
+  const double edge = 300.0 * (0.1 / 0.6) / 2.5;  // px from the centre row 99.5
+  EXPECT_NEAR(crossing(60, 1), 99.5 - edge, 0.5);
+  EXPECT_NEAR(crossing(140, -1), 99.5 + edge, 0.5);
+
+  // A face turned to a lamp at the camera shows colour (ambient + power cos / r^2).
+  Scene face;
+  face.boxes.push_back(box);
+  SceneRenderOptions at_camera;
+  at_camera.ambient = 0.1;
+  at_camera.lamps.push_back({Eigen::Vector3d::Zero(), 2.0});
+  const cv::Mat lit_face = RenderScene(camera, face, at_camera);
+  EXPECT_NEAR(lit_face.at<cv::Vec3f>(100, 100)[1], 0.5 * (0.1 + 2.0 / (2.4 * 2.4)), 2e-3);
+  // Glossy: a highlight on top of it, strongest where the half vector meets the normal.
+  at_camera.glossy = 0.5;
+  const cv::Mat glossy_face = RenderScene(camera, face, at_camera);
+  EXPECT_GT(glossy_face.at<cv::Vec3f>(100, 100)[1], lit_face.at<cv::Vec3f>(100, 100)[1] + 0.05);
+  EXPECT_GT(glossy_face.at<cv::Vec3f>(100, 100)[1], glossy_face.at<cv::Vec3f>(100, 120)[1]);
+}
+
 TEST(CameraResponse, TheSensorRecordsTheResponseFormula) {
   calib::CameraIntrinsics k = Pinhole(100.0).intrinsics;
   const cv::Mat grey(k.height, k.width, CV_32FC3, cv::Scalar(0.2, 0.3, 0.4));
