@@ -32,8 +32,8 @@ constexpr char kHelp[] =
     "The workstation (docs/gui.md), in rooms: the recording (netlab ingest --check's findings\n"
     "per camera, the cameras' timestamps), the calibration (the rig, a 3D sketch of it), the\n"
     "labeling (four synchronized camera views, Find Node, Find Path, Fill Grid and tracking as\n"
-    "undoable steps, the review queue, autosave with recovery), the simulation (the simulated\n"
-    "net drawn over the footage, netlab score's verdict).\n"
+    "undoable steps, the review queue, autosave with recovery), the reconstruction (3D\n"
+    "tracks), the simulation (the simulated net drawn over the footage, netlab score's verdict).\n"
     "  netlab gui                  an empty window: File > Open / New project, recent projects\n"
     "  netlab gui PROJECT.yaml     opens a project (experiment, rig, colouring, labels, net)\n"
     "  netlab gui EXPERIMENT.yaml --room recording\n"
@@ -43,8 +43,9 @@ constexpr char kHelp[] =
     "                              makes a project of them (written to --project, default\n"
     "                              project.yaml beside the labels file) and opens it\n\n"
     "options:\n"
-    "  --room ROOM         open in this room: recording, calibration, labeling (the default)\n"
-    "                      or simulation (the project's simulations scored against its tracks)\n"
+    "  --room ROOM         open in this room: recording, calibration, labeling (the default),\n"
+    "                      reconstruction (the labels' 3D tracks) or simulation (the project's\n"
+    "                      simulations scored against its tracks)\n"
     "  --frame N           open at frame number N\n"
     "  --review N          open at the N-th item of the review queue (as Space N times: its\n"
     "                      frame, its camera maximised, zoomed on the knot)\n"
@@ -153,10 +154,10 @@ int RunGui(const std::vector<std::string>& args) {
     if (!keys.empty() && screenshot.empty()) throw app::UsageError("--keys needs --screenshot");
     room_name = cl.Option("room").value_or("labeling");
     if (room_name != "recording" && room_name != "calibration" && room_name != "labeling" &&
-        room_name != "simulation")
+        room_name != "reconstruction" && room_name != "simulation")
       throw app::UsageError(
-          "--room expects recording, calibration, labeling or simulation, got '" + room_name +
-          "'");
+          "--room expects recording, calibration, labeling, reconstruction or simulation, got '" +
+          room_name + "'");
     if (cl.Option("room") && cl.positional().empty())
       throw app::UsageError("--room needs a project");
     frame = cl.IntOption("frame", -1, 0, 100000000);
@@ -245,6 +246,7 @@ int RunGui(const std::vector<std::string>& args) {
     for (int i = 0; i < review; ++i) window.NextReview();
     window.ShowRoom(room_name == "recording"     ? MainWindow::Room::kRecording
                     : room_name == "calibration" ? MainWindow::Room::kCalibration
+                    : room_name == "reconstruction" ? MainWindow::Room::kReconstruction
                     : room_name == "simulation"  ? MainWindow::Room::kSimulation
                                                  : MainWindow::Room::kLabeling);
   }

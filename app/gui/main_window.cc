@@ -42,6 +42,7 @@
 #include "app/gui/camera_view.h"
 #include "app/gui/knot_grid.h"
 #include "app/gui/recording_room.h"
+#include "app/gui/reconstruction_room.h"
 #include "app/gui/simulation_room.h"
 #include "app/gui/settings.h"
 #include "app/gui/shortcut_editor.h"
@@ -379,7 +380,8 @@ void MainWindow::BuildActions() {
   AddAction(rooms, "Recording room", "Ctrl+1", &MainWindow::RecordingRoomAction);
   AddAction(rooms, "Calibration room", "Ctrl+2", &MainWindow::CalibrationRoomAction);
   AddAction(rooms, "Labeling room", "Ctrl+3", &MainWindow::LabelingRoomAction);
-  AddAction(rooms, "Simulation room", "Ctrl+4", &MainWindow::SimulationRoomAction);
+  AddAction(rooms, "Reconstruction room", "Ctrl+4", &MainWindow::ReconstructionRoomAction);
+  AddAction(rooms, "Simulation room", "Ctrl+5", &MainWindow::SimulationRoomAction);
   QMenu* help = menuBar()->addMenu("&Help");
   AddAction(help, "Keyboard shortcuts", "F1;?", &MainWindow::ShowShortcuts);
   help->addAction("Manual (docs/gui.md)", this, &MainWindow::ShowManual);
@@ -1367,7 +1369,8 @@ bool MainWindow::WaitForIdle(int timeout_ms) {
     return (frame_shown_ || !session_) && !previewing() && !previewer_.running() && !busy() &&
            !checker_.pending() &&
            !(room_ == Room::kSimulation && (simulation_room_->busy() ||
-                                             !simulation_room_->frame_shown()));
+                                             !simulation_room_->frame_shown())) &&
+           !(room_ == Room::kReconstruction && reconstruction_room_->busy());
   };
   WaitUntil(idle, timeout_ms);
   return idle();
@@ -1377,7 +1380,7 @@ bool MainWindow::WaitForIdle(int timeout_ms) {
 // The rooms: recording, calibration, labeling.
 
 void MainWindow::BuildRooms() {
-  for (const char* name : {"Recording", "Calibration", "Labeling", "Simulation"})
+  for (const char* name : {"Recording", "Calibration", "Labeling", "Reconstruction", "Simulation"})
     rooms_->addTab(name);
   rooms_->setCurrentIndex(static_cast<int>(Room::kLabeling));
   rooms_->hide();  // until a project is open
@@ -1415,6 +1418,12 @@ void MainWindow::BuildRooms() {
                        .arg(rig),
         15000);
   });
+  reconstruction_room_ = new ReconstructionRoom;
+  stack_->addWidget(reconstruction_room_);
+  connect(reconstruction_room_, &ReconstructionRoom::frameChanged, this, [this](int t) {
+    if (session_ && room_ == Room::kReconstruction) SetFrame(t);
+  });
+  connect(reconstruction_room_, &ReconstructionRoom::showLabel, this, &MainWindow::ShowLabel);
   simulation_room_ = new SimulationRoom;
   stack_->addWidget(simulation_room_);
   connect(simulation_room_, &SimulationRoom::frameChanged, this, [this](int t) {
@@ -1462,6 +1471,11 @@ void MainWindow::ShowRoom(Room room) {
       stack_->setCurrentWidget(workspace_);
       FocusView();
       break;
+    case Room::kReconstruction:
+      stack_->setCurrentWidget(reconstruction_room_);
+      reconstruction_room_->Show(reconstruction_.get());
+      reconstruction_room_->SetFrame(frame());
+      break;
     case Room::kSimulation:
       stack_->setCurrentWidget(simulation_room_);
       simulation_room_->Show(simulation_.get(), reconstruction_.get());
@@ -1470,7 +1484,28 @@ void MainWindow::ShowRoom(Room room) {
   }
 }
 
+void MainWindow::ShowLabel(int camera, int t, int knot) {
+  if (!session_ || t < 0 || t >= session_->frames()) return;
+  const recon::LabelSet& labels = session_->document().labels();
+  if (camera < 0)
+    for (int c = 0; c < session_->cameras() && camera < 0; ++c)
+      if (labels.at(c, t, knot).present()) camera = c;
+  if (camera < 0) camera = 0;
+  ShowRoom(Room::kLabeling);
+  SetFrame(t);
+  SetCamera(camera);
+  SetKnot(knot);
+  Maximise(camera);
+  const recon::Label& label = labels.at(camera, t, knot);
+  if (label.present()) views_[camera]->ZoomTo(label.px, 120.0);
+  statusBar()->showMessage(
+      QString("The label of knot %1 in %2 (Ctrl+4: back to the reconstruction room)")
+          .arg(KnotName(knot), QString::fromStdString(session_->camera_names()[camera])),
+      10000);
+}
+
 void MainWindow::StopSessionWorkers() {
+  reconstruction_room_->Show(nullptr);
   simulation_room_->Show(nullptr, nullptr);
   simulation_.reset();
   reconstruction_.reset();

@@ -44,6 +44,7 @@ class CalibrationRoom;
 class CameraView;
 class KnotGrid;
 class RecordingRoom;
+class ReconstructionRoom;
 class SimulationRoom;
 class Timeline;
 struct ViewOverlay;
@@ -68,10 +69,10 @@ class MainWindow : public QMainWindow {
   Session* session() { return session_.get(); }
 
   // The rooms of an open project, in the order of the work: the recording (ingest check), the
-  // calibration (the rig), the labeling, the simulation (the simulated net over the footage and
-  // the score's verdict). The tab bar above them and the Room menu switch them; the labeling
-  // room's docks, tool bar and keys belong to it alone.
-  enum class Room { kRecording, kCalibration, kLabeling, kSimulation };
+  // calibration (the rig), the labeling, the reconstruction (3D tracks), the simulation (the
+  // simulated net over the footage and the score's verdict). The tab bar above them and the Room
+  // menu switch them; the labeling room's docks, tool bar and keys belong to it alone.
+  enum class Room { kRecording, kCalibration, kLabeling, kReconstruction, kSimulation };
   // Shows a room; without a project only the recording room of an opened recording.
   void ShowRoom(Room room);
   // Opens a recording alone (experiment.yaml, no rig or labels yet) in the recording room; the
@@ -81,6 +82,7 @@ class MainWindow : public QMainWindow {
   Room room() const { return room_; }
   RecordingRoom* recording_room() const { return recording_room_; }
   CalibrationRoom* calibration_room() const { return calibration_room_; }
+  ReconstructionRoom* reconstruction_room() const { return reconstruction_room_; }
   SimulationRoom* simulation_room() const { return simulation_room_; }
   const RecordingPresenter* recording() const { return recording_.get(); }
   const CalibrationPresenter* calibration() const { return calibration_.get(); }
@@ -147,7 +149,10 @@ class MainWindow : public QMainWindow {
   void RecordingRoomAction() { ShowRoom(Room::kRecording); }
   void CalibrationRoomAction() { ShowRoom(Room::kCalibration); }
   void LabelingRoomAction() { ShowRoom(Room::kLabeling); }
+  void ReconstructionRoomAction() { ShowRoom(Room::kReconstruction); }
   void SimulationRoomAction() { ShowRoom(Room::kSimulation); }
+  // The labeling room at a label another room points to (camera -1: the first that has it).
+  void ShowLabel(int camera, int t, int knot);
   void BuildWorkspace();
   void BuildActions();
   QAction* AddAction(QMenu* menu, const QString& name, const QString& keys,
@@ -280,6 +285,7 @@ class MainWindow : public QMainWindow {
   Room room_ = Room::kLabeling;
   RecordingRoom* recording_room_ = nullptr;
   CalibrationRoom* calibration_room_ = nullptr;
+  ReconstructionRoom* reconstruction_room_ = nullptr;
   SimulationRoom* simulation_room_ = nullptr;
   std::vector<QAction*> labeling_actions_;  // enabled in the labeling room only
   std::vector<QWidget*> labeling_bars_;     // its docks and tool bar, hidden in the other rooms

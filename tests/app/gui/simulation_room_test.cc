@@ -104,7 +104,7 @@ TEST_F(SimulationRoomTest, TheTrueSimulationLiesOnTheLabelsAndIsConsistentTheNoD
   w.show();
   ASSERT_TRUE(w.OpenProject(QString::fromStdString(d + "/project.yaml"), false));
   ASSERT_TRUE(w.WaitForFrame());
-  QTest::keyClick(&w, Qt::Key_4, Qt::ControlModifier);  // Room > Simulation room
+  QTest::keyClick(&w, Qt::Key_5, Qt::ControlModifier);  // Room > Simulation room
   ASSERT_EQ(w.room(), MainWindow::Room::kSimulation);
   SimulationRoom* room = w.simulation_room();
   ASSERT_TRUE(room->isVisible());

@@ -1,0 +1,218 @@
+// The reconstruction room in the window (Qt's offscreen platform), driven by mouse and keys, on
+// the command tests' small net rendered by `netlab render` (0.1 s) with its true labels and rig,
+// one label moved 12 px off its knot: Triangulate (netlab triangulate's engine on a worker), the
+// moved label listed as an outlier with why; a click on it lands on that label in the labeling
+// room (its frame, its camera maximised, its knot) and Ctrl+4 comes back. The 3D view follows the
+// frame slider and the window's frame; a drag turns it, the wheel zooms. Export writes tracks.h5
+// equal to `netlab triangulate`'s from the same labels, and xyzpts.csv / xyzres.csv beside it.
+
+#include <gtest/gtest.h>
+
+#include <QApplication>
+#include <QComboBox>
+#include <QDoubleSpinBox>
+#include <QElapsedTimer>
+#include <QLabel>
+#include <QPushButton>
+#include <QSlider>
+#include <QTableWidget>
+#include <QTest>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "app/gui/camera_view.h"
+#include "app/gui/document/project.h"
+#include "app/gui/main_window.h"
+#include "app/gui/reconstruction_room.h"
+#include "libnetsim/tracks/track_file.h"
+#include "libreconstruct/labels/label_set.h"
+#include "tests/app/cli/run_netlab.h"
+#include "tests/app/cli/small_shot.h"
+
+namespace netlab::gui {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::RunNetlab;
+
+constexpr int kLastFrame = 17;                    // frames 0..17 (0.1 s at 179 fps)
+constexpr int kMovedCamera = 1, kMovedFrame = 10;  // the label moved off its knot
+
+const fs::path& Dir() {
+  static const fs::path dir =
+      fs::temp_directory_path() / ("netlab_reconstruction_room_" + std::to_string(getpid()));
+  return dir;
+}
+
+bool WaitIdle(const ReconstructionRoom& room, int timeout_ms) {
+  QElapsedTimer clock;
+  clock.start();
+  while (room.busy() && clock.elapsed() < timeout_ms) QTest::qWait(20);
+  QTest::qWait(20);
+  return !room.busy();
+}
+
+// The knot of the moved label: the first that every camera sees in that frame (with three views
+// left, the point is placed and the moved one measured against it).
+int moved_knot = -1;
+int MovedKnot() { return moved_knot; }
+
+class ReconstructionRoomTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    fs::remove_all(Dir());
+    fs::create_directories(Dir());
+    const std::string d = Dir().string();
+    std::string scenario = testing::kSmallShotScenario;
+    scenario.replace(scenario.find("duration: 0.06"), 14, "duration: 0.1");
+    std::ofstream(d + "/shot.yaml") << scenario;
+    ASSERT_EQ(RunNetlab("simulate " + d + "/shot.yaml --out " + d + "/sim.h5 --quiet").status, 0);
+    ASSERT_EQ(RunNetlab("color-net --knots 6x6 --out " + d + "/coloring.yaml --quiet").status, 0);
+    const auto render = RunNetlab("render --sim " + d + "/sim.h5 --out " + d +
+                                  "/shot --frames 0:" + std::to_string(kLastFrame) +
+                                  " --scale 0.25 --calibration-views 0 --coloring " + d +
+                                  "/coloring.yaml --quiet");
+    ASSERT_EQ(render.status, 0) << render.err;
+    recon::LabelSet labels = recon::ReadLabels(d + "/shot/labels_true.h5");
+    for (int k = 0; k < labels.knots() && moved_knot < 0; ++k) {
+      bool all = true;
+      for (int c = 0; c < static_cast<int>(labels.cameras.size()); ++c)
+        all = all && labels.at(c, kMovedFrame, k).present();
+      if (all) moved_knot = k;
+    }
+    ASSERT_GE(moved_knot, 0);
+    recon::Label& moved = labels.at(kMovedCamera, kMovedFrame, MovedKnot());
+    ASSERT_TRUE(moved.present());
+    moved.px += Eigen::Vector2d(12.0, 0.0);
+    recon::WriteLabels(d + "/labels.h5", labels);
+    Project project = MakeProject(d + "/shot/experiment.yaml", d + "/shot/rig_true.yaml",
+                                  d + "/coloring.yaml", d + "/labels.h5", 0, 0);
+    project.target = d + "/sim.h5";  // the box, drawn in the 3D view
+    SaveProject(project, d + "/project.yaml");
+  }
+  static void TearDownTestSuite() {
+    if (!getenv("NETLAB_KEEP_TEST_FILES")) fs::remove_all(Dir());
+  }
+};
+
+TEST_F(ReconstructionRoomTest, TriangulateClickAnOutlierLandOnItsLabelAndExportAsTheCli) {
+  const std::string d = Dir().string();
+  MainWindow w;
+  w.resize(1500, 1000);
+  w.show();
+  ASSERT_TRUE(w.OpenProject(QString::fromStdString(d + "/project.yaml"), false));
+  ASSERT_TRUE(w.WaitForFrame());
+  w.activateWindow();
+  ASSERT_TRUE(QTest::qWaitForWindowActive(&w));
+  QTest::keyClick(&w, Qt::Key_4, Qt::ControlModifier);  // Room > Reconstruction room
+  ASSERT_EQ(w.room(), MainWindow::Room::kReconstruction);
+  ReconstructionRoom* room = w.reconstruction_room();
+  EXPECT_FALSE(room->export_button()->isEnabled());
+
+  // Bundle adjustment of the points (the default), the labels' sigma typed; Triangulate.
+  EXPECT_EQ(room->adjustment_box()->currentText(), "points");
+  room->sigma_box()->selectAll();
+  QTest::keyClicks(room->sigma_box(), "0.100");
+  QTest::mouseClick(room->triangulate_button(), Qt::LeftButton);
+  ASSERT_TRUE(WaitIdle(*room, 60000));
+  ASSERT_TRUE(room->export_button()->isEnabled()) << room->status_label()->text().toStdString();
+  std::printf("%s\n", room->summary_label()->text().toStdString().c_str());
+
+  // The moved label is an outlier, with why.
+  int row = -1;
+  const auto& problems = room->problems();
+  for (size_t i = 0; i < problems.size(); ++i)
+    if (!problems[i].degenerate && problems[i].camera == kMovedCamera &&
+        problems[i].t == kMovedFrame && problems[i].knot == MovedKnot())
+      row = static_cast<int>(i);
+  ASSERT_GE(row, 0) << problems.size() << " problems listed";
+  EXPECT_TRUE(problems[row].why.contains("px from the point's projection"))
+      << problems[row].why.toStdString();
+  EXPECT_LE(problems.size(), 3u) << "only the moved label should be in doubt";
+
+  // A click on it: the labeling room at that label.
+  QTableWidget* table = room->problems_table();
+  table->scrollToItem(table->item(row, 0));
+  QTest::mouseClick(table->viewport(), Qt::LeftButton, {},
+                    table->visualItemRect(table->item(row, 0)).center());
+  EXPECT_EQ(w.room(), MainWindow::Room::kLabeling);
+  EXPECT_EQ(w.frame(), kMovedFrame);
+  EXPECT_EQ(w.camera(), kMovedCamera);
+  EXPECT_EQ(w.knot(), MovedKnot());
+  EXPECT_EQ(w.maximised(), kMovedCamera);
+  // And back.
+  QTest::keyClick(&w, Qt::Key_4, Qt::ControlModifier);
+  EXPECT_EQ(w.room(), MainWindow::Room::kReconstruction);
+  EXPECT_EQ(room->frame(), kMovedFrame);
+
+  // The 3D view follows the slider (and the window's frame follows the room).
+  NetView3D* view = room->view();
+  room->frame_slider()->setValue(4);
+  EXPECT_EQ(room->frame(), 4);
+  EXPECT_EQ(view->row(), 4);
+  EXPECT_EQ(w.frame(), 4);
+  const netsim::KnotTracks* tracks = w.reconstruction()->tracks();
+  ASSERT_NE(tracks, nullptr);
+  const auto centre = view->ToScreen(tracks->Position(4, MovedKnot()));
+  ASSERT_TRUE(centre.has_value());
+  EXPECT_TRUE(view->rect().contains(centre->toPoint()));
+  // A click on the knot selects it: its residual and sigma.
+  QTest::mouseClick(view, Qt::LeftButton, {}, centre->toPoint());
+  EXPECT_EQ(view->selected(), std::set<int>{MovedKnot()});
+  EXPECT_TRUE(room->knot_label()->text().contains("reprojection RMS"))
+      << room->knot_label()->text().toStdString();
+  // A drag turns the view, the wheel zooms it.
+  const double yaw = view->yaw(), distance = view->distance();
+  QTest::mousePress(view, Qt::LeftButton, {}, QPoint(100, 100));
+  QMouseEvent move(QEvent::MouseMove, QPointF(160, 110), view->mapToGlobal(QPointF(160, 110)),
+                   Qt::LeftButton, Qt::LeftButton, Qt::NoModifier);
+  QApplication::sendEvent(view, &move);
+  QTest::mouseRelease(view, Qt::LeftButton, {}, QPoint(160, 110));
+  EXPECT_NE(view->yaw(), yaw);
+  QWheelEvent wheel(QPointF(100, 100), view->mapToGlobal(QPointF(100, 100)), QPoint(),
+                    QPoint(0, 120), Qt::NoButton, Qt::NoModifier, Qt::NoScrollPhase, false);
+  QApplication::sendEvent(view, &wheel);
+  EXPECT_LT(view->distance(), distance);
+
+  // Export: the CLI's files, its numbers.
+  fs::create_directories(Dir() / "export");
+  ASSERT_TRUE(room->ExportTo(QString::fromStdString((Dir() / "export/tracks.h5").string())));
+  EXPECT_TRUE(fs::exists(Dir() / "export/xyzpts.csv"));
+  EXPECT_TRUE(fs::exists(Dir() / "export/xyzres.csv"));
+  const auto cli = RunNetlab("triangulate --rig " + d + "/shot/rig_true.yaml --labels " + d +
+                             "/labels.h5 --knots 6x6 --fps 179 --sigma-px 0.1 --experiment " + d +
+                             "/shot/experiment.yaml --out " + d + "/cli_tracks.h5 --quiet");
+  ASSERT_EQ(cli.status, 0) << cli.err;
+  const netsim::KnotTracks ours = netsim::ReadKnotTracks(d + "/export/tracks.h5");
+  const netsim::KnotTracks theirs = netsim::ReadKnotTracks(d + "/cli_tracks.h5");
+  ASSERT_EQ(ours.position.size(), theirs.position.size());
+  EXPECT_EQ(ours.valid, theirs.valid);
+  EXPECT_EQ(ours.time, theirs.time);
+  double worst = 0.0;
+  for (size_t i = 0; i < ours.position.size(); ++i)
+    if (ours.valid[i]) worst = std::max(worst, (ours.position[i] - theirs.position[i]).norm());
+  EXPECT_LT(worst, 1e-9);
+  EXPECT_EQ(ours.outliers.size(), theirs.outliers.size());
+  // The project names the tracks the room wrote on triangulating.
+  EXPECT_EQ(LoadProject(d + "/project.yaml").tracks, (Dir() / "tracks.h5").string());
+
+  if (const char* out = getenv("NETLAB_RECONSTRUCTION_SCREENSHOT")) {
+    room->SetFrame(kMovedFrame);
+    view->SetView(-0.5, 0.3, 3.5);
+    QTest::qWait(50);
+    ASSERT_TRUE(w.grab().save(out));
+    std::printf("wrote %s\n", out);
+  }
+}
+
+}  // namespace
+}  // namespace netlab::gui
+
+int main(int argc, char** argv) {
+  if (qEnvironmentVariableIsEmpty("QT_QPA_PLATFORM")) qputenv("QT_QPA_PLATFORM", "offscreen");
+  QApplication app(argc, argv);
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
