@@ -1420,15 +1420,10 @@ void MainWindow::BuildRooms() {
   });
   reconstruction_room_ = new ReconstructionRoom;
   stack_->addWidget(reconstruction_room_);
-  connect(reconstruction_room_, &ReconstructionRoom::frameChanged, this, [this](int t) {
-    if (session_ && room_ == Room::kReconstruction) SetFrame(t);
-  });
   connect(reconstruction_room_, &ReconstructionRoom::showLabel, this, &MainWindow::ShowLabel);
   simulation_room_ = new SimulationRoom;
   stack_->addWidget(simulation_room_);
-  connect(simulation_room_, &SimulationRoom::frameChanged, this, [this](int t) {
-    if (session_ && room_ == Room::kSimulation) SetFrame(t);
-  });
+
   for (QDockWidget* dock : findChildren<QDockWidget*>()) labeling_bars_.push_back(dock);
   for (QToolBar* bar : findChildren<QToolBar*>()) labeling_bars_.push_back(bar);
 }
@@ -1436,6 +1431,11 @@ void MainWindow::BuildRooms() {
 void MainWindow::ShowRoom(Room room) {
   if (!session_ && !(room == Room::kRecording && recording_)) return;
   const bool labeling = room == Room::kLabeling;
+  // The frame the person left the reconstruction or simulation room at (their sliders do not
+  // load the labeling room's frames on every step: the 3D view's frame change stays fast).
+  std::optional<int> left_at;
+  if (room_ == Room::kReconstruction && room != room_) left_at = reconstruction_room_->frame();
+  if (room_ == Room::kSimulation && room != room_) left_at = simulation_room_->frame();
   room_ = room;
   {
     const QSignalBlocker block(rooms_);
@@ -1469,17 +1469,18 @@ void MainWindow::ShowRoom(Room room) {
       break;
     case Room::kLabeling:
       stack_->setCurrentWidget(workspace_);
+      if (left_at && *left_at != frame()) SetFrame(*left_at);
       FocusView();
       break;
     case Room::kReconstruction:
       stack_->setCurrentWidget(reconstruction_room_);
       reconstruction_room_->Show(reconstruction_.get());
-      reconstruction_room_->SetFrame(frame());
+      reconstruction_room_->SetFrame(left_at.value_or(frame()));
       break;
     case Room::kSimulation:
       stack_->setCurrentWidget(simulation_room_);
       simulation_room_->Show(simulation_.get(), reconstruction_.get());
-      simulation_room_->SetFrame(frame());
+      simulation_room_->SetFrame(left_at.value_or(frame()));
       break;
   }
 }

@@ -147,12 +147,15 @@ TEST_F(ReconstructionRoomTest, TriangulateClickAnOutlierLandOnItsLabelAndExportA
   EXPECT_EQ(w.room(), MainWindow::Room::kReconstruction);
   EXPECT_EQ(room->frame(), kMovedFrame);
 
-  // The 3D view follows the slider (and the window's frame follows the room).
+  // The 3D view follows the slider; the labeling room opens at the frame left.
   NetView3D* view = room->view();
   room->frame_slider()->setValue(4);
   EXPECT_EQ(room->frame(), 4);
   EXPECT_EQ(view->row(), 4);
+  QTest::keyClick(&w, Qt::Key_3, Qt::ControlModifier);
   EXPECT_EQ(w.frame(), 4);
+  QTest::keyClick(&w, Qt::Key_4, Qt::ControlModifier);
+  EXPECT_EQ(room->frame(), 4);
   const netsim::KnotTracks* tracks = w.reconstruction()->tracks();
   ASSERT_NE(tracks, nullptr);
   const auto centre = view->ToScreen(tracks->Position(4, MovedKnot()));
