@@ -81,6 +81,17 @@ echo "  no-drag simulation: $(verdict "$out/score_no_drag.json")" \
   "  (report: $out/score_no_drag.html)" >&2
 echo "  frames, truth and calibration images in $out/shot; rig in $out/rig_calibrated.yaml;" \
   "labels in $out/labels.h5; 3D tracks in $out/tracks.h5" >&2
-echo "  open the shot in the labeling workstation (docs/gui.md):" >&2
-echo "    $netlab gui $out/shot/experiment.yaml --rig $out/rig_calibrated.yaml" \
-  "--coloring $out/coloring.yaml --labels $out/labels.h5" >&2
+# The finished project: the shot, the rig, the labels, their tracks and both simulations (the
+# window scores them against the tracks as step 6 did, time+rigid, and shows the verdicts).
+cat > "$out/project.yaml" <<EOF
+netlab_project: 1
+experiment: shot/experiment.yaml
+rig: rig_calibrated.yaml
+coloring: coloring.yaml
+labels: labels.h5
+tracks: tracks.h5
+simulations: [sim.h5, sim_no_drag.h5]
+EOF
+echo "  the project in $out/project.yaml; open it in the workstation on the verdicts" \
+  "(docs/gui.md):" >&2
+echo "    $netlab gui $out/project.yaml --room simulation" >&2
