@@ -25,6 +25,7 @@
 #include <cmath>
 
 #include "app/gui/document/missing_knots.h"
+#include "app/gui/document/project.h"
 #include "app/gui/document/session.h"
 
 namespace netlab::gui {
@@ -68,8 +69,8 @@ void NetView3D::SetView(double yaw, double pitch, double distance) {
 }
 
 void NetView3D::Fit() {
-  // The centre: the knots' mean over the shot (else the cameras'); the distance: the whole rig
-  // and net in view.
+  // The centre: the knots' mean over the shot (else the cameras'); the distance: the nearest at
+  // which the cameras and every knot of the shot are in view.
   std::vector<Eigen::Vector3d> points;
   Eigen::Vector3d knots = Eigen::Vector3d::Zero();
   int n = 0;
@@ -77,20 +78,31 @@ void NetView3D::Fit() {
     for (size_t i = 0; i < tracks_->position.size(); ++i)
       if (tracks_->valid[i] && tracks_->position[i].allFinite()) {
         knots += tracks_->position[i];
+        points.push_back(tracks_->position[i]);
         ++n;
       }
+  std::vector<Eigen::Vector3d> cameras;
   if (rig_ != nullptr)
-    for (const calib::Camera& c : rig_->cameras) points.push_back(c.Center());
+    for (const calib::Camera& c : rig_->cameras) cameras.push_back(c.Center());
+  centre_.setZero();
   if (n > 0) {
     centre_ = knots / n;
-  } else if (!points.empty()) {
-    centre_.setZero();
-    for (const auto& p : points) centre_ += p;
-    centre_ /= static_cast<double>(points.size());
+  } else if (!cameras.empty()) {
+    for (const auto& p : cameras) centre_ += p;
+    centre_ /= static_cast<double>(cameras.size());
   }
-  double extent = 1.0;
-  for (const auto& p : points) extent = std::max(extent, (p - centre_).norm());
-  distance_ = 1.6 * extent;
+  points.insert(points.end(), cameras.begin(), cameras.end());
+  // A point (x, y, z) of the turned frame is in view (within 45 % of the view's smaller side of
+  // its middle) from d >= 2 max(|x|, |z|) - y.
+  const double cy = std::cos(yaw_), sy = std::sin(yaw_), cp = std::cos(pitch_),
+               sp = std::sin(pitch_);
+  distance_ = 1.0;
+  for (const Eigen::Vector3d& p : points) {
+    const Eigen::Vector3d q = p - centre_;
+    const double x1 = cy * q.x() + sy * q.y(), y1 = -sy * q.x() + cy * q.y(), z1 = q.z();
+    const double y2 = cp * y1 + sp * z1, z2 = -sp * y1 + cp * z1;
+    distance_ = std::max(distance_, 2.0 * std::max(std::abs(x1), std::abs(z2)) - y2);
+  }
 }
 
 std::optional<QPointF> NetView3D::ToScreen(const Eigen::Vector3d& p) const {
@@ -462,6 +474,15 @@ void ReconstructionRoom::Show(ReconstructionPresenter* presenter) {
       }
     }
     view_->SetSelected({});
+    // The project's tracks, until the labels are triangulated here.
+    if (presenter_ && presenter_->tracks() == nullptr) {
+      try {
+        const Project project = LoadProject(presenter_->session().project().path);
+        if (!project.tracks.empty()) presenter_->LoadTracks(project.tracks);
+      } catch (const std::exception& e) {
+        status_->setText(QString("The project's tracks are not read: ") + e.what());
+      }
+    }
     if (presenter_) {
       slider_->blockSignals(true);
       slider_->setRange(0, std::max(0, presenter_->session().frames() - 1));

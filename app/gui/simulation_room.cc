@@ -118,7 +118,8 @@ SimulationRoom::SimulationRoom(QWidget* parent)
                         : "Not scored.");
                 scoring_ = -1;
                 RefreshTable();
-                Select(i);
+                // The person's selection stays (the project's simulations are scored in turn).
+                Select(selected_ >= 0 ? selected_ : i);
                 if (!to_score_.empty()) {
                   const int next = to_score_.front();
                   to_score_.erase(to_score_.begin());
