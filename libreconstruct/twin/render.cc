@@ -371,10 +371,10 @@ class Lighting {
       if (!solid.is_ball) boxes_.push_back(&solid);
   }
 
-  // A surface point p (camera frame) of unit normal n: its colour; `glossy` adds the lamps'
-  // highlights.
+  // A surface point p (camera frame) of unit normal n on `self` (a box: it cannot shadow a
+  // face turned to the lamp; null for a ball): its colour; `glossy` adds the lamps' highlights.
   Colour Surface(const Colour& colour, const Eigen::Vector3d& p, const Eigen::Vector3d& n,
-                 bool glossy) const {
+                 bool glossy, const Solid* self) const {
     const Eigen::Vector3d view = -p.normalized();
     double diffuse = ambient_, specular = 0.0;
     for (const auto& [position, power] : lamps_) {
@@ -382,7 +382,7 @@ class Lighting {
       const double r2 = d.squaredNorm();
       const Eigen::Vector3d l = d / std::sqrt(r2);
       const double cosine = n.dot(l);
-      if (!(cosine > 0.0) || Hidden(p + 1e-7 * n, position)) continue;
+      if (!(cosine > 0.0) || Hidden(p, position, self)) continue;
       diffuse += power * cosine / r2;
       if (glossy && glossy_ > 0.0) {
         const double nh = std::max(0.0, n.dot((l + view).normalized()));
@@ -406,9 +406,12 @@ class Lighting {
     return static_cast<float>(shade);
   }
 
-  // Does the segment from p to the lamp at q (camera frame) pass through a box?
-  bool Hidden(const Eigen::Vector3d& p, const Eigen::Vector3d& q) const {
+  // Does the segment from p to the lamp at q (camera frame) pass through a box other than
+  // `self`?
+  bool Hidden(const Eigen::Vector3d& p, const Eigen::Vector3d& q,
+              const Solid* self = nullptr) const {
     for (const Solid* box : boxes_) {
+      if (box == self) continue;
       const Eigen::Vector3d a = box->box_from_cam * p + box->camera_in_box;
       const Eigen::Vector3d d = box->box_from_cam * (q - p);
       double t0 = 0.0, t1 = 1.0;
@@ -441,11 +444,11 @@ Colour Solid::Shade(const Eigen::Vector3d& ray, double depth, int face,
                     const Lighting* lighting) const {
   if (lighting == nullptr) return ShadeDirectional(ray, depth, face, light, ambient);
   const Eigen::Vector3d p = depth * ray;
-  if (is_ball) return lighting->Surface(colour, p, (p - center) / radius, false);
+  if (is_ball) return lighting->Surface(colour, p, (p - center) / radius, false, nullptr);
   const int axis = face / 2;
   const Eigen::Vector3d normal =
       (face % 2 ? -1.0 : 1.0) * box_from_cam.row(axis).transpose();
-  return lighting->Surface(colour, p, normal, true);
+  return lighting->Surface(colour, p, normal, true, this);
 }
 
 Colour Lambert(const Colour& colour, const Eigen::Vector3d& normal, const Eigen::Vector3d& light,

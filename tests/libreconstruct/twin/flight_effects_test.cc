@@ -142,6 +142,19 @@ TEST(Lamps, TheTargetsShadowEdgeIsWhereTheLampsRayGrazesTheBox) {
   at_camera.lamps.push_back({Eigen::Vector3d::Zero(), 2.0});
   const cv::Mat lit_face = RenderScene(camera, face, at_camera);
   EXPECT_NEAR(lit_face.at<cv::Vec3f>(100, 100)[1], 0.5 * (0.1 + 2.0 / (2.4 * 2.4)), 2e-3);
+  // A face seen obliquely, lit by a lamp beside it, is lit at every pixel: it does not shadow
+  // itself (the -y face of a cube above the camera's axis, rows 158-161).
+  Scene oblique;
+  Box high = box;
+  high.center = {0.0, 0.6, 2.5};
+  oblique.boxes.push_back(high);
+  SceneRenderOptions beside;
+  beside.ambient = 0.1;
+  beside.lamps.push_back({Eigen::Vector3d(0.0, -1.0, 2.5), 2.0});
+  const cv::Mat top = RenderScene(camera, oblique, beside);
+  for (int v = 158; v <= 161; ++v)
+    for (int u = 92; u <= 108; ++u)
+      EXPECT_GT(top.at<cv::Vec3f>(v, u)[1], 0.5 * (0.1 + 2.0 / (1.6 * 1.6))) << u << " " << v;
   // Glossy: a highlight on top of it, strongest where the half vector meets the normal.
   at_camera.glossy = 0.5;
   const cv::Mat glossy_face = RenderScene(camera, face, at_camera);
