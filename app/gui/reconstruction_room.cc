@@ -252,7 +252,8 @@ void NetView3D::paintEvent(QPaintEvent*) {
   }
   painter.setPen(QColor(210, 210, 210));
   painter.drawText(rect().adjusted(8, 6, -8, -6), Qt::AlignBottom | Qt::AlignLeft,
-                   QString("t = %1 s%2 · drag: turn · right drag: pan · wheel: zoom")
+                   QString("t = %1 s%2 · drag: turn · right drag: pan · wheel: zoom · double "
+                           "click: fit")
                        .arg(time, 0, 'f', 4)
                        .arg(show_sigma_ ? QString(" · σ ×%1").arg(kSigmaScale) : QString()));
 }
@@ -423,6 +424,7 @@ ReconstructionRoom::ReconstructionRoom(QWidget* parent)
   splitter->addWidget(right);
   splitter->setStretchFactor(0, 2);
   splitter->setStretchFactor(1, 3);
+  splitter->setSizes({560, 840});  // the problems' reasons readable beside the 3D view
   layout->addWidget(splitter, 1);
 
   progress_timer_ = new QTimer(this);

@@ -34,8 +34,8 @@ namespace netlab::gui {
 // knots (discs; degenerate ones red), the links between valid neighbours, the target's boxes and
 // balls at that time, the rig's cameras (a small pyramid each, named), the selected knots'
 // trajectories over the whole shot, and on demand each knot's sigma as a circle (scaled x10).
-// Left drag turns it, right or middle drag pans, the wheel zooms; a click selects the nearest
-// knot (Ctrl+click adds it to the selection).
+// Left drag turns it, right or middle drag pans, the wheel zooms, a double click fits it again; a
+// click selects the nearest knot (Ctrl+click adds it to the selection).
 class NetView3D : public QWidget {
   Q_OBJECT
 
@@ -59,6 +59,11 @@ class NetView3D : public QWidget {
   // Where a world point is drawn (nullopt: behind the eye).
   std::optional<QPointF> ToScreen(const Eigen::Vector3d& p) const;
   long paints() const { return paints_; }
+  // Centred on the shot's knots, as near as keeps every camera and knot in view.
+  void FitView() {
+    Fit();
+    update();
+  }
   QSize sizeHint() const override { return {600, 500}; }
 
  signals:
@@ -70,6 +75,7 @@ class NetView3D : public QWidget {
   void mouseMoveEvent(QMouseEvent* event) override;
   void mouseReleaseEvent(QMouseEvent* event) override;
   void wheelEvent(QWheelEvent* event) override;
+  void mouseDoubleClickEvent(QMouseEvent*) override { FitView(); }
 
  private:
   void Fit();

@@ -203,7 +203,7 @@ TEST_F(ReconstructionRoomTest, TriangulateClickAnOutlierLandOnItsLabelAndExportA
 
   if (const char* out = getenv("NETLAB_RECONSTRUCTION_SCREENSHOT")) {
     room->SetFrame(kMovedFrame);
-    view->SetView(-0.5, 0.3, 3.5);
+    QTest::mouseDClick(view, Qt::LeftButton, {}, QPoint(5, 5));  // fitted again
     QTest::qWait(50);
     ASSERT_TRUE(w.grab().save(out));
     std::printf("wrote %s\n", out);
