@@ -27,7 +27,9 @@
 // the whole reason, and whether a missing label was in the first frame, on the border). With
 // --coloring (the colouring the shot was rendered with) the engine also checks every label
 // against the yarn colours. NETLAB_WRONG_CROPS=DIR writes a crop of each wrong label there;
-// NETLAB_WRONG_CSV=FILE lists every wrong label (camera, frame, knot, source, px off).
+// NETLAB_WRONG_CSV=FILE lists every wrong label (camera, frame, knot, source, px off);
+// NETLAB_WRONG_HISTORY=1 names every wrong label on stderr (not only the first ten) with the
+// knot's labels in that camera over the eight frames before, and in the other cameras.
 //
 // --detector: no engine and no script; Find Node at every visible knot's true place (the brush
 // of --radius, and tracking's 3 px snap), what it answers per camera, with and without the
@@ -399,12 +401,13 @@ void TallyErrors(const Shot& shot, const recon::LabelStore& store, std::vector<T
           if (wrong_csv)
             std::fprintf(wrong_csv, "%s,%d,%d,%d,%d,%s,%.3f\n", shot.cameras[c].c_str(),
                          shot.frames[t], k, k / shot.cols, k % shot.cols, SourceName(l.source), e);
-          if (++y.wrong <= 10)
+          const int named = std::getenv("NETLAB_WRONG_HISTORY") ? 1000 : 10;
+          if (++y.wrong <= named)
             std::fprintf(stderr, "wrong: %s frame %d knot %d (%d,%d) %s: %s\n",
                          shot.cameras[c].c_str(), shot.frames[t], k, k / shot.cols, k % shot.cols,
                          SourceName(l.source),
                          e < 0 ? "the knot is hidden" : (std::to_string(e) + " px off").c_str());
-          if (e > 0 && y.wrong <= 10) {
+          if (e > 0 && y.wrong <= named) {
             const recon::FindNodeResult r = recon::FindNode(image(c, t), truth_l.px, 6.0);
             const Eigen::Vector2d off = l.px - truth_l.px;
             std::fprintf(stderr, "  label - truth (%.2f, %.2f); Find Node at the truth: %s", off.x(),
@@ -428,6 +431,38 @@ void TallyErrors(const Shot& shot, const recon::LabelStore& store, std::vector<T
                            (r2.knot.px - truth_l.px).norm(), r2.knot.px.x() - truth_l.px.x(),
                            r2.knot.px.y() - truth_l.px.y());
             std::fprintf(stderr, "\n");
+            // NETLAB_WRONG_HISTORY: the knot's labels in this camera over the frames before,
+            // each as source, state (a: accepted, r: review) and px off the truth.
+            if (std::getenv("NETLAB_WRONG_HISTORY")) {
+              std::fprintf(stderr, "  before:");
+              for (int s = std::max(0, t - 8); s <= t; ++s) {
+                const recon::Label& h = store.at(c, s, k);
+                const recon::Label& ht = shot.Truth(c, s, k);
+                if (!h.present()) {
+                  std::fprintf(stderr, " [%d -]", shot.frames[s]);
+                  continue;
+                }
+                std::fprintf(stderr, " [%d %s %c %.2f]", shot.frames[s], SourceName(h.source),
+                             h.state == recon::LabelState::kAccepted ? 'a' : 'r',
+                             ht.present() ? (h.px - ht.px).norm() : -1.0);
+              }
+              std::fprintf(stderr, "\n  other cameras:");
+              for (int o = 0; o < shot.n_cam(); ++o) {
+                const recon::Label& h = store.at(o, t, k);
+                const recon::Label& ht = shot.Truth(o, t, k);
+                if (o == c) continue;
+                if (!h.present()) {
+                  std::fprintf(stderr, " [%s -%s]", shot.cameras[o].c_str(),
+                               ht.present() ? "" : " hidden");
+                  continue;
+                }
+                std::fprintf(stderr, " [%s %s %c %.2f]", shot.cameras[o].c_str(),
+                             SourceName(h.source),
+                             h.state == recon::LabelState::kAccepted ? 'a' : 'r',
+                             ht.present() ? (h.px - ht.px).norm() : -1.0);
+              }
+              std::fprintf(stderr, "\n");
+            }
             if (const char* dir = std::getenv("NETLAB_WRONG_CROPS"))  // a look at the place
               SaveCrop(image(c, t), truth_l.px, l.px,
                        std::string(dir) + "/wrong_" + shot.cameras[c] + "_" +
