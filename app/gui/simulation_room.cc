@@ -11,6 +11,8 @@
 #include <QHeaderView>
 #include <QLabel>
 #include <QLineEdit>
+#include <QPainter>
+#include <QPainterPath>
 #include <QProgressBar>
 #include <QPushButton>
 #include <QSlider>
@@ -42,7 +44,151 @@ std::string FreshPath(const std::string& folder, const std::string& stem) {
   return path.string();
 }
 
+// The classes' colours in the error chart (corner, edge, inner).
+const QColor kClassColour[3] = {QColor(220, 60, 60), QColor(40, 140, 220), QColor(60, 170, 60)};
+
+// A round step for an axis up to `max`: 1, 2 or 5 times a power of ten, about 4 ticks.
+double TickStep(double max) {
+  if (!(max > 0)) return 1.0;
+  const double raw = max / 4.0, power = std::pow(10.0, std::floor(std::log10(raw)));
+  for (double m : {1.0, 2.0, 5.0})
+    if (m * power >= raw) return m * power;
+  return 10.0 * power;
+}
+
 }  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// ScoreChart
+
+ScoreChart::ScoreChart(Kind kind, QWidget* parent) : QWidget(parent), kind_(kind) {}
+
+void ScoreChart::SetScore(const netsim::ScoreResult* score) {
+  score_ = score;
+  y_max_ = 0.0;
+  if (score_ != nullptr) {
+    if (kind_ == Kind::kErrorOverTime) {
+      for (const auto& row : score_->rms_per_class)
+        for (double v : row)
+          if (std::isfinite(v)) y_max_ = std::max(y_max_, v * 1e3);
+    } else {
+      for (size_t b = 0; b < score_->d2_counts.size(); ++b)
+        y_max_ = std::max({y_max_, score_->d2_counts[b], score_->d2_expected[b]});
+    }
+  }
+  update();
+}
+
+std::vector<int> ScoreChart::series_points() const {
+  std::vector<int> n;
+  if (score_ == nullptr) return n;
+  if (kind_ == Kind::kD2Histogram) return {static_cast<int>(score_->d2_counts.size())};
+  n.assign(3, 0);
+  for (const auto& row : score_->rms_per_class)
+    for (int c = 0; c < 3; ++c) n[c] += std::isfinite(row[c]);
+  return n;
+}
+
+void ScoreChart::paintEvent(QPaintEvent*) {
+  QPainter painter(this);
+  painter.fillRect(rect(), Qt::white);
+  painter.setRenderHint(QPainter::Antialiasing, true);
+  const QString title = kind_ == Kind::kErrorOverTime
+                            ? "RMS error (mm) per knot class over time (s)"
+                            : "d²: counts (bars), chi²(3) expected (line)";
+  painter.setPen(Qt::black);
+  painter.drawText(QRect(6, 2, width() - 12, 16), Qt::AlignLeft | Qt::AlignVCenter, title);
+  if (score_ == nullptr || y_max_ <= 0) {
+    painter.setPen(Qt::gray);
+    painter.drawText(rect(), Qt::AlignCenter, "Not scored yet.");
+    return;
+  }
+  const QRectF plot(44, 22, width() - 54, height() - 42);
+  double x0 = 0, x1 = 1;
+  if (kind_ == Kind::kErrorOverTime && !score_->time.empty()) {
+    x0 = score_->time.front();
+    x1 = std::max(score_->time.back(), x0 + 1e-9);
+  } else if (kind_ == Kind::kD2Histogram && !score_->d2_edges.empty()) {
+    x0 = score_->d2_edges.front();
+    x1 = score_->d2_edges.back();
+  }
+  const double y1 = 1.08 * y_max_;
+  const auto X = [&](double x) { return plot.left() + (x - x0) / (x1 - x0) * plot.width(); };
+  const auto Y = [&](double y) { return plot.bottom() - y / y1 * plot.height(); };
+  // Phases (the error chart): shaded alternately, named at the top.
+  if (kind_ == Kind::kErrorOverTime) {
+    for (size_t p = 0; p < score_->summary.per_phase.size(); ++p) {
+      const netsim::ScoreRow& row = score_->summary.per_phase[p];
+      const double a = std::clamp(X(row.start_s), plot.left(), plot.right());
+      const double b = std::clamp(X(row.end_s), plot.left(), plot.right());
+      if (b <= a) continue;
+      painter.fillRect(QRectF(a, plot.top(), b - a, plot.height()),
+                       p % 2 ? QColor(245, 245, 245) : QColor(232, 238, 246));
+      painter.setPen(QColor(90, 90, 90));
+      painter.drawText(QRectF(a + 2, plot.top(), b - a - 4, 14), Qt::AlignLeft | Qt::AlignTop,
+                       QString::fromStdString(row.name));
+    }
+  }
+  // Axes and ticks.
+  painter.setPen(QColor(120, 120, 120));
+  painter.drawRect(plot);
+  QFont small = font();
+  small.setPointSizeF(std::max(6.0, small.pointSizeF() - 1.5));
+  painter.setFont(small);
+  const double ystep = TickStep(y1);
+  for (double y = 0; y <= y1 + 1e-12; y += ystep) {
+    painter.drawLine(QPointF(plot.left() - 3, Y(y)), QPointF(plot.left(), Y(y)));
+    painter.drawText(QRectF(0, Y(y) - 7, plot.left() - 5, 14), Qt::AlignRight | Qt::AlignVCenter,
+                     QString::number(y, 'g', 3));
+  }
+  const double xstep = TickStep(x1 - x0);
+  for (double x = std::ceil(x0 / xstep) * xstep; x <= x1 + 1e-12; x += xstep) {
+    painter.drawLine(QPointF(X(x), plot.bottom()), QPointF(X(x), plot.bottom() + 3));
+    painter.drawText(QRectF(X(x) - 30, plot.bottom() + 3, 60, 14), Qt::AlignCenter,
+                     QString::number(x, 'g', 3));
+  }
+  if (kind_ == Kind::kErrorOverTime) {
+    for (int c = 0; c < 3; ++c) {
+      QPainterPath path;
+      bool open = false;
+      for (size_t t = 0; t < score_->time.size(); ++t) {
+        const double v = score_->rms_per_class[t][c];
+        if (!std::isfinite(v)) {
+          open = false;
+          continue;
+        }
+        const QPointF p(X(score_->time[t]), Y(v * 1e3));
+        open ? path.lineTo(p) : path.moveTo(p);
+        open = true;
+      }
+      painter.setPen(QPen(kClassColour[c], 1.5));
+      painter.setBrush(Qt::NoBrush);
+      painter.drawPath(path);
+      painter.drawText(QRectF(plot.right() - 150 + 50 * c, plot.bottom() - 16, 48, 14),
+                       Qt::AlignCenter, netsim::kKnotClassNames[c]);
+    }
+  } else {
+    painter.setPen(Qt::NoPen);
+    painter.setBrush(QColor(120, 160, 220));
+    for (size_t b = 0; b < score_->d2_counts.size(); ++b) {
+      const double a = X(score_->d2_edges[b]), e = X(score_->d2_edges[b + 1]);
+      painter.drawRect(QRectF(a + 0.5, Y(score_->d2_counts[b]), std::max(0.5, e - a - 1),
+                              plot.bottom() - Y(score_->d2_counts[b])));
+    }
+    QPainterPath expected;
+    for (size_t b = 0; b < score_->d2_expected.size(); ++b) {
+      const double mid = 0.5 * (score_->d2_edges[b] + score_->d2_edges[b + 1]);
+      const QPointF p(X(mid), Y(score_->d2_expected[b]));
+      b == 0 ? expected.moveTo(p) : expected.lineTo(p);
+    }
+    painter.setPen(QPen(QColor(200, 60, 60), 1.5));
+    painter.setBrush(Qt::NoBrush);
+    painter.drawPath(expected);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// SimulationRoom
 
 SimulationRoom::SimulationRoom(QWidget* parent)
     : QWidget(parent),
@@ -264,6 +410,10 @@ SimulationRoom::SimulationRoom(QWidget* parent)
   verdict_->setMinimumWidth(320);
   verdict_->setAlignment(Qt::AlignTop | Qt::AlignLeft);
   side_layout->addWidget(verdict_, 1);
+  error_chart_ = new ScoreChart(ScoreChart::Kind::kErrorOverTime);
+  side_layout->addWidget(error_chart_);
+  d2_chart_ = new ScoreChart(ScoreChart::Kind::kD2Histogram);
+  side_layout->addWidget(d2_chart_);
   splitter->addWidget(side);
   splitter->setStretchFactor(0, 3);
   splitter->setStretchFactor(1, 1);
@@ -320,6 +470,10 @@ void SimulationRoom::Show(SimulationPresenter* simulation, ReconstructionPresent
   reconstruction_ = reconstruction;
   alive_ = simulation ? simulation->lifetime() : std::weak_ptr<const int>();
   selected_ = -1;
+  error_chart_->SetScore(nullptr);  // it points into the old presenter's scores
+  d2_chart_->SetScore(nullptr);
+  verdict_->setText("Not scored yet.");
+  verdict_->setStyleSheet({});
   shown_frame_ = -1;
   frame_ = 0;
   to_score_.clear();
@@ -412,6 +566,8 @@ void SimulationRoom::Select(int i) {
                          : score->summary.verdict == "consistent" ? "#d8f5d0"
                                                                   : "#f8d4d0";
   verdict_->setStyleSheet("QLabel { background: " + colour + "; padding: 6px; }");
+  error_chart_->SetScore(score ? &*score : nullptr);
+  d2_chart_->SetScore(score ? &*score : nullptr);
   RefreshOverlays();
   RefreshButtons();
 }

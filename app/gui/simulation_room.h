@@ -34,6 +34,31 @@ class QTimer;
 
 namespace netlab::gui {
 
+// A score's charts, drawn with QPainter (offscreen too): the error over time (the RMS of |r| per
+// knot class per measured frame, mm, the phases shaded and named) or the d² histogram against
+// chi²(3)'s expected counts.
+class ScoreChart : public QWidget {
+  Q_OBJECT
+
+ public:
+  enum class Kind { kErrorOverTime, kD2Histogram };
+  explicit ScoreChart(Kind kind, QWidget* parent = nullptr);
+  void SetScore(const netsim::ScoreResult* score);  // null: nothing scored
+  // The largest value drawn (mm, or the largest count) and the number of points of each series.
+  double y_max() const { return y_max_; }
+  std::vector<int> series_points() const;
+  QSize sizeHint() const override { return {360, 170}; }
+  QSize minimumSizeHint() const override { return {200, 110}; }
+
+ protected:
+  void paintEvent(QPaintEvent* event) override;
+
+ private:
+  Kind kind_;
+  const netsim::ScoreResult* score_ = nullptr;
+  double y_max_ = 0.0;
+};
+
 class SimulationRoom : public QWidget {
   Q_OBJECT
 
@@ -60,6 +85,8 @@ class SimulationRoom : public QWidget {
   QLabel* status_label() const { return status_; }
   QLabel* verdict_label() const { return verdict_; }
   QLabel* hover_label() const { return hover_; }
+  ScoreChart* error_chart() const { return error_chart_; }
+  ScoreChart* d2_chart() const { return d2_chart_; }
   QSlider* frame_slider() const { return slider_; }
   CameraView* view(int c) const { return views_[c]; }
   int frame() const { return frame_; }
@@ -122,6 +149,8 @@ class SimulationRoom : public QWidget {
   QLabel* status_ = nullptr;
   QLabel* verdict_ = nullptr;
   QLabel* hover_ = nullptr;
+  ScoreChart* error_chart_ = nullptr;
+  ScoreChart* d2_chart_ = nullptr;
   QSlider* slider_ = nullptr;
   QLabel* frame_label_ = nullptr;
   std::array<CameraView*, 4> views_{};

@@ -20,6 +20,7 @@
 #include <Eigen/Core>
 #include <QString>
 #include <atomic>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -149,7 +150,7 @@ class SimulationPresenter {
  private:
   const Session* session_;
   const ReconstructionPresenter* reconstruction_;
-  std::vector<Simulation> simulations_;
+  std::deque<Simulation> simulations_;  // a deque: an added one moves no score a chart shows
   std::shared_ptr<const int> alive_ = std::make_shared<const int>(0);
 };
 

@@ -190,6 +190,16 @@ TEST_F(SimulationRoomTest, TheTrueSimulationLiesOnTheLabelsAndIsConsistentTheNoD
   const std::string no_drag = ScoreSelected(room);
   EXPECT_NE(no_drag.find("inconsistent"), std::string::npos) << no_drag;
   std::printf("no-drag simulation: %s\n", no_drag.c_str());
+  // Its charts: the error over time of every class (its worst class over 5 mm at the end of the
+  // flight), the d² histogram.
+  const std::vector<int> points = room->error_chart()->series_points();
+  ASSERT_EQ(points.size(), 3u);
+  EXPECT_GT(points[0] + points[1] + points[2], 20);
+  EXPECT_GT(room->error_chart()->y_max(), 5.0);
+  EXPECT_GT(room->d2_chart()->y_max(), 0.0);
+  room->Select(0);  // the true one's: errors of 0 mm
+  EXPECT_LT(room->error_chart()->y_max(), 1e-3);
+  room->Select(1);
   // Side by side in the table.
   EXPECT_EQ(room->simulations_table()->item(0, 1)->text(), "consistent");
   EXPECT_EQ(room->simulations_table()->item(1, 1)->text(), "inconsistent");
