@@ -273,6 +273,17 @@ SimulationRoom::SimulationRoom(QWidget* parent)
                 }
                 RefreshButtons();
               }),
+      fitter_(this,
+              [this](FitRun run) {
+                StopProgress();
+                if (!Alive()) return;
+                simulation_->SetFit(std::move(run));
+                fit_->setText(simulation_->FitText(selected_));
+                status_->setText(simulation_->fit()->cancelled ? "Fit cancelled."
+                                 : simulation_->fit()->result  ? "Fitted."
+                                                               : "The fit failed.");
+                RefreshButtons();
+              }),
       loader_(this, [this](Loaded loaded) {
         if (!Alive() || loaded.t != frame_) return;
         for (int c = 0; c < 4; ++c)
@@ -334,6 +345,21 @@ SimulationRoom::SimulationRoom(QWidget* parent)
   progress_->setMaximumWidth(220);
   sim_row->addWidget(progress_);
   layout->addLayout(sim_row);
+
+  // The fit: the scenario's free parameters against the tracks.
+  auto* fit_row = new QHBoxLayout;
+  fit_row->addWidget(new QLabel("Fit"));
+  free_edit_ = new QLineEdit;
+  free_edit_->setObjectName("simulation_free");
+  free_edit_->setPlaceholderText(
+      "free parameters of the scenario, as netlab fit --free: drag.drag_coefficient,"
+      "materials.nylon_1mm.bend_stiffness,time_offset");
+  fit_row->addWidget(free_edit_, 1);
+  fit_button_ = new QPushButton("Fit");
+  fit_button_->setToolTip("netlab fit's engine: the free parameters that make the scenario "
+                          "(with the overrides above) agree best with the triangulated labels");
+  fit_row->addWidget(fit_button_);
+  layout->addLayout(fit_row);
 
   status_ = new QLabel("Load a simulation, or choose a scenario and Simulate.");
   status_->setObjectName("simulation_status");
@@ -410,6 +436,11 @@ SimulationRoom::SimulationRoom(QWidget* parent)
   verdict_->setMinimumWidth(320);
   verdict_->setAlignment(Qt::AlignTop | Qt::AlignLeft);
   side_layout->addWidget(verdict_, 1);
+  fit_ = new QLabel;
+  fit_->setObjectName("simulation_fit");
+  fit_->setWordWrap(true);
+  fit_->setTextInteractionFlags(Qt::TextSelectableByMouse);
+  side_layout->addWidget(fit_);
   error_chart_ = new ScoreChart(ScoreChart::Kind::kErrorOverTime);
   side_layout->addWidget(error_chart_);
   d2_chart_ = new ScoreChart(ScoreChart::Kind::kD2Histogram);
@@ -421,8 +452,13 @@ SimulationRoom::SimulationRoom(QWidget* parent)
 
   progress_timer_ = new QTimer(this);
   progress_timer_->setInterval(100);
-  connect(progress_timer_, &QTimer::timeout, this,
-          [this] { progress_->setValue(static_cast<int>(1000 * fraction_->load())); });
+  connect(progress_timer_, &QTimer::timeout, this, [this] {
+    progress_->setValue(static_cast<int>(1000 * fraction_->load()));
+    if (fitter_.pending()) {
+      const std::lock_guard<std::mutex> lock(fit_status_->mutex);
+      if (!fit_status_->text.isEmpty()) status_->setText("Fitting: " + fit_status_->text);
+    }
+  });
 
   connect(triangulate_button_, &QPushButton::clicked, this, [this] { Triangulate(); });
   connect(simulate_button_, &QPushButton::clicked, this, &SimulationRoom::Simulate);
@@ -439,6 +475,7 @@ SimulationRoom::SimulationRoom(QWidget* parent)
   connect(cancel_button_, &QPushButton::clicked, this, &SimulationRoom::Cancel);
   connect(score_button_, &QPushButton::clicked, this, [this] { Score(selected_); });
   connect(report_button_, &QPushButton::clicked, this, &SimulationRoom::OpenReport);
+  connect(fit_button_, &QPushButton::clicked, this, &SimulationRoom::Fit);
   connect(show_simulated_, &QCheckBox::toggled, this, [this] { RefreshOverlays(); });
   connect(slider_, &QSlider::valueChanged, this, [this](int t) { SetFrame(t); });
   connect(table_, &QTableWidget::itemSelectionChanged, this, [this] {
@@ -463,6 +500,8 @@ void SimulationRoom::Show(SimulationPresenter* simulation, ReconstructionPresent
   triangulator_.Drop();
   simulator_.Drop();
   scorer_.Drop();
+  fitter_.Cancel();
+  fitter_.Drop();
   loader_.Drop();
   loader_.Wait();  // it reads the old session's frames
   StopProgress();
@@ -507,7 +546,7 @@ void SimulationRoom::Show(SimulationPresenter* simulation, ReconstructionPresent
 
 bool SimulationRoom::busy() const {
   return triangulator_.pending() || simulator_.pending() || scorer_.pending() ||
-         loader_.pending();
+         fitter_.pending() || loader_.pending();
 }
 
 void SimulationRoom::SetFrame(int t) {
@@ -604,12 +643,14 @@ void SimulationRoom::RefreshTable() {
 
 void SimulationRoom::RefreshButtons() {
   const bool open = simulation_ != nullptr;
-  const bool working = triangulator_.pending() || simulator_.pending() || scorer_.pending();
+  const bool working =
+      triangulator_.pending() || simulator_.pending() || scorer_.pending() || fitter_.pending();
   triangulate_button_->setEnabled(open && !working);
   simulate_button_->setEnabled(open && !working);
   load_button_->setEnabled(open && !working);
   cancel_button_->setEnabled(working);
   score_button_->setEnabled(open && !working && selected_ >= 0);
+  fit_button_->setEnabled(open && !working);
   report_button_->setEnabled(open && selected_ >= 0 &&
                              !simulation_->simulation(selected_).report_path.empty());
 }
@@ -722,6 +763,46 @@ void SimulationRoom::Score(int i) {
   RefreshButtons();
 }
 
+void SimulationRoom::Fit() {
+  if (!simulation_) return;
+  const std::string scenario = scenario_edit_->text().trimmed().toStdString();
+  const std::string free = free_edit_->text().trimmed().toStdString();
+  if (scenario.empty() || free.empty()) {
+    status_->setText("Choose the scenario and type its free parameters first.");
+    return;
+  }
+  if (simulation_->measured() == nullptr) {
+    status_->setText("Triangulate the labels first (the fit compares with their tracks).");
+    return;
+  }
+  std::vector<std::string> overrides;
+  for (const QString& part : overrides_edit_->text().split(' ', Qt::SkipEmptyParts))
+    overrides.push_back(part.toStdString());
+  FitJob job;
+  try {
+    job = simulation_->MakeFitJob(scenario, overrides, free);
+  } catch (const std::exception& e) {
+    status_->setText(QString("Cannot fit: ") + e.what());
+    return;
+  }
+  {
+    const std::lock_guard<std::mutex> lock(fit_status_->mutex);
+    fit_status_->text.clear();
+  }
+  status_->setText("Fitting " + QString::fromStdString(free) + "…");
+  fit_->setText("");
+  auto status = fit_status_;
+  fitter_.Request([job = std::move(job), status](const std::atomic<bool>& cancel) {
+    return SimulationPresenter::Fit(job, cancel, [status](const netsim::FitProgress& p) {
+      const std::lock_guard<std::mutex> lock(status->mutex);
+      status->text = SimulationPresenter::ProgressText(p);
+    });
+  });
+  progress_->setRange(0, 0);  // busy: the fit's ETA is in the status line
+  progress_timer_->start();
+  RefreshButtons();
+}
+
 void SimulationRoom::OpenReport() {
   if (!simulation_ || selected_ < 0) return;
   const std::string& report = simulation_->simulation(selected_).report_path;
@@ -731,6 +812,7 @@ void SimulationRoom::OpenReport() {
 void SimulationRoom::Cancel() {
   triangulator_.Cancel();
   simulator_.Cancel();
+  fitter_.Cancel();  // stops at its next iteration; the answer says cancelled
   // A score is not cancellable inside: its answer is dropped.
   to_score_.clear();
   if (scorer_.pending()) {

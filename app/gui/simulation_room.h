@@ -14,6 +14,7 @@
 #include <array>
 #include <atomic>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "app/gui/camera_view.h"
@@ -85,6 +86,9 @@ class SimulationRoom : public QWidget {
   QLabel* status_label() const { return status_; }
   QLabel* verdict_label() const { return verdict_; }
   QLabel* hover_label() const { return hover_; }
+  QLineEdit* free_edit() const { return free_edit_; }
+  QPushButton* fit_button() const { return fit_button_; }
+  QLabel* fit_label() const { return fit_; }
   ScoreChart* error_chart() const { return error_chart_; }
   ScoreChart* d2_chart() const { return d2_chart_; }
   QSlider* frame_slider() const { return slider_; }
@@ -118,6 +122,8 @@ class SimulationRoom : public QWidget {
   // a score asked for while one runs waits its turn.
   void Score(int i);
   void OpenReport();
+  // Fits the free parameters of the scenario (with its overrides) to the tracks on a worker.
+  void Fit();
   void Cancel();
   void RequestFrame();
   void RefreshOverlays();
@@ -149,6 +155,9 @@ class SimulationRoom : public QWidget {
   QLabel* status_ = nullptr;
   QLabel* verdict_ = nullptr;
   QLabel* hover_ = nullptr;
+  QLineEdit* free_edit_ = nullptr;
+  QPushButton* fit_button_ = nullptr;
+  QLabel* fit_ = nullptr;
   ScoreChart* error_chart_ = nullptr;
   ScoreChart* d2_chart_ = nullptr;
   QSlider* slider_ = nullptr;
@@ -161,6 +170,13 @@ class SimulationRoom : public QWidget {
   LatestRequest<SimulationRun> simulator_;
   LatestRequest<ScoreRun> scorer_;
   LatestRequest<Loaded> loader_;
+  // The fit's progress line, written by its worker and shown by the progress timer.
+  struct FitStatus {
+    std::mutex mutex;
+    QString text;
+  };
+  std::shared_ptr<FitStatus> fit_status_ = std::make_shared<FitStatus>();
+  LatestRequest<FitRun> fitter_;
 };
 
 }  // namespace netlab::gui

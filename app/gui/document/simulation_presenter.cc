@@ -34,6 +34,13 @@ std::string Stem(const std::string& path) {
   return stem.empty() ? "sim" : stem;
 }
 
+// Thrown from the fit's progress call to stop it (never leaves Fit).
+struct FitCancelled {};
+
+QString Seconds(double s) {
+  return s < 90 ? QString("%1 s").arg(s, 0, 'f', 0) : QString("%1 min").arg(s / 60, 0, 'f', 1);
+}
+
 }  // namespace
 
 std::optional<Eigen::Vector2d> SimulatedView::Find(int knot) const {
@@ -232,6 +239,97 @@ QString SimulationPresenter::Verdict(int i) const {
     aligned += QString(", moved %1 mm").arg(m.translation.norm() * 1e3, 0, 'f', 1);
   text += "\n" + aligned + ".";
   if (!s.score_error.empty()) text += "\n" + QString::fromStdString(s.score_error);
+  return text;
+}
+
+FitJob SimulationPresenter::MakeFitJob(const std::string& scenario_path,
+                                       const std::vector<std::string>& overrides,
+                                       const std::string& free) const {
+  if (measured() == nullptr) throw std::logic_error("no measured tracks: triangulate first");
+  FitJob job;
+  job.scenario_path = scenario_path;
+  for (const std::string& text : overrides) job.options.set.push_back(netsim::ParseOverride(text));
+  job.options.score.max_time_offset_s = 0.05;  // as netlab fit
+  job.options.jobs = 2;
+  job.parameters = netsim::ParseFreeParameters(free, scenario_path, job.options.set,
+                                               job.options.score.time_offset_s);
+  job.measured = *measured();
+  return job;
+}
+
+FitRun SimulationPresenter::Fit(const FitJob& job, const std::atomic<bool>& cancel,
+                                const std::function<void(const netsim::FitProgress&)>& progress) {
+  FitRun run;
+  if (cancel) {
+    run.cancelled = true;
+    return run;
+  }
+  netsim::FitOptions options = job.options;
+  options.progress = [&](const netsim::FitProgress& p) {
+    if (cancel) throw FitCancelled{};
+    if (progress) progress(p);
+  };
+  try {
+    run.result = netsim::FitShot(job.scenario_path, job.measured, job.parameters, options,
+                                 "the triangulated labels");
+  } catch (const FitCancelled&) {
+    run.cancelled = true;
+  } catch (const std::exception& e) {
+    run.error = e.what();
+  }
+  return run;
+}
+
+QString SimulationPresenter::ProgressText(const netsim::FitProgress& p) {
+  QString text;
+  if (!p.stage.empty()) text += "stage " + QString::fromStdString(p.stage) + ", ";
+  if (p.iteration >= 0) text += QString("iteration %1, ").arg(p.iteration);
+  return text + QString("cost %1, %2 simulations, %3, ETA at most %4")
+                    .arg(p.cost, 0, 'g', 5)
+                    .arg(p.simulations)
+                    .arg(Seconds(p.elapsed_s))
+                    .arg(Seconds(p.eta_s));
+}
+
+QString SimulationPresenter::FitText(int start) const {
+  if (!fit_) return "";
+  if (fit_->cancelled) return "Fit cancelled.";
+  if (!fit_->result) return "Fit failed: " + QString::fromStdString(fit_->error);
+  const netsim::FitResult& r = *fit_->result;
+  QString text = "Fitted:";
+  for (const netsim::FittedParameter& f : r.parameters) {
+    const QString sigma = std::isfinite(f.sigma) ? QString::number(f.sigma, 'g', 3) : "∞";
+    QString verdict = f.identified ? "identified by the " + QString::fromStdString(f.determined_by)
+                      : f.determined_by == "prior" ? QString("from its prior")
+                                                    : QString("not identified");
+    if (f.rough) verdict += "; the cost is rough there: σ means little";
+    if (f.ambiguous) verdict += QString("; another valley at %1").arg(f.alternative, 0, 'g', 4);
+    text += QString("\n  %1 = %2 ± %3 %4 (%5)")
+                .arg(QString::fromStdString(f.parameter.name))
+                .arg(f.value, 0, 'g', 5)
+                .arg(sigma)
+                .arg(QString::fromStdString(f.parameter.units))
+                .arg(verdict);
+  }
+  text += QString("\nCost %1 → %2 in %3 iterations, %4 simulations, %5.")
+              .arg(r.cost_initial, 0, 'g', 5)
+              .arg(r.cost_final, 0, 'g', 5)
+              .arg(r.iterations)
+              .arg(r.simulations)
+              .arg(Seconds(r.wall_s));
+  text += QString("\nThe fitted model: %1, RMS %2 mm, mean d² %3.")
+              .arg(QString::fromStdString(r.score.verdict))
+              .arg(r.score.rms_m * 1e3, 0, 'g', 3)
+              .arg(r.score.mean_d2, 0, 'g', 3);
+  if (start >= 0 && start < simulations() && simulations_[start].score) {
+    const netsim::ScoreSummary& s = simulations_[start].score->summary;
+    text += QString("\nThe start (%1): %2, RMS %3 mm, mean d² %4.")
+                .arg(QString::fromStdString(simulations_[start].name))
+                .arg(QString::fromStdString(s.verdict))
+                .arg(s.rms_m * 1e3, 0, 'g', 3)
+                .arg(s.mean_d2, 0, 'g', 3);
+  }
+  for (const std::string& note : r.notes) text += "\nnote: " + QString::fromStdString(note);
   return text;
 }
 

@@ -28,6 +28,7 @@
 #include <utility>
 #include <vector>
 
+#include "libnetsim/identification/shot_fit.h"
 #include "libnetsim/scenario/scenario_override.h"
 #include "libnetsim/tracks/track_file.h"
 #include "libnetsim/validation/score.h"
@@ -63,6 +64,19 @@ struct ScoreRun {
   int index = 0;
   std::optional<netsim::ScoreResult> result;
   std::string error;
+};
+
+// A fit to run (`netlab fit`'s engine, netsim::FitShot) and its answer.
+struct FitJob {
+  std::string scenario_path;
+  std::vector<netsim::FitParameter> parameters;
+  netsim::KnotTracks measured;
+  netsim::FitOptions options;
+};
+struct FitRun {
+  std::optional<netsim::FitResult> result;
+  std::string error;
+  bool cancelled = false;
 };
 
 // A simulation in the room.
@@ -145,9 +159,29 @@ class SimulationPresenter {
   // The score's 3D residual |measured - simulated| at (t, knot), m (nullopt: not compared).
   std::optional<double> ResidualM(int i, int t, int knot) const;
 
+  // ---- Fit: the free parameters (`netlab fit --free`: comma-separated dotted paths of the
+  // scenario, time_offset) of the scenario after `overrides`, against the measured tracks, with
+  // `netlab fit`'s defaults (the time offset searched within 0.05 s). InputError naming a bad
+  // entry; std::logic_error without measured tracks.
+  FitJob MakeFitJob(const std::string& scenario_path, const std::vector<std::string>& overrides,
+                    const std::string& free) const;
+  // Any thread. progress(p) once per iteration; a set `cancel` stops the fit at the next one (the
+  // answer says cancelled).
+  static FitRun Fit(const FitJob& job, const std::atomic<bool>& cancel,
+                    const std::function<void(const netsim::FitProgress&)>& progress = {});
+  void SetFit(FitRun run) { fit_ = std::move(run); }
+  const FitRun* fit() const { return fit_ ? &*fit_ : nullptr; }
+  // The fitted values with sigma and whether the flight data, a prior or neither determined
+  // each; the cost from start to end; the fitted model's score beside the starting one's (the
+  // simulation `start` when scored, -1: none).
+  QString FitText(int start = -1) const;
+  // One line of a fit's progress: stage, iteration, cost, simulations, time and ETA.
+  static QString ProgressText(const netsim::FitProgress& p);
+
   std::weak_ptr<const int> lifetime() const { return alive_; }
 
  private:
+  std::optional<FitRun> fit_;
   const Session* session_;
   const ReconstructionPresenter* reconstruction_;
   std::deque<Simulation> simulations_;  // a deque: an added one moves no score a chart shows

@@ -255,6 +255,58 @@ TEST_F(SimulationRoomTest, AProjectWithTracksAndSimulationsOpensOnTheirVerdicts)
   EXPECT_TRUE(room->frame_shown());
 }
 
+// A fit of the drag coefficient from the window, started from 0.8 (the shot's is 1.2): cancelled
+// at once (said, nothing kept), then run to the end: 1.2 within its sigma's reach, the flight
+// data naming it, the fitted model "consistent".
+TEST_F(SimulationRoomTest, AFitOfTheDragCoefficientIsCancelledThenRunToTheEnd) {
+  const std::string d = Dir().string();
+  MainWindow w;
+  w.resize(1500, 1000);
+  w.show();
+  ASSERT_TRUE(w.OpenProject(QString::fromStdString(d + "/project.yaml"), false));
+  w.ShowRoom(MainWindow::Room::kSimulation);
+  ASSERT_TRUE(w.WaitForIdle());
+  SimulationRoom* room = w.simulation_room();
+  room->sigma_box()->setValue(0.1);
+  QTest::mouseClick(room->triangulate_button(), Qt::LeftButton);
+  ASSERT_TRUE(WaitIdle(*room, 60000));
+  ASSERT_NE(w.simulation()->measured(), nullptr) << room->status_label()->text().toStdString();
+
+  QTest::mouseClick(room->scenario_edit(), Qt::LeftButton);
+  QTest::keyClicks(room->scenario_edit(), QString::fromStdString(d + "/shot.yaml"));
+  QTest::mouseClick(room->overrides_edit(), Qt::LeftButton);
+  QTest::keyClicks(room->overrides_edit(), "drag.drag_coefficient=0.8");
+  QTest::mouseClick(room->free_edit(), Qt::LeftButton);
+  QTest::keyClicks(room->free_edit(), "drag.drag_coefficient");
+  Click(room->fit_button());
+  EXPECT_TRUE(room->cancel_button()->isEnabled());
+  Click(room->cancel_button());
+  ASSERT_TRUE(WaitIdle(*room, 120000));
+  EXPECT_EQ(room->status_label()->text(), "Fit cancelled.");
+  ASSERT_NE(w.simulation()->fit(), nullptr);
+  EXPECT_TRUE(w.simulation()->fit()->cancelled);
+
+  QElapsedTimer clock;
+  clock.start();
+  Click(room->fit_button());
+  ASSERT_TRUE(WaitIdle(*room, 600000));
+  ASSERT_NE(w.simulation()->fit(), nullptr);
+  const FitRun& fit = *w.simulation()->fit();
+  ASSERT_TRUE(fit.result.has_value()) << fit.error;
+  const netsim::FittedParameter& drag = fit.result->parameters.at(0);
+  std::printf("fit: drag coefficient %.4f +- %.4f (%s), cost %.4g -> %.4g, %d simulations, "
+              "%.1f s; fitted model %s\n",
+              drag.value, drag.sigma, drag.determined_by.c_str(), fit.result->cost_initial,
+              fit.result->cost_final, fit.result->simulations, clock.elapsed() / 1000.0,
+              fit.result->score.verdict.c_str());
+  EXPECT_NEAR(drag.value, 1.2, std::max(3 * drag.sigma, 0.01));
+  EXPECT_TRUE(drag.identified);
+  EXPECT_EQ(fit.result->score.verdict, "consistent");
+  const std::string text = room->fit_label()->text().toStdString();
+  EXPECT_NE(text.find("drag.drag_coefficient = "), std::string::npos) << text;
+  EXPECT_NE(text.find("The fitted model: consistent"), std::string::npos) << text;
+}
+
 }  // namespace
 }  // namespace netlab::gui
 
