@@ -701,6 +701,12 @@ void MainWindow::OnColoursRead(std::optional<Session::KnotColours> colours) {
 
 void MainWindow::OnLabelsChanged(const QList<int>& frames) {
   DropPreview("discarded: the labels changed");
+  // The tracks of those frames follow the labels (the current frame's first).
+  if (reconstruction_ && reconstruction_->tracks() != nullptr) {
+    std::vector<int> rows(frames.begin(), frames.end());
+    std::stable_partition(rows.begin(), rows.end(), [this](int t) { return t == frame(); });
+    reconstruction_->UpdateRows(rows);
+  }
   timeline_->SetReviewFrames(session_->document().ReviewFrames());
   if (frames.contains(frame())) {
     RefreshOverlays();

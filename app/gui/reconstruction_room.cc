@@ -566,7 +566,13 @@ void ReconstructionRoom::Refresh() {
     return;
   }
   const Session& session = presenter_->session();
-  summary_->setText(presenter_->Summary());
+  QString summary = presenter_->Summary();
+  if (const size_t n = presenter_->updated_rows().size())
+    summary += QString("\n%1 frame%2 triangulated again after an edit of the labels (knot by knot, "
+                       "no adjustment): Triangulate renews the whole shot")
+                   .arg(n)
+                   .arg(n == 1 ? "" : "s");
+  summary_->setText(summary);
   view_->Set(presenter_->tracks(), &session.rig(), target_.empty() ? nullptr : &target_,
              session.project().cols);
   // The problems: each outlier observation and degenerate point, in frame order.

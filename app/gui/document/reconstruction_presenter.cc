@@ -1,5 +1,6 @@
 #include "app/gui/document/reconstruction_presenter.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -94,9 +95,48 @@ void ReconstructionPresenter::SetRun(TriangulationRun run) {
   if (run.cancelled) return;  // the tracks before it stay
   run_ = std::move(run);
   tracks_path_.clear();
+  updated_rows_.clear();
+}
+
+int ReconstructionPresenter::UpdateRows(const std::vector<int>& rows) {
+  if (tracks() == nullptr) return 0;
+  netsim::KnotTracks& tracks = run_->tracks;
+  // The labels' sigma: the run's, else the tracks' median reprojection RMS.
+  double sigma = run_->result ? run_->result->sigma_px : 0.0;
+  if (!(sigma > 0)) {
+    std::vector<double> rms;
+    for (double v : tracks.reprojection_error_px)
+      if (std::isfinite(v) && v > 0) rms.push_back(v);
+    if (!rms.empty()) {
+      std::nth_element(rms.begin(), rms.begin() + rms.size() / 2, rms.end());
+      sigma = rms[rms.size() / 2];
+    }
+  }
+  const int knots = tracks.knots();
+  int changed = 0;
+  for (int t : rows) {
+    const int row = TrackRow(t);
+    if (row < 0) continue;
+    updated_rows_.insert(t);
+    for (int k = 0; k < knots; ++k) {
+      const recon::PointEstimate p = session_->Triangulate(t, k);
+      const size_t i = static_cast<size_t>(row) * knots + k;
+      const bool was = tracks.valid[i] != 0;
+      if (p.valid == was && (!was || (tracks.position[i] - p.position).norm() < 1e-12)) continue;
+      ++changed;
+      tracks.valid[i] = p.valid ? 1 : 0;
+      if (!tracks.degenerate.empty()) tracks.degenerate[i] = 0;
+      if (!p.valid) continue;
+      tracks.position[i] = p.position;
+      if (!tracks.covariance.empty()) tracks.covariance[i] = sigma * sigma * p.unit_covariance;
+      if (!tracks.reprojection_error_px.empty()) tracks.reprojection_error_px[i] = p.rms_px;
+    }
+  }
+  return changed;
 }
 
 void ReconstructionPresenter::LoadTracks(const std::string& path) {
+  updated_rows_.clear();
   netsim::KnotTracks tracks = netsim::ReadKnotTracks(path);
   const int rows = session_->project().rows, cols = session_->project().cols;
   if (tracks.knots() != rows * cols)

@@ -18,6 +18,7 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -88,6 +89,15 @@ class ReconstructionPresenter {
   // The tracks' row of frame row t of the session (-1: none).
   int TrackRow(int t) const;
 
+  // After an edit of the labels: the tracks of these frame rows triangulated again from the
+  // current labels, knot by knot (Session::Triangulate: the accepted labels of two views or more,
+  // no adjustment, no priors), their covariance for the run's labels' sigma. What an edit changes
+  // shows at once; Triangulate renews the whole shot with its options. Returns the knot-frames
+  // whose point changed (0 without tracks).
+  int UpdateRows(const std::vector<int>& rows);
+  // The frame rows updated so since the tracks were made or read.
+  const std::set<int>& updated_rows() const { return updated_rows_; }
+
   // Writes the tracks as netlab triangulate --out does, and with a non-empty `csv_prefix`
   // PREFIXxyzpts.csv and PREFIXxyzres.csv as its --csv (all put in place together).
   // std::logic_error without tracks, std::runtime_error naming a file that cannot be written.
@@ -100,6 +110,7 @@ class ReconstructionPresenter {
   const Session* session_;
   std::optional<TriangulationRun> run_;
   std::string tracks_path_;
+  std::set<int> updated_rows_;
   std::shared_ptr<const int> alive_ = std::make_shared<const int>(0);
 };
 

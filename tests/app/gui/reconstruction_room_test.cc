@@ -24,6 +24,7 @@
 
 #include "app/gui/camera_view.h"
 #include "app/gui/document/project.h"
+#include "app/gui/document/session.h"
 #include "app/gui/main_window.h"
 #include "app/gui/reconstruction_room.h"
 #include "libnetsim/tracks/track_file.h"
@@ -200,6 +201,26 @@ TEST_F(ReconstructionRoomTest, TriangulateClickAnOutlierLandOnItsLabelAndExportA
   EXPECT_EQ(ours.outliers.size(), theirs.outliers.size());
   // The project names the tracks the room wrote on triangulating.
   EXPECT_EQ(LoadProject(d + "/project.yaml").tracks, (Dir() / "tracks.h5").string());
+
+  // A label moved in the labeling room: its frame's tracks follow at once, knot by knot.
+  Session* s = w.session();
+  int other = -1;
+  for (int k = 0; k < tracks->knots() && other < 0; ++k)
+    if (k != MovedKnot() && tracks->Valid(kMovedFrame, k) &&
+        s->document().labels().at(0, kMovedFrame, k).accepted())
+      other = k;
+  ASSERT_GE(other, 0);
+  const Eigen::Vector3d before = tracks->Position(kMovedFrame, other);
+  const Eigen::Vector2d px = s->document().labels().at(0, kMovedFrame, other).px;
+  s->PlaceLabel(0, kMovedFrame, other, px + Eigen::Vector2d(1.0, 0.0));
+  EXPECT_EQ(w.reconstruction()->updated_rows(), std::set<int>{kMovedFrame});
+  const recon::PointEstimate now = s->Triangulate(kMovedFrame, other);
+  ASSERT_TRUE(now.valid);
+  EXPECT_LT((tracks->Position(kMovedFrame, other) - now.position).norm(), 1e-12);
+  EXPECT_GT((tracks->Position(kMovedFrame, other) - before).norm(), 1e-5);
+  QTest::keyClick(&w, Qt::Key_4, Qt::ControlModifier);
+  EXPECT_TRUE(room->summary_label()->text().contains("1 frame triangulated again"))
+      << room->summary_label()->text().toStdString();
 
   if (const char* out = getenv("NETLAB_RECONSTRUCTION_SCREENSHOT")) {
     room->SetFrame(kMovedFrame);
