@@ -26,6 +26,7 @@
 #include <limits>
 
 #include "app/gui/document/session.h"
+#include "app/gui/knot_grid.h"
 
 namespace netlab::gui {
 namespace {
@@ -444,7 +445,18 @@ SimulationRoom::SimulationRoom(QWidget* parent)
   error_chart_ = new ScoreChart(ScoreChart::Kind::kErrorOverTime);
   side_layout->addWidget(error_chart_);
   d2_chart_ = new ScoreChart(ScoreChart::Kind::kD2Histogram);
-  side_layout->addWidget(d2_chart_);
+  auto* bottom = new QHBoxLayout;
+  bottom->addWidget(d2_chart_, 3);
+  auto* grid_box = new QVBoxLayout;
+  error_grid_ = new KnotGrid;
+  error_grid_->setObjectName("simulation_error_grid");
+  error_grid_->setToolTip("Each knot's RMS error in the selected score: green 0, red the largest");
+  grid_box->addWidget(error_grid_, 1);
+  error_grid_caption_ = new QLabel;
+  error_grid_caption_->setWordWrap(true);
+  grid_box->addWidget(error_grid_caption_);
+  bottom->addLayout(grid_box, 2);
+  side_layout->addLayout(bottom);
   splitter->addWidget(side);
   splitter->setStretchFactor(0, 3);
   splitter->setStretchFactor(1, 1);
@@ -607,8 +619,39 @@ void SimulationRoom::Select(int i) {
   verdict_->setStyleSheet("QLabel { background: " + colour + "; padding: 6px; }");
   error_chart_->SetScore(score ? &*score : nullptr);
   d2_chart_->SetScore(score ? &*score : nullptr);
+  RefreshErrorGrid();
   RefreshOverlays();
   RefreshButtons();
+}
+
+void SimulationRoom::RefreshErrorGrid() {
+  const Session* session = reconstruction_ ? &reconstruction_->session() : nullptr;
+  if (session == nullptr) return;
+  const int rows = session->project().rows, cols = session->project().cols;
+  if (error_grid_->rows() != rows || error_grid_->cols() != cols) error_grid_->SetNet(rows, cols);
+  std::vector<KnotGrid::Cell> cells(rows * cols);
+  const netsim::ScoreResult* score = selected_ >= 0 && simulation_->simulation(selected_).score
+                                         ? &*simulation_->simulation(selected_).score
+                                         : nullptr;
+  double worst = 0.0;
+  if (score != nullptr)
+    for (const netsim::ScoreRow& row : score->summary.per_knot)
+      if (std::isfinite(row.rms_m)) worst = std::max(worst, row.rms_m);
+  if (score != nullptr && worst > 0 &&
+      static_cast<int>(score->summary.per_knot.size()) == rows * cols) {
+    for (int k = 0; k < rows * cols; ++k) {
+      const double rms = score->summary.per_knot[k].rms_m;
+      if (!std::isfinite(rms)) continue;
+      const double f = std::clamp(rms / worst, 0.0, 1.0);  // green, yellow, red
+      cells[k].label = f < 0.5 ? QColor::fromRgbF(2 * f, 0.75, 0.1)
+                               : QColor::fromRgbF(1.0, 0.75 * (2 - 2 * f), 0.1);
+    }
+    error_grid_caption_->setText(
+        QString("Per knot: RMS 0 (green) to %1 mm (red)").arg(worst * 1e3, 0, 'g', 3));
+  } else {
+    error_grid_caption_->setText(score ? "Per knot: no error" : "Per knot: not scored");
+  }
+  error_grid_->SetCells(std::move(cells));
 }
 
 void SimulationRoom::RefreshTable() {

@@ -35,6 +35,8 @@ class QTimer;
 
 namespace netlab::gui {
 
+class KnotGrid;
+
 // A score's charts, drawn with QPainter (offscreen too): the error over time (the RMS of |r| per
 // knot class per measured frame, mm, the phases shaded and named) or the d² histogram against
 // chi²(3)'s expected counts.
@@ -91,6 +93,10 @@ class SimulationRoom : public QWidget {
   QLabel* fit_label() const { return fit_; }
   ScoreChart* error_chart() const { return error_chart_; }
   ScoreChart* d2_chart() const { return d2_chart_; }
+  // The net's knots coloured by their RMS error in the selected score (green 0, red the
+  // largest).
+  KnotGrid* error_grid() const { return error_grid_; }
+  QLabel* error_grid_caption() const { return error_grid_caption_; }
   QSlider* frame_slider() const { return slider_; }
   CameraView* view(int c) const { return views_[c]; }
   int frame() const { return frame_; }
@@ -160,6 +166,9 @@ class SimulationRoom : public QWidget {
   QLabel* fit_ = nullptr;
   ScoreChart* error_chart_ = nullptr;
   ScoreChart* d2_chart_ = nullptr;
+  KnotGrid* error_grid_ = nullptr;
+  QLabel* error_grid_caption_ = nullptr;
+  void RefreshErrorGrid();
   QSlider* slider_ = nullptr;
   QLabel* frame_label_ = nullptr;
   std::array<CameraView*, 4> views_{};

@@ -26,6 +26,7 @@
 
 #include "app/gui/camera_view.h"
 #include "app/gui/document/project.h"
+#include "app/gui/knot_grid.h"
 #include "app/gui/main_window.h"
 #include "app/gui/simulation_room.h"
 #include "libreconstruct/labels/label_set.h"
@@ -158,9 +159,11 @@ TEST_F(SimulationRoomTest, TheTrueSimulationLiesOnTheLabelsAndIsConsistentTheNoD
               worst);
 
   // The toggle takes the simulated net off the views and puts it back.
-  Click(room->overlay_box());
+  QCheckBox* toggle = room->overlay_box();  // clicked on its box (a wide row's middle is not it)
+  const QPoint box(8, toggle->height() / 2);
+  QTest::mouseClick(toggle, Qt::LeftButton, {}, box);
   EXPECT_TRUE(room->view(0)->overlay().simulated.empty());
-  Click(room->overlay_box());
+  QTest::mouseClick(toggle, Qt::LeftButton, {}, box);
   EXPECT_FALSE(room->view(0)->overlay().simulated.empty());
 
   // The mouse over a label: its distance to its simulated knot.
@@ -197,6 +200,10 @@ TEST_F(SimulationRoomTest, TheTrueSimulationLiesOnTheLabelsAndIsConsistentTheNoD
   EXPECT_GT(points[0] + points[1] + points[2], 20);
   EXPECT_GT(room->error_chart()->y_max(), 5.0);
   EXPECT_GT(room->d2_chart()->y_max(), 0.0);
+  // The per-knot error on the room's Net grid: its scale named.
+  EXPECT_TRUE(room->error_grid_caption()->text().contains("mm (red)"))
+      << room->error_grid_caption()->text().toStdString();
+  EXPECT_EQ(room->error_grid()->rows(), 6);
   room->Select(0);  // the true one's: errors of 0 mm
   EXPECT_LT(room->error_chart()->y_max(), 1e-3);
   room->Select(1);
