@@ -17,6 +17,7 @@
 #include <QPushButton>
 #include <QSlider>
 #include <QSplitter>
+#include <QTabWidget>
 #include <QTableWidget>
 #include <QTimer>
 #include <QUrl>
@@ -436,14 +437,20 @@ SimulationRoom::SimulationRoom(QWidget* parent)
   verdict_->setTextInteractionFlags(Qt::TextSelectableByMouse);
   verdict_->setMinimumWidth(320);
   verdict_->setAlignment(Qt::AlignTop | Qt::AlignLeft);
-  side_layout->addWidget(verdict_, 1);
+  // The verdict and its charts, and the scenario's form, as two tabs.
+  auto* tabs = new QTabWidget;
+  tabs->setObjectName("simulation_tabs");
+  auto* verdict_page = new QWidget;
+  auto* verdict_layout = new QVBoxLayout(verdict_page);
+  verdict_layout->setContentsMargins(0, 4, 0, 0);
+  verdict_layout->addWidget(verdict_, 1);
   fit_ = new QLabel;
   fit_->setObjectName("simulation_fit");
   fit_->setWordWrap(true);
   fit_->setTextInteractionFlags(Qt::TextSelectableByMouse);
-  side_layout->addWidget(fit_);
+  verdict_layout->addWidget(fit_);
   error_chart_ = new ScoreChart(ScoreChart::Kind::kErrorOverTime);
-  side_layout->addWidget(error_chart_);
+  verdict_layout->addWidget(error_chart_);
   d2_chart_ = new ScoreChart(ScoreChart::Kind::kD2Histogram);
   auto* bottom = new QHBoxLayout;
   bottom->addWidget(d2_chart_, 3);
@@ -456,7 +463,23 @@ SimulationRoom::SimulationRoom(QWidget* parent)
   error_grid_caption_->setWordWrap(true);
   grid_box->addWidget(error_grid_caption_);
   bottom->addLayout(grid_box, 2);
-  side_layout->addLayout(bottom);
+  verdict_layout->addLayout(bottom);
+  tabs->addTab(verdict_page, "Verdict");
+  auto* form_page = new QWidget;
+  auto* form_layout = new QVBoxLayout(form_page);
+  form_layout->setContentsMargins(0, 4, 0, 0);
+  form_ = new QTableWidget(0, 2);
+  form_->setObjectName("simulation_form");
+  form_->setHorizontalHeaderLabels({"Key (--set's dotted path)", "Value"});
+  form_->horizontalHeader()->setStretchLastSection(true);
+  form_->verticalHeader()->hide();
+  form_->setToolTip("The scenario's main keys; a changed value becomes a --set override");
+  form_layout->addWidget(form_, 1);
+  form_check_ = new QLabel("Choose a scenario: its keys are listed here.");
+  form_check_->setWordWrap(true);
+  form_layout->addWidget(form_check_);
+  tabs->addTab(form_page, "Scenario");
+  side_layout->addWidget(tabs, 2);
   splitter->addWidget(side);
   splitter->setStretchFactor(0, 3);
   splitter->setStretchFactor(1, 1);
@@ -482,12 +505,21 @@ SimulationRoom::SimulationRoom(QWidget* parent)
   connect(scenario_button_, &QPushButton::clicked, this, [this] {
     const QString path = QFileDialog::getOpenFileName(this, "Scenario", {},
                                                       "Scenarios (*.yaml *.yml);;All files (*)");
-    if (!path.isEmpty()) scenario_edit_->setText(path);
+    if (path.isEmpty()) return;
+    scenario_edit_->setText(path);
+    FillForm();
   });
   connect(cancel_button_, &QPushButton::clicked, this, &SimulationRoom::Cancel);
   connect(score_button_, &QPushButton::clicked, this, [this] { Score(selected_); });
   connect(report_button_, &QPushButton::clicked, this, &SimulationRoom::OpenReport);
   connect(fit_button_, &QPushButton::clicked, this, &SimulationRoom::Fit);
+  connect(scenario_edit_, &QLineEdit::editingFinished, this, &SimulationRoom::FillForm);
+  connect(scenario_edit_, &QLineEdit::textChanged, this, [this] { form_->setRowCount(0); });
+  connect(overrides_edit_, &QLineEdit::editingFinished, this, &SimulationRoom::CheckScenario);
+  connect(form_, &QTableWidget::cellChanged, this, [this](int row, int column) {
+    if (filling_form_ || column != 1) return;
+    SetOverride(form_->item(row, 0)->text(), form_->item(row, 1)->text().trimmed());
+  });
   connect(show_simulated_, &QCheckBox::toggled, this, [this] { RefreshOverlays(); });
   connect(slider_, &QSlider::valueChanged, this, [this](int t) { SetFrame(t); });
   connect(table_, &QTableWidget::itemSelectionChanged, this, [this] {
@@ -804,6 +836,63 @@ void SimulationRoom::Score(int i) {
   });
   progress_->setRange(0, 0);  // the score has no progress to tell: busy
   RefreshButtons();
+}
+
+void SimulationRoom::FillForm() {
+  const std::string path = scenario_edit_->text().trimmed().toStdString();
+  if (path.empty() || path == form_path_) return;
+  form_path_ = path;
+  std::vector<std::pair<std::string, std::string>> rows;
+  try {
+    rows = SimulationPresenter::ScenarioKeys(path);
+  } catch (const std::exception& e) {
+    form_check_->setText(QString("<span style='color:#b00000'>%1</span>")
+                             .arg(QString(e.what()).toHtmlEscaped()));
+    return;
+  }
+  filling_form_ = true;
+  form_->setRowCount(static_cast<int>(rows.size()));
+  for (size_t i = 0; i < rows.size(); ++i) {
+    auto* key = new QTableWidgetItem(QString::fromStdString(rows[i].first));
+    key->setFlags(key->flags() & ~Qt::ItemIsEditable);
+    form_->setItem(static_cast<int>(i), 0, key);
+    form_->setItem(static_cast<int>(i), 1,
+                   new QTableWidgetItem(QString::fromStdString(rows[i].second)));
+  }
+  form_->resizeColumnToContents(0);
+  filling_form_ = false;
+  CheckScenario();
+}
+
+void SimulationRoom::SetOverride(const QString& key, const QString& value) {
+  // The overrides edit keeps one PATH=VALUE per key: this one replaced or added.
+  QStringList parts = overrides_edit_->text().split(' ', Qt::SkipEmptyParts);
+  parts.erase(std::remove_if(parts.begin(), parts.end(),
+                             [&](const QString& p) { return p.startsWith(key + "="); }),
+              parts.end());
+  QString compact = value;
+  compact.remove(' ');  // one word each: [0.5, 0, 0] as [0.5,0,0]
+  parts.push_back(key + "=" + compact);
+  overrides_edit_->setText(parts.join(' '));
+  CheckScenario();
+}
+
+bool SimulationRoom::CheckScenario() {
+  const std::string path = scenario_edit_->text().trimmed().toStdString();
+  if (path.empty()) return false;
+  std::vector<std::string> overrides;
+  for (const QString& part : overrides_edit_->text().split(' ', Qt::SkipEmptyParts))
+    overrides.push_back(part.toStdString());
+  const std::string error = SimulationPresenter::CheckScenario(path, overrides);
+  if (!error.empty()) {
+    form_check_->setText(QString("<span style='color:#b00000'>%1</span>")
+                             .arg(QString::fromStdString(error).toHtmlEscaped()));
+    return false;
+  }
+  form_check_->setText(QString("The scenario is valid with %1 override%2.")
+                           .arg(overrides.size())
+                           .arg(overrides.size() == 1 ? "" : "s"));
+  return true;
 }
 
 void SimulationRoom::Fit() {

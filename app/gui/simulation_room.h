@@ -91,6 +91,12 @@ class SimulationRoom : public QWidget {
   QLineEdit* free_edit() const { return free_edit_; }
   QPushButton* fit_button() const { return fit_button_; }
   QLabel* fit_label() const { return fit_; }
+  // The scenario's form: its main keys by dotted path; a value changed there becomes a --set
+  // override in overrides_edit(), checked as netlab simulate checks the scenario.
+  QTableWidget* form() const { return form_; }
+  QLabel* form_check() const { return form_check_; }
+  // Lists the scenario's keys (after its path is typed or chosen).
+  void FillForm();
   ScoreChart* error_chart() const { return error_chart_; }
   ScoreChart* d2_chart() const { return d2_chart_; }
   // The net's knots coloured by their RMS error in the selected score (green 0, red the
@@ -164,6 +170,12 @@ class SimulationRoom : public QWidget {
   QLineEdit* free_edit_ = nullptr;
   QPushButton* fit_button_ = nullptr;
   QLabel* fit_ = nullptr;
+  QTableWidget* form_ = nullptr;
+  QLabel* form_check_ = nullptr;
+  std::string form_path_;
+  bool filling_form_ = false;
+  void SetOverride(const QString& key, const QString& value);
+  bool CheckScenario();  // the scenario with the overrides loaded: said under the form
   ScoreChart* error_chart_ = nullptr;
   ScoreChart* d2_chart_ = nullptr;
   KnotGrid* error_grid_ = nullptr;

@@ -14,6 +14,7 @@
 #include "app/gui/document/session.h"
 #include "common/errors.h"
 #include "common/files.h"
+#include "common/yaml_util.h"
 #include "libnetsim/scenario/run_scenario.h"
 #include "libnetsim/validation/score_file.h"
 #include "libnetsim/validation/score_report.h"
@@ -331,6 +332,57 @@ QString SimulationPresenter::FitText(int start) const {
   }
   for (const std::string& note : r.notes) text += "\nnote: " + QString::fromStdString(note);
   return text;
+}
+
+namespace {
+
+// The scenario's main keys as (dotted path, value) rows: the scalars and short lists of the
+// sections a person changes (net, materials, launch, target, drag, integrator, time).
+void Flatten(const YAML::Node& node, const std::string& path,
+             std::vector<std::pair<std::string, std::string>>* rows) {
+  if (node.IsScalar()) {
+    rows->emplace_back(path, node.as<std::string>());
+  } else if (node.IsSequence()) {
+    bool scalars = true;
+    for (const YAML::Node& item : node) scalars = scalars && item.IsScalar();
+    if (scalars) {
+      YAML::Emitter out;
+      out << YAML::Flow << node;
+      rows->emplace_back(path, out.c_str());
+      return;
+    }
+    for (size_t i = 0; i < node.size(); ++i)
+      Flatten(node[i], path + "." + std::to_string(i), rows);
+  } else if (node.IsMap()) {
+    for (auto it = node.begin(); it != node.end(); ++it)
+      Flatten(it->second, path.empty() ? it->first.as<std::string>()
+                                       : path + "." + it->first.as<std::string>(),
+              rows);
+  }
+}
+
+}  // namespace
+
+std::vector<std::pair<std::string, std::string>> SimulationPresenter::ScenarioKeys(
+    const std::string& path) {
+  std::vector<std::pair<std::string, std::string>> rows;
+  const YAML::Node root = LoadYamlFile(path);
+  for (const char* key : {"duration", "integrator", "drag", "gravity", "materials", "nets",
+                          "bodies"})
+    if (root[key]) Flatten(root[key], key, &rows);
+  return rows;
+}
+
+std::string SimulationPresenter::CheckScenario(const std::string& path,
+                                               const std::vector<std::string>& overrides) {
+  try {
+    std::vector<netsim::ScenarioOverride> parsed;
+    for (const std::string& text : overrides) parsed.push_back(netsim::ParseOverride(text));
+    netsim::LoadScenario(path, parsed);  // every check of netlab simulate's
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
 }
 
 double SimulationPresenter::FrameTime(int t) const {

@@ -117,6 +117,14 @@ class SimulationPresenter {
   // answers the reason.
   static SimulationRun Simulate(const SimulationJob& job, const std::atomic<bool>& cancel,
                                 const std::function<void(double)>& progress = {});
+  // The scenario's main keys (duration, integrator, drag, gravity, materials, nets, bodies) as
+  // (`--set`'s dotted path, value) rows, lists of numbers as one value. InputError naming the
+  // file when it cannot be read.
+  static std::vector<std::pair<std::string, std::string>> ScenarioKeys(const std::string& path);
+  // Why the scenario with these overrides (PATH=VALUE) cannot be simulated, as netlab simulate
+  // says it ("" : it can).
+  static std::string CheckScenario(const std::string& path,
+                                   const std::vector<std::string>& overrides);
   // Reads a knot-track file (a netlab simulate result); the error names the file.
   static SimulationRun Load(const std::string& path);
   // Adds a run with tracks (GUI thread); returns its index (-1: none added, no tracks).

@@ -176,6 +176,24 @@ TEST_F(SimulationRoomTest, TheTrueSimulationLiesOnTheLabelsAndIsConsistentTheNoD
   // The scenario without drag, simulated from the room: Cancel at once, then to the end.
   QTest::mouseClick(room->scenario_edit(), Qt::LeftButton);
   QTest::keyClicks(room->scenario_edit(), QString::fromStdString(d + "/no_drag.yaml"));
+  QTest::keyClick(room->scenario_edit(), Qt::Key_Return);
+  // Its form: the main keys by dotted path; a value typed there becomes an override, checked.
+  QTableWidget* form = room->form();
+  int velocity = -1;
+  for (int r = 0; r < form->rowCount(); ++r)
+    if (form->item(r, 0)->text() == "nets.0.velocity") velocity = r;
+  ASSERT_GE(velocity, 0) << form->rowCount() << " keys listed";
+  EXPECT_EQ(form->item(velocity, 1)->text(), "[0.5, 0, 0]");
+  EXPECT_TRUE(room->form_check()->text().startsWith("The scenario is valid"))
+      << room->form_check()->text().toStdString();
+  form->item(velocity, 1)->setText("[0.5, 0]");  // as a person's edit ends: a bad value
+  EXPECT_EQ(room->overrides_edit()->text(), "nets.0.velocity=[0.5,0]");
+  EXPECT_TRUE(room->form_check()->text().contains("nets.0.velocity") ||
+              room->form_check()->text().contains("velocity"))
+      << room->form_check()->text().toStdString();
+  form->item(velocity, 1)->setText("[0.5, 0, 0]");  // back: the same flight as the file's
+  EXPECT_EQ(room->overrides_edit()->text(), "nets.0.velocity=[0.5,0,0]");
+  EXPECT_TRUE(room->form_check()->text().startsWith("The scenario is valid with 1 override"));
   Click(room->simulate_button());
   EXPECT_TRUE(room->cancel_button()->isEnabled());
   Click(room->cancel_button());
