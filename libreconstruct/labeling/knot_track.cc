@@ -93,6 +93,7 @@ bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot*
   if (near.empty())
     if (const std::optional<Junction> j = FitAlongLinks(i, degree, predicted)) near.push_back(*j);
   t->px = predicted;
+  t->predicted = predicted;
   t->one_yarn_short = false;
   t->branch_angles_rad.clear();
   if (near.empty()) {

@@ -20,6 +20,7 @@
 // knot whose result lies within the snap radius of another's is accepted. A knot not accepted
 // needs review, with the reason, at the best position there is.
 
+#include <cmath>
 #include <string>
 #include <utility>
 #include <vector>
@@ -86,6 +87,8 @@ struct TrackedKnot {
   bool one_yarn_short = false;
   // The yarns of the junction it was snapped to (image angles, rad; Junction::branch_angles_rad).
   std::vector<double> branch_angles_rad;
+  // Where the flow (or its neighbours' motion) carried it, the snap's centre.
+  Eigen::Vector2d predicted = Eigen::Vector2d::Constant(NAN);
 };
 
 // A knot not tracked but labeled in both frames (accepted there: a person's fix, a label kept

@@ -474,6 +474,7 @@ EngineCounts LabelEngine::Track(int from, int to) {
   struct CameraTrack {
     std::vector<std::pair<int, Eigen::Vector2d>> knots;
     std::vector<bool> was_accepted;
+    std::vector<bool> from_hand;  // placed by the person in `from`
     std::vector<KnownMotion> known;  // knots accepted in both frames, not tracked again
     const cv::Mat* a = nullptr;
     const cv::Mat* b = nullptr;
@@ -493,6 +494,7 @@ EngineCounts LabelEngine::Track(int from, int to) {
       }
       job.knots.emplace_back(k, l.px);
       job.was_accepted.push_back(l.state == LabelState::kAccepted);
+      job.from_hand.push_back(l.source == LabelSource::kManual);
     }
     if (job.knots.empty()) continue;
     // The frames are read here, one camera after the other (the cache is not shared across
@@ -514,10 +516,20 @@ EngineCounts LabelEngine::Track(int from, int to) {
     const CameraTrack& job = jobs[camera];
     for (size_t i = 0; i < job.tracked.size(); ++i) {
       const TrackedKnot& tk = job.tracked[i];
-      const bool accepted = tk.accepted && job.was_accepted[i];
+      // From a hand-placed label: the junction where the flow carried it, not one beside it
+      // (in the wrapping, tracked labels after runs of the person's clicks took crossings
+      // 2.1-3.2 px from the knot).
+      const double snapped = (tk.px - tk.predicted).norm();
+      const bool off_hand = tk.accepted && job.from_hand[i] && o_.from_hand_snap_px > 0.0 &&
+                            !(snapped <= o_.from_hand_snap_px);
+      const bool accepted = tk.accepted && job.was_accepted[i] && !off_hand;
       edits.push_back({camera, to, tk.knot,
                        Made(tk.px, LabelSource::kTracked, tk.confidence, accepted)});
-      if (!accepted)
+      if (off_hand)
+        Note(camera, to, tk.knot,
+             "tracked from a label placed by hand onto a junction " + Px(snapped) +
+                 " px from where the flow carried it");
+      else if (!accepted)
         Note(camera, to, tk.knot, tk.accepted ? "tracked from a label under review" : tk.why);
     }
   }
@@ -614,7 +626,7 @@ std::optional<Eigen::Vector2d> LabelEngine::OthersPlace(int camera, int t, int k
     if (ViewOffTheOthers(*rig_, others, topt, o_.projection_tolerance_px, o_.label_sigma_px))
       return std::nullopt;
     const std::optional<ProjectedPoint> q = ProjectEstimate(*rig_, RigIndex(camera), e);
-    if (!q) return std::nullopt;
+    if (!q || !FineEnough(camera, others, e.position)) return std::nullopt;
     if (WorstSigma(*q, o_.label_sigma_px) <= o_.place_sigma_px) return q->px;
   }
   // The views do not fix it alone: with the knot's motion.
@@ -622,8 +634,25 @@ std::optional<Eigen::Vector2d> LabelEngine::OthersPlace(int camera, int t, int k
   if (!e) return std::nullopt;
   const std::optional<ProjectedPoint> q = ProjectEstimate(*rig_, RigIndex(camera), *e);
   if (!q || !(WorstSigma(*q, o_.label_sigma_px) <= o_.place_sigma_px)) return std::nullopt;
+  // The path's views of frame row t and the frames beside it are the other cameras' (and this
+  // camera's own, in other frames: as fine as it).
+  if (!FineEnough(camera, others, e->position)) return std::nullopt;
   if (by_motion) *by_motion = true;
   return q->px;
+}
+
+bool LabelEngine::FineEnough(int camera, const std::vector<Observation>& views,
+                             const Eigen::Vector3d& point) const {
+  if (!(o_.place_max_magnification > 0.0)) return true;
+  // px per metre at the point: the focal length over the depth.
+  const auto scale = [&](int rig_index) {
+    const calib::Camera& cam = rig_->cameras[rig_index];
+    const double depth = (cam.cam_from_world * point).z();
+    return depth > 0.0 ? cam.intrinsics.fx / depth : 0.0;
+  };
+  double finest = 0.0;
+  for (const Observation& v : views) finest = std::max(finest, scale(v.camera));
+  return finest * o_.place_max_magnification >= scale(RigIndex(camera));
 }
 
 std::vector<Observation> LabelEngine::OtherViews(int camera, int t, int knot) const {

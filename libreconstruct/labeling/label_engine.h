@@ -121,6 +121,18 @@ struct LabelEngineOptions {
   // its neighbours did to within this (px; the net moves nearly evenly over a mesh), or, where
   // they were not labeled then, its tracked label (the flow's end) is within this of the place.
   double place_motion_px = 1.5;
+  // A knot the person placed by hand in the frame before (the engine had found no junction
+  // there it could accept) is tracked onto a junction only within this of where the flow
+  // carried the hand's label (px); farther, the junction is more likely a crossing beside the
+  // knot than the knot, and the label is kept for review.
+  double from_hand_snap_px = 1.0;
+  // A knot is placed in a camera from the other cameras' labels only where one of those views
+  // sees it at least 1 / place_max_magnification as finely (px per metre at the knot) as the
+  // camera placed: the views' own errors grow by that ratio in it, and a tracked label's error
+  // persists from frame to frame, so neither more views nor more frames of the coarse ones
+  // average it away (in the wrapping, the near pair, 2.7 times finer than the far one, was given
+  // places 2.0-3.7 px off from the far pair's labels).
+  double place_max_magnification = 1.5;
   // The scene's background at a place: the median colour of the pixels within this of it
   // (and of the places this far to each side) differs from the whole frame's median by at
   // most background_tolerance (0..1 of the image's range).
@@ -246,6 +258,10 @@ class LabelEngine {
   // The knot's own labels (not placed ones) of every camera but `camera` (-1: of every camera)
   // in frame row t, as views of the rig; none without a rig.
   std::vector<Observation> OtherViews(int camera, int t, int knot) const;
+  // Whether one of `views` sees `point` at least 1 / place_max_magnification as finely as
+  // `camera` does (px per metre).
+  bool FineEnough(int camera, const std::vector<Observation>& views,
+                  const Eigen::Vector3d& point) const;
   const ReviewReasons& reasons() const { return reasons_; }
   double link_length_m() const { return link_length_m_; }
   // Takes `m` (> 0) as the net's link length when none is set or estimated yet: one another

@@ -1133,6 +1133,67 @@ TEST(LabelEngine, FindNodeDoubtsAJunctionOffTheOtherCamerasEpipolarLine) {
 
 // Tracking runs the cameras side by side (LabelEngineOptions::threads): the labels, their states
 // and the reasons are the same on one thread and on two.
+// Where the person placed a knot by hand, tracking takes the junction where the flow carried
+// the hand's label, not one beside it: a hand label 1.1 px off the knot (within tracking's
+// relative-motion check) is carried 1.1 px off, and the knot's own junction there is kept for
+// review; from a hand label on the knot, or from a tracked one as far off, it is accepted.
+TEST(LabelEngine, TrackingFromAHandPlacedLabelTakesOnlyTheJunctionWhereTheFlowCarriedIt) {
+  const Shot shot = Render(2);
+  constexpr int kKnot = 12;
+  const Eigen::Vector2d off(0.8, -0.75);  // 1.1 px
+  for (const bool by_hand : {true, false}) {
+    for (const double click_off : {0.0, 1.0}) {
+      LabelSet labels = Empty(shot);
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < kKnots; ++k) labels.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
+      labels.at(0, 0, kKnot).px += click_off * off;
+      if (!by_hand) labels.at(0, 0, kKnot).source = LabelSource::kTracked;
+      LabelStore store(std::move(labels));
+      LabelEngine engine(&store, &shot.rig, Images(shot));
+      engine.Track(0, 1);
+      const Label& l = store.at(0, 1, kKnot);
+      ASSERT_TRUE(l.present());
+      EXPECT_LT((l.px - shot.Truth(0, 1, kKnot)).norm(), 0.3);
+      const bool kept = by_hand && click_off > 0.0;
+      EXPECT_EQ(l.state, kept ? LabelState::kNeedsReview : LabelState::kAccepted)
+          << (by_hand ? "by hand, " : "tracked, ") << click_off * off.norm() << " px off";
+      if (kept)
+        EXPECT_NE(engine.reasons().at({0, 1, kKnot}).find("placed by hand"), std::string::npos)
+            << engine.reasons().at({0, 1, kKnot});
+    }
+  }
+}
+
+// A knot is placed in a camera from the other cameras' labels only where one of them sees it
+// about as finely: camera a, 0.75 m from the net, sees it twice as finely as b and c (1.5 m),
+// whose exact labels would fix it there to 0.5 px by their spread alone.
+TEST(LabelEngine, AKnotIsNotPlacedFromViewsThatSeeItMoreCoarselyThanItsCamera) {
+  const Shot shot = Render(1);
+  calib::Rig rig = shot.rig;
+  rig.cameras[0] = calib::LookAtCamera("a", {-0.75, 0.0, 0.0}, {0, 0, 0}, 16.0, 5.5, 1024);
+  constexpr int kKnot = 12;
+  LabelSet labels = Empty(shot);
+  for (int c = 0; c < 3; ++c)
+    labels.at(c, 0, kKnot) = Accepted(rig.cameras[c].ProjectWorld(shot.knots[0][kKnot]));
+  labels.at(0, 0, kKnot) = Label{};
+  LabelStore store(labels);
+  LabelEngine engine(&store, &rig, Images(shot));
+  EXPECT_FALSE(engine.OthersPlace(0, 0, kKnot).has_value());
+  LabelEngineOptions any_scale;
+  any_scale.place_max_magnification = 0.0;
+  LabelEngine unguarded(&store, &rig, Images(shot), any_scale);
+  const std::optional<Eigen::Vector2d> q = unguarded.OthersPlace(0, 0, kKnot);
+  ASSERT_TRUE(q.has_value());
+  EXPECT_LT((*q - rig.cameras[0].ProjectWorld(shot.knots[0][kKnot])).norm(), 0.1);
+  // The other way, the fine view among the sources: b placed from a and c.
+  LabelSet from_a = labels;
+  from_a.at(0, 0, kKnot) = Accepted(rig.cameras[0].ProjectWorld(shot.knots[0][kKnot]));
+  from_a.at(1, 0, kKnot) = Label{};
+  LabelStore store_b(std::move(from_a));
+  LabelEngine engine_b(&store_b, &rig, Images(shot));
+  EXPECT_TRUE(engine_b.OthersPlace(1, 0, kKnot).has_value());
+}
+
 TEST(LabelEngine, TrackingGivesTheSameLabelsOnOneThreadAsOnTwo) {
   const Shot shot = Render(3);
   LabelSet labels = Empty(shot);
