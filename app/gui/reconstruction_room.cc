@@ -235,18 +235,32 @@ void NetView3D::paintEvent(QPaintEvent*) {
                                                                  : QColor(255, 150, 0));
     painter.drawEllipse(*p, selected ? 4.5 : 3.0, selected ? 4.5 : 3.0);
     if (show_sigma_ && !tracks_->covariance.empty()) {
+      // The 1-sigma ellipsoid (scaled) as the view shows it: the covariance carried to the
+      // screen by the projection's Jacobian (finite differences), drawn as its ellipse.
       const Eigen::Matrix3d& cov = tracks_->covariance[static_cast<size_t>(row_) * knots + k];
-      const double sigma =
-          std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov)
-                                      .eigenvalues()
-                                      .maxCoeff()));
-      const auto q = ToScreen(tracks_->Position(row_, k) +
-                              kSigmaScale * sigma * Eigen::Vector3d::UnitZ());
-      if (q) {
-        const double r = std::hypot(p->x() - q->x(), p->y() - q->y());
+      const Eigen::Vector3d& x = tracks_->Position(row_, k);
+      const double h = 1e-4 * distance_;
+      Eigen::Matrix<double, 2, 3> jacobian;
+      bool ok = true;
+      for (int a = 0; a < 3 && ok; ++a) {
+        const auto q = ToScreen(x + h * Eigen::Vector3d::Unit(a));
+        ok = q.has_value();
+        if (ok) jacobian.col(a) = Eigen::Vector2d(q->x() - p->x(), q->y() - p->y()) / h;
+      }
+      if (ok) {
+        const Eigen::Matrix2d screen =
+            kSigmaScale * kSigmaScale * jacobian * cov * jacobian.transpose();
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(screen);
+        const double a = std::sqrt(std::max(0.0, eig.eigenvalues()[1]));
+        const double b = std::sqrt(std::max(0.0, eig.eigenvalues()[0]));
+        const Eigen::Vector2d axis = eig.eigenvectors().col(1);
+        painter.save();
+        painter.translate(*p);
+        painter.rotate(std::atan2(axis.y(), axis.x()) * 180.0 / M_PI);
         painter.setBrush(Qt::NoBrush);
         painter.setPen(QPen(QColor(255, 120, 255, 200), 1.0));
-        painter.drawEllipse(*p, r, r);
+        painter.drawEllipse(QPointF(0, 0), std::max(a, 0.5), std::max(b, 0.5));
+        painter.restore();
       }
     }
   }

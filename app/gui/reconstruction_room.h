@@ -33,7 +33,8 @@ namespace netlab::gui {
 // The net at one frame in a perspective view, drawn with QPainter (offscreen too): the valid
 // knots (discs; degenerate ones red), the links between valid neighbours, the target's boxes and
 // balls at that time, the rig's cameras (a small pyramid each, named), the selected knots'
-// trajectories over the whole shot, and on demand each knot's sigma as a circle (scaled x10).
+// trajectories over the whole shot, and on demand each knot's 1-sigma ellipsoid as the view
+// sees it (an ellipse, scaled x10).
 // Left drag turns it, right or middle drag pans, the wheel zooms, a double click fits it again; a
 // click selects the nearest knot (Ctrl+click adds it to the selection).
 class NetView3D : public QWidget {

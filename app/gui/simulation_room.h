@@ -118,7 +118,7 @@ class SimulationRoom : public QWidget {
   bool frame_shown() const { return shown_frame_ == frame_; }
 
  signals:
-  // The frame row shown changed (the window's frame follows).
+  // The frame row shown changed (the labeling room opens at the frame left here).
   void frameChanged(int t);
 
  private:

@@ -225,6 +225,10 @@ TEST_F(ReconstructionRoomTest, TriangulateClickAnOutlierLandOnItsLabelAndExportA
   if (const char* out = getenv("NETLAB_RECONSTRUCTION_SCREENSHOT")) {
     room->SetFrame(kMovedFrame);
     QTest::mouseDClick(view, Qt::LeftButton, {}, QPoint(5, 5));  // fitted again
+    if (getenv("NETLAB_RECONSTRUCTION_SIGMA")) {  // close to the net, the sigma shown
+      view->SetView(view->yaw(), view->pitch(), 0.9);
+      view->SetShowSigma(true);
+    }
     QTest::qWait(50);
     ASSERT_TRUE(w.grab().save(out));
     std::printf("wrote %s\n", out);
