@@ -11,6 +11,10 @@
 // - render, 4 samples: zero it, four RenderScene of the net 2.5 mm apart (motion blur);
 // - Expose at 8 and 12 bits (RGGB, read noise 2 grey levels, vignetting 0.5).
 // The first render of each camera (building its ray grid and the scratch canvas) is shown apart.
+// Then the flight effects (libreconstruct/twin/flight_effects.h), one sample, mean over the
+// cameras: point lamps (PaperLamps, shadow rays against the box), the textile background, the
+// depth map with ApplyDepthOfField (f/4 at 3 m), Expose with a camera response (gain, white
+// balance, gamma, PRNU, DSNU, hot pixels).
 
 #include <algorithm>
 #include <chrono>
@@ -21,6 +25,7 @@
 #include <vector>
 
 #include "calibration/rig.h"
+#include "libreconstruct/twin/flight_effects.h"
 #include "libreconstruct/twin/render.h"
 
 namespace netlab::recon {
@@ -159,6 +164,58 @@ int main(int argc, char** argv) {
     std::printf("| **mean** | %.1f | %.1f | %.1f | %.1f | %.1f |\n", mean.render1, mean.render4,
                 mean.expose8, mean.expose12, mean.first);
     std::printf("(checksum %.0f)\n", checksum);
+
+    // The flight effects, mean ms per camera-frame over the cameras.
+    double lamps = 0, textile = 0, dof = 0, response = 0, plain = 0;
+    SceneRenderOptions lit = options;
+    const LampRig paper = PaperLamps(rig, Eigen::Vector3d(1.0, 0.0, 0.0));
+    lit.lamps = paper.lamps;
+    lit.ambient = paper.ambient;
+    lit.glossy = paper.glossy;
+    DepthOfField lens{4.0, 3.0, 5.5e-6 / scale};
+    SensorOptions responding;
+    responding.noise_sigma = 2.0;
+    responding.vignetting = 0.5;
+    responding.response = DrawCameraResponses(1, 0.1, 1)[0];
+    for (const calib::Camera& camera : rig.cameras) {
+      const cv::Mat panel = TextileBackground(camera.intrinsics, 0.1, true, 1);
+      SceneRenderOptions on_textile = options;
+      on_textile.background_image = &panel;
+      double best[5] = {1e30, 1e30, 1e30, 1e30, 1e30};
+      for (int run = 0; run < runs; ++run) {
+        cv::Mat accumulator, depth;
+        auto start = std::chrono::steady_clock::now();
+        RenderScene(camera, scene, options, 1.0f, &accumulator);
+        best[0] = std::min(best[0], Ms(start));
+        accumulator.release();
+        start = std::chrono::steady_clock::now();
+        RenderScene(camera, scene, lit, 1.0f, &accumulator);
+        best[1] = std::min(best[1], Ms(start));
+        accumulator.release();
+        start = std::chrono::steady_clock::now();
+        RenderScene(camera, scene, on_textile, 1.0f, &accumulator);
+        best[2] = std::min(best[2], Ms(start));
+        accumulator.release();
+        start = std::chrono::steady_clock::now();
+        RenderScene(camera, scene, options, 1.0f, &accumulator, &depth);
+        const cv::Mat blurred = ApplyDepthOfField(accumulator, depth, camera.intrinsics.fx, lens);
+        best[3] = std::min(best[3], Ms(start));
+        start = std::chrono::steady_clock::now();
+        const cv::Mat raw = Expose(blurred, camera.intrinsics, responding);
+        best[4] = std::min(best[4], Ms(start));
+        checksum += cv::sum(raw)[0];
+      }
+      plain += best[0] / rig.cameras.size();
+      lamps += best[1] / rig.cameras.size();
+      textile += best[2] / rig.cameras.size();
+      dof += best[3] / rig.cameras.size();
+      response += best[4] / rig.cameras.size();
+    }
+    std::printf("\nFlight effects, PaperRig(%.2f), mean ms per camera-frame (one sample)\n\n",
+                scale);
+    std::printf("| render | + paper lamps | + textile background | + depth map and f/4 blur "
+                "| Expose 8-bit with a camera response |\n|---|---|---|---|---|\n");
+    std::printf("| %.1f | %.1f | %.1f | %.1f | %.1f |\n", plain, lamps, textile, dof, response);
   }
   return 0;
 }
