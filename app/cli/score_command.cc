@@ -21,12 +21,25 @@
 #include "libnetsim/validation/score.h"
 #include "libnetsim/validation/score_file.h"
 #include "libnetsim/validation/score_report.h"
+#include "libnetsim/validation/sim_ensemble.h"
 
 namespace netlab::app {
 namespace {
 
+std::vector<std::string> SplitList(const std::string& text) {
+  std::vector<std::string> parts;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = std::min(text.find(',', start), text.size());
+    if (comma > start) parts.push_back(text.substr(start, comma - start));
+    start = comma + 1;
+  }
+  return parts;
+}
+
 constexpr char kHelp[] =
     "usage: netlab score --measured tracks.h5 --sim sim.h5 --out score.h5 [--report report.html]\n"
+    "                    [--sim-ensemble ens.h5|a.h5,b.h5,...]\n"
     "                    [--align none|time|rigid|time+rigid] [--json]\n\n"
     "Scores a simulation against measured knot tracks (the paper's sec. 4.1 validation): aligns\n"
     "them in time (and space), takes r = measured - simulated for every knot and frame the\n"
@@ -44,6 +57,9 @@ constexpr char kHelp[] =
     "  --max-time-offset S half width of the offset search, s (default 0.2)\n"
     "  --sim-sigma M       the simulation's own standard deviation, m (a dt/discretisation\n"
     "                      study), when the simulation file has no /knots/covariance (default 0)\n"
+    "  --sim-ensemble F    the simulation's own spread: a netlab sweep file (its finished runs)\n"
+    "                      or a comma list of simulation files of the same net; the per\n"
+    "                      knot-frame covariance of the runs is added to Sigma_sim\n"
     "  --meas-sigma M      measurement standard deviation, m, for measured tracks without\n"
     "                      /knots/covariance\n"
     "  --significance A    test level: inconsistent when p < A (default 0.01)\n"
@@ -189,6 +205,22 @@ void PrintJson(const netsim::ScoreSummary& s, const std::string& out, const std:
   json.Key("per_phase").BeginObject();
   for (const auto& row : s.per_phase) json.Key(row.name).Number(row.rms_m * 1e3);
   json.EndObject();
+  // Per phase, the error beside the two contributions to its expectation.
+  json.Key("phases").BeginArray();
+  for (const auto& row : s.per_phase) {
+    json.BeginObject();
+    json.Key("name").String(row.name);
+    json.Key("start_s").Number(row.start_s);
+    json.Key("end_s").Number(row.end_s);
+    json.Key("points").Int(row.points);
+    json.Key("rms_mm").Number(row.rms_m * 1e3);
+    json.Key("sigma_sim_mm").Number(row.sigma_sim_m * 1e3);
+    json.Key("sigma_meas_mm").Number(row.sigma_meas_m * 1e3);
+    json.Key("mean_d2").Number(row.mean_d2);
+    json.EndObject();
+  }
+  json.EndArray();
+  json.Key("ensemble_members").Int(s.ensemble_members);
   json.Key("contact_time_s").Number(s.contact_time_s);
   json.Key("contact_from").String(s.contact_from);
   json.Key("max_area_measured_m2").Number(s.max_area_measured_m2);
@@ -210,7 +242,7 @@ int RunScore(const std::vector<std::string>& args) {
     const CommandLine cl(
         args, {"json", "quiet", "help"},
         {"measured", "sim", "out", "report", "align", "time-offset", "max-time-offset", "sim-sigma",
-         "meas-sigma", "significance", "contact-time", "max-sigma"});
+         "meas-sigma", "significance", "contact-time", "max-sigma", "sim-ensemble"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -221,6 +253,7 @@ int RunScore(const std::vector<std::string>& args) {
     const std::string measured_path = cl.Required("measured"), sim_path = cl.Required("sim");
     const std::string out = cl.Required("out");
     const std::string report = cl.Option("report").value_or("");
+    const std::string ensemble = cl.Option("sim-ensemble").value_or("");
     netsim::ScoreOptions options;
     const std::string align = cl.Option("align").value_or("time");
     if (!netsim::ParseAlignment(align, &options.alignment))
@@ -237,19 +270,23 @@ int RunScore(const std::vector<std::string>& args) {
     if (!options.IsValid(&why)) throw UsageError(why);
     const bool quiet = cl.Flag("quiet");
     // Before any work: no output over an input or the other output, every output writable.
-    CheckOutputPaths({{"--measured", measured_path}, {"--sim", sim_path}},
-                     {{"--out", out}, {"--report", report}});
+    std::vector<NamedPath> inputs = {{"--measured", measured_path},
+                                                               {"--sim", sim_path}};
+    if (!ensemble.empty())
+      for (const std::string& part : SplitList(ensemble)) inputs.push_back({"--sim-ensemble", part});
+    CheckOutputPaths(inputs, {{"--out", out}, {"--report", report}});
 
     if (!quiet)
       std::fprintf(stderr, "reading %s and %s\n", measured_path.c_str(), sim_path.c_str());
     const netsim::KnotTracks measured = netsim::ReadKnotTracks(measured_path);
-    const netsim::KnotTracks sim = netsim::ReadKnotTracks(sim_path);
+    netsim::KnotTracks sim = netsim::ReadKnotTracks(sim_path);
     CheckSomethingToCompare(measured, measured_path, true);
     CheckSomethingToCompare(sim, sim_path, false);
     CheckGrid(measured, measured_path);
     CheckGrid(sim, sim_path);
     CheckCovariances(measured, measured_path);
     CheckCovariances(sim, sim_path);
+    const bool sim_had_covariance = !sim.covariance.empty();
     CheckContactTime(options.contact_time_s, "--contact-time", sim, sim_path);
     CheckContactStartDataset(sim_path);
     if (!std::isfinite(options.contact_time_s))
@@ -257,7 +294,24 @@ int RunScore(const std::vector<std::string>& args) {
     if (!quiet)
       std::fprintf(stderr, "scoring %d x %d knot-frames against %d simulated frames\n",
                    measured.frames(), measured.knots(), sim.frames());
+    int members = 0;
+    double ensemble_max_sigma_m = 0.0;
+    if (!ensemble.empty()) {
+      if (!quiet) std::fprintf(stderr, "reading the ensemble %s\n", ensemble.c_str());
+      const std::vector<netsim::EnsembleMember> runs = netsim::ReadEnsemble(ensemble);
+      members = static_cast<int>(runs.size());
+      sim = netsim::AddEnsembleCovariance(sim, sim_path, runs, &ensemble_max_sigma_m);
+    }
     netsim::ScoreResult result = netsim::Score(measured, sim, options, measured_path, sim_path);
+    if (members > 0) {
+      result.summary.ensemble_members = members;
+      char text[200];
+      std::snprintf(text, sizeof(text),
+                    "the spread of %d ensemble runs (%s; largest sigma %.3g mm)%s", members,
+                    ensemble.c_str(), ensemble_max_sigma_m * 1e3,
+                    sim_had_covariance ? " added to the simulation's /knots/covariance" : "");
+      result.summary.sim_uncertainty = text;
+    }
     {
       // Both put in place together once both are complete.
       OutputSet outputs({out, report});

@@ -647,6 +647,8 @@ void ResidualsAtFit(const KnotTracks& meas, const Scorer& scorer, const Fit& fit
   result->residual.assign(cells, Vector3d::Constant(kNaN));
   result->d2.assign(cells, kNaN);
   result->compared.assign(cells, 0);
+  result->sim_var.assign(cells, kNaN);
+  result->meas_var.assign(cells, kNaN);
   sigma->assign(cells, kNaN);
   sim_pos->assign(cells, Vector3d::Constant(kNaN));
   for (const Point& pt : scorer.points()) {
@@ -666,6 +668,8 @@ void ResidualsAtFit(const KnotTracks& meas, const Scorer& scorer, const Fit& fit
     result->residual[i] = r;
     result->d2[i] = r.dot(w * r);
     result->compared[i] = 1;
+    result->sim_var[i] = scorer.SimCovariance(meas.time[pt.frame] + fit.tau, pt.knot).trace();
+    result->meas_var[i] = pt.meas_cov.trace();
     (*sim_pos)[i] = a;
     (*sigma)[i] = std::sqrt(std::max(
         0.0, Eigen::SelfAdjointEigenSolver<Matrix3d>(pt.meas_cov, Eigen::EigenvaluesOnly)
@@ -1123,10 +1127,14 @@ ScoreRow PhaseRow(const PhaseSpan& span, const KnotTracks& meas, const ScoreResu
     if (meas.time[t] < lo || meas.time[t] >= hi) continue;
     for (int k = 0; k < knots; ++k) {
       const size_t i = static_cast<size_t>(t) * knots + k;
-      if (result.compared[i])
-        AddRow(&row, result.residual[i].squaredNorm(), result.d2[i], result.informative[i]);
+      if (!result.compared[i]) continue;
+      AddRow(&row, result.residual[i].squaredNorm(), result.d2[i], result.informative[i]);
+      row.sigma_sim_m += result.sim_var[i];
+      row.sigma_meas_m += result.meas_var[i];
     }
   }
+  row.sigma_sim_m = row.points > 0 ? std::sqrt(row.sigma_sim_m / row.points) : kNaN;
+  row.sigma_meas_m = row.points > 0 ? std::sqrt(row.sigma_meas_m / row.points) : kNaN;
   FinishRow(&row);
   return row;
 }

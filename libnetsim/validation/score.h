@@ -92,6 +92,10 @@ struct ScoreRow {
   double mean_d2 = 0.0;    // mean d2 (expected 3 when consistent)
   double start_s = 0.0;    // phases: measured time span [start_s, end_s)
   double end_s = 0.0;
+  // Phases: the two parts of the expected |r|, sqrt of the mean trace of each covariance over the
+  // compared points, m: the simulation's (Sigma_sim, an ensemble's spread) and the measurement's.
+  double sigma_sim_m = 0.0;
+  double sigma_meas_m = 0.0;
 };
 
 struct ScoreSummary {
@@ -147,6 +151,7 @@ struct ScoreSummary {
   double interpolation_rms_m = 0.0;  // estimated error of the cubic interpolation
   bool sim_too_sparse = false;
   std::string sim_uncertainty;       // "zero", "isotropic 0.5 mm", "from /knots/covariance"
+  int ensemble_members = 0;          // runs whose spread is Sigma_sim (0: no ensemble)
   // Skill against a naive baseline: every knot in straight-line flight from its simulated
   // position and velocity at the first compared time (no forces: the corner masses' ballistic
   // flight in microgravity). 1 - sum d2 / sum d2_baseline; 1 perfect, 0 no better, < 0 worse.
@@ -180,6 +185,8 @@ struct ScoreResult {
   std::vector<double> d2;           // [T*K]
   std::vector<uint8_t> compared;    // [T*K] 1 where r and d2 are defined
   std::vector<uint8_t> informative;  // [T*K] 1 where compared and within the sigma bound
+  std::vector<double> sim_var, meas_var;  // [T*K] m^2, trace of Sigma_sim / Sigma_meas (NaN: not
+                                          // compared)
   std::vector<std::array<double, 3>> rms_per_class;  // [T] m, NaN where a class has no point
   std::vector<double> area_measured, area_simulated;  // [T] corner polygon, m^2 (NaN: a corner
                                                       // is missing)

@@ -371,6 +371,19 @@ void WriteClassAndPhaseTables(std::ostringstream& o, const ScoreSummary& s) {
   o << "</table>\n<p class=\"caption\">Phases from the simulated corner polygon: ejection until "
        "it reaches half its largest area, spreading until the largest, opened after it; "
     << contact << ". Phases the measurement does not reach have no knot-frames.</p>\n";
+  // Per phase, the two contributions to the expected error beside the error itself.
+  o << "<h3>Per phase: the error and what it is weighed against</h3>\n<table>"
+    << Row({"phase", "RMS error (mm)", "σ simulation (mm)", "σ measurement (mm)", "mean d²"},
+           "th");
+  for (const auto& row : s.per_phase)
+    o << Row({row.name, Fixed(row.rms_m * 1e3, 2), Fixed(row.sigma_sim_m * 1e3, 2),
+              Fixed(row.sigma_meas_m * 1e3, 2), Fixed(row.mean_d2, 2)});
+  o << "</table>\n<p class=\"caption\">σ: the square root of the mean trace of each covariance "
+       "over the phase's compared knot-frames (the RMS length of the error each alone would "
+       "explain). The simulation's is "
+    << Escape(s.sim_uncertainty)
+    << (s.ensemble_members > 0 ? ": large in a phase where the model's own runs part" : "")
+    << ".</p>\n";
 }
 
 // The alignment's table: what was fitted, the fit, and the simulation's sampling.
