@@ -121,3 +121,60 @@ TEST_F(ScoreCommand, AMissingFileAndABadAlignmentAreNamed) {
 }
 
 }  // namespace
+
+namespace {
+
+// --sim-ensemble: a comma list of runs gives Sigma_sim (ensemble_members, per phase sigma_sim_mm
+// beside rms_mm); one member, or a member of another net, is refused naming the file, and nothing
+// is left under --out or --report.
+TEST_F(ScoreCommand, AnEnsembleGivesSigmaSimPerPhaseAndABadOneIsRefused) {
+  std::mt19937 rng(9);
+  netlab::netsim::WriteKnotTracks(Path("tracks.h5"), Flight(6, 6, 60, 0.0, 5e-4, &rng));
+  netlab::netsim::WriteKnotTracks(Path("sim.h5"), Flight(6, 6, 80, 0.0, 0.0, nullptr));
+  std::string list;
+  for (int m = 0; m < 3; ++m) {
+    std::mt19937 member_rng(100 + m);
+    KnotTracks run = Flight(6, 6, 80, 0.0, 2e-3, &member_rng);
+    run.covariance.clear();
+    const std::string path = Path("run" + std::to_string(m) + ".h5");
+    netlab::netsim::WriteKnotTracks(path, run);
+    list += (list.empty() ? "" : ",") + path;
+  }
+  const std::string head = "score --measured " + Path("tracks.h5") + " --sim " + Path("sim.h5") +
+                           " --out " + Path("score.h5") + " --report " + Path("report.html");
+  auto r = RunNetlab(head + " --sim-ensemble " + list + " --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  auto json = LastJson(r.out);
+  EXPECT_EQ(json["ensemble_members"].number(), 3);
+  EXPECT_NE(json["sim_uncertainty"].string().find("3 ensemble runs"), std::string::npos);
+  bool some_phase = false;
+  for (const auto& phase : json["phases"].array()) {
+    if (phase["points"].number() == 0) continue;
+    some_phase = true;
+    // Three runs 2 mm apart per axis: 2 S (sigma_sim^2 = 2 x 3 x 4e-6 m^2 on average) ~ 4.9 mm.
+    EXPECT_GT(phase["sigma_sim_mm"].number(), 3.0);
+    EXPECT_LT(phase["sigma_sim_mm"].number(), 7.0);
+    EXPECT_NEAR(phase["sigma_meas_mm"].number(), 0.5 * std::sqrt(3.0), 1e-6);
+    EXPECT_TRUE(phase.has("rms_mm"));
+  }
+  EXPECT_TRUE(some_phase);
+  std::filesystem::remove(Path("score.h5"));
+  std::filesystem::remove(Path("report.html"));
+
+  r = RunNetlab(head + " --sim-ensemble " + Path("run0.h5"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("1 member (" + Path("run0.h5") + ")"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("at least 2 runs"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(Path("score.h5")));
+  EXPECT_FALSE(std::filesystem::exists(Path("report.html")));
+
+  netlab::netsim::WriteKnotTracks(Path("other.h5"), Flight(6, 5, 80, 0.0, 0.0, nullptr));
+  r = RunNetlab(head + " --sim-ensemble " + Path("run0.h5") + "," + Path("other.h5"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find(Path("other.h5") + ": 30 knots"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("same net"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(Path("score.h5")));
+  EXPECT_FALSE(std::filesystem::exists(Path("report.html")));
+}
+
+}  // namespace
