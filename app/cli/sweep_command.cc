@@ -34,7 +34,7 @@ namespace {
 constexpr char kHelp[] =
     "usage: netlab sweep SCENARIO.yaml --vary PATH=a:b:n [--vary ...] --out SWEEP.h5\n"
     "                    [--report SWEEP.html] [--set PATH=VALUE ...] [--jobs N] [--decimate N]\n"
-    "                    [--json] [--quiet]\n"
+    "                    [--ensemble N] [--json] [--quiet]\n"
     "       mpirun -np N netlab sweep ...   (the runs spread over N processes)\n\n"
     "A sensitivity study: runs SCENARIO.yaml once per point of a grid of parameter values and\n"
     "writes every run's summary and knot tracks to SWEEP.h5 (docs/sweep.md). Each --vary names\n"
@@ -55,6 +55,10 @@ constexpr char kHelp[] =
     "  --set PATH=VALUE change a value in every run (repeatable), e.g. --set duration=0.5\n"
     "  --jobs N         runs at a time in this process (threads; default: the machine's cores,\n"
     "                   1 per rank under mpirun)\n"
+    "  --ensemble N     N runs instead of the full grid, each --vary at one of its n values\n"
+    "                   (each value equally often, in a shuffled order with a fixed seed):\n"
+    "                   runs differing only in what the model cannot know (the step, the\n"
+    "                   links' resolution, the launch), for netlab score --sim-ensemble\n"
     "  --decimate N     keep every N-th output frame of each run's tracks (default 1: all)\n"
     "  --json           print one JSON summary object on stdout as the last output: runs, ok,\n"
     "                   failed, wall_s, runs_per_hour, parameters, results (per run: values,\n"
@@ -212,7 +216,7 @@ int RunSweep(const std::vector<std::string>& args) {
   std::unique_ptr<netsim::MpiSession> mpi;
   return RunGuarded("sweep", [&] {
     const CommandLine cl(args, {"json", "quiet", "help"},
-                         {"out", "vary", "set", "report", "jobs", "decimate"});
+                         {"out", "vary", "set", "report", "jobs", "decimate", "ensemble"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -246,7 +250,12 @@ int RunSweep(const std::vector<std::string>& args) {
     const bool root = mpi == nullptr || mpi->rank() == 0;
     // The paths before any run: an unknown one is an error naming it (on every rank alike).
     netsim::CheckSweepParameters(scenario_path, fixed, parameters);
-    const std::vector<netsim::SweepPoint> grid = netsim::SweepGrid(fixed, parameters);
+    // --ensemble N: N runs, each parameter at one of its values (each equally often, shuffled),
+    // instead of the full grid: the spread netlab score --sim-ensemble reads.
+    const int ensemble = cl.Option("ensemble") ? cl.IntOption("ensemble", 0, 2, 100000) : 0;
+    const std::vector<netsim::SweepPoint> grid =
+        ensemble > 0 ? netsim::SweepEnsemble(fixed, parameters, ensemble)
+                     : netsim::SweepGrid(fixed, parameters);
     std::vector<std::vector<netsim::ScenarioOverride>> sets;
     for (const netsim::SweepPoint& point : grid) sets.push_back(point.overrides);
 
@@ -313,7 +322,12 @@ int RunSweep(const std::vector<std::string>& args) {
     if (!root) return 0;
     progress.Break();
 
-    const auto sensitivity = netsim::ComputeSensitivities(parameters, result.runs);
+    auto sensitivity = netsim::ComputeSensitivities(parameters, result.runs);
+    if (ensemble > 0)
+      // The runs are draws, not a grid: no central difference to take.
+      for (auto& per_output : sensitivity)
+        for (netsim::Sensitivity& one : per_output)
+          one = {NAN, -1, -1, "an ensemble, not a grid"};
     // A study of which no run succeeded has no result: --out and --report are left as they were
     // (each run's error is named above and in the JSON).
     if (failed == static_cast<int>(result.runs.size()) && failed > 0) {

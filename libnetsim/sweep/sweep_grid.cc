@@ -1,5 +1,8 @@
 #include "libnetsim/sweep/sweep_grid.h"
 
+#include <algorithm>
+#include <random>
+
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -154,6 +157,35 @@ std::vector<SweepPoint> SweepGrid(const std::vector<ScenarioOverride>& fixed,
     }
   }
   return grid;
+}
+
+std::vector<SweepPoint> SweepEnsemble(const std::vector<ScenarioOverride>& fixed,
+                                      const std::vector<SweepParameter>& parameters, int runs) {
+  if (runs < 2 || runs > kMaxRuns)
+    throw InputError("--ensemble: " + std::to_string(runs) + " runs; a spread needs 2 to " +
+                     std::to_string(kMaxRuns));
+  std::vector<SweepPoint> points(runs);
+  for (int i = 0; i < runs; ++i) {
+    points[i].index = i;
+    points[i].overrides = fixed;
+    points[i].value_index.resize(parameters.size());
+    points[i].values.resize(parameters.size());
+  }
+  for (size_t q = 0; q < parameters.size(); ++q) {
+    const std::vector<double> values = parameters[q].Values();
+    std::vector<int> order(runs);
+    for (int i = 0; i < runs; ++i) order[i] = i % parameters[q].count;
+    std::mt19937 rng(static_cast<unsigned>(1000 + q));
+    std::shuffle(order.begin(), order.end(), rng);
+    for (int i = 0; i < runs; ++i) {
+      points[i].value_index[q] = order[i];
+      points[i].values[q] = values[order[i]];
+    }
+  }
+  for (SweepPoint& point : points)
+    for (size_t q = 0; q < parameters.size(); ++q)
+      point.overrides.push_back({parameters[q].path, ValueText(point.values[q])});
+  return points;
 }
 
 }  // namespace netlab::netsim

@@ -54,4 +54,12 @@ struct SweepPoint {
 std::vector<SweepPoint> SweepGrid(const std::vector<ScenarioOverride>& fixed,
                                   const std::vector<SweepParameter>& parameters);
 
+// An ensemble of `runs` runs (`netlab sweep --ensemble N`): runs of one model differing only in
+// what it cannot know, for `netlab score --sim-ensemble`. Each parameter takes one of its count
+// values per run, each value equally often (within one) and in an order shuffled with a fixed seed
+// per parameter, so the parameters are drawn independently and the same command gives the same
+// runs. InputError when runs is below 2 or above 100000.
+std::vector<SweepPoint> SweepEnsemble(const std::vector<ScenarioOverride>& fixed,
+                                      const std::vector<SweepParameter>& parameters, int runs);
+
 }  // namespace netlab::netsim

@@ -123,9 +123,10 @@ KnotTracks AddEnsembleCovariance(const KnotTracks& sim, const std::string& sim_n
     if (t.frames() < 2)
       throw InputError(members[m].name + ": " + std::to_string(t.frames()) +
                        " frames: a member must cover the simulation's time");
-    // Half a member frame of slack at each end: runs of another step end a fraction of a frame
-    // apart.
-    const double slack = 0.5 * (t.time.back() - t.time.front()) / (t.frames() - 1);
+    // One member frame of slack at each end: a run of another step stores its frames at its
+    // steps, and may end up to a frame early. A frame of the simulation beyond a member's span
+    // takes the spread of the other members (no extrapolation).
+    const double slack = 1.01 * (t.time.back() - t.time.front()) / (t.frames() - 1);
     if (t.time.front() > sim.time.front() + slack || t.time.back() < sim.time.back() - slack)
       throw InputError(members[m].name + ": covers [" + Seconds(t.time.front()) + ", " +
                        Seconds(t.time.back()) + "], " + sim_name + " [" +
@@ -140,9 +141,13 @@ KnotTracks AddEnsembleCovariance(const KnotTracks& sim, const std::string& sim_n
   std::vector<Eigen::Vector3d> samples(m_count);
   for (int f = 0; f < frames; ++f) {
     // Each member's bracketing frames and weight at the simulated time.
-    std::vector<std::array<double, 3>> at(m_count);  // i0, i1, w1
+    std::vector<std::array<double, 3>> at(m_count);  // i0, i1, w1; i0 < 0: outside its span
     for (int m = 0; m < m_count; ++m) {
       const auto& time = members[m].tracks.time;
+      if (sim.time[f] < time.front() - 1e-9 || sim.time[f] > time.back() + 1e-9) {
+        at[m] = {-1.0, -1.0, 0.0};
+        continue;
+      }
       const double t = std::clamp(sim.time[f], time.front(), time.back());
       const int i1 = std::clamp(
           static_cast<int>(std::lower_bound(time.begin(), time.end(), t) - time.begin()), 1,
@@ -156,6 +161,7 @@ KnotTracks AddEnsembleCovariance(const KnotTracks& sim, const std::string& sim_n
       for (int m = 0; m < m_count; ++m) {
         const KnotTracks& t = members[m].tracks;
         const int a = static_cast<int>(at[m][0]), b = static_cast<int>(at[m][1]);
+        if (a < 0) continue;
         const int mk = member_knot[m][k];
         if (!t.Valid(a, mk) || !t.Valid(b, mk)) continue;
         samples[n++] = (1 - at[m][2]) * t.Position(a, mk) + at[m][2] * t.Position(b, mk);

@@ -27,7 +27,8 @@ std::vector<EnsembleMember> ReadEnsemble(const std::string& spec);
 
 // `sim` with /knots/covariance replaced by its own (zero when absent) plus the members' spread.
 // Throws InputError naming the member and what differs: fewer than 2 members, a member of another
-// net (its grid), a member that does not cover the simulation's time.
+// net (its grid), a member that does not cover the simulation's time to within one of its frames
+// (a frame beyond a member's span takes the others' spread).
 // The largest per-axis spread is returned in `max_sigma_m` when given.
 KnotTracks AddEnsembleCovariance(const KnotTracks& sim, const std::string& sim_name,
                                  const std::vector<EnsembleMember>& members,

@@ -77,6 +77,34 @@ TEST(ValueText, ReadsBackAsTheSameDouble) {
   EXPECT_EQ(ValueText(1178.0), "1178");
 }
 
+// --ensemble N: N runs, each parameter at one of its values, each value equally often (within
+// one), the parameters shuffled apart, the same runs every time; fewer than 2 runs refused.
+TEST(SweepEnsemble, EachValueEquallyOftenShuffledAndRepeatable) {
+  const std::vector<SweepParameter> parameters = {ParseVary("integrator.dt=1e-5:4e-5:4"),
+                                                  ParseVary("nets.0.segments_per_link=2:3:2")};
+  const std::vector<SweepPoint> runs = SweepEnsemble({{"duration", "0.1"}}, parameters, 10);
+  ASSERT_EQ(runs.size(), 10u);
+  std::vector<int> dt_count(4, 0), seg_count(2, 0);
+  for (int i = 0; i < 10; ++i) {
+    EXPECT_EQ(runs[i].index, i);
+    ASSERT_EQ(runs[i].overrides.size(), 3u);
+    EXPECT_EQ(runs[i].overrides[0].path, "duration");
+    EXPECT_EQ(runs[i].values[0], parameters[0].Values()[runs[i].value_index[0]]);
+    dt_count[runs[i].value_index[0]]++;
+    seg_count[runs[i].value_index[1]]++;
+  }
+  for (int c : dt_count) EXPECT_TRUE(c == 2 || c == 3) << c;
+  EXPECT_EQ(seg_count[0], 5);
+  EXPECT_EQ(seg_count[1], 5);
+  // Not the grid's order, and the same on a second call.
+  bool grid_order = true;
+  for (int i = 0; i < 10; ++i) grid_order &= runs[i].value_index[0] == i % 4;
+  EXPECT_FALSE(grid_order);
+  const std::vector<SweepPoint> again = SweepEnsemble({{"duration", "0.1"}}, parameters, 10);
+  for (int i = 0; i < 10; ++i) EXPECT_EQ(again[i].values, runs[i].values);
+  EXPECT_THROW(SweepEnsemble({}, parameters, 1), InputError);
+}
+
 TEST(SweepGrid, IsTheFullGridFirstParameterSlowest) {
   const std::vector<SweepParameter> parameters = {ParseVary("a.x=1:2:2"), ParseVary("b.y=10:30:3")};
   const std::vector<SweepPoint> grid = SweepGrid({{"duration", "0.1"}}, parameters);
