@@ -299,3 +299,49 @@ TEST_F(SweepCommand, HelpDescribesTheCommand) {
 }
 
 }  // namespace
+
+namespace {
+
+// The twin check of an ensemble: truth = the explicit step at 5e-6 s through the wrapping of the
+// ball, model = the scenario's step. The runs of `sweep --ensemble` (step, segments per link,
+// launch speed) give Sigma_sim: without it the model is rejected in the contact phase, with it
+// consistent there.
+TEST_F(SweepCommand, AnEnsembleMakesTheDefaultStepConsistentInContact) {
+  const std::string set = " --set duration=0.2";
+  const std::string ens = Path("ens.h5"), truth = Path("truth.h5"), model = Path("model.h5");
+  NetlabResult r = RunNetlab("sweep " + scenario_ + set +
+                             " --ensemble 8 --vary integrator.dt=1e-5:2.5e-5:4"
+                             " --vary nets.0.segments_per_link=2:3:2"
+                             " --vary nets.0.velocity.2=-1.005:-0.995:3 --out " + ens +
+                             " --json --quiet");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(LastJson(r.out)["runs"].number(), 8);
+  ASSERT_EQ(RunNetlab("simulate " + scenario_ + set + " --set integrator.dt=5e-6 --out " + truth +
+                      " --quiet").status, 0);
+  ASSERT_EQ(RunNetlab("simulate " + scenario_ + set + " --out " + model + " --quiet").status, 0);
+  const std::string score = "score --measured " + truth + " --meas-sigma 1e-4 --sim " + model +
+                            " --align none --out " + Path("score.h5") + " --json --quiet";
+  auto contact = [](const Json& json) {
+    for (const auto& phase : json["phases"].array())
+      if (phase["name"].string() == "contact") return phase;
+    ADD_FAILURE() << "no contact phase";
+    return json["phases"].array()[0];
+  };
+  r = RunNetlab(score);
+  ASSERT_EQ(r.status, 0) << r.err;
+  Json json = LastJson(r.out);
+  EXPECT_EQ(json["verdict"].string(), "inconsistent");
+  EXPECT_EQ(json["ensemble_members"].number(), 0);
+  EXPECT_GT(contact(json)["mean_d2"].number(), 30.0);
+  EXPECT_EQ(contact(json)["sigma_sim_mm"].number(), 0.0);
+
+  r = RunNetlab(score + " --sim-ensemble " + ens);
+  ASSERT_EQ(r.status, 0) << r.err;
+  json = LastJson(r.out);
+  EXPECT_EQ(json["verdict"].string(), "consistent") << json["mean_d2"].number();
+  EXPECT_EQ(json["ensemble_members"].number(), 8);
+  EXPECT_LT(contact(json)["mean_d2"].number(), 4.0);
+  EXPECT_GT(contact(json)["sigma_sim_mm"].number(), 0.1);
+}
+
+}  // namespace
