@@ -1297,6 +1297,9 @@ std::optional<LabelEdit> LabelEngine::SearchAtProjection(FrameCheck* f, const Fi
   const int c = view.camera;
   const Eigen::Vector2d q = f->projected[c][k];
   if (!view.Inside(q) || f->Repeat(c, k, q)) return std::nullopt;
+  // The point checks a junction here only as finely as its views see it (a point only the far
+  // pair fixed let a junction 2.05 px off in a near camera pass within the tolerance).
+  if (!FineEnough(c, OtherViews(c, f->t, k), *f->point[k])) return std::nullopt;
   // The brush a little wider than the tolerance: the detector's seeds are 1.5 px apart.
   const FindNodeResult r = FindNode(view.image, q, o_.projection_tolerance_px + 1.5, o_.detector,
                                     Neighbours(k).size() == 2);
