@@ -189,9 +189,3 @@ TEST(CalibrationPresenter, DetectCalibrateExcludeTheWorstImageRerunAndSave) {
 
 }  // namespace
 }  // namespace netlab::gui
-
-int main(int argc, char** argv) {
-  QCoreApplication app(argc, argv);
-  ::testing::InitGoogleTest(&argc, argv);
-  return RUN_ALL_TESTS();
-}

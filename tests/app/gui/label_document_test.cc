@@ -306,9 +306,3 @@ TEST(ProjectFile, KeepsAKnotlessNetAndRefusesAnUnclearOne) {
 
 }  // namespace
 }  // namespace netlab::gui
-
-int main(int argc, char** argv) {
-  QCoreApplication app(argc, argv);
-  ::testing::InitGoogleTest(&argc, argv);
-  return RUN_ALL_TESTS();
-}

@@ -206,9 +206,3 @@ TEST(LatestRequest, ADroppedRequestNeverAnswersAndCancelReachesTheWork) {
 
 }  // namespace
 }  // namespace netlab::gui
-
-int main(int argc, char** argv) {
-  QCoreApplication app(argc, argv);
-  ::testing::InitGoogleTest(&argc, argv);
-  return RUN_ALL_TESTS();
-}

@@ -1816,10 +1816,3 @@ TEST(FillGridPreviewKeys, AreInTheCheatSheetAndTheShortcutEditor) {
 
 }  // namespace
 }  // namespace netlab::gui
-
-int main(int argc, char** argv) {
-  if (qEnvironmentVariableIsEmpty("QT_QPA_PLATFORM")) qputenv("QT_QPA_PLATFORM", "offscreen");
-  QApplication app(argc, argv);
-  ::testing::InitGoogleTest(&argc, argv);
-  return RUN_ALL_TESTS();
-}

@@ -374,9 +374,3 @@ TEST(MissingKnots, InvalidOptionsAreRefusedByName) {
 
 }  // namespace
 }  // namespace netlab::gui
-
-int main(int argc, char** argv) {
-  QCoreApplication app(argc, argv);
-  ::testing::InitGoogleTest(&argc, argv);
-  return RUN_ALL_TESTS();
-}

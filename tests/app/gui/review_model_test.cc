@@ -190,9 +190,3 @@ TEST(ReviewModel, ListsMissingKnotsWithTheLabelsUnderReview) {
 
 }  // namespace
 }  // namespace netlab::gui
-
-int main(int argc, char** argv) {
-  QCoreApplication app(argc, argv);
-  ::testing::InitGoogleTest(&argc, argv);
-  return RUN_ALL_TESTS();
-}
