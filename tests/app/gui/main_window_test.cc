@@ -54,7 +54,7 @@
 #include "app/gui/timeline.h"
 #include "libreconstruct/geometry/triangulation.h"
 #include "tests/app/cli/run_netlab.h"
-#include "tests/app/cli/small_shot.h"
+#include "tests/app/gui/small_shot_film.h"
 #include "tests/app/gui/scripted_person.h"
 
 namespace netlab::gui {
@@ -63,12 +63,6 @@ namespace {
 namespace fs = std::filesystem;
 using testing::RunNetlab;
 
-// The command tests' small shot (a 6 x 6-knot net past a box), 0.2 s long (36 frames).
-std::string Shot() {
-  std::string scenario = testing::kSmallShotScenario;
-  const std::string from = "duration: 0.06", to = "duration: 0.2";
-  return scenario.replace(scenario.find(from), from.size(), to);
-}
 constexpr int kLastFrame = 30;  // frames 0..30: a tracking run of 30 frames
 
 const fs::path& Dir() {
@@ -93,15 +87,10 @@ class MainWindowTest : public ::testing::Test {
   static void SetUpTestSuite() {
     fs::remove_all(Dir());
     fs::create_directories(Dir());
-    std::ofstream((Dir() / "shot.yaml").string()) << Shot();
-    const std::string d = Dir().string();
-    ASSERT_EQ(RunNetlab("simulate " + d + "/shot.yaml --out " + d + "/sim.h5 --quiet").status, 0);
-    ASSERT_EQ(RunNetlab("color-net --knots 6x6 --out " + d + "/coloring.yaml --quiet").status, 0);
-    const auto render =
-        RunNetlab("render --sim " + d + "/sim.h5 --out " + d +
-                  "/shot --frames 0:" + std::to_string(kLastFrame) +
-                  " --calibration-views 0 --coloring " + d + "/coloring.yaml --quiet");
-    ASSERT_EQ(render.status, 0) << render.err;
+    // The command tests' small shot (a 6 x 6-knot net past a box), 0.2 s long (36 frames).
+    const auto film = testing::FilmSmallShot(Dir().string(), testing::SmallShotLasting(0.2),
+                                             kLastFrame);
+    ASSERT_EQ(film.status, 0) << film.err;
   }
   static void TearDownTestSuite() {
     if (!getenv("NETLAB_KEEP_TEST_FILES")) fs::remove_all(Dir());

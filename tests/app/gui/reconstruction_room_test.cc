@@ -30,7 +30,7 @@
 #include "libnetsim/tracks/track_file.h"
 #include "libreconstruct/labels/label_set.h"
 #include "tests/app/cli/run_netlab.h"
-#include "tests/app/cli/small_shot.h"
+#include "tests/app/gui/small_shot_film.h"
 
 namespace netlab::gui {
 namespace {
@@ -66,16 +66,9 @@ class ReconstructionRoomTest : public ::testing::Test {
     fs::remove_all(Dir());
     fs::create_directories(Dir());
     const std::string d = Dir().string();
-    std::string scenario = testing::kSmallShotScenario;
-    scenario.replace(scenario.find("duration: 0.06"), 14, "duration: 0.1");
-    std::ofstream(d + "/shot.yaml") << scenario;
-    ASSERT_EQ(RunNetlab("simulate " + d + "/shot.yaml --out " + d + "/sim.h5 --quiet").status, 0);
-    ASSERT_EQ(RunNetlab("color-net --knots 6x6 --out " + d + "/coloring.yaml --quiet").status, 0);
-    const auto render = RunNetlab("render --sim " + d + "/sim.h5 --out " + d +
-                                  "/shot --frames 0:" + std::to_string(kLastFrame) +
-                                  " --scale 0.25 --calibration-views 0 --coloring " + d +
-                                  "/coloring.yaml --quiet");
-    ASSERT_EQ(render.status, 0) << render.err;
+    const auto film =
+        testing::FilmSmallShot(d, testing::SmallShotLasting(0.1), kLastFrame, "--scale 0.25");
+    ASSERT_EQ(film.status, 0) << film.err;
     recon::LabelSet labels = recon::ReadLabels(d + "/shot/labels_true.h5");
     for (int k = 0; k < labels.knots() && moved_knot < 0; ++k) {
       bool all = true;

@@ -31,7 +31,7 @@
 #include "app/gui/simulation_room.h"
 #include "libreconstruct/labels/label_set.h"
 #include "tests/app/cli/run_netlab.h"
-#include "tests/app/cli/small_shot.h"
+#include "tests/app/gui/small_shot_film.h"
 
 namespace netlab::gui {
 namespace {
@@ -43,9 +43,7 @@ constexpr int kLastFrame = 26;  // frames 0..26 rendered (0.15 s at 179 fps)
 
 // The small shot with air drag strong enough to bend the net in 0.15 s, and the same without.
 std::string Scenario(bool drag) {
-  std::string scenario = testing::kSmallShotScenario;
-  const std::string from = "duration: 0.06", to = "duration: 0.15";
-  scenario.replace(scenario.find(from), from.size(), to);
+  std::string scenario = testing::SmallShotLasting(0.15);
   if (drag) scenario += "drag: {air_density: 10.0, drag_coefficient: 1.2}\n";
   return scenario;
 }
@@ -72,15 +70,9 @@ class SimulationRoomTest : public ::testing::Test {
     fs::remove_all(Dir());
     fs::create_directories(Dir());
     const std::string d = Dir().string();
-    std::ofstream(d + "/shot.yaml") << Scenario(true);
     std::ofstream(d + "/no_drag.yaml") << Scenario(false);
-    ASSERT_EQ(RunNetlab("simulate " + d + "/shot.yaml --out " + d + "/sim.h5 --quiet").status, 0);
-    ASSERT_EQ(RunNetlab("color-net --knots 6x6 --out " + d + "/coloring.yaml --quiet").status, 0);
-    const auto render = RunNetlab("render --sim " + d + "/sim.h5 --out " + d +
-                                  "/shot --frames 0:" + std::to_string(kLastFrame) +
-                                  " --scale 0.25 --calibration-views 0 --coloring " + d +
-                                  "/coloring.yaml --quiet");
-    ASSERT_EQ(render.status, 0) << render.err;
+    const auto film = testing::FilmSmallShot(d, Scenario(true), kLastFrame, "--scale 0.25");
+    ASSERT_EQ(film.status, 0) << film.err;
     fs::copy_file(d + "/shot/labels_true.h5", d + "/labels.h5");
     SaveProject(MakeProject(d + "/shot/experiment.yaml", d + "/shot/rig_true.yaml",
                             d + "/coloring.yaml", d + "/labels.h5", 0, 0),
