@@ -4,6 +4,7 @@
 #include <fstream>
 #include <iomanip>
 #include <sstream>
+#include <tuple>
 
 #include "common/memory.h"
 #include "common/yaml_util.h"
@@ -15,6 +16,15 @@
 namespace netlab::netsim {
 namespace {
 
+// The largest stiffness (EA in N, EI and GJ in N m^2) a material may have.
+constexpr double kMaxStiffness = 1e12;
+
+std::string Short(double v) {
+  std::ostringstream os;
+  os << std::setprecision(3) << v;
+  return os.str();
+}
+
 Vector3d ToVector(const std::array<double, 3>& a) { return Vector3d(a[0], a[1], a[2]); }
 
 std::string Resolve(const std::string& base_dir, const std::string& file) {
@@ -25,6 +35,17 @@ std::string Resolve(const std::string& base_dir, const std::string& file) {
 
 TimeSeries3 ReadSeries(const YamlMap& map, const std::string& base_dir) {
   const std::string file = Resolve(base_dir, map.String("file"));
+  // A folder or a device (/dev/zero was read as one endless line for a minute, until memory
+  // ran out) is named before it is read; no time series netlab reads is near 64 MiB.
+  std::error_code error;
+  const std::filesystem::file_status status = std::filesystem::status(file, error);
+  if (std::filesystem::is_directory(status))
+    map.Fail("file", file + ": is a folder, not a CSV time series");
+  if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
+    map.Fail("file", file + ": not a regular file (a device?), not a CSV time series");
+  if (std::filesystem::is_regular_file(status) &&
+      std::filesystem::file_size(file, error) > (std::uintmax_t{64} << 20))
+    map.Fail("file", file + ": more than 64 MiB; not a CSV time series netlab reads");
   try {
     return TimeSeries3::ReadCsv(file);
   } catch (const std::exception& e) {
@@ -163,6 +184,18 @@ class Parser {
       mat.stretch_damping = m.Positive("stretch_damping", 0.0, true);
       mat.bend_damping = m.Positive("bend_damping", 0.0, true);
       mat.twist_damping = m.Positive("twist_damping", 0.0, true);
+      // Past any cord or cable (a steel bar 1 m across has EA 1.6e11 N, EI 1e10 N m^2), the
+      // forces and energies overflow: 1e300 ran under the implicit step with an elastic energy
+      // of 7e273 J, called stable, and blew up at 1e308.
+      for (const auto& [key, value, unit] :
+           {std::tuple<const char*, double, const char*>{"stretch_stiffness",
+                                                          mat.stretch_stiffness, " N"},
+            {"bend_stiffness", mat.bend_stiffness, " N m^2"},
+            {"twist_stiffness", mat.twist_stiffness, " N m^2"}})
+        if (value > kMaxStiffness)
+          m.Fail(key, Short(value) + unit + " is stiffer than any cord or cable (a steel bar " +
+                          "1 m across has EA 1.6e11 N, EI 1e10 N m^2): at most " +
+                          Short(kMaxStiffness));
       s->materials.push_back(mat);
     }
     if (s->materials.empty()) materials.Fail(materials.node(), "no materials defined");

@@ -52,6 +52,10 @@ class BadInputSimulate : public CommandTest {
           Replace(kSmallShotScenario, "duration: 0.06", "duration: !seconds 0.06"));
     Write("two_documents.yaml", std::string(kSmallShotScenario) + "---\nduration: 5\n");
     std::filesystem::create_directory(Path("folder.yaml"));
+    Write("gravity_folder.yaml", Replace(kSmallShotScenario, "gravity: [0, 0, 0]",
+                                         "gravity: {file: " + Path("folder.yaml") + "}"));
+    Write("gravity_zero.yaml",
+          Replace(kSmallShotScenario, "gravity: [0, 0, 0]", "gravity: {file: /dev/zero}"));
     std::ofstream(Path("previous.h5")) << "the previous output";
     std::filesystem::create_symlink(Path("scene.yaml"), Path("link_to_scene.h5"));
     mkfifo(Path("fifo").c_str(), 0644);
@@ -101,10 +105,22 @@ TEST_F(BadInputSimulate, EachKindEndsInAClearError) {
            "'nets.0.knots=[20000,2000]'",
            1,
            {"{dir}/scene.yaml", "nets.0 ('net'): 20000x2000 knots", "available"}},
-          {"a step that never ends",
+          // A stiffness past any cord: the explicit step would never end, the implicit one ran
+          // with an elastic energy of 7e273 J and called itself stable.
+          {"a stiffness of 1e300 N",
            "simulate {dir}/stiff.yaml --out {dir}/a.h5",
            1,
-           {"{dir}/stiff.yaml", "dt", "steps", "stiffness"}},
+           {"{dir}/stiff.yaml:", "materials.nylon.stretch_stiffness: 1e+300 N",
+            "stiffer than any cord"}},
+          {"a stiffness of 1e300 N under the implicit step",
+           "simulate {dir}/scene.yaml --out {dir}/a.h5 --set integrator.type=implicit --set "
+           "materials.nylon.stretch_stiffness=1e300",
+           1,
+           {"{dir}/scene.yaml:", "materials.nylon.stretch_stiffness: 1e+300 N", "at most 1e+12"}},
+          {"a bending stiffness of 2e12 N m^2",
+           "simulate {dir}/scene.yaml --out {dir}/a.h5 --set materials.nylon.bend_stiffness=2e12",
+           1,
+           {"materials.nylon.bend_stiffness: 2e+12 N m^2", "stiffer than any cord"}},
           {"unknown --set path",
            "simulate {dir}/scene.yaml --out {dir}/a.h5 --set nets.0.knotz=3",
            1,
@@ -165,6 +181,12 @@ TEST_F(BadInputSimulate, EachKindEndsInAClearError) {
            "simulate {dir}/scene.yaml --out {dir}/a.h5 --set nets.0.segments_per_link=2000",
            1,
            {"{dir}/scene.yaml: dt", "nets.0.segments_per_link 2000 (segments of 5e-05 m)"}},
+          // 6e6 segments: the step names the key (it built a 15.5 GB model for 50 s and then
+          // spoke of the output's size).
+          {"a hundred thousand segments per link",
+           "simulate {dir}/scene.yaml --out {dir}/a.h5 --set nets.0.segments_per_link=100000",
+           1,
+           {"{dir}/scene.yaml: dt", "nets.0.segments_per_link 100000 (segments of 1e-06 m)"}},
           {"a step longer than the run",
            "simulate {dir}/scene.yaml --out {dir}/a.h5 --set integrator.dt=10",
            1,
@@ -195,6 +217,15 @@ TEST_F(BadInputSimulate, EachKindEndsInAClearError) {
            "simulate {dir}/folder.yaml --out {dir}/a.h5",
            1,
            {"{dir}/folder.yaml: is a folder, not a YAML scenario file"}},
+          {"a folder as a time series",
+           "simulate {dir}/gravity_folder.yaml --out {dir}/a.h5",
+           1,
+           {"{dir}/gravity_folder.yaml:5: gravity.file: {dir}/folder.yaml: is a folder, not a "
+            "CSV time series"}},
+          {"a device as a time series",
+           "simulate {dir}/gravity_zero.yaml --out {dir}/a.h5",
+           1,
+           {"{dir}/gravity_zero.yaml:5: gravity.file: /dev/zero: not a regular file"}},
           {"a device as the scenario",
            "simulate /dev/zero --out {dir}/a.h5",
            1,
