@@ -1,8 +1,10 @@
 #include "libnetsim/characterization/bench_file.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <iomanip>
 #include <sstream>
 
 #include "common/yaml_util.h"
@@ -12,6 +14,12 @@ namespace {
 
 std::string Line(const YAML::Node& node) {
   return node.Mark().line >= 0 ? ":" + std::to_string(node.Mark().line + 1) : "";
+}
+
+std::string Short(double v) {
+  std::ostringstream os;
+  os << std::setprecision(3) << v;
+  return os.str();
 }
 
 // A series `key` of rows of `columns` numbers; with `timed`, the first column must increase.
@@ -93,6 +101,31 @@ void ReadCantilever(const YamlMap& m, CantileverTest* c) {
     if (std::hypot(p[0], p[1]) > 1.001 * c->length)
       m.Fail("shape",
              "a point lies farther from the clamp than the length " + YamlMap::Number(c->length));
+  // A thread clamped horizontally hangs below the clamp and runs away from it: its angle below
+  // the horizontal grows from 0 towards (never past) 90 degrees, so y never rises above 0 and x
+  // never falls back. A shape that does either (y measured downward, the rows out of order, the
+  // clamp at the other end) was fitted without a word. 2 % of the length allows for the
+  // measurement's noise.
+  const double slack = 0.02 * c->length;
+  const YAML::Node rows = m.Has("shape") ? m.Get("shape") : YAML::Node();
+  double farthest = 0.0;
+  for (size_t i = 0; i < c->shape.rows.size(); ++i) {
+    const double x = c->shape.rows[i][0], y = c->shape.rows[i][1];
+    const std::string at = m.file() + Line(rows[i]) + ": " + m.Join("shape") + "[" +
+                           std::to_string(i) + "]: ";
+    if (y > slack)
+      throw InputError(at + "y " + Short(y) +
+                       " m is above the clamp: y is up, and a thread clamped horizontally bends "
+                       "down under its weight (give the drop as negative y)");
+    if (x < farthest - slack)
+      throw InputError(at + "x " + Short(x) +
+                       (farthest > 0.0 ? " m runs back towards the clamp (x " + Short(farthest) +
+                                             " m before it)"
+                                       : " m is behind the clamp") +
+                       ": a thread hanging from a horizontal clamp runs away from it; give the "
+                       "points from the clamp to the tip, x away from the clamp");
+    farthest = std::max(farthest, x);
+  }
   if (m.Has("oscillation"))
     c->oscillation = ReadSeries(m, "oscillation", 2, true, kMinOscillationSamples);
 }

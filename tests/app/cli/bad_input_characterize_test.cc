@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "tests/app/cli/bad_input.h"
 
@@ -36,6 +38,16 @@ std::string Tensile(bool moving, double force_scale = 1.0) {
     text += "  - [" + std::to_string(0.01 * i) + ", " + (moving ? std::to_string(1e-5 * i) : "0") +
             ", " + force + "]\n";
   }
+  return text;
+}
+
+// A cantilever test of a 0.5 m thread whose shape is `points` [x, y]; rows from line 6 on.
+std::string Cantilever(const std::vector<std::pair<double, double>>& points) {
+  std::string text = "test: cantilever\nmaterial: m\nlength: 0.5\n"
+                     "weighing: {mass: 1e-3, mass_sigma: 1e-6, length: 1, length_sigma: 1e-3}\n"
+                     "shape:\n";
+  for (const auto& [x, y] : points)
+    text += "  - [" + std::to_string(x) + ", " + std::to_string(y) + "]\n";
   return text;
 }
 
@@ -68,6 +80,12 @@ class BadInputCharacterize : public CommandTest {
           "test: cantilever\nmaterial: m\nlength: 0.5\n"
           "weighing: {mass: 1e-3, mass_sigma: 1e-6, length: 1, length_sigma: 1e-3}\n"
           "tip_deflection: {vertical: 0.6, sigma: 1e-3}\n");
+    // A shape no thread clamped horizontally takes: rising above the clamp (y measured down),
+    // running back towards it (x measured towards the clamp), folding back half way.
+    Write("cantilever_up.yaml", Cantilever({{0.1, 0.02}, {0.2, 0.06}, {0.3, 0.12}}));
+    Write("cantilever_back.yaml", Cantilever({{-0.1, -0.01}, {-0.2, -0.04}, {-0.3, -0.09}}));
+    Write("cantilever_folded.yaml",
+          Cantilever({{0.1, -0.01}, {0.2, -0.04}, {0.15, -0.09}, {0.1, -0.15}}));
     Write("no_material.yaml", Replace(Torsion(), "material: nylon_1mm\n", ""));
     // What a YAML reader takes without a word and netlab would misread.
     Write("twice.yaml", Replace(Torsion(), "material: nylon_1mm\n",
@@ -163,6 +181,20 @@ TEST_F(BadInputCharacterize, EachKindEndsInAClearError) {
            "characterize {dir}/cantilever_too_deep.yaml" + out,
            1,
            {"{dir}/cantilever_too_deep.yaml:5: tip_deflection.vertical: must be below"}},
+          {"a cantilever bending upward",
+           "characterize {dir}/cantilever_up.yaml" + out,
+           1,
+           {"{dir}/cantilever_up.yaml:6: shape[0]: y 0.02 m is above the clamp", "y is up"}},
+          {"a cantilever running back from the clamp",
+           "characterize {dir}/cantilever_back.yaml" + out,
+           1,
+           {"{dir}/cantilever_back.yaml:6: shape[0]: x -0.1 m is behind the clamp",
+            "from the clamp to the tip"}},
+          {"a cantilever folding back towards the clamp",
+           "characterize {dir}/cantilever_folded.yaml" + out,
+           1,
+           {"{dir}/cantilever_folded.yaml:8: shape[2]: x 0.15 m runs back towards the clamp "
+            "(x 0.2 m before it)"}},
           {"forces of 1e300 N",
            "characterize {dir}/tensile_huge.yaml" + out,
            1,
