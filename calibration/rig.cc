@@ -39,6 +39,9 @@ void WriteRig(const std::string& path, const Rig& rig) {
 
 Rig ReadRig(const std::string& path) {
   if (!std::filesystem::exists(path)) throw std::runtime_error(path + ": rig file not found");
+  // OpenCV's reader answers a folder with its own assertion ("buf in function 'open'").
+  if (std::filesystem::is_directory(path))
+    throw std::runtime_error(path + ": is a folder, not a rig file");
   cv::FileStorage fs;
   try {
     fs.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_AUTO);

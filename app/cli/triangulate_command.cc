@@ -491,6 +491,14 @@ int RunTriangulate(const std::vector<std::string>& args) {
     std::vector<std::string> names;
     for (const auto& c : rig.cameras) names.push_back(c.name);
     const recon::LabelSet labels = recon::ReadLabelsAny(a.labels_path, a.rows, a.cols, names);
+    std::string rig_names;
+    for (const std::string& name : names) rig_names += (rig_names.empty() ? "" : ", ") + name;
+    for (const std::string& camera : labels.cameras)
+      if (std::find(names.begin(), names.end(), camera) == names.end())
+        throw InputError(a.labels_path + ": labels of camera '" + camera + "', which the --rig " +
+                         a.rig_path + " does not have (it has " +
+                         std::to_string(names.size()) + ": " + rig_names +
+                         "): give the rig the labels were made with");
     Outcome o;
     o.times = FrameTimesOf(a, rig, labels);
     std::optional<netsim::KnotTracks> truth;

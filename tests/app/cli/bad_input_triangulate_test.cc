@@ -86,6 +86,10 @@ class BadInputTriangulate : public CommandTest {
     CommandTest::SetUp();
     const calib::Rig rig = calib::PaperRig();
     calib::WriteRig(Path("rig.yaml"), rig);
+    calib::Rig three = rig;
+    three.cameras.pop_back();  // the labels' cam3 is not in it
+    calib::WriteRig(Path("rig3.yaml"), three);
+    std::filesystem::create_directory(Path("folder.yaml"));
     std::vector<std::string> names;
     for (const auto& c : rig.cameras) names.push_back(c.name);
     std::vector<int> frames;
@@ -224,6 +228,13 @@ TEST_F(BadInputTriangulate, EachKindEndsInAClearError) {
                             "--labels {dir}/labels.h5 --out {dir}/t.h5", 2, {"--knots"}},
           {"missing rig", "triangulate --rig {dir}/missing.yaml --knots 4x4 --fps 179 "
                           "--labels {dir}/labels.h5 --out {dir}/t.h5", 1, {"{dir}/missing.yaml"}},
+          {"a folder as the rig", "triangulate --rig {dir}/folder.yaml --knots 4x4 --fps 179 "
+                                  "--labels {dir}/labels.h5 --out {dir}/t.h5", 1,
+           {"{dir}/folder.yaml: is a folder, not a rig file"}},
+          {"a rig with fewer cameras than the labels",
+           "triangulate --rig {dir}/rig3.yaml --knots 4x4 --fps 179 --labels {dir}/labels.h5 "
+           "--out {dir}/t.h5", 1,
+           {"{dir}/labels.h5", "cam3", "{dir}/rig3.yaml"}},
           {"empty --out", good + "--out ''", 2, {"--out needs a non-empty value"}},
           {"--out in a folder that is a file", good + "--out {dir}/rig.yaml/t.h5", 1,
            {"{dir}/rig.yaml/t.h5"}},
