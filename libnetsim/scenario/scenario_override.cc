@@ -1,7 +1,9 @@
 #include "libnetsim/scenario/scenario_override.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <sstream>
 
 #include "common/yaml_util.h"
@@ -231,6 +233,36 @@ YAML::Node ScenarioValue(const std::string& path, const std::vector<ScenarioOver
     walked = walked.empty() ? part : walked + "." + part;
   }
   return node;
+}
+
+std::string ScenarioKeyUnits(const std::string& dotted) {
+  // The last key that is not a list index: nets.0.velocity.1 -> velocity.
+  std::string key;
+  for (size_t start = 0; start <= dotted.size();) {
+    const size_t dot = std::min(dotted.find('.', start), dotted.size());
+    const std::string part = dotted.substr(start, dot - start);
+    if (!part.empty() && part.find_first_not_of("0123456789") != std::string::npos) key = part;
+    start = dot + 1;
+  }
+  static const std::map<std::string, std::string> kUnits = {
+      {"duration", "s"}, {"output_interval", "s"}, {"dt", "s"},
+      {"safety", "1"}, {"coupling_stiffness_ratio", "1"}, {"contact_frequency_ratio", "1"},
+      {"max_speed", "m/s"}, {"threads", "1"},
+      {"gravity", "m/s^2"}, {"air_density", "kg/m^3"}, {"drag_coefficient", "1"},
+      {"tangential_coefficient", "1"}, {"angular_velocity", "rad/s"},
+      {"diameter", "m"}, {"linear_density", "kg/m"}, {"stretch_stiffness", "N"},
+      {"stretch_damping", "N s"}, {"bend_stiffness", "N m^2"}, {"twist_stiffness", "N m^2"},
+      {"bend_damping", "N m^2 s"}, {"twist_damping", "N m^2 s"},
+      {"start", "m"}, {"end", "m"}, {"segments", "1"}, {"velocity", "m/s"}, {"mass", "kg"},
+      {"inertia", "kg m^2"}, {"knots", "1"}, {"mesh", "m"}, {"segments_per_link", "1"},
+      {"center", "m"}, {"normal", "1"}, {"x_axis", "1"}, {"knot_mass", "kg"},
+      {"corner_mass", "kg"}, {"corner_radius", "m"}, {"corner_velocities", "m/s"},
+      {"spread", "1"}, {"radius", "m"}, {"size", "m"}, {"orientation", "1"}, {"point", "m"},
+      {"friction", "1"}, {"stiffness", "N/m"}, {"damping_ratio", "1"}, {"force", "N"},
+      {"node", "1"}, {"knot", "1"},
+  };
+  const auto it = kUnits.find(key);
+  return it == kUnits.end() ? "" : it->second;
 }
 
 }  // namespace netlab::netsim

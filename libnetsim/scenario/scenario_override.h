@@ -44,4 +44,10 @@ Scenario LoadScenario(const std::string& path, const std::vector<ScenarioOverrid
 YAML::Node ScenarioValue(const std::string& path, const std::vector<ScenarioOverride>& overrides,
                          const std::string& dotted);
 
+// The unit of the value at a dotted path ("nets.0.velocity.1": "m/s", "duration": "s",
+// "materials.nylon.bend_stiffness": "N m^2"; "1" for a pure number such as a count, a ratio or a
+// direction), as docs/scenarios.md gives it; "" for a path that holds no number. Sweep files
+// store it beside each parameter.
+std::string ScenarioKeyUnits(const std::string& dotted);
+
 }  // namespace netlab::netsim

@@ -7,6 +7,7 @@
 
 #include "common/files.h"
 #include "common/hdf5_util.h"
+#include "libnetsim/scenario/scenario_override.h"
 
 namespace netlab::netsim {
 
@@ -61,23 +62,27 @@ SweepFileWriter::SweepFileWriter(const std::string& path, const SweepFileHeader&
   h5::Id parameters = h5::CreateGroup(file, "parameters");
   std::vector<double> from, to, values;
   std::vector<int> count;
-  std::string paths;
+  // Each parameter's unit, one per line as the paths (a duration in s, a velocity in m/s: the
+  // file used to call every parameter dimensionless, "1").
+  std::string paths, units;
   for (const SweepParameter& q : header.parameters) {
     from.push_back(q.from);
     to.push_back(q.to);
     count.push_back(q.count);
     paths += (paths.empty() ? "" : "\n") + q.path;
+    const std::string unit = ScenarioKeyUnits(q.path);
+    units += (units.empty() ? "" : "\n") + (unit.empty() ? "unknown" : unit);
   }
   h5::WriteStringAttribute(parameters.get(), "paths", paths);
-  WriteDoubles(parameters.get(), "from", {p}, from, "1");
-  WriteDoubles(parameters.get(), "to", {p}, to, "1");
+  WriteDoubles(parameters.get(), "from", {p}, from, units);
+  WriteDoubles(parameters.get(), "to", {p}, to, units);
   h5::WriteDataset(parameters.get(), "count", H5T_NATIVE_INT, {p}, count.data());
   h5::SetUnits(parameters.get(), "count", "1");
 
   h5::Id runs = h5::CreateGroup(file, "runs");
   for (const SweepPoint& point : header.grid)
     values.insert(values.end(), point.values.begin(), point.values.end());
-  WriteDoubles(runs.get(), "values", {r, p}, values, "1");
+  WriteDoubles(runs.get(), "values", {r, p}, values, units);  // a column per parameter
   handles_->tracks = h5::CreateGroup(file, "tracks");
 }
 

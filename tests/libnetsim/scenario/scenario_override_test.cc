@@ -146,5 +146,18 @@ TEST(ScenarioOverride, TheFilesOwnErrorsComeFirst) {
   }
 }
 
+// The unit of a dotted path's value, by its last key (list indices skipped).
+TEST(ScenarioKeyUnits, NamesTheUnitOfEachKey) {
+  EXPECT_EQ(ScenarioKeyUnits("duration"), "s");
+  EXPECT_EQ(ScenarioKeyUnits("integrator.dt"), "s");
+  EXPECT_EQ(ScenarioKeyUnits("nets.0.velocity.1"), "m/s");
+  EXPECT_EQ(ScenarioKeyUnits("nets.0.knots.0"), "1");
+  EXPECT_EQ(ScenarioKeyUnits("materials.nylon.stretch_stiffness"), "N");
+  EXPECT_EQ(ScenarioKeyUnits("materials.nylon.bend_damping"), "N m^2 s");
+  EXPECT_EQ(ScenarioKeyUnits("gravity.2"), "m/s^2");
+  EXPECT_EQ(ScenarioKeyUnits("bodies.0.stiffness"), "N/m");
+  EXPECT_EQ(ScenarioKeyUnits("name"), "");
+}
+
 }  // namespace
 }  // namespace netlab::netsim

@@ -72,6 +72,30 @@ TEST_F(SweepFile, WritesToPartialThenRenames) {
   EXPECT_EQ(h5::ReadStringAttribute(f.get(), "format"), "netlab-sweep");
 }
 
+// Each parameter's values carry its unit, one line per parameter in the order of the paths (they
+// were all called dimensionless, "1").
+TEST_F(SweepFile, EachParameterHasItsUnit) {
+  header_.parameters = {ParseVary("duration=0.1:0.2:2"), ParseVary("nets.0.velocity.0=1:2:2"),
+                        ParseVary("materials.nylon.bend_stiffness=1e-4:2e-4:2"),
+                        ParseVary("nets.0.segments_per_link=2:3:2")};
+  header_.grid = SweepGrid({}, header_.parameters);
+  {
+    SweepFileWriter writer(path_, header_);
+    SweepResult result;
+    for (int i = 0; i < static_cast<int>(header_.grid.size()); ++i) {
+      result.runs.push_back(Run(i));
+      writer.AddRun(result.runs.back());
+    }
+    writer.Commit(result, ComputeSensitivities(header_.parameters, result.runs));
+  }
+  std::lock_guard<std::mutex> lock(h5::Mutex());
+  h5::Id f = h5::OpenFileReadOnly(path_);
+  for (const char* name : {"parameters/from", "parameters/to", "runs/values"}) {
+    h5::Id dataset(H5Dopen2(f.get(), name, H5P_DEFAULT));
+    EXPECT_EQ(h5::ReadStringAttribute(dataset.get(), "units"), "s\nm/s\nN m^2\n1") << name;
+  }
+}
+
 TEST_F(SweepFile, WithoutCommitThePreviousFileStays) {
   {
     SweepFileWriter writer(path_, header_);
