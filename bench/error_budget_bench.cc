@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "calibration/rig.h"
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 #include "libnetsim/validation/score.h"
 #include "libreconstruct/geometry/bundle_adjust.h"
 #include "libreconstruct/geometry/track_export.h"
@@ -47,7 +47,7 @@ recon::LabelSet Noisy(recon::LabelSet labels, double sigma_px, std::mt19937* rng
 }
 
 Row Measure(const std::string& what, const calib::Rig& rig, const recon::LabelSet& labels,
-            double stated_px, const netsim::KnotTracks& sim, double fps) {
+            double stated_px, const KnotTracks& sim, double fps) {
   Row row;
   row.what = what;
   row.stated_px = stated_px;
@@ -55,7 +55,7 @@ Row Measure(const std::string& what, const calib::Rig& rig, const recon::LabelSe
   recon::SequenceOptions options;
   options.sigma_px = stated_px;
   const recon::SequenceResult result = recon::ReconstructSequence(rig, labels, options);
-  const netsim::KnotTracks tracks = recon::TracksFromSequence(result, fps, what);
+  const KnotTracks tracks = recon::TracksFromSequence(result, fps, what);
   row.truth = recon::CompareWithTruth(tracks, sim);
   double trace = 0;
   int n = 0;
@@ -90,7 +90,7 @@ int main(int argc, char** argv) {
   const calib::Rig rig =
       calib::ReadRig(Arg(argc, argv, "--rig", (dir + "/rig_true.yaml").c_str()));
   const double fps = std::atof(Arg(argc, argv, "--fps", "179"));
-  const netsim::KnotTracks sim = netsim::ReadKnotTracks(sim_path);
+  const KnotTracks sim = ReadKnotTracks(sim_path);
   const recon::LabelSet truth = recon::ReadLabels(dir + "/labels_true.h5");
 
   std::vector<Row> rows;

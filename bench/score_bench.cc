@@ -21,7 +21,7 @@
 
 namespace {
 
-using netlab::netsim::KnotTracks;
+using netlab::KnotTracks;
 
 Eigen::Vector3d Flight(int row, int col, double t) {
   const double open = 1.0 + 0.3 * std::sin(0.4 * t);

@@ -4,7 +4,7 @@ anchor is a heading of its page, and every `netlab ...` command line a document 
 
 Documents: README.md, docs/*.md and every README.md below the root. Checked in them:
 - paths in backticks or links whose first part is a top-level folder of the repository
-  (`libnetsim/tracks/track_file.h`, `docs/score.md`), and in a folder's README the bare source
+  (`common/tracks/track_file.h`, `docs/score.md`), and in a folder's README the bare source
   names it lists (`bench_file.h`), which are its own files; placeholders (`<case>`, `*`, `NAME`
   in capitals, `...`) are not paths. `build/bench/NAME` must be a benchmark bench/CMakeLists.txt
   declares; other build outputs are not checked.

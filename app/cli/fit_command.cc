@@ -409,9 +409,9 @@ int RunFit(const std::vector<std::string>& args) {
         netsim::ParseFreeParameters(free, scenarios, options.set, options.score.time_offset_s);
     if (const auto prior = cl.Option("prior"))
       options.priors = ReadPriors(*prior, parameters, quiet);
-    std::vector<netsim::KnotTracks> measured;
+    std::vector<KnotTracks> measured;
     std::vector<netsim::FitShotInput> shots;
-    for (const std::string& path : measured_paths) measured.push_back(netsim::ReadKnotTracks(path));
+    for (const std::string& path : measured_paths) measured.push_back(ReadKnotTracks(path));
     for (size_t k = 0; k < scenarios.size(); ++k) {
       shots.push_back({scenarios[k], &measured[k], measured_paths[k]});
       if (!quiet)

@@ -17,7 +17,7 @@
 #include "common/files.h"
 #include "common/hdf5_util.h"
 #include "common/output_paths.h"
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 #include "libnetsim/validation/score.h"
 #include "libnetsim/validation/score_file.h"
 #include "libnetsim/validation/score_report.h"
@@ -84,7 +84,7 @@ constexpr double kMinVariance = 1e-40, kMaxVariance = 1e6;
 
 // Refuses a covariance of a valid knot-frame with a variance outside [kMinVariance,
 // kMaxVariance], naming the file, frame and knot.
-void CheckCovariances(const netsim::KnotTracks& tracks, const std::string& path) {
+void CheckCovariances(const KnotTracks& tracks, const std::string& path) {
   if (tracks.covariance.empty()) return;
   const int knots = tracks.knots();
   for (size_t i = 0; i < tracks.covariance.size(); ++i) {
@@ -106,7 +106,7 @@ void CheckCovariances(const netsim::KnotTracks& tracks, const std::string& path)
 
 // Refuses a file that holds nothing to compare: a measurement of one frame (no span of time to
 // align or compare; it read "no overlap in time"), or every knot invalid in every frame.
-void CheckSomethingToCompare(const netsim::KnotTracks& tracks, const std::string& path,
+void CheckSomethingToCompare(const KnotTracks& tracks, const std::string& path,
                              bool measured) {
   if (measured && tracks.frames() < 2)
     throw InputError(path + ": " + std::to_string(tracks.frames()) +
@@ -120,7 +120,7 @@ void CheckSomethingToCompare(const netsim::KnotTracks& tracks, const std::string
 
 // Refuses a /knots/grid that lists a knot twice (and so leaves another out): the knots would be
 // compared with the wrong ones.
-void CheckGrid(const netsim::KnotTracks& tracks, const std::string& path) {
+void CheckGrid(const KnotTracks& tracks, const std::string& path) {
   std::map<std::array<int, 3>, int> first;  // (net, row, col) -> its first index
   for (int k = 0; k < tracks.knots(); ++k) {
     const int net = tracks.net.empty() ? 0 : tracks.net[k];
@@ -149,7 +149,7 @@ void CheckContactStartDataset(const std::string& path) {
 
 // Refuses a contact time (given, or the simulation's /contact_start) outside the simulation's
 // time: the contact phase would start before the first frame or after the last.
-void CheckContactTime(double t, const std::string& what, const netsim::KnotTracks& sim,
+void CheckContactTime(double t, const std::string& what, const KnotTracks& sim,
                       const std::string& sim_path) {
   if (!std::isfinite(t) || sim.time.empty()) return;
   if (t >= sim.time.front() && t <= sim.time.back()) return;
@@ -278,8 +278,8 @@ int RunScore(const std::vector<std::string>& args) {
 
     if (!quiet)
       std::fprintf(stderr, "reading %s and %s\n", measured_path.c_str(), sim_path.c_str());
-    const netsim::KnotTracks measured = netsim::ReadKnotTracks(measured_path);
-    netsim::KnotTracks sim = netsim::ReadKnotTracks(sim_path);
+    const KnotTracks measured = ReadKnotTracks(measured_path);
+    KnotTracks sim = ReadKnotTracks(sim_path);
     CheckSomethingToCompare(measured, measured_path, true);
     CheckSomethingToCompare(sim, sim_path, false);
     CheckGrid(measured, measured_path);

@@ -22,7 +22,7 @@
 #include "common/errors.h"
 #include "common/files.h"
 #include "common/output_paths.h"
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 #include "libreconstruct/geometry/bundle_adjust.h"
 #include "libreconstruct/geometry/camera_offsets.h"
 #include "libreconstruct/geometry/track_export.h"
@@ -146,7 +146,7 @@ TriangulateArgs ParseArgs(const CommandLine& cl) {
 
 // The truth must be the labels' net over the labels' frames: a 6 x 6 truth against 11 x 11 labels
 // matched the first 36 knots by (row, col) and reported "353 mm RMS" instead of refusing.
-void CheckTruthMatches(const netsim::KnotTracks& truth, const TriangulateArgs& a,
+void CheckTruthMatches(const KnotTracks& truth, const TriangulateArgs& a,
                        const recon::LabelSet& labels, const std::vector<double>& times) {
   int rows = 0, cols = 0;
   for (const auto& [row, col] : truth.grid) {
@@ -230,13 +230,13 @@ struct Outcome {
 
 // The knot-track file, and with --csv the DLTdv8-style files (their paths into `outcome`).
 // All are put in place together once every one is complete (a failure leaves each as it was).
-void WriteOutputs(const TriangulateArgs& a, const netsim::KnotTracks& tracks, Outcome* outcome) {
+void WriteOutputs(const TriangulateArgs& a, const KnotTracks& tracks, Outcome* outcome) {
   if (a.csv) {
     outcome->csv_pts = *a.csv + "xyzpts.csv";
     outcome->csv_res = *a.csv + "xyzres.csv";
   }
   OutputSet outputs({a.out, outcome->csv_pts, outcome->csv_res});
-  netsim::WriteKnotTracks(a.out, tracks);
+  WriteKnotTracks(a.out, tracks);
   if (a.csv) {
     recon::WriteXyzPts(outcome->csv_pts, tracks, a.rows, a.cols);
     recon::WriteXyzRes(outcome->csv_res, tracks, a.rows, a.cols);
@@ -501,9 +501,9 @@ int RunTriangulate(const std::vector<std::string>& args) {
                          "): give the rig the labels were made with");
     Outcome o;
     o.times = FrameTimesOf(a, rig, labels);
-    std::optional<netsim::KnotTracks> truth;
+    std::optional<KnotTracks> truth;
     if (a.truth_path) {
-      truth = netsim::ReadKnotTracks(*a.truth_path);
+      truth = ReadKnotTracks(*a.truth_path);
       CheckTruthMatches(*truth, a, labels, o.times.time_s);
     }
 
@@ -533,7 +533,7 @@ int RunTriangulate(const std::vector<std::string>& args) {
                        "one rejected as an outlier: do the labels belong to this --rig?)");
 
     // The tracks written, compared with the truth, reported.
-    netsim::KnotTracks tracks =
+    KnotTracks tracks =
         recon::TracksFromSequence(o.result, o.times.time_s, "netlab triangulate");
     if (!o.times.cameras.empty()) tracks.frame_time_spread_s = o.times.spread_s;
     if (o.offsets) {

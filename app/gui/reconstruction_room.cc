@@ -44,7 +44,7 @@ NetView3D::NetView3D(QWidget* parent) : QWidget(parent) {
   setFocusPolicy(Qt::ClickFocus);
 }
 
-void NetView3D::Set(const netsim::KnotTracks* tracks, const calib::Rig* rig,
+void NetView3D::Set(const KnotTracks* tracks, const calib::Rig* rig,
                     const recon::Target* target, int cols) {
   const bool changed = tracks != tracks_ || rig != rig_;
   tracks_ = tracks;
@@ -647,7 +647,7 @@ void ReconstructionRoom::Refresh() {
 }
 
 void ReconstructionRoom::RefreshKnot() {
-  const netsim::KnotTracks* tracks = presenter_ ? presenter_->tracks() : nullptr;
+  const KnotTracks* tracks = presenter_ ? presenter_->tracks() : nullptr;
   const int row = view_->row();
   if (tracks == nullptr || row < 0 || view_->selected().empty()) {
     knot_->setText("Click a knot in the 3D view: its residual and sigma.");

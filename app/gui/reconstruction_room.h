@@ -44,7 +44,7 @@ class NetView3D : public QWidget {
   explicit NetView3D(QWidget* parent = nullptr);
   // What to draw (null: nothing); `target` may be empty. The view is fitted to the rig and the
   // tracks when they change.
-  void Set(const netsim::KnotTracks* tracks, const calib::Rig* rig, const recon::Target* target,
+  void Set(const KnotTracks* tracks, const calib::Rig* rig, const recon::Target* target,
            int cols);
   void SetRow(int row);  // the tracks' row shown (-1: none)
   int row() const { return row_; }
@@ -80,7 +80,7 @@ class NetView3D : public QWidget {
 
  private:
   void Fit();
-  const netsim::KnotTracks* tracks_ = nullptr;
+  const KnotTracks* tracks_ = nullptr;
   const calib::Rig* rig_ = nullptr;
   const recon::Target* target_ = nullptr;
   int cols_ = 1, row_ = -1;

@@ -30,7 +30,7 @@
 
 #include "libnetsim/identification/fit_parameters.h"
 #include "libnetsim/scenario/scenario.h"
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 #include "libnetsim/validation/score.h"
 
 namespace netlab::netsim {

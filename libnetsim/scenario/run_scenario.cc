@@ -11,7 +11,7 @@
 
 #include "common/errors.h"
 #include "common/memory.h"
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 
 namespace netlab::netsim {
 

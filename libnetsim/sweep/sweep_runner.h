@@ -22,7 +22,7 @@
 
 #include "libnetsim/scenario/run_scenario.h"
 #include "libnetsim/scenario/scenario_override.h"
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 
 namespace netlab::netsim {
 

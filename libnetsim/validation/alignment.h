@@ -10,7 +10,7 @@
 #include <cmath>
 #include <vector>
 
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 
 namespace netlab::netsim {
 

@@ -40,7 +40,7 @@
 
 #include <Eigen/Core>
 
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 
 namespace netlab::netsim {
 

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 
 namespace netlab::netsim {
 

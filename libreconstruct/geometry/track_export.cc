@@ -24,7 +24,7 @@ namespace {
 
 // Linear interpolation of the truth's knot `k` at time t; false outside its time span or where
 // either neighbouring sample is not valid.
-bool TruthAt(const netsim::KnotTracks& truth, int k, double t, Eigen::Vector3d* p) {
+bool TruthAt(const KnotTracks& truth, int k, double t, Eigen::Vector3d* p) {
   const auto& time = truth.time;
   if (time.empty() || t < time.front() - 1e-9 || t > time.back() + 1e-9) return false;
   const size_t hi = std::min<size_t>(
@@ -39,7 +39,7 @@ bool TruthAt(const netsim::KnotTracks& truth, int k, double t, Eigen::Vector3d* 
 }
 
 // The tracks' knot of each point P (index P - 1), or -1 where the tracks lack it.
-std::vector<int> KnotOfPoint(const netsim::KnotTracks& tracks, int rows, int cols) {
+std::vector<int> KnotOfPoint(const KnotTracks& tracks, int rows, int cols) {
   tracks.CheckConsistent();
   if (rows < 1 || cols < 1) throw std::invalid_argument("track export: rows, cols must be >= 1");
   std::vector<int> knot_of_point(static_cast<size_t>(rows) * cols, -1);
@@ -68,7 +68,7 @@ int PointOf(const std::string& path, const std::string& column, const std::smatc
 
 }  // namespace
 
-void WriteXyzPts(const std::string& path, const netsim::KnotTracks& tracks, int rows, int cols) {
+void WriteXyzPts(const std::string& path, const KnotTracks& tracks, int rows, int cols) {
   const std::vector<int> knot_of_point = KnotOfPoint(tracks, rows, cols);
   WriteTextFile(path, [&](std::ostream& out) {
     for (size_t p = 1; p <= knot_of_point.size(); ++p) {
@@ -92,7 +92,7 @@ void WriteXyzPts(const std::string& path, const netsim::KnotTracks& tracks, int 
   });
 }
 
-void WriteXyzRes(const std::string& path, const netsim::KnotTracks& tracks, int rows, int cols) {
+void WriteXyzRes(const std::string& path, const KnotTracks& tracks, int rows, int cols) {
   const std::vector<int> knot_of_point = KnotOfPoint(tracks, rows, cols);
   const bool known = !tracks.reprojection_error_px.empty();
   WriteTextFile(path, [&](std::ostream& out) {
@@ -167,12 +167,12 @@ std::vector<std::vector<double>> ReadXyzRes(const std::string& path) {
   return residual;
 }
 
-netsim::KnotTracks TracksFromSequence(const SequenceResult& result,
+KnotTracks TracksFromSequence(const SequenceResult& result,
                                       const std::vector<double>& time_s,
                                       const std::string& source) {
   if (time_s.size() != result.frame_index.size())
     throw std::invalid_argument("track export: one time per frame row needed");
-  netsim::KnotTracks tracks;
+  KnotTracks tracks;
   tracks.source = source;
   tracks.time = time_s;
   tracks.frame_index = result.frame_index;
@@ -195,15 +195,15 @@ netsim::KnotTracks TracksFromSequence(const SequenceResult& result,
   return tracks;
 }
 
-netsim::KnotTracks TracksFromSequence(const SequenceResult& result, double fps,
+KnotTracks TracksFromSequence(const SequenceResult& result, double fps,
                                       const std::string& source) {
   std::vector<double> time;
   for (int f : result.frame_index) time.push_back(f / fps);
   return TracksFromSequence(result, time, source);
 }
 
-TruthComparison CompareWithTruth(const netsim::KnotTracks& tracks,
-                                 const netsim::KnotTracks& truth) {
+TruthComparison CompareWithTruth(const KnotTracks& tracks,
+                                 const KnotTracks& truth) {
   // The valid points and the degenerate ones with their true positions.
   TruthComparison c;
   std::vector<Eigen::Vector3d> measured, truth_of, degenerate, truth_of_degenerate;

@@ -1,6 +1,6 @@
 #pragma once
 // Knot tracks out of a sequence reconstruction: in the layout of the knot-track file
-// (libnetsim/tracks/track_file.h), compared with true tracks, and exported as DLTdv8-style CSV:
+// (common/tracks/track_file.h), compared with true tracks, and exported as DLTdv8-style CSV:
 //
 //   xyzpts.csv  a header row, then one row per frame of the tracks: columns pt{P}_X, pt{P}_Y,
 //               pt{P}_Z for P = 1..K (knot (row, col) of a rows x cols net is P = row*cols+col+1;
@@ -18,7 +18,7 @@
 
 #include <Eigen/Core>
 
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 #include "libreconstruct/geometry/bundle_adjust.h"
 
 namespace netlab::recon {
@@ -27,11 +27,11 @@ namespace netlab::recon {
 // the cameras' timestamps), the knots of the rows x cols net in row-major order, positions,
 // validity, covariances, RMS reprojection residuals, the outlier observations, the degenerate
 // points and the rig's camera names, the given source.
-netsim::KnotTracks TracksFromSequence(const SequenceResult& result,
+KnotTracks TracksFromSequence(const SequenceResult& result,
                                       const std::vector<double>& time_s,
                                       const std::string& source);
 // The same with time = frame_index / fps.
-netsim::KnotTracks TracksFromSequence(const SequenceResult& result, double fps,
+KnotTracks TracksFromSequence(const SequenceResult& result, double fps,
                                       const std::string& source);
 
 // Reconstructed tracks against true ones (e.g. the simulation that was rendered), every number in
@@ -57,11 +57,11 @@ struct TruthComparison {
 // the same grid position, linearly interpolated to the point's time; points outside the truth's
 // time span, or where it lacks the knot or a valid position, are left out. The rigid motion is
 // Umeyama's (no scale) over the valid points; the degenerate points are compared apart.
-TruthComparison CompareWithTruth(const netsim::KnotTracks& tracks,
-                                 const netsim::KnotTracks& truth);
+TruthComparison CompareWithTruth(const KnotTracks& tracks,
+                                 const KnotTracks& truth);
 
-void WriteXyzPts(const std::string& path, const netsim::KnotTracks& tracks, int rows, int cols);
-void WriteXyzRes(const std::string& path, const netsim::KnotTracks& tracks, int rows, int cols);
+void WriteXyzPts(const std::string& path, const KnotTracks& tracks, int rows, int cols);
+void WriteXyzRes(const std::string& path, const KnotTracks& tracks, int rows, int cols);
 
 // Reads xyzpts.csv back: positions[t][P - 1] (NaN where "NaN"). Throws netlab::InputError naming
 // the file, line and column on malformed input.

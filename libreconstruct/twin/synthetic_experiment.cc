@@ -178,8 +178,8 @@ void WriteTrueLabels(const fs::path& path, const calib::Rig& rig,
 }  // namespace
 
 SimulatedShot::SimulatedShot(const std::string& path) {
-  tracks_ = netsim::ReadKnotTracks(path);
-  nodes_ = netsim::ReadNodePositions(path);
+  tracks_ = ReadKnotTracks(path);
+  nodes_ = ReadNodePositions(path);
   if (nodes_.empty())
     throw InputError(path + ": no /nodes/position (the scenario needs store_nodes: true)");
   if (tracks_.scenario.empty())
@@ -587,7 +587,7 @@ void RenderFrames(const RenderJob& job, const SimulatedShot& shot, const FrameRa
 // The truth of the rendered frames: the knots at the frame times, their pixels and visibility
 // per camera, and how many each camera sees.
 struct FrameTruth {
-  netsim::KnotTracks tracks;
+  KnotTracks tracks;
   std::vector<int> frame_index;                  // [T] the camera frame of each row
   std::vector<std::vector<double>> pixels;       // [camera][T * K * 2] px
   std::vector<std::vector<uint8_t>> visibility;  // [camera][T * K] (KnotVisibility's codes)
@@ -700,7 +700,7 @@ void WriteTruth(const fs::path& out, const RenderJob& job, const FrameTruth& tru
   const int knots = truth.tracks.knots();
   const fs::path truth_path = out / "truth.h5";
   const std::string writing = truth_path.string() + ".writing";
-  netsim::WriteKnotTracks(writing, truth.tracks);
+  WriteKnotTracks(writing, truth.tracks);
   {
     std::lock_guard<std::mutex> lock(h5::Mutex());
     h5::Id file = h5::OpenFileReadWrite(writing);

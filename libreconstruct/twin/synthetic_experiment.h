@@ -42,7 +42,7 @@
 
 #include "calibration/rig.h"
 #include "libnetsim/scenario/scenario.h"
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 #include "libreconstruct/coloring/palette.h"
 #include "libreconstruct/coloring/yarn_coloring.h"
 #include "libreconstruct/twin/flight_effects.h"
@@ -60,7 +60,7 @@ class SimulatedShot {
 
   double start_time() const { return tracks_.time.front(); }
   double end_time() const { return tracks_.time.back(); }
-  const netsim::KnotTracks& tracks() const { return tracks_; }
+  const KnotTracks& tracks() const { return tracks_; }
   const netsim::Model& model() const { return *model_; }
 
   // Node positions at time t (linear between stored frames, clamped to the stored range).
@@ -77,7 +77,7 @@ class SimulatedShot {
   // position.
   void CheckFinite(const std::string& path) const;
 
-  netsim::KnotTracks tracks_;
+  KnotTracks tracks_;
   std::vector<std::vector<Eigen::Vector3d>> nodes_;  // [T][N]
   netsim::Scenario scenario_;
   std::unique_ptr<netsim::Model> model_;

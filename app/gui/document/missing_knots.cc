@@ -5,7 +5,7 @@
 
 #include "common/errors.h"
 #include "libnetsim/scenario/scenario.h"
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 
 namespace netlab::gui {
 
@@ -14,7 +14,7 @@ recon::Target LoadTarget(const std::string& path, double fps) {
   const bool result = path.size() > 3 && path.compare(path.size() - 3, 3, ".h5") == 0;
   std::string text;
   try {
-    text = result ? netsim::ReadKnotTracks(path).scenario : netsim::ReadScenarioText(path);
+    text = result ? ReadKnotTracks(path).scenario : netsim::ReadScenarioText(path);
   } catch (const InputError&) {
     throw;
   } catch (const std::exception& e) {

@@ -100,7 +100,7 @@ void ReconstructionPresenter::SetRun(TriangulationRun run) {
 
 int ReconstructionPresenter::UpdateRows(const std::vector<int>& rows) {
   if (tracks() == nullptr) return 0;
-  netsim::KnotTracks& tracks = run_->tracks;
+  KnotTracks& tracks = run_->tracks;
   // The labels' sigma: the run's, else the tracks' median reprojection RMS.
   double sigma = run_->result ? run_->result->sigma_px : 0.0;
   if (!(sigma > 0)) {
@@ -137,7 +137,7 @@ int ReconstructionPresenter::UpdateRows(const std::vector<int>& rows) {
 
 void ReconstructionPresenter::LoadTracks(const std::string& path) {
   updated_rows_.clear();
-  netsim::KnotTracks tracks = netsim::ReadKnotTracks(path);
+  KnotTracks tracks = ReadKnotTracks(path);
   const int rows = session_->project().rows, cols = session_->project().cols;
   if (tracks.knots() != rows * cols)
     throw InputError(path + ": " + std::to_string(tracks.knots()) + " knots, the project's net " +
@@ -149,7 +149,7 @@ void ReconstructionPresenter::LoadTracks(const std::string& path) {
   tracks_path_ = path;
 }
 
-const netsim::KnotTracks* ReconstructionPresenter::tracks() const {
+const KnotTracks* ReconstructionPresenter::tracks() const {
   return run_ && (run_->result || !run_->tracks.time.empty()) ? &run_->tracks : nullptr;
 }
 
@@ -166,7 +166,7 @@ void ReconstructionPresenter::SaveToProject(std::string path) {
 }
 
 int ReconstructionPresenter::TrackRow(int t) const {
-  const netsim::KnotTracks* tracks = this->tracks();
+  const KnotTracks* tracks = this->tracks();
   if (tracks == nullptr || t < 0 || t >= session_->frames()) return -1;
   const int number = session_->frame_number(t);
   const std::vector<int>& index = tracks->frame_index;
@@ -205,13 +205,13 @@ QString ReconstructionPresenter::Summary() const {
 
 void ReconstructionPresenter::Export(const std::string& tracks_path,
                                      const std::string& csv_prefix) const {
-  const netsim::KnotTracks* tracks = this->tracks();
+  const KnotTracks* tracks = this->tracks();
   if (tracks == nullptr) throw std::logic_error("no tracks to export: triangulate first");
   const int rows = session_->project().rows, cols = session_->project().cols;
   const std::string pts = csv_prefix.empty() ? "" : csv_prefix + "xyzpts.csv";
   const std::string res = csv_prefix.empty() ? "" : csv_prefix + "xyzres.csv";
   OutputSet outputs({tracks_path, pts, res});
-  netsim::WriteKnotTracks(tracks_path, *tracks);
+  WriteKnotTracks(tracks_path, *tracks);
   if (!pts.empty()) {
     recon::WriteXyzPts(pts, *tracks, rows, cols);
     recon::WriteXyzRes(res, *tracks, rows, cols);

@@ -10,7 +10,7 @@
 //   TriangulationOptions options;                          // --ba points, sigma from residuals
 //   reconstruction.SetRun(ReconstructionPresenter::Triangulate(reconstruction.MakeJob(options),
 //                                                              cancel));
-//   const netsim::KnotTracks* tracks = reconstruction.tracks();
+//   const KnotTracks* tracks = reconstruction.tracks();
 //   reconstruction.Export("tracks.h5", "out/");            // tracks.h5, out/xyzpts.csv, ...
 
 #include <QString>
@@ -23,7 +23,7 @@
 #include <vector>
 
 #include "calibration/rig.h"
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 #include "libreconstruct/geometry/bundle_adjust.h"
 #include "libreconstruct/labels/label_set.h"
 
@@ -50,7 +50,7 @@ struct TriangulationJob {
 };
 struct TriangulationRun {
   std::optional<recon::SequenceResult> result;
-  netsim::KnotTracks tracks;          // valid with a result
+  KnotTracks tracks;          // valid with a result
   std::vector<std::string> warnings;  // recon::SequenceWarnings
   std::string error;                  // why there is no result
   bool cancelled = false;
@@ -77,7 +77,7 @@ class ReconstructionPresenter {
   // run; the error names the file, or a net other than the project's.
   void LoadTracks(const std::string& path);
   // The tracks of the last run or file (null: none yet).
-  const netsim::KnotTracks* tracks() const;
+  const KnotTracks* tracks() const;
   // Where they were read from or last saved ("" : not saved).
   const std::string& tracks_path() const { return tracks_path_; }
   // Writes them to `path` (as Export, without the CSV files; "": the project's `tracks`, else

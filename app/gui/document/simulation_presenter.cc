@@ -88,7 +88,7 @@ SimulationRun SimulationPresenter::Simulate(const SimulationJob& job,
       run.error = job.scenario_path + ": the run stopped: " + summary.error;
     } else {
       outputs.Commit();
-      run.tracks = netsim::ReadKnotTracks(job.out_path);
+      run.tracks = ReadKnotTracks(job.out_path);
     }
   } catch (const Cancelled&) {
     run.cancelled = true;
@@ -103,7 +103,7 @@ SimulationRun SimulationPresenter::Load(const std::string& path) {
   SimulationRun run;
   run.path = path;
   try {
-    run.tracks = netsim::ReadKnotTracks(path);
+    run.tracks = ReadKnotTracks(path);
   } catch (const std::exception& e) {
     run.error = e.what();
   }
@@ -156,7 +156,7 @@ std::vector<std::string> SimulationPresenter::OpenFromProject(
   return errors;
 }
 
-const netsim::KnotTracks* SimulationPresenter::measured() const {
+const KnotTracks* SimulationPresenter::measured() const {
   return reconstruction_ ? reconstruction_->tracks() : nullptr;
 }
 
@@ -386,7 +386,7 @@ std::string SimulationPresenter::CheckScenario(const std::string& path,
 }
 
 double SimulationPresenter::FrameTime(int t) const {
-  const netsim::KnotTracks* m = measured();
+  const KnotTracks* m = measured();
   const int row = reconstruction_ ? reconstruction_->TrackRow(t) : -1;
   if (m != nullptr && row >= 0) return m->time[row];
   return session_->frame_number(t) / session_->fps();
@@ -399,7 +399,7 @@ double SimulationPresenter::time_offset_s(int i) const {
 
 std::vector<Eigen::Vector3d> SimulationPresenter::KnotsAt(int i, double time_s) const {
   const Simulation& s = simulations_.at(i);
-  const netsim::KnotTracks& sim = s.tracks;
+  const KnotTracks& sim = s.tracks;
   const int rows = session_->project().rows, cols = session_->project().cols;
   std::vector<Eigen::Vector3d> out(rows * cols, Eigen::Vector3d::Constant(kNaN));
   const int n = sim.frames();

@@ -30,7 +30,7 @@
 
 #include "libnetsim/identification/shot_fit.h"
 #include "libnetsim/scenario/scenario_override.h"
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 #include "libnetsim/validation/score.h"
 
 namespace netlab::gui {
@@ -48,7 +48,7 @@ struct SimulationJob {
 // A simulation, run or loaded.
 struct SimulationRun {
   std::string path;                     // the knot-track file
-  std::optional<netsim::KnotTracks> tracks;
+  std::optional<KnotTracks> tracks;
   std::string error;                    // why there are no tracks
   bool cancelled = false;
   double wall_s = 0.0;
@@ -56,7 +56,7 @@ struct SimulationRun {
 // A score to compute (copied: it runs on a worker) and its answer.
 struct ScoreJob {
   int index = 0;  // the simulation's
-  netsim::KnotTracks measured, sim;
+  KnotTracks measured, sim;
   netsim::ScoreOptions options;
   std::string measured_name, sim_name;
 };
@@ -70,7 +70,7 @@ struct ScoreRun {
 struct FitJob {
   std::string scenario_path;
   std::vector<netsim::FitParameter> parameters;
-  netsim::KnotTracks measured;
+  KnotTracks measured;
   netsim::FitOptions options;
 };
 struct FitRun {
@@ -83,7 +83,7 @@ struct FitRun {
 struct Simulation {
   std::string name;  // the file's name
   std::string path;
-  netsim::KnotTracks tracks;
+  KnotTracks tracks;
   std::optional<netsim::ScoreResult> score;
   std::string score_error;
   std::string score_path, report_path;  // written with the score ("" until then)
@@ -139,7 +139,7 @@ class SimulationPresenter {
   const Simulation& simulation(int i) const { return simulations_[i]; }
 
   // ---- Scores. The measured tracks are the reconstruction's (null: not triangulated yet).
-  const netsim::KnotTracks* measured() const;
+  const KnotTracks* measured() const;
   // std::logic_error without measured tracks. `alignment` as --align.
   ScoreJob MakeScoreJob(int i, netsim::Alignment alignment = netsim::Alignment::kTimeAndRigid) const;
   static ScoreRun RunScore(const ScoreJob& job);  // any thread

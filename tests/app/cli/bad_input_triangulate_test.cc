@@ -16,7 +16,7 @@
 
 #include "calibration/rig.h"
 #include "common/hdf5_util.h"
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 #include "libreconstruct/labels/label_set.h"
 #include "tests/app/cli/bad_input.h"
 #include "tests/app/cli/h5_edit.h"
@@ -32,8 +32,8 @@ Eigen::Vector3d KnotAt(int t, int k, int cols = kCols) {
 }
 
 // The net's tracks over the labels' frames (a `rows` x `cols` net), starting at `t0` s.
-netsim::KnotTracks Truth(int rows, int cols, double t0 = 0.0) {
-  netsim::KnotTracks tracks;
+KnotTracks Truth(int rows, int cols, double t0 = 0.0) {
+  KnotTracks tracks;
   for (int k = 0; k < rows * cols; ++k) tracks.grid.push_back({k / cols, k % cols});
   for (int t = 0; t < kFrames; ++t) {
     tracks.time.push_back(t0 + t / kFps);
@@ -50,7 +50,7 @@ netsim::KnotTracks Truth(int rows, int cols, double t0 = 0.0) {
 // covariance), legal content every reader must skip. Knot (0,0) from frame 6 on (a knot-frame
 // next to it then has a valid stencil whose error window reaches a lost frame), knot (0,1) in
 // frames 0..2 (the net's side is measured along row 0 in the first frame), knot (1,1) in 4..5.
-void LoseKnots(netsim::KnotTracks* tracks) {
+void LoseKnots(KnotTracks* tracks) {
   const int knots = tracks->knots();
   auto lose = [&](int t, int k) {
     const size_t i = static_cast<size_t>(t) * knots + k;
@@ -67,11 +67,11 @@ void LoseKnots(netsim::KnotTracks* tracks) {
 // match and the "units" attributes saying so.
 void ToUnits(const std::string& path, const std::string& time_units, double per_s,
              const std::string& length_units, double per_m) {
-  netsim::KnotTracks tracks = netsim::ReadKnotTracks(path);
+  KnotTracks tracks = ReadKnotTracks(path);
   for (double& t : tracks.time) t *= per_s;
   for (Eigen::Vector3d& p : tracks.position) p *= per_m;
   for (Eigen::Matrix3d& c : tracks.covariance) c *= per_m * per_m;
-  netsim::WriteKnotTracks(path, tracks);
+  WriteKnotTracks(path, tracks);
   h5::Id file = h5::OpenFileReadWrite(path);
   h5::SetUnits(file.get(), "time", time_units);
   h5::SetUnits(file.get(), "knots/position", length_units);
@@ -115,9 +115,9 @@ class BadInputTriangulate : public CommandTest {
     for (const std::string& camera : names)
       FillH5(Path("nan.h5"), "/cameras/" + camera + "/position_px", NAN);
 
-    netsim::WriteKnotTracks(Path("truth.h5"), Truth(kRows, kCols));
-    netsim::WriteKnotTracks(Path("truth6.h5"), Truth(6, 6));
-    netsim::WriteKnotTracks(Path("truth_late.h5"), Truth(kRows, kCols, 100.0));
+    WriteKnotTracks(Path("truth.h5"), Truth(kRows, kCols));
+    WriteKnotTracks(Path("truth6.h5"), Truth(6, 6));
+    WriteKnotTracks(Path("truth_late.h5"), Truth(kRows, kCols, 100.0));
     for (const char* name : {"backwards.h5", "int.h5"})
       std::filesystem::copy_file(Path("truth.h5"), Path(name));
     PokeH5(Path("backwards.h5"), "/time", 5, -0.05);
@@ -128,21 +128,21 @@ class BadInputTriangulate : public CommandTest {
     ASSERT_EQ(measured.status, 0) << measured.err;
 
     // Legal files score used to crash on, and files in other units.
-    netsim::KnotTracks lost = netsim::ReadKnotTracks(Path("truth.h5"));
+    KnotTracks lost = ReadKnotTracks(Path("truth.h5"));
     LoseKnots(&lost);
-    netsim::WriteKnotTracks(Path("lost.h5"), lost);
-    netsim::KnotTracks measured_lost = netsim::ReadKnotTracks(Path("measured.h5"));
+    WriteKnotTracks(Path("lost.h5"), lost);
+    KnotTracks measured_lost = ReadKnotTracks(Path("measured.h5"));
     LoseKnots(&measured_lost);
-    netsim::WriteKnotTracks(Path("measured_lost.h5"), measured_lost);
+    WriteKnotTracks(Path("measured_lost.h5"), measured_lost);
     // The truth measured with 1 mm of noise (a fixed pattern), in s and m, and in ms and mm.
-    netsim::KnotTracks noisy = Truth(kRows, kCols);
+    KnotTracks noisy = Truth(kRows, kCols);
     for (size_t i = 0; i < noisy.position.size(); ++i) {
       noisy.position[i] += 1e-3 * Eigen::Vector3d(std::sin(1.0 * i), std::cos(2.0 * i),
                                                   std::sin(3.0 * i + 1));
       noisy.covariance.push_back(Eigen::Matrix3d::Identity() * 1e-6);
     }
-    netsim::WriteKnotTracks(Path("noisy.h5"), noisy);
-    netsim::WriteKnotTracks(Path("noisy_mm.h5"), noisy);
+    WriteKnotTracks(Path("noisy.h5"), noisy);
+    WriteKnotTracks(Path("noisy_mm.h5"), noisy);
     ToUnits(Path("noisy_mm.h5"), "ms", 1e3, "mm", 1e3);
     std::filesystem::copy_file(Path("measured.h5"), Path("measured_furlong.h5"));
     ToUnits(Path("measured_furlong.h5"), "s", 1.0, "furlong", 1.0 / 201.168);
@@ -157,9 +157,9 @@ class BadInputTriangulate : public CommandTest {
     // or a billion seconds before the flight, a grid that lists knot (1,0) twice and (1,1) not.
     for (const auto& [name, variance] : {std::pair<const char*, double>{"cov_tiny.h5", 1e-300},
                                          {"cov_huge.h5", 1e300}}) {
-      netsim::KnotTracks tracks = Truth(kRows, kCols);
+      KnotTracks tracks = Truth(kRows, kCols);
       tracks.covariance.assign(tracks.position.size(), Eigen::Matrix3d::Identity() * variance);
-      netsim::WriteKnotTracks(Path(name), tracks);
+      WriteKnotTracks(Path(name), tracks);
     }
     std::filesystem::copy_file(Path("truth.h5"), Path("contact_nan.h5"));
     {
@@ -167,21 +167,21 @@ class BadInputTriangulate : public CommandTest {
       const double nan = NAN;
       h5::WriteDataset(file.get(), "contact_start", H5T_NATIVE_DOUBLE, {1}, &nan);
     }
-    netsim::KnotTracks early = Truth(kRows, kCols);
+    KnotTracks early = Truth(kRows, kCols);
     early.contact_start_s = -1e9;
-    netsim::WriteKnotTracks(Path("contact_early.h5"), early);
-    netsim::KnotTracks one_frame = Truth(kRows, kCols);
+    WriteKnotTracks(Path("contact_early.h5"), early);
+    KnotTracks one_frame = Truth(kRows, kCols);
     one_frame.time.resize(1);
     one_frame.position.resize(kRows * kCols);
     one_frame.valid.resize(kRows * kCols);
-    netsim::WriteKnotTracks(Path("one_frame.h5"), one_frame);
-    netsim::KnotTracks all_lost = Truth(kRows, kCols);
+    WriteKnotTracks(Path("one_frame.h5"), one_frame);
+    KnotTracks all_lost = Truth(kRows, kCols);
     all_lost.valid.assign(all_lost.valid.size(), 0);
     all_lost.position.assign(all_lost.position.size(), Eigen::Vector3d::Constant(NAN));
-    netsim::WriteKnotTracks(Path("all_lost.h5"), all_lost);
-    netsim::KnotTracks twice = Truth(kRows, kCols);
+    WriteKnotTracks(Path("all_lost.h5"), all_lost);
+    KnotTracks twice = Truth(kRows, kCols);
     twice.grid[5] = twice.grid[4];
-    netsim::WriteKnotTracks(Path("grid_twice.h5"), twice);
+    WriteKnotTracks(Path("grid_twice.h5"), twice);
   }
   std::string Base() const {
     return "triangulate --rig " + Path("rig.yaml") + " --knots 4x4 --fps 179 ";

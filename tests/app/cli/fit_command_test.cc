@@ -13,7 +13,7 @@
 #include <sstream>
 
 #include "common/hdf5_util.h"
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 #include "tests/app/cli/bad_input.h"
 #include "tests/app/cli/run_netlab.h"
 #include "tests/libnetsim/identification/twin_shot.h"
@@ -42,12 +42,12 @@ class FitCommand : public netlab::testing::CommandTest {
     std::ofstream(Path("prior.yaml")) << kPrior;
     ASSERT_EQ(RunNetlab("simulate " + Path("shot.yaml") + " --out " + Path("truth.h5")).status, 0);
     // Measured: the truth with 1 mm of noise and its covariance, as triangulate writes it.
-    netlab::netsim::KnotTracks m = netlab::netsim::ReadKnotTracks(Path("truth.h5"));
+    netlab::KnotTracks m = netlab::ReadKnotTracks(Path("truth.h5"));
     std::mt19937 rng(3);
     std::normal_distribution<double> noise(0.0, 1e-3);
     for (Eigen::Vector3d& p : m.position) p += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
     m.covariance.assign(m.position.size(), Eigen::Matrix3d::Identity() * 1e-6);
-    netlab::netsim::WriteKnotTracks(Path("measured.h5"), m);
+    netlab::WriteKnotTracks(Path("measured.h5"), m);
   }
   std::string Fit(const std::string& more) const {
     return "fit " + Path("shot.yaml") + " --measured " + Path("measured.h5") + " --out " +
@@ -151,11 +151,11 @@ TEST_F(FitCommand, BadInputsAreNamed) {
                 .status,
             0);
   // The measurement on another clock: 100 s after the launch, in s and (converted) in ms.
-  netlab::netsim::KnotTracks late = netlab::netsim::ReadKnotTracks(Path("measured.h5"));
+  netlab::KnotTracks late = netlab::ReadKnotTracks(Path("measured.h5"));
   for (double& t : late.time) t += 100.0;
-  netlab::netsim::WriteKnotTracks(Path("late.h5"), late);
+  netlab::WriteKnotTracks(Path("late.h5"), late);
   for (double& t : late.time) t *= 1e3;
-  netlab::netsim::WriteKnotTracks(Path("late_ms.h5"), late);
+  netlab::WriteKnotTracks(Path("late_ms.h5"), late);
   {
     netlab::h5::Id file = netlab::h5::OpenFileReadWrite(Path("late_ms.h5"));
     netlab::h5::SetUnits(file.get(), "time", "ms");

@@ -10,7 +10,7 @@
 
 #include "calibration/rig.h"
 #include "common/hdf5_util.h"
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 #include "libreconstruct/labels/label_set.h"
 #include "tests/app/cli/run_netlab.h"
 #include "tests/app/cli/small_shot.h"
@@ -83,7 +83,7 @@ TEST_F(RenderCommand, ACameraRunningLateSeesTheKnotsLaterAndTheTruthSaysSo) {
   const auto r = RunNetlab(base + Path("late") + " --camera-time-offset cam2=0.3");
   ASSERT_EQ(r.status, 0) << r.err;
   const netlab::calib::Rig rig = netlab::calib::ReadRig(Path("late/rig_true.yaml"));
-  const netlab::netsim::KnotTracks sim = netlab::netsim::ReadKnotTracks(Path("sim.h5"));
+  const netlab::KnotTracks sim = netlab::ReadKnotTracks(Path("sim.h5"));
   h5::Id file = h5::OpenFileReadOnly(Path("late/truth.h5"));
   std::vector<double> offsets(4);
   h5::ReadDataset(file.get(), "camera_time_offset_frames", H5T_NATIVE_DOUBLE, offsets.data());
@@ -124,8 +124,8 @@ TEST_F(RenderCommand, ACameraRunningLateSeesTheKnotsLaterAndTheTruthSaysSo) {
 TEST_F(RenderCommand, TruePixelsAreTheProjectionsOfTheTrueKnots) {
   ASSERT_EQ(render_.status, 0) << render_.err;
   const netlab::calib::Rig rig = netlab::calib::ReadRig(Path("shot/rig_true.yaml"));
-  const netlab::netsim::KnotTracks truth = netlab::netsim::ReadKnotTracks(Path("shot/truth.h5"));
-  const netlab::netsim::KnotTracks sim = netlab::netsim::ReadKnotTracks(Path("sim.h5"));
+  const netlab::KnotTracks truth = netlab::ReadKnotTracks(Path("shot/truth.h5"));
+  const netlab::KnotTracks sim = netlab::ReadKnotTracks(Path("sim.h5"));
   ASSERT_EQ(truth.frames(), 8);
   ASSERT_EQ(truth.knots(), 36);
   // Frame k at time k / 179 s: frame 2 is simulation output 2 (same interval).

@@ -16,7 +16,7 @@
 
 #include "calibration/rig.h"
 #include "common/hdf5_util.h"
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 #include "libreconstruct/twin/flight_effects.h"
 #include "tests/app/cli/run_netlab.h"
 #include "tests/app/cli/small_shot.h"
@@ -168,7 +168,7 @@ TEST_F(RenderEffects, AMovingCamerasPosesAreInTheTruthAndItsPixelsFollowThem) {
   const auto r = Render("moving", 0.25, "--camera-motion cam0=4:60,cam2=3");
   ASSERT_EQ(r.status, 0) << r.err;
   const netlab::calib::Rig rig = netlab::calib::ReadRig(Path("moving/rig_true.yaml"));
-  const netlab::netsim::KnotTracks truth = netlab::netsim::ReadKnotTracks(Path("moving/truth.h5"));
+  const netlab::KnotTracks truth = netlab::ReadKnotTracks(Path("moving/truth.h5"));
   h5::Id file = h5::OpenFileReadOnly(Path("moving/truth.h5"));
   for (int c = 0; c < 4; ++c) {
     const std::string group = "cameras/" + rig.cameras[c].name + "/";

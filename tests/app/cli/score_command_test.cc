@@ -8,12 +8,12 @@
 #include <random>
 
 #include "common/hdf5_util.h"
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 #include "tests/app/cli/run_netlab.h"
 
 namespace {
 
-using netlab::netsim::KnotTracks;
+using netlab::KnotTracks;
 using netlab::testing::LastJson;
 using netlab::testing::RunNetlab;
 
@@ -58,8 +58,8 @@ TEST_F(ScoreCommand, HelpNamesEveryOptionOfTheContract) {
 TEST_F(ScoreCommand, ScoresAShiftedNoisyMeasurementAsConsistentWithTheContractFields) {
   std::mt19937 rng(5);
   // The measurement starts 12.3 ms into the simulation: the offset the command must find.
-  netlab::netsim::WriteKnotTracks(Path("tracks.h5"), Flight(6, 6, 120, 0.0123, 5e-4, &rng));
-  netlab::netsim::WriteKnotTracks(Path("sim.h5"), Flight(6, 6, 160, 0.0, 0.0, nullptr));
+  netlab::WriteKnotTracks(Path("tracks.h5"), Flight(6, 6, 120, 0.0123, 5e-4, &rng));
+  netlab::WriteKnotTracks(Path("sim.h5"), Flight(6, 6, 160, 0.0, 0.0, nullptr));
   const auto r =
       RunNetlab("score --measured " + Path("tracks.h5") + " --sim " + Path("sim.h5") + " --out " +
                 Path("score.h5") + " --report " + Path("report.html") + " --align time --json");
@@ -97,8 +97,8 @@ TEST_F(ScoreCommand, ScoresAShiftedNoisyMeasurementAsConsistentWithTheContractFi
 
 TEST_F(ScoreCommand, AGridMismatchIsAnErrorNamingTheFiles) {
   std::mt19937 rng(5);
-  netlab::netsim::WriteKnotTracks(Path("tracks.h5"), Flight(6, 6, 20, 0.0, 5e-4, &rng));
-  netlab::netsim::WriteKnotTracks(Path("sim.h5"), Flight(6, 5, 40, 0.0, 0.0, nullptr));
+  netlab::WriteKnotTracks(Path("tracks.h5"), Flight(6, 6, 20, 0.0, 5e-4, &rng));
+  netlab::WriteKnotTracks(Path("sim.h5"), Flight(6, 5, 40, 0.0, 0.0, nullptr));
   const auto r = RunNetlab("score --measured " + Path("tracks.h5") + " --sim " + Path("sim.h5") +
                            " --out " + Path("score.h5"));
   EXPECT_EQ(r.status, 1);
@@ -129,15 +129,15 @@ namespace {
 // is left under --out or --report.
 TEST_F(ScoreCommand, AnEnsembleGivesSigmaSimPerPhaseAndABadOneIsRefused) {
   std::mt19937 rng(9);
-  netlab::netsim::WriteKnotTracks(Path("tracks.h5"), Flight(6, 6, 60, 0.0, 5e-4, &rng));
-  netlab::netsim::WriteKnotTracks(Path("sim.h5"), Flight(6, 6, 80, 0.0, 0.0, nullptr));
+  netlab::WriteKnotTracks(Path("tracks.h5"), Flight(6, 6, 60, 0.0, 5e-4, &rng));
+  netlab::WriteKnotTracks(Path("sim.h5"), Flight(6, 6, 80, 0.0, 0.0, nullptr));
   std::string list;
   for (int m = 0; m < 3; ++m) {
     std::mt19937 member_rng(100 + m);
     KnotTracks run = Flight(6, 6, 80, 0.0, 2e-3, &member_rng);
     run.covariance.clear();
     const std::string path = Path("run" + std::to_string(m) + ".h5");
-    netlab::netsim::WriteKnotTracks(path, run);
+    netlab::WriteKnotTracks(path, run);
     list += (list.empty() ? "" : ",") + path;
   }
   const std::string head = "score --measured " + Path("tracks.h5") + " --sim " + Path("sim.h5") +
@@ -168,7 +168,7 @@ TEST_F(ScoreCommand, AnEnsembleGivesSigmaSimPerPhaseAndABadOneIsRefused) {
   EXPECT_FALSE(std::filesystem::exists(Path("score.h5")));
   EXPECT_FALSE(std::filesystem::exists(Path("report.html")));
 
-  netlab::netsim::WriteKnotTracks(Path("other.h5"), Flight(6, 5, 80, 0.0, 0.0, nullptr));
+  netlab::WriteKnotTracks(Path("other.h5"), Flight(6, 5, 80, 0.0, 0.0, nullptr));
   r = RunNetlab(head + " --sim-ensemble " + Path("run0.h5") + "," + Path("other.h5"));
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find(Path("other.h5") + ": 30 knots"), std::string::npos) << r.err;

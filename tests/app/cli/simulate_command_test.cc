@@ -12,7 +12,7 @@
 #include <regex>
 #include <sstream>
 
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 #include "tests/app/cli/run_netlab.h"
 
 namespace {
@@ -63,7 +63,7 @@ TEST_F(SimulateCommand, DurationOverridesTheScenario) {
                           " --duration 0.01 --json --quiet");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NEAR(LastJson(r.out)["sim_time"].number(), 0.01, 1e-12);
-  EXPECT_EQ(netlab::netsim::ReadKnotTracks(out).frames(), 3);  // t = 0, 0.005, 0.01
+  EXPECT_EQ(netlab::ReadKnotTracks(out).frames(), 3);  // t = 0, 0.005, 0.01
   EXPECT_EQ(Netlab("simulate " + Write("net.yaml", kNet) + " --out " + out + " --duration -1").status, 2);
 }
 
@@ -91,7 +91,7 @@ TEST_F(SimulateCommand, JsonSummaryHasTheContractFields) {
     EXPECT_TRUE(json["energy"].has(e)) << e;
   EXPECT_GT(json["energy"]["kinetic"].number(), 0.0);  // it is falling
   // The knot tracks: 5 frames of 12 knots.
-  const auto tracks = netlab::netsim::ReadKnotTracks(out);
+  const auto tracks = netlab::ReadKnotTracks(out);
   EXPECT_EQ(tracks.frames(), 5);
   EXPECT_EQ(tracks.knots(), 12);
   EXPECT_EQ(tracks.scenario, kNet);
@@ -135,7 +135,7 @@ TEST_F(SimulateCommand, SetOverridesOneValueByItsPath) {
                           " --set materials.pp.bend_stiffness=1e-4 --json --quiet");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(LastJson(r.out)["dt"].number(), 2e-5);
-  const netlab::netsim::KnotTracks tracks = netlab::netsim::ReadKnotTracks(out);
+  const netlab::KnotTracks tracks = netlab::ReadKnotTracks(out);
   EXPECT_NE(tracks.scenario.find("--set nets.0.velocity=[0.1, 0, 0]"), std::string::npos);
   EXPECT_NE(tracks.scenario.find("bend_stiffness: 1e-4"), std::string::npos) << tracks.scenario;
   // The net moved with it: the corner's x advanced 0.1 m/s x 0.02 s.

@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "common/hdf5_util.h"
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 #include "tests/app/cli/run_netlab.h"
 
 namespace {
@@ -118,7 +118,7 @@ TEST_F(SweepCommand, RunsMatchSingleSimulationsBitForBit) {
     const NetlabResult s = RunNetlab("simulate " + scenario_ + " " + overrides[run] + " --out " +
                                      single + " --json --quiet");
     ASSERT_EQ(s.status, 0) << s.err;
-    const netlab::netsim::KnotTracks tracks = netlab::netsim::ReadKnotTracks(single);
+    const netlab::KnotTracks tracks = netlab::ReadKnotTracks(single);
     const std::string group = "tracks/" + std::to_string(run);
     EXPECT_EQ(ReadDoubles(out, group + "/time"), tracks.time);
     const std::vector<double> knots = ReadDoubles(out, group + "/knots/position");

@@ -10,7 +10,7 @@
 #include <utility>
 
 #include "calibration/rig.h"
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 #include "libreconstruct/geometry/track_export.h"
 #include "libreconstruct/labels/label_set.h"
 #include "tests/app/cli/run_netlab.h"
@@ -81,7 +81,7 @@ TEST_F(TriangulateCommand, WritesTracksCsvAndTheContractFields) {
   EXPECT_EQ(json["outliers"].number(), 1);
   EXPECT_LT(json["reprojection_rms_px"].number(), 0.4);
 
-  const netlab::netsim::KnotTracks tracks = netlab::netsim::ReadKnotTracks(Path("tracks.h5"));
+  const netlab::KnotTracks tracks = netlab::ReadKnotTracks(Path("tracks.h5"));
   ASSERT_EQ(tracks.frames(), kFrames);
   ASSERT_EQ(tracks.knots(), kRows * kCols);
   EXPECT_NEAR(tracks.time[3], 3 / kFps, 1e-12);
@@ -116,8 +116,8 @@ TEST_F(TriangulateCommand, XyPtsInputGivesTheSameTracks) {
   ASSERT_EQ(RunNetlab(Base() + "--labels " + Path("xypts.csv") + " --out " + Path("b.h5") + common)
                 .status,
             0);
-  const auto a = netlab::netsim::ReadKnotTracks(Path("a.h5"));
-  const auto b = netlab::netsim::ReadKnotTracks(Path("b.h5"));
+  const auto a = netlab::ReadKnotTracks(Path("a.h5"));
+  const auto b = netlab::ReadKnotTracks(Path("b.h5"));
   EXPECT_EQ(a.position.size(), b.position.size());
   EXPECT_EQ(a.valid, b.valid);
   for (size_t i = 0; i < a.position.size(); ++i)
@@ -128,7 +128,7 @@ TEST_F(TriangulateCommand, XyPtsInputGivesTheSameTracks) {
 
 TEST_F(TriangulateCommand, ComparesWithTheTruthAndReportsPriorsAndTheRig) {
   recon::WriteLabels(Path("labels.h5"), labels_);
-  netlab::netsim::KnotTracks truth;
+  netlab::KnotTracks truth;
   for (int t = 0; t < kFrames; ++t) truth.time.push_back(t / kFps);
   for (int k = 0; k < kRows * kCols; ++k) truth.grid.push_back({k / kCols, k % kCols});
   for (int t = 0; t < kFrames; ++t)
@@ -136,7 +136,7 @@ TEST_F(TriangulateCommand, ComparesWithTheTruthAndReportsPriorsAndTheRig) {
       truth.position.push_back(KnotAt(t, k));
       truth.valid.push_back(1);
     }
-  netlab::netsim::WriteKnotTracks(Path("truth.h5"), truth);
+  netlab::WriteKnotTracks(Path("truth.h5"), truth);
   const auto r = RunNetlab(Base() + "--labels " + Path("labels.h5") + " --out " +
                            Path("tracks.h5") + " --truth " + Path("truth.h5") +
                            " --ba rig --link-length 0.1 --smooth-sigma 1e-4 --json");
@@ -201,7 +201,7 @@ TEST_F(TriangulateCommand, ADegeneratePointIsCountedAndSaidNotValid) {
   EXPECT_NE(r.err.find("frame 3, knot (3,3): the rays of cam0 and cam3 meet at"),
             std::string::npos)
       << r.err;
-  const netlab::netsim::KnotTracks tracks = netlab::netsim::ReadKnotTracks(Path("tracks.h5"));
+  const netlab::KnotTracks tracks = netlab::ReadKnotTracks(Path("tracks.h5"));
   EXPECT_FALSE(tracks.Valid(3, 15));
   EXPECT_TRUE(tracks.Degenerate(3, 15));
   ASSERT_EQ(tracks.degenerate_points.size(), 1u);
@@ -257,12 +257,12 @@ TEST_F(TriangulateCommand, EstimatesAndAppliesACamerasClockOffset) {
                       " --sigma-px 0.1 --quiet --out " + Path("synchronised_tracks.h5"))
                 .status,
             0);
-  const auto synchronised = netlab::netsim::ReadKnotTracks(Path("synchronised_tracks.h5"));
-  const auto as_is = netlab::netsim::ReadKnotTracks(Path("estimated.h5"));
-  const auto applied = netlab::netsim::ReadKnotTracks(Path("applied.h5"));
+  const auto synchronised = netlab::ReadKnotTracks(Path("synchronised_tracks.h5"));
+  const auto as_is = netlab::ReadKnotTracks(Path("estimated.h5"));
+  const auto applied = netlab::ReadKnotTracks(Path("applied.h5"));
   EXPECT_TRUE(applied.camera_offsets_applied);
   ASSERT_EQ(applied.camera_offset_frames.size(), 4u);
-  auto rms = [&](const netlab::netsim::KnotTracks& tracks) {
+  auto rms = [&](const netlab::KnotTracks& tracks) {
     double ss = 0.0;
     int n = 0;
     for (int t = 0; t < kFrames; ++t)
@@ -305,7 +305,7 @@ TEST_F(TriangulateCommand, TimesComeFromTheRecordingsTimestamps) {
   EXPECT_NEAR(LastJson(r.out)["frame_time_spread_max_s"].number(), 1e-4, 1e-9);
   EXPECT_NE(r.err.find("times from the timestamps of cam0, cam1, cam2"), std::string::npos)
       << r.err;
-  const auto tracks = netlab::netsim::ReadKnotTracks(Path("tracks.h5"));
+  const auto tracks = netlab::ReadKnotTracks(Path("tracks.h5"));
   EXPECT_NEAR(tracks.time[4], 1.0 + 4 / kFps + 1e-4 / 3, 1e-9);
   ASSERT_EQ(tracks.frame_time_spread_s.size(), static_cast<size_t>(kFrames));
   EXPECT_NEAR(tracks.frame_time_spread_s[4], 1e-4, 1e-9);

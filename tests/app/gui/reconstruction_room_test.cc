@@ -27,7 +27,7 @@
 #include "app/gui/document/session.h"
 #include "app/gui/main_window.h"
 #include "app/gui/reconstruction_room.h"
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 #include "libreconstruct/labels/label_set.h"
 #include "tests/app/cli/run_netlab.h"
 #include "tests/app/gui/small_shot_film.h"
@@ -150,7 +150,7 @@ TEST_F(ReconstructionRoomTest, TriangulateClickAnOutlierLandOnItsLabelAndExportA
   EXPECT_EQ(w.frame(), 4);
   QTest::keyClick(&w, Qt::Key_4, Qt::ControlModifier);
   EXPECT_EQ(room->frame(), 4);
-  const netsim::KnotTracks* tracks = w.reconstruction()->tracks();
+  const KnotTracks* tracks = w.reconstruction()->tracks();
   ASSERT_NE(tracks, nullptr);
   const auto centre = view->ToScreen(tracks->Position(4, MovedKnot()));
   ASSERT_TRUE(centre.has_value());
@@ -182,8 +182,8 @@ TEST_F(ReconstructionRoomTest, TriangulateClickAnOutlierLandOnItsLabelAndExportA
                              "/labels.h5 --knots 6x6 --fps 179 --sigma-px 0.1 --experiment " + d +
                              "/shot/experiment.yaml --out " + d + "/cli_tracks.h5 --quiet");
   ASSERT_EQ(cli.status, 0) << cli.err;
-  const netsim::KnotTracks ours = netsim::ReadKnotTracks(d + "/export/tracks.h5");
-  const netsim::KnotTracks theirs = netsim::ReadKnotTracks(d + "/cli_tracks.h5");
+  const KnotTracks ours = ReadKnotTracks(d + "/export/tracks.h5");
+  const KnotTracks theirs = ReadKnotTracks(d + "/cli_tracks.h5");
   ASSERT_EQ(ours.position.size(), theirs.position.size());
   EXPECT_EQ(ours.valid, theirs.valid);
   EXPECT_EQ(ours.time, theirs.time);

@@ -29,8 +29,8 @@ nets:
 )";
 
 // The truth's knots plus isotropic Gaussian noise of `sigma` m.
-inline netsim::KnotTracks MeasuredTwin(const netsim::SweepRun& truth, double sigma, uint32_t seed) {
-  netsim::KnotTracks m = truth.Tracks();
+inline KnotTracks MeasuredTwin(const netsim::SweepRun& truth, double sigma, uint32_t seed) {
+  KnotTracks m = truth.Tracks();
   std::mt19937 rng(seed);
   std::normal_distribution<double> noise(0.0, sigma);
   for (Eigen::Vector3d& p : m.position) p += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));

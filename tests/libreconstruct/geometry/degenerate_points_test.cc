@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <random>
 
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 #include "libreconstruct/geometry/bundle_adjust.h"
 #include "libreconstruct/geometry/track_export.h"
 
@@ -101,15 +101,15 @@ TEST(DegeneratePoints, TheTrackFileKeepsThemAndTheClocks) {
   const SequenceResult r = ReconstructSequence(rig, Labels(rig), options);
   std::vector<double> time;
   for (int t = 0; t < kFrames; ++t) time.push_back(0.5 + t * 0.01);
-  netsim::KnotTracks tracks = TracksFromSequence(r, time, "test");
+  KnotTracks tracks = TracksFromSequence(r, time, "test");
   tracks.frame_time_spread_s.assign(kFrames, 1e-5);
   tracks.camera_offset_frames = {0.0, 0.01, 0.3, std::nan("")};
   tracks.camera_offset_sigma_frames = {0.0, 0.002, 0.002, 0.2};
   tracks.camera_offsets_applied = true;
   const std::string path =
       (std::filesystem::temp_directory_path() / "degenerate_points_test.h5").string();
-  netsim::WriteKnotTracks(path, tracks);
-  const netsim::KnotTracks back = netsim::ReadKnotTracks(path);
+  WriteKnotTracks(path, tracks);
+  const KnotTracks back = ReadKnotTracks(path);
   std::filesystem::remove(path);
   EXPECT_EQ(back.time, time);
   EXPECT_EQ(back.degenerate, tracks.degenerate);
@@ -134,11 +134,11 @@ TEST(DegeneratePoints, TheTruthComparisonIsInTheTruthsFrameWithThemApart) {
   options.adjustment = Adjustment::kNone;
   options.sigma_px = 0.1;
   const SequenceResult r = ReconstructSequence(rig, Labels(rig), options);
-  const netsim::KnotTracks tracks = TracksFromSequence(r, kFps, "test");
+  const KnotTracks tracks = TracksFromSequence(r, kFps, "test");
   // The truth in another frame: turned 0.2 rad about z and moved 0.3 m.
   const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const Eigen::Vector3d shift(0.3, 0.0, 0.0);
-  netsim::KnotTracks truth;
+  KnotTracks truth;
   for (int f = 30; f < 60; ++f) truth.time.push_back(f / kFps);
   truth.grid = tracks.grid;
   for (int f = 30; f < 60; ++f)

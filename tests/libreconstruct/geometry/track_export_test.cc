@@ -33,8 +33,8 @@ int Point(int row, int col) { return row * kCols + col + 1; }
 
 // Tracks of a 2 x 3 net over four frames: the knots stored in an order unlike the points', knot
 // (1, 2) missing, some knots not valid in some frames, values with all 17 digits.
-netsim::KnotTracks Example() {
-  netsim::KnotTracks tracks;
+KnotTracks Example() {
+  KnotTracks tracks;
   tracks.time = {0.0, 0.01, 0.02, 0.03};
   tracks.grid = {{1, 1}, {0, 2}, {0, 0}, {1, 0}, {0, 1}};
   std::mt19937 rng(11);
@@ -57,7 +57,7 @@ std::string ReadText(const std::string& path) {
 
 TEST(XyzPts, RoundTripIsExactWithNanWhereNotValid) {
   ScratchDir dir("track_export");
-  const netsim::KnotTracks tracks = Example();
+  const KnotTracks tracks = Example();
   WriteXyzPts(dir / "xyzpts.csv", tracks, kRows, kCols);
   EXPECT_FALSE(fs::exists(dir / "xyzpts.csv.partial"));
   const std::vector<std::vector<Eigen::Vector3d>> read = ReadXyzPts(dir / "xyzpts.csv");
@@ -81,7 +81,7 @@ TEST(XyzPts, RoundTripIsExactWithNanWhereNotValid) {
 
 TEST(XyzRes, RoundTripIsExactWithNanWhereNotValid) {
   ScratchDir dir("track_export");
-  const netsim::KnotTracks tracks = Example();
+  const KnotTracks tracks = Example();
   WriteXyzRes(dir / "xyzres.csv", tracks, kRows, kCols);
   EXPECT_FALSE(fs::exists(dir / "xyzres.csv.partial"));
   const std::vector<std::vector<double>> read = ReadXyzRes(dir / "xyzres.csv");
@@ -101,7 +101,7 @@ TEST(XyzRes, RoundTripIsExactWithNanWhereNotValid) {
 
 TEST(XyzRes, UnknownResidualsAreNan) {
   ScratchDir dir("track_export");
-  netsim::KnotTracks tracks = Example();
+  KnotTracks tracks = Example();
   tracks.reprojection_error_px.clear();
   WriteXyzRes(dir / "xyzres.csv", tracks, kRows, kCols);
   for (const std::vector<double>& row : ReadXyzRes(dir / "xyzres.csv"))
@@ -110,7 +110,7 @@ TEST(XyzRes, UnknownResidualsAreNan) {
 
 TEST(TrackExport, FilesHaveTheDltdv8Layout) {
   ScratchDir dir("track_export");
-  netsim::KnotTracks tracks;
+  KnotTracks tracks;
   tracks.time = {0.0, 1.0};
   tracks.grid = {{0, 0}, {0, 1}};
   tracks.position = {{0.1, -2.0, 3.5}, {1.0, 2.0, 3.0}, {4.0, 5.0, 6.0}, {1e-7, 0.0, -1.25}};
@@ -130,13 +130,13 @@ TEST(TrackExport, FilesHaveTheDltdv8Layout) {
 
 TEST(TrackExport, RefusesTracksThatDoNotFitTheNet) {
   ScratchDir dir("track_export");
-  netsim::KnotTracks outside = Example();
+  KnotTracks outside = Example();
   outside.grid[3] = {2, 0};  // row 2 of a 2-row net
   EXPECT_THROW(WriteXyzPts(dir / "xyzpts.csv", outside, kRows, kCols), std::invalid_argument);
-  netsim::KnotTracks twice = Example();
+  KnotTracks twice = Example();
   twice.grid[3] = twice.grid[0];  // two knots at (1, 1): the tracks hold two nets
   EXPECT_THROW(WriteXyzRes(dir / "xyzres.csv", twice, kRows, kCols), std::invalid_argument);
-  netsim::KnotTracks short_valid = Example();
+  KnotTracks short_valid = Example();
   short_valid.valid.pop_back();
   EXPECT_THROW(WriteXyzPts(dir / "xyzpts.csv", short_valid, kRows, kCols),
                std::invalid_argument);
@@ -202,7 +202,7 @@ SequenceResult ExampleResult() {
 
 TEST(TracksFromSequence, CarriesEveryFieldWithTimeFromTheFrameRateAndKnotsRowMajor) {
   const SequenceResult r = ExampleResult();
-  const netsim::KnotTracks tracks = TracksFromSequence(r, 100.0, "a test");
+  const KnotTracks tracks = TracksFromSequence(r, 100.0, "a test");
   EXPECT_NO_THROW(tracks.CheckConsistent());
   EXPECT_EQ(tracks.source, "a test");
   EXPECT_EQ(tracks.time, (std::vector<double>{0.04, 0.05}));
@@ -225,8 +225,8 @@ TEST(TracksFromSequence, CarriesEveryFieldWithTimeFromTheFrameRateAndKnotsRowMaj
 
 // True tracks of a 2 x 3 net sampled at 0, 0.1, 0.2 s, every knot moving at (1, 2, 0) m/s from
 // (row, col, 0).
-netsim::KnotTracks Truth() {
-  netsim::KnotTracks truth;
+KnotTracks Truth() {
+  KnotTracks truth;
   truth.time = {0.0, 0.1, 0.2};
   for (int row = 0; row < kRows; ++row)
     for (int col = 0; col < kCols; ++col) truth.grid.push_back({row, col});
@@ -240,10 +240,10 @@ netsim::KnotTracks Truth() {
 
 // Measured tracks between the truth's samples: true positions through `motion`; covariances
 // diag(var) (m^2).
-netsim::KnotTracks Measured(const std::vector<double>& times,
+KnotTracks Measured(const std::vector<double>& times,
                             const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& motion,
                             double var) {
-  netsim::KnotTracks tracks = Truth();
+  KnotTracks tracks = Truth();
   tracks.time = times;
   tracks.position.clear();
   tracks.valid.clear();
@@ -260,7 +260,7 @@ TEST(CompareWithTruth, AnOffsetIsTheFramesDifferenceNotAnError) {
   // Every point 3 mm off along y, between the truth's samples: in the truth's frame no error,
   // and the motion that takes the tracks there is the 3 mm.
   const Eigen::Vector3d offset(0.0, 0.003, 0.0);
-  const netsim::KnotTracks tracks = Measured(
+  const KnotTracks tracks = Measured(
       {0.05, 0.125}, [&](const Eigen::Vector3d& p) { return Eigen::Vector3d(p + offset); },
       0.5 * 0.003 * 0.003);
   const TruthComparison c = CompareWithTruth(tracks, Truth());
@@ -277,7 +277,7 @@ TEST(CompareWithTruth, ErrorsAndMahalanobisInTheTruthsFrame) {
   // explains any of them (their mean and their moments along the rows and columns are zero), so
   // they are the errors in the truth's frame. Covariance (3 mm)^2 / 2 per axis.
   const double var = 0.5 * 0.003 * 0.003;
-  netsim::KnotTracks tracks =
+  KnotTracks tracks =
       Measured({0.05, 0.125}, [](const Eigen::Vector3d& p) { return p; }, var);
   for (int t = 0; t < 2; ++t)
     for (int k = 0; k < kRows * kCols; ++k)
@@ -294,7 +294,7 @@ TEST(CompareWithTruth, ErrorsAndMahalanobisInTheTruthsFrame) {
 TEST(CompareWithTruth, ARigidMotionVanishesAfterAlignment) {
   // The truth turned by 0.1 rad about z and moved: large errors, none after the best motion.
   const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  const netsim::KnotTracks tracks = Measured(
+  const KnotTracks tracks = Measured(
       {0.0, 0.1, 0.2},
       [&](const Eigen::Vector3d& p) {
         return Eigen::Vector3d(turn * p + Eigen::Vector3d(1.0, 0.0, 0.0));
@@ -309,11 +309,11 @@ TEST(CompareWithTruth, ARigidMotionVanishesAfterAlignment) {
 TEST(CompareWithTruth, LeavesOutPointsTheTruthCannotGive) {
   // Frame 0 before the truth's span, frame 2 after it; in frame 1 knot 0 not valid, knot 1 at a
   // grid position the truth lacks, and knot 2 between a valid and an invalid true sample.
-  netsim::KnotTracks tracks =
+  KnotTracks tracks =
       Measured({-0.01, 0.15, 0.21}, [](const Eigen::Vector3d& p) { return p; }, 1e-6);
   tracks.valid[kRows * kCols + 0] = 0;
   tracks.grid[1] = {5, 5};
-  netsim::KnotTracks truth = Truth();
+  KnotTracks truth = Truth();
   truth.valid[2 * kRows * kCols + 2] = 0;
   const TruthComparison c = CompareWithTruth(tracks, truth);
   EXPECT_EQ(c.points, kRows * kCols - 3);

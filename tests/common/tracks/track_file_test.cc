@@ -1,4 +1,4 @@
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 
 #include <gtest/gtest.h>
 
@@ -11,7 +11,7 @@
 
 #include "common/hdf5_util.h"
 
-namespace netlab::netsim {
+namespace netlab {
 namespace {
 
 class TrackFile : public ::testing::Test {
@@ -192,4 +192,4 @@ TEST_F(TrackFile, UnitsAttributesAreConvertedOrRefused) {
 }
 
 }  // namespace
-}  // namespace netlab::netsim
+}  // namespace netlab

@@ -1,4 +1,4 @@
-#include "libnetsim/tracks/track_file.h"
+#include "common/tracks/track_file.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +10,7 @@
 #include "common/files.h"
 #include "common/hdf5_util.h"
 
-namespace netlab::netsim {
+namespace netlab {
 namespace {
 
 // /contact_start (s), when the simulation had a contact.
@@ -486,4 +486,4 @@ void TrackFileWriter::Commit() {
   RenameInto(partial_path_, path_);
 }
 
-}  // namespace netlab::netsim
+}  // namespace netlab

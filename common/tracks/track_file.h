@@ -50,7 +50,7 @@
 
 #include <Eigen/Core>
 
-namespace netlab::netsim {
+namespace netlab {
 
 inline constexpr char kTrackFileFormat[] = "netlab-knot-tracks";
 
@@ -161,4 +161,4 @@ class TrackFileWriter {
   double contact_start_s_ = std::numeric_limits<double>::quiet_NaN();
 };
 
-}  // namespace netlab::netsim
+}  // namespace netlab
