@@ -22,6 +22,7 @@
 #include "libnetsim/validation/score_file.h"
 #include "libnetsim/validation/score_report.h"
 #include "libnetsim/validation/sim_ensemble.h"
+#include "libnetsim/validation/summary_fields.h"
 
 namespace netlab::app {
 namespace {
@@ -160,77 +161,60 @@ void CheckContactTime(double t, const std::string& what, const KnotTracks& sim,
   throw InputError(what + " " + span + sim_path + range);
 }
 
-void PrintJson(const netsim::ScoreSummary& s, const std::string& out, const std::string& report) {
+// The JSON summary: every field summary_fields.h prints in the JSON, in its order.
+void PrintJson(const netsim::ScoreSummary& s) {
+  using netsim::SummaryKind;
   JsonWriter json;
   json.BeginObject();
-  json.Key("frames").Int(s.frames);
-  json.Key("knots").Int(s.knots);
-  json.Key("points").Int(s.points);
-  json.Key("masked").Int(s.masked);
-  json.Key("rms_mm").Number(s.rms_m * 1e3);
-  json.Key("rms_percent_of_side").Number(s.rms_percent_of_side);
-  json.Key("side_m").Number(s.side_m);
-  json.Key("max_mm").Number(s.max_m * 1e3);
-  json.Key("headline").String(s.headline);
-  json.Key("left_out_points").Int(s.left_out);
-  json.Key("left_out_max_sigma_mm").Number(s.left_out_max_sigma_m * 1e3);
-  json.Key("sigma_bound_mm").Number(s.sigma_bound_m * 1e3);
-  json.Key("sigma_bound_from").String(s.sigma_bound_from);
-  json.Key("median_sigma_mm").Number(s.median_sigma_m * 1e3);
-  json.Key("weighted_rms_mm").Number(s.weighted_rms_m * 1e3);
-  json.Key("sigma_spread").Number(s.sigma_spread);
-  json.Key("degenerate_points").Int(s.degenerate);
-  json.Key("mean_d2").Number(s.mean_d2);
-  json.Key("dof").Number(s.dof);
-  json.Key("fitted_parameters").Int(s.fitted_parameters);
-  json.Key("tau_int").Number(s.tau_int);
-  json.Key("design_effect").Number(s.design_effect);
-  json.Key("effective_points").Number(s.effective_points);
-  json.Key("p_value").Number(s.p_value);
-  json.Key("critical_mean_d2").Number(s.critical_mean_d2);
-  json.Key("margin").Number(s.margin);
-  json.Key("verdict").String(s.verdict);
-  json.Key("alignment").String(netsim::AlignmentName(s.alignment));
-  json.Key("time_offset_s").Number(s.time_offset_s);
-  json.Key("time_offset_sigma_s").Number(s.time_offset_sigma_s);
-  json.Key("translation").Vector3(s.translation);
-  json.Key("sim_uncertainty").String(s.sim_uncertainty);
-  json.Key("sim_too_sparse").Bool(s.sim_too_sparse);
-  json.Key("interpolation_rms_mm").Number(s.interpolation_rms_m * 1e3);
-  json.Key("skill").Number(s.skill);
-  json.Key("baseline_rms_mm").Number(s.baseline_rms_m * 1e3);
-  json.Key("per_class").BeginObject();
-  for (const auto& row : s.per_class) json.Key(row.name).Number(row.rms_m * 1e3);
-  json.EndObject();
-  json.Key("per_phase").BeginObject();
-  for (const auto& row : s.per_phase) json.Key(row.name).Number(row.rms_m * 1e3);
-  json.EndObject();
-  // Per phase, the error beside the two contributions to its expectation.
-  json.Key("phases").BeginArray();
-  for (const auto& row : s.per_phase) {
-    json.BeginObject();
-    json.Key("name").String(row.name);
-    json.Key("start_s").Number(row.start_s);
-    json.Key("end_s").Number(row.end_s);
-    json.Key("points").Int(row.points);
-    json.Key("rms_mm").Number(row.rms_m * 1e3);
-    json.Key("sigma_sim_mm").Number(row.sigma_sim_m * 1e3);
-    json.Key("sigma_meas_mm").Number(row.sigma_meas_m * 1e3);
-    json.Key("mean_d2").Number(row.mean_d2);
-    json.EndObject();
+  for (const netsim::SummaryField& field : netsim::SummaryFields()) {
+    if (!(field.outputs & netsim::kInJson)) continue;
+    const netsim::SummaryValue value = field.value(s);
+    json.Key(std::string(field.key));
+    switch (field.kind) {
+      case SummaryKind::kInt:
+        json.Int(static_cast<long long>(value.number));
+        break;
+      case SummaryKind::kNumber:
+        json.Number(value.number);
+        break;
+      case SummaryKind::kText:
+        json.String(value.text);
+        break;
+      case SummaryKind::kFlag:
+        json.Bool(value.number != 0.0);
+        break;
+      case SummaryKind::kVector3:
+        json.Vector3(value.vector);
+        break;
+      case SummaryKind::kRows:
+        json.BeginObject();
+        for (const netsim::ScoreRow& row : value.rows) json.Key(row.name).Number(row.rms_m * 1e3);
+        json.EndObject();
+        break;
+      case SummaryKind::kPhases:
+        // Per phase, the error beside the two contributions to its expectation.
+        json.BeginArray();
+        for (const netsim::ScoreRow& row : value.rows) {
+          json.BeginObject();
+          json.Key("name").String(row.name);
+          json.Key("start_s").Number(row.start_s);
+          json.Key("end_s").Number(row.end_s);
+          json.Key("points").Int(row.points);
+          json.Key("rms_mm").Number(row.rms_m * 1e3);
+          json.Key("sigma_sim_mm").Number(row.sigma_sim_m * 1e3);
+          json.Key("sigma_meas_mm").Number(row.sigma_meas_m * 1e3);
+          json.Key("mean_d2").Number(row.mean_d2);
+          json.EndObject();
+        }
+        json.EndArray();
+        break;
+      case SummaryKind::kLines:
+        json.BeginArray();
+        for (const std::string& line : value.lines) json.String(line);
+        json.EndArray();
+        break;
+    }
   }
-  json.EndArray();
-  json.Key("ensemble_members").Int(s.ensemble_members);
-  json.Key("contact_time_s").Number(s.contact_time_s);
-  json.Key("contact_from").String(s.contact_from);
-  json.Key("max_area_measured_m2").Number(s.max_area_measured_m2);
-  json.Key("max_area_simulated_m2").Number(s.max_area_simulated_m2);
-  json.Key("notes").BeginArray();
-  for (const auto& note : s.notes) json.String(note);
-  json.EndArray();
-  json.Key("output").String(out);
-  json.Key("report").String(report);
-  json.Key("wall_s").Number(s.wall_s);
   json.EndObject();
   std::cout << json.str() << std::endl;
 }
@@ -325,13 +309,15 @@ int RunScore(const std::vector<std::string>& args) {
       }
       outputs.Commit();
     }
+    result.summary.output_path = out;
+    result.summary.report_path = report;
     result.summary.wall_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (!quiet || !cl.Flag("json")) {
       std::cerr << result.summary.BriefReport();
       std::cerr << "  wrote " << out << (report.empty() ? "" : " and " + report) << "\n";
     }
-    if (cl.Flag("json")) PrintJson(result.summary, out, report);
+    if (cl.Flag("json")) PrintJson(result.summary);
     return 0;
   });
 }

@@ -16,6 +16,7 @@
 
 #include "common/hdf5_util.h"
 #include "libnetsim/validation/alignment.h"
+#include "libnetsim/validation/summary_fields.h"
 
 namespace netlab::netsim {
 namespace {
@@ -1258,25 +1259,20 @@ ScoreResult Score(const KnotTracks& meas, const KnotTracks& sim, const ScoreOpti
   return result;
 }
 
-std::string ScoreSummary::BriefReport() const {
-  std::ostringstream o;
-  o.precision(4);
-  o << "score: " << points << " knot-frames (" << frames << " frames x " << knots << " knots, "
-    << masked << " masked), alignment " << AlignmentName(alignment) << "\n";
-  o << "  " << headline << "\n";
-  o << "  RMS " << rms_percent_of_side << " % of the " << side_m
-    << " m side; corner/edge/inner RMS " << per_class[0].rms_m * 1e3
-    << " / " << per_class[1].rms_m * 1e3 << " / " << per_class[2].rms_m * 1e3 << " mm\n";
-  o << "  time offset " << time_offset_s * 1e3 << " +- " << time_offset_sigma_s * 1e3
-    << " ms; Sigma_sim " << sim_uncertainty << "\n";
-  o << "  mean d2 " << mean_d2 << " (expected 3; dof " << dof << ", effective points "
-    << effective_points << ", tau_int " << tau_int << " frames, design effect " << design_effect
-    << "), p = " << p_value << "\n";
-  o << "  verdict: " << verdict << " with the measurement uncertainty (rejected above mean d2 "
-    << critical_mean_d2 << ", margin " << margin << "); skill " << skill
-    << " against straight-line flight (" << baseline_rms_m * 1e3 << " mm RMS)\n";
-  for (const std::string& note : notes) o << "  note: " << note << "\n";
-  return o.str();
-}
+// The text summary's layout: its words, and the fields' values and labels by key.
+constexpr char kBriefText[] =
+    "score: {points} knot-frames ({frames} frames x {knots} knots, {masked} masked), "
+    "[alignment]\n"
+    "  {headline}\n"
+    "  [rms_percent_of_side] % of the {side_m} m side; [per_class.corner] / {per_class.edge} / "
+    "{per_class.inner} mm\n"
+    "  [time_offset_s@ms] [time_offset_sigma_s@ms] ms; [sim_uncertainty]\n"
+    "  [mean_d2] (expected 3; [dof], [effective_points], [tau_int] frames, [design_effect]), "
+    "[p_value]\n"
+    "  [verdict] with the measurement uncertainty ([critical_mean_d2], [margin]); [skill] "
+    "against straight-line flight ({baseline_rms_mm} mm RMS)\n"
+    "  [notes]\n";
+
+std::string ScoreSummary::BriefReport() const { return FillSummaryText(kBriefText, *this); }
 
 }  // namespace netlab::netsim

@@ -169,8 +169,11 @@ struct ScoreSummary {
   double max_area_measured_m2 = 0.0, max_area_time_measured_s = 0.0;  // NaN: never measured
   double max_area_simulated_m2 = 0.0, max_area_time_simulated_s = 0.0;
   std::vector<std::string> notes;  // what a reader must know (Sigma_sim zero, sparse output...)
+  // The files the score was written to (score.h5, the HTML report; empty: none), for the JSON.
+  std::string output_path, report_path;
   double wall_s = 0.0;
 
+  // The text summary, a few lines (its fields and words: summary_fields.h).
   std::string BriefReport() const;
 };
 

@@ -5,6 +5,7 @@
 
 #include "common/files.h"
 #include "common/hdf5_util.h"
+#include "libnetsim/validation/summary_fields.h"
 
 namespace netlab::netsim {
 namespace {
@@ -118,36 +119,14 @@ void WriteScore(const std::string& path, const ScoreResult& r) {
 
     h5::Id summary = h5::CreateGroup(f, "summary");
     const hid_t g = summary.get();
-    WriteScalar(g, "frames", s.frames, "1");
-    WriteScalar(g, "knots", s.knots, "1");
-    WriteScalar(g, "points", s.points, "knot-frames");
-    WriteScalar(g, "rms_mm", s.rms_m * 1e3, "mm");
-    WriteScalar(g, "rms_percent_of_side", s.rms_percent_of_side, "%");
-    WriteScalar(g, "max_mm", s.max_m * 1e3, "mm");
-    WriteScalar(g, "left_out_points", s.left_out, "knot-frames");
-    WriteScalar(g, "sigma_bound_mm", s.sigma_bound_m * 1e3, "mm");
-    WriteScalar(g, "weighted_rms_mm", s.weighted_rms_m * 1e3, "mm");
-    WriteScalar(g, "degenerate_points", s.degenerate, "knot-frames");
-    WriteScalar(g, "side_m", s.side_m, "m");
-    WriteScalar(g, "mean_d2", s.mean_d2, "1");
-    WriteScalar(g, "dof", s.dof, "1");
-    WriteScalar(g, "tau_int", s.tau_int, "frames");
-    WriteScalar(g, "design_effect", s.design_effect, "1");
-    WriteScalar(g, "effective_points", s.effective_points, "knot-frames");
-    WriteScalar(g, "p_value", s.p_value, "1");
-    WriteScalar(g, "critical_mean_d2", s.critical_mean_d2, "1");
-    WriteScalar(g, "margin", s.margin, "1");
-    WriteScalar(g, "skill", s.skill, "1");
-    WriteScalar(g, "baseline_rms_mm", s.baseline_rms_m * 1e3, "mm");
-    WriteScalar(g, "interpolation_rms_mm", s.interpolation_rms_m * 1e3, "mm");
-    WriteScalar(g, "max_area_measured_m2", s.max_area_measured_m2, "m^2");
-    WriteScalar(g, "max_area_time_measured_s", s.max_area_time_measured_s, "s");
-    WriteScalar(g, "max_area_simulated_m2", s.max_area_simulated_m2, "m^2");
-    WriteScalar(g, "max_area_time_simulated_s", s.max_area_time_simulated_s, "s");
-    WriteScalar(g, "contact_time_s", s.contact_time_s, "s");
-    h5::WriteStringAttribute(g, "sim_uncertainty", s.sim_uncertainty);
-    h5::WriteStringAttribute(g, "headline", s.headline);
-    h5::WriteStringAttribute(g, "contact_from", s.contact_from);
+    for (const SummaryField& field : SummaryFields()) {
+      if (!(field.outputs & kInFile)) continue;
+      const std::string key(field.key);
+      if (field.kind == SummaryKind::kText)
+        h5::WriteStringAttribute(g, key, field.value(s).text);
+      else
+        WriteScalar(g, key, field.value(s).number, std::string(field.unit));
+    }
     H5Fflush(f, H5F_SCOPE_GLOBAL);
   }
   RenameInto(partial, path);
