@@ -4,17 +4,6 @@
 #include <stdexcept>
 
 namespace netlab::recon {
-namespace {
-
-// Bitwise equality that treats NaN positions alike (an absent label equals an absent label).
-bool Same(const Label& a, const Label& b) {
-  auto same = [](double x, double y) { return x == y || (std::isnan(x) && std::isnan(y)); };
-  return same(a.px.x(), b.px.x()) && same(a.px.y(), b.px.y()) && a.source == b.source &&
-         a.confidence == b.confidence && a.state == b.state;
-}
-
-}  // namespace
-
 LabelStore::LabelStore(LabelSet labels) : labels_(std::move(labels)) {}
 
 int LabelStore::Apply(const std::string& name, const std::vector<LabelEdit>& edits) {
@@ -31,7 +20,7 @@ int LabelStore::Apply(const std::string& name, const std::vector<LabelEdit>& edi
   Step step{name, {}};
   for (const LabelEdit& e : edits) {
     Label& slot = labels_.at(e.camera, e.t, e.knot);
-    if (Same(slot, e.label)) continue;
+    if (SameLabel(slot, e.label)) continue;
     step.changes.push_back({e.camera, e.t, e.knot, slot, e.label});
     slot = e.label;
   }

@@ -79,6 +79,15 @@ struct Label {
   }
 };
 
+// Whether two labels are the same: position, source, confidence and state alike, an absent
+// position (NaN) equal to an absent one. The label store's steps and the window's session
+// compare labels by it.
+inline bool SameLabel(const Label& a, const Label& b) {
+  const auto same = [](double x, double y) { return x == y || (std::isnan(x) && std::isnan(y)); };
+  return same(a.px.x(), b.px.x()) && same(a.px.y(), b.px.y()) && a.source == b.source &&
+         a.confidence == b.confidence && a.state == b.state;
+}
+
 // Per (camera, frame row, knot): why a label is under review (the labeling tools' reasons).
 using ReviewReasons = std::map<std::tuple<int, int, int>, std::string>;
 

@@ -58,13 +58,6 @@ recon::LabelSet OpenLabels(const Project& p, const std::vector<std::string>& cam
   return empty;
 }
 
-// Whether two labels are the same (as LabelStore::Apply compares them: NaN equals NaN).
-bool SameLabel(const recon::Label& a, const recon::Label& b) {
-  const auto same = [](double x, double y) { return x == y || (std::isnan(x) && std::isnan(y)); };
-  return same(a.px.x(), b.px.x()) && same(a.px.y(), b.px.y()) && a.source == b.source &&
-         a.confidence == b.confidence && a.state == b.state;
-}
-
 }  // namespace
 
 std::unique_ptr<Session> Session::Open(const Project& project,
@@ -225,7 +218,7 @@ Session::FillGridPreview Session::PreviewFillGrid(recon::LabelSet snapshot, int 
     for (int c = 0; c < cameras(); ++c)
       for (int f = 0; f < after.frames(); ++f)
         for (int k = 0; k < after.knots(); ++k)
-          if (!SameLabel(before.at(c, f, k), after.at(c, f, k)))
+          if (!recon::SameLabel(before.at(c, f, k), after.at(c, f, k)))
             edits.push_back({c, f, k, after.at(c, f, k)});
     return edits;
   };

@@ -139,6 +139,27 @@ TEST(LabelSet, EmptyHasEveryLabelAbsent) {
   EXPECT_EQ(set.at(1, 3, 5).source, LabelSource::kNone);
 }
 
+TEST(LabelSet, SameLabelComparesEveryFieldAndTakesAbsentPositionsAlike) {
+  const Label absent;
+  EXPECT_TRUE(SameLabel(absent, Label()));  // NaN positions: both absent
+  Label placed;
+  placed.px = {10.5, 20.25};
+  placed.source = LabelSource::kManual;
+  placed.confidence = 1.0f;
+  placed.state = LabelState::kAccepted;
+  EXPECT_TRUE(SameLabel(placed, placed));
+  EXPECT_FALSE(SameLabel(placed, absent));
+  for (int field = 0; field < 4; ++field) {
+    Label other = placed;
+    if (field == 0) other.px.y() = 20.5;
+    if (field == 1) other.source = LabelSource::kNone;
+    if (field == 2) other.confidence = 0.5f;
+    if (field == 3) other.state = LabelState::kNeedsReview;
+    EXPECT_FALSE(SameLabel(placed, other)) << "field " << field;
+  }
+  EXPECT_FALSE(SameLabel(Label::Hidden(), absent));  // hidden: the person's mark, no position
+}
+
 TEST(LabelSet, FindsCamerasByName) {
   const LabelSet set = LabelSet::Empty(1, 1, {"left", "right"}, {0});
   EXPECT_EQ(set.FindCamera("left"), 0);
