@@ -9,6 +9,7 @@
 
 #include "common/files.h"
 #include "common/hdf5_util.h"
+#include "common/memory.h"
 
 namespace netlab {
 namespace {
@@ -297,6 +298,14 @@ KnotTracks ReadKnotTracks(const std::string& path) {
   if (time_dims.size() != 1) fail("/time must be 1-D");
   if (grid_dims.size() != 2 || grid_dims[1] != 2) fail("/knots/grid must be [K,2]");
   const hsize_t t = time_dims[0], k = grid_dims[0];
+  // A dataset's extent costs nothing to declare: a file of 1e11 frames is 3 kB, and reading it
+  // ended in a bare "out of memory". Sized before anything is allocated (a position, a flag and a
+  // covariance per knot-frame, a time per frame).
+  if (const std::string shortfall = MemoryShortfall(static_cast<double>(t) *
+                                                    (8.0 + static_cast<double>(k) * 97.0));
+      !shortfall.empty())
+    fail("/time and /knots/grid give " + std::to_string(t) + " frames of " + std::to_string(k) +
+         " knots: reading them " + shortfall);
   auto expect = [&](const char* name, std::vector<hsize_t> dims) {
     if (h5::DatasetDims(f, name) != dims) {
       std::string shape;

@@ -19,6 +19,7 @@
 #include "common/errors.h"
 #include "common/files.h"
 #include "common/hdf5_util.h"
+#include "common/memory.h"
 #include "libreconstruct/labels/csv_table.h"
 
 namespace netlab::recon {
@@ -242,6 +243,16 @@ LabelSet ReadLabelsFile(const std::string& path, hid_t f) {
   if (frame_dims.size() != 1)
     fail("/frame_index has shape " + Shape(frame_dims) + ", expected [T]");
   const hsize_t t = frame_dims[0], k = static_cast<hsize_t>(labels.knots());
+  // A dataset's extent costs nothing to declare: sized before anything is allocated (it ended in
+  // a bare "out of memory" naming neither the file nor the frames).
+  if (const std::string shortfall =
+          MemoryShortfall(static_cast<double>(t) * static_cast<double>(k) *
+                          static_cast<double>(std::max<size_t>(1, labels.cameras.size())) *
+                          sizeof(Label));
+      !shortfall.empty())
+    fail("/frame_index gives " + std::to_string(t) + " frames of " + std::to_string(k) +
+         " knots in " + std::to_string(labels.cameras.size()) + " cameras: reading them " +
+         shortfall);
   labels.frame_index.resize(t);
   h5::ReadDataset(f, "/frame_index", H5T_NATIVE_INT, labels.frame_index.data());
   // Repeated or backward frames gave a /time that stood still or ran back downstream.

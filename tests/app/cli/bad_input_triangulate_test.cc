@@ -79,6 +79,21 @@ void ToUnits(const std::string& path, const std::string& time_units, double per_
     h5::SetUnits(file.get(), "knots/covariance", length_units + "^2");
 }
 
+// Gives the datasets `names` (each [T, ...] of `type`s) of the file at `path` an extent of
+// `frames` frames, nothing stored: a file of 3 kB that declares 1e11 frames.
+void DeclareFrames(const std::string& path, hsize_t frames,
+                   const std::vector<std::pair<std::string, hid_t>>& names) {
+  h5::Id file = h5::OpenFileReadWrite(path);
+  for (const auto& [name, type] : names) {
+    std::vector<hsize_t> dims = h5::DatasetDims(file.get(), name);
+    H5Ldelete(file.get(), name.c_str(), H5P_DEFAULT);
+    const std::vector<hsize_t> frame_dims(dims.begin() + 1, dims.end());
+    h5::Id dataset = h5::CreateFrameDataset(file.get(), name, type, frame_dims, 1024);
+    dims[0] = frames;
+    ASSERT_GE(H5Dset_extent(dataset.get(), dims.data()), 0) << path << ":" << name;
+  }
+}
+
 class BadInputTriangulate : public CommandTest {
  protected:
   BadInputTriangulate() : CommandTest("bad_input_triangulate") {}
@@ -179,6 +194,13 @@ class BadInputTriangulate : public CommandTest {
     all_lost.valid.assign(all_lost.valid.size(), 0);
     all_lost.position.assign(all_lost.position.size(), Eigen::Vector3d::Constant(NAN));
     WriteKnotTracks(Path("all_lost.h5"), all_lost);
+    // Files that declare 1e11 frames (3 kB each): a bare "out of memory" named neither.
+    std::filesystem::copy_file(Path("truth.h5"), Path("declared_huge.h5"));
+    DeclareFrames(Path("declared_huge.h5"), 100000000000ULL,
+                  {{"/time", H5T_NATIVE_DOUBLE}, {"/knots/position", H5T_NATIVE_DOUBLE},
+                   {"/knots/valid", H5T_NATIVE_UINT8}});
+    std::filesystem::copy_file(Path("labels.h5"), Path("labels_huge.h5"));
+    DeclareFrames(Path("labels_huge.h5"), 100000000000ULL, {{"/frame_index", H5T_NATIVE_INT}});
     KnotTracks twice = Truth(kRows, kCols);
     twice.grid[5] = twice.grid[4];
     WriteKnotTracks(Path("grid_twice.h5"), twice);
@@ -235,6 +257,9 @@ TEST_F(BadInputTriangulate, EachKindEndsInAClearError) {
            "triangulate --rig {dir}/rig3.yaml --knots 4x4 --fps 179 --labels {dir}/labels.h5 "
            "--out {dir}/t.h5", 1,
            {"{dir}/labels.h5", "cam3", "{dir}/rig3.yaml"}},
+          {"labels declaring 1e11 frames", base + "--labels {dir}/labels_huge.h5 --out {dir}/t.h5",
+           1, {"{dir}/labels_huge.h5: /frame_index gives 100000000000 frames of 16 knots in 4 "
+               "cameras: reading them needs ~", "available"}},
           {"empty --out", good + "--out ''", 2, {"--out needs a non-empty value"}},
           {"--out in a folder that is a file", good + "--out {dir}/rig.yaml/t.h5", 1,
            {"{dir}/rig.yaml/t.h5"}},
@@ -320,6 +345,10 @@ TEST_F(BadInputTriangulate, ScoreEndsInAClearError) {
            {"{dir}/one_frame.h5: 1 frame: a score compares a flight over time"}},
           {"a simulation with every knot lost", base + "--sim {dir}/all_lost.h5 --out {dir}/s.h5",
            1, {"{dir}/all_lost.h5: no knot is valid in any of its 12 frames"}},
+          {"a measurement declaring 1e11 frames", "score --measured {dir}/declared_huge.h5 --sim "
+                                                  "{dir}/truth.h5 --out {dir}/s.h5", 1,
+           {"{dir}/declared_huge.h5: /time and /knots/grid give 100000000000 frames of 16 knots: "
+            "reading them needs ~", "available"}},
           {"a grid with a knot twice", "score --measured {dir}/grid_twice.h5 --sim "
                                        "{dir}/truth.h5 --out {dir}/s.h5", 1,
            {"{dir}/grid_twice.h5:/knots/grid: knots 4 and 5 are both (1, 0)"}},
