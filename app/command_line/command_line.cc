@@ -167,6 +167,19 @@ int RunGuarded(const char* name, const std::function<int()>& body) {
                  "(%s available); try a smaller input or option range\n",
                  name, available ? FormatBytes(*available).c_str() : "unknown");
     return 1;
+  } catch (const std::logic_error& e) {
+    // std::invalid_argument and std::out_of_range are a library's checks of the values it is
+    // given (and std::stoi's); the values are the user's, so they read as bad input.
+    if (dynamic_cast<const std::invalid_argument*>(&e) == nullptr &&
+        dynamic_cast<const std::out_of_range*>(&e) == nullptr) {
+      std::fprintf(stderr,
+                   "netlab %s: internal error: %s\n(a broken invariant of netlab's, not a fault "
+                   "in the input: please report it with the command line)\n",
+                   name, e.what());
+      return kInternalErrorStatus;
+    }
+    std::fprintf(stderr, "netlab %s: error: %s\n", name, e.what());
+    return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "netlab %s: error: %s\n", name, e.what());
     return 1;

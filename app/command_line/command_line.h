@@ -48,9 +48,19 @@ class CommandLine {
   std::vector<std::string> positional_;
 };
 
+// The exit status of a command stopped by a broken invariant of netlab itself (a bug).
+inline constexpr int kInternalErrorStatus = 3;
+
 // Runs a subcommand's body and turns what it throws into the exit status and message every
-// command has: UsageError -> "netlab NAME: <what>" and "(see netlab NAME --help)", status 2; any
-// other std::exception -> "netlab NAME: error: <what>", status 1. Otherwise the body's status.
+// command has (docs/architecture.md, "Errors"):
+//   UsageError                      "netlab NAME: <what>" and "(see netlab NAME --help)", status 2
+//   InputError, a failed run (any   "netlab NAME: error: <what>", status 1
+//     other std::exception, out of
+//     memory, std::invalid_argument
+//     and std::out_of_range)
+//   std::logic_error (an invariant) "netlab NAME: internal error: <what>" and a line saying it is
+//                                   a bug of netlab's, status kInternalErrorStatus
+// Otherwise the body's status.
 int RunGuarded(const char* name, const std::function<int()>& body);
 
 }  // namespace netlab::app
