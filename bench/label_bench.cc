@@ -1,7 +1,7 @@
 // The labeling engine against a scripted user, on a rendered shot with its truth.
 //
-//   bench_label --shot DIR [--coloring FILE] [--frames A:B] [--cameras cam0,cam1] [--radius PX]
-//               [--seed N] [--detector] [--fill-grid-between]
+//   bench_label --shot DIR [--coloring FILE] [--target SIM.h5] [--frames A:B]
+//               [--cameras cam0,cam1] [--radius PX] [--seed N] [--detector] [--fill-grid-between]
 //
 // DIR is the output of `netlab render` (experiment.yaml, rig_true.yaml, labels_true.h5). The
 // script plays the person: it seeds the four corners of the first frame in every camera that
@@ -11,7 +11,11 @@
 // --radius); when Find Node says none or several, it clicks the knot by hand (a second action,
 // the true position off by up to 0.5 px). A label under review on a knot the truth says is
 // hidden is deleted (one action). Accepted labels are never checked by the script: a wrong one
-// stays wrong and is counted.
+// stays wrong and is counted. After the person's labels of a frame the engine checks the knots'
+// other labels against them (LabelEngine::CheckAgainstPerson), and the person fixes what that
+// turns to review, as in the window. --target (the simulation or scenario the shot was rendered
+// from, as a project's `target`): the engine knows the target and doubts a label of a knot it
+// hides (LabelEngine::SetTarget).
 //
 // --fill-grid-between: the person works a frame's cameras from the one with the fewest knots to
 // fix, and before each next one with a dozen or more to fix presses G and Enter (Fill Grid's
@@ -62,6 +66,7 @@
 #include "libreconstruct/labels/label_set.h"
 #include "libreconstruct/recording/experiment.h"
 #include "libreconstruct/recording/sequence.h"
+#include "app/gui/document/missing_knots.h"
 #include "bench/person_time.h"
 
 namespace {
@@ -113,9 +118,11 @@ const char* SourceName(recon::LabelSource s) {
 
 void Usage() {
   std::fprintf(stderr,
-               "usage: bench_label --shot DIR [--coloring FILE] [--frames A:B] "
+               "usage: bench_label --shot DIR [--coloring FILE] [--target SIM.h5] [--frames A:B] "
                "[--cameras cam0,cam1,...] [--radius PX] [--seed N] [--knotless] [--detector]\n"
                "               [--fill-grid-between]\n"
+               "--target: the simulation (or scenario) the shot was rendered from: the engine\n"
+               "  doubts a label of a knot its target hides (LabelEngine::SetTarget)\n"
                "--fill-grid-between: the person works the cameras from the one with the fewest\n"
                "  knots to fix, pressing G and Enter (Fill Grid: two actions) before each next\n"
                "  one\n"
@@ -130,7 +137,7 @@ void Usage() {
 }
 
 struct BenchOptions {
-  std::string shot, coloring_path;
+  std::string shot, coloring_path, target_path;
   int first = -1, last = -1;  // frame numbers; -1: the truth's
   double radius = 6.0;        // Find Node's brush, px
   uint64_t seed = 1;          // of the clicks' error
@@ -149,6 +156,8 @@ bool ParseArgs(int argc, char** argv, BenchOptions* o) {
       o->shot = argv[++i];
     } else if (a == "--coloring" && more) {
       o->coloring_path = argv[++i];
+    } else if (a == "--target" && more) {
+      o->target_path = argv[++i];
     } else if (a == "--frames" && more) {
       if (std::sscanf(argv[++i], "%d:%d", &o->first, &o->last) != 2) return false;
     } else if (a == "--radius" && more) {
@@ -250,6 +259,10 @@ struct ScriptedUser {
   // NETLAB_ACTIONS_CSV=FILE: one row per visible knot the person acted on (for analysis).
   std::FILE* actions_csv = nullptr;
   bool fill_grid_between = false;             // --fill-grid-between
+  // The knots the person labeled in the frame row at hand, with the cameras (FixKnot).
+  std::map<int, std::vector<int>> touched{};
+  // Labels the check after the person's labels turned to review; of them > 1 px off or hidden.
+  int recheck_flags = 0, recheck_flags_off = 0;
   static constexpr int kWorthAFillGrid = 12;  // knots to fix in a camera worth G and Enter
 
   // Every knot of frame row t in every camera: the engine's labels counted, and corrected.
@@ -274,6 +287,43 @@ struct ScriptedUser {
       placed = placed || tally[c].find_node > brushed;
       if (!edits.empty()) store.Apply("scripted user", edits);
     }
+    CheckAfterPerson(t);
+  }
+
+  // The engine checks each knot the person labeled in frame row t against its other cameras'
+  // labels (LabelEngine::CheckAgainstPerson); what it turns to review the person fixes too, and
+  // so on while it finds more.
+  void CheckAfterPerson(int t) {
+    for (int round = 0; round < 4 && !touched.empty(); ++round) {
+      std::map<int, std::vector<int>> asked;
+      asked.swap(touched);
+      std::vector<std::pair<int, int>> flagged;  // (camera, knot)
+      for (const auto& [k, cams] : asked) {
+        std::vector<recon::Label> before(shot.n_cam());
+        for (int c = 0; c < shot.n_cam(); ++c) before[c] = store.at(c, t, k);
+        if (engine.CheckAgainstPerson(t, k, cams) == 0) continue;
+        for (int c = 0; c < shot.n_cam(); ++c)
+          if (before[c].accepted() && !store.at(c, t, k).accepted()) flagged.push_back({c, k});
+      }
+      for (int c = 0; c < shot.n_cam(); ++c) {
+        std::vector<recon::LabelEdit> edits;
+        for (const auto& [fc, k] : flagged) {
+          if (fc != c) continue;
+          ++recheck_flags;
+          const recon::Label& l = store.at(c, t, k);
+          recheck_flags_off += (l.px - shot.Truth(c, t, k).px).norm() > 1.0 ||
+                               !shot.Truth(c, t, k).present();
+          if (!shot.Truth(c, t, k).present()) {
+            ++tally[c].deletes;
+            edits.push_back({c, t, k, recon::Label{}});
+            continue;
+          }
+          FixKnot(c, t, k, &edits);
+        }
+        if (!edits.empty()) store.Apply("scripted user", edits);
+      }
+    }
+    touched.clear();
   }
 
   // The visible knots of (c, t) without an accepted label, and hidden ones under review: what
@@ -320,6 +370,16 @@ struct ScriptedUser {
     }
     ++y.knot_frames;
     if (l.accepted()) return;
+    FixKnot(c, t, k, edits);
+  }
+
+  // Visible knot k of (c, t) without an accepted label: Find Node at its true position, else a
+  // click. The person's label is noted in `touched` for the check after the frame.
+  void FixKnot(int c, int t, int k, std::vector<recon::LabelEdit>* edits) {
+    Tally& y = tally[c];
+    const recon::Label& l = store.at(c, t, k);
+    const recon::Label& truth_l = shot.Truth(c, t, k);
+    touched[k].push_back(c);
     ++y.find_node;
     y.find_node_missing += !l.present();
     auto& [n, n_off] = causes[Cause(c, t, k)];
@@ -681,6 +741,8 @@ int main(int argc, char** argv) {
         },
         setup.options);
     setup.ApplyColourCheck(&engine);
+    if (!o.target_path.empty())
+      engine.SetTarget(gui::LoadTarget(o.target_path, sequence.experiment().fps));
     // The engine frame by frame, the person after each frame.
     ScriptedUser user{shot, engine, store, o.radius, tally, std::mt19937_64(o.seed)};
     user.fill_grid_between = o.fill_grid_between;
@@ -718,6 +780,9 @@ int main(int argc, char** argv) {
     for (const auto& [check, n] : user.doubts)
       std::printf("Find Node kept for review by %s: %d (%d of them > 1 px off)\n", check.c_str(),
                   n.first, n.second);
+    std::printf("the check after the person's labels turned %d accepted labels to review (%d of "
+                "them > 1 px off, or of a hidden knot)\n",
+                user.recheck_flags, user.recheck_flags_off);
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_label: %s\n", e.what());

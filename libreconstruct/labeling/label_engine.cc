@@ -36,6 +36,9 @@ std::optional<std::pair<int, double>> ViewOffTheOthers(const calib::Rig& rig,
                                                        const std::vector<Observation>& obs,
                                                        const TriangulationOptions& topt,
                                                        double tolerance, double sigma);
+std::optional<double> OffTheViews(const calib::Rig& rig, const Observation& view,
+                                  const std::vector<Observation>& others,
+                                  const TriangulationOptions& topt, double tolerance, double sigma);
 
 void Add(EngineCounts* sum, const EngineCounts& n);
 
@@ -607,6 +610,70 @@ FindNodeResult LabelEngine::FindNodeAt(int camera, int t, int knot, const Eigen:
   return r;
 }
 
+int LabelEngine::CheckAgainstPerson(int t, int knot, const std::vector<int>& person) {
+  if (!rig_) return 0;
+  const LabelSet& set = store_->labels();
+  const auto persons = [&](int c) {
+    const LabelSource s = set.at(c, t, knot).source;
+    return s == LabelSource::kManual || s == LabelSource::kImported ||
+           std::find(person.begin(), person.end(), c) != person.end();
+  };
+  std::vector<Observation> obs;
+  std::vector<int> from;
+  for (int c = 0; c < static_cast<int>(set.cameras.size()); ++c)
+    if (Observed(set.at(c, t, knot))) {
+      obs.push_back({RigIndex(c), set.at(c, t, knot).px});
+      from.push_back(c);
+    }
+  if (std::none_of(from.begin(), from.end(), persons)) return 0;
+  TriangulationOptions topt;
+  topt.outlier_threshold_px = o_.epipolar_tolerance_px;
+  std::vector<LabelEdit> flags;
+  const auto flag = [&](size_t i, const std::string& why) {
+    Label l = set.at(from[i], t, knot);
+    l.state = LabelState::kNeedsReview;
+    flags.push_back({from[i], t, knot, l});
+    Note(from[i], t, knot, why);
+  };
+  // Two of the person's views or more: they are the reference, each tool's label held against
+  // where they put the knot (they must agree with each other; if not, it is the person's word).
+  std::vector<Observation> persons_views;
+  for (size_t i = 0; i < from.size(); ++i)
+    if (persons(from[i])) persons_views.push_back(obs[i]);
+  if (persons_views.size() >= 2) {
+    for (size_t i = 0; i < from.size(); ++i)
+      if (!persons(from[i]))
+        if (const std::optional<double> off = OffTheViews(*rig_, obs[i], persons_views, topt,
+                                                          o_.projection_tolerance_px,
+                                                          o_.label_sigma_px))
+          flag(i, "after the person's labels: " + Px(*off) +
+                      " px from where the person's labels put the knot");
+    obs.clear();
+  }
+  // The person's one view: the worst view each time, until the rest agree (a knot may have two
+  // tools' labels off).
+  while (obs.size() >= 3) {
+    const auto off =
+        ViewOffTheOthers(*rig_, obs, topt, o_.projection_tolerance_px, o_.label_sigma_px);
+    if (!off) break;
+    const size_t i = static_cast<size_t>(off->first);
+    if (persons(from[i])) {
+      for (size_t j = 0; j < from.size(); ++j)
+        if (!persons(from[j]))
+          flag(j, "after the person's label in " + set.cameras[from[i]] + ": the cameras " +
+                      "disagree with it by " + Px(off->second) + " px");
+      break;
+    }
+    flag(i, "after the person's labels: " + Px(off->second) +
+                " px from where the other cameras put the knot");
+    obs.erase(obs.begin() + static_cast<std::ptrdiff_t>(i));
+    from.erase(from.begin() + static_cast<std::ptrdiff_t>(i));
+  }
+  if (flags.empty()) return 0;
+  return Commit("check after the person's label (frame row " + std::to_string(t) + ")", flags)
+      .review;
+}
+
 std::optional<Eigen::Vector2d> LabelEngine::OthersPlace(int camera, int t, int knot,
                                                         bool* by_motion) const {
   if (by_motion) *by_motion = false;
@@ -1016,24 +1083,36 @@ std::optional<std::pair<int, double>> ViewOffTheOthers(const calib::Rig& rig,
                                                        const std::vector<Observation>& obs,
                                                        const TriangulationOptions& topt,
                                                        double tolerance, double sigma) {
-  if (obs.size() < 3 || !(tolerance > 0.0) || !(sigma > 0.0)) return std::nullopt;
+  if (obs.size() < 3) return std::nullopt;
   std::optional<std::pair<int, double>> worst;
   for (size_t i = 0; i < obs.size(); ++i) {
     std::vector<Observation> others;
     for (size_t o = 0; o < obs.size(); ++o)
       if (o != i) others.push_back(obs[o]);
-    const std::optional<ProjectedPoint> q = ProjectAgreeingViews(rig, obs[i].camera, others, topt);
-    if (!q) continue;
-    const Eigen::Vector2d off = q->px - obs[i].px;
-    if (off.norm() <= tolerance || (worst && off.norm() <= worst->second)) continue;
-    // The projection's covariance plus this label's own noise; beyond the 99.9 % ellipse of two
-    // degrees of freedom.
-    const Eigen::Matrix2d covariance =
-        sigma * sigma * (Eigen::Matrix2d::Identity() + q->unit_covariance);
-    if (off.dot(covariance.ldlt().solve(off)) > 13.8)
-      worst = std::make_pair(static_cast<int>(i), off.norm());
+    const std::optional<double> off = OffTheViews(rig, obs[i], others, topt, tolerance, sigma);
+    if (off && (!worst || *off > worst->second)) worst = std::make_pair(static_cast<int>(i), *off);
   }
   return worst;
+}
+
+// How far `others`, agreeing with each other, place the knot from `view` (px), where that is more
+// than `tolerance` beyond what the labels' noise (`sigma` px in each view) explains there;
+// nullopt otherwise, or where they do not fix it (ProjectAgreeingViews).
+std::optional<double> OffTheViews(const calib::Rig& rig, const Observation& view,
+                                  const std::vector<Observation>& others,
+                                  const TriangulationOptions& topt, double tolerance,
+                                  double sigma) {
+  if (others.size() < 2 || !(tolerance > 0.0) || !(sigma > 0.0)) return std::nullopt;
+  const std::optional<ProjectedPoint> q = ProjectAgreeingViews(rig, view.camera, others, topt);
+  if (!q) return std::nullopt;
+  const Eigen::Vector2d off = q->px - view.px;
+  if (off.norm() <= tolerance) return std::nullopt;
+  // The projection's covariance plus this label's own noise; beyond the 99.9 % ellipse of two
+  // degrees of freedom.
+  const Eigen::Matrix2d covariance =
+      sigma * sigma * (Eigen::Matrix2d::Identity() + q->unit_covariance);
+  if (off.dot(covariance.ldlt().solve(off)) > 13.8) return off.norm();
+  return std::nullopt;
 }
 
 // `n` added to `sum`.
@@ -1117,9 +1196,43 @@ EngineCounts LabelEngine::CrossCheck(int t) {
   // The labels Fill Grid accepted, checked like the rest (a candidate is accepted where the
   // cameras agree within the outlier threshold; each one's place is known better only now).
   if (f.geometry && filled > 0) total.review += CheckEpipolar(&f);
-  // 3. The yarn colours.
+  // 3. Where the target hides the knot.
+  total.review += CheckHidden(t);
+  // 4. The yarn colours.
   if (codebook_) total.review += CheckColours(t);
   return total;
+}
+
+int LabelEngine::CheckHidden(int t) {
+  if (!rig_ || target_.empty()) return 0;
+  const LabelSet& set = store_->labels();
+  const double time_s = set.frame_index[t] / target_.fps;
+  TriangulationOptions topt;
+  topt.outlier_threshold_px = o_.epipolar_tolerance_px;
+  std::vector<LabelEdit> flags;
+  for (int c = 0; c < static_cast<int>(set.cameras.size()); ++c)
+    for (int k = 0; k < set.knots(); ++k) {
+      const Label& l = set.at(c, t, k);
+      if (!l.accepted() || l.source == LabelSource::kManual || l.source == LabelSource::kImported)
+        continue;
+      const std::vector<Observation> others = OtherViews(c, t, k);
+      if (others.size() < 2) continue;
+      const PointEstimate e = TriangulatePoint(*rig_, others, topt);
+      if (!e.valid || !e.outliers.empty() || !UsableGeometry(e)) continue;
+      const calib::Camera& camera = rig_->cameras[RigIndex(c)];
+      if (!TargetHides(target_, camera.Center(), e.position, time_s, -o_.target_margin_m))
+        continue;
+      Label flagged = l;
+      flagged.state = LabelState::kNeedsReview;
+      flags.push_back({c, t, k, flagged});
+      std::string from;
+      for (const Observation& o : others)
+        for (int j = 0; j < static_cast<int>(set.cameras.size()); ++j)
+          if (RigIndex(j) == o.camera) from += (from.empty() ? "" : ", ") + set.cameras[j];
+      Note(c, t, k, "the target hides the knot here (where " + from + " put it)");
+    }
+  if (flags.empty()) return 0;
+  return Commit("the target's check (frame row " + std::to_string(t) + ")", flags).review;
 }
 
 LabelingSummary LabelEngine::LabelFrames(int first, int last, const FrameDone& after_frame) {

@@ -58,6 +58,7 @@
 #include "libreconstruct/labeling/knot_track.h"
 #include "libreconstruct/labeling/label_identity.h"
 #include "libreconstruct/labeling/label_store.h"
+#include "libreconstruct/labeling/missing_knots.h"
 
 namespace netlab::recon {
 
@@ -138,6 +139,9 @@ struct LabelEngineOptions {
   // most background_tolerance (0..1 of the image's range).
   double background_reach_px = 10.0;
   double background_tolerance = 0.08;
+  // The target's check (SetTarget): its solids shrunk by this (m), so that a knot on a face the
+  // camera sees, its point a few millimetres off, is not taken for one behind it.
+  double target_margin_m = 0.005;
   // Threads for the work that is independent per camera (tracking each camera's knots); the
   // labels do not depend on it.
   int threads = 2;
@@ -225,6 +229,14 @@ class LabelEngine {
   int CheckColours(int t);
   // The net's colouring as the cameras see it; CrossCheck then ends with CheckColours.
   void SetCodebook(KnotCodebook codebook, IdentityCheckOptions options = {});
+  // The target (missing_knots.h: its solids in the rig's world frame, frame number f at time
+  // f / fps). CrossCheck then keeps for review a tool's label of a knot that the target hides
+  // from its camera: where two or more other cameras' labels place the knot, consistently and
+  // with a usable ray geometry, behind the target (its solids shrunk by target_margin_m). Empty
+  // (the default): nothing is known to hide a knot.
+  void SetTarget(Target target) { target_ = std::move(target); }
+  // That check of frame row t alone; returns the labels turned to review.
+  int CheckHidden(int t);
   // The person's brush: Find Node in (camera, t) at `centre`; a knot found is labeled `knot`,
   // accepted unless it contradicts what is known of that knot (then kept for review with the
   // reason): its yarns must run towards its accepted neighbours in that view, as in Fill Grid
@@ -244,6 +256,18 @@ class LabelEngine {
   // (projected: placed from the other cameras).
   FindNodeResult FindNodeAt(int camera, int t, int knot, const Eigen::Vector2d& centre,
                             double radius_px);
+  // The person's word on a knot in frame row t: `person` lists the cameras whose label of it the
+  // person has just set (placed, moved, accepted, or found with the brush). The knot's other
+  // accepted labels that a tool made (not the person's clicks or imported seeds, nor those
+  // cameras) are checked against the views with the person's, as the epipolar check does: a
+  // label that the other views place farther than projection_tolerance_px from the knot, beyond
+  // what label_sigma_px explains there, turns to review; where the tools' labels agree with each
+  // other and the person's one view is the odd one, all of them do (the person looked; nothing
+  // tells which of the tools' labels misled the rest). Where two of the person's views disagree,
+  // nothing is flagged: the person has said both. Tracking checked each label only against
+  // the views of its own time: a label tracked 3.3 px off stayed accepted after the person had
+  // set the knot's three other views. Returns the labels turned to review.
+  int CheckAgainstPerson(int t, int knot, const std::vector<int>& person);
 
   // Where the accepted labels of two or more other cameras (not themselves projected) put a
   // knot in (camera, t), when they agree and fix it to place_sigma_px; else, with one view or
@@ -374,6 +398,7 @@ class LabelEngine {
   KnotsInFrames one_path_;  // see one_path()
   double link_length_m_ = 0.0;
   std::optional<KnotCodebook> codebook_;
+  Target target_;
   IdentityCheckOptions identity_;
 };
 

@@ -104,8 +104,10 @@ std::unique_ptr<Session> Session::Open(const Project& project,
       OpenLabels(project, s->camera_names_, s->frame_numbers_), project.labels);
   // The missing knots, without those the target hides when the project knows it.
   MissingKnotsOptions missing_options;
-  if (!project.target.empty())
-    missing_options.target = LoadTarget(project.target, s->sequence_->experiment().fps);
+  if (!project.target.empty()) {
+    s->target_ = LoadTarget(project.target, s->sequence_->experiment().fps);
+    missing_options.target = s->target_;
+  }
   s->missing_ = std::make_unique<MissingKnots>(s->document_.get(), &s->rig_, s->rig_index_,
                                                missing_options);
   return s;
@@ -125,6 +127,7 @@ std::unique_ptr<recon::LabelEngine> Session::MakeEngine(recon::LabelStore* store
   auto engine = std::make_unique<recon::LabelEngine>(
       store, &rig_, [this](int c, int t) { return Image(c, t); }, engine_options_);
   if (codebook_) engine->SetCodebook(*codebook_, identity_);
+  engine->SetTarget(target_);
   {
     const std::lock_guard<std::mutex> lock(one_path_mutex_);
     engine->AdoptOnePath(one_path_);
@@ -140,8 +143,15 @@ recon::LabelEngine& Session::engine() {
 recon::FindNodeResult Session::FindNode(int camera, int t, int knot, const Eigen::Vector2d& centre,
                                         double radius_px) {
   const recon::FindNodeResult result = engine().FindNodeAt(camera, t, knot, centre, radius_px);
+  if (document_->at(camera, t, knot).accepted() && result.status == recon::FindNodeStatus::kFound)
+    CheckAgainstPerson(camera, t, knot);
   document_->MergeReasons(engine().reasons());
   return result;
+}
+
+void Session::CheckAgainstPerson(int camera, int t, int knot) {
+  engine().CheckAgainstPerson(t, knot, {camera});
+  document_->MergeReasons(engine().reasons());
 }
 
 void Session::PlaceLabel(int camera, int t, int knot, const Eigen::Vector2d& px,
@@ -152,6 +162,7 @@ void Session::PlaceLabel(int camera, int t, int knot, const Eigen::Vector2d& px,
   label.confidence = 1.0f;
   label.state = recon::LabelState::kAccepted;
   document_->Apply(step, {{camera, t, knot, label}});
+  CheckAgainstPerson(camera, t, knot);
 }
 
 void Session::AcceptLabel(int camera, int t, int knot) {
@@ -159,6 +170,7 @@ void Session::AcceptLabel(int camera, int t, int knot) {
   if (!label.present()) return;
   label.state = recon::LabelState::kAccepted;
   document_->Apply("Accept", {{camera, t, knot, label}});
+  CheckAgainstPerson(camera, t, knot);
 }
 
 void Session::DeleteLabel(int camera, int t, int knot) {

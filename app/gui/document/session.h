@@ -63,7 +63,9 @@ class Session {
   cv::Mat Image(int camera, int t, std::string* error = nullptr) const;
 
   // The tools, each one undoable step (GUI thread). Find Node: the person's brush (never a
-  // guess: none or several leave the labels as they were).
+  // guess: none or several leave the labels as they were). After the person's label (found with
+  // the brush, placed or accepted) the knot's other labels of the frame are checked against it
+  // (LabelEngine::CheckAgainstPerson): a step of its own where it turns some to review.
   recon::FindNodeResult FindNode(int camera, int t, int knot, const Eigen::Vector2d& centre,
                                  double radius_px);
   // A label exactly where the person put it (source: person, accepted). Also accepts and corrects
@@ -191,6 +193,9 @@ class Session {
   int MarkHiddenRun(int camera, int t, int knot);
 
  private:
+  // LabelEngine::CheckAgainstPerson for the person's label in (camera, t) of `knot`, its reasons
+  // merged into the document.
+  void CheckAgainstPerson(int camera, int t, int knot);
   Session() = default;
   std::unique_ptr<recon::LabelEngine> MakeEngine(recon::LabelStore* store) const;
   recon::LabelEngine& engine();
@@ -205,6 +210,7 @@ class Session {
   std::optional<recon::KnotCodebook> codebook_;
   recon::IdentityCheckOptions identity_;
   recon::LabelEngineOptions engine_options_;
+  recon::Target target_;  // project.yaml's target: its engines doubt labels of knots it hides
   std::unique_ptr<LabelDocument> document_;
   std::unique_ptr<recon::LabelEngine> engine_;  // over the document's store (GUI thread)
   std::unique_ptr<MissingKnots> missing_;       // over the document (destroyed before it)
