@@ -4,19 +4,23 @@
 //   netlab simulate scenarios/net_a_0.5.yaml --duration 0.4 --out sim.h5
 //   netlab color-net --knots 11x11 --out coloring.yaml
 //   netlab render --sim sim.h5 --out shot --frames 0:59 --coloring coloring.yaml
-//   build/bench/bench_gui --shot shot --coloring coloring.yaml [--frames 40] [--part A|B] [--json]
+//   build/bench/bench_gui --shot shot --coloring coloring.yaml [--target sim.h5] [--frames 40]
+//                         [--part A|B|C] [--json]
 //
 // A. Frame change latency: from the key press (Right) to all four 2048^2 views painted with the
 //    frame's labels (labels_true.h5: every visible knot) and overlays, over `--frames` frames:
 //    uncached (first visit, the cache emptied by a new window) and cached (the same frames
 //    again), at full and half resolution.
 // B. The scripted person (tests/app/gui/scripted_person.h) labeling the shot through the window:
-//    actions per knot-frame and wall time per action.
+//    actions per knot-frame and wall time per action, and the visible knot-frames the review
+//    queue never offered (left unlabeled), by how many other cameras labeled the knot there.
+//    --target (the project's target: the simulation the shot was rendered from, or the shot's
+//    truth.h5) keeps the knots the target hides off the queue, as a project with a target does.
 // C. Frame change with the 3D view open: the reconstruction room over the true labels
 //    triangulated (netlab triangulate's engine, --ba points), each step of its frame slider
 //    timed until the 3D view has painted the new frame (the window's frame follows it).
-// --json prints cached_ms, uncached_half_ms and three_d_ms ({median, p95}) and
-// actions_per_knot_frame.
+// --json prints cached_ms, uncached_half_ms and three_d_ms ({median, p95}),
+// actions_per_knot_frame, never_offered and wrong (part B).
 
 #include <QApplication>
 #include <QPushButton>
@@ -58,15 +62,17 @@ Stats Summarise(std::vector<double> ms) {
 
 // A project over the shot whose labels start as `start` (copied) or empty.
 std::string ProjectFile(const std::string& shot, const std::string& coloring,
-                        const std::string& dir, const std::string& name, const std::string& start) {
+                        const std::string& dir, const std::string& name, const std::string& start,
+                        const std::string& target = "") {
   const std::string labels = dir + "/" + name + ".h5";
   fs::remove(labels);
   fs::remove(labels + ".journal");
   if (!start.empty()) fs::copy_file(start, labels);
   const std::string path = dir + "/" + name + ".yaml";
-  SaveProject(
-      MakeProject(shot + "/experiment.yaml", shot + "/rig_true.yaml", coloring, labels, 0, 0),
-      path);
+  Project project =
+      MakeProject(shot + "/experiment.yaml", shot + "/rig_true.yaml", coloring, labels, 0, 0);
+  if (!target.empty()) project.target = fs::absolute(target).string();
+  SaveProject(project, path);
   return path;
 }
 
@@ -152,7 +158,7 @@ Stats ThreeDTimes(const std::string& project, int frames) {
 
 int main(int argc, char** argv) {
   using namespace netlab::gui;
-  std::string shot, coloring;
+  std::string shot, coloring, target;
   int frames = 40;
   bool json = false;
   std::string part = "ABC";  // --part A, B or C: that part only
@@ -162,6 +168,8 @@ int main(int argc, char** argv) {
       shot = argv[++i];
     else if (a == "--coloring" && i + 1 < argc)
       coloring = argv[++i];
+    else if (a == "--target" && i + 1 < argc)
+      target = argv[++i];
     else if (a == "--frames" && i + 1 < argc)
       frames = std::stoi(argv[++i]);
     else if (a == "--json")
@@ -172,7 +180,7 @@ int main(int argc, char** argv) {
       part = argv[++i];
     else {
       std::fprintf(stderr,
-                   "usage: bench_gui --shot DIR --coloring coloring.yaml [--frames N] "
+                   "usage: bench_gui --shot DIR --coloring coloring.yaml [--target FILE] [--frames N] "
                    "[--part A|B|C] [--json]\n");
       return 2;
     }
@@ -213,11 +221,12 @@ int main(int argc, char** argv) {
 
   // B. The scripted person through the window.
   double per_knot_frame = 0;
+  long never_offered = 0, wrong_accepted = 0;
   if (part.find('B') != std::string::npos) {
     MainWindow w;
     w.resize(1600, 1000);
     w.show();
-    w.OpenProject(QString::fromStdString(ProjectFile(shot, coloring, dir, "session", "")), false);
+    w.OpenProject(QString::fromStdString(ProjectFile(shot, coloring, dir, "session", "", target)), false);
     w.WaitForFrame(60000);
     QElapsedTimer timer;
     timer.start();
@@ -236,6 +245,8 @@ int main(int argc, char** argv) {
     per_knot_frame = knot_frames > 0 ? double(actions) / knot_frames : 0.0;
     // What the session left: accepted labels right (<= 2 px) and wrong, visible knots unlabeled.
     long right = 0, wrong = 0, unlabeled = 0;
+    // The unlabeled ones by how many other cameras have a label of the knot in that frame.
+    std::array<long, 4> unlabeled_by_others{};
     const netlab::recon::LabelSet& got = w.session()->document().labels();
     for (int c = 0; c < static_cast<int>(got.cameras.size()); ++c)
       for (int t = 0; t < got.frames(); ++t)
@@ -247,8 +258,13 @@ int main(int argc, char** argv) {
             ++right;
           else if (accepted)
             ++wrong;
-          else if (want.present())
+          else if (want.present()) {
             ++unlabeled;
+            int others = 0;
+            for (int o = 0; o < static_cast<int>(got.cameras.size()); ++o)
+              others += o != c && got.at(o, t, k).present();
+            ++unlabeled_by_others[std::min(others, 3)];
+          }
         }
     std::printf(
         "\nB. the scripted person through the window: %d actions (%d review items) for %ld "
@@ -265,11 +281,15 @@ int main(int argc, char** argv) {
         kinds[Action::kHide], kinds[Action::kHideRun], kinds[Action::kAccept],
         kinds[Action::kFindPath], kinds[Action::kTrack], session.navigation, session.review_items);
     std::printf(
-        "   left: %ld accepted labels right, %ld wrong, %ld visible knot-frames unlabeled "
-        "(the script walks the review queue: knots seen by fewer than two other cameras are not "
-        "in it), %zu "
-        "labels still for review\n",
-        right, wrong, unlabeled, w.session()->document().ReviewItems().size());
+        "   left: %ld accepted labels right, %ld wrong, %ld visible knot-frames never offered "
+        "(unlabeled: the review queue never listed them; labeled in 0 / 1 / 2 / 3 other "
+        "cameras: %ld / %ld / %ld / %ld), %zu labels still for review, %d missing knots "
+        "listed\n",
+        right, wrong, unlabeled, unlabeled_by_others[0], unlabeled_by_others[1],
+        unlabeled_by_others[2], unlabeled_by_others[3],
+        w.session()->document().ReviewItems().size(), w.session()->missing().size());
+    never_offered = unlabeled;
+    wrong_accepted = wrong;
   }
   // C. The 3D view.
   Stats three_d;
@@ -285,9 +305,9 @@ int main(int argc, char** argv) {
     std::printf(
         "{\"cached_ms\": {\"median\": %.3f, \"p95\": %.3f}, \"uncached_half_ms\": "
         "{\"median\": %.3f, \"p95\": %.3f}, \"three_d_ms\": {\"median\": %.3f, \"p95\": "
-        "%.3f}, \"actions_per_knot_frame\": %.6f}\n",
+        "%.3f}, \"actions_per_knot_frame\": %.6f, \"never_offered\": %ld, \"wrong\": %ld}\n",
         full_cached.median, full_cached.p95, half_uncached.median, half_uncached.p95,
-        three_d.median, three_d.p95, per_knot_frame);
+        three_d.median, three_d.p95, per_knot_frame, never_offered, wrong_accepted);
   fs::remove_all(dir);
   return 0;
 }
