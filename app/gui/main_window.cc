@@ -113,7 +113,8 @@ void MainWindow::BuildWelcome() {
   auto* title = new QLabel(
       "<h2>netlab — knot labeling workstation</h2>"
       "<p>Open a project (project.yaml) or make one from an experiment, its "
-      "rig and the net's colouring.</p>");
+      "rig and the net's colouring.</p>"
+      "<p>New here? Help ▸ Manual walks through the workflow; F1 lists every key.</p>");
   title->setAlignment(Qt::AlignCenter);
   layout->addStretch();
   layout->addWidget(title);
@@ -801,6 +802,13 @@ void MainWindow::NewProject() {
   const QString coloring = QFileDialog::getOpenFileName(
       this, "New project: the net's colouring, coloring.yaml (Cancel: none)",
       QFileInfo(rig).path(), "Colouring (*.yaml)");
+  // The target, so that the knots it hides are not listed missing (a scenario's or a netlab
+  // simulate result's bodies, in the rig's world frame).
+  const QString target = QFileDialog::getOpenFileName(
+      this,
+      "New project: the target, so that the knots it hides are not listed missing: its scenario "
+      "or simulation (Cancel: none)",
+      QFileInfo(experiment).path(), "Scenario or simulation (*.yaml *.h5)");
   int rows = 0, cols = 0;
   if (coloring.isEmpty()) {  // the grid from the person: rows and columns (Net B is 17 x 17)
     bool ok = false;
@@ -829,6 +837,10 @@ void MainWindow::NewProject() {
     Project project = MakeProject(experiment.toStdString(), rig.toStdString(),
                                   coloring.toStdString(), labels.toStdString(), rows, cols);
     project.knotless = balls == QMessageBox::No;
+    if (!target.isEmpty()) {
+      LoadTarget(target.toStdString(), 179.0);  // refused here, naming the file, if unreadable
+      project.target = target.toStdString();
+    }
     SaveProject(project, path.toStdString());
   } catch (const std::exception& e) {
     QMessageBox::critical(this, "Cannot make the project", QString::fromLocal8Bit(e.what()));
