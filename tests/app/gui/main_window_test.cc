@@ -414,6 +414,46 @@ TEST_F(MainWindowTest, SpaceReachesAMissingKnotAndAFindNodeClickLabelsIt) {
   }
 }
 
+// A review item's message in a narrow window is not cut off by the status bar's knot and frame
+// readouts: they give way to it (the cursor's pixel stays), and the whole message is the bar's
+// tooltip.
+TEST_F(MainWindowTest, AStatusMessageHasTheBarsWidthAndIsWholeInItsTooltip) {
+  const recon::LabelSet truth = Truth();
+  const std::string project = MakeProjectFile("status", (Dir() / "shot/labels_true.h5").string());
+  MainWindow w;
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, project));
+  w.resize(700, 800);
+  Session* s = w.session();
+  const int t = 7, c = 2, k = KnotSeenByAll(truth, t);
+  ASSERT_GE(k, 0);
+  w.SetFrame(t);
+  ASSERT_TRUE(w.WaitForFrame());
+  QTest::mouseClick(w.view(c), Qt::LeftButton, Qt::NoModifier,
+                    w.view(c)->ToWidget(s->document().at(c, t, k).px).toPoint());
+  ASSERT_EQ(w.knot(), k);
+  QTest::keyClick(&w, Qt::Key_Delete);
+  // The readouts are shown while no message is.
+  w.statusBar()->clearMessage();
+  QCoreApplication::processEvents();
+  int readouts = 0;
+  for (QLabel* label : w.statusBar()->findChildren<QLabel*>()) readouts += label->isVisible();
+  ASSERT_GE(readouts, 2);
+  w.SetFrame(0);
+  ASSERT_TRUE(SpaceTo(&w, c, t, k));
+  QCoreApplication::processEvents();
+  const QString message = w.statusBar()->currentMessage();
+  ASSERT_TRUE(message.contains("expected near")) << message.toStdString();
+  EXPECT_EQ(w.statusBar()->toolTip(), message);
+  int visible = 0, beside = 0;  // the labels still shown, and the width they take
+  for (QLabel* label : w.statusBar()->findChildren<QLabel*>())
+    if (label->isVisible()) {
+      ++visible;
+      beside += label->width();
+    }
+  EXPECT_EQ(visible, 1) << "only the cursor's pixel stays beside a message";
+  EXPECT_LE(beside, w.statusBar()->width() / 4);
+}
+
 // The other three cameras' labels of a knot moved together (one point 2.5 px from the knot in
 // camera b: consistent views, as when one is off along its epipolar line): a Find Node click on
 // the knot's junction in b keeps it for review, and the status bar says why once, without
@@ -943,9 +983,10 @@ TEST_F(MainWindowTest, AClosedPanelIsReopenedFromTheViewMenu) {
   }
 }
 
-// File > New project, its dialogs answered as a person does: without a colouring it asks the
-// rows and the columns (a net need not be square) and whether the net has knot balls; the
-// project it writes says so, and opens.
+// File > New project, its dialogs answered as a person does: the target (the shot's truth.h5,
+// a simulation with its scenario); without a colouring it asks the rows and the columns (a net
+// need not be square) and whether the net has knot balls; the project it writes says so, with
+// paths relative to its folder, and opens.
 TEST_F(MainWindowTest, NewProjectAsksRowsColumnsAndKnotBalls) {
   const std::string d = Dir().string();
   const std::string labels = d + "/wizard.h5", project = d + "/wizard.yaml";
@@ -968,7 +1009,8 @@ TEST_F(MainWindowTest, NewProjectAsksRowsColumnsAndKnotBalls) {
     QTimer::singleShot(100, modal, [&, modal] {
     const QString title = modal->windowTitle();
     if (auto* files = qobject_cast<QFileDialog*>(modal)) {
-      const QString file = title.contains("experiment")    ? QString::fromStdString(d + "/shot/experiment.yaml")
+      const QString file = title.contains("target")        ? QString::fromStdString(d + "/shot/truth.h5")
+                           : title.contains("experiment")  ? QString::fromStdString(d + "/shot/experiment.yaml")
                            : title.contains("rig")         ? QString::fromStdString(d + "/shot/rig_true.yaml")
                            : title.contains("labels")      ? QString::fromStdString(labels)
                            : title.contains("project as")  ? QString::fromStdString(project)
@@ -998,10 +1040,17 @@ TEST_F(MainWindowTest, NewProjectAsksRowsColumnsAndKnotBalls) {
   EXPECT_EQ(p.rows, 6);
   EXPECT_EQ(p.cols, 7);
   EXPECT_TRUE(p.knotless);
+  EXPECT_EQ(p.target, d + "/shot/truth.h5");
+  // The files below the project's folder are written relative to it (the folder can move).
+  std::ifstream in(project);
+  const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  EXPECT_NE(text.find("experiment: shot/experiment.yaml"), std::string::npos) << text;
+  EXPECT_NE(text.find("target: shot/truth.h5"), std::string::npos) << text;
+  EXPECT_EQ(text.find(d), std::string::npos) << text;
   ASSERT_NE(w.session(), nullptr);
   EXPECT_EQ(w.session()->project().cols, 7);
   for (const QString& t : titles) EXPECT_FALSE(t.contains(" of ")) << t.toStdString();
-  EXPECT_EQ(titles.size(), 8) << titles.join(" | ").toStdString();
+  EXPECT_EQ(titles.size(), 9) << titles.join(" | ").toStdString();
 }
 
 // Help > Manual shows docs/gui.md, in a window of its own.
