@@ -169,6 +169,14 @@ void LabelEngine::Note(int camera, int t, int knot, const std::string& why) {
     reasons_[{camera, t, knot}] = why;
 }
 
+void LabelEngine::ToReview(int camera, int t, int knot, const std::string& why,
+                           std::vector<LabelEdit>* flags) {
+  Label l = store_->labels().at(camera, t, knot);
+  l.state = LabelState::kNeedsReview;
+  flags->push_back({camera, t, knot, l});
+  Note(camera, t, knot, why);
+}
+
 EngineCounts LabelEngine::Commit(const std::string& name, const std::vector<LabelEdit>& edits) {
   EngineCounts n;
   for (const auto& e : edits) {
@@ -630,10 +638,7 @@ int LabelEngine::CheckAgainstPerson(int t, int knot, const std::vector<int>& per
   topt.outlier_threshold_px = o_.epipolar_tolerance_px;
   std::vector<LabelEdit> flags;
   const auto flag = [&](size_t i, const std::string& why) {
-    Label l = set.at(from[i], t, knot);
-    l.state = LabelState::kNeedsReview;
-    flags.push_back({from[i], t, knot, l});
-    Note(from[i], t, knot, why);
+    ToReview(from[i], t, knot, why, &flags);
   };
   // Two of the person's views or more: they are the reference, each tool's label held against
   // where they put the knot (they must agree with each other; if not, it is the person's word).
@@ -1222,14 +1227,11 @@ int LabelEngine::CheckHidden(int t) {
       const calib::Camera& camera = rig_->cameras[RigIndex(c)];
       if (!TargetHides(target_, camera.Center(), e.position, time_s, -o_.target_margin_m))
         continue;
-      Label flagged = l;
-      flagged.state = LabelState::kNeedsReview;
-      flags.push_back({c, t, k, flagged});
-      std::string from;
-      for (const Observation& o : others)
-        for (int j = 0; j < static_cast<int>(set.cameras.size()); ++j)
-          if (RigIndex(j) == o.camera) from += (from.empty() ? "" : ", ") + set.cameras[j];
-      Note(c, t, k, "the target hides the knot here (where " + from + " put it)");
+      std::string from;  // the cameras of `others` (OtherViews: every other one with the knot)
+      for (int o = 0; o < static_cast<int>(set.cameras.size()); ++o)
+        if (o != c && Observed(set.at(o, t, k)))
+          from += (from.empty() ? "" : ", ") + set.cameras[o];
+      ToReview(c, t, k, "the target hides the knot here (where " + from + " put it)", &flags);
     }
   if (flags.empty()) return 0;
   return Commit("the target's check (frame row " + std::to_string(t) + ")", flags).review;
@@ -1287,12 +1289,7 @@ void LabelEngine::TriangulateAccepted(FrameCheck* f, std::vector<LabelEdit>* fla
     if (e.valid && e.outliers.empty()) f->clean[k] = e.position;
     if (!flags) continue;
     // Every view of a point it cannot resolve, or the views it leaves out, to review.
-    auto flag = [&](int i, const std::string& why) {
-      Label l = set.at(from[i], t, k);
-      l.state = LabelState::kNeedsReview;
-      flags->push_back({from[i], t, k, l});
-      Note(from[i], t, k, why);
-    };
+    auto flag = [&](int i, const std::string& why) { ToReview(from[i], t, k, why, flags); };
     if (!e.valid) {
       for (size_t i = 0; i < from.size(); ++i)
         flag(static_cast<int>(i), "epipolar check: the cameras disagree (" + e.why + ")");
@@ -1732,10 +1729,7 @@ int LabelEngine::CheckColours(int t) {
       const IdentityCheck check = CheckIdentity(image, *codebook_, k, l.px,
                                                 AcceptedNeighbourYarns(set, c, t, k), identity_);
       if (check.verdict != IdentityVerdict::kMismatch) continue;
-      Label flagged = l;
-      flagged.state = LabelState::kNeedsReview;
-      flags.push_back({c, t, k, flagged});
-      Note(c, t, k, "colour check: " + check.why);
+      ToReview(c, t, k, "colour check: " + check.why, &flags);
     }
   }
   if (flags.empty()) return 0;

@@ -305,6 +305,9 @@ class LabelEngine {
   const cv::Mat& Image(int camera, int t);
   int RigIndex(int camera) const { return rig_index_[camera]; }
   void Note(int camera, int t, int knot, const std::string& why);
+  // The label of (camera, t, knot) as it is, turned to review with `why`, appended to `flags`.
+  void ToReview(int camera, int t, int knot, const std::string& why,
+                std::vector<LabelEdit>* flags);
   EngineCounts Commit(const std::string& name, const std::vector<LabelEdit>& edits);
   // LabelFirstFrame with three corners seeded: Find Node on the knots of the fourth corner's
   // row and column (not the corner), where the homography of the other two sides' knots (`px`:
