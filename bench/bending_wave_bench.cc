@@ -118,9 +118,8 @@ int main(int argc, char** argv) {
     };
     // The implicit step at its automatic value, at net A's flight step (5.08e-4 s, that of its
     // stiffest, knotted nodes) and at a quarter of it.
-    const Case cases[] = {{"explicit", 0},        {"implicit", 0},
-                          {"implicit", 5.08e-4}, {"implicit", 2.54e-4},
-                          {"implicit", 1.27e-4}, {"verlet", 0}};
+    const Case cases[] = {{"explicit", 0},       {"implicit", 0},       {"implicit", 5.08e-4},
+                          {"implicit", 2.54e-4}, {"implicit", 1.27e-4}, {"verlet", 0}};
     for (const Case& c : cases) {
       const Wave w = c.integrator == std::string("explicit") && c.dt == 0
                          ? auto_explicit

@@ -13,11 +13,11 @@
 
 #include <atomic>
 #include <chrono>
-#include <thread>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <random>
+#include <thread>
 
 #include "calibration/calibrate.h"
 #include "calibration/detect.h"
@@ -49,17 +49,20 @@ int main(int argc, char** argv) {
     if (!std::strcmp(argv[i], "--skip-images")) images = false;
   }
   const Rig truth = PaperRig(1.0);
-  const CalibrationTarget foil = CalibrationTarget::Foil(BoardPattern::Chessboard(9, 6, 0.06), 0.0005);
+  const CalibrationTarget foil =
+      CalibrationTarget::Foil(BoardPattern::Chessboard(9, 6, 0.06), 0.0005);
   std::mt19937 pose_rng(5);
-  const auto poses = RandomTargetPoses(truth, foil, {0, 1, 2, 3}, views,
-                                       Eigen::Vector3d(1.25, 0.0, 0.1),
-                                       Eigen::Vector3d(0.35, 0.35, 0.3), FacingPlusX(), 0.6,
-                                       pose_rng);
+  const auto poses =
+      RandomTargetPoses(truth, foil, {0, 1, 2, 3}, views, Eigen::Vector3d(1.25, 0.0, 0.1),
+                        Eigen::Vector3d(0.35, 0.35, 0.3), FacingPlusX(), 0.6, pose_rng);
 
-  std::printf("A. accuracy against corner noise: 4 cameras x %d views of a 9x6 chessboard foil, "
-              "%d trials each\n\n", views, trials);
-  std::printf("| sigma (px) | RMS (px) | RMS a perfect fit leaves (px) | centre error (mm) | "
-              "predicted centre sigma (mm) | rotation error (deg) | fx error (px) | solve (s) |\n");
+  std::printf(
+      "A. accuracy against corner noise: 4 cameras x %d views of a 9x6 chessboard foil, "
+      "%d trials each\n\n",
+      views, trials);
+  std::printf(
+      "| sigma (px) | RMS (px) | RMS a perfect fit leaves (px) | centre error (mm) | "
+      "predicted centre sigma (mm) | rotation error (deg) | fx error (px) | solve (s) |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (double sigma : {0.1, 0.25, 0.5, 1.0}) {
     double rms = 0, allowed = 0, centre = 0, predicted = 0, rotation = 0, fx = 0, solve = 0;
@@ -95,7 +98,8 @@ int main(int argc, char** argv) {
       const int n = result.summary.observations;
       const int p = 4 * 14 + 6 * (views - 1);  // 6 pose + 8 intrinsics per camera, 6 per free frame
       rms += result.summary.rms_px / trials;
-      allowed += sigma * std::sqrt(2.0) * std::sqrt(1.0 - static_cast<double>(p) / (2.0 * n)) / trials;
+      allowed +=
+          sigma * std::sqrt(2.0) * std::sqrt(1.0 - static_cast<double>(p) / (2.0 * n)) / trials;
       for (size_t c = 0; c < truth.cameras.size(); ++c) {
         const Rigid3d true_cam = truth.cameras[c].cam_from_world * world_true_from_world_est;
         const Camera& e = result.rig.cameras[c];
@@ -112,8 +116,10 @@ int main(int argc, char** argv) {
   }
 
   if (!images) return 0;
-  std::printf("\nB. the pipeline on images: 4 cameras x %d views at 2048 x 2048 (noise 2 grey "
-              "levels)\n\n", views);
+  std::printf(
+      "\nB. the pipeline on images: 4 cameras x %d views at 2048 x 2048 (noise 2 grey "
+      "levels)\n\n",
+      views);
   auto start = std::chrono::steady_clock::now();
   const auto prints = MakeTargetPrints(foil);
   std::vector<CameraRays> rays;
@@ -137,8 +143,8 @@ int main(int argc, char** argv) {
   std::atomic<int> next{0};
   auto work = [&] {
     for (int task; (task = next++) < 4 * views;)
-      found[task / views][task % views] = DetectPattern(rendered[task / views][task % views],
-                                                        foil.faces[0].pattern);
+      found[task / views][task % views] =
+          DetectPattern(rendered[task / views][task % views], foil.faces[0].pattern);
   };
   pool.emplace_back(work);
   work();
@@ -158,16 +164,19 @@ int main(int argc, char** argv) {
   const Rigid3d world_true_from_world_est = poses[0];
   for (size_t c = 0; c < 4; ++c) {
     const Rigid3d true_cam = truth.cameras[c].cam_from_world * world_true_from_world_est;
-    centre = std::max(centre, (result.rig.cameras[c].Center() - true_cam.Inverse().translation).norm());
+    centre =
+        std::max(centre, (result.rig.cameras[c].Center() - true_cam.Inverse().translation).norm());
   }
   std::printf("| stage | wall (s) | per image (ms) |\n|---|---|---|\n");
   std::printf("| undistortion rays (4 cameras) | %.2f | |\n", ray_s);
-  std::printf("| render %d images | %.2f | %.0f |\n", 4 * views, render_s, 1e3 * render_s / (4 * views));
+  std::printf("| render %d images | %.2f | %.0f |\n", 4 * views, render_s,
+              1e3 * render_s / (4 * views));
   std::printf("| detect (2 threads) | %.2f | %.0f |\n", detect_s, 1e3 * detect_s / (4 * views));
   std::printf("| calibrate (%d points) | %.2f | |\n", result.summary.observations, solve_s);
-  std::printf("\ndetected %zu of %d views; RMS %.3f px; worst camera-centre error %.2f mm; "
-              "metric check cam0-cam1 %.3f mm RMS, cam2-cam3 %.3f mm RMS\n",
-              input.observations.size(), 4 * views, result.summary.rms_px, 1e3 * centre,
-              result.summary.pairs.front().rms_error_mm, result.summary.pairs.back().rms_error_mm);
+  std::printf(
+      "\ndetected %zu of %d views; RMS %.3f px; worst camera-centre error %.2f mm; "
+      "metric check cam0-cam1 %.3f mm RMS, cam2-cam3 %.3f mm RMS\n",
+      input.observations.size(), 4 * views, result.summary.rms_px, 1e3 * centre,
+      result.summary.pairs.front().rms_error_mm, result.summary.pairs.back().rms_error_mm);
   return 0;
 }

@@ -87,8 +87,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   const std::string dir = shot;
-  const calib::Rig rig =
-      calib::ReadRig(Arg(argc, argv, "--rig", (dir + "/rig_true.yaml").c_str()));
+  const calib::Rig rig = calib::ReadRig(Arg(argc, argv, "--rig", (dir + "/rig_true.yaml").c_str()));
   const double fps = std::atof(Arg(argc, argv, "--fps", "179"));
   const KnotTracks sim = ReadKnotTracks(sim_path);
   const recon::LabelSet truth = recon::ReadLabels(dir + "/labels_true.h5");
@@ -102,8 +101,7 @@ int main(int argc, char** argv) {
   }
   if (const char* labels = Arg(argc, argv, "--labels", nullptr)) {
     const double stated = std::atof(Arg(argc, argv, "--labels-sigma", "0.09"));
-    const recon::LabelSet set =
-        recon::ReadLabelsAny(labels, truth.rows, truth.cols, truth.cameras);
+    const recon::LabelSet set = recon::ReadLabelsAny(labels, truth.rows, truth.cols, truth.cameras);
     rows.push_back(Measure("labels (" + std::string(labels) + ")", rig, set, stated, sim, fps));
   }
 

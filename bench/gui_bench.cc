@@ -23,9 +23,9 @@
 // actions_per_knot_frame, never_offered and wrong (part B).
 
 #include <QApplication>
+#include <QElapsedTimer>
 #include <QPushButton>
 #include <QSlider>
-#include <QElapsedTimer>
 #include <QTest>
 #include <algorithm>
 #include <array>
@@ -117,11 +117,12 @@ std::pair<Stats, Stats> Latency(const std::string& project, bool half, int frame
   const auto after = w.session()->cache().stats();
   // Whether the second pass really came from the cache (a budget too small for the shot at this
   // level evicts frames ahead of the playhead).
-  std::printf("(%s resolution, second pass: %ld cache hits, %ld misses, %ld evicted; %.0f of "
-              "%.0f MiB cached)\n",
-              half ? "half" : "full", after.hits - before.hits, after.misses - before.misses,
-              after.evicted - before.evicted, after.bytes / 1048576.0,
-              w.session()->cache().limit() / 1048576.0);
+  std::printf(
+      "(%s resolution, second pass: %ld cache hits, %ld misses, %ld evicted; %.0f of "
+      "%.0f MiB cached)\n",
+      half ? "half" : "full", after.hits - before.hits, after.misses - before.misses,
+      after.evicted - before.evicted, after.bytes / 1048576.0,
+      w.session()->cache().limit() / 1048576.0);
   return {uncached, cached};
 }
 
@@ -179,9 +180,10 @@ int main(int argc, char** argv) {
               std::string(argv[i + 1]) == "C"))
       part = argv[++i];
     else {
-      std::fprintf(stderr,
-                   "usage: bench_gui --shot DIR --coloring coloring.yaml [--target FILE] [--frames N] "
-                   "[--part A|B|C] [--json]\n");
+      std::fprintf(
+          stderr,
+          "usage: bench_gui --shot DIR --coloring coloring.yaml [--target FILE] [--frames N] "
+          "[--part A|B|C] [--json]\n");
       return 2;
     }
   }
@@ -226,7 +228,8 @@ int main(int argc, char** argv) {
     MainWindow w;
     w.resize(1600, 1000);
     w.show();
-    w.OpenProject(QString::fromStdString(ProjectFile(shot, coloring, dir, "session", "", target)), false);
+    w.OpenProject(QString::fromStdString(ProjectFile(shot, coloring, dir, "session", "", target)),
+                  false);
     w.WaitForFrame(60000);
     QElapsedTimer timer;
     timer.start();
@@ -294,8 +297,8 @@ int main(int argc, char** argv) {
   // C. The 3D view.
   Stats three_d;
   if (part.find('C') != std::string::npos) {
-    three_d = ThreeDTimes(ProjectFile(shot, coloring, dir, "three_d", shot + "/labels_true.h5"),
-                          frames);
+    three_d =
+        ThreeDTimes(ProjectFile(shot, coloring, dir, "three_d", shot + "/labels_true.h5"), frames);
     std::printf(
         "\nC. frame change with the 3D view open (the reconstruction room, the true labels "
         "triangulated), %d frames: %.1f / %.1f / %.1f ms (median / p95 / max)\n",

@@ -57,13 +57,14 @@ int Main(int argc, char** argv) {
   std::vector<ColouredNet> scenes;
   std::vector<cv::Mat> renders;
   for (int n = 0; n < nets; ++n) {
-    scenes.push_back(MakeColouredNet(camera, 4, 0.25, 1.5, 7.5 * n * M_PI / 180.0, 0.0005,
-                                     palette, background, 100 + n));
+    scenes.push_back(MakeColouredNet(camera, 4, 0.25, 1.5, 7.5 * n * M_PI / 180.0, 0.0005, palette,
+                                     background, 100 + n));
     renders.push_back(RenderScene(camera, scenes.back().scene, SceneRenderOptions{}));
   }
 
-  std::printf("| noise sigma | colour shift | knots | identified correct | identified wrong | "
-              "ambiguous | unknown | ms / knot |\n");
+  std::printf(
+      "| noise sigma | colour shift | knots | identified correct | identified wrong | "
+      "ambiguous | unknown | ms / knot |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (bool shift : {false, true}) {
     for (double sigma : {0.0, 2.0, 4.0, 8.0, 16.0}) {
@@ -81,9 +82,9 @@ int Main(int argc, char** argv) {
           const auto start = std::chrono::steady_clock::now();
           const KnotIdentification id = IdentifyKnot(frame, view.pixel, view.directions,
                                                      IdentifyOptions{}, scenes[n].codebook);
-          row.ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() -
-                                                              start)
-                        .count();
+          row.ms +=
+              std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                  .count();
           switch (id.status) {
             case IdentifyStatus::kIdentified:
               (id.knots.size() == 1 && id.knots[0] == view.knot ? row.correct : row.wrong)++;

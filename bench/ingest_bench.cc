@@ -21,12 +21,11 @@
 #include <filesystem>
 #include <fstream>
 #include <numeric>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <thread>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "libreconstruct/recording/frame_cache.h"
 #include "libreconstruct/recording/frame_store.h"
@@ -76,7 +75,8 @@ void WriteRecording(const fs::path& dir, int frames, int depth) {
     const std::string name = "cam" + std::to_string(c);
     fs::create_directories(dir / name);
     yaml << "  - name: " << name << "\n    frames: " << name << "/frame_%06d.pgm\n"
-         << "    bayer: RGGB\n" << (depth == CV_16U ? "    bit_depth: 12\n" : "");
+         << "    bayer: RGGB\n"
+         << (depth == CV_16U ? "    bit_depth: 12\n" : "");
     for (int k = 0; k < frames; ++k) {
       char file[64];
       std::snprintf(file, sizeof(file), "frame_%06d.pgm", k);
@@ -103,7 +103,8 @@ double MemcpyGBs() {
   std::memcpy(b.data(), a.data(), bytes);
   const auto start = std::chrono::steady_clock::now();
   const int repeats = 8;
-  for (int r = 0; r < repeats; ++r) std::memcpy((r % 2 ? a : b).data(), (r % 2 ? b : a).data(), bytes);
+  for (int r = 0; r < repeats; ++r)
+    std::memcpy((r % 2 ? a : b).data(), (r % 2 ? b : a).data(), bytes);
   return repeats * bytes / Seconds(start) / 1e9;
 }
 
@@ -119,8 +120,9 @@ double Run(const SynchronizedSequence& seq, const std::vector<std::pair<int, int
     std::string error;
     for (int t; (t = next++) < static_cast<int>(order.size());) {
       const auto [c, k] = order[t];
-      const cv::Mat m = work == Work::kRead ? seq.ReadRaw(c, k, &error)
-                                            : seq.ReadDisplay(c, k, work == Work::kHalf ? 1 : 0, &error);
+      const cv::Mat m = work == Work::kRead
+                            ? seq.ReadRaw(c, k, &error)
+                            : seq.ReadDisplay(c, k, work == Work::kHalf ? 1 : 0, &error);
       if (m.empty()) ++failed;
     }
   };
@@ -163,7 +165,8 @@ int main(int argc, char** argv) {
   fs::path dir = fs::temp_directory_path() / "netlab_ingest_bench";
   bool keep = false;
   for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--frames") && i + 1 < argc) frames = std::max(8, std::atoi(argv[++i]));
+    if (!std::strcmp(argv[i], "--frames") && i + 1 < argc)
+      frames = std::max(8, std::atoi(argv[++i]));
     if (!std::strcmp(argv[i], "--dir") && i + 1 < argc) dir = argv[++i];
     if (!std::strcmp(argv[i], "--keep")) keep = true;
   }
@@ -193,9 +196,10 @@ int main(int argc, char** argv) {
   WarmPageCache(dir);
 
   const double bandwidth = MemcpyGBs();
-  std::printf("\nA. memory bandwidth: memcpy %.1f GB/s (read + write). A 4.2 MB frame read once and\n"
-              "   written once costs at least %.2f ms: at most %.0f camera frames/s per core.\n\n",
-              bandwidth, 2 * 4.194 / bandwidth, bandwidth * 1e3 / (2 * 4.194));
+  std::printf(
+      "\nA. memory bandwidth: memcpy %.1f GB/s (read + write). A 4.2 MB frame read once and\n"
+      "   written once costs at least %.2f ms: at most %.0f camera frames/s per core.\n\n",
+      bandwidth, 2 * 4.194 / bandwidth, bandwidth * 1e3 / (2 * 4.194));
 
   struct Source {
     const char* name;
@@ -209,8 +213,12 @@ int main(int argc, char** argv) {
   };
 
   std::printf("B. one camera, one thread (camera frames/s; raw MB/s in brackets)\n\n");
-  std::printf("| source               | order      | read            | read+demosaic full | read+half res   |\n");
-  std::printf("|----------------------|------------|-----------------|--------------------|-----------------|\n");
+  std::printf(
+      "| source               | order      | read            | read+demosaic full | read+half res  "
+      " |\n");
+  std::printf(
+      "|----------------------|------------|-----------------|--------------------|----------------"
+      "-|\n");
   for (const Source& s : sources) {
     const SynchronizedSequence seq(LoadExperiment(s.experiment));
     const int n = seq.last_frame() + 1;
@@ -220,16 +228,21 @@ int main(int argc, char** argv) {
       const double read = Run(seq, order, Work::kRead, 1);
       const double full = Run(seq, order, Work::kFull, 1);
       const double half = Run(seq, order, Work::kHalf, 1);
-      std::printf("| %-20s | %-10s | %6.0f (%5.0f)  | %7.0f (%5.0f)    | %6.0f (%5.0f)  |\n", s.name,
-                  random ? "random" : "sequential", read, read * mb, full, full * mb, half,
+      std::printf("| %-20s | %-10s | %6.0f (%5.0f)  | %7.0f (%5.0f)    | %6.0f (%5.0f)  |\n",
+                  s.name, random ? "random" : "sequential", read, read * mb, full, full * mb, half,
                   half * mb);
     }
   }
 
-  std::printf("\nC. four cameras together, %d threads (synchronized frames/s = camera frames/s / 4)\n\n",
-              threads);
-  std::printf("| source               | order      | full res sync fps | half res sync fps | full MB/s |\n");
-  std::printf("|----------------------|------------|-------------------|-------------------|-----------|\n");
+  std::printf(
+      "\nC. four cameras together, %d threads (synchronized frames/s = camera frames/s / 4)\n\n",
+      threads);
+  std::printf(
+      "| source               | order      | full res sync fps | half res sync fps | full MB/s "
+      "|\n");
+  std::printf(
+      "|----------------------|------------|-------------------|-------------------|-----------|"
+      "\n");
   double target_full = 0, target_half_random = 0;
   for (const Source& s : sources) {
     const SynchronizedSequence seq(LoadExperiment(s.experiment));
@@ -245,14 +258,20 @@ int main(int argc, char** argv) {
                   random ? "random" : "sequential", full, half, full * kCameras * mb);
     }
   }
-  std::printf("\ntargets (PGM 8-bit): sequential full res %.0f sync fps (>= 60: %s), random half res "
-              "%.0f sync fps (>= 30: %s)\n",
-              target_full, target_full >= 60 ? "met" : "NOT met", target_half_random,
-              target_half_random >= 30 ? "met" : "NOT met");
+  std::printf(
+      "\ntargets (PGM 8-bit): sequential full res %.0f sync fps (>= 60: %s), random half res "
+      "%.0f sync fps (>= 30: %s)\n",
+      target_full, target_full >= 60 ? "met" : "NOT met", target_half_random,
+      target_half_random >= 30 ? "met" : "NOT met");
 
-  std::printf("\nD. the frame cache as the viewer uses it (PGM 8-bit, 4 cameras per displayed frame)\n\n");
-  std::printf("| level | limit MiB | access                   | sync fps | hit rate | worst ms | cache peak MiB | RSS peak MiB |\n");
-  std::printf("|-------|-----------|--------------------------|----------|----------|----------|----------------|--------------|\n");
+  std::printf(
+      "\nD. the frame cache as the viewer uses it (PGM 8-bit, 4 cameras per displayed frame)\n\n");
+  std::printf(
+      "| level | limit MiB | access                   | sync fps | hit rate | worst ms | cache "
+      "peak MiB | RSS peak MiB |\n");
+  std::printf(
+      "|-------|-----------|--------------------------|----------|----------|----------|-----------"
+      "-----|--------------|\n");
   {
     const SynchronizedSequence seq(LoadExperiment(sources[0].experiment));
     const int n = seq.last_frame() + 1;
@@ -270,8 +289,9 @@ int main(int argc, char** argv) {
         for (size_t i = 0; i < frames_in_order.size(); ++i) {
           const auto [f, direction] = frames_in_order[i];
           if (pace > 0)
-            std::this_thread::sleep_until(start + std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                                      std::chrono::duration<double>(i / pace)));
+            std::this_thread::sleep_until(start +
+                                          std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                              std::chrono::duration<double>(i / pace)));
           const auto asked = std::chrono::steady_clock::now();
           cache.SetPlayhead(f, direction, level);
           for (int c = 0; c < kCameras; ++c)

@@ -38,11 +38,11 @@ struct Tally {
     std::vector<double> t = ms;
     std::sort(c.begin(), c.end());
     std::sort(t.begin(), t.end());
-    std::printf("| %s | %d | %d | %d (%d wrong) | %d (%d without the true knot) | %d | %d | %.1f "
-                "ms |\n",
-                name.c_str(), asked, found, identified, identified_wrong, offered,
-                offered_without_truth, c.empty() ? 0 : c[c.size() / 2], unknown,
-                t.empty() ? 0.0 : t[t.size() / 2]);
+    std::printf(
+        "| %s | %d | %d | %d (%d wrong) | %d (%d without the true knot) | %d | %d | %.1f "
+        "ms |\n",
+        name.c_str(), asked, found, identified, identified_wrong, offered, offered_without_truth,
+        c.empty() ? 0 : c[c.size() / 2], unknown, t.empty() ? 0.0 : t[t.size() / 2]);
   }
 };
 
@@ -69,9 +69,9 @@ void Run(const std::string& shot, const std::string& coloring, int frames, doubl
   fs::remove(labels);
   fs::remove(labels + ".journal");
   const std::string project_path = dir + "/project.yaml";
-  SaveProject(MakeProject(shot + "/experiment.yaml", shot + "/rig_true.yaml", coloring, labels, 0,
-                          0),
-              project_path);
+  SaveProject(
+      MakeProject(shot + "/experiment.yaml", shot + "/rig_true.yaml", coloring, labels, 0, 0),
+      project_path);
   const auto session = Session::Open(LoadProject(project_path));
   frames = std::min(frames, session->frames());
   std::map<std::string, Tally> seeding, known;
@@ -80,8 +80,8 @@ void Run(const std::string& shot, const std::string& coloring, int frames, doubl
     for (int c = 0; c < session->cameras(); ++c) {
       const std::string& name = session->camera_names()[c];
       const int tc = truth.FindCamera(name);
-      const auto row = std::find(truth.frame_index.begin(), truth.frame_index.end(),
-                                 session->frame_number(t));
+      const auto row =
+          std::find(truth.frame_index.begin(), truth.frame_index.end(), session->frame_number(t));
       if (tc < 0 || row == truth.frame_index.end()) continue;
       const int tr = static_cast<int>(row - truth.frame_index.begin());
       const double link = TrueLinkPx(truth, tc, tr);
@@ -110,9 +110,7 @@ void Run(const std::string& shot, const std::string& coloring, int frames, doubl
                 tally->offered_without_truth += !has;
                 tally->candidates.push_back(static_cast<int>(knots.size()));
                 break;
-              case recon::IdentifyStatus::kUnknown:
-                ++tally->unknown;
-                break;
+              case recon::IdentifyStatus::kUnknown: ++tally->unknown; break;
             }
           }
         }
@@ -120,9 +118,10 @@ void Run(const std::string& shot, const std::string& coloring, int frames, doubl
     }
   std::printf("bench_knot_picker: %s, frames 0..%d, %d knots, brush %.0f px at the true pixel\n\n",
               shot.c_str(), frames - 1, truth.knots(), brush);
-  std::printf("| case, camera | knot-views | junction found | identified alone | offered several "
-              "| knots offered (median) | nothing said | time per I (median) |\n"
-              "|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "| case, camera | knot-views | junction found | identified alone | offered several "
+      "| knots offered (median) | nothing said | time per I (median) |\n"
+      "|---|---|---|---|---|---|---|---|\n");
   for (const auto& [name, tally] : seeding) tally.Print("seeding (link unknown), " + name);
   all_seeding.Print("**seeding, all**");
   for (const auto& [name, tally] : known) tally.Print("link length known, " + name);
@@ -147,8 +146,9 @@ int main(int argc, char** argv) {
     else if (a == "--brush" && i + 1 < argc)
       brush = std::stod(argv[++i]);
     else {
-      std::fprintf(stderr, "usage: bench_knot_picker --shot DIR --coloring C.yaml [--frames N] "
-                           "[--brush PX]\n");
+      std::fprintf(stderr,
+                   "usage: bench_knot_picker --shot DIR --coloring C.yaml [--frames N] "
+                   "[--brush PX]\n");
       return 2;
     }
   }

@@ -42,23 +42,24 @@
 // (Junction::colour_step), and that place's from the truth (-1: not told).
 
 #include <algorithm>
-#include <functional>
 #include <array>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <map>
 #include <numeric>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
+#include "app/gui/document/missing_knots.h"
+#include "bench/person_time.h"
 #include "calibration/rig.h"
 #include "libreconstruct/coloring/net_coloring.h"
 #include "libreconstruct/labeling/label_engine.h"
@@ -66,8 +67,6 @@
 #include "libreconstruct/labels/label_set.h"
 #include "libreconstruct/recording/experiment.h"
 #include "libreconstruct/recording/sequence.h"
-#include "app/gui/document/missing_knots.h"
-#include "bench/person_time.h"
 
 namespace {
 
@@ -88,7 +87,7 @@ double Quantile(std::vector<double> v, double q) {
 struct Tally {
   int64_t knot_frames = 0, seeds = 0, find_node = 0, manual = 0, deletes = 0;
   int64_t find_node_missing = 0;  // of find_node: on a knot with no label (searched for)
-  int64_t fill_grid = 0;  // --fill-grid-between: G and Enter, two actions a press
+  int64_t fill_grid = 0;          // --fill-grid-between: G and Enter, two actions a press
   int64_t engine_accepted = 0, engine_review = 0, wrong = 0, over_1px = 0;
   std::vector<double> error;
   std::map<std::string, std::vector<double>> error_by_source;
@@ -138,12 +137,12 @@ void Usage() {
 
 struct BenchOptions {
   std::string shot, coloring_path, target_path;
-  int first = -1, last = -1;  // frame numbers; -1: the truth's
-  double radius = 6.0;        // Find Node's brush, px
-  uint64_t seed = 1;          // of the clicks' error
-  std::vector<std::string> only;  // cameras; empty: all
-  bool detector_only = false;     // --detector: the knot detector alone at every true knot
-  bool knotless = false;          // --knotless
+  int first = -1, last = -1;       // frame numbers; -1: the truth's
+  double radius = 6.0;             // Find Node's brush, px
+  uint64_t seed = 1;               // of the clicks' error
+  std::vector<std::string> only;   // cameras; empty: all
+  bool detector_only = false;      // --detector: the knot detector alone at every true knot
+  bool knotless = false;           // --knotless
   bool fill_grid_between = false;  // --fill-grid-between
 };
 
@@ -210,8 +209,7 @@ Shot SelectShot(recon::LabelSet truth, const recon::SynchronizedSequence& sequen
     }
   for (size_t c = 0; c < tr.cameras.size(); ++c) {
     const auto& only = o->only;
-    if (!only.empty() && std::find(only.begin(), only.end(), tr.cameras[c]) == only.end())
-      continue;
+    if (!only.empty() && std::find(only.begin(), only.end(), tr.cameras[c]) == only.end()) continue;
     shot.cameras.push_back(tr.cameras[c]);
     shot.truth_camera.push_back(static_cast<int>(c));
     int s = -1;
@@ -258,7 +256,7 @@ struct ScriptedUser {
   std::map<std::string, std::pair<int, int>> causes{};
   // NETLAB_ACTIONS_CSV=FILE: one row per visible knot the person acted on (for analysis).
   std::FILE* actions_csv = nullptr;
-  bool fill_grid_between = false;             // --fill-grid-between
+  bool fill_grid_between = false;  // --fill-grid-between
   // The knots the person labeled in the frame row at hand, with the cameras (FixKnot).
   std::map<int, std::vector<int>> touched{};
   // Labels the check after the person's labels turned to review; of them > 1 px off or hidden.
@@ -311,8 +309,8 @@ struct ScriptedUser {
           if (fc != c) continue;
           ++recheck_flags;
           const recon::Label& l = store.at(c, t, k);
-          recheck_flags_off += (l.px - shot.Truth(c, t, k).px).norm() > 1.0 ||
-                               !shot.Truth(c, t, k).present();
+          recheck_flags_off +=
+              (l.px - shot.Truth(c, t, k).px).norm() > 1.0 || !shot.Truth(c, t, k).present();
           if (!shot.Truth(c, t, k).present()) {
             ++tally[c].deletes;
             edits.push_back({c, t, k, recon::Label{}});
@@ -359,8 +357,8 @@ struct ScriptedUser {
     Tally& y = tally[c];
     const recon::Label& l = store.at(c, t, k);
     const recon::Label& truth_l = shot.Truth(c, t, k);
-    if (l.present()) (l.state == recon::LabelState::kAccepted ? y.engine_accepted
-                                                                : y.engine_review)++;
+    if (l.present())
+      (l.state == recon::LabelState::kAccepted ? y.engine_accepted : y.engine_review)++;
     if (!truth_l.present()) {
       if (l.present() && l.state == recon::LabelState::kNeedsReview) {
         ++y.deletes;
@@ -384,17 +382,16 @@ struct ScriptedUser {
     y.find_node_missing += !l.present();
     auto& [n, n_off] = causes[Cause(c, t, k)];
     ++n, n_off += l.present() && (l.px - truth_l.px).norm() > 1.0;
-    std::string before =
-        engine.reasons().count({c, t, k}) ? engine.reasons().at({c, t, k}) : "";
+    std::string before = engine.reasons().count({c, t, k}) ? engine.reasons().at({c, t, k}) : "";
     const recon::FindNodeResult r = engine.FindNodeAt(c, t, k, truth_l.px, radius);
     if (actions_csv) {
       std::replace(before.begin(), before.end(), ',', ';');
-      std::fprintf(actions_csv, "%s,%d,%d,%d,%d,%d,%.3f,%d,%.3f,%d,%s\n", shot.cameras[c].c_str(),
-                   shot.frames[t], k, k / shot.cols, k % shot.cols, l.present() ? 1 : 0,
-                   l.present() ? (l.px - truth_l.px).norm() : -1.0, static_cast<int>(r.status),
-                   r.status == recon::FindNodeStatus::kFound ? (r.knot.px - truth_l.px).norm()
-                                                             : -1.0,
-                   store.at(c, t, k).accepted() ? 1 : 0, before.c_str());
+      std::fprintf(
+          actions_csv, "%s,%d,%d,%d,%d,%d,%.3f,%d,%.3f,%d,%s\n", shot.cameras[c].c_str(),
+          shot.frames[t], k, k / shot.cols, k % shot.cols, l.present() ? 1 : 0,
+          l.present() ? (l.px - truth_l.px).norm() : -1.0, static_cast<int>(r.status),
+          r.status == recon::FindNodeStatus::kFound ? (r.knot.px - truth_l.px).norm() : -1.0,
+          store.at(c, t, k).accepted() ? 1 : 0, before.c_str());
     }
     // Found and accepted: done. Found but in doubt (its yarns or the other cameras
     // disagree), or not found: the person clicks the knot.
@@ -405,9 +402,8 @@ struct ScriptedUser {
       const auto why = engine.reasons().find({c, t, k});
       const std::string reason = why == engine.reasons().end() ? "" : why->second;
       const bool off = (r.knot.px - truth_l.px).norm() > 1.0;
-      auto& [count, count_off] = doubts[reason.find("cameras") != std::string::npos
-                                            ? "the other cameras"
-                                            : "its yarns"];
+      auto& [count, count_off] =
+          doubts[reason.find("cameras") != std::string::npos ? "the other cameras" : "its yarns"];
       ++count, count_off += off;
     }
     ++y.manual;
@@ -424,14 +420,15 @@ struct ScriptedUser {
 // `path`.
 void SaveCrop(const cv::Mat& img, const Eigen::Vector2d& truth, const Eigen::Vector2d& label,
               const std::string& path) {
-  const cv::Rect box = cv::Rect(static_cast<int>(truth.x()) - 30, static_cast<int>(truth.y()) - 30,
-                                61, 61) &
-                       cv::Rect(0, 0, img.cols, img.rows);
+  const cv::Rect box =
+      cv::Rect(static_cast<int>(truth.x()) - 30, static_cast<int>(truth.y()) - 30, 61, 61) &
+      cv::Rect(0, 0, img.cols, img.rows);
   cv::Mat crop;
   cv::resize(img(box), crop, cv::Size(), 8, 8, cv::INTER_NEAREST);
   const auto mark = [&](const Eigen::Vector2d& q, const cv::Scalar& colour) {
-    cv::circle(crop, cv::Point(static_cast<int>((q.x() - box.x + 0.5) * 8),
-                               static_cast<int>((q.y() - box.y + 0.5) * 8)),
+    cv::circle(crop,
+               cv::Point(static_cast<int>((q.x() - box.x + 0.5) * 8),
+                         static_cast<int>((q.y() - box.y + 0.5) * 8)),
                6, colour, 2);
   };
   mark(truth, cv::Scalar(0, 255, 0));
@@ -470,14 +467,15 @@ void TallyErrors(const Shot& shot, const recon::LabelStore& store, std::vector<T
           if (e > 0 && y.wrong <= named) {
             const recon::FindNodeResult r = recon::FindNode(image(c, t), truth_l.px, 6.0);
             const Eigen::Vector2d off = l.px - truth_l.px;
-            std::fprintf(stderr, "  label - truth (%.2f, %.2f); Find Node at the truth: %s", off.x(),
-                         off.y(),
-                         r.status == recon::FindNodeStatus::kFound   ? "found"
-                         : r.status == recon::FindNodeStatus::kNone  ? "none"
-                                                                     : "several");
+            std::fprintf(stderr, "  label - truth (%.2f, %.2f); Find Node at the truth: %s",
+                         off.x(), off.y(),
+                         r.status == recon::FindNodeStatus::kFound  ? "found"
+                         : r.status == recon::FindNodeStatus::kNone ? "none"
+                                                                    : "several");
             if (r.status == recon::FindNodeStatus::kFound)
-              std::fprintf(stderr, " %.2f px from the truth, %.2f px from the label, %d branches, "
-                                   "fit rms %.2f px, confidence %.2f",
+              std::fprintf(stderr,
+                           " %.2f px from the truth, %.2f px from the label, %d branches, "
+                           "fit rms %.2f px, confidence %.2f",
                            (r.knot.px - truth_l.px).norm(), (r.knot.px - l.px).norm(),
                            r.knot.branches, r.knot.fit_rms_px, r.knot.confidence);
             // And with rings half as far out (6 px): a link that bends within the default rings
@@ -533,15 +531,15 @@ void TallyErrors(const Shot& shot, const recon::LabelStore& store, std::vector<T
         if (e > 1.0) ++y.over_1px;
         if (e > 1.0 && e <= 2.0 && std::getenv("NETLAB_SHOW_OVER_1PX")) {
           const recon::FindNodeResult r = recon::FindNode(image(c, t), truth_l.px, 6.0);
-          std::fprintf(stderr, "over 1 px: %s frame %d knot %d %s: %.2f px (%.2f, %.2f)%s\n",
-                       shot.cameras[c].c_str(), shot.frames[t], k, SourceName(l.source), e,
-                       l.px.x() - truth_l.px.x(), l.px.y() - truth_l.px.y(),
-                       r.status == recon::FindNodeStatus::kFound
-                           ? (", Find Node at the truth " +
-                              std::to_string((r.knot.px - truth_l.px).norm()) + " px off, " +
-                              std::to_string(r.knot.branches) + " branches")
-                                 .c_str()
-                           : ", Find Node at the truth: not found");
+          std::fprintf(
+              stderr, "over 1 px: %s frame %d knot %d %s: %.2f px (%.2f, %.2f)%s\n",
+              shot.cameras[c].c_str(), shot.frames[t], k, SourceName(l.source), e,
+              l.px.x() - truth_l.px.x(), l.px.y() - truth_l.px.y(),
+              r.status == recon::FindNodeStatus::kFound
+                  ? (", Find Node at the truth " + std::to_string((r.knot.px - truth_l.px).norm()) +
+                     " px off, " + std::to_string(r.knot.branches) + " branches")
+                        .c_str()
+                  : ", Find Node at the truth: not found");
         }
         y.error.push_back(e);
         y.error_by_source[SourceName(l.source)].push_back(e);
@@ -552,14 +550,14 @@ void TallyErrors(const Shot& shot, const recon::LabelStore& store, std::vector<T
 // One row of the table (with_g: the G presses of --fill-grid-between too).
 void PrintRow(const std::string& name, const Tally& y, bool with_g) {
   const std::string g = with_g ? " / " + std::to_string(y.fill_grid) : "";
-  std::printf("| %s | %lld | %lld (%lld / %lld / %lld / %lld%s) | %.4f | %lld | %lld | %lld / "
-              "%lld | %.3f | %.3f |\n",
-              name.c_str(), (long long)y.knot_frames, (long long)y.actions(),
-              (long long)y.seeds, (long long)y.find_node, (long long)y.manual,
-              (long long)y.deletes, g.c_str(),
-              y.knot_frames ? static_cast<double>(y.actions()) / y.knot_frames : 0.0,
-              (long long)y.wrong, (long long)y.over_1px, (long long)y.engine_accepted,
-              (long long)y.engine_review, Quantile(y.error, 0.5), Quantile(y.error, 0.99));
+  std::printf(
+      "| %s | %lld | %lld (%lld / %lld / %lld / %lld%s) | %.4f | %lld | %lld | %lld / "
+      "%lld | %.3f | %.3f |\n",
+      name.c_str(), (long long)y.knot_frames, (long long)y.actions(), (long long)y.seeds,
+      (long long)y.find_node, (long long)y.manual, (long long)y.deletes, g.c_str(),
+      y.knot_frames ? static_cast<double>(y.actions()) / y.knot_frames : 0.0, (long long)y.wrong,
+      (long long)y.over_1px, (long long)y.engine_accepted, (long long)y.engine_review,
+      Quantile(y.error, 0.5), Quantile(y.error, 0.99));
 }
 
 // The table per camera and in all; then the errors by source. Returns the sum over cameras.
@@ -582,10 +580,11 @@ Tally PrintTables(const BenchOptions& o, const Shot& shot, const std::vector<Tal
     std::printf(" %s %.1f / %.1f", shot.cameras[c].c_str(), Quantile(px, 0.05), Quantile(px, 0.5));
   }
   std::printf("\n\n");
-  std::printf("| camera | knot-frames | actions (seed / Find Node / manual / delete%s) | actions "
-              "per knot-frame | wrong accepted | > 1 px | engine: accepted / review | "
-              "median px | p99 px |\n|---|---|---|---|---|---|---|---|---|\n",
-              o.fill_grid_between ? " / G, Enter" : "");
+  std::printf(
+      "| camera | knot-frames | actions (seed / Find Node / manual / delete%s) | actions "
+      "per knot-frame | wrong accepted | > 1 px | engine: accepted / review | "
+      "median px | p99 px |\n|---|---|---|---|---|---|---|---|---|\n",
+      o.fill_grid_between ? " / G, Enter" : "");
   Tally all;
   for (int c = 0; c < shot.n_cam(); ++c) {
     PrintRow(shot.cameras[c], tally[c], o.fill_grid_between);
@@ -606,12 +605,13 @@ Tally PrintTables(const BenchOptions& o, const Shot& shot, const std::vector<Tal
   if (all.knot_frames > 0) {
     const double per_kf = all.seconds() / all.knot_frames;
     const double shot_kf = static_cast<double>(all.knot_frames) / shot.n_t() * bench::kShotFrames;
-    std::printf("\nthe person's time: %.1f min (%.4f s per knot-frame; Find Node on %lld review "
-                "labels and %lld missing knots, %lld by hand, %lld deletes, %lld seeds); a 6 s "
-                "shot at this rate (%.0f knot-frames): %.1f h\n",
-                all.seconds() / 60.0, per_kf, (long long)(all.find_node - all.find_node_missing),
-                (long long)all.find_node_missing, (long long)all.manual, (long long)all.deletes,
-                (long long)all.seeds, shot_kf, per_kf * shot_kf / 3600.0);
+    std::printf(
+        "\nthe person's time: %.1f min (%.4f s per knot-frame; Find Node on %lld review "
+        "labels and %lld missing knots, %lld by hand, %lld deletes, %lld seeds); a 6 s "
+        "shot at this rate (%.0f knot-frames): %.1f h\n",
+        all.seconds() / 60.0, per_kf, (long long)(all.find_node - all.find_node_missing),
+        (long long)all.find_node_missing, (long long)all.manual, (long long)all.deletes,
+        (long long)all.seeds, shot_kf, per_kf * shot_kf / 3600.0);
   }
   std::printf("\n| source | labels | median px | p99 px | max px |\n|---|---|---|---|---|\n");
   for (const auto& [s, v] : all.error_by_source)
@@ -628,9 +628,10 @@ void BenchDetector(const Shot& shot, const BenchOptions& o,
                    const std::function<cv::Mat(int, int)>& image) {
   std::printf("Find Node at the true knots of %s, frames %d:%d\n\n", o.shot.c_str(),
               shot.frames.front(), shot.frames.back());
-  std::printf("| camera | brush | knots | found | other degree | several | none (rings found) | "
-              "median px | p99 px | > 1 px | > 2 px | without the lone yarn checks: found, "
-              "> 1 px, > 2 px |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "| camera | brush | knots | found | other degree | several | none (rings found) | "
+      "median px | p99 px | > 1 px | > 2 px | without the lone yarn checks: found, "
+      "> 1 px, > 2 px |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   recon::KnotDetectorOptions rings_only, unchecked, asked;
   asked.colour_step = std::getenv("NETLAB_STEP") != nullptr;  // where edge colours change
   rings_only.fit_yarns = false;
@@ -658,7 +659,8 @@ void BenchDetector(const Shot& shot, const BenchOptions& o,
           const char* dir = std::getenv("NETLAB_WRONG_CROPS");
           const std::string crop = dir ? std::string(dir) + "/" + shot.cameras[c] + "_" +
                                              std::to_string(shot.frames[t]) + "_" +
-                                             std::to_string(k) : "";
+                                             std::to_string(k)
+                                       : "";
           if (f.status == recon::FindNodeStatus::kSeveral) {
             ++several;
           } else if (f.status == recon::FindNodeStatus::kNone) {
@@ -683,20 +685,23 @@ void BenchDetector(const Shot& shot, const BenchOptions& o,
                   f.knot.colour_step.allFinite() ? (f.knot.colour_step - truth_l.px).norm() : -1.0);
             over1 += e > 1.0, over2 += e > 2.0;
             if (e > 2.0 && radius == 3.0) {
-              std::fprintf(stderr, "over 2 px: %s frame %d knot %d at (%.2f, %.2f), found "
-                           "(%.2f, %.2f)\n", shot.cameras[c].c_str(), shot.frames[t], k,
-                           truth_l.px.x(), truth_l.px.y(), f.knot.px.x(), f.knot.px.y());
+              std::fprintf(stderr,
+                           "over 2 px: %s frame %d knot %d at (%.2f, %.2f), found "
+                           "(%.2f, %.2f)\n",
+                           shot.cameras[c].c_str(), shot.frames[t], k, truth_l.px.x(),
+                           truth_l.px.y(), f.knot.px.x(), f.knot.px.y());
               if (dir) SaveCrop(img, truth_l.px, f.knot.px, crop + "_off.png");
             }
           }
         }
       }
-      std::printf("| %s | %.0f px | %lld | %lld | %lld | %lld | %lld (%lld) | %.3f | %.3f | %lld | "
-                  "%lld | %lld, %lld, %lld |\n",
-                  shot.cameras[c].c_str(), radius, (long long)n, (long long)found,
-                  (long long)degree, (long long)several, (long long)none, (long long)rings,
-                  Quantile(err, 0.5), Quantile(err, 0.99), (long long)over1, (long long)over2,
-                  (long long)u_found, (long long)u_over1, (long long)u_over2);
+      std::printf(
+          "| %s | %.0f px | %lld | %lld | %lld | %lld | %lld (%lld) | %.3f | %.3f | %lld | "
+          "%lld | %lld, %lld, %lld |\n",
+          shot.cameras[c].c_str(), radius, (long long)n, (long long)found, (long long)degree,
+          (long long)several, (long long)none, (long long)rings, Quantile(err, 0.5),
+          Quantile(err, 0.99), (long long)over1, (long long)over2, (long long)u_found,
+          (long long)u_over1, (long long)u_over2);
     }
 }
 
@@ -749,7 +754,8 @@ int main(int argc, char** argv) {
     if (const char* path = std::getenv("NETLAB_ACTIONS_CSV")) {
       user.actions_csv = std::fopen(path, "w");
       if (!user.actions_csv) throw std::runtime_error(std::string("cannot write ") + path);
-      std::fprintf(user.actions_csv, "camera,frame,knot,row,col,had_label,label_px_off,"
+      std::fprintf(user.actions_csv,
+                   "camera,frame,knot,row,col,had_label,label_px_off,"
                    "find_node,found_px_off,accepted_after,cause\n");
     }
     double engine_s = 0.0, user_s = 0.0;
@@ -770,19 +776,21 @@ int main(int argc, char** argv) {
     TallyErrors(shot, store, &tally, read_frame);
 
     const Tally all = PrintTables(o, shot, tally);
-    std::printf("\nengine %.1f s (of which frame reading %.1f s): %.0f knot-frames/s; the "
-                "script's Find Node calls %.1f s; link length %.4f m\n",
-                engine_s, read_s, engine_s > 0 ? all.knot_frames / engine_s : 0.0, user_s,
-                engine.link_length_m());
+    std::printf(
+        "\nengine %.1f s (of which frame reading %.1f s): %.0f knot-frames/s; the "
+        "script's Find Node calls %.1f s; link length %.4f m\n",
+        engine_s, read_s, engine_s > 0 ? all.knot_frames / engine_s : 0.0, user_s,
+        engine.link_length_m());
     std::printf("\nwhy the person acted on a visible knot (count; labels > 1 px off):\n");
     for (const auto& [cause, n] : user.causes)
       std::printf("  %6d  %5d  %s\n", n.first, n.second, cause.c_str());
     for (const auto& [check, n] : user.doubts)
       std::printf("Find Node kept for review by %s: %d (%d of them > 1 px off)\n", check.c_str(),
                   n.first, n.second);
-    std::printf("the check after the person's labels turned %d accepted labels to review (%d of "
-                "them > 1 px off, or of a hidden knot)\n",
-                user.recheck_flags, user.recheck_flags_off);
+    std::printf(
+        "the check after the person's labels turned %d accepted labels to review (%d of "
+        "them > 1 px off, or of a hidden knot)\n",
+        user.recheck_flags, user.recheck_flags_off);
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_label: %s\n", e.what());

@@ -76,9 +76,10 @@ void Timing(const recon::LabelSet& labels, const calib::Rig& rig, const std::vec
   std::printf("| whole shot, %d frame rows x %d knots x %zu cameras (%zu missing) | %.1f ms |\n",
               labels.frames(), labels.knots(), labels.cameras.size(), found, whole);
   std::printf("| per frame row (whole shot / rows) | %.3f ms |\n", per_row);
-  std::printf("| an edit through the document (apply, journal, its rows counted; median) | %.3f ms "
-              "|\n",
-              edit.empty() ? 0.0 : edit[edit.size() / 2]);
+  std::printf(
+      "| an edit through the document (apply, journal, its rows counted; median) | %.3f ms "
+      "|\n",
+      edit.empty() ? 0.0 : edit[edit.size() / 2]);
   std::printf("| 3200 frame rows, extrapolated | %.2f s |\n\n", per_row * 3200 / 1000.0);
 }
 
@@ -87,7 +88,7 @@ struct Score {
   int listed = 0, visible = 0, false_alarms = 0;
   int by_basis[3] = {0, 0, 0}, false_by_basis[3] = {0, 0, 0};  // MissingBasis
   int runs = 0;  // (camera, knot) runs of consecutive frame rows listed: Shift+D presses
-  std::vector<double> error;        // expected vs true position of the visible ones, px
+  std::vector<double> error;  // expected vs true position of the visible ones, px
   int unlabeled_visible = 0, unlisted = 0;
   std::vector<int> unlisted_by_others;  // by the other cameras with accepted labels
 };
@@ -151,7 +152,8 @@ void Truth(const recon::LabelSet& labels, const calib::Rig& rig, const std::vect
     for (recon::Label& l : camera)
       if (l.present() && uniform(rng) < 0.03) l = recon::Label{}, ++deleted;
   const std::pair<const char*, const recon::LabelSet*> cases[] = {
-      {"the labels given", &labels}, {"the truth (all visible knots)", &truth},
+      {"the labels given", &labels},
+      {"the truth (all visible knots)", &truth},
       {"the truth, 3 % deleted", &thinned}};
   struct Variant {
     const char* target;
@@ -166,19 +168,21 @@ void Truth(const recon::LabelSet& labels, const calib::Rig& rig, const std::vect
     variants.push_back({"yes", "yes", with_target});
     variants.back().options.need_labeled_neighbour = true;
   }
-  std::printf("| labels | target | neighbour rule | listed (cameras / neighbours / motion) | "
-              "false alarms | visible without a label | unlisted | runs (Shift+D) | "
-              "expected vs true, median / max |\n|---|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "| labels | target | neighbour rule | listed (cameras / neighbours / motion) | "
+      "false alarms | visible without a label | unlisted | runs (Shift+D) | "
+      "expected vs true, median / max |\n|---|---|---|---|---|---|---|---|---|\n");
   for (const auto& [name, set] : cases)
     for (const Variant& v : variants) {
       const Score s = Compare(*set, rig, index, truth, v.options);
-      std::printf("| %s | %s | %s | %d (%d / %d / %d) | %d (%.1f %%) | %d | %d (%.1f %%) | %d | "
-                  "%.2f / %.2f px |\n",
-                  name, v.target, v.rule, s.listed, s.by_basis[0], s.by_basis[1], s.by_basis[2],
-                  s.false_alarms, Percent(s.false_alarms, s.listed), s.unlabeled_visible,
-                  s.unlisted, Percent(s.unlisted, s.unlabeled_visible), s.runs,
-                  s.error.empty() ? 0.0 : s.error[s.error.size() / 2],
-                  s.error.empty() ? 0.0 : s.error.back());
+      std::printf(
+          "| %s | %s | %s | %d (%d / %d / %d) | %d (%.1f %%) | %d | %d (%.1f %%) | %d | "
+          "%.2f / %.2f px |\n",
+          name, v.target, v.rule, s.listed, s.by_basis[0], s.by_basis[1], s.by_basis[2],
+          s.false_alarms, Percent(s.false_alarms, s.listed), s.unlabeled_visible, s.unlisted,
+          Percent(s.unlisted, s.unlabeled_visible), s.runs,
+          s.error.empty() ? 0.0 : s.error[s.error.size() / 2],
+          s.error.empty() ? 0.0 : s.error.back());
     }
   std::printf("\n(the truth, 3 %% deleted: %d visible labels deleted)\n\n", deleted);
   // The labels given, with the target where there is one: false alarms and unlisted knots by
@@ -221,8 +225,9 @@ int main(int argc, char** argv) {
     else if (a == "--repeat" && i + 1 < argc)
       repeat = std::max(1, std::stoi(argv[++i]));
     else {
-      std::fprintf(stderr, "usage: bench_missing --labels L.h5 --rig RIG.yaml [--truth T.h5] "
-                           "[--target SIM.h5|SCENARIO.yaml] [--fps F] [--repeat N]\n");
+      std::fprintf(stderr,
+                   "usage: bench_missing --labels L.h5 --rig RIG.yaml [--truth T.h5] "
+                   "[--target SIM.h5|SCENARIO.yaml] [--fps F] [--repeat N]\n");
       return 2;
     }
   }
@@ -242,8 +247,7 @@ int main(int argc, char** argv) {
     gui::MissingKnotsOptions options;
     if (!target_path.empty()) options.target = gui::LoadTarget(target_path, fps);
     gui::Timing(labels, rig, index, options, repeat);
-    if (!truth_path.empty())
-      gui::Truth(labels, rig, index, recon::ReadLabels(truth_path), options);
+    if (!truth_path.empty()) gui::Truth(labels, rig, index, recon::ReadLabels(truth_path), options);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_missing: %s\n", e.what());
     return 1;

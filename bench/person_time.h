@@ -14,12 +14,12 @@
 namespace netlab::bench {
 
 struct PersonTime {
-  static constexpr double kKey = 0.28;         // K
-  static constexpr double kPoint = 1.1;        // P
-  static constexpr double kButton = 0.2;       // B
-  static constexpr double kDecide = 1.35;      // M
-  static constexpr double kReviewLook = 4.0;   // a review item looked at in four views
-  static constexpr double kSearch = 5.0;       // a knot without a ring found in the image
+  static constexpr double kKey = 0.28;        // K
+  static constexpr double kPoint = 1.1;       // P
+  static constexpr double kButton = 0.2;      // B
+  static constexpr double kDecide = 1.35;     // M
+  static constexpr double kReviewLook = 4.0;  // a review item looked at in four views
+  static constexpr double kSearch = 5.0;      // a knot without a ring found in the image
 
   // An aimed click (Find Node's brush on a knot, a seed, a knot placed by hand).
   static constexpr double AimedClick() { return kDecide + kPoint + kButton; }

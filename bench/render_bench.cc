@@ -43,8 +43,8 @@ Scene BenchScene(double shift) {
   const double half = 0.5 * kMesh * (kKnots - 1);
   // The cup: x = 1 - kCup (1 - rho^2 / rho_max^2) along the flight axis, y and z across it.
   auto at = [&](double y, double z) {
-    return Eigen::Vector3d(1.0 + shift - kCup * (1.0 - (y * y + z * z) / (2.0 * half * half)),
-                           y, z);
+    return Eigen::Vector3d(1.0 + shift - kCup * (1.0 - (y * y + z * z) / (2.0 * half * half)), y,
+                           z);
   };
   auto knot = [&](int i, int j) { return Eigen::Vector2d((i - 5) * kMesh, (j - 5) * kMesh); };
   Scene scene;
@@ -68,7 +68,8 @@ Scene BenchScene(double shift) {
       }
     }
   for (int corner = 0; corner < 4; ++corner) {
-    const double y = (corner & 1 ? 1 : -1) * (half + 0.02), z = (corner & 2 ? 1 : -1) * (half + 0.02);
+    const double y = (corner & 1 ? 1 : -1) * (half + 0.02),
+                 z = (corner & 2 ? 1 : -1) * (half + 0.02);
     scene.balls.push_back({at(y, z), 0.005, {0.2f, 0.2f, 0.8f}});
   }
   Box box;
@@ -129,7 +130,8 @@ int main(int argc, char** argv) {
 
         start = std::chrono::steady_clock::now();
         accumulator.setTo(cv::Scalar::all(0));
-        for (const Scene& sub_frame : blur) RenderScene(camera, sub_frame, options, 0.25f, &accumulator);
+        for (const Scene& sub_frame : blur)
+          RenderScene(camera, sub_frame, options, 0.25f, &accumulator);
         row.render4 = std::min(row.render4, Ms(start));
 
         sensor.seed = 1000 + run;
@@ -147,8 +149,9 @@ int main(int argc, char** argv) {
     }
     const int pixels = rig.cameras[0].intrinsics.width;
     std::printf("\nPaperRig(%.2f): %d x %d px, ms per camera-frame\n\n", scale, pixels, pixels);
-    std::printf("| camera | render, 1 sample | render, 4 samples | Expose 8-bit | Expose 12-bit "
-                "| first render (cold) |\n|---|---|---|---|---|---|\n");
+    std::printf(
+        "| camera | render, 1 sample | render, 4 samples | Expose 8-bit | Expose 12-bit "
+        "| first render (cold) |\n|---|---|---|---|---|---|\n");
     Row mean;
     mean.camera = "mean";
     mean.render1 = mean.render4 = mean.expose8 = mean.expose12 = 0.0;
@@ -213,8 +216,9 @@ int main(int argc, char** argv) {
     }
     std::printf("\nFlight effects, PaperRig(%.2f), mean ms per camera-frame (one sample)\n\n",
                 scale);
-    std::printf("| render | + paper lamps | + textile background | + depth map and f/4 blur "
-                "| Expose 8-bit with a camera response |\n|---|---|---|---|---|\n");
+    std::printf(
+        "| render | + paper lamps | + textile background | + depth map and f/4 blur "
+        "| Expose 8-bit with a camera response |\n|---|---|---|---|---|\n");
     std::printf("| %.1f | %.1f | %.1f | %.1f | %.1f |\n", plain, lamps, textile, dof, response);
   }
   return 0;

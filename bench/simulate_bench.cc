@@ -18,8 +18,9 @@
 // reference's response and that of the explicit step at half its step. --keep-coupling holds the
 // coupling penalty (kappa = 100 max(EI, GJ) / l^2, a numerical device of the explicit model) at
 // its nominal value when EI or GJ changes. --stretching sets the implicit integrator's stretching
-// step (backward_euler, sdirk2) of the tested runs. Wall time and "x real time" are those of the changed
-// run under the tested integrator, in process CPU time (one core, whatever the machine's load).
+// step (backward_euler, sdirk2) of the tested runs. Wall time and "x real time" are those of the
+// changed run under the tested integrator, in process CPU time (one core, whatever the machine's
+// load).
 //
 // Per case: the scenario's run (its integrator, automatic dt, rotational inertia scaled) with its
 // segments, dt, steps, wall time, segment-steps/s and real-time factor; its error against a
@@ -40,10 +41,10 @@
 
 #include <algorithm>
 #include <chrono>
-#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <string>
 #include <vector>
 
@@ -139,11 +140,13 @@ struct Parameter {
   double Material::*field;  // null: the drag coefficient
 };
 
-constexpr Parameter kParameters[] = {
-    {"EA", 0.5, &Material::stretch_stiffness}, {"EI", 4.0, &Material::bend_stiffness},
-    {"GJ", 4.0, &Material::twist_stiffness},   {"c_s", 4.0, &Material::stretch_damping},
-    {"c_b", 4.0, &Material::bend_damping},     {"c_t", 4.0, &Material::twist_damping},
-    {"C_d", 1.5, nullptr}};
+constexpr Parameter kParameters[] = {{"EA", 0.5, &Material::stretch_stiffness},
+                                     {"EI", 4.0, &Material::bend_stiffness},
+                                     {"GJ", 4.0, &Material::twist_stiffness},
+                                     {"c_s", 4.0, &Material::stretch_damping},
+                                     {"c_b", 4.0, &Material::bend_damping},
+                                     {"c_t", 4.0, &Material::twist_damping},
+                                     {"C_d", 1.5, nullptr}};
 
 Scenario Changed(Scenario s, const Parameter& p) {
   if (p.field) {
@@ -181,8 +184,8 @@ double Rms(const std::vector<std::vector<Vector3d>>& r) {
 // scenario's own integrator and under the explicit reference at its own step, and how far apart
 // the two responses are.
 int Sensitivity(const std::string& dir, const std::vector<std::string>& cases, double window,
-                const char* integrator, const std::vector<std::string>& only, double dt_factor, bool with_floor,
-                bool keep_coupling, const char* stretching) {
+                const char* integrator, const std::vector<std::string>& only, double dt_factor,
+                bool with_floor, bool keep_coupling, const char* stretching) {
   std::printf(
       "| case | parameter | factor | reference response RMS / max (mm) | %s response RMS / max "
       "(mm) | relative error | reference floor | %s CPU (s) | x real time | reference CPU (s) |\n"
@@ -201,7 +204,8 @@ int Sensitivity(const std::string& dir, const std::vector<std::string>& cases, d
     const Trajectory def = Run(s, w, 1, dt_factor, false, 1, integrator);
     const Trajectory half = with_floor ? Run(s, w, 1, 0.5, false, 1, "explicit") : Trajectory{};
     std::printf(
-        "| %s | nominal | 1 | – | %.3f / %.3f from the reference | – | – | %.2f | %.2f | %.2f |%s\n",
+        "| %s | nominal | 1 | – | %.3f / %.3f from the reference | – | – | %.2f | %.2f | %.2f "
+        "|%s\n",
         case_name.c_str(), Compare(def, ref).rms_mm, Compare(def, ref).max_mm, def.cpu_s,
         def.sim_time / def.cpu_s, ref.cpu_s, ref.stable && def.stable ? "" : " UNSTABLE");
     std::fflush(stdout);
@@ -237,11 +241,12 @@ int Sensitivity(const std::string& dir, const std::vector<std::string>& cases, d
       }
       char floor_text[32] = "–";
       if (floor >= 0.0) std::snprintf(floor_text, sizeof floor_text, "%.2f", floor);
-      std::printf("| %s | %s | %g | %.3f / %.2f | %.3f / %.2f | %.2f | %s | %.2f | %.2f | %.2f |%s\n",
-                  case_name.c_str(), p.name, p.factor, rms_ref * 1e3, max_ref * 1e3,
-                  Rms(r_def) * 1e3, max_def * 1e3, rms_ref > 0 ? Rms(diff) / rms_ref : 0.0,
-                  floor_text, def_p.cpu_s, def_p.sim_time / def_p.cpu_s, ref_p.cpu_s,
-                  ref_p.stable && def_p.stable ? "" : " UNSTABLE");
+      std::printf(
+          "| %s | %s | %g | %.3f / %.2f | %.3f / %.2f | %.2f | %s | %.2f | %.2f | %.2f |%s\n",
+          case_name.c_str(), p.name, p.factor, rms_ref * 1e3, max_ref * 1e3, Rms(r_def) * 1e3,
+          max_def * 1e3, rms_ref > 0 ? Rms(diff) / rms_ref : 0.0, floor_text, def_p.cpu_s,
+          def_p.sim_time / def_p.cpu_s, ref_p.cpu_s,
+          ref_p.stable && def_p.stable ? "" : " UNSTABLE");
       std::fflush(stdout);
     }
   }
@@ -308,8 +313,8 @@ int main(int argc, char** argv) {
                        stretching);
   }
   if (cases.empty())
-    cases = {"cantilever", "pendulum", "net_capture", "net_a_0.5", "net_a_0.8", "net_b_0.5",
-             "net_b_0.8"};
+    cases = {"cantilever", "pendulum",  "net_capture", "net_a_0.5",
+             "net_a_0.8",  "net_b_0.5", "net_b_0.8"};
   const auto fastest = [&](const Scenario& s, double w, int n) {
     Trajectory run = Run(s, w, 1, 1.0, false, n, integrator);
     for (int r = 1; r < repeat; ++r) {
@@ -336,8 +341,9 @@ int main(int argc, char** argv) {
     }
     return 0;
   }
-  std::printf("| case | sim s | segments | dt (s) | steps | wall (s) | M seg-steps/s | x real time |"
-              " error vs reference RMS / max (mm) | inertia-scaling error RMS / max (mm) |\n");
+  std::printf(
+      "| case | sim s | segments | dt (s) | steps | wall (s) | M seg-steps/s | x real time |"
+      " error vs reference RMS / max (mm) | inertia-scaling error RMS / max (mm) |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   for (const std::string& case_name : cases) {
     const char* name = case_name.c_str();

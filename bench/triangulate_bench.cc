@@ -67,8 +67,8 @@ void NoiseTable(int draws) {
         const Eigen::Vector3d p(ux(rng), uy(rng), uz(rng));
         std::vector<recon::Observation> obs;
         for (int c : cams)
-          obs.push_back({c, rig.cameras[c].ProjectWorld(p) +
-                                Eigen::Vector2d(noise(rng), noise(rng))});
+          obs.push_back(
+              {c, rig.cameras[c].ProjectWorld(p) + Eigen::Vector2d(noise(rng), noise(rng))});
         const auto t0 = Clock::now();
         recon::TriangulationOptions options;
         options.outlier_threshold_px = std::max(4.0, 5.0 * sigma);  // as the docs advise
@@ -118,24 +118,27 @@ void ParabolaTable(int frames) {
         ++present;
       }
     }
-  std::printf("\nB. Full parabola: %d knots x %d frames x %zu cameras, %lld labels (%.1f s to "
-              "generate), %lld mislabeled\n\n",
-              kRows * kCols, frames, names.size(), static_cast<long long>(present), Since(g0),
-              static_cast<long long>(planted));
-  std::printf("| mode | priors | wall (s) | triangulate (s) | adjust (s) | triangulated | RMS error "
-              "(mm) | mean Mahalanobis^2 (3: covariance right) | wrong points (> 6 sigma) | mislabels found | other outliers | threshold (px) | "
-              "reprojection RMS (px) | prior shift RMS (mm) |\n");
+  std::printf(
+      "\nB. Full parabola: %d knots x %d frames x %zu cameras, %lld labels (%.1f s to "
+      "generate), %lld mislabeled\n\n",
+      kRows * kCols, frames, names.size(), static_cast<long long>(present), Since(g0),
+      static_cast<long long>(planted));
+  std::printf(
+      "| mode | priors | wall (s) | triangulate (s) | adjust (s) | triangulated | RMS error "
+      "(mm) | mean Mahalanobis^2 (3: covariance right) | wrong points (> 6 sigma) | mislabels "
+      "found | other outliers | threshold (px) | "
+      "reprojection RMS (px) | prior shift RMS (mm) |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   struct Case {
     recon::Adjustment mode;
     bool link, smooth;
   };
-  for (const Case& c : {Case{recon::Adjustment::kNone, false, false},
-                        Case{recon::Adjustment::kPoints, false, false},
-                        Case{recon::Adjustment::kPoints, true, false},
-                        Case{recon::Adjustment::kPoints, false, true},
-                        Case{recon::Adjustment::kPoints, true, true},
-                        Case{recon::Adjustment::kRig, false, false}}) {
+  for (const Case& c :
+       {Case{recon::Adjustment::kNone, false, false},
+        Case{recon::Adjustment::kPoints, false, false},
+        Case{recon::Adjustment::kPoints, true, false},
+        Case{recon::Adjustment::kPoints, false, true}, Case{recon::Adjustment::kPoints, true, true},
+        Case{recon::Adjustment::kRig, false, false}}) {
     recon::SequenceOptions o;
     o.adjustment = c.mode;
     if (c.link) o.link_length_m = 0.1, o.link_sigma_m = 0.002;
@@ -168,9 +171,9 @@ void ParabolaTable(int frames) {
                        : c.mode == recon::Adjustment::kPoints ? "points"
                                                               : "rig";
     const std::string priors = c.link && c.smooth ? "link + smoothness"
-                         : c.link           ? "link length"
-                         : c.smooth         ? "smoothness"
-                                            : "-";
+                               : c.link           ? "link length"
+                               : c.smooth         ? "smoothness"
+                                                  : "-";
     char shift[64] = "-";
     if (c.link && c.smooth)
       std::snprintf(shift, sizeof shift, "%.4f / %.4f (%d sweeps, last %.4f)",
@@ -179,13 +182,14 @@ void ParabolaTable(int frames) {
     else if (c.link || c.smooth)
       std::snprintf(shift, sizeof shift, "%.4f",
                     1e3 * (c.link ? r.link_shift_rms_m : r.smoothness_shift_rms_m));
-    std::printf("| %s | %s | %.1f | %.1f | %.1f | %lld | %.4f | %.2f | %lld | %lld / %lld | %lld | %.2f | "
-                "%.3f | %s |\n",
-                mode, priors.c_str(), wall, r.triangulate_s, r.adjust_s,
-                static_cast<long long>(r.triangulated), 1e3 * std::sqrt(ss / n), m2 / n,
-                static_cast<long long>(wrong), static_cast<long long>(found),
-                static_cast<long long>(planted), static_cast<long long>(r.outliers.size()) - found,
-                r.outlier_threshold_px, r.reprojection_rms_px, shift);
+    std::printf(
+        "| %s | %s | %.1f | %.1f | %.1f | %lld | %.4f | %.2f | %lld | %lld / %lld | %lld | %.2f | "
+        "%.3f | %s |\n",
+        mode, priors.c_str(), wall, r.triangulate_s, r.adjust_s,
+        static_cast<long long>(r.triangulated), 1e3 * std::sqrt(ss / n), m2 / n,
+        static_cast<long long>(wrong), static_cast<long long>(found),
+        static_cast<long long>(planted), static_cast<long long>(r.outliers.size()) - found,
+        r.outlier_threshold_px, r.reprojection_rms_px, shift);
     std::fflush(stdout);
   }
 }
@@ -195,8 +199,10 @@ void ParabolaTable(int frames) {
 int main(int argc, char** argv) {
   int frames = 3222, draws = 2000;
   for (int i = 1; i + 1 < argc; ++i) {
-    if (std::strcmp(argv[i], "--frames") == 0) frames = std::atoi(argv[++i]);
-    else if (std::strcmp(argv[i], "--draws") == 0) draws = std::atoi(argv[++i]);
+    if (std::strcmp(argv[i], "--frames") == 0)
+      frames = std::atoi(argv[++i]);
+    else if (std::strcmp(argv[i], "--draws") == 0)
+      draws = std::atoi(argv[++i]);
   }
   NoiseTable(draws);
   ParabolaTable(frames);

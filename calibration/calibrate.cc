@@ -1,6 +1,7 @@
 #include "calibration/calibrate.h"
 
 #include <ceres/ceres.h>
+#include <glob.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -8,7 +9,6 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
-#include <glob.h>
 #include <iomanip>
 #include <limits>
 #include <mutex>
@@ -49,7 +49,6 @@ std::string TruncatedImage(const std::string& path) {
   }
   return "";
 }
-
 
 [[noreturn]] void Fail(const std::string& message) { throw std::runtime_error(message); }
 
@@ -115,7 +114,8 @@ Eigen::Vector3d Triangulate(const Camera& a, const Eigen::Vector2d& pa, const Ca
     return Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   Eigen::Matrix4d m;
   m << ra, rb;
-  const Eigen::Vector4d h = Eigen::JacobiSVD<Eigen::Matrix4d>(m, Eigen::ComputeFullV).matrixV().col(3);
+  const Eigen::Vector4d h =
+      Eigen::JacobiSVD<Eigen::Matrix4d>(m, Eigen::ComputeFullV).matrixV().col(3);
   return h.head<3>() / h.w();
 }
 
@@ -142,11 +142,11 @@ bool CalibrationOptions::IsValid(std::string* error) const {
 std::string CalibrationSummary::BriefReport() const {
   std::ostringstream os;
   os << std::setprecision(4);
-  os << "calibration: RMS " << rms_px << " px over " << observations << " points ("
-     << outliers << " outliers dropped)\n";
+  os << "calibration: RMS " << rms_px << " px over " << observations << " points (" << outliers
+     << " outliers dropped)\n";
   for (const CameraReport& c : cameras) {
-    os << "  " << c.name << ": RMS " << c.rms_px << " px, " << c.views << " views, "
-       << c.points << " points, coverage " << Percent(c.coverage);
+    os << "  " << c.name << ": RMS " << c.rms_px << " px, " << c.views << " views, " << c.points
+       << " points, coverage " << Percent(c.coverage);
     if (c.position_sigma_m > 0.0) os << ", centre sigma " << c.position_sigma_m * 1e3 << " mm";
     // The images that fit worst: where a bad detection would show.
     std::vector<std::pair<int, double>> worst = c.image_rms_px;

@@ -20,10 +20,9 @@
 
 #include <functional>
 #include <map>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "calibration/detect.h"
 #include "calibration/rig.h"
@@ -52,8 +51,8 @@ inline Observation MakeObservation(int camera, int frame, const PatternDetection
 
 struct CalibrationInput {
   std::vector<std::string> camera_names;
-  std::vector<cv::Size> image_sizes;                    // per camera
-  std::vector<std::vector<std::string>> image_names;    // [camera][frame], for reports (optional)
+  std::vector<cv::Size> image_sizes;                  // per camera
+  std::vector<std::vector<std::string>> image_names;  // [camera][frame], for reports (optional)
   int num_frames = 0;
   std::vector<Observation> observations;
 };
@@ -63,11 +62,11 @@ struct CalibrationOptions {
   bool refine_intrinsics = true;  // let the bundle adjustment refine the intrinsics
   // Known intrinsics by camera name (--fix-intrinsics): held constant.
   std::map<std::string, CameraIntrinsics> fixed_intrinsics;
-  double huber_px = 1.0;        // scale of the Huber loss, px
-  double outlier_px = 1.0;      // observations beyond max(outlier_px, 5 robust sigma) are dropped
-  int min_views = 5;            // a camera with fewer views gets a warning
+  double huber_px = 1.0;    // scale of the Huber loss, px
+  double outlier_px = 1.0;  // observations beyond max(outlier_px, 5 robust sigma) are dropped
+  int min_views = 5;        // a camera with fewer views gets a warning
   double min_view_spread_deg = 15.0;  // all of a camera's views within this angle: warning
-  double min_coverage = 0.3;    // fraction of the image's 10 x 10 cells with points: warning
+  double min_coverage = 0.3;          // fraction of the image's 10 x 10 cells with points: warning
   int max_iterations = 200;
 
   bool IsValid(std::string* error) const;
@@ -86,10 +85,10 @@ struct CameraReport {
 struct PairCheck {
   std::string a, b;
   double baseline_m = 0.0;
-  int segments = 0;               // adjacent point pairs triangulated by both
-  double mean_length_mm = 0.0;    // recovered square (or marker side), mm
+  int segments = 0;             // adjacent point pairs triangulated by both
+  double mean_length_mm = 0.0;  // recovered square (or marker side), mm
   double nominal_length_mm = 0.0;
-  double rms_error_mm = 0.0;      // against the nominal length
+  double rms_error_mm = 0.0;  // against the nominal length
 };
 
 struct CalibrationSummary {

@@ -3,7 +3,6 @@
 #include <ceres/jet.h>
 
 #include <Eigen/Dense>
-
 #include <cmath>
 #include <limits>
 #include <opencv2/calib3d.hpp>

@@ -13,19 +13,18 @@
 // The intrinsic parameter block used by the cost functions holds 12 doubles:
 //   fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6.
 
-#include <array>
-#include <string>
-
 #include <Eigen/Core>
+#include <array>
 #include <opencv2/core.hpp>
+#include <string>
 
 namespace netlab::calib {
 
 inline constexpr int kNumIntrinsics = 12;
 
 struct CameraIntrinsics {
-  int width = 0;   // px
-  int height = 0;  // px
+  int width = 0;              // px
+  int height = 0;             // px
   double fx = 0.0, fy = 0.0;  // focal lengths, px
   double cx = 0.0, cy = 0.0;  // principal point, px
   // k1, k2, p1, p2, k3, k4, k5, k6 (OpenCV order); k4..k6 only with `rational`.
@@ -34,8 +33,8 @@ struct CameraIntrinsics {
 
   int num_distortion() const { return rational ? 8 : 5; }
   Eigen::Matrix3d K() const;
-  cv::Mat CameraMatrix() const;          // 3x3 CV_64F
-  cv::Mat DistortionCoefficients() const; // 1x5 or 1x8 CV_64F
+  cv::Mat CameraMatrix() const;            // 3x3 CV_64F
+  cv::Mat DistortionCoefficients() const;  // 1x5 or 1x8 CV_64F
   std::array<double, kNumIntrinsics> ToParameters() const;
   void FromParameters(const double* p);
   // True when sizes and focal lengths are positive and every value finite; else the reason.
@@ -48,8 +47,8 @@ template <typename T>
 inline void Distort(const T* d, const T& x, const T& y, T* xd, T* yd) {
   const T r2 = x * x + y * y;
   const T r4 = r2 * r2, r6 = r4 * r2;
-  const T radial = (T(1) + d[0] * r2 + d[1] * r4 + d[4] * r6) /
-                   (T(1) + d[5] * r2 + d[6] * r4 + d[7] * r6);
+  const T radial =
+      (T(1) + d[0] * r2 + d[1] * r4 + d[4] * r6) / (T(1) + d[5] * r2 + d[6] * r4 + d[7] * r6);
   *xd = x * radial + T(2) * d[2] * x * y + d[3] * (r2 + T(2) * x * x);
   *yd = y * radial + d[2] * (r2 + T(2) * y * y) + T(2) * d[3] * x * y;
 }

@@ -26,8 +26,7 @@ class ReprojectionCostFunctor {
 
   template <typename T>
   bool operator()(const T* cam_from_world_q, const T* cam_from_world_t, const T* intrinsics,
-                  const T* world_from_target_q, const T* world_from_target_t,
-                  T* residuals) const {
+                  const T* world_from_target_q, const T* world_from_target_t, T* residuals) const {
     const Eigen::Map<const Eigen::Quaternion<T>> q_cw(cam_from_world_q);
     const Eigen::Map<const Eigen::Matrix<T, 3, 1>> t_cw(cam_from_world_t);
     const Eigen::Map<const Eigen::Quaternion<T>> q_wt(world_from_target_q);
@@ -43,8 +42,7 @@ class ReprojectionCostFunctor {
 
   static ceres::CostFunction* Create(const Eigen::Vector2d& observed,
                                      const Eigen::Vector3d& point_in_target) {
-    return new ceres::AutoDiffCostFunction<ReprojectionCostFunctor, 2, 4, 3, kNumIntrinsics, 4,
-                                           3>(
+    return new ceres::AutoDiffCostFunction<ReprojectionCostFunctor, 2, 4, 3, kNumIntrinsics, 4, 3>(
         new ReprojectionCostFunctor(observed, point_in_target));
   }
 

@@ -38,8 +38,8 @@ PatternDetection DetectChessboard(const cv::Mat& gray, const BoardPattern& patte
   double spacing = 1e9;
   for (int r = 0; r < pattern.rows; ++r)
     for (int c = 0; c + 1 < pattern.cols; ++c)
-      spacing = std::min<double>(spacing, cv::norm(corners[r * pattern.cols + c + 1] -
-                                                   corners[r * pattern.cols + c]));
+      spacing = std::min<double>(
+          spacing, cv::norm(corners[r * pattern.cols + c + 1] - corners[r * pattern.cols + c]));
   const int window = std::clamp(static_cast<int>(spacing / 3.0), 2, 15);
   cv::cornerSubPix(gray, corners, cv::Size(window, window), cv::Size(-1, -1),
                    cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-4));
@@ -57,8 +57,7 @@ PatternDetection DetectChessboard(const cv::Mat& gray, const BoardPattern& patte
   }
   // Then colour: the inner square at corner 0 is black, the one at the last corner white.
   const Eigen::Vector2d first = 0.25 * (at(0) + at(1) + at(cols) + at(cols + 1));
-  const Eigen::Vector2d last =
-      0.25 * (at(n - 1) + at(n - 2) + at(n - 1 - cols) + at(n - 2 - cols));
+  const Eigen::Vector2d last = 0.25 * (at(n - 1) + at(n - 2) + at(n - 1 - cols) + at(n - 2 - cols));
   const double radius = 0.2 * spacing;
   if (MeanAround(gray, first, radius) > MeanAround(gray, last, radius))
     std::reverse(corners.begin(), corners.end());

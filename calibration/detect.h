@@ -1,10 +1,9 @@
 #pragma once
 // Finding a target's points in an image, with sub-pixel refinement.
 
-#include <vector>
-
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "calibration/target.h"
 

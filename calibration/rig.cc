@@ -19,15 +19,17 @@ int Rig::Find(const std::string& name) const {
 void WriteRig(const std::string& path, const Rig& rig) {
   // Written in memory, then through common/files.h's WriteTextFile: OpenCV's file writer does not
   // report a write that fails (a full disk), and would leave a truncated rig in place.
-  cv::FileStorage fs(path, cv::FileStorage::WRITE | cv::FileStorage::MEMORY |
-                               cv::FileStorage::FORMAT_YAML);
+  cv::FileStorage fs(
+      path, cv::FileStorage::WRITE | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_YAML);
   {
-    fs << "cameras" << "[";
+    fs << "cameras"
+       << "[";
     for (const Camera& c : rig.cameras) {
       cv::Mat rotation, translation;
       cv::eigen2cv(Eigen::Matrix3d(c.cam_from_world.RotationMatrix()), rotation);
       cv::eigen2cv(Eigen::Vector3d(c.cam_from_world.translation), translation);
-      fs << "{" << "name" << c.name << "image_width" << c.intrinsics.width << "image_height"
+      fs << "{"
+         << "name" << c.name << "image_width" << c.intrinsics.width << "image_height"
          << c.intrinsics.height << "camera_matrix" << c.intrinsics.CameraMatrix()
          << "distortion_coefficients" << c.intrinsics.DistortionCoefficients() << "rotation"
          << rotation << "translation" << translation << "}";
@@ -68,9 +70,9 @@ Rig ReadRig(const std::string& path) {
       if (m.empty()) fail(std::string("missing ") + key);
       if (m.rows != rows || (m.cols != cols_a && m.cols != cols_b))
         fail(std::string(key) + ": expected " + std::to_string(rows) + "x" +
-             std::to_string(cols_a) + (cols_b > 0 ? " or " + std::to_string(rows) + "x" +
-                                                        std::to_string(cols_b)
-                                                  : std::string()) +
+             std::to_string(cols_a) +
+             (cols_b > 0 ? " or " + std::to_string(rows) + "x" + std::to_string(cols_b)
+                         : std::string()) +
              ", got " + std::to_string(m.rows) + "x" + std::to_string(m.cols));
       m.convertTo(m, CV_64F);
       return m;
@@ -104,8 +106,8 @@ Rig ReadRig(const std::string& path) {
         !(std::abs(rotation.determinant() - 1.0) < 1e-6))
       fail_named("rotation is not a rotation matrix (R^T R != I or det != 1)");
     t = t.reshape(1, 3);
-    c.cam_from_world = Rigid3d(rotation, Eigen::Vector3d(t.at<double>(0), t.at<double>(1),
-                                                         t.at<double>(2)));
+    c.cam_from_world =
+        Rigid3d(rotation, Eigen::Vector3d(t.at<double>(0), t.at<double>(1), t.at<double>(2)));
     if (rig.Find(c.name) >= 0) fail_named("camera name used twice");
     rig.cameras.push_back(c);
   }
@@ -132,7 +134,7 @@ Camera LookAtCamera(const std::string& name, const Eigen::Vector3d& center,
 
 Rig PaperRig(double scale) {
   const int pixels = static_cast<int>(std::lround(2048 * scale));
-  const double pixel_size = 5.5 / scale;  // um: the same field of view at any scale
+  const double pixel_size = 5.5 / scale;     // um: the same field of view at any scale
   const Eigen::Vector3d aim(1.0, 0.0, 0.0);  // middle of the flight path
   Rig rig;
   struct Placement {

@@ -1,14 +1,13 @@
 #include "calibration/rig_compare.h"
 
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
-
-#include <Eigen/Geometry>
-#include <Eigen/SVD>
 
 #include "calibration/camera.h"
 
@@ -84,7 +83,7 @@ std::string RigComparison::Report() const {
   os << "rig vs truth: "
      << (alignment == RigAlignment::kNone      ? "one world frame, not aligned"
          : alignment == RigAlignment::kCentres ? "aligned on the camera centres"
-                                             : "aligned on the mean orientation and the centroid")
+                                               : "aligned on the mean orientation and the centroid")
      << " (residual " << Fixed("%.3f", alignment_rms_m * 1e3) << " mm, "
      << Fixed("%.4f", alignment_rms_deg) << " deg RMS); scale error "
      << (std::isfinite(scale_error) ? Fixed("%+.4f", scale_error * 100.0) + " %" : "n/a") << "\n";
@@ -95,9 +94,8 @@ std::string RigComparison::Report() const {
   for (const CameraComparison& c : cameras) {
     std::snprintf(line, sizeof(line),
                   "  %-10s %9.3f %9.4f %+8.3f %+8.3f %+8.3f %+8.3f %9.3f %9.3f\n", c.name.c_str(),
-                  c.centre_error_m * 1e3, c.rotation_error_deg, c.fx_error_px,
-                  c.fy_error_px, c.cx_error_px, c.cy_error_px, c.image_error_rms_px,
-                  c.image_error_max_px);
+                  c.centre_error_m * 1e3, c.rotation_error_deg, c.fx_error_px, c.fy_error_px,
+                  c.cx_error_px, c.cy_error_px, c.image_error_rms_px, c.image_error_max_px);
     os << line;
   }
   return os.str();

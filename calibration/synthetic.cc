@@ -19,11 +19,11 @@ class ChessboardPrint final : public PlanarPrint {
   explicit ChessboardPrint(const BoardPattern& p) : p_(p) {}
   double Albedo(double x, double y) const override {
     const double s = p_.square, margin = 0.5 * s;
-    if (x < -s - margin || y < -s - margin || x > p_.cols * s + margin ||
-        y > p_.rows * s + margin)
+    if (x < -s - margin || y < -s - margin || x > p_.cols * s + margin || y > p_.rows * s + margin)
       return -1.0;
     if (x < -s || y < -s || x >= p_.cols * s || y >= p_.rows * s) return 1.0;
-    const int i = static_cast<int>(std::floor(x / s)) + 1, j = static_cast<int>(std::floor(y / s)) + 1;
+    const int i = static_cast<int>(std::floor(x / s)) + 1,
+              j = static_cast<int>(std::floor(y / s)) + 1;
     return (i + j) % 2 == 0 ? 0.0 : 1.0;
   }
   Eigen::Vector2d Min() const override { return p_.extent_min.array() - 0.5 * p_.square; }
@@ -40,8 +40,12 @@ class TexturePrint final : public PlanarPrint {
   TexturePrint(cv::Mat texture, const Eigen::Matrix<double, 2, 3>& plane_to_texel,
                const Eigen::Vector2d& min, const Eigen::Vector2d& max, double margin,
                double viewer_z)
-      : texture_(std::move(texture)), map_(plane_to_texel), min_(min), max_(max),
-        margin_(margin), viewer_z_(viewer_z) {}
+      : texture_(std::move(texture)),
+        map_(plane_to_texel),
+        min_(min),
+        max_(max),
+        margin_(margin),
+        viewer_z_(viewer_z) {}
   double Albedo(double x, double y) const override {
     if (x < min_.x() - margin_ || y < min_.y() - margin_ || x > max_.x() + margin_ ||
         y > max_.y() + margin_)
@@ -158,8 +162,8 @@ CameraRays::CameraRays(const CameraIntrinsics& intrinsics) : intrinsics_(intrins
     for (int v = row_begin; v < row_end; ++v)
       for (int u = 0; u < w; ++u) {
         const Eigen::Vector2d ray = UndistortPoint(intrinsics_, Eigen::Vector2d(u - 0.5, v - 0.5));
-        corners_.at<cv::Vec2f>(v, u) = cv::Vec2f(static_cast<float>(ray.x()),
-                                                 static_cast<float>(ray.y()));
+        corners_.at<cv::Vec2f>(v, u) =
+            cv::Vec2f(static_cast<float>(ray.x()), static_cast<float>(ray.y()));
       }
   };
   std::thread other(work, 0, h / 2);
@@ -248,7 +252,8 @@ cv::Mat RenderPrints(const CameraRays& rays, const std::vector<PrintPose>& print
   for (int v = 0; v < h; ++v) {
     for (int u = 0; u < w; ++u) {
       const float a00 = corner_albedo.at<float>(v, u), a10 = corner_albedo.at<float>(v, u + 1);
-      const float a01 = corner_albedo.at<float>(v + 1, u), a11 = corner_albedo.at<float>(v + 1, u + 1);
+      const float a01 = corner_albedo.at<float>(v + 1, u),
+                  a11 = corner_albedo.at<float>(v + 1, u + 1);
       double grey;
       if (a00 == a10 && a00 == a01 && a00 == a11) {
         grey = to_grey(a00);
@@ -260,8 +265,8 @@ cv::Mat RenderPrints(const CameraRays& rays, const std::vector<PrintPose>& print
         for (int j = 0; j < n; ++j)
           for (int i = 0; i < n; ++i) {
             const double fx = (i + 0.5) / n, fy = (j + 0.5) / n;
-            const Eigen::Vector2d ray = (1 - fy) * ((1 - fx) * r00 + fx * r10) +
-                                        fy * ((1 - fx) * r01 + fx * r11);
+            const Eigen::Vector2d ray =
+                (1 - fy) * ((1 - fx) * r00 + fx * r10) + fy * ((1 - fx) * r01 + fx * r11);
             sum += to_grey(shade(ray, u, v));
           }
         grey = sum / (n * n);
@@ -278,7 +283,8 @@ cv::Mat RenderTarget(const Camera& camera, const CameraRays& rays,
                      const RenderOptions& options) {
   std::vector<PrintPose> poses;
   for (const TargetPrint& p : prints)
-    poses.push_back({p.print.get(), camera.cam_from_world * world_from_target * p.target_from_print});
+    poses.push_back(
+        {p.print.get(), camera.cam_from_world * world_from_target * p.target_from_print});
   return RenderPrints(rays, poses, options);
 }
 
@@ -319,8 +325,7 @@ std::vector<FaceProjection> ProjectTarget(const Camera& camera, const Calibratio
 
 std::vector<Rigid3d> RandomTargetPoses(const Rig& rig, const CalibrationTarget& target,
                                        const std::vector<int>& must_see, int count,
-                                       const Eigen::Vector3d& center,
-                                       const Eigen::Vector3d& spread,
+                                       const Eigen::Vector3d& center, const Eigen::Vector3d& spread,
                                        const Eigen::Quaterniond& base, double max_tilt_rad,
                                        std::mt19937& rng, double margin_px) {
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
@@ -328,8 +333,9 @@ std::vector<Rigid3d> RandomTargetPoses(const Rig& rig, const CalibrationTarget& 
   int tries = 0;
   while (static_cast<int>(poses.size()) < count) {
     if (++tries > 20000 * count)
-      throw std::runtime_error("RandomTargetPoses: no pose that every camera sees; widen the "
-                               "search or shrink the target");
+      throw std::runtime_error(
+          "RandomTargetPoses: no pose that every camera sees; widen the "
+          "search or shrink the target");
     Eigen::Vector3d axis(unit(rng), unit(rng), unit(rng));
     if (axis.norm() < 1e-6) continue;
     const double angle = max_tilt_rad * std::abs(unit(rng));
@@ -342,7 +348,8 @@ std::vector<Rigid3d> RandomTargetPoses(const Rig& rig, const CalibrationTarget& 
       bool seen = false;
       for (const FaceProjection& fp : ProjectTarget(rig.cameras[c], target, pose, margin_px)) {
         size_t total = 0;
-        for (const Eigen::Vector3d& x : target.faces[fp.face].pattern.points) total += x.allFinite();
+        for (const Eigen::Vector3d& x : target.faces[fp.face].pattern.points)
+          total += x.allFinite();
         if (fp.ids.size() == total) seen = true;
       }
       ok = ok && seen;

@@ -11,10 +11,9 @@
 
 #include <cstdint>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <random>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "calibration/rig.h"
 #include "calibration/target.h"
@@ -64,7 +63,7 @@ struct RenderOptions {
   double background = 90.0;  // grey level where no print is seen
   double noise_sigma = 0.0;  // Gaussian sensor noise, grey levels
   uint64_t seed = 1;
-  int supersample = 4;       // samples per pixel side at edges
+  int supersample = 4;  // samples per pixel side at edges
 };
 
 struct PrintPose {
@@ -89,8 +88,7 @@ struct FaceProjection {
   std::vector<Eigen::Vector2d> pixels;
 };
 std::vector<FaceProjection> ProjectTarget(const Camera& camera, const CalibrationTarget& target,
-                                          const Rigid3d& world_from_target,
-                                          double margin_px = 0.0);
+                                          const Rigid3d& world_from_target, double margin_px = 0.0);
 
 // A world_from_face orientation facing cameras that look along +x (the paper rig's cam0/cam1):
 // face x to their right (-y), face y down (-z), the print seen from -x.
@@ -103,8 +101,7 @@ Eigen::Quaterniond FacingPlusX(const BoardPattern& pattern);
 // many tries.
 std::vector<Rigid3d> RandomTargetPoses(const Rig& rig, const CalibrationTarget& target,
                                        const std::vector<int>& must_see, int count,
-                                       const Eigen::Vector3d& center,
-                                       const Eigen::Vector3d& spread,
+                                       const Eigen::Vector3d& center, const Eigen::Vector3d& spread,
                                        const Eigen::Quaterniond& base, double max_tilt_rad,
                                        std::mt19937& rng, double margin_px = 10.0);
 

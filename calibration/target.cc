@@ -16,14 +16,22 @@ namespace {
 const std::map<std::string, int>& DictionaryNames() {
   using namespace cv::aruco;
   static const std::map<std::string, int> names = {
-      {"DICT_4X4_50", DICT_4X4_50},       {"DICT_4X4_100", DICT_4X4_100},
-      {"DICT_4X4_250", DICT_4X4_250},     {"DICT_4X4_1000", DICT_4X4_1000},
-      {"DICT_5X5_50", DICT_5X5_50},       {"DICT_5X5_100", DICT_5X5_100},
-      {"DICT_5X5_250", DICT_5X5_250},     {"DICT_5X5_1000", DICT_5X5_1000},
-      {"DICT_6X6_50", DICT_6X6_50},       {"DICT_6X6_100", DICT_6X6_100},
-      {"DICT_6X6_250", DICT_6X6_250},     {"DICT_6X6_1000", DICT_6X6_1000},
-      {"DICT_7X7_50", DICT_7X7_50},       {"DICT_7X7_100", DICT_7X7_100},
-      {"DICT_7X7_250", DICT_7X7_250},     {"DICT_7X7_1000", DICT_7X7_1000},
+      {"DICT_4X4_50", DICT_4X4_50},
+      {"DICT_4X4_100", DICT_4X4_100},
+      {"DICT_4X4_250", DICT_4X4_250},
+      {"DICT_4X4_1000", DICT_4X4_1000},
+      {"DICT_5X5_50", DICT_5X5_50},
+      {"DICT_5X5_100", DICT_5X5_100},
+      {"DICT_5X5_250", DICT_5X5_250},
+      {"DICT_5X5_1000", DICT_5X5_1000},
+      {"DICT_6X6_50", DICT_6X6_50},
+      {"DICT_6X6_100", DICT_6X6_100},
+      {"DICT_6X6_250", DICT_6X6_250},
+      {"DICT_6X6_1000", DICT_6X6_1000},
+      {"DICT_7X7_50", DICT_7X7_50},
+      {"DICT_7X7_100", DICT_7X7_100},
+      {"DICT_7X7_250", DICT_7X7_250},
+      {"DICT_7X7_1000", DICT_7X7_1000},
       {"DICT_ARUCO_ORIGINAL", DICT_ARUCO_ORIGINAL},
   };
   return names;
@@ -307,8 +315,8 @@ CalibrationTarget CalibrationTarget::Parse(const std::string& spec) {
       root.Fail("markers", e.what());
     }
   }
-  root.Fail("type", "expected chessboard, charuco, double_sided_foil or marker_map, got '" +
-                        type + "'");
+  root.Fail("type",
+            "expected chessboard, charuco, double_sided_foil or marker_map, got '" + type + "'");
 }
 
 }  // namespace netlab::calib

@@ -23,12 +23,11 @@
 // Specs: "chessboard:COLSxROWS:SQUARE" (inner corners, m), "charuco:COLSxROWS:SQUARE:MARKER:DICT"
 // (squares, m, e.g. DICT_5X5_100), or the path of a YAML file (docs/calibration.md).
 
+#include <opencv2/aruco.hpp>
+#include <opencv2/aruco/charuco.hpp>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <opencv2/aruco.hpp>
-#include <opencv2/aruco/charuco.hpp>
 
 #include "calibration/rigid3.h"
 
@@ -38,20 +37,20 @@ enum class PatternType { kChessboard, kCharuco, kMarkers };
 
 struct BoardPattern {
   PatternType type = PatternType::kChessboard;
-  int cols = 0, rows = 0;   // chessboard: inner corners; charuco: squares
-  double square = 0.0;      // m
-  double marker = 0.0;      // m (charuco)
-  std::string dictionary;   // charuco / markers: e.g. "DICT_5X5_100"
+  int cols = 0, rows = 0;  // chessboard: inner corners; charuco: squares
+  double square = 0.0;     // m
+  double marker = 0.0;     // m (charuco)
+  std::string dictionary;  // charuco / markers: e.g. "DICT_5X5_100"
 
-  std::vector<Eigen::Vector3d> points;             // by id, face frame, m
-  std::vector<std::pair<int, int>> neighbours;     // ids one square apart (metric check)
-  Eigen::Vector2d extent_min, extent_max;          // printed outline in the face frame, m
+  std::vector<Eigen::Vector3d> points;          // by id, face frame, m
+  std::vector<std::pair<int, int>> neighbours;  // ids one square apart (metric check)
+  Eigen::Vector2d extent_min, extent_max;       // printed outline in the face frame, m
   // The side of the face (sign of z in the face frame) from which the print is seen the right way
   // round: -1 when z points into the print (x right, y down as seen), +1 for y up (OpenCV's
   // ChArUco boards may be either).
   double viewer_z = -1.0;
-  cv::Ptr<cv::aruco::CharucoBoard> charuco;        // charuco only
-  cv::Ptr<cv::aruco::Dictionary> aruco_dictionary; // charuco and markers
+  cv::Ptr<cv::aruco::CharucoBoard> charuco;         // charuco only
+  cv::Ptr<cv::aruco::Dictionary> aruco_dictionary;  // charuco and markers
 
   // A chessboard or ChArUco board; throws std::invalid_argument naming what is wrong.
   static BoardPattern Chessboard(int cols, int rows, double square);
@@ -83,9 +82,9 @@ struct CalibrationTarget {
   static CalibrationTarget Foil(BoardPattern pattern, double thickness, char flip_axis = 'y',
                                 const Eigen::Vector2d& back_offset = Eigen::Vector2d::Zero());
   // A marker map from marker corners (target frame, m), ids 4k..4k+3 for marker id k.
-  static CalibrationTarget MarkerMap(const std::string& dictionary,
-                                     const std::vector<std::pair<int, std::array<Eigen::Vector3d, 4>>>&
-                                         markers);
+  static CalibrationTarget MarkerMap(
+      const std::string& dictionary,
+      const std::vector<std::pair<int, std::array<Eigen::Vector3d, 4>>>& markers);
 };
 
 // cv::aruco dictionary by name ("DICT_4X4_50" ... "DICT_ARUCO_ORIGINAL"); throws on unknown names.

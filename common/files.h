@@ -52,8 +52,10 @@ inline void RenameNow(const std::string& from, const std::string& to) {
   std::error_code error;
   const fs::file_status target = fs::status(to, error);
   if (fs::exists(target) && !fs::is_regular_file(target) && !fs::is_directory(target))
-    throw std::runtime_error(to + ": not a regular file (a device, FIFO or socket): not replaced "
-                             "by " + from);
+    throw std::runtime_error(to +
+                             ": not a regular file (a device, FIFO or socket): not replaced "
+                             "by " +
+                             from);
   error.clear();
   fs::rename(from, to, error);
   if (error)
@@ -223,8 +225,8 @@ inline void ReplaceDirectory(const std::string& partial, const std::string& dir)
   if (error) {
     std::error_code ignored;
     fs::rename(old, dir, ignored);
-    throw std::runtime_error(dir + ": cannot rename " + partial + " into place: " +
-                             error.message() + " (the previous folder is kept)");
+    throw std::runtime_error(dir + ": cannot rename " + partial +
+                             " into place: " + error.message() + " (the previous folder is kept)");
   }
   // The new folder is in place: a failure to delete the old one loses nothing.
   fs::remove_all(old, error);
@@ -241,7 +243,8 @@ class FolderReplacement {
     namespace fs = std::filesystem;
     const std::string name = fs::path(dir_).filename().string();
     if (dir_.empty() || name == "." || name == ".." || dir_ == "/")
-      throw std::runtime_error("'" + dir_ + "': name the output folder itself (it is replaced "
+      throw std::runtime_error("'" + dir_ +
+                               "': name the output folder itself (it is replaced "
                                "as a whole), not '.', '..' or '/'");
     // A status error means "no such path" here (or one under a file: create_directories below
     // names that).
@@ -252,8 +255,8 @@ class FolderReplacement {
     partial_ = dir_ + ".partial";
     if (fs::exists(fs::symlink_status(partial_, ignored))) fs::remove_all(partial_, error);
     if (error)
-      throw std::runtime_error(partial_ + ": cannot remove the stale partial folder: " +
-                               error.message());
+      throw std::runtime_error(partial_ +
+                               ": cannot remove the stale partial folder: " + error.message());
     fs::create_directories(partial_, error);
     if (error)
       throw std::runtime_error(partial_ + ": cannot create the output folder: " + error.message());

@@ -122,8 +122,8 @@ Id CreateFrameDataset(hid_t loc, const std::string& name, hid_t type,
     H5Pset_shuffle(props.get());
     H5Pset_deflate(props.get(), static_cast<unsigned>(deflate_level));
   }
-  Id dataset(H5Dcreate2(loc, name.c_str(), type, space.get(), H5P_DEFAULT, props.get(),
-                        H5P_DEFAULT));
+  Id dataset(
+      H5Dcreate2(loc, name.c_str(), type, space.get(), H5P_DEFAULT, props.get(), H5P_DEFAULT));
   if (!dataset.valid()) Fail(ObjectName(loc) + ": cannot create dataset " + name);
   return dataset;
 }
@@ -157,8 +157,8 @@ void WriteDataset(hid_t loc, const std::string& name, hid_t type, const std::vec
     H5Pset_shuffle(props.get());
     H5Pset_deflate(props.get(), static_cast<unsigned>(deflate_level));
   }
-  Id dataset(H5Dcreate2(loc, name.c_str(), type, space.get(), H5P_DEFAULT, props.get(),
-                        H5P_DEFAULT));
+  Id dataset(
+      H5Dcreate2(loc, name.c_str(), type, space.get(), H5P_DEFAULT, props.get(), H5P_DEFAULT));
   if (!dataset.valid()) Fail(ObjectName(loc) + ": cannot create dataset " + name);
   if (elements > 0 && H5Dwrite(dataset.get(), type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
     Fail(ObjectName(dataset.get()) + ": write failed (is the disk full?)");
@@ -283,7 +283,8 @@ void ReadFrame(hid_t dataset, hid_t type, hsize_t frame, void* data) {
   const int rank = H5Sget_simple_extent_ndims(space.get());
   std::vector<hsize_t> dims(rank);
   H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
-  if (rank < 1 || frame >= dims[0]) Fail(ObjectName(dataset) + ": frame " + std::to_string(frame) + " out of range");
+  if (rank < 1 || frame >= dims[0])
+    Fail(ObjectName(dataset) + ": frame " + std::to_string(frame) + " out of range");
   std::vector<hsize_t> start(rank, 0), count(dims);
   start[0] = frame;
   count[0] = 1;

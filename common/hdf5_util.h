@@ -40,11 +40,11 @@ class Id {
 // Turns off HDF5's automatic error stack printing (once per process).
 void SilenceErrors();
 
-Id CreateFile(const std::string& path);            // truncates
-Id OpenFileReadOnly(const std::string& path);      // throws "cannot open ... as HDF5"
-Id OpenFileReadWrite(const std::string& path);     // to add datasets to an existing file
+Id CreateFile(const std::string& path);         // truncates
+Id OpenFileReadOnly(const std::string& path);   // throws "cannot open ... as HDF5"
+Id OpenFileReadWrite(const std::string& path);  // to add datasets to an existing file
 Id CreateGroup(hid_t loc, const std::string& name);
-bool Exists(hid_t loc, const std::string& path);   // a link at `path` (relative to loc)
+bool Exists(hid_t loc, const std::string& path);  // a link at `path` (relative to loc)
 
 // A chunked dataset of frames: shape [0, frame_dims...], growing along the first axis.
 Id CreateFrameDataset(hid_t loc, const std::string& name, hid_t type,

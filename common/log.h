@@ -50,7 +50,7 @@ class LogMessage {
 
 }  // namespace netlab
 
-#define NETLAB_LOG(level)                                    \
-  if (!::netlab::LogEnabled(::netlab::LogLevel::level)) {    \
-  } else                                                     \
+#define NETLAB_LOG(level)                                 \
+  if (!::netlab::LogEnabled(::netlab::LogLevel::level)) { \
+  } else                                                  \
     ::netlab::LogMessage(::netlab::LogLevel::level).stream()

@@ -96,7 +96,8 @@ inline void CheckOutputPaths(const std::vector<NamedPath>& inputs,
       if (SameFile(out.path, in.path))
         throw std::runtime_error(Describe(out) + " is the " + in.name + " file " + in.path +
                                  ": the output would replace the input it is made from; name "
-                                 "another " + Option(out));
+                                 "another " +
+                                 Option(out));
       if (SameFile(out.path + ".partial", in.path))
         throw std::runtime_error(Describe(out) + " would be written first to " + out.path +
                                  ".partial, which is the " + in.name + " file " + in.path +
@@ -117,7 +118,8 @@ inline void CheckOutputPaths(const std::vector<NamedPath>& inputs,
           (kind == "a folder"
                ? ": name the file to write in it"
                : ", not a regular file: netlab writes every output whole to a file and renames "
-                 "it into place, which would replace " + out.path + " itself; name a file"));
+                 "it into place, which would replace " +
+                     out.path + " itself; name a file"));
     fs::path folder = Resolved(out.path).parent_path();
     if (folder.empty()) folder = ".";
     std::error_code error;

@@ -51,14 +51,16 @@ inline std::string Child(const std::string& path, const std::string& key) {
 inline void CheckTree(const YAML::Node& node, const std::string& origin, const std::string& path,
                       std::size_t& budget) {
   if (budget == 0)
-    throw InputError(origin + ": its aliases ('*name') expand to more values than the file's "
-                              "text holds; netlab reads no alias bombs");
+    throw InputError(origin +
+                     ": its aliases ('*name') expand to more values than the file's "
+                     "text holds; netlab reads no alias bombs");
   --budget;
   const std::string& tag = node.Tag();
   if (!tag.empty() && tag != "?" && tag != "!") {
     const std::string shown = tag.rfind("tag:yaml.org,2002:", 0) == 0 ? "!!" + tag.substr(18) : tag;
     throw InputError(Line(origin, node.Mark()) + (path.empty() ? std::string("(root)") : path) +
-                     ": the tag '" + shown + "' is not read by netlab (the value would be read "
+                     ": the tag '" + shown +
+                     "' is not read by netlab (the value would be read "
                      "as if it had none); remove it");
   }
   if (node.IsMap()) {
@@ -70,10 +72,10 @@ inline void CheckTree(const YAML::Node& node, const std::string& origin, const s
       if (key.IsScalar())
         for (const auto& [other, line] : seen)
           if (other == name)
-            throw InputError(
-                Line(origin, key.Mark()) + Child(path, name) + ": given twice, at lines " +
-                std::to_string(line + 1) + " and " + std::to_string(key.Mark().line + 1) +
-                " (a YAML reader keeps one of them silently); keep one");
+            throw InputError(Line(origin, key.Mark()) + Child(path, name) +
+                             ": given twice, at lines " + std::to_string(line + 1) + " and " +
+                             std::to_string(key.Mark().line + 1) +
+                             " (a YAML reader keeps one of them silently); keep one");
       seen.emplace_back(name, key.Mark().line);
       CheckTree(key, origin, Child(path, name), budget);
       CheckTree(value, origin, Child(path, name), budget);
@@ -96,8 +98,8 @@ inline YAML::Node LoadYamlString(const std::string& text, const std::string& ori
   try {
     documents = YAML::LoadAll(text);
   } catch (const YAML::ParserException& e) {
-    throw InputError(origin + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " +
-                     e.msg);
+    throw InputError(origin + ":" + std::to_string(e.mark.line + 1) +
+                     ": YAML syntax error: " + e.msg);
   }
   for (std::size_t i = 1; i < documents.size(); ++i)
     if (!documents[i].IsNull())
@@ -181,7 +183,9 @@ class YamlMap {
   // A value that must be > 0 (or >= 0 with allow_zero).
   double Positive(const std::string& key, bool allow_zero = false) const {
     const double v = Double(key);
-    if (!(allow_zero ? v >= 0.0 : v > 0.0)) Fail(key, std::string("must be ") + (allow_zero ? ">= 0" : "> 0") + " (got " + Number(v) + ")");
+    if (!(allow_zero ? v >= 0.0 : v > 0.0))
+      Fail(key,
+           std::string("must be ") + (allow_zero ? ">= 0" : "> 0") + " (got " + Number(v) + ")");
     return v;
   }
   double Positive(const std::string& key, double fallback, bool allow_zero = false) const {
@@ -263,8 +267,7 @@ class YamlMap {
 
  private:
   double ToDouble(const YAML::Node& value, const std::string& what) const {
-    if (!value.IsScalar())
-      throw InputError(Location(value) + what + ": expected a number");
+    if (!value.IsScalar()) throw InputError(Location(value) + what + ": expected a number");
     double v;
     try {
       v = value.as<double>();

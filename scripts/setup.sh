@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
 # Shared set-up of scripts/demo.sh and scripts/test.sh: installs the Debian packages netlab needs
 # (only those missing), then configures and builds with CMake into build/ (or $NETLAB_BUILD_DIR).
-# Source it; it defines NETLAB_ROOT and NETLAB_BUILD_DIR.
+# Source it; it defines NETLAB_ROOT and NETLAB_BUILD_DIR. A script that needs more packages names
+# them in the array netlab_extra_packages before it sources this.
 set -euo pipefail
 
 NETLAB_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 NETLAB_BUILD_DIR=${NETLAB_BUILD_DIR:-"$NETLAB_ROOT/build"}
 NETLAB_BUILD_TYPE=${NETLAB_BUILD_TYPE:-Release}
+[ -v netlab_extra_packages ] || netlab_extra_packages=()
 
 netlab_packages=(
   g++ cmake make pkg-config
@@ -14,6 +16,7 @@ netlab_packages=(
   libceres-dev libopencv-dev libopencv-contrib-dev qt6-base-dev
   hdf5-tools python3 fonts-dejavu-core
   libopenmpi-dev openmpi-bin
+  "${netlab_extra_packages[@]}"
 )
 
 netlab_install_missing() {

@@ -10,9 +10,9 @@
 #include <iostream>
 #include <optional>
 
-#include "app/command_line/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "app/command_line/command_line.h"
 #include "calibration/calibrate.h"
 #include "calibration/rig_compare.h"
 #include "common/output_paths.h"
@@ -184,14 +184,14 @@ int RunCalibrate(const std::vector<std::string>& args) {
     }
 
     const bool progress = !cl.Flag("quiet") && isatty(fileno(stderr));
-    const calib::CalibrationInput input = calib::DetectInImages(
-        names, files, target,
-        progress ? std::function<void(int, int)>([](int done, int total) {
-          std::fprintf(stderr, "\rdetecting %d/%d", done, total);
-          std::fflush(stderr);
-        })
-                 : std::function<void(int, int)>(),
-        2);
+    const calib::CalibrationInput input =
+        calib::DetectInImages(names, files, target,
+                              progress ? std::function<void(int, int)>([](int done, int total) {
+                                std::fprintf(stderr, "\rdetecting %d/%d", done, total);
+                                std::fflush(stderr);
+                              })
+                                       : std::function<void(int, int)>(),
+                              2);
     if (progress) std::fprintf(stderr, "\n");
     calib::CalibrationResult result = calib::CalibrateRig(target, input, options);
     result.summary.wall_s =

@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "app/command_line/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "app/command_line/command_line.h"
 #include "common/errors.h"
 #include "common/output_paths.h"
 #include "libnetsim/characterization/bench_file.h"

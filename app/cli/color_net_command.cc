@@ -8,9 +8,9 @@
 #include <iostream>
 #include <new>
 
-#include "app/command_line/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "app/command_line/command_line.h"
 #include "common/memory.h"
 #include "common/output_paths.h"
 #include "libreconstruct/coloring/color_identify.h"
@@ -50,9 +50,9 @@ constexpr char kHelp[] =
 
 int RunColorNet(const std::vector<std::string>& args) {
   return RunGuarded("color-net", [&] {
-    const CommandLine cl(args, {"json", "quiet", "help", "adjacent-distinct"},
-                         {"knots", "rule", "distance", "radius", "palette", "out", "time-limit",
-                          "background"});
+    const CommandLine cl(
+        args, {"json", "quiet", "help", "adjacent-distinct"},
+        {"knots", "rule", "distance", "radius", "palette", "out", "time-limit", "background"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -89,10 +89,11 @@ int RunColorNet(const std::vector<std::string>& args) {
     }
     if (coloring.method == "infeasible")
       throw std::runtime_error(what + ": no palette of at most " +
-                               std::to_string(options.max_colors) + " colours can identify every "
-                               "knot under rule " + rule + ", distance " +
-                               std::to_string(options.min_distance) + " (lower bound " +
-                               std::to_string(coloring.lower_bound) +
+                               std::to_string(options.max_colors) +
+                               " colours can identify every "
+                               "knot under rule " +
+                               rule + ", distance " + std::to_string(options.min_distance) +
+                               " (lower bound " + std::to_string(coloring.lower_bound) +
                                "); try --rule cyclic, a --radius, or a smaller --distance");
     std::vector<std::array<int, 3>> srgb;
     double min_delta_e = 0.0;
@@ -141,7 +142,8 @@ int RunColorNet(const std::vector<std::string>& args) {
                                        " s; try a larger --time-limit"
                                  : "within the search's budget; try a smaller --distance or a "
                                    "--radius"));
-    coloring.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    coloring.wall_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::string why;
     if (!recon::VerifyColoring(coloring, &why))
       throw std::runtime_error("internal error: the colouring fails verification: " + why);
@@ -149,15 +151,14 @@ int RunColorNet(const std::vector<std::string>& args) {
     if (!cl.Flag("quiet")) {
       char delta[32];
       std::snprintf(delta, sizeof delta, "%.1f", min_delta_e);
-      const std::string dyes = srgb.empty() ? "dyes " + source
-                                            : "dyes from " + source +
-                                                  " (least CIEDE2000 difference " + delta + ")";
+      const std::string dyes =
+          srgb.empty() ? "dyes " + source
+                       : "dyes from " + source + " (least CIEDE2000 difference " + delta + ")";
       std::string notes;
       if (coloring.exact_skipped)
         notes += "; no exact search (more than " + std::to_string(recon::kExactSearchMaxKnots) +
                  " knots)";
-      if (coloring.time_limited)
-        notes += "; cut short by --time-limit, so another run may differ";
+      if (coloring.time_limited) notes += "; cut short by --time-limit, so another run may differ";
       std::fprintf(stderr,
                    "%dx%d knots, rule %s, distance %d, radius %d%s: %d colours (lower bound %d, "
                    "%s, %s) in %.2f s%s; %s; written to %s\n",

@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "app/command_line/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "app/command_line/command_line.h"
 #include "common/errors.h"
 #include "common/files.h"
 #include "common/output_paths.h"
@@ -294,7 +294,8 @@ void PrintJson(const netsim::FitResult& r, const std::string& out) {
 std::vector<std::string> SplitList(const std::string& list, const std::string& option) {
   // getline yields no item after a trailing comma: that empty name is refused as the others are.
   if (!list.empty() && list.back() == ',')
-    throw UsageError("--" + option + " '" + list + "': an empty file name in the list (a "
+    throw UsageError("--" + option + " '" + list +
+                     "': an empty file name in the list (a "
                      "trailing comma)");
   std::vector<std::string> items;
   std::istringstream in(list);

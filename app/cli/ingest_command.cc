@@ -12,10 +12,10 @@
 #include <iostream>
 #include <thread>
 
-#include "app/command_line/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
 #include "app/cli/progress_bar.h"
+#include "app/command_line/command_line.h"
 #include "common/files.h"
 #include "common/output_paths.h"
 #include "libreconstruct/recording/frame_store.h"
@@ -50,7 +50,8 @@ double SampleDecodeFps(const recon::SynchronizedSequence& sequence, int threads,
   for (int c = 0; c < sequence.num_cameras(); ++c) {
     const std::vector<int>& idx = sequence.source(c).indices();
     const int n = std::min<int>(samples, static_cast<int>(idx.size()));
-    for (int k = 0; k < n; ++k) tasks.emplace_back(c, idx[(idx.size() - 1) * k / std::max(1, n - 1)]);
+    for (int k = 0; k < n; ++k)
+      tasks.emplace_back(c, idx[(idx.size() - 1) * k / std::max(1, n - 1)]);
   }
   std::atomic<int> next{0}, decoded{0};
   const auto start = std::chrono::steady_clock::now();
@@ -63,7 +64,8 @@ double SampleDecodeFps(const recon::SynchronizedSequence& sequence, int threads,
   for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
   worker();
   for (std::thread& t : pool) t.join();
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return wall > 0 ? decoded / wall : 0.0;
 }
 
@@ -96,8 +98,7 @@ void PrintJson(const recon::SynchronizedSequence& sequence, const recon::CheckRe
       json.Key("frames").Int(c.frames);
       json.Key("width").Int(c.width);
       json.Key("height").Int(c.height);
-      json.Key("bit_depth").Int(
-          sequence.Correction(sequence.experiment().Find(c.name)).bit_depth);
+      json.Key("bit_depth").Int(sequence.Correction(sequence.experiment().Find(c.name)).bit_depth);
       WriteIndices(json, "missing", c.missing);
       WriteIndices(json, "unreadable", c.unreadable);
       WriteIndices(json, "duplicated", c.duplicated);
@@ -143,8 +144,9 @@ int RunIngest(const std::vector<std::string>& args) {
       return 0;
     }
     if (cl.positional().size() != 1)
-      throw UsageError(cl.positional().empty() ? "EXPERIMENT.yaml is required"
-                                               : "unexpected argument '" + cl.positional()[1] + "'");
+      throw UsageError(cl.positional().empty()
+                           ? "EXPERIMENT.yaml is required"
+                           : "unexpected argument '" + cl.positional()[1] + "'");
     const auto to_hdf5 = cl.Option("to-hdf5");
     if (!cl.Flag("check") && !to_hdf5) throw UsageError("say --check or --to-hdf5 OUT.h5");
     if (cl.Flag("decode") && !cl.Flag("check")) throw UsageError("--decode goes with --check");
@@ -171,8 +173,8 @@ int RunIngest(const std::vector<std::string>& args) {
     if (cl.Flag("check")) {
       const bool decode = cl.Flag("decode");
       ProgressBar bar(decode ? "decoding" : "checking", !quiet && isatty(fileno(stderr)));
-      check = sequence.Check(decode, [&](int done, int total) { bar.Update(done, total); },
-                             threads);
+      check = sequence.Check(
+          decode, [&](int done, int total) { bar.Update(done, total); }, threads);
       if (decode) {
         decode_fps = check.read_fps;
       } else {
@@ -201,9 +203,10 @@ int RunIngest(const std::vector<std::string>& args) {
       conversion.wall_s =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       if (!quiet)
-        std::fprintf(stderr, "frame store %s (%.1f MB, %d frames per camera, %.1f s); read it with %s\n",
-                     to_hdf5->c_str(), conversion.bytes / 1e6, conversion.frames,
-                     conversion.wall_s, stored.path.c_str());
+        std::fprintf(stderr,
+                     "frame store %s (%.1f MB, %d frames per camera, %.1f s); read it with %s\n",
+                     to_hdf5->c_str(), conversion.bytes / 1e6, conversion.frames, conversion.wall_s,
+                     stored.path.c_str());
     }
     if (cl.Flag("json"))
       PrintJson(sequence, cl.Flag("check") ? &check : nullptr, decode_fps, sampled,

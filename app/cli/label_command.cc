@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "app/command_line/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "app/command_line/command_line.h"
 #include "calibration/rig.h"
 #include "common/errors.h"
 #include "common/files.h"
@@ -168,8 +168,10 @@ std::vector<CameraCounts> CountLabels(const LabelJob& job, const recon::LabelSto
     int corners_labeled = 0;
     for (int k : corners) corners_labeled += store.at(ci, 0, k).present();
     if (corners_labeled < 3)
-      notes[c] = "fewer than three corners in the first frame: labeled where the other cameras "
-                 "see the knots" + std::string(notes[c].empty() ? "" : "; ") + notes[c];
+      notes[c] =
+          "fewer than three corners in the first frame: labeled where the other cameras "
+          "see the knots" +
+          std::string(notes[c].empty() ? "" : "; ") + notes[c];
     counts[c].first_frame_note = notes[c];
     for (int t = 0; t < store.labels().frames(); ++t)
       for (int k = 0; k < rows * cols; ++k) {
@@ -264,8 +266,7 @@ int RunLabel(const std::vector<std::string>& args) {
     if (!cl.Flag("no-colour-check")) {
       net.coloring = &coloring;
       net.dyes = dyes;
-      net.illumination =
-          cl.DoubleOption("illumination", recon::kRenderIllumination, 1e-3, 100.0);
+      net.illumination = cl.DoubleOption("illumination", recon::kRenderIllumination, 1e-3, 100.0);
       net.bayer = sequence.experiment().cameras.front().bayer;
     }
     const recon::LabelingSetup setup = recon::SetUpLabeling(net);
@@ -299,8 +300,7 @@ int RunLabel(const std::vector<std::string>& args) {
     }
     for (const auto& c : report.counts)
       report.labeled += c.labeled, report.needs_review += c.needs_review;
-    report.wall_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (!quiet) PrintReport(job, report, out);
     if (cl.Flag("json")) PrintJson(job, report);
     return 0;

@@ -13,7 +13,9 @@ namespace netlab::app {
 class ProgressBar {
  public:
   ProgressBar(std::string label, bool enabled)
-      : label_(std::move(label)), enabled_(enabled), tty_(isatty(fileno(stderr))),
+      : label_(std::move(label)),
+        enabled_(enabled),
+        tty_(isatty(fileno(stderr))),
         start_(std::chrono::steady_clock::now()) {}
 
   void Update(int done, int total) {

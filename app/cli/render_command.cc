@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "app/command_line/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
 #include "app/cli/progress_bar.h"
+#include "app/command_line/command_line.h"
 #include "libreconstruct/twin/synthetic_experiment.h"
 
 namespace netlab::app {
@@ -47,7 +47,8 @@ constexpr char kHelp[] =
     "  --blur-samples N       renders averaged over the exposure (default 3; 1: no blur)\n"
     "  --vignetting V         0..1 of the lens's cos^4 fall-off (default 0.5)\n"
     "  --calibration-views N  foil poses for calibration images (default 20; 0: none)\n"
-    "  --coloring FILE        yarn colours per link (`netlab color-net`; default: six dyes cycled)\n"
+    "  --coloring FILE        yarn colours per link (`netlab color-net`; default: six dyes "
+    "cycled)\n"
     "  --seed N               noise and pose seed (default 1)\n"
     "  --camera-time-offset CAM=D[,CAM=D...]\n"
     "                         camera CAM exposes its frame k at (k + D) / fps, D in frames,\n"
@@ -137,8 +138,7 @@ recon::Flicker ParseFlicker(const std::string& text) {
   flicker.hz = Number(parts[0], "--flicker " + text, "the frequency HZ");
   flicker.depth = Number(parts[1], "--flicker " + text, "the depth");
   if (parts.size() == 3) flicker.duty = Number(parts[2], "--flicker " + text, "the duty cycle");
-  if (!(flicker.hz > 0.0))
-    throw UsageError("--flicker " + text + ": the frequency must be > 0 Hz");
+  if (!(flicker.hz > 0.0)) throw UsageError("--flicker " + text + ": the frequency must be > 0 Hz");
   if (!(flicker.depth >= 0.0 && flicker.depth <= 1.0))
     throw UsageError("--flicker " + text + ": the depth must be in [0, 1]");
   if (parts.size() == 3 && !(flicker.duty > 0.0 && flicker.duty < 1.0))
@@ -174,8 +174,8 @@ std::vector<recon::CameraMotion> ParseCameraMotion(const std::string& text, cons
       throw UsageError("--camera-motion " + item + ": the amplitude must be in (0, 1000] mm");
     if (colon != std::string::npos && !(hz > 0.0))
       throw UsageError("--camera-motion " + item + ": the frequency must be > 0 Hz");
-    motion[c] = recon::DrawCameraMotion(1e-3 * mm, hz, std::numeric_limits<double>::quiet_NaN(),
-                                        seed, c);
+    motion[c] =
+        recon::DrawCameraMotion(1e-3 * mm, hz, std::numeric_limits<double>::quiet_NaN(), seed, c);
   }
   return motion;
 }
@@ -207,11 +207,31 @@ void PrintJson(const recon::RenderSummary& s, const std::string& out) {
 int RunRender(const std::vector<std::string>& args) {
   return RunGuarded("render", [&] {
     const CommandLine cl(args, {"json", "quiet", "help", "frame-clutter"},
-                         {"sim", "out", "rig", "frames", "scale", "noise", "fps", "bit-depth",
-                          "bayer", "background", "exposure", "blur-samples", "vignetting",
-                          "calibration-views", "seed", "threads", "coloring",
-                          "camera-time-offset", "flicker", "f-number", "focus-distance",
-                          "pixel-pitch", "camera-variation", "camera-response", "camera-motion",
+                         {"sim",
+                          "out",
+                          "rig",
+                          "frames",
+                          "scale",
+                          "noise",
+                          "fps",
+                          "bit-depth",
+                          "bayer",
+                          "background",
+                          "exposure",
+                          "blur-samples",
+                          "vignetting",
+                          "calibration-views",
+                          "seed",
+                          "threads",
+                          "coloring",
+                          "camera-time-offset",
+                          "flicker",
+                          "f-number",
+                          "focus-distance",
+                          "pixel-pitch",
+                          "camera-variation",
+                          "camera-response",
+                          "camera-motion",
                           "lamps"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
@@ -266,8 +286,8 @@ int RunRender(const std::vector<std::string>& args) {
         throw UsageError("--f-number and --focus-distance go together");
       job.depth_of_field.f_number = cl.DoubleOption("f-number", 4.0, 0.5, 64.0);
       job.depth_of_field.focus_distance_m = cl.DoubleOption("focus-distance", 3.0, 0.05, 1e4);
-      job.depth_of_field.pixel_pitch_m = 1e-6 * cl.DoubleOption("pixel-pitch", 5.5, 0.1, 100.0) /
-                                         scale;
+      job.depth_of_field.pixel_pitch_m =
+          1e-6 * cl.DoubleOption("pixel-pitch", 5.5, 0.1, 100.0) / scale;
       for (const calib::Camera& camera : job.rig.cameras) {
         const double f = camera.intrinsics.fx * job.depth_of_field.pixel_pitch_m;
         if (!(job.depth_of_field.focus_distance_m > 2.0 * f))
@@ -278,9 +298,9 @@ int RunRender(const std::vector<std::string>& args) {
     if (cl.Option("camera-variation") && cl.Option("camera-response"))
       throw UsageError("--camera-variation and --camera-response exclude each other");
     if (cl.Option("camera-variation"))
-      job.responses = recon::DrawCameraResponses(
-          static_cast<int>(job.rig.cameras.size()),
-          cl.DoubleOption("camera-variation", 0.0, 0.0, 1.0), job.sensor.seed);
+      job.responses = recon::DrawCameraResponses(static_cast<int>(job.rig.cameras.size()),
+                                                 cl.DoubleOption("camera-variation", 0.0, 0.0, 1.0),
+                                                 job.sensor.seed);
     if (const auto file = cl.Option("camera-response"))
       job.responses = recon::ReadCameraResponses(*file, job.rig);
     if (const auto motion = cl.Option("camera-motion"))

@@ -10,9 +10,9 @@
 #include <iostream>
 #include <map>
 
-#include "app/command_line/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "app/command_line/command_line.h"
 #include "common/errors.h"
 #include "common/files.h"
 #include "common/hdf5_util.h"
@@ -96,8 +96,8 @@ void CheckCovariances(const KnotTracks& tracks, const std::string& path) {
       char text[160];
       std::snprintf(text, sizeof(text), "variance %.3g m^2 (sigma %.3g m)", v,
                     std::sqrt(std::max(v, 0.0)));
-      throw InputError(path + ":/knots/covariance: frame " + std::to_string(i / knots) +
-                       ", knot " + std::to_string(i % knots) + ": " + text +
+      throw InputError(path + ":/knots/covariance: frame " + std::to_string(i / knots) + ", knot " +
+                       std::to_string(i % knots) + ": " + text +
                        " is outside 1e-40..1e6 m^2 (sigma 1e-20 m to 1 km): no position is "
                        "measured so; fix the file, or give --meas-sigma / --sim-sigma for a file "
                        "without covariances");
@@ -107,8 +107,7 @@ void CheckCovariances(const KnotTracks& tracks, const std::string& path) {
 
 // Refuses a file that holds nothing to compare: a measurement of one frame (no span of time to
 // align or compare; it read "no overlap in time"), or every knot invalid in every frame.
-void CheckSomethingToCompare(const KnotTracks& tracks, const std::string& path,
-                             bool measured) {
+void CheckSomethingToCompare(const KnotTracks& tracks, const std::string& path, bool measured) {
   if (measured && tracks.frames() < 2)
     throw InputError(path + ": " + std::to_string(tracks.frames()) +
                      (tracks.frames() == 1 ? " frame" : " frames") +
@@ -125,8 +124,8 @@ void CheckGrid(const KnotTracks& tracks, const std::string& path) {
   std::map<std::array<int, 3>, int> first;  // (net, row, col) -> its first index
   for (int k = 0; k < tracks.knots(); ++k) {
     const int net = tracks.net.empty() ? 0 : tracks.net[k];
-    const auto [it, fresh] = first.emplace(std::array<int, 3>{net, tracks.grid[k][0],
-                                                              tracks.grid[k][1]}, k);
+    const auto [it, fresh] =
+        first.emplace(std::array<int, 3>{net, tracks.grid[k][0], tracks.grid[k][1]}, k);
     if (!fresh)
       throw InputError(path + ":/knots/grid: knots " + std::to_string(it->second) + " and " +
                        std::to_string(k) + " are both (" + std::to_string(tracks.grid[k][0]) +
@@ -171,21 +170,11 @@ void PrintJson(const netsim::ScoreSummary& s) {
     const netsim::SummaryValue value = field.value(s);
     json.Key(std::string(field.key));
     switch (field.kind) {
-      case SummaryKind::kInt:
-        json.Int(static_cast<long long>(value.number));
-        break;
-      case SummaryKind::kNumber:
-        json.Number(value.number);
-        break;
-      case SummaryKind::kText:
-        json.String(value.text);
-        break;
-      case SummaryKind::kFlag:
-        json.Bool(value.number != 0.0);
-        break;
-      case SummaryKind::kVector3:
-        json.Vector3(value.vector);
-        break;
+      case SummaryKind::kInt: json.Int(static_cast<long long>(value.number)); break;
+      case SummaryKind::kNumber: json.Number(value.number); break;
+      case SummaryKind::kText: json.String(value.text); break;
+      case SummaryKind::kFlag: json.Bool(value.number != 0.0); break;
+      case SummaryKind::kVector3: json.Vector3(value.vector); break;
       case SummaryKind::kRows:
         json.BeginObject();
         for (const netsim::ScoreRow& row : value.rows) json.Key(row.name).Number(row.rms_m * 1e3);
@@ -254,10 +243,10 @@ int RunScore(const std::vector<std::string>& args) {
     if (!options.IsValid(&why)) throw UsageError(why);
     const bool quiet = cl.Flag("quiet");
     // Before any work: no output over an input or the other output, every output writable.
-    std::vector<NamedPath> inputs = {{"--measured", measured_path},
-                                                               {"--sim", sim_path}};
+    std::vector<NamedPath> inputs = {{"--measured", measured_path}, {"--sim", sim_path}};
     if (!ensemble.empty())
-      for (const std::string& part : SplitList(ensemble)) inputs.push_back({"--sim-ensemble", part});
+      for (const std::string& part : SplitList(ensemble))
+        inputs.push_back({"--sim-ensemble", part});
     CheckOutputPaths(inputs, {{"--out", out}, {"--report", report}});
 
     if (!quiet)

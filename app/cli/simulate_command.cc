@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "app/command_line/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "app/command_line/command_line.h"
 #include "common/files.h"
 #include "common/log.h"
 #include "common/output_paths.h"

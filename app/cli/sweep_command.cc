@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "app/command_line/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "app/command_line/command_line.h"
 #include "common/errors.h"
 #include "common/files.h"
 #include "common/output_paths.h"
@@ -326,15 +326,16 @@ int RunSweep(const std::vector<std::string>& args) {
     if (ensemble > 0)
       // The runs are draws, not a grid: no central difference to take.
       for (auto& per_output : sensitivity)
-        for (netsim::Sensitivity& one : per_output)
-          one = {NAN, -1, -1, "an ensemble, not a grid"};
+        for (netsim::Sensitivity& one : per_output) one = {NAN, -1, -1, "an ensemble, not a grid"};
     // A study of which no run succeeded has no result: --out and --report are left as they were
     // (each run's error is named above and in the JSON).
     if (failed == static_cast<int>(result.runs.size()) && failed > 0) {
       writer.reset();  // closes the partial file, which `outputs` removes
       if (cl.Flag("json")) PrintJson(scenario_path, parameters, grid, result, sensitivity, "", "");
-      std::fprintf(stderr, "netlab sweep: error: all %d runs failed (each named above); %s was "
-                   "not written%s\n", failed, out.c_str(),
+      std::fprintf(stderr,
+                   "netlab sweep: error: all %d runs failed (each named above); %s was "
+                   "not written%s\n",
+                   failed, out.c_str(),
                    std::filesystem::exists(out) ? ", the existing file is as it was" : "");
       return 1;
     }

@@ -15,9 +15,9 @@
 #include <string>
 #include <vector>
 
-#include "app/command_line/command_line.h"
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "app/command_line/command_line.h"
 #include "calibration/rig.h"
 #include "common/errors.h"
 #include "common/files.h"
@@ -101,7 +101,7 @@ struct TriangulateArgs {
   std::optional<std::string> experiment_path;  // --experiment FILE
   bool quiet = false, json = false;
   bool estimate_offsets = false, apply_offsets = false;
-  recon::SequenceOptions options;              // without progress
+  recon::SequenceOptions options;  // without progress
 };
 
 // Every option but --help, in the order they are checked (the first bad one is reported).
@@ -219,11 +219,11 @@ class ProgressPrinter {
 struct Outcome {
   int frames = 0;
   recon::SequenceResult result;
-  std::optional<recon::TruthComparison> truth;  // with --truth
+  std::optional<recon::TruthComparison> truth;   // with --truth
   std::optional<recon::OffsetEstimate> offsets;  // with --estimate-offsets
-  bool result_offsets_applied = false;            // --apply-offsets
+  bool result_offsets_applied = false;           // --apply-offsets
   recon::FrameTimes times;
-  std::string csv_pts, csv_res;                 // with --csv
+  std::string csv_pts, csv_res;  // with --csv
   std::vector<std::string> warnings;
   double wall_s = 0.0;
 };
@@ -254,8 +254,8 @@ void PrintRigSummary(const recon::SequenceResult& r) {
   for (size_t c = 1; c < r.rig_center_change_mm.size(); ++c)
     std::fprintf(stderr, "  %s: %s %.3f mm (sigma %.3f), %.4f deg (sigma %.4f)\n",
                  r.rig.cameras[c].name.c_str(), r.rig_adjusted ? "moved" : "would move",
-                 r.rig_center_change_mm[c], r.rig_center_sigma_mm[c],
-                 r.rig_rotation_change_deg[c], r.rig_rotation_sigma_deg[c]);
+                 r.rig_center_change_mm[c], r.rig_center_sigma_mm[c], r.rig_rotation_change_deg[c],
+                 r.rig_rotation_sigma_deg[c]);
 }
 
 // The degenerate points: how many, the bound and whence, the first few with their reasons.
@@ -278,12 +278,10 @@ void PrintDegenerate(const TriangulateArgs& a, const recon::SequenceResult& r) {
 // Where the times come from, and each camera's clock offset when estimated.
 void PrintClocks(const Outcome& o) {
   if (!o.times.cameras.empty()) {
-    const double spread =
-        *std::max_element(o.times.spread_s.begin(), o.times.spread_s.end());
+    const double spread = *std::max_element(o.times.spread_s.begin(), o.times.spread_s.end());
     std::string names;
     for (const std::string& c : o.times.cameras) names += (names.empty() ? "" : ", ") + c;
-    std::fprintf(stderr,
-                 "times from the timestamps of %s (mean per frame; spread up to %.4f ms)\n",
+    std::fprintf(stderr, "times from the timestamps of %s (mean per frame; spread up to %.4f ms)\n",
                  names.c_str(), spread * 1e3);
   }
   if (!o.offsets) return;
@@ -369,8 +367,10 @@ void PrintJsonClocks(const Outcome& o, JsonWriter* json) {
   json->Key("camera_offsets_frames").BeginObject();
   for (const recon::CameraOffset& c : o.offsets->cameras) {
     json->Key(c.camera);
-    if (c.determined) json->Number(c.offset_frames);
-    else json->Null();
+    if (c.determined)
+      json->Number(c.offset_frames);
+    else
+      json->Null();
   }
   json->EndObject();
   json->Key("camera_offsets_sigma_frames").BeginObject();
@@ -463,13 +463,11 @@ void PrintJson(const TriangulateArgs& a, const Outcome& o) {
 
 int RunTriangulate(const std::vector<std::string>& args) {
   return RunGuarded("triangulate", [&] {
-    const CommandLine cl(args,
-                         {"json", "quiet", "help", "use-unreviewed", "estimate-offsets",
-                          "apply-offsets"},
-                         {"rig", "labels", "knots", "fps", "out", "csv", "ba", "outlier-px",
-                          "sigma-px", "link-length", "link-sigma", "smooth-sigma", "rig-frames",
-                          "truth", "threads", "rig-max-sigma-mm", "rig-max-sigma-deg",
-                          "max-sigma-mm", "experiment"});
+    const CommandLine cl(
+        args, {"json", "quiet", "help", "use-unreviewed", "estimate-offsets", "apply-offsets"},
+        {"rig", "labels", "knots", "fps", "out", "csv", "ba", "outlier-px", "sigma-px",
+         "link-length", "link-sigma", "smooth-sigma", "rig-frames", "truth", "threads",
+         "rig-max-sigma-mm", "rig-max-sigma-deg", "max-sigma-mm", "experiment"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -479,7 +477,8 @@ int RunTriangulate(const std::vector<std::string>& args) {
     const auto start = std::chrono::steady_clock::now();
     TriangulateArgs a = ParseArgs(cl);
     // Before any work: no output over an input or another output, every output's folder there.
-    CheckOutputPaths({{"--rig", a.rig_path}, {"--labels", a.labels_path},
+    CheckOutputPaths({{"--rig", a.rig_path},
+                      {"--labels", a.labels_path},
                       {"--truth", a.truth_path.value_or("")},
                       {"--experiment", a.experiment_path.value_or("")}},
                      {{"--out", a.out},
@@ -496,9 +495,8 @@ int RunTriangulate(const std::vector<std::string>& args) {
     for (const std::string& camera : labels.cameras)
       if (std::find(names.begin(), names.end(), camera) == names.end())
         throw InputError(a.labels_path + ": labels of camera '" + camera + "', which the --rig " +
-                         a.rig_path + " does not have (it has " +
-                         std::to_string(names.size()) + ": " + rig_names +
-                         "): give the rig the labels were made with");
+                         a.rig_path + " does not have (it has " + std::to_string(names.size()) +
+                         ": " + rig_names + "): give the rig the labels were made with");
     Outcome o;
     o.times = FrameTimesOf(a, rig, labels);
     std::optional<KnotTracks> truth;
@@ -533,8 +531,7 @@ int RunTriangulate(const std::vector<std::string>& args) {
                        "one rejected as an outlier: do the labels belong to this --rig?)");
 
     // The tracks written, compared with the truth, reported.
-    KnotTracks tracks =
-        recon::TracksFromSequence(o.result, o.times.time_s, "netlab triangulate");
+    KnotTracks tracks = recon::TracksFromSequence(o.result, o.times.time_s, "netlab triangulate");
     if (!o.times.cameras.empty()) tracks.frame_time_spread_s = o.times.spread_s;
     if (o.offsets) {
       for (const recon::CameraOffset& c : o.offsets->cameras) {

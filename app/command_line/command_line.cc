@@ -112,8 +112,8 @@ void CommandLine::Knots(const std::string& name, int* rows, int* cols) const {
     *cols = std::stoi(text.substr(x + 1), &used_c);
     if (used_r != x || used_c != text.size() - x - 1) throw std::invalid_argument("junk");
   } catch (const std::exception&) {
-    throw UsageError("--" + name + " expects ROWSxCOLS, e.g. 11x11, got '" +
-                     YamlMap::Shown(text) + "'");
+    throw UsageError("--" + name + " expects ROWSxCOLS, e.g. 11x11, got '" + YamlMap::Shown(text) +
+                     "'");
   }
   if (*rows < 2 || *cols < 2 || *rows > 1000 || *cols > 1000)
     throw UsageError("--" + name + " " + text + ": need 2..1000 knots per side");

@@ -34,8 +34,8 @@ constexpr double kFrustumDepthM = 0.4;  // how deep a camera's frustum is drawn
 constexpr double kAxisM = 0.5;          // the world axes' length
 
 QColor CameraColour(int i) {
-  static const QColor colours[] = {QColor(31, 119, 180), QColor(255, 127, 14),
-                                   QColor(44, 160, 44), QColor(214, 39, 40)};
+  static const QColor colours[] = {QColor(31, 119, 180), QColor(255, 127, 14), QColor(44, 160, 44),
+                                   QColor(214, 39, 40)};
   return colours[i % 4];
 }
 
@@ -89,8 +89,8 @@ RigSketch::Fit RigSketch::MakeFit() const {
     y0 = std::min(y0, p.dot(fit.up)), y1 = std::max(y1, p.dot(fit.up));
   }
   const QRectF area(30, 44, width() - 60, height() - 74);
-  fit.scale = std::min(area.width() / std::max(x1 - x0, 1e-6),
-                       area.height() / std::max(y1 - y0, 1e-6));
+  fit.scale =
+      std::min(area.width() / std::max(x1 - x0, 1e-6), area.height() / std::max(y1 - y0, 1e-6));
   fit.middle = area.center();
   fit.mx = (x0 + x1) / 2, fit.my = (y0 + y1) / 2;
   return fit;
@@ -224,8 +224,10 @@ void CalibrationImageView::paintEvent(QPaintEvent*) {
     return;
   }
   const CalibrationImage& image = presenter_->image(*key_);
-  if (!image_.isNull()) painter.drawImage(r, image_);
-  else if (!r.isEmpty()) painter.fillRect(r, QColor(70, 70, 70));
+  if (!image_.isNull())
+    painter.drawImage(r, image_);
+  else if (!r.isEmpty())
+    painter.fillRect(r, QColor(70, 70, 70));
   if (coverage_) {
     const CoverageGrid grid = presenter_->Coverage(key_->first);
     const int most = std::max(1, grid.max());
@@ -235,9 +237,9 @@ void CalibrationImageView::paintEvent(QPaintEvent*) {
         const int n = grid.at(x, y);
         // Empty cells blue (the distortion is not constrained there), the others from yellow
         // (few points) to red (the most).
-        const QColor colour = n == 0 ? QColor(40, 90, 255, 80)
-                                     : QColor(255, static_cast<int>(220 * (1.0 - double(n) / most)),
-                                              0, 80);
+        const QColor colour =
+            n == 0 ? QColor(40, 90, 255, 80)
+                   : QColor(255, static_cast<int>(220 * (1.0 - double(n) / most)), 0, 80);
         painter.fillRect(QRectF(r.left() + x * cw, r.top() + y * ch, cw, ch), colour);
       }
   }
@@ -271,8 +273,7 @@ void CalibrationImageView::paintEvent(QPaintEvent*) {
     else if (residuals_ && residual_scale_ > 0)
       parts << QString("residuals ×%1 (red: a 1 px error drawn %1 px long)").arg(residual_scale_);
   }
-  if (coverage_)
-    parts << "coverage of the camera's images: blue no point, yellow few, red most";
+  if (coverage_) parts << "coverage of the camera's images: blue no point, yellow few, red most";
   painter.setPen(QColor(230, 230, 230));
   painter.drawText(legend, Qt::AlignLeft | Qt::AlignVCenter | Qt::TextWordWrap, parts.join(" · "));
 }
@@ -327,8 +328,9 @@ CalibrationRoom::CalibrationRoom(QWidget* parent)
   inputs->addWidget(globs_, 1, 1);
   auto* glob_buttons = new QVBoxLayout;
   folder_button_ = new QPushButton("Images folder…");
-  folder_button_->setToolTip("A folder with one sub-folder of images per camera (cam0/, cam1/, …) "
-                             "and, beside them, the target's YAML file");
+  folder_button_->setToolTip(
+      "A folder with one sub-folder of images per camera (cam0/, cam1/, …) "
+      "and, beside them, the target's YAML file");
   auto* add_camera = new QPushButton("Add camera");
   glob_buttons->addWidget(folder_button_);
   glob_buttons->addWidget(add_camera);
@@ -348,7 +350,7 @@ CalibrationRoom::CalibrationRoom(QWidget* parent)
   status_->setObjectName("calibration_status");
   status_->setWordWrap(true);
   for (QWidget* w : std::initializer_list<QWidget*>{detect_button_, cancel_button_, progress_,
-                                                     calibrate_button_, save_button_})
+                                                    calibrate_button_, save_button_})
     actions->addWidget(w);
   actions->addWidget(status_, 1);
   layout->addLayout(actions);
@@ -363,9 +365,11 @@ CalibrationRoom::CalibrationRoom(QWidget* parent)
   images_->setEditTriggers(QAbstractItemView::NoEditTriggers);
   images_->setSelectionBehavior(QAbstractItemView::SelectRows);
   images_->setSelectionMode(QAbstractItemView::SingleSelection);
-  images_->setToolTip("A click on Used excludes or includes the image and calibrates again "
-                      "(Ctrl+Z undoes)");
-  images_->horizontalHeaderItem(kUsedColumn)->setToolTip("Click to leave the image out or take it in");
+  images_->setToolTip(
+      "A click on Used excludes or includes the image and calibrates again "
+      "(Ctrl+Z undoes)");
+  images_->horizontalHeaderItem(kUsedColumn)
+      ->setToolTip("Click to leave the image out or take it in");
   split->addWidget(images_);
 
   auto* middle = new QWidget;
@@ -416,8 +420,8 @@ CalibrationRoom::CalibrationRoom(QWidget* parent)
   right_layout->addWidget(summary_);
   table_ = new QTableWidget(0, 8);
   table_->setObjectName("rig_table");
-  table_->setHorizontalHeaderLabels({"Camera", "Image (px)", "fx, fy (px)", "cx, cy (px)",
-                                     "k1, k2", "Centre (m)", "Looks along", "Principal point"});
+  table_->setHorizontalHeaderLabels({"Camera", "Image (px)", "fx, fy (px)", "cx, cy (px)", "k1, k2",
+                                     "Centre (m)", "Looks along", "Principal point"});
   table_->horizontalHeader()->setStretchLastSection(true);
   table_->verticalHeader()->setVisible(false);
   table_->verticalHeader()->setDefaultSectionSize(20);
@@ -442,9 +446,9 @@ CalibrationRoom::CalibrationRoom(QWidget* parent)
   });
 
   connect(target_button_, &QPushButton::clicked, this, [this] {
-    const QString file = QFileDialog::getOpenFileName(
-        this, "The calibration target (board, foil or marker map)", target_edit_->text(),
-        "Target (*.yaml *.yml);;All files (*)");
+    const QString file =
+        QFileDialog::getOpenFileName(this, "The calibration target (board, foil or marker map)",
+                                     target_edit_->text(), "Target (*.yaml *.yml);;All files (*)");
     if (!file.isEmpty()) target_edit_->setText(file);
   });
   connect(folder_button_, &QPushButton::clicked, this, [this] {
@@ -475,7 +479,8 @@ CalibrationRoom::CalibrationRoom(QWidget* parent)
   connect(images_, &QTableWidget::cellClicked, this, [this](int row, int column) {
     SelectImage(row);
     if (column != kUsedColumn || !Alive() || presenter_->result() == nullptr) return;
-    const ImageKey key(row / std::max(1, presenter_->frames()), row % std::max(1, presenter_->frames()));
+    const ImageKey key(row / std::max(1, presenter_->frames()),
+                       row % std::max(1, presenter_->frames()));
     if (presenter_->image(key).status != CalibrationImage::Status::kFound) return;
     presenter_->ToggleExcluded(key);
     Rerun();
@@ -559,12 +564,13 @@ void CalibrationRoom::FillFromFolder(const QString& folder) {
     globs_->setItem(row, 1, new QTableWidgetItem(QString::fromStdString(pattern)));
   }
   if (!target.empty()) target_edit_->setText(QString::fromStdString(target));
-  status_->setText(QString("%1 cameras from %2%3: Detect finds the target in their images")
-                       .arg(globs.size())
-                       .arg(folder)
-                       .arg(target.empty() ? QString(" (no target file beside them: choose one)")
-                                           : QString(", target ") +
-                                                 QFileInfo(QString::fromStdString(target)).fileName()));
+  status_->setText(
+      QString("%1 cameras from %2%3: Detect finds the target in their images")
+          .arg(globs.size())
+          .arg(folder)
+          .arg(target.empty()
+                   ? QString(" (no target file beside them: choose one)")
+                   : QString(", target ") + QFileInfo(QString::fromStdString(target)).fileName()));
   status_->setStyleSheet("");
 }
 
@@ -577,8 +583,9 @@ bool CalibrationRoom::ApplyInputs() {
   if (!Alive()) return false;
   const std::string spec = target_edit_->text().trimmed().toStdString();
   if (spec.empty()) {
-    ShowError("Choose the target first: its YAML file (Target file…) or a spec such as "
-              "chessboard:9x6:0.06");
+    ShowError(
+        "Choose the target first: its YAML file (Target file…) or a spec such as "
+        "chessboard:9x6:0.06");
     return false;
   }
   std::vector<std::pair<std::string, std::string>> globs;
@@ -595,8 +602,9 @@ bool CalibrationRoom::ApplyInputs() {
     globs.emplace_back(n.toStdString(), p.toStdString());
   }
   if (globs.empty()) {
-    ShowError("Choose the images first: Images folder… (one sub-folder per camera), or a "
-              "camera's name and glob per row");
+    ShowError(
+        "Choose the images first: Images folder… (one sub-folder per camera), or a "
+        "camera's name and glob per row");
     return false;
   }
   // Read again at every Detect: a changed target file or a new image is taken in.
@@ -679,8 +687,8 @@ void CalibrationRoom::SelectImage(int row) {
     const QSignalBlocker block(images_);
     images_->selectRow(row);
   }
-  view_caption_->setText(QString("%1 · %2").arg(QString::fromStdString(presenter_->camera_name(key.first)),
-                                               ImageName(image)));
+  view_caption_->setText(QString("%1 · %2").arg(
+      QString::fromStdString(presenter_->camera_name(key.first)), ImageName(image)));
   view_->Set(presenter_, std::nullopt, {});
   view_->Set(presenter_, selected_, {});
   loader_.Request([key, path = image.path](const std::atomic<bool>&) {
@@ -709,8 +717,7 @@ void CalibrationRoom::RefreshImages() {
     QString status = "not searched", points, rms, used = "";
     QColor colour = palette().color(QPalette::Text);
     switch (image.status) {
-      case CalibrationImage::Status::kNotDetected:
-        break;
+      case CalibrationImage::Status::kNotDetected: break;
       case CalibrationImage::Status::kFailed:
         status = "failed: " + QString::fromStdString(image.why);
         colour = QColor(176, 0, 0);
@@ -725,7 +732,11 @@ void CalibrationRoom::RefreshImages() {
         break;
     }
     QStringList cells = {QString::fromStdString(presenter_->camera_name(image.camera)),
-                         ImageName(image), used, rms, points, status};
+                         ImageName(image),
+                         used,
+                         rms,
+                         points,
+                         status};
     // A failed image's reason over the columns it has no values for.
     if (image.status == CalibrationImage::Status::kFailed) {
       cells = {cells[0], cells[1], status, "", "", ""};
@@ -783,8 +794,10 @@ void CalibrationRoom::Refresh() {
     status_->setStyleSheet("");
   } else if (!presenter_->images().empty() && status_->styleSheet().isEmpty()) {
     QString next;
-    if (!presenter_->detected()) next = " · Detect searches the rest";
-    else if (presenter_->result() == nullptr && presenter_->run() == nullptr) next = " · Calibrate next";
+    if (!presenter_->detected())
+      next = " · Detect searches the rest";
+    else if (presenter_->result() == nullptr && presenter_->run() == nullptr)
+      next = " · Calibrate next";
     else if (presenter_->result() != nullptr && !presenter_->saved())
       next = " · click Used to leave an image out, Save rig… when done";
     status_->setText(presenter_->DetectionSummary() + next);
@@ -802,8 +815,9 @@ void CalibrationRoom::Refresh() {
   for (int c = 0; c < n; ++c) {
     const calib::CameraReport& r = result->summary.cameras[c];
     const std::vector<int>& faces = result->summary.face_of_camera;
-    const bool foil = presenter_->target() != nullptr &&
-                      presenter_->target()->kind == calib::CalibrationTarget::Kind::kDoubleSidedFoil;
+    const bool foil =
+        presenter_->target() != nullptr &&
+        presenter_->target()->kind == calib::CalibrationTarget::Kind::kDoubleSidedFoil;
     const QStringList cells = {
         QString::fromStdString(r.name),
         QString::number(r.rms_px, 'f', 3),

@@ -4,9 +4,9 @@
 // them: the target (a spec or a board/foil/marker-map YAML) and each camera's images (NAME and
 // GLOB; "Images folder…" fills them from a folder of camN/ sub-folders and its target file), then
 // Detect (progress, Cancel), Calibrate and Save rig…. Below, left to right: the images (used,
-// RMS, points, status; a click on the "Used" cell excludes or includes the image and re-runs, Ctrl+Z
-// undoes), the selected image with its detected corners, its residual vectors (scaled, the scale
-// written) and the coverage heat map of its camera, and the results: the calibration's text
+// RMS, points, status; a click on the "Used" cell excludes or includes the image and re-runs,
+// Ctrl+Z undoes), the selected image with its detected corners, its residual vectors (scaled, the
+// scale written) and the coverage heat map of its camera, and the results: the calibration's text
 // (RMS, baselines, metric check, warnings), a row per camera, the rig's table and its 3D sketch
 // (cameras as frusta, the world frame's axes), rotated by dragging with the mouse.
 
@@ -137,8 +137,8 @@ class CalibrationRoom : public QWidget {
   bool ApplyInputs();  // the inputs into the presenter; false (said) when they are wrong
   void Detect();
   void Calibrate();
-  void Rerun();        // when the excluded set has no result yet
-  void Refresh();      // every part from the presenter
+  void Rerun();    // when the excluded set has no result yet
+  void Refresh();  // every part from the presenter
   void RefreshImages();
   void SelectImage(int row);
   void ShowError(const QString& text);

@@ -1,9 +1,9 @@
 #include "app/gui/camera_view.h"
 
 #include <QMouseEvent>
-#include <QResizeEvent>
 #include <QPainter>
 #include <QPainterPath>
+#include <QResizeEvent>
 #include <QWheelEvent>
 #include <algorithm>
 #include <cmath>
@@ -279,7 +279,8 @@ void CameraView::DrawGhosts(QPainter& painter) const {
   // Larger than a label's mark, so a ghost round a label (kToReview) rings it.
   const double r = std::clamp(scale_ * 3.0, 3.0, 9.0) + 3.0;
   const auto diamond = [](const QPointF& p, double d) {
-    return QPolygonF({p + QPointF(0, -d), p + QPointF(d, 0), p + QPointF(0, d), p + QPointF(-d, 0)});
+    return QPolygonF(
+        {p + QPointF(0, -d), p + QPointF(d, 0), p + QPointF(0, d), p + QPointF(-d, 0)});
   };
   // Each mark twice: a dark outline under a dashed pink line, visible on any yarn or background.
   QPen outline(QColor(0, 0, 0, 170), 3.5);
@@ -300,9 +301,7 @@ void CameraView::DrawGhosts(QPainter& painter) const {
           else
             painter.drawEllipse(p, r, r);
           break;
-        case ViewOverlay::Ghost::kToReview:
-          painter.drawPolygon(diamond(p, r + 3));
-          break;
+        case ViewOverlay::Ghost::kToReview: painter.drawPolygon(diamond(p, r + 3)); break;
         case ViewOverlay::Ghost::kRemoved:
           painter.drawLine(p + QPointF(-r, -r), p + QPointF(r, r));
           painter.drawLine(p + QPointF(-r, r), p + QPointF(r, -r));

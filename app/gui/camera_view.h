@@ -27,10 +27,10 @@ namespace netlab::gui {
 // down into a 500-pixel view costs the GUI thread ~5 ms per view and frame; the reduced copy is a
 // blit.
 struct ViewFrame {
-  cv::Mat image;       // as given
-  int reduction = 1;   // reduced = image shrunk by this factor (1, 2, 4, ...)
-  cv::Mat reduced;     // BGR, image / reduction (image itself when 1)
-  QImage display;      // reduced after the tone curve, Format_RGB32 (owns its pixels)
+  cv::Mat image;      // as given
+  int reduction = 1;  // reduced = image shrunk by this factor (1, 2, 4, ...)
+  cv::Mat reduced;    // BGR, image / reduction (image itself when 1)
+  QImage display;     // reduced after the tone curve, Format_RGB32 (owns its pixels)
 };
 
 // The tone curve out = 255 * clamp(gain * (in / 255 - 0.5) + 0.5 + offset)^gamma as a lookup
@@ -118,7 +118,7 @@ class CameraView : public QWidget {
   // and the visible rectangle stay (a mouse move repaints the brush, not the image).
   mutable QImage zoomed_part_;
   mutable cv::Rect zoomed_rect_;
-  cv::Mat tone_;   // ToneTable of the tone below
+  cv::Mat tone_;  // ToneTable of the tone below
   int full_width_ = 0, full_height_ = 0;
   QString problem_;
   ViewOverlay overlay_;

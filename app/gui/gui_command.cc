@@ -139,10 +139,9 @@ int RunGui(const std::vector<std::string>& args) {
   std::string project_path, experiment_path, screenshot, keys, room_name = "labeling";
   int frame = -1, review = 0;
   try {
-    const app::CommandLine cl(
-        args, {"help", "knotless"},
-        {"room", "frame", "review", "screenshot", "keys", "rig", "labels", "coloring", "knots",
-         "project", "target"});
+    const app::CommandLine cl(args, {"help", "knotless"},
+                              {"room", "frame", "review", "screenshot", "keys", "rig", "labels",
+                               "coloring", "knots", "project", "target"});
     if (cl.Flag("help")) {
       std::fputs(kHelp, stdout);
       return 0;
@@ -244,11 +243,11 @@ int RunGui(const std::vector<std::string>& args) {
     }
     if (frame >= 0) window.SetFrame(frame - window.session()->frame_number(0));
     for (int i = 0; i < review; ++i) window.NextReview();
-    window.ShowRoom(room_name == "recording"     ? MainWindow::Room::kRecording
-                    : room_name == "calibration" ? MainWindow::Room::kCalibration
+    window.ShowRoom(room_name == "recording"        ? MainWindow::Room::kRecording
+                    : room_name == "calibration"    ? MainWindow::Room::kCalibration
                     : room_name == "reconstruction" ? MainWindow::Room::kReconstruction
-                    : room_name == "simulation"  ? MainWindow::Room::kSimulation
-                                                 : MainWindow::Room::kLabeling);
+                    : room_name == "simulation"     ? MainWindow::Room::kSimulation
+                                                    : MainWindow::Room::kLabeling);
   }
   if (!screenshot.empty()) {
     window.resize(1600, 1000);

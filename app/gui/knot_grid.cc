@@ -102,11 +102,14 @@ bool KnotGrid::event(QEvent* event) {
       QToolTip::showText(help->globalPos(), toolTip(), this);
     } else {
       const Cell& c = cells_[k];
-      QString state = c.hidden ? "marked hidden here" : c.label.isValid() ? "labeled here" : "no label here";
+      QString state = c.hidden            ? "marked hidden here"
+                      : c.label.isValid() ? "labeled here"
+                                          : "no label here";
       if (std::find(offered_.begin(), offered_.end(), k) != offered_.end())
         state += identified_ ? "; the colours identify it" : "; the colours fit it";
       QToolTip::showText(help->globalPos(),
-                         QString("knot (%1, %2): %3").arg(k / cols_).arg(k % cols_).arg(state), this);
+                         QString("knot (%1, %2): %3").arg(k / cols_).arg(k % cols_).arg(state),
+                         this);
     }
     return true;
   }

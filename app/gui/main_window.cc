@@ -41,11 +41,11 @@
 #include "app/gui/calibration_room.h"
 #include "app/gui/camera_view.h"
 #include "app/gui/knot_grid.h"
-#include "app/gui/recording_room.h"
 #include "app/gui/reconstruction_room.h"
-#include "app/gui/simulation_room.h"
+#include "app/gui/recording_room.h"
 #include "app/gui/settings.h"
 #include "app/gui/shortcut_editor.h"
+#include "app/gui/simulation_room.h"
 #include "app/gui/timeline.h"
 
 namespace netlab::gui {
@@ -164,8 +164,9 @@ void MainWindow::BuildWorkspace() {
   frame_box_ = new QSpinBox;
   frame_box_->setPrefix("frame ");
   frame_box_->setKeyboardTracking(false);
-  frame_box_->setToolTip("Click to type a frame number; Enter goes there and hands the keys back "
-                         "to the view");
+  frame_box_->setToolTip(
+      "Click to type a frame number; Enter goes there and hands the keys back "
+      "to the view");
   timeline_ = new Timeline;
   timeline_->setObjectName("labeling_timeline");
   bar->addWidget(frame_box_);
@@ -214,8 +215,8 @@ void MainWindow::BuildWorkspace() {
   grid_dock->setWidget(knot_grid_);
   connect(knot_grid_, &KnotGrid::knotPicked, this, [this](int k) {
     SetKnot(k);
-    statusBar()->showMessage(QString("Knot %1 picked: click it in a view to label it").arg(KnotName(k)),
-                             4000);
+    statusBar()->showMessage(
+        QString("Knot %1 picked: click it in a view to label it").arg(KnotName(k)), 4000);
   });
 
   // The review queue.
@@ -470,10 +471,10 @@ bool MainWindow::OpenProject(const QString& path, bool ask, QString* error) {
     recording_ = std::make_unique<RecordingPresenter>(p.experiment);
   } catch (const std::exception& e) {
     recording_.reset();
-    statusBar()->showMessage(QString("The recording room cannot open %1: %2")
-                                 .arg(QString::fromStdString(p.experiment),
-                                      QString::fromLocal8Bit(e.what())),
-                             10000);
+    statusBar()->showMessage(
+        QString("The recording room cannot open %1: %2")
+            .arg(QString::fromStdString(p.experiment), QString::fromLocal8Bit(e.what())),
+        10000);
   }
   calibration_ = std::make_unique<CalibrationPresenter>(&session_->rig(), p.rig, p.path);
   reconstruction_ = std::make_unique<ReconstructionPresenter>(session_.get());
@@ -519,8 +520,8 @@ void MainWindow::FocusView() {
 
 bool MainWindow::eventFilter(QObject* watched, QEvent* event) {
   auto* box = qobject_cast<QSpinBox*>(watched);
-  if (box == nullptr || (event->type() != QEvent::ShortcutOverride &&
-                         event->type() != QEvent::KeyPress))
+  if (box == nullptr ||
+      (event->type() != QEvent::ShortcutOverride && event->type() != QEvent::KeyPress))
     return QMainWindow::eventFilter(watched, event);
   const auto* key = static_cast<QKeyEvent*>(event);
   const Qt::KeyboardModifiers mods = key->modifiers() & ~Qt::KeypadModifier;
@@ -658,8 +659,9 @@ void MainWindow::IdentifyAtCursor() {
     message = "Identify: " + why;
   } else if (identified) {
     SetKnot(hint.reading.knots.front());
-    message = QString("Identify: the colours say knot %1 (picked; click the junction to label it) — %2")
-                  .arg(KnotName(knot()), why);
+    message =
+        QString("Identify: the colours say knot %1 (picked; click the junction to label it) — %2")
+            .arg(KnotName(knot()), why);
   } else if (!hint.reading.knots.empty()) {
     message = QString("Identify: %1 knots possible, ringed in the Net grid: pick one there — %2")
                   .arg(hint.reading.knots.size())
@@ -715,7 +717,9 @@ void MainWindow::OnLabelsChanged(const QList<int>& frames) {
   }
 }
 
-QString MainWindow::KnotName(int knot) const { return session_ ? cursor_.KnotName(knot) : QString(); }
+QString MainWindow::KnotName(int knot) const {
+  return session_ ? cursor_.KnotName(knot) : QString();
+}
 
 void MainWindow::SetCamera(int c) {
   if (!session_ || c < 0 || c >= session_->cameras()) return;
@@ -800,8 +804,8 @@ void MainWindow::NewProject() {
                                                    QFileInfo(experiment).path(), "Rig (*.yaml)");
   if (rig.isEmpty()) return;
   const QString coloring = QFileDialog::getOpenFileName(
-      this, "New project: the net's colouring, coloring.yaml (Cancel: none)",
-      QFileInfo(rig).path(), "Colouring (*.yaml)");
+      this, "New project: the net's colouring, coloring.yaml (Cancel: none)", QFileInfo(rig).path(),
+      "Colouring (*.yaml)");
   // The target, so that the knots it hides are not listed missing (a scenario's or a netlab
   // simulate result's bodies, in the rig's world frame).
   const QString target = QFileDialog::getOpenFileName(
@@ -815,8 +819,8 @@ void MainWindow::NewProject() {
     rows = QInputDialog::getInt(this, "New project: the net", "Knots in a column (rows):", 11, 2,
                                 1000, 1, &ok);
     if (!ok) return;
-    cols = QInputDialog::getInt(this, "New project: the net", "Knots in a row (columns):", rows,
-                                2, 1000, 1, &ok);
+    cols = QInputDialog::getInt(this, "New project: the net", "Knots in a row (columns):", rows, 2,
+                                1000, 1, &ok);
     if (!ok) return;
   }
   const auto balls = QMessageBox::question(
@@ -829,9 +833,9 @@ void MainWindow::NewProject() {
       this, "New project: where the labels are saved", QFileInfo(experiment).path() + "/labels.h5",
       "Labels (*.h5)", nullptr, QFileDialog::DontConfirmOverwrite);
   if (labels.isEmpty()) return;
-  const QString path = QFileDialog::getSaveFileName(
-      this, "New project: save the project as", QFileInfo(labels).path() + "/project.yaml",
-      "Project (*.yaml)");
+  const QString path =
+      QFileDialog::getSaveFileName(this, "New project: save the project as",
+                                   QFileInfo(labels).path() + "/project.yaml", "Project (*.yaml)");
   if (path.isEmpty()) return;
   try {
     Project project = MakeProject(experiment.toStdString(), rig.toStdString(),
@@ -898,8 +902,8 @@ void MainWindow::TogglePlay() {
 }
 
 void MainWindow::NextReview(bool backwards) {
-  const int row = presenter_ ? presenter_->walk().NextRow({camera(), frame(), knot()}, backwards)
-                             : -1;
+  const int row =
+      presenter_ ? presenter_->walk().NextRow({camera(), frame(), knot()}, backwards) : -1;
   if (row < 0) {
     statusBar()->showMessage("Nothing to review", 3000);
     return;
@@ -976,12 +980,13 @@ void MainWindow::FindPathCorners() {
 
 void MainWindow::FindPathToPrevious() {
   if (!session_ || busy() || cursor_.previous_knot() < 0) return;
-  const std::string why = session_->FindPathBetween(camera(), frame(), cursor_.previous_knot(), knot());
-  statusBar()->showMessage(
-      why.empty()
-          ? QString("Find Path %1 → %2: done").arg(KnotName(cursor_.previous_knot()), KnotName(knot()))
-          : "Find Path refused: " + QString::fromStdString(why),
-      8000);
+  const std::string why =
+      session_->FindPathBetween(camera(), frame(), cursor_.previous_knot(), knot());
+  statusBar()->showMessage(why.empty()
+                               ? QString("Find Path %1 → %2: done")
+                                     .arg(KnotName(cursor_.previous_knot()), KnotName(knot()))
+                               : "Find Path refused: " + QString::fromStdString(why),
+                           8000);
 }
 
 void MainWindow::FillGridHere() {
@@ -1241,9 +1246,7 @@ void MainWindow::ConnectMissing() {
   OnMissingChanged();
 }
 
-void MainWindow::OnMissingChanged() {
-  timeline_->SetMissingFrames(session_->missing().Frames());
-}
+void MainWindow::OnMissingChanged() { timeline_->SetMissingFrames(session_->missing().Frames()); }
 
 void MainWindow::HideSelected() {
   if (!session_ || busy()) return;
@@ -1386,8 +1389,8 @@ bool MainWindow::WaitForIdle(int timeout_ms) {
   const auto idle = [this] {
     return (frame_shown_ || !session_) && !previewing() && !previewer_.running() && !busy() &&
            !checker_.pending() &&
-           !(room_ == Room::kSimulation && (simulation_room_->busy() ||
-                                             !simulation_room_->frame_shown())) &&
+           !(room_ == Room::kSimulation &&
+             (simulation_room_->busy() || !simulation_room_->frame_shown())) &&
            !(room_ == Room::kReconstruction && reconstruction_room_->busy());
   };
   WaitUntil(idle, timeout_ms);
@@ -1408,10 +1411,9 @@ void MainWindow::BuildRooms() {
   stack_->addWidget(recording_room_);
   connect(recording_room_, &RecordingRoom::goToFrame, this, [this](int frame_number) {
     if (!session_) {
-      statusBar()->showMessage(
-          "Frame " + QString::number(frame_number) +
-              ": the labeling room opens with a project (File > New project)",
-          6000);
+      statusBar()->showMessage("Frame " + QString::number(frame_number) +
+                                   ": the labeling room opens with a project (File > New project)",
+                               6000);
       return;
     }
     ShowRoom(Room::kLabeling);

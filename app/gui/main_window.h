@@ -263,10 +263,10 @@ class MainWindow : public QMainWindow {
   void ShowPreviewBanner();
 
   // Missing knots (the review queue's second kind) and hidden marks.
-  void ConnectMissing();      // the review model and the timeline follow the session's list
+  void ConnectMissing();  // the review model and the timeline follow the session's list
   void OnMissingChanged();
-  void HideSelected();        // D with no label selected: a hidden mark here
-  void HideSelectedOnwards(); // Shift+D: here and in the following frames it is missing in
+  void HideSelected();         // D with no label selected: a hidden mark here
+  void HideSelectedOnwards();  // Shift+D: here and in the following frames it is missing in
 
   // The knot picker's grid dock and its colour hint (I: which knot is the junction under the
   // cursor; the knots its colours fit are ringed in the grid until the frame or camera changes).
@@ -301,7 +301,7 @@ class MainWindow : public QMainWindow {
   KnotGrid* knot_grid_ = nullptr;
   int cursor_camera_ = -1;  // the view and pixel the mouse was last over (I reads there)
   Eigen::Vector2d cursor_px_ = Eigen::Vector2d::Zero();
-  int hint_camera_ = -1;    // the view of the grid's colour hint (-1: none shown)
+  int hint_camera_ = -1;  // the view of the grid's colour hint (-1: none shown)
   QLabel* status_frame_ = nullptr;
   QLabel* status_cursor_ = nullptr;
   QLabel* status_knot_ = nullptr;

@@ -1,5 +1,6 @@
 #include "app/gui/reconstruction_room.h"
 
+#include <Eigen/Eigenvalues>
 #include <QCheckBox>
 #include <QComboBox>
 #include <QDoubleSpinBox>
@@ -19,7 +20,6 @@
 #include <QTimer>
 #include <QVBoxLayout>
 #include <QWheelEvent>
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -44,8 +44,8 @@ NetView3D::NetView3D(QWidget* parent) : QWidget(parent) {
   setFocusPolicy(Qt::ClickFocus);
 }
 
-void NetView3D::Set(const KnotTracks* tracks, const calib::Rig* rig,
-                    const recon::Target* target, int cols) {
+void NetView3D::Set(const KnotTracks* tracks, const calib::Rig* rig, const recon::Target* target,
+                    int cols) {
   const bool changed = tracks != tracks_ || rig != rig_;
   tracks_ = tracks;
   rig_ = rig;
@@ -143,8 +143,7 @@ void NetView3D::paintEvent(QPaintEvent*) {
       const Eigen::Vector3d centre = c.Center();
       const Eigen::Quaterniond world_from_cam = c.cam_from_world.rotation.conjugate();
       const double w = c.intrinsics.width > 0 ? c.intrinsics.width / (2 * c.intrinsics.fx) : 0.4;
-      const double h =
-          c.intrinsics.height > 0 ? c.intrinsics.height / (2 * c.intrinsics.fy) : 0.4;
+      const double h = c.intrinsics.height > 0 ? c.intrinsics.height / (2 * c.intrinsics.fy) : 0.4;
       std::array<Eigen::Vector3d, 4> corner;
       const double depth = 0.25;
       corner[0] = centre + world_from_cam * Eigen::Vector3d(-w, -h, 1) * depth;
@@ -161,8 +160,9 @@ void NetView3D::paintEvent(QPaintEvent*) {
   }
   if (tracks_ == nullptr || row_ < 0 || row_ >= tracks_->frames()) {
     painter.setPen(QColor(200, 200, 200));
-    painter.drawText(rect().adjusted(10, 10, -10, -10), Qt::AlignTop | Qt::AlignLeft,
-                     tracks_ == nullptr ? "No tracks yet: Triangulate." : "No tracks at this frame.");
+    painter.drawText(
+        rect().adjusted(10, 10, -10, -10), Qt::AlignTop | Qt::AlignLeft,
+        tracks_ == nullptr ? "No tracks yet: Triangulate." : "No tracks at this frame.");
     return;
   }
   const int knots = tracks_->knots();
@@ -172,8 +172,8 @@ void NetView3D::paintEvent(QPaintEvent*) {
     painter.setPen(QPen(QColor(150, 150, 160), 1.2));
     painter.setBrush(Qt::NoBrush);
     for (const recon::TargetSolid& s : target_->solids) {
-      const double at = tracks_->frame_index.empty() ? time
-                                                     : tracks_->frame_index[row_] / target_->fps;
+      const double at =
+          tracks_->frame_index.empty() ? time : tracks_->frame_index[row_] / target_->fps;
       const Eigen::Vector3d centre = s.center + at * s.velocity;
       if (s.shape == recon::TargetSolid::Shape::kSphere) {
         const auto p = ToScreen(centre);
@@ -231,8 +231,9 @@ void NetView3D::paintEvent(QPaintEvent*) {
     const bool degenerate = tracks_->Degenerate(row_, k);
     const bool selected = selected_.count(k) != 0;
     painter.setPen(Qt::NoPen);
-    painter.setBrush(degenerate ? QColor(255, 70, 70) : selected ? QColor(255, 200, 60)
-                                                                 : QColor(255, 150, 0));
+    painter.setBrush(degenerate ? QColor(255, 70, 70)
+                     : selected ? QColor(255, 200, 60)
+                                : QColor(255, 150, 0));
     painter.drawEllipse(*p, selected ? 4.5 : 3.0, selected ? 4.5 : 3.0);
     if (show_sigma_ && !tracks_->covariance.empty()) {
       // The 1-sigma ellipsoid (scaled) as the view shows it: the covariance carried to the
@@ -344,7 +345,7 @@ ReconstructionRoom::ReconstructionRoom(QWidget* parent)
             saved = QString(" Not saved: ") + e.what();
           }
         }
-        status_->setText(cancelled ? "Triangulation cancelled."
+        status_->setText(cancelled         ? "Triangulation cancelled."
                          : error.isEmpty() ? "Labels triangulated." + saved
                                            : "Triangulation failed: " + error);
         Refresh();
@@ -354,9 +355,10 @@ ReconstructionRoom::ReconstructionRoom(QWidget* parent)
   options->addWidget(new QLabel("Bundle adjustment"));
   adjustment_ = new QComboBox;
   adjustment_->addItems({"points", "none", "rig"});
-  adjustment_->setToolTip("As netlab triangulate --ba: none (triangulation only), points (the "
-                          "default: Ceres over the sequence with the priors), rig (the cameras' "
-                          "extrinsics first)");
+  adjustment_->setToolTip(
+      "As netlab triangulate --ba: none (triangulation only), points (the "
+      "default: Ceres over the sequence with the priors), rig (the cameras' "
+      "extrinsics first)");
   options->addWidget(adjustment_);
   const auto spin = [&](const QString& label, const QString& tip, double max, int decimals,
                         const QString& zero) {
@@ -374,9 +376,9 @@ ReconstructionRoom::ReconstructionRoom(QWidget* parent)
                 "from the residuals");
   link_ = spin("Link length (m)", "--link-length: adjacent knots this far apart (a prior); 0: off",
                10.0, 4, "off");
-  smooth_ = spin("Smoothing σ (m)",
-                 "--smooth-sigma: p[t-1] - 2 p[t] + p[t+1] = 0 with this sigma; 0: off", 1.0, 5,
-                 "off");
+  smooth_ =
+      spin("Smoothing σ (m)",
+           "--smooth-sigma: p[t-1] - 2 p[t] + p[t+1] = 0 with this sigma; 0: off", 1.0, 5, "off");
   unreviewed_ = new QCheckBox("Labels under review too");
   unreviewed_->setToolTip("--use-unreviewed");
   options->addWidget(unreviewed_);
@@ -392,8 +394,9 @@ ReconstructionRoom::ReconstructionRoom(QWidget* parent)
   progress_->setMaximumWidth(200);
   actions->addWidget(progress_);
   export_button_ = new QPushButton("Export…");
-  export_button_->setToolTip("tracks.h5, and xyzpts.csv / xyzres.csv beside it for DLTdv users "
-                             "(netlab triangulate --out, --csv)");
+  export_button_->setToolTip(
+      "tracks.h5, and xyzpts.csv / xyzres.csv beside it for DLTdv users "
+      "(netlab triangulate --out, --csv)");
   actions->addWidget(export_button_);
   actions->addStretch(1);
   layout->addLayout(actions);
@@ -456,8 +459,8 @@ ReconstructionRoom::ReconstructionRoom(QWidget* parent)
     Refresh();
   });
   connect(export_button_, &QPushButton::clicked, this, [this] {
-    const QString path = QFileDialog::getSaveFileName(this, "Export the tracks", "tracks.h5",
-                                                      "Knot tracks (*.h5)");
+    const QString path =
+        QFileDialog::getSaveFileName(this, "Export the tracks", "tracks.h5", "Knot tracks (*.h5)");
     if (!path.isEmpty()) ExportTo(path);
   });
   connect(slider_, &QSlider::valueChanged, this, [this](int t) { SetFrame(t); });
@@ -582,8 +585,9 @@ void ReconstructionRoom::Refresh() {
   const Session& session = presenter_->session();
   QString summary = presenter_->Summary();
   if (const size_t n = presenter_->updated_rows().size())
-    summary += QString("\n%1 frame%2 triangulated again after an edit of the labels (knot by knot, "
-                       "no adjustment): Triangulate renews the whole shot")
+    summary += QString(
+                   "\n%1 frame%2 triangulated again after an edit of the labels (knot by knot, "
+                   "no adjustment): Triangulate renews the whole shot")
                    .arg(n)
                    .arg(n == 1 ? "" : "s");
   summary_->setText(summary);
@@ -594,8 +598,7 @@ void ReconstructionRoom::Refresh() {
   const auto row_of = [&](int frame_number) {
     const std::vector<int>& numbers = session.frame_numbers();
     const auto it = std::lower_bound(numbers.begin(), numbers.end(), frame_number);
-    return it != numbers.end() && *it == frame_number ? static_cast<int>(it - numbers.begin())
-                                                      : -1;
+    return it != numbers.end() && *it == frame_number ? static_cast<int>(it - numbers.begin()) : -1;
   };
   if (const TriangulationRun* run = presenter_->run(); run && run->result) {
     const recon::SequenceResult& r = *run->result;
@@ -632,12 +635,12 @@ void ReconstructionRoom::Refresh() {
     const int row = static_cast<int>(i);
     problems_->setItem(row, 0, new QTableWidgetItem(p.degenerate ? "degenerate" : "outlier"));
     problems_->setItem(row, 1, new QTableWidgetItem(QString::number(session.frame_number(p.t))));
-    problems_->setItem(row, 2,
-                       new QTableWidgetItem(QString("(%1,%2)").arg(p.knot / cols).arg(p.knot % cols)));
-    problems_->setItem(row, 3, new QTableWidgetItem(
-                                   p.camera >= 0
-                                       ? QString::fromStdString(session.camera_names()[p.camera])
-                                       : QString("—")));
+    problems_->setItem(
+        row, 2, new QTableWidgetItem(QString("(%1,%2)").arg(p.knot / cols).arg(p.knot % cols)));
+    problems_->setItem(row, 3,
+                       new QTableWidgetItem(
+                           p.camera >= 0 ? QString::fromStdString(session.camera_names()[p.camera])
+                                         : QString("—")));
     problems_->setItem(row, 4, new QTableWidgetItem(p.why));
     problems_->item(row, 4)->setToolTip(p.why);
   }
@@ -665,7 +668,8 @@ void ReconstructionRoom::RefreshKnot() {
     return;
   }
   const Eigen::Vector3d& p = tracks->Position(row, k);
-  text += QString("(%1, %2, %3) m").arg(p.x(), 0, 'f', 4).arg(p.y(), 0, 'f', 4).arg(p.z(), 0, 'f', 4);
+  text +=
+      QString("(%1, %2, %3) m").arg(p.x(), 0, 'f', 4).arg(p.y(), 0, 'f', 4).arg(p.z(), 0, 'f', 4);
   if (!tracks->reprojection_error_px.empty() && std::isfinite(tracks->reprojection_error_px[i]))
     text += QString("; reprojection RMS %1 px").arg(tracks->reprojection_error_px[i], 0, 'f', 3);
   if (!tracks->covariance.empty()) {

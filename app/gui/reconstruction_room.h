@@ -44,8 +44,7 @@ class NetView3D : public QWidget {
   explicit NetView3D(QWidget* parent = nullptr);
   // What to draw (null: nothing); `target` may be empty. The view is fitted to the rig and the
   // tracks when they change.
-  void Set(const KnotTracks* tracks, const calib::Rig* rig, const recon::Target* target,
-           int cols);
+  void Set(const KnotTracks* tracks, const calib::Rig* rig, const recon::Target* target, int cols);
   void SetRow(int row);  // the tracks' row shown (-1: none)
   int row() const { return row_; }
   void SetShowSigma(bool show) { show_sigma_ = show, update(); }
@@ -150,8 +149,7 @@ class ReconstructionRoom : public QWidget {
   QComboBox* adjustment_ = nullptr;
   QDoubleSpinBox *sigma_ = nullptr, *link_ = nullptr, *smooth_ = nullptr;
   QCheckBox *unreviewed_ = nullptr, *show_sigma_ = nullptr;
-  QPushButton *triangulate_button_ = nullptr, *cancel_button_ = nullptr,
-              *export_button_ = nullptr;
+  QPushButton *triangulate_button_ = nullptr, *cancel_button_ = nullptr, *export_button_ = nullptr;
   QProgressBar* progress_ = nullptr;
   QLabel *status_ = nullptr, *summary_ = nullptr, *knot_ = nullptr, *frame_label_ = nullptr;
   QTableWidget* problems_ = nullptr;

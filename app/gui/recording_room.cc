@@ -17,8 +17,8 @@ namespace {
 
 // One colour per camera, as distinct as four can be.
 QColor SeriesColour(int i) {
-  static const QColor colours[] = {QColor(31, 119, 180), QColor(255, 127, 14),
-                                   QColor(44, 160, 44), QColor(214, 39, 40),
+  static const QColor colours[] = {QColor(31, 119, 180),  QColor(255, 127, 14),
+                                   QColor(44, 160, 44),   QColor(214, 39, 40),
                                    QColor(148, 103, 189), QColor(140, 86, 75)};
   return colours[i % 6];
 }
@@ -138,10 +138,9 @@ void RecordingRoom::Show(const RecordingPresenter* presenter) {
   table_->setRowCount(static_cast<int>(findings_.size()));
   for (int row = 0; row < static_cast<int>(findings_.size()); ++row) {
     const RecordingFinding& f = findings_[row];
-    const QStringList cells = {QString::fromStdString(f.camera_name),
-                               QString::fromStdString(f.kind),
-                               RecordingPresenter::FrameList(f.frames),
-                               QString::fromStdString(f.detail)};
+    const QStringList cells = {
+        QString::fromStdString(f.camera_name), QString::fromStdString(f.kind),
+        RecordingPresenter::FrameList(f.frames), QString::fromStdString(f.detail)};
     for (int column = 0; column < cells.size(); ++column)
       table_->setItem(row, column, new QTableWidgetItem(cells[column]));
   }

@@ -42,10 +42,8 @@ bool IsModifierOnly(int key) {
     case Qt::Key_NumLock:
     case Qt::Key_ScrollLock:
     case Qt::Key_unknown:
-    case 0:
-      return true;
-    default:
-      return false;
+    case 0: return true;
+    default: return false;
   }
 }
 

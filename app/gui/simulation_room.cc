@@ -214,7 +214,7 @@ SimulationRoom::SimulationRoom(QWidget* parent)
                         }
                       }
                       measured_->setText(reconstruction_->Summary());
-                      status_->setText(cancelled ? "Triangulation cancelled."
+                      status_->setText(cancelled         ? "Triangulation cancelled."
                                        : error.isEmpty() ? "Labels triangulated." + saved
                                                          : "Triangulation failed: " + error);
                       if (reconstruction_->tracks() == nullptr) to_score_.clear();
@@ -306,8 +306,9 @@ SimulationRoom::SimulationRoom(QWidget* parent)
   sigma_->setDecimals(3);
   sigma_->setSingleStep(0.01);
   sigma_->setSpecialValueText("from the residuals");
-  sigma_->setToolTip("The labels' noise for the tracks' covariances (netlab triangulate "
-                     "--sigma-px); 0: estimated from the reprojection residuals");
+  sigma_->setToolTip(
+      "The labels' noise for the tracks' covariances (netlab triangulate "
+      "--sigma-px); 0: estimated from the reprojection residuals");
   measured_row->addWidget(sigma_);
   triangulate_button_ = new QPushButton("Triangulate labels");
   triangulate_button_->setToolTip(
@@ -358,8 +359,9 @@ SimulationRoom::SimulationRoom(QWidget* parent)
       "materials.nylon_1mm.bend_stiffness,time_offset");
   fit_row->addWidget(free_edit_, 1);
   fit_button_ = new QPushButton("Fit");
-  fit_button_->setToolTip("netlab fit's engine: the free parameters that make the scenario "
-                          "(with the overrides above) agree best with the triangulated labels");
+  fit_button_->setToolTip(
+      "netlab fit's engine: the free parameters that make the scenario "
+      "(with the overrides above) agree best with the triangulated labels");
   fit_row->addWidget(fit_button_);
   layout->addLayout(fit_row);
 
@@ -418,8 +420,9 @@ SimulationRoom::SimulationRoom(QWidget* parent)
       "calibrated from a foil has its own world frame: time+rigid)");
   score_row->addWidget(alignment_);
   score_button_ = new QPushButton("Score");
-  score_button_->setToolTip("The selected simulation against the triangulated labels (netlab "
-                            "score's engine; the labels are triangulated first when need be)");
+  score_button_->setToolTip(
+      "The selected simulation against the triangulated labels (netlab "
+      "score's engine; the labels are triangulated first when need be)");
   score_row->addWidget(score_button_);
   report_button_ = new QPushButton("Open report");
   score_row->addWidget(report_button_);
@@ -531,11 +534,10 @@ SimulationRoom::SimulationRoom(QWidget* parent)
 
 SimulationRoom::~SimulationRoom() = default;
 
-bool SimulationRoom::Alive() const {
-  return simulation_ != nullptr && !alive_.expired();
-}
+bool SimulationRoom::Alive() const { return simulation_ != nullptr && !alive_.expired(); }
 
-void SimulationRoom::Show(SimulationPresenter* simulation, ReconstructionPresenter* reconstruction) {
+void SimulationRoom::Show(SimulationPresenter* simulation,
+                          ReconstructionPresenter* reconstruction) {
   if (simulation == simulation_ && reconstruction == reconstruction_) {
     RefreshButtons();
     if (simulation_) RequestFrame();
@@ -645,7 +647,7 @@ void SimulationRoom::Select(int i) {
   verdict_->setText("<b>" + QString::fromStdString(simulation_->simulation(i).name) + "</b><br>" +
                     simulation_->Verdict(i).toHtmlEscaped().replace("\n", "<br>"));
   const auto& score = simulation_->simulation(i).score;
-  const QString colour = !score ? "palette(window)"
+  const QString colour = !score                                   ? "palette(window)"
                          : score->summary.verdict == "consistent" ? "#d8f5d0"
                                                                   : "#f8d4d0";
   verdict_->setStyleSheet("QLabel { background: " + colour + "; padding: 6px; }");
@@ -698,15 +700,15 @@ void SimulationRoom::RefreshTable() {
       table_->setItem(i, column, item);
     };
     set(0, QString::fromStdString(s.name));
-    set(1, s.score ? QString::fromStdString(s.score->summary.verdict)
-                   : s.score_error.empty() ? "—" : "error");
+    set(1, s.score                 ? QString::fromStdString(s.score->summary.verdict)
+           : s.score_error.empty() ? "—"
+                                   : "error");
     set(2, s.score ? Number(s.score->summary.rms_m * 1e3) : "");
     set(3, s.score ? Number(s.score->summary.mean_d2) : "");
     set(4, s.score ? Number(s.score->summary.p_value, 2) : "");
     if (s.score)
-      table_->item(i, 1)->setForeground(s.score->summary.verdict == "consistent"
-                                            ? QColor(0, 130, 0)
-                                            : QColor(190, 0, 0));
+      table_->item(i, 1)->setForeground(
+          s.score->summary.verdict == "consistent" ? QColor(0, 130, 0) : QColor(190, 0, 0));
   }
   table_->resizeColumnsToContents();
   table_->horizontalHeader()->setSectionResizeMode(0, QHeaderView::Stretch);
@@ -846,8 +848,8 @@ void SimulationRoom::FillForm() {
   try {
     rows = SimulationPresenter::ScenarioKeys(path);
   } catch (const std::exception& e) {
-    form_check_->setText(QString("<span style='color:#b00000'>%1</span>")
-                             .arg(QString(e.what()).toHtmlEscaped()));
+    form_check_->setText(
+        QString("<span style='color:#b00000'>%1</span>").arg(QString(e.what()).toHtmlEscaped()));
     return;
   }
   filling_form_ = true;
@@ -938,7 +940,8 @@ void SimulationRoom::Fit() {
 void SimulationRoom::OpenReport() {
   if (!simulation_ || selected_ < 0) return;
   const std::string& report = simulation_->simulation(selected_).report_path;
-  if (!report.empty()) QDesktopServices::openUrl(QUrl::fromLocalFile(QString::fromStdString(report)));
+  if (!report.empty())
+    QDesktopServices::openUrl(QUrl::fromLocalFile(QString::fromStdString(report)));
 }
 
 void SimulationRoom::Cancel() {
@@ -979,7 +982,8 @@ void SimulationRoom::RefreshOverlays() {
       if (!l.present()) continue;
       overlay.labels.push_back({k, l.px, kLabelColour, l.state == recon::LabelState::kNeedsReview});
     }
-    QString caption = QString("%1 · frame %2").arg(QString::fromStdString(session.camera_names()[c]))
+    QString caption = QString("%1 · frame %2")
+                          .arg(QString::fromStdString(session.camera_names()[c]))
                           .arg(session.frame_number(t));
     if (draw) {
       simulated_[c] = simulation_->InCamera(selected_, c, t);
@@ -991,10 +995,8 @@ void SimulationRoom::RefreshOverlays() {
     overlay.caption = caption;
     views_[c]->SetOverlay(std::move(overlay));
   }
-  frame_label_->setText(QString("frame %1 (row %2 of %3)")
-                            .arg(session.frame_number(t))
-                            .arg(t)
-                            .arg(session.frames()));
+  frame_label_->setText(
+      QString("frame %1 (row %2 of %3)").arg(session.frame_number(t)).arg(t).arg(session.frames()));
 }
 
 void SimulationRoom::OnCursor(int camera, const Eigen::Vector2d& px) {

@@ -45,8 +45,8 @@ std::vector<std::string> SplitNames(const std::string& text) {
   return names;
 }
 
-void WriteGrid(hid_t knots, const std::vector<std::array<int, 2>>& grid, const std::vector<int>& net,
-               const std::vector<std::string>& net_names) {
+void WriteGrid(hid_t knots, const std::vector<std::array<int, 2>>& grid,
+               const std::vector<int>& net, const std::vector<std::string>& net_names) {
   std::vector<int32_t> flat;
   for (const auto& g : grid) {
     flat.push_back(g[0]);
@@ -164,8 +164,8 @@ void WriteKnotTracks(const std::string& path, const KnotTracks& tracks) {
     h5::SetUnits(file.get(), "time", "s");
     h5::Id knots = h5::CreateGroup(file.get(), "knots");
     WriteGrid(knots.get(), tracks.grid, tracks.net, tracks.net_names);
-    h5::WriteDataset(knots.get(), "position", H5T_NATIVE_DOUBLE, {t, k, 3},
-                     tracks.position.data(), 4);
+    h5::WriteDataset(knots.get(), "position", H5T_NATIVE_DOUBLE, {t, k, 3}, tracks.position.data(),
+                     4);
     h5::SetUnits(knots.get(), "position", "m");
     h5::WriteDataset(knots.get(), "valid", H5T_NATIVE_UINT8, {t, k}, tracks.valid.data(), 4);
     h5::SetUnits(knots.get(), "valid", "1");
@@ -301,8 +301,8 @@ KnotTracks ReadKnotTracks(const std::string& path) {
   // A dataset's extent costs nothing to declare: a file of 1e11 frames is 3 kB, and reading it
   // ended in a bare "out of memory". Sized before anything is allocated (a position, a flag and a
   // covariance per knot-frame, a time per frame).
-  if (const std::string shortfall = MemoryShortfall(static_cast<double>(t) *
-                                                    (8.0 + static_cast<double>(k) * 97.0));
+  if (const std::string shortfall =
+          MemoryShortfall(static_cast<double>(t) * (8.0 + static_cast<double>(k) * 97.0));
       !shortfall.empty())
     fail("/time and /knots/grid give " + std::to_string(t) + " frames of " + std::to_string(k) +
          " knots: reading them " + shortfall);
@@ -431,7 +431,9 @@ struct TrackFileWriter::Handles {
 };
 
 TrackFileWriter::TrackFileWriter(const std::string& path, const Layout& layout)
-    : path_(path), partial_path_(path + ".partial"), layout_(layout),
+    : path_(path),
+      partial_path_(path + ".partial"),
+      layout_(layout),
       handles_(std::make_unique<Handles>()) {
   Handles& h = *handles_;
   h.file = h5::CreateFile(partial_path_);

@@ -41,14 +41,13 @@
 // Files are written to "<path>.partial" and renamed into place when complete, so an interrupted
 // write never replaces a good file.
 
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <limits>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace netlab {
 
@@ -68,23 +67,23 @@ struct KnotTracks {
     int frame = 0, knot = 0, camera = 0;  // frame number, knot index, index into camera_names
     double residual_px = 0.0;
   };
-  std::vector<Outlier> outliers;              // observations left out (measured tracks)
-  std::vector<std::string> camera_names;      // non-empty: /outliers is written
-  std::vector<uint8_t> degenerate;            // [T*K], or empty: /knots/degenerate
+  std::vector<Outlier> outliers;          // observations left out (measured tracks)
+  std::vector<std::string> camera_names;  // non-empty: /outliers is written
+  std::vector<uint8_t> degenerate;        // [T*K], or empty: /knots/degenerate
   struct Degenerate {
     int frame = 0, knot = 0;  // frame number, knot index
     double sigma_m = 0.0, ray_angle_deg = 0.0;
-    std::string reason;       // one line
+    std::string reason;  // one line
   };
   std::vector<Degenerate> degenerate_points;  // written with `degenerate`
   double degenerate_max_sigma_m = 0.0;
-  std::string degenerate_bound_from;          // e.g. "10 x the median sigma (0.123 mm)"
-  std::vector<double> frame_time_spread_s;    // [T], or empty
+  std::string degenerate_bound_from;        // e.g. "10 x the median sigma (0.123 mm)"
+  std::vector<double> frame_time_spread_s;  // [T], or empty
   // Per camera_names entry, or empty: /camera_offsets.
   std::vector<double> camera_offset_frames, camera_offset_sigma_frames;
   bool camera_offsets_applied = false;
-  std::string source;                         // e.g. "netlab simulate"
-  std::string scenario;                       // scenario YAML, or empty
+  std::string source;    // e.g. "netlab simulate"
+  std::string scenario;  // scenario YAML, or empty
   // s: the simulation's first contact of the net with a body; NaN: none (or not a simulation)
   double contact_start_s = std::numeric_limits<double>::quiet_NaN();
 
@@ -123,13 +122,13 @@ std::vector<std::vector<Eigen::Vector3d>> ReadNodePositions(const std::string& p
 class TrackFileWriter {
  public:
   struct Layout {
-    int nodes = 0;                               // node count, 0: no /nodes
-    std::vector<std::array<int, 2>> grid;        // knots
-    std::vector<int> net;                        // net index per knot
+    int nodes = 0;                         // node count, 0: no /nodes
+    std::vector<std::array<int, 2>> grid;  // knots
+    std::vector<int> net;                  // net index per knot
     std::vector<std::string> net_names;
     std::vector<std::string> probe_names;
     std::string source = "netlab simulate";
-    std::string scenario;                        // stored as /scenario when not empty
+    std::string scenario;  // stored as /scenario when not empty
   };
 
   // Creates "<path>.partial". Throws std::runtime_error if it cannot.

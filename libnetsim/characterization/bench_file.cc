@@ -111,19 +111,19 @@ void ReadCantilever(const YamlMap& m, CantileverTest* c) {
   double farthest = 0.0;
   for (size_t i = 0; i < c->shape.rows.size(); ++i) {
     const double x = c->shape.rows[i][0], y = c->shape.rows[i][1];
-    const std::string at = m.file() + Line(rows[i]) + ": " + m.Join("shape") + "[" +
-                           std::to_string(i) + "]: ";
+    const std::string at =
+        m.file() + Line(rows[i]) + ": " + m.Join("shape") + "[" + std::to_string(i) + "]: ";
     if (y > slack)
       throw InputError(at + "y " + Short(y) +
                        " m is above the clamp: y is up, and a thread clamped horizontally bends "
                        "down under its weight (give the drop as negative y)");
     if (x < farthest - slack)
-      throw InputError(at + "x " + Short(x) +
-                       (farthest > 0.0 ? " m runs back towards the clamp (x " + Short(farthest) +
-                                             " m before it)"
-                                       : " m is behind the clamp") +
-                       ": a thread hanging from a horizontal clamp runs away from it; give the "
-                       "points from the clamp to the tip, x away from the clamp");
+      throw InputError(
+          at + "x " + Short(x) +
+          (farthest > 0.0 ? " m runs back towards the clamp (x " + Short(farthest) + " m before it)"
+                          : " m is behind the clamp") +
+          ": a thread hanging from a horizontal clamp runs away from it; give the "
+          "points from the clamp to the tip, x away from the clamp");
     farthest = std::max(farthest, x);
   }
   if (m.Has("oscillation"))

@@ -5,12 +5,13 @@
 //   E = 1/2 (1/l) sum_k K_k (phi_k - phi0_k)^2,  K = (EI, EI, GJ), l the mean segment length,
 // i.e. the Darboux vector Omega = phi / l with energy density 1/2 K Omega^2. Damping uses the
 // rate of phi, dphi/dt = Jr^-1 w_b - Jl^-1 w_a (w body-frame angular velocities), in
-// D = 1/2 (1/l) sum_k C_k (dphi_k/dt)^2, C = (c_b, c_b, c_t). With g = (K (phi - phi0) + C dphi/dt)/l
-// the body-frame torques are
+// D = 1/2 (1/l) sum_k C_k (dphi_k/dt)^2, C = (c_b, c_b, c_t). With g = (K (phi - phi0) + C
+// dphi/dt)/l the body-frame torques are
 //   tau_a = Jr^-1^T ... = g + 1/2 phi x g + b phi x (phi x g),
 //   tau_b = -(g - 1/2 phi x g + b phi x (phi x g)),
 // (rotation.h: LogMap and its Jacobians). A rod under an end moment M therefore turns by exactly
-// M l / EI per joint. Clamped ends (Model::anchors) are joints to a fixed frame over half a segment.
+// M l / EI per joint. Clamped ends (Model::anchors) are joints to a fixed frame over half a
+// segment.
 
 #include <vector>
 

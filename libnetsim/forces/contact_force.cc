@@ -15,9 +15,7 @@ double RigidBody::SignedDistance(const Vector3d& p, double t, Vector3d* normal_o
       *normal_out = r > 0.0 ? Vector3d(d / r) : Vector3d::UnitZ();
       return r - radius;
     }
-    case Shape::kPlane:
-      *normal_out = normal;
-      return normal.dot(p - c);
+    case Shape::kPlane: *normal_out = normal; return normal.dot(p - c);
     case Shape::kBox: {
       const Vector3d local = orientation.conjugate() * (p - c);
       const Vector3d d = local.cwiseAbs() - half_extents;
@@ -55,7 +53,8 @@ bool RigidBody::IsValid(std::string* error) const {
     if (error) *error = message;
     return false;
   };
-  if (!center.allFinite() || !velocity.allFinite()) return fail("center and velocity must be finite");
+  if (!center.allFinite() || !velocity.allFinite())
+    return fail("center and velocity must be finite");
   if (shape == Shape::kSphere && !(radius > 0.0)) return fail("radius must be > 0");
   if (shape == Shape::kBox && !(half_extents.minCoeff() > 0.0)) return fail("size must be > 0");
   if (shape == Shape::kPlane && !(std::abs(normal.norm() - 1.0) < 1e-9))

@@ -25,15 +25,15 @@ struct RigidBody {
   enum class Shape { kSphere, kBox, kPlane };
   std::string name;
   Shape shape = Shape::kSphere;
-  Vector3d center = Vector3d::Zero();       // m at t = 0: sphere or box centre, a point of a plane
-  Vector3d velocity = Vector3d::Zero();     // m/s, constant
-  double radius = 0.0;                      // sphere, m
-  Vector3d half_extents = Vector3d::Zero(); // box, m
+  Vector3d center = Vector3d::Zero();        // m at t = 0: sphere or box centre, a point of a plane
+  Vector3d velocity = Vector3d::Zero();      // m/s, constant
+  double radius = 0.0;                       // sphere, m
+  Vector3d half_extents = Vector3d::Zero();  // box, m
   Quaterniond orientation = Quaterniond::Identity();  // box: box axes to simulation frame
-  Vector3d normal = Vector3d::UnitZ();      // plane: outward unit normal
-  double friction = 0.0;                    // Coulomb coefficient mu
-  double stiffness = 0.0;                   // N/m; 0 = automatic (see above)
-  double damping_ratio = 0.3;               // zeta of the normal penalty spring (restitution ~0.37)
+  Vector3d normal = Vector3d::UnitZ();                // plane: outward unit normal
+  double friction = 0.0;                              // Coulomb coefficient mu
+  double stiffness = 0.0;                             // N/m; 0 = automatic (see above)
+  double damping_ratio = 0.3;  // zeta of the normal penalty spring (restitution ~0.37)
 
   // Signed distance (m, negative inside) from point p to the body's surface at time t, and the
   // outward unit normal at the closest surface point.

@@ -8,10 +8,9 @@
 //   segment torques body frame of the segment, N m, one per segment: the work conjugate of a
 //                  body-frame rotation q -> q Exp(dtheta).
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "libnetsim/model/model.h"
 

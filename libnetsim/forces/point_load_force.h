@@ -13,8 +13,8 @@ namespace netlab::netsim {
 struct PointLoad {
   enum class Kind { kForce, kMoment };
   Kind kind = Kind::kForce;
-  int index = 0;                         // node for a force, segment for a moment
-  Vector3d vector = Vector3d::Zero();    // N or N m, simulation frame
+  int index = 0;                       // node for a force, segment for a moment
+  Vector3d vector = Vector3d::Zero();  // N or N m, simulation frame
 };
 
 class PointLoadForce final : public Force {

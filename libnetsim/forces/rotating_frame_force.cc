@@ -14,9 +14,12 @@ void RotatingFrameForce::Accumulate(const Model& model, const State& state, doub
     const double* x = state.x[i].data();
     const double* v = state.v[i].data();
     const double wdx = wx * x[0] + wy * x[1] + wz * x[2];
-    const double a0 = 2.0 * (wy * v[2] - wz * v[1]) + wx * wdx - x[0] * w2 + (ay * x[2] - az * x[1]);
-    const double a1 = 2.0 * (wz * v[0] - wx * v[2]) + wy * wdx - x[1] * w2 + (az * x[0] - ax * x[2]);
-    const double a2 = 2.0 * (wx * v[1] - wy * v[0]) + wz * wdx - x[2] * w2 + (ax * x[1] - ay * x[0]);
+    const double a0 =
+        2.0 * (wy * v[2] - wz * v[1]) + wx * wdx - x[0] * w2 + (ay * x[2] - az * x[1]);
+    const double a1 =
+        2.0 * (wz * v[0] - wx * v[2]) + wy * wdx - x[1] * w2 + (az * x[0] - ax * x[2]);
+    const double a2 =
+        2.0 * (wx * v[1] - wy * v[0]) + wz * wdx - x[2] * w2 + (ax * x[1] - ay * x[0]);
     const double m = model.node_mass[i];
     double* f = out.force[i].data();
     f[0] -= m * a0;

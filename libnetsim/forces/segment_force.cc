@@ -132,8 +132,8 @@ double SegmentForce::Energy(const Model& model, const State& state) const {
     const double strain = length / s.rest_length - 1.0;
     if (stretch_) energy += 0.5 * s.stretch_stiffness * s.rest_length * strain * strain;
     if (coupling_)
-      energy += s.coupling_stiffness * s.rest_length *
-                (1.0 - (e / length).dot(Director3(state.q[j])));
+      energy +=
+          s.coupling_stiffness * s.rest_length * (1.0 - (e / length).dot(Director3(state.q[j])));
   }
   return energy;
 }

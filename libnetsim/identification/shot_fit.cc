@@ -207,7 +207,7 @@ constexpr double kAnchorSigma = 6.907755278982137;  // ln 1000
 struct Shot {
   Residuals residuals;
   Simulator simulator;
-  int offset = 0;  // first row of its residuals
+  int offset = 0;                             // first row of its residuals
   std::optional<ScenarioOverride> held_step;  // integrator.dt when it was auto (HoldStep)
 };
 
@@ -512,8 +512,8 @@ void CheckTimeOverlap(const FitShotInput& in, const Scenario& scenario, const Fi
   std::ostringstream os;
   os << in.measured_name << ": /time spans " << measured.time.front() << " .. "
      << measured.time.back() << " s; at --time-offset " << offset << " s (+- " << margin
-     << " s) that is " << lo << " .. " << hi << " s of the simulation, which "
-     << in.scenario_path << " runs over 0 .. " << scenario.duration
+     << " s) that is " << lo << " .. " << hi << " s of the simulation, which " << in.scenario_path
+     << " runs over 0 .. " << scenario.duration
      << " s (duration): no overlap. Give the measured file's launch as its time 0, or the "
      << "offset between them as --time-offset";
   throw InputError(os.str());

@@ -28,9 +28,9 @@
 #include <string>
 #include <vector>
 
+#include "common/tracks/track_file.h"
 #include "libnetsim/identification/fit_parameters.h"
 #include "libnetsim/scenario/scenario.h"
-#include "common/tracks/track_file.h"
 #include "libnetsim/validation/score.h"
 
 namespace netlab::netsim {

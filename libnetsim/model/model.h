@@ -11,11 +11,10 @@
 // in link order. Link order: the horizontal links (r,c)-(r,c+1) row by row, then the vertical
 // links (r,c)-(r+1,c) row by row. Node order of a rod: start to end.
 
-#include <string>
-#include <vector>
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <string>
+#include <vector>
 
 #include "libnetsim/model/material.h"
 
@@ -26,36 +25,37 @@ using Eigen::Vector3d;
 
 // One rod element between two nodes, carrying one orientation.
 struct Segment {
-  int node_a = 0;                   // start node; d3 points from node_a towards node_b
-  int node_b = 0;                   // end node
-  int material = 0;                 // index into Model::materials
-  double rest_length = 0.0;         // m
-  double inv_rest_length = 0.0;     // 1/m
-  double stretch_stiffness = 0.0;   // EA, N
-  double stretch_damping = 0.0;     // c_s, N s
-  double coupling_stiffness = 0.0;  // kappa, N: penalty tying d3 to the tangent (forces/segment_force.h)
-  double diameter = 0.0;            // m
+  int node_a = 0;                  // start node; d3 points from node_a towards node_b
+  int node_b = 0;                  // end node
+  int material = 0;                // index into Model::materials
+  double rest_length = 0.0;        // m
+  double inv_rest_length = 0.0;    // 1/m
+  double stretch_stiffness = 0.0;  // EA, N
+  double stretch_damping = 0.0;    // c_s, N s
+  double coupling_stiffness =
+      0.0;                // kappa, N: penalty tying d3 to the tangent (forces/segment_force.h)
+  double diameter = 0.0;  // m
 };
 
 // The joint between two consecutive segments of one rod: bending and torsion live here.
 struct BendPair {
-  int segment_a = 0;                       // the earlier segment along the rod
-  int segment_b = 0;                       // the next one
-  double inv_length = 0.0;                 // 1 / (mean rest length of the two), 1/m
-  Vector3d stiffness = Vector3d::Zero();   // (EI, EI, GJ), N m^2
-  Vector3d damping = Vector3d::Zero();     // (c_b, c_b, c_t), N m^2 s
-  Vector3d rest_phi = Vector3d::Zero();    // rest relative rotation vector, rad (0: straight)
+  int segment_a = 0;                      // the earlier segment along the rod
+  int segment_b = 0;                      // the next one
+  double inv_length = 0.0;                // 1 / (mean rest length of the two), 1/m
+  Vector3d stiffness = Vector3d::Zero();  // (EI, EI, GJ), N m^2
+  Vector3d damping = Vector3d::Zero();    // (c_b, c_b, c_t), N m^2 s
+  Vector3d rest_phi = Vector3d::Zero();   // rest relative rotation vector, rad (0: straight)
 };
 
 // The joint between a clamped rod end and its fixed frame. Bending and torsion act over half the
 // end segment (from the clamped node to the segment's centre), so the curvature at the clamp is
 // resolved like any other joint's and the discretisation stays second order.
 struct AnchorJoint {
-  int segment = 0;                          // the rod's end segment
+  int segment = 0;                              // the rod's end segment
   Quaterniond frame = Quaterniond::Identity();  // the clamp's fixed orientation
-  double inv_length = 0.0;                  // 2 / rest length of the segment, 1/m
-  Vector3d stiffness = Vector3d::Zero();    // (EI, EI, GJ), N m^2
-  Vector3d damping = Vector3d::Zero();      // (c_b, c_b, c_t), N m^2 s
+  double inv_length = 0.0;                      // 2 / rest length of the segment, 1/m
+  Vector3d stiffness = Vector3d::Zero();        // (EI, EI, GJ), N m^2
+  Vector3d damping = Vector3d::Zero();          // (c_b, c_b, c_t), N m^2 s
 };
 
 struct RodInfo {
@@ -127,11 +127,11 @@ struct Model {
 };
 
 struct State {
-  double time = 0.0;            // s
-  std::vector<Vector3d> x;      // node positions, m, simulation frame
-  std::vector<Vector3d> v;      // node velocities, m/s
-  std::vector<Quaterniond> q;   // segment orientations (body to world)
-  std::vector<Vector3d> w;      // segment angular velocities, body frame, rad/s
+  double time = 0.0;           // s
+  std::vector<Vector3d> x;     // node positions, m, simulation frame
+  std::vector<Vector3d> v;     // node velocities, m/s
+  std::vector<Quaterniond> q;  // segment orientations (body to world)
+  std::vector<Vector3d> w;     // segment angular velocities, body frame, rad/s
 };
 
 }  // namespace netlab::netsim

@@ -44,7 +44,8 @@ double MinimumSpread(int segments_per_link) {
 }
 
 ModelBuilder::ModelBuilder(ModelBuilderOptions options) : options_(options) {
-  if (!(options_.coupling_stiffness_ratio > 0.0) || !std::isfinite(options_.coupling_stiffness_ratio))
+  if (!(options_.coupling_stiffness_ratio > 0.0) ||
+      !std::isfinite(options_.coupling_stiffness_ratio))
     Fail("coupling_stiffness_ratio", "must be > 0");
 }
 
@@ -236,8 +237,7 @@ int ModelBuilder::AddNet(const NetSpec& spec) {
       model_.knots.push_back(Knot{net_index, r, c, node});
     }
   }
-  const int corners[4] = {0, spec.cols - 1, (spec.rows - 1) * spec.cols,
-                          spec.rows * spec.cols - 1};
+  const int corners[4] = {0, spec.cols - 1, (spec.rows - 1) * spec.cols, spec.rows * spec.cols - 1};
   for (int i = 0; i < 4; ++i) {
     const int node = model_.knots[info.first_knot + corners[i]].node;
     model_.node_mass[node] += spec.corner_mass;

@@ -24,9 +24,9 @@ enum class Fixity { kFree, kPinned, kClamped };
 
 struct RodSpec {
   std::string name;
-  int material = 0;                  // index returned by AddMaterial
-  Vector3d start = Vector3d::Zero(); // m
-  Vector3d end = Vector3d::UnitX();  // m
+  int material = 0;                   // index returned by AddMaterial
+  Vector3d start = Vector3d::Zero();  // m
+  Vector3d end = Vector3d::UnitX();   // m
   int segments = 1;
   Fixity fix_start = Fixity::kFree;  // pinned: position; clamped: position and orientation
   Fixity fix_end = Fixity::kFree;
@@ -41,31 +41,31 @@ struct RodSpec {
 struct NetSpec {
   std::string name;
   int material = 0;
-  int rows = 2;                             // knots per column
-  int cols = 2;                             // knots per row
-  double mesh = 0.1;                        // link rest length, m
+  int rows = 2;       // knots per column
+  int cols = 2;       // knots per row
+  double mesh = 0.1;  // link rest length, m
   int segments_per_link = 1;
-  Vector3d center = Vector3d::Zero();       // m
-  Vector3d normal = Vector3d::UnitZ();      // net plane normal
-  Vector3d x_axis = Vector3d::UnitX();      // direction of increasing col (projected on the plane)
-  double knot_mass = 0.0;                   // kg added at every knot (knotted nets)
-  double corner_mass = 0.0;                 // kg added at each of the four corners
-  double corner_radius = 0.0;               // m, contact radius of the corner masses (0: thread)
-  Vector3d velocity = Vector3d::Zero();     // m/s, whole net
+  Vector3d center = Vector3d::Zero();    // m
+  Vector3d normal = Vector3d::UnitZ();   // net plane normal
+  Vector3d x_axis = Vector3d::UnitX();   // direction of increasing col (projected on the plane)
+  double knot_mass = 0.0;                // kg added at every knot (knotted nets)
+  double corner_mass = 0.0;              // kg added at each of the four corners
+  double corner_radius = 0.0;            // m, contact radius of the corner masses (0: thread)
+  Vector3d velocity = Vector3d::Zero();  // m/s, whole net
   Vector3d angular_velocity = Vector3d::Zero();  // rad/s, whole net about `center`
   // Extra velocity of the corner masses (m/s), in the order (0,0), (0,cols-1), (rows-1,0),
   // (rows-1,cols-1): the ejector's corner-mass shot.
-  std::array<Vector3d, 4> corner_velocities = {Vector3d::Zero(), Vector3d::Zero(),
-                                                Vector3d::Zero(), Vector3d::Zero()};
+  std::array<Vector3d, 4> corner_velocities = {Vector3d::Zero(), Vector3d::Zero(), Vector3d::Zero(),
+                                               Vector3d::Zero()};
   // Knot spacing as a fraction of `mesh` (0 < spread <= 1). Below 1 the links bulge out of the
   // plane along `normal`, keeping their length: a partly folded net as it leaves the ejector.
   double spread = 1.0;
 };
 
 struct ModelBuilderOptions {
-  // Coupling penalty kappa = ratio * max(EI, GJ) / l^2 per segment (forces/segment_force.h). The shear
-  // compliance it leaves is ~1/ratio of the bending compliance at the scale of one segment, and
-  // far less at the scale of a link: 100 keeps the Kirchhoff constraint to ~1 %.
+  // Coupling penalty kappa = ratio * max(EI, GJ) / l^2 per segment (forces/segment_force.h). The
+  // shear compliance it leaves is ~1/ratio of the bending compliance at the scale of one segment,
+  // and far less at the scale of a link: 100 keeps the Kirchhoff constraint to ~1 %.
   double coupling_stiffness_ratio = 100.0;
 };
 

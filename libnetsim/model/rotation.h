@@ -12,10 +12,9 @@
 // discrete bending energy is exactly quadratic in the turning angle: a rod under an end moment
 // M = 2 pi EI / L closes into a regular polygon whatever the segment count.
 
-#include <cmath>
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cmath>
 
 namespace netlab::netsim {
 
@@ -107,12 +106,15 @@ inline LogScalars LogMap(double w, double x, double y, double z) {
     const double inv_w = 1.0 / w;
     const double u2 = s2 * inv_w * inv_w;
     const double atan_ratio =
-        1.0 + u2 * (-1.0 / 3 + u2 * (1.0 / 5 + u2 * (-1.0 / 7 + u2 * (1.0 / 9 + u2 * (-1.0 / 11 +
-        u2 * (1.0 / 13 + u2 * (-1.0 / 15)))))));
+        1.0 +
+        u2 * (-1.0 / 3 +
+              u2 * (1.0 / 5 +
+                    u2 * (-1.0 / 7 +
+                          u2 * (1.0 / 9 + u2 * (-1.0 / 11 + u2 * (1.0 / 13 + u2 * (-1.0 / 15)))))));
     scale = 2.0 * inv_w * atan_ratio;
     const double t2 = scale * scale * s2;  // theta^2
-    b = 1.0 / 12 + t2 * (1.0 / 720 + t2 * (1.0 / 30240 + t2 * (1.0 / 1209600 +
-        t2 * (1.0 / 47900160))));
+    b = 1.0 / 12 +
+        t2 * (1.0 / 720 + t2 * (1.0 / 30240 + t2 * (1.0 / 1209600 + t2 * (1.0 / 47900160))));
   } else {
     const double s = std::sqrt(s2);
     const double theta = 2.0 * std::atan2(s, w);

@@ -92,8 +92,7 @@ Eigen::Vector3d TimeSeries3::Value(double t) const {
 }
 
 Eigen::Vector3d TimeSeries3::Rate(double t) const {
-  if (times_.size() < 2 || t < times_.front() || t >= times_.back())
-    return Eigen::Vector3d::Zero();
+  if (times_.size() < 2 || t < times_.front() || t >= times_.back()) return Eigen::Vector3d::Zero();
   const size_t i = Interval(t);
   return (values_[i + 1] - values_[i]) / (times_[i + 1] - times_[i]);
 }

@@ -6,10 +6,9 @@
 // increasing; blank lines and lines starting with '#' are skipped; a first line that does not
 // parse as numbers is taken as a header. Outside [t_first, t_last] the end values hold.
 
+#include <Eigen/Core>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace netlab::netsim {
 

@@ -19,8 +19,7 @@ std::string RunSummary::BriefReport() const {
   std::ostringstream os;
   os << std::setprecision(4);
   os << "scenario " << scenario << ": " << (stable ? "stable" : "UNSTABLE") << "\n";
-  os << "  model       " << nodes << " nodes, " << segments << " segments, " << knots
-     << " knots\n";
+  os << "  model       " << nodes << " nodes, " << segments << " segments, " << knots << " knots\n";
   os << "  forces      ";
   for (size_t i = 0; i < active.size(); ++i) os << (i ? ", " : "") << active[i];
   os << "\n";
@@ -38,8 +37,7 @@ std::string RunSummary::BriefReport() const {
   os << "  energy      kinetic " << energy.kinetic << " J, elastic " << energy.elastic
      << " J, potential " << energy.potential << " J\n";
   for (const auto& [name, p] : probes)
-    os << "  probe       " << name << " at (" << p.x() << ", " << p.y() << ", " << p.z()
-       << ") m\n";
+    os << "  probe       " << name << " at (" << p.x() << ", " << p.y() << ", " << p.z() << ") m\n";
   if (!output.empty()) os << "  output      " << frames << " frames in " << output << "\n";
   if (!error.empty()) os << "  error       " << error << "\n";
   return os.str();
@@ -59,14 +57,14 @@ void CheckOutputSize(const Scenario& scenario, const RunOptions& options, double
   head << std::setprecision(3)
        << (scenario.source_path.empty() ? scenario.name : scenario.source_path)
        << ": output_interval " << scenario.output_interval << " s over duration "
-       << scenario.duration << " s (a step of " << dt << " s) gives " << frames
-       << " output frames";
-  const char* advice = "; raise output_interval (the flight scenarios write one frame per "
-                       "camera frame, 1/179 s)";
+       << scenario.duration << " s (a step of " << dt << " s) gives " << frames << " output frames";
+  const char* advice =
+      "; raise output_interval (the flight scenarios write one frame per "
+      "camera frame, 1/179 s)";
   if (!options.out_path.empty()) {
     // /time, the knots (position and valid), the probes and, when stored, every node.
-    const double per_frame = 8.0 + knots * 25.0 + probes * 24.0 +
-                             (scenario.store_nodes ? nodes * 24.0 : 0.0);
+    const double per_frame =
+        8.0 + knots * 25.0 + probes * 24.0 + (scenario.store_nodes ? nodes * 24.0 : 0.0);
     std::error_code error;
     fs::path folder = fs::absolute(options.out_path, error).parent_path();
     const fs::space_info space = fs::space(folder, error);
@@ -130,9 +128,9 @@ RunSummary RunScenario(const Scenario& scenario, const RunOptions& options) {
     // The step falls with the segments' length: name the key that made them short.
     int shortest = -1;
     for (size_t n = 0; n < scenario.nets.size(); ++n)
-      if (shortest < 0 || scenario.nets[n].mesh / scenario.nets[n].segments_per_link <
-                              scenario.nets[shortest].mesh /
-                                  scenario.nets[shortest].segments_per_link)
+      if (shortest < 0 ||
+          scenario.nets[n].mesh / scenario.nets[n].segments_per_link <
+              scenario.nets[shortest].mesh / scenario.nets[shortest].segments_per_link)
         shortest = static_cast<int>(n);
     if (shortest >= 0 && scenario.nets[shortest].segments_per_link > 1) {
       const NetSpec& net = scenario.nets[shortest];
@@ -142,8 +140,7 @@ RunSummary RunScenario(const Scenario& scenario, const RunOptions& options) {
     throw InputError(os.str());
   }
   // Output frames every `steps_per_frame` steps; an automatic dt divides the interval exactly.
-  const long steps_per_frame =
-      std::max(1L, std::lround(scenario.output_interval / sim.dt()));
+  const long steps_per_frame = std::max(1L, std::lround(scenario.output_interval / sim.dt()));
   const long total_steps = std::lround(scenario.duration / sim.dt());
   // A step longer than the run (integrator.dt 10 s of a 0.01 s run) ran 0 steps and was
   // reported stable.
@@ -192,8 +189,7 @@ RunSummary RunScenario(const Scenario& scenario, const RunOptions& options) {
     if (options.progress && step % progress_every == 0)
       options.progress(static_cast<double>(step) / total_steps);
   }
-  summary.wall_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   const State& s = sim.state();
   summary.steps = sim.steps_taken();
@@ -215,8 +211,7 @@ RunSummary RunScenario(const Scenario& scenario, const RunOptions& options) {
   if (sim.failure()) {
     summary.stable = false;
     summary.error = sim.failure()->message;
-    if (writer)
-      summary.error += "; the frames up to the failure are in " + writer->partial_path();
+    if (writer) summary.error += "; the frames up to the failure are in " + writer->partial_path();
   } else if (writer) {
     writer->Commit();
     summary.output = options.out_path;

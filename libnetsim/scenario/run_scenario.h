@@ -29,11 +29,11 @@ struct RunOptions {
 
 struct RunSummary {
   std::string scenario;
-  bool stable = true;          // false when the run stopped on a NaN or blow-up
-  std::string error;           // why it stopped (empty when stable)
-  std::string integrator;      // "explicit" | "verlet" | "implicit"
-  double dt = 0.0;             // s, the step used
-  double dt_limit = 0.0;       // s, estimated stability limit
+  bool stable = true;              // false when the run stopped on a NaN or blow-up
+  std::string error;               // why it stopped (empty when stable)
+  std::string integrator;          // "explicit" | "verlet" | "implicit"
+  double dt = 0.0;                 // s, the step used
+  double dt_limit = 0.0;           // s, estimated stability limit
   double max_inertia_scale = 1.0;  // largest rotational inertia scaling factor
   long steps = 0;
   // Steps the implicit integrator split, for the tension (otherwise the same as steps), and the
@@ -43,18 +43,18 @@ struct RunSummary {
   int nodes = 0;
   int segments = 0;
   int knots = 0;
-  int frames = 0;              // output frames written
-  double sim_time = 0.0;       // s, simulated time reached
-  double wall_s = 0.0;         // s, wall-clock time of the stepping (and output)
+  int frames = 0;         // output frames written
+  double sim_time = 0.0;  // s, simulated time reached
+  double wall_s = 0.0;    // s, wall-clock time of the stepping (and output)
   double segment_steps_per_s = 0.0;
-  double real_time_factor = 0.0;  // sim_time / wall_s
-  double max_penetration = 0.0;   // m, deepest contact penetration
-  std::string max_penetration_at; // where it happened ("" when no contact)
+  double real_time_factor = 0.0;   // sim_time / wall_s
+  double max_penetration = 0.0;    // m, deepest contact penetration
+  std::string max_penetration_at;  // where it happened ("" when no contact)
   double contact_start_s = std::numeric_limits<double>::quiet_NaN();  // first contact; NaN: none
-  std::vector<std::pair<std::string, Vector3d>> probes;  // positions at the end, m
-  Energy energy;                                      // at the end
-  std::vector<std::string> active;                    // forces in use
-  std::string output;                                 // file written ("" if none)
+  std::vector<std::pair<std::string, Vector3d>> probes;               // positions at the end, m
+  Energy energy;                                                      // at the end
+  std::vector<std::string> active;                                    // forces in use
+  std::string output;                                                 // file written ("" if none)
 
   // A few human-readable lines.
   std::string BriefReport() const;

@@ -187,11 +187,10 @@ class Parser {
       // Past any cord or cable (a steel bar 1 m across has EA 1.6e11 N, EI 1e10 N m^2), the
       // forces and energies overflow: 1e300 ran under the implicit step with an elastic energy
       // of 7e273 J, called stable, and blew up at 1e308.
-      for (const auto& [key, value, unit] :
-           {std::tuple<const char*, double, const char*>{"stretch_stiffness",
-                                                          mat.stretch_stiffness, " N"},
-            {"bend_stiffness", mat.bend_stiffness, " N m^2"},
-            {"twist_stiffness", mat.twist_stiffness, " N m^2"}})
+      for (const auto& [key, value, unit] : {std::tuple<const char*, double, const char*>{
+                                                 "stretch_stiffness", mat.stretch_stiffness, " N"},
+                                             {"bend_stiffness", mat.bend_stiffness, " N m^2"},
+                                             {"twist_stiffness", mat.twist_stiffness, " N m^2"}})
         if (value > kMaxStiffness)
           m.Fail(key, Short(value) + unit + " is stiffer than any cord or cable (a steel bar " +
                           "1 m across has EA 1.6e11 N, EI 1e10 N m^2): at most " +
@@ -285,8 +284,9 @@ class Parser {
     if (m.Has("corner_velocities")) {
       const YAML::Node list = m.Get("corner_velocities");
       if (!list.IsSequence() || list.size() != 4)
-        m.Fail("corner_velocities", "expected 4 velocities [[vx,vy,vz], ...] for the corners "
-                                    "(0,0), (0,cols-1), (rows-1,0), (rows-1,cols-1)");
+        m.Fail("corner_velocities",
+               "expected 4 velocities [[vx,vy,vz], ...] for the corners "
+               "(0,0), (0,cols-1), (rows-1,0), (rows-1,cols-1)");
       for (size_t i = 0; i < 4; ++i) {
         YAML::Node holder;
         holder["v"] = list[i];
@@ -464,8 +464,8 @@ void CheckModelSize(const Scenario& s, const std::string& origin) {
     nodes += r.segments + 1.0;
     if (r.segments > largest) {
       largest = r.segments;
-      largest_what = "rods." + std::to_string(i) + " ('" + r.name + "'): " +
-                     std::to_string(r.segments) + " segments";
+      largest_what = "rods." + std::to_string(i) + " ('" + r.name +
+                     "'): " + std::to_string(r.segments) + " segments";
     }
   }
   for (size_t i = 0; i < s.nets.size(); ++i) {
@@ -473,8 +473,8 @@ void CheckModelSize(const Scenario& s, const std::string& origin) {
     std::ostringstream what;
     what << std::setprecision(3);
     const double knots = static_cast<double>(n.rows) * n.cols;
-    const double links = static_cast<double>(n.rows) * (n.cols - 1) +
-                         static_cast<double>(n.cols) * (n.rows - 1);
+    const double links =
+        static_cast<double>(n.rows) * (n.cols - 1) + static_cast<double>(n.cols) * (n.rows - 1);
     const double net_segments = links * n.segments_per_link;
     segments += net_segments;
     nodes += knots + links * (n.segments_per_link - 1);
@@ -490,8 +490,7 @@ void CheckModelSize(const Scenario& s, const std::string& origin) {
   os << std::setprecision(3);
   if (segments > kIndexable || nodes > kIndexable) {
     os << origin << ": " << largest_what << ": the model would have " << segments
-       << " segments and " << nodes << " nodes, more than the " << kIndexable
-       << " it can index";
+       << " segments and " << nodes << " nodes, more than the " << kIndexable << " it can index";
     throw InputError(os.str());
   }
   constexpr double kBytesPerSegment = 1000.0;

@@ -27,10 +27,10 @@ namespace netlab::netsim {
 
 // A node named in a scenario: a rod node (by index, "start" is 0 and "end" the last) or a knot.
 struct NodeRef {
-  int rod = -1;    // index into Scenario::rods, or -1
-  int net = -1;    // index into Scenario::nets, or -1
-  int index = 0;   // rod node index
-  int row = 0;     // knot grid coordinate
+  int rod = -1;   // index into Scenario::rods, or -1
+  int net = -1;   // index into Scenario::nets, or -1
+  int index = 0;  // rod node index
+  int row = 0;    // knot grid coordinate
   int col = 0;
 };
 
@@ -85,7 +85,7 @@ Scenario ParseScenarioTree(const YAML::Node& tree, const std::string& text,
 // A scenario turned into a runnable simulation.
 struct BuiltScenario {
   std::unique_ptr<Simulation> simulation;
-  std::vector<int> knot_nodes;               // node of each knot, in Model::knots order
+  std::vector<int> knot_nodes;  // node of each knot, in Model::knots order
   std::vector<std::array<int, 2>> knot_grid;
   std::vector<int> knot_net;
   std::vector<std::string> net_names;

@@ -29,8 +29,7 @@ std::vector<std::string> Split(const std::string& path) {
 // file it never came from.
 YAML::Node Fresh(const YAML::Node& n) {
   switch (n.Type()) {
-    case YAML::NodeType::Scalar:
-      return YAML::Node(n.Scalar());
+    case YAML::NodeType::Scalar: return YAML::Node(n.Scalar());
     case YAML::NodeType::Sequence: {
       YAML::Node out(YAML::NodeType::Sequence);
       for (const YAML::Node& item : n) out.push_back(Fresh(item));
@@ -41,8 +40,7 @@ YAML::Node Fresh(const YAML::Node& n) {
       for (auto it = n.begin(); it != n.end(); ++it) out[it->first.Scalar()] = Fresh(it->second);
       return out;
     }
-    default:
-      return YAML::Node(YAML::NodeType::Null);
+    default: return YAML::Node(YAML::NodeType::Null);
   }
 }
 
@@ -245,21 +243,54 @@ std::string ScenarioKeyUnits(const std::string& dotted) {
     start = dot + 1;
   }
   static const std::map<std::string, std::string> kUnits = {
-      {"duration", "s"}, {"output_interval", "s"}, {"dt", "s"},
-      {"safety", "1"}, {"coupling_stiffness_ratio", "1"}, {"contact_frequency_ratio", "1"},
-      {"max_speed", "m/s"}, {"threads", "1"},
-      {"gravity", "m/s^2"}, {"air_density", "kg/m^3"}, {"drag_coefficient", "1"},
-      {"tangential_coefficient", "1"}, {"angular_velocity", "rad/s"},
-      {"diameter", "m"}, {"linear_density", "kg/m"}, {"stretch_stiffness", "N"},
-      {"stretch_damping", "N s"}, {"bend_stiffness", "N m^2"}, {"twist_stiffness", "N m^2"},
-      {"bend_damping", "N m^2 s"}, {"twist_damping", "N m^2 s"},
-      {"start", "m"}, {"end", "m"}, {"segments", "1"}, {"velocity", "m/s"}, {"mass", "kg"},
-      {"inertia", "kg m^2"}, {"knots", "1"}, {"mesh", "m"}, {"segments_per_link", "1"},
-      {"center", "m"}, {"normal", "1"}, {"x_axis", "1"}, {"knot_mass", "kg"},
-      {"corner_mass", "kg"}, {"corner_radius", "m"}, {"corner_velocities", "m/s"},
-      {"spread", "1"}, {"radius", "m"}, {"size", "m"}, {"orientation", "1"}, {"point", "m"},
-      {"friction", "1"}, {"stiffness", "N/m"}, {"damping_ratio", "1"}, {"force", "N"},
-      {"node", "1"}, {"knot", "1"},
+      {"duration", "s"},
+      {"output_interval", "s"},
+      {"dt", "s"},
+      {"safety", "1"},
+      {"coupling_stiffness_ratio", "1"},
+      {"contact_frequency_ratio", "1"},
+      {"max_speed", "m/s"},
+      {"threads", "1"},
+      {"gravity", "m/s^2"},
+      {"air_density", "kg/m^3"},
+      {"drag_coefficient", "1"},
+      {"tangential_coefficient", "1"},
+      {"angular_velocity", "rad/s"},
+      {"diameter", "m"},
+      {"linear_density", "kg/m"},
+      {"stretch_stiffness", "N"},
+      {"stretch_damping", "N s"},
+      {"bend_stiffness", "N m^2"},
+      {"twist_stiffness", "N m^2"},
+      {"bend_damping", "N m^2 s"},
+      {"twist_damping", "N m^2 s"},
+      {"start", "m"},
+      {"end", "m"},
+      {"segments", "1"},
+      {"velocity", "m/s"},
+      {"mass", "kg"},
+      {"inertia", "kg m^2"},
+      {"knots", "1"},
+      {"mesh", "m"},
+      {"segments_per_link", "1"},
+      {"center", "m"},
+      {"normal", "1"},
+      {"x_axis", "1"},
+      {"knot_mass", "kg"},
+      {"corner_mass", "kg"},
+      {"corner_radius", "m"},
+      {"corner_velocities", "m/s"},
+      {"spread", "1"},
+      {"radius", "m"},
+      {"size", "m"},
+      {"orientation", "1"},
+      {"point", "m"},
+      {"friction", "1"},
+      {"stiffness", "N/m"},
+      {"damping_ratio", "1"},
+      {"force", "N"},
+      {"node", "1"},
+      {"knot", "1"},
   };
   const auto it = kUnits.find(key);
   return it == kUnits.end() ? "" : it->second;

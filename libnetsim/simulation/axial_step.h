@@ -40,11 +40,10 @@
 // stage instead, the paper's net dropped onto a sphere at 5 m/s blew up (implicit_test), and a
 // flying 5 x 5 net strayed 5.1 mm from the explicit step's paths in 0.2 s (1.2 mm along the end).
 
-#include <vector>
-
 #include <Eigen/Core>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
+#include <vector>
 
 #include "libnetsim/model/model.h"
 
@@ -61,21 +60,22 @@ class AxialStep {
   // One step of length h (above): x the positions at its start, v the velocities after the
   // explicit kick, replaced by those at its end; drift receives the mean velocity over the step
   // (the positions at its end are x + h drift). False as Apply.
-  bool Step(const Model& model, double h, const std::vector<Vector3d>& x,
-            std::vector<Vector3d>& v, std::vector<Vector3d>& drift);
+  bool Step(const Model& model, double h, const std::vector<Vector3d>& x, std::vector<Vector3d>& v,
+            std::vector<Vector3d>& drift);
 
   // One backward Euler stage of length h (above): the axial impulses applied to `v` (the
   // velocities after the explicit kick), given the positions x at its start, along each segment's
   // midpoint direction or (end_direction) its predicted end direction. False when the system
   // could not be factorised or its solution is not finite (a state already blown up).
-  bool Apply(const Model& model, double h, const std::vector<Vector3d>& x,
-             std::vector<Vector3d>& v, bool end_direction = false);
+  bool Apply(const Model& model, double h, const std::vector<Vector3d>& x, std::vector<Vector3d>& v,
+             bool end_direction = false);
 
   // Segments solved (those with EA or c_s > 0).
   int size() const { return static_cast<int>(segments_.size()); }
 
-  // Per node, the geometric (string) stiffness of the last stage's tensions, sum of 2 |N| / |e| over
-  // its segments (N/m): the transverse stiffness the tension gives the explicit part of the step.
+  // Per node, the geometric (string) stiffness of the last stage's tensions, sum of 2 |N| / |e|
+  // over its segments (N/m): the transverse stiffness the tension gives the explicit part of the
+  // step.
   const std::vector<double>& geometric_stiffness() const { return geometric_; }
 
  private:
@@ -96,7 +96,7 @@ class AxialStep {
   std::vector<Vector3d> tangent_;
   std::vector<double> length_;
   Eigen::VectorXd rhs_;
-  std::vector<double> geometric_;  // per node
+  std::vector<double> geometric_;        // per node
   std::vector<Vector3d> kicked_, base_;  // Step's scratch: v*, and the second stage's start
 };
 

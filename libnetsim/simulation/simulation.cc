@@ -16,12 +16,9 @@ namespace netlab::netsim {
 
 std::string IntegratorName(IntegratorType type) {
   switch (type) {
-    case IntegratorType::kVelocityVerlet:
-      return "verlet";
-    case IntegratorType::kImplicit:
-      return "implicit";
-    case IntegratorType::kSymplecticEuler:
-      break;
+    case IntegratorType::kVelocityVerlet: return "verlet";
+    case IntegratorType::kImplicit: return "implicit";
+    case IntegratorType::kSymplecticEuler: break;
   }
   return "explicit";
 }
@@ -80,7 +77,9 @@ bool SimulationOptions::IsValid(std::string* error) const {
 
 Simulation::Simulation(Model model, State state, std::vector<std::unique_ptr<Force>> forces,
                        const SimulationOptions& options)
-    : model_(std::move(model)), state_(std::move(state)), forces_(std::move(forces)),
+    : model_(std::move(model)),
+      state_(std::move(state)),
+      forces_(std::move(forces)),
       options_(options) {
   std::string error;
   if (!options_.IsValid(&error)) throw std::invalid_argument("integrator: " + error);
@@ -142,10 +141,10 @@ Simulation::Simulation(Model model, State state, std::vector<std::unique_ptr<For
     // Each node's own step under the static bounds, capped at dt (ImplicitSubsteps).
     node_step_.resize(model_.num_nodes());
     for (int i = 0; i < model_.num_nodes(); ++i)
-      node_step_[i] = std::min(
-          dt_, options_.EffectiveSafety() * StableStep(stability_.bounds.node_stiffness[i],
-                                                       stability_.bounds.node_damping[i],
-                                                       model_.node_mass[i]));
+      node_step_[i] =
+          std::min(dt_, options_.EffectiveSafety() * StableStep(stability_.bounds.node_stiffness[i],
+                                                                stability_.bounds.node_damping[i],
+                                                                model_.node_mass[i]));
   }
   if (implicit_frames_) {
     // Each frame's own bending damping coefficient: c_b / l over its joints (2 c_b / l at a clamp).
@@ -320,12 +319,13 @@ bool Simulation::Step() {
       // cantilever of 40 segments blew up at 0.45 of the stable step; with it, relaxation runs
       // at the full step.
       for (int i = 0; i < model_.num_nodes(); ++i)
-        state_.x[i] -= 1.5 * dt_ * state_.v[i] -
-                       0.5 * dt_ * dt_ * model_.node_inv_mass[i] * buffers_.force[i];
+        state_.x[i] -=
+            1.5 * dt_ * state_.v[i] - 0.5 * dt_ * dt_ * model_.node_inv_mass[i] * buffers_.force[i];
       for (int j = 0; j < model_.num_segments(); ++j)
-        RotateBody(state_.q[j], -1.5 * dt_ * state_.w[j] +
-                                    0.5 * dt_ * dt_ *
-                                        model_.segment_inv_inertia[j].cwiseProduct(buffers_.torque[j]));
+        RotateBody(
+            state_.q[j],
+            -1.5 * dt_ * state_.w[j] +
+                0.5 * dt_ * dt_ * model_.segment_inv_inertia[j].cwiseProduct(buffers_.torque[j]));
       for (Vector3d& v : state_.v) v.setZero();
       for (Vector3d& w : state_.w) w.setZero();
       last_kinetic_ = 0.0;
@@ -584,14 +584,9 @@ Energy Simulation::ComputeEnergy() const {
   energy.kinetic = KineticEnergy();
   for (const auto& f : forces_) {
     switch (f->energy_kind()) {
-      case EnergyKind::kElastic:
-        energy.elastic += f->Energy(model_, state_);
-        break;
-      case EnergyKind::kPotential:
-        energy.potential += f->Energy(model_, state_);
-        break;
-      case EnergyKind::kNone:
-        break;
+      case EnergyKind::kElastic: energy.elastic += f->Energy(model_, state_); break;
+      case EnergyKind::kPotential: energy.potential += f->Energy(model_, state_); break;
+      case EnergyKind::kNone: break;
     }
   }
   return energy;

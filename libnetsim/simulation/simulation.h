@@ -109,11 +109,11 @@ struct Energy {
 
 // Why a run stopped early.
 struct Failure {
-  double time = 0.0;    // s, the time of the state that holds the bad value
-  int node = -1;        // the node, or -1
-  int segment = -1;     // the segment, or -1
-  std::string quantity; // "velocity", "angular velocity"
-  std::string message;  // all of the above in one sentence, for the user
+  double time = 0.0;     // s, the time of the state that holds the bad value
+  int node = -1;         // the node, or -1
+  int segment = -1;      // the segment, or -1
+  std::string quantity;  // "velocity", "angular velocity"
+  std::string message;   // all of the above in one sentence, for the user
 };
 
 class Simulation {
@@ -197,12 +197,12 @@ class Simulation {
   bool implicit_frames_ = false;           // implicit with coupling: frames follow (see .cc)
   BendTwistForce* joints_ = nullptr;       // implicit frames: evaluated on the turned frames
   bool skip_joints_ = false;
-  bool skip_contact_ = false;  // implicit contact: resolved by the stepper, not in the kick
-  std::vector<Quaterniond> turned_;          // scratch: frames turned to the new tangents
-  std::vector<Vector3d> drift_;              // implicit: each node's mean velocity over the step
-  std::vector<double> node_step_;            // implicit: per node, min(dt, its static stable step)
-  std::vector<double> frame_damping_;        // per segment, its joints' bending damping, N m s
-  std::vector<double> frame_twist_;          // ... their twist stiffness, N m
+  bool skip_contact_ = false;          // implicit contact: resolved by the stepper, not in the kick
+  std::vector<Quaterniond> turned_;    // scratch: frames turned to the new tangents
+  std::vector<Vector3d> drift_;        // implicit: each node's mean velocity over the step
+  std::vector<double> node_step_;      // implicit: per node, min(dt, its static stable step)
+  std::vector<double> frame_damping_;  // per segment, its joints' bending damping, N m s
+  std::vector<double> frame_twist_;    // ... their twist stiffness, N m
   std::vector<double> frame_twist_damping_;  // ... their twist damping, N m s
   ContactForce* contact_ = nullptr;
   SimulationOptions options_;

@@ -91,8 +91,8 @@ StabilityReport PrepareStability(Model& model, const State& state,
   report.dt_limit = std::numeric_limits<double>::infinity();
   for (int i = 0; i < model.num_nodes(); ++i) {
     if (model.node_inv_mass[i] == 0.0) continue;
-    const double dt = StableStep(bounds.node_stiffness[i], bounds.node_damping[i],
-                                 model.node_mass[i]);
+    const double dt =
+        StableStep(bounds.node_stiffness[i], bounds.node_damping[i], model.node_mass[i]);
     if (dt < report.dt_limit) {
       report.dt_limit = dt;
       report.limiting_node = i;
@@ -102,8 +102,7 @@ StabilityReport PrepareStability(Model& model, const State& state,
     if (model.segment_inv_inertia[j].squaredNorm() == 0.0) continue;
     const double inertia = options.implicit_frames ? model.segment_inertia[j].z()
                                                    : model.segment_inertia[j].minCoeff();
-    const double dt =
-        StableStep(bounds.segment_stiffness[j], bounds.segment_damping[j], inertia);
+    const double dt = StableStep(bounds.segment_stiffness[j], bounds.segment_damping[j], inertia);
     if (dt < report.dt_limit) {
       report.dt_limit = dt;
       report.limiting_node = -1;

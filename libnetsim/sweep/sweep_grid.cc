@@ -1,13 +1,12 @@
 #include "libnetsim/sweep/sweep_grid.h"
 
 #include <algorithm>
-#include <random>
-
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <random>
 #include <set>
 #include <sstream>
 

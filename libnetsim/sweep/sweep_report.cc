@@ -133,8 +133,7 @@ std::string Plot(const std::string& id, const std::vector<double>& x_values,
   auto py = [&](double y) { return kFrame.Y(y, y0, y1); };
   std::ostringstream o;
   o << "<svg id=\"" << id << "\" class=\"plot\" viewBox=\"0 0 " << kFrame.width << " "
-    << kFrame.height << "\" width=\"" << kFrame.width << "\" height=\"" << kFrame.height
-    << "\">\n";
+    << kFrame.height << "\" width=\"" << kFrame.width << "\" height=\"" << kFrame.height << "\">\n";
   const std::vector<double> y_ticks = Ticks(y0, y1, 4), x_ticks = Ticks(x0, x1, 4);
   html::PlotAxes(
       o, kFrame, x0, x1, y0, y1, x_ticks, y_ticks,

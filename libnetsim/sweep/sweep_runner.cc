@@ -265,14 +265,10 @@ KnotTracks SweepRun::Tracks() const {
 
 const char* StatusName(SweepRun::Status status) {
   switch (status) {
-    case SweepRun::Status::kOk:
-      return "ok";
-    case SweepRun::Status::kBlewUp:
-      return "blew up";
-    case SweepRun::Status::kBadValue:
-      return "bad value";
-    case SweepRun::Status::kFailed:
-      return "failed";
+    case SweepRun::Status::kOk: return "ok";
+    case SweepRun::Status::kBlewUp: return "blew up";
+    case SweepRun::Status::kBadValue: return "bad value";
+    case SweepRun::Status::kFailed: return "failed";
   }
   return "?";
 }

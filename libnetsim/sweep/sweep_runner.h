@@ -20,9 +20,9 @@
 #include <string>
 #include <vector>
 
+#include "common/tracks/track_file.h"
 #include "libnetsim/scenario/run_scenario.h"
 #include "libnetsim/scenario/scenario_override.h"
-#include "common/tracks/track_file.h"
 
 namespace netlab::netsim {
 

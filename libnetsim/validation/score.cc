@@ -287,14 +287,10 @@ bool ParseAlignment(const std::string& text, Alignment* alignment) {
 
 std::string AlignmentName(Alignment alignment) {
   switch (alignment) {
-    case Alignment::kNone:
-      return "none";
-    case Alignment::kTime:
-      return "time";
-    case Alignment::kRigid:
-      return "rigid";
-    case Alignment::kTimeAndRigid:
-      return "time+rigid";
+    case Alignment::kNone: return "none";
+    case Alignment::kTime: return "time";
+    case Alignment::kRigid: return "rigid";
+    case Alignment::kTimeAndRigid: return "time+rigid";
   }
   return "?";
 }
@@ -672,9 +668,9 @@ void ResidualsAtFit(const KnotTracks& meas, const Scorer& scorer, const Fit& fit
     result->sim_var[i] = scorer.SimCovariance(meas.time[pt.frame] + fit.tau, pt.knot).trace();
     result->meas_var[i] = pt.meas_cov.trace();
     (*sim_pos)[i] = a;
-    (*sigma)[i] = std::sqrt(std::max(
-        0.0, Eigen::SelfAdjointEigenSolver<Matrix3d>(pt.meas_cov, Eigen::EigenvaluesOnly)
-                 .eigenvalues()[2]));
+    (*sigma)[i] = std::sqrt(
+        std::max(0.0, Eigen::SelfAdjointEigenSolver<Matrix3d>(pt.meas_cov, Eigen::EigenvaluesOnly)
+                          .eigenvalues()[2]));
     const double weight = 3.0 / w.inverse().trace();
     sums->weighted_e2 += weight * r.squaredNorm();
     sums->weights += weight;

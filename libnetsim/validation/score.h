@@ -32,13 +32,12 @@
 // covariance-weighted RMS (each point weighed by 1 / its mean variance) for tracks whose points
 // differ strongly in sigma.
 
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <limits>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "common/tracks/track_file.h"
 
@@ -85,12 +84,12 @@ struct ScoreOptions {
 // One row of the per-knot, per-class or per-phase tables.
 struct ScoreRow {
   std::string name;
-  int points = 0;          // knot-frames compared
-  int left_out = 0;        // of those, not informative: out of rms_m and max_m (not of mean_d2)
-  double rms_m = 0.0;      // RMS of |r| over the informative points, m (NaN when none)
-  double max_m = 0.0;      // largest |r| of those, m
-  double mean_d2 = 0.0;    // mean d2 (expected 3 when consistent)
-  double start_s = 0.0;    // phases: measured time span [start_s, end_s)
+  int points = 0;        // knot-frames compared
+  int left_out = 0;      // of those, not informative: out of rms_m and max_m (not of mean_d2)
+  double rms_m = 0.0;    // RMS of |r| over the informative points, m (NaN when none)
+  double max_m = 0.0;    // largest |r| of those, m
+  double mean_d2 = 0.0;  // mean d2 (expected 3 when consistent)
+  double start_s = 0.0;  // phases: measured time span [start_s, end_s)
   double end_s = 0.0;
   // Phases: the two parts of the expected |r|, sqrt of the mean trace of each covariance over the
   // compared points, m: the simulation's (Sigma_sim, an ensemble's spread) and the measurement's.
@@ -102,14 +101,14 @@ struct ScoreSummary {
   // Sizes.
   int frames = 0;  // measured frames with at least one compared knot
   int knots = 0;
-  int points = 0;  // knot-frames compared
-  int masked = 0;  // measured knot-frames not compared (invalid, or outside the simulation)
+  int points = 0;      // knot-frames compared
+  int masked = 0;      // measured knot-frames not compared (invalid, or outside the simulation)
   int degenerate = 0;  // of the masked, flagged degenerate by the triangulation
   // The informative points: the compared ones whose largest sigma is within the bound.
-  int left_out = 0;                  // compared points beyond it: in d2, not in the errors below
-  double sigma_bound_m = 0.0;        // the bound
-  std::string sigma_bound_from;      // "given", or "10 x the median sigma (0.12 mm)"
-  double median_sigma_m = 0.0;       // over the compared points
+  int left_out = 0;                   // compared points beyond it: in d2, not in the errors below
+  double sigma_bound_m = 0.0;         // the bound
+  std::string sigma_bound_from;       // "given", or "10 x the median sigma (0.12 mm)"
+  double median_sigma_m = 0.0;        // over the compared points
   double left_out_max_sigma_m = 0.0;  // the largest sigma left out (0: none)
   double left_out_max_error_m = 0.0;  // the largest error left out (0: none)
   // Errors over the informative points, measured frame.
@@ -132,9 +131,9 @@ struct ScoreSummary {
   double design_effect = 1.0;   // within-frame inflation
   double effective_points = 0;  // N / (tau_int * design_effect)
   double p_value = 1.0;
-  double critical_mean_d2 = 0;  // mean d2 above which the verdict is "inconsistent"
-  double margin = 0.0;          // critical_mean_d2 - mean_d2 (negative: rejected)
-  std::string verdict;          // "consistent" | "inconsistent"
+  double critical_mean_d2 = 0;        // mean d2 above which the verdict is "inconsistent"
+  double margin = 0.0;                // critical_mean_d2 - mean_d2 (negative: rejected)
+  std::string verdict;                // "consistent" | "inconsistent"
   bool covariance_too_large = false;  // lower tail also below significance: Sigma looks inflated
   // The time alignment.
   Alignment alignment = Alignment::kTime;
@@ -150,8 +149,8 @@ struct ScoreSummary {
   double meas_interval_s = 0.0;
   double interpolation_rms_m = 0.0;  // estimated error of the cubic interpolation
   bool sim_too_sparse = false;
-  std::string sim_uncertainty;       // "zero", "isotropic 0.5 mm", "from /knots/covariance"
-  int ensemble_members = 0;          // runs whose spread is Sigma_sim (0: no ensemble)
+  std::string sim_uncertainty;  // "zero", "isotropic 0.5 mm", "from /knots/covariance"
+  int ensemble_members = 0;     // runs whose spread is Sigma_sim (0: no ensemble)
   // Skill against a naive baseline: every knot in straight-line flight from its simulated
   // position and velocity at the first compared time (no forces: the corner masses' ballistic
   // flight in microgravity). 1 - sum d2 / sum d2_baseline; 1 perfect, 0 no better, < 0 worse.
@@ -181,20 +180,20 @@ struct ScoreSummary {
 // the measured frames; masked entries are NaN.
 struct ScoreResult {
   ScoreSummary summary;
-  std::vector<double> time;         // [T] measured time, s
-  std::vector<std::array<int, 2>> grid;  // [K]
-  std::vector<int> knot_class;      // [K] KnotClass
+  std::vector<double> time;               // [T] measured time, s
+  std::vector<std::array<int, 2>> grid;   // [K]
+  std::vector<int> knot_class;            // [K] KnotClass
   std::vector<Eigen::Vector3d> residual;  // [T*K] m, measured frame
-  std::vector<double> d2;           // [T*K]
-  std::vector<uint8_t> compared;    // [T*K] 1 where r and d2 are defined
-  std::vector<uint8_t> informative;  // [T*K] 1 where compared and within the sigma bound
+  std::vector<double> d2;                 // [T*K]
+  std::vector<uint8_t> compared;          // [T*K] 1 where r and d2 are defined
+  std::vector<uint8_t> informative;       // [T*K] 1 where compared and within the sigma bound
   std::vector<double> sim_var, meas_var;  // [T*K] m^2, trace of Sigma_sim / Sigma_meas (NaN: not
                                           // compared)
-  std::vector<std::array<double, 3>> rms_per_class;  // [T] m, NaN where a class has no point
+  std::vector<std::array<double, 3>> rms_per_class;   // [T] m, NaN where a class has no point
   std::vector<double> area_measured, area_simulated;  // [T] corner polygon, m^2 (NaN: a corner
                                                       // is missing)
   std::vector<Eigen::Vector3d> centroid_measured, centroid_simulated;  // [T] over compared knots
-  std::vector<std::array<double, 6>> corner_distance_measured;  // [T] 01 12 23 30 02 13, m
+  std::vector<std::array<double, 6>> corner_distance_measured;         // [T] 01 12 23 30 02 13, m
   std::vector<std::array<double, 6>> corner_distance_simulated;
   // d2 histogram: bin edges [B+1], counts [B], chi^2_3 expected counts [B].
   std::vector<double> d2_edges, d2_counts, d2_expected;

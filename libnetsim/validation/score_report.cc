@@ -92,16 +92,16 @@ class LinePlot {
   static void Axes(std::ostream& o, double x0, double x1, double y0, double y1,
                    const std::string& x_label, const std::string& y_label) {
     const auto text = [](double t) { return Num(t, 4); };
-    html::PlotAxes(o, kFrame, x0, x1, y0, y1, Ticks(x0, x1, 6), Ticks(y0, y1), text, text,
-                   x_label, y_label);
+    html::PlotAxes(o, kFrame, x0, x1, y0, y1, Ticks(x0, x1, 6), Ticks(y0, y1), text, text, x_label,
+                   y_label);
   }
 
  private:
   void Legend(std::ostringstream& o) const {
     double x = kFrame.left + 12;
     for (const auto& s : series_) {
-      o << "<line x1=\"" << x << "\" x2=\"" << x + 22 << "\" y1=\"" << kFrame.top - 14
-        << "\" y2=\"" << kFrame.top - 14 << "\" stroke=\"" << s.colour << "\" stroke-width=\"3\""
+      o << "<line x1=\"" << x << "\" x2=\"" << x + 22 << "\" y1=\"" << kFrame.top - 14 << "\" y2=\""
+        << kFrame.top - 14 << "\" stroke=\"" << s.colour << "\" stroke-width=\"3\""
         << (s.dashed ? " stroke-dasharray=\"6 4\"" : "") << "/><text x=\"" << x + 27 << "\" y=\""
         << kFrame.top - 10 << "\">" << s.name << "</text>\n";
       x += 40 + 8 * s.name.size();
@@ -132,10 +132,9 @@ std::string AreaCaption(const ScoreResult& r) {
   const ScoreSummary& s = r.summary;
   int measured = 0;
   for (double a : r.area_measured) measured += std::isfinite(a);
-  std::string text = measured == 0
-                         ? "Measured: none (no frame has all four corners measured). "
-                         : "Maximum measured " + Fixed(s.max_area_measured_m2, 3) + " m² at " +
-                               Fixed(s.max_area_time_measured_s, 3) + " s, ";
+  std::string text = measured == 0 ? "Measured: none (no frame has all four corners measured). "
+                                   : "Maximum measured " + Fixed(s.max_area_measured_m2, 3) +
+                                         " m² at " + Fixed(s.max_area_time_measured_s, 3) + " s, ";
   text += (measured == 0 ? "Simulated: maximum " : "simulated ") +
           Fixed(s.max_area_simulated_m2, 3) + " m² at " + Fixed(s.max_area_time_simulated_s, 3) +
           " s.";
@@ -291,8 +290,8 @@ void WriteVerdict(std::ostringstream& o, const ScoreSummary& s, const ReportInfo
     << s.frames << " frames × " << s.knots << " knots, " << s.masked
     << " knot-frames masked (not measured"
     << (s.degenerate > 0 ? ", " + std::to_string(s.degenerate) + " of them degenerate" : "")
-    << "). Errors are correlated in time (τ_int "
-    << Fixed(s.tau_int, 1) << " frames) and across a frame's knots (×" << Fixed(s.design_effect, 2)
+    << "). Errors are correlated in time (τ_int " << Fixed(s.tau_int, 1)
+    << " frames) and across a frame's knots (×" << Fixed(s.design_effect, 2)
     << "): the test counts " << Fixed(s.effective_points, 0) << " independent points.</p>\n";
 }
 
@@ -366,15 +365,15 @@ void WriteClassAndPhaseTables(std::ostringstream& o, const ScoreSummary& s) {
   const std::string contact =
       s.contact_from == "given"        ? "contact from the given time of first contact"
       : s.contact_from == "simulation" ? "contact from the simulation's first contact with the "
-                                         "target (" + Fixed(s.contact_time_s, 3) + " s simulated)"
+                                         "target (" +
+                                             Fixed(s.contact_time_s, 3) + " s simulated)"
                                        : "no contact phase (the simulation has no contact)";
   o << "</table>\n<p class=\"caption\">Phases from the simulated corner polygon: ejection until "
        "it reaches half its largest area, spreading until the largest, opened after it; "
     << contact << ". Phases the measurement does not reach have no knot-frames.</p>\n";
   // Per phase, the two contributions to the expected error beside the error itself.
   o << "<h3>Per phase: the error and what it is weighed against</h3>\n<table>"
-    << Row({"phase", "RMS error (mm)", "σ simulation (mm)", "σ measurement (mm)", "mean d²"},
-           "th");
+    << Row({"phase", "RMS error (mm)", "σ simulation (mm)", "σ measurement (mm)", "mean d²"}, "th");
   for (const auto& row : s.per_phase)
     o << Row({row.name, Fixed(row.rms_m * 1e3, 2), Fixed(row.sigma_sim_m * 1e3, 2),
               Fixed(row.sigma_meas_m * 1e3, 2), Fixed(row.mean_d2, 2)});

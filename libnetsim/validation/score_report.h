@@ -24,7 +24,7 @@ namespace netlab::netsim {
 struct ReportInfo {
   std::string measured_path;  // shown in the header
   std::string sim_path;
-  std::string score_path;     // the score.h5 written next to it
+  std::string score_path;  // the score.h5 written next to it
 };
 
 // The report as HTML text.

@@ -1,13 +1,12 @@
 #include "libnetsim/validation/sim_ensemble.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <map>
 #include <sstream>
-
-#include <Eigen/Eigenvalues>
 
 #include "common/errors.h"
 #include "common/hdf5_util.h"
@@ -92,8 +91,7 @@ std::vector<EnsembleMember> ReadEnsemble(const std::string& spec) {
 }
 
 KnotTracks AddEnsembleCovariance(const KnotTracks& sim, const std::string& sim_name,
-                                 const std::vector<EnsembleMember>& members,
-                                 double* max_sigma_m) {
+                                 const std::vector<EnsembleMember>& members, double* max_sigma_m) {
   const int m_count = static_cast<int>(members.size());
   if (m_count < 2)
     throw InputError(std::string("--sim-ensemble: ") + std::to_string(m_count) +
@@ -106,14 +104,15 @@ KnotTracks AddEnsembleCovariance(const KnotTracks& sim, const std::string& sim_n
   for (int m = 0; m < m_count; ++m) {
     const KnotTracks& t = members[m].tracks;
     if (t.knots() != knots)
-      throw InputError(members[m].name + ": " + std::to_string(t.knots()) + " knots, " +
-                       sim_name + " has " + std::to_string(knots) +
+      throw InputError(members[m].name + ": " + std::to_string(t.knots()) + " knots, " + sim_name +
+                       " has " + std::to_string(knots) +
                        ": an ensemble must be runs of the same net");
     index.clear();
     for (int k = 0; k < t.knots(); ++k)
       index[{t.net.empty() ? 0 : t.net[k], t.grid[k][0], t.grid[k][1]}] = k;
     for (int k = 0; k < knots; ++k) {
-      const auto it = index.find({sim.net.empty() ? 0 : sim.net[k], sim.grid[k][0], sim.grid[k][1]});
+      const auto it =
+          index.find({sim.net.empty() ? 0 : sim.net[k], sim.grid[k][0], sim.grid[k][1]});
       if (it == index.end())
         throw InputError(members[m].name + ": has no knot (" + std::to_string(sim.grid[k][0]) +
                          ", " + std::to_string(sim.grid[k][1]) + ") of " + sim_name +
@@ -149,9 +148,9 @@ KnotTracks AddEnsembleCovariance(const KnotTracks& sim, const std::string& sim_n
         continue;
       }
       const double t = std::clamp(sim.time[f], time.front(), time.back());
-      const int i1 = std::clamp(
-          static_cast<int>(std::lower_bound(time.begin(), time.end(), t) - time.begin()), 1,
-          static_cast<int>(time.size()) - 1);
+      const int i1 =
+          std::clamp(static_cast<int>(std::lower_bound(time.begin(), time.end(), t) - time.begin()),
+                     1, static_cast<int>(time.size()) - 1);
       const double span = time[i1] - time[i1 - 1];
       at[m] = {static_cast<double>(i1 - 1), static_cast<double>(i1),
                span > 0 ? (t - time[i1 - 1]) / span : 0.0};

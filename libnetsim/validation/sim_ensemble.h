@@ -7,7 +7,8 @@
 // of one run about the ensemble's mean. The measured flight and the scored run are each one such
 // outcome, independent, so their difference has covariance 2 S; as r^T S^-1 r of M - 1 degrees
 // of freedom averages 3 (M - 1) / (M - 5) (Hotelling), 2 S (M - 1) / (M - 5) is what is added to
-// the simulation's own /knots/covariance (2 S for M <= 5: too few runs; 10 or more advised). `netlab score --sim-ensemble` (docs/score.md).
+// the simulation's own /knots/covariance (2 S for M <= 5: too few runs; 10 or more advised).
+// `netlab score --sim-ensemble` (docs/score.md).
 
 #include <string>
 #include <vector>

@@ -183,20 +183,15 @@ std::string Expand(std::string_view spec, bool with_label, const ScoreSummary& s
       text = Format(field, number);
       break;
     }
-    case SummaryKind::kText:
-      text = value.text;
-      break;
+    case SummaryKind::kText: text = value.text; break;
     case SummaryKind::kRows:
       for (const ScoreRow& r : value.rows)
         if (r.name == row) text = Format(field, r.rms_m * 1e3);
       if (text.empty())
         throw std::logic_error("summary text: {" + std::string(spec) + "}: no such row");
       break;
-    case SummaryKind::kLines:
-      text = line != nullptr ? *line : "";
-      break;
-    default:
-      throw std::logic_error("summary text: {" + std::string(spec) + "} has no text form");
+    case SummaryKind::kLines: text = line != nullptr ? *line : ""; break;
+    default: throw std::logic_error("summary text: {" + std::string(spec) + "} has no text form");
   }
   return with_label ? std::string(field.label) + " " + text : text;
 }

@@ -5,12 +5,11 @@
 // text summary (ScoreSummary::BriefReport, through FillSummaryText), the JSON summary (`netlab
 // score --json`) and score.h5's /summary group (WriteScore).
 
+#include <Eigen/Core>
 #include <span>
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "libnetsim/validation/score.h"
 
@@ -31,15 +30,15 @@ enum class SummaryKind {
 inline constexpr unsigned kInJson = 1, kInFile = 2;
 
 struct SummaryValue {
-  double number = 0.0;                   // kInt, kNumber, kFlag (0 or 1)
-  std::string text;                      // kText
+  double number = 0.0;                               // kInt, kNumber, kFlag (0 or 1)
+  std::string text;                                  // kText
   Eigen::Vector3d vector = Eigen::Vector3d::Zero();  // kVector3
-  std::span<const ScoreRow> rows;        // kRows, kPhases
-  std::span<const std::string> lines;    // kLines
+  std::span<const ScoreRow> rows;                    // kRows, kPhases
+  std::span<const std::string> lines;                // kLines
 };
 
 struct SummaryField {
-  std::string_view key;    // "rms_mm": the JSON key and the score.h5 /summary name
+  std::string_view key;  // "rms_mm": the JSON key and the score.h5 /summary name
   SummaryKind kind;
   std::string_view unit;   // the value's unit, score.h5's "units" attribute ("mm", "1", "s")
   std::string_view label;  // the field in words, as the text summary names it ("mean d2")

@@ -99,8 +99,7 @@ bool KnotCodebook::IsValid(std::string* error) const {
   for (size_t k = 0; k < knots.size(); ++k) {
     const CodebookKnot& knot = knots[k];
     const std::string where = "KnotCodebook: knot " + std::to_string(k) + " (row " +
-                              std::to_string(knot.row) + ", col " + std::to_string(knot.col) +
-                              ")";
+                              std::to_string(knot.row) + ", col " + std::to_string(knot.col) + ")";
     if (knot.degree() < 2 || knot.degree() > 4) return fail(where + ": degree not in 2..4");
     for (int c : knot.link_colours) {
       if (c < 0 || c >= static_cast<int>(palette.size())) {
@@ -250,8 +249,7 @@ std::vector<int> AllPaletteIndices(size_t palette_size) {
 
 YarnReading ClassifyYarnColour(const Colour& measured, const Colour& background,
                                const std::vector<PaletteColour>& palette,
-                               const IdentifyOptions& options,
-                               const std::array<bool, 3>& observed,
+                               const IdentifyOptions& options, const std::array<bool, 3>& observed,
                                const Colour& measured_sigma) {
   YarnReading r;
   // The ΔE00 that noise_sigmas standard deviations of the measurement make, per channel.
@@ -260,8 +258,8 @@ YarnReading ClassifyYarnColour(const Colour& measured, const Colour& background,
     for (int c = 0; c < 3; ++c) {
       for (float sign : {-1.0f, 1.0f}) {
         Colour moved = measured;
-        moved[c] = std::max(0.0f, moved[c] + sign * static_cast<float>(options.noise_sigmas) *
-                                                 measured_sigma[c]);
+        moved[c] = std::max(
+            0.0f, moved[c] + sign * static_cast<float>(options.noise_sigmas) * measured_sigma[c]);
         r.noise_delta_e = std::max(r.noise_delta_e, CieDe2000(lab, LinearBgrToLab(moved)));
       }
     }
@@ -286,17 +284,16 @@ YarnReading ClassifyYarnColour(const Colour& measured, const Colour& background,
     r.confidence = 0.0;
     return r;
   }
-  const double gap = std::max({options.ambiguity_margin, options.ambiguity_ratio * r.best_delta_e,
-                               r.noise_delta_e});
+  const double gap = std::max(
+      {options.ambiguity_margin, options.ambiguity_ratio * r.best_delta_e, r.noise_delta_e});
   for (size_t c = 0; c < palette.size(); ++c) {
     if (score[c] <= r.best_delta_e + gap) r.plausible.push_back(static_cast<int>(c));
   }
   if (r.plausible.size() == 1) {
-    const double excess = std::isfinite(r.second_delta_e)
-                              ? (r.second_delta_e - r.best_delta_e) / (2.0 * gap)
-                              : 1.0;
-    r.confidence = std::clamp(excess, 0.5, 1.0) *
-                   (1.0 - 0.5 * r.best_delta_e / options.max_delta_e);
+    const double excess =
+        std::isfinite(r.second_delta_e) ? (r.second_delta_e - r.best_delta_e) / (2.0 * gap) : 1.0;
+    r.confidence =
+        std::clamp(excess, 0.5, 1.0) * (1.0 - 0.5 * r.best_delta_e / options.max_delta_e);
   }
   return r;
 }

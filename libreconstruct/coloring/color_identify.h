@@ -12,13 +12,12 @@
 // within ~9 degrees of the pixel rows or columns is not read at all (the mosaic may never sample
 // one of its colours; see IdentifyOptions::bayer).
 
+#include <Eigen/Core>
 #include <array>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
 
 #include "libreconstruct/coloring/colour.h"
 #include "libreconstruct/coloring/colour_science.h"
@@ -80,9 +79,9 @@ struct IdentifyOptions {
   // those pixels most; averaging removes the demosaicing zipper of a 1 px line).
   double keep_fraction = 0.5;
   // Classification: the palette colour c is fitted as background + alpha (c - background),
-  // alpha in [alpha_min, alpha_max] the thread's coverage (or width in px), and scored by CIEDE2000 to the measured
-  // colour. Colour reading d_best <= max_delta_e, else "unknown colour" (all palette colours
-  // remain plausible). A palette colour is plausible when its score is within
+  // alpha in [alpha_min, alpha_max] the thread's coverage (or width in px), and scored by CIEDE2000
+  // to the measured colour. Colour reading d_best <= max_delta_e, else "unknown colour" (all
+  // palette colours remain plausible). A palette colour is plausible when its score is within
   // max(ambiguity_margin, ambiguity_ratio * d_best) of the best.
   double max_delta_e = 12.0;
   double ambiguity_margin = 8.0;
@@ -125,16 +124,16 @@ enum class IdentifyStatus { kIdentified, kAmbiguous, kUnknown };
 std::string IdentifyStatusName(IdentifyStatus status);
 
 struct YarnReading {
-  int best = -1;                   // palette index of the best fit, -1 without enough samples
-  double best_delta_e = 0.0;       // its CIEDE2000 score
-  double second_delta_e = 0.0;     // the runner-up's (inf with a one-colour palette)
-  double confidence = 0.0;         // in [0, 1]: 0 unknown/ambiguous .. 1 clear
-  std::vector<int> plausible;      // palette indices that this yarn may be (all when unknown)
-  int samples = 0;                 // thread samples found along the yarn
-  double alpha = 0.0;              // fitted coverage (px of thread width) of the best colour
-  double noise_delta_e = 0.0;      // ΔE00 of noise_sigmas standard deviations of the measurement
+  int best = -1;                // palette index of the best fit, -1 without enough samples
+  double best_delta_e = 0.0;    // its CIEDE2000 score
+  double second_delta_e = 0.0;  // the runner-up's (inf with a one-colour palette)
+  double confidence = 0.0;      // in [0, 1]: 0 unknown/ambiguous .. 1 clear
+  std::vector<int> plausible;   // palette indices that this yarn may be (all when unknown)
+  int samples = 0;              // thread samples found along the yarn
+  double alpha = 0.0;           // fitted coverage (px of thread width) of the best colour
+  double noise_delta_e = 0.0;   // ΔE00 of noise_sigmas standard deviations of the measurement
   std::array<bool, 3> observed{true, true, true};  // B, G, R seen on their own mosaic sites
-  Colour measured{0, 0, 0};        // mean linear BGR of the kept samples
+  Colour measured{0, 0, 0};                        // mean linear BGR of the kept samples
 };
 
 struct KnotIdentification {
@@ -142,10 +141,10 @@ struct KnotIdentification {
   // kIdentified: the one knot (codebook index). kAmbiguous: every knot that fits some
   // plausible reading. kUnknown: empty.
   std::vector<int> knots;
-  double confidence = 0.0;          // the smallest yarn confidence when identified, else 0
-  std::vector<YarnReading> yarns;   // in the order of the given directions
-  std::vector<std::string> reasons; // human-readable, one per decision
-  Colour background{0, 0, 0};       // the local background estimate, linear BGR
+  double confidence = 0.0;           // the smallest yarn confidence when identified, else 0
+  std::vector<YarnReading> yarns;    // in the order of the given directions
+  std::vector<std::string> reasons;  // human-readable, one per decision
+  Colour background{0, 0, 0};        // the local background estimate, linear BGR
 };
 
 // Identifies the knot at `knot_px` of a demosaiced 8-bit BGR frame whose yarns leave it along

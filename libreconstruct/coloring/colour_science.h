@@ -8,9 +8,8 @@
 // through the sRGB primaries, i.e. D65 (IEC 61966-2-1), so a neutral camera white is Lab (100, 0,
 // 0).
 
-#include <array>
-
 #include <Eigen/Core>
+#include <array>
 
 #include "libreconstruct/coloring/colour.h"
 
@@ -43,7 +42,6 @@ Lab LinearBgrToLab(const Colour& bgr);
 // observations", Color Res. Appl. 30(1), 2005, eq. 1-22 (hue angles in degrees, the mean hue
 // and hue difference rules of eq. 10 and 14 for the 180 degree discontinuity, h = 0 when
 // a' = b = 0). Parametric factors kL = kC = kH = 1 by default.
-double CieDe2000(const Lab& x, const Lab& y, double k_l = 1.0, double k_c = 1.0,
-                 double k_h = 1.0);
+double CieDe2000(const Lab& x, const Lab& y, double k_l = 1.0, double k_c = 1.0, double k_h = 1.0);
 
 }  // namespace netlab::recon

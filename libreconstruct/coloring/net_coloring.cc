@@ -66,9 +66,7 @@ Cfg Canonical(CodeRule rule, const Cfg& x) {
       for (int i = y.d; i < 4; ++i) y.c[i] = -1;
       return y;
     }
-    case CodeRule::kMultiset:
-      std::sort(y.c.begin(), y.c.begin() + y.d);
-      return y;
+    case CodeRule::kMultiset: std::sort(y.c.begin(), y.c.begin() + y.d); return y;
     case CodeRule::kCyclic: {
       std::array<Cfg, 8> images;
       const int n = DihedralImages(x, &images);
@@ -97,8 +95,10 @@ int SetChange(const Cfg& x, const Cfg& s /* canonical set */) {
   for (int i = 0; i < x.d; ++i) {
     bool in = false;
     for (int j = 0; j < s.d; ++j) in = in || s.c[j] == x.c[i];
-    if (in) present |= uint64_t{1} << x.c[i];
-    else ++out;
+    if (in)
+      present |= uint64_t{1} << x.c[i];
+    else
+      ++out;
   }
   const int missing = s.d - __builtin_popcountll(present);
   return std::max(out, missing);
@@ -115,9 +115,12 @@ int Distance(CodeRule rule, const Cfg& a, const Cfg& b) {
       std::sort(y.begin(), y.begin() + b.d);
       int i = 0, j = 0, common = 0;
       while (i < a.d && j < b.d) {
-        if (x[i] == y[j]) ++common, ++i, ++j;
-        else if (x[i] < y[j]) ++i;
-        else ++j;
+        if (x[i] == y[j])
+          ++common, ++i, ++j;
+        else if (x[i] < y[j])
+          ++i;
+        else
+          ++j;
       }
       return a.d - common;
     }
@@ -299,8 +302,10 @@ int64_t PatternPackingBound(CodeRule rule, int degree, int k, bool distinct, int
     Cfg base = empty;
     std::vector<int> free;
     for (int i = 0; i < degree; ++i) {
-      if (mask & (1 << i)) base.c[i] = kWildColour;
-      else free.push_back(i);
+      if (mask & (1 << i))
+        base.c[i] = kWildColour;
+      else
+        free.push_back(i);
     }
     ForEachRenamedFilling(base, free, distinct, [&](const Cfg& x, int used) {
       keys[Pattern(rule, x)] += Falling(k, used) / OrbitSize(rule, x);
@@ -557,9 +562,8 @@ bool TabuSearch(const Net& net, int k, Model& model, std::mt19937_64& rng, Budge
 // the 225 inner ones 15), then the inner links with every link at the border frozen (the inner
 // knots have room to spare wherever the border is the tight part).
 template <typename Model>
-bool SearchBorderFirst(const Net& net, int k, Model& model, std::mt19937_64& rng,
-                       Budget& budget, int64_t refresh_every, bool border_first,
-                       std::vector<int>* out) {
+bool SearchBorderFirst(const Net& net, int k, Model& model, std::mt19937_64& rng, Budget& budget,
+                       int64_t refresh_every, bool border_first, std::vector<int>* out) {
   const std::vector<char> all_knots(net.n, 1), all_links(net.links, 1);
   std::vector<char> border(net.n), inner_links(net.links);
   bool any_border = false, any_inner = false;
@@ -711,7 +715,8 @@ class LocalSearch : public CostModel {
       MoveCount(nv, ov);
       MoveCount(nu, ou);
       if (o_.adjacent_distinct)
-        d += AdjacentPairs(cu) + AdjacentPairs(cv) - AdjacentPairs(cfg_[u]) - AdjacentPairs(cfg_[v]);
+        d +=
+            AdjacentPairs(cu) + AdjacentPairs(cv) - AdjacentPairs(cfg_[u]) - AdjacentPairs(cfg_[v]);
       return d;
     }
     return Contribution(u, v, cu, cv) - Contribution(u, v, cfg_[u], cfg_[v]);
@@ -739,7 +744,8 @@ class LocalSearch : public CostModel {
       if (Counted(u, w))
         update(u, w, Violates(old_u, w == v ? old_v : cfg_[w]), Violates(cfg_[u], cfg_[w]));
     for (int w : net_.partners(v))
-      if (w != u && Counted(v, w)) update(v, w, Violates(old_v, cfg_[w]), Violates(cfg_[v], cfg_[w]));
+      if (w != u && Counted(v, w))
+        update(v, w, Violates(old_v, cfg_[w]), Violates(cfg_[v], cfg_[w]));
   }
 
   bool hashed_;
@@ -747,9 +753,9 @@ class LocalSearch : public CostModel {
   std::unordered_map<uint64_t, int> count_;
 };
 
-// Keys for distance 2 (LocalSearchD2). A key is a family tag (top byte) over a code-like body (degree and colours,
-// CodeKey's layout); two knots conflict when a key of one meets a key of a MATCHING family
-// with the same body in the other.
+// Keys for distance 2 (LocalSearchD2). A key is a family tag (top byte) over a code-like body
+// (degree and colours, CodeKey's layout); two knots conflict when a key of one meets a key of a
+// MATCHING family with the same body in the other.
 //   Multiset and cyclic, one family kWild matching itself: the code with one link colour
 //   wildcarded. Two knots of equal degree are within one change of each other exactly when
 //   they share such a key (wildcard the link where they differ, or any link when equal).
@@ -818,8 +824,8 @@ void DistanceTwoKeys(CodeRule rule, const Cfg& x, std::vector<uint64_t>* keys) {
 }
 
 // Tabu search for min_distance 2 over the whole net (radius 0), every rule, with hashed
-// bookkeeping: each knot has a few keys (DistanceTwoKeys), two knots of one degree are within one link
-// change of each other exactly when keys of matching families meet, so the cost (meetings of
+// bookkeeping: each knot has a few keys (DistanceTwoKeys), two knots of one degree are within one
+// link change of each other exactly when keys of matching families meet, so the cost (meetings of
 // keys) is 0 exactly for a valid colouring, and a move (two knots change) costs O(d) hash
 // operations instead of a comparison with every knot.
 class LocalSearchD2 : public CostModel {
@@ -888,7 +894,8 @@ class LocalSearchD2 : public CostModel {
     for (uint64_t key : scratch_) {
       const int n = Partners(FamilyOf(key), &partners);
       for (int i = 0; i < n; ++i)
-        self += std::binary_search(scratch_.begin(), scratch_.end(), Tagged(partners[i], Body(key)));
+        self +=
+            std::binary_search(scratch_.begin(), scratch_.end(), Tagged(partners[i], Body(key)));
     }
     return Meetings(scratch_) > self;
   }
@@ -997,7 +1004,7 @@ class ExactSearch {
   const Net& net_;
   const ColoringOptions& o_;
   int k_;
-  Budget& budget_;  // in nodes and code comparisons
+  Budget& budget_;              // in nodes and code comparisons
   mutable int64_t checks_ = 0;  // code comparisons since the last node
   std::vector<int> order_;
   std::vector<std::vector<int>> completes_;
@@ -1021,10 +1028,14 @@ bool DistanceTwoKeysMeet(CodeRule rule, const std::vector<int>& a, const std::ve
 }
 
 bool ParseCodeRule(const std::string& name, CodeRule* rule) {
-  if (name == "set") *rule = CodeRule::kSet;
-  else if (name == "multiset") *rule = CodeRule::kMultiset;
-  else if (name == "cyclic") *rule = CodeRule::kCyclic;
-  else return false;
+  if (name == "set")
+    *rule = CodeRule::kSet;
+  else if (name == "multiset")
+    *rule = CodeRule::kMultiset;
+  else if (name == "cyclic")
+    *rule = CodeRule::kCyclic;
+  else
+    return false;
   return true;
 }
 
@@ -1039,12 +1050,18 @@ std::string CodeRuleName(CodeRule rule) {
 
 bool ColoringOptions::IsValid(std::string* error) const {
   std::string e;
-  if (min_distance < 1) e = "min_distance must be >= 1";
-  else if (radius < 0) e = "radius must be >= 0 (0: whole net)";
-  else if (max_colors < 1 || max_colors > 64) e = "max_colors must be in 1..64";
-  else if (!(time_limit_s >= 0.0)) e = "time_limit_s must be >= 0";
-  else if (work_per_link < 1) e = "work_per_link must be >= 1";
-  else if (exact_work < 0) e = "exact_work must be >= 0";
+  if (min_distance < 1)
+    e = "min_distance must be >= 1";
+  else if (radius < 0)
+    e = "radius must be >= 0 (0: whole net)";
+  else if (max_colors < 1 || max_colors > 64)
+    e = "max_colors must be in 1..64";
+  else if (!(time_limit_s >= 0.0))
+    e = "time_limit_s must be >= 0";
+  else if (work_per_link < 1)
+    e = "work_per_link must be >= 1";
+  else if (exact_work < 0)
+    e = "exact_work must be >= 0";
   if (error) *error = e;
   return e.empty();
 }
@@ -1068,16 +1085,17 @@ std::array<int, 4> LinkKnots(int rows, int cols, int link) {
 std::vector<int> KnotLinks(int rows, int cols, int r, int c) {
   const int horizontal = rows * (cols - 1);
   std::vector<int> l;
-  if (c + 1 < cols) l.push_back(r * (cols - 1) + c);             // right
-  if (r + 1 < rows) l.push_back(horizontal + r * cols + c);       // down
-  if (c > 0) l.push_back(r * (cols - 1) + c - 1);                 // left
-  if (r > 0) l.push_back(horizontal + (r - 1) * cols + c);        // up
+  if (c + 1 < cols) l.push_back(r * (cols - 1) + c);         // right
+  if (r + 1 < rows) l.push_back(horizontal + r * cols + c);  // down
+  if (c > 0) l.push_back(r * (cols - 1) + c - 1);            // left
+  if (r > 0) l.push_back(horizontal + (r - 1) * cols + c);   // up
   return l;
 }
 
 std::vector<int> KnotLinkColours(const NetColoring& coloring, int r, int c) {
   std::vector<int> out;
-  for (int l : KnotLinks(coloring.rows, coloring.cols, r, c)) out.push_back(coloring.link_colour.at(l));
+  for (int l : KnotLinks(coloring.rows, coloring.cols, r, c))
+    out.push_back(coloring.link_colour.at(l));
   return out;
 }
 
@@ -1111,8 +1129,7 @@ int64_t CountCodes(CodeRule rule, int degree, int k, bool adjacent_distinct) {
       for (int j = 1; j <= std::min(degree, k); ++j) s += Binomial(k, j);
       return s;
     }
-    case CodeRule::kMultiset:
-      return Binomial(k + degree - 1, degree);
+    case CodeRule::kMultiset: return Binomial(k + degree - 1, degree);
     case CodeRule::kCyclic:
       if (degree <= 3) return Binomial(k + degree - 1, degree);
       {
@@ -1123,8 +1140,7 @@ int64_t CountCodes(CodeRule rule, int degree, int k, bool adjacent_distinct) {
   return 0;
 }
 
-int64_t MaxCodePacking(CodeRule rule, int degree, int k, bool adjacent_distinct,
-                       int min_distance) {
+int64_t MaxCodePacking(CodeRule rule, int degree, int k, bool adjacent_distinct, int min_distance) {
   const int64_t all = CountCodes(rule, degree, k, adjacent_distinct);
   if (min_distance <= 1 || k <= 0) return all;
   if (min_distance > degree) return std::min<int64_t>(all, 1);  // any two are within degree
@@ -1177,19 +1193,18 @@ int ColoringLowerBound(int rows, int cols, const ColoringOptions& options) {
     // pairwise distance <= R fits in a box [u0, u0 + R] x [v0, v0 + R]: the largest count of
     // each degree over all such boxes, from prefix sums over (u, v) (O((rows + cols)^2) per
     // degree instead of R^2 per box).
-    for (int d = 1; d < 5; ++d) need[d] = LargestInBox(rows, cols, R, [&](int r, int c) {
-      return degree_of(r, c) == d;
-    });
+    for (int d = 1; d < 5; ++d)
+      need[d] = LargestInBox(rows, cols, R, [&](int r, int c) { return degree_of(r, c) == d; });
   }
   // Two knots of equal degree d joined by a link share its colour, so they are at most d - 1
   // apart under every rule: min_distance >= d makes such a pair impossible to separate.
   for (int r = 0; r < rows; ++r)
-      for (int c = 0; c < cols; ++c) {
-        const int d = degree_of(r, c);
-        if (options.min_distance < d) continue;
-        if ((c + 1 < cols && degree_of(r, c + 1) == d) || (r + 1 < rows && degree_of(r + 1, c) == d))
-          return 65;
-      }
+    for (int c = 0; c < cols; ++c) {
+      const int d = degree_of(r, c);
+      if (options.min_distance < d) continue;
+      if ((c + 1 < cols && degree_of(r, c + 1) == d) || (r + 1 < rows && degree_of(r + 1, c) == d))
+        return 65;
+    }
   int max_degree = 0;
   for (int d = 0; d < 5; ++d)
     if (need[d] > 0) max_degree = d;
@@ -1255,8 +1270,8 @@ int64_t WorkBudget(int links, const ColoringOptions& o) {
 int ExactColoring(int rows, int cols, const ColoringOptions& options, int k, double time_limit_s,
                   std::vector<int>* link_colour) {
   if (!RunsExactStage(rows, cols))
-    throw std::invalid_argument("ExactColoring: more than " +
-                                std::to_string(kExactSearchMaxKnots) + " knots");
+    throw std::invalid_argument("ExactColoring: more than " + std::to_string(kExactSearchMaxKnots) +
+                                " knots");
   const Net net = BuildNet(rows, cols, options, true);
   Budget budget{options.exact_work, After(Clock::now(), time_limit_s)};
   return ExactOnNet(net, options, k, budget, link_colour);
@@ -1266,7 +1281,8 @@ NetColoring SolveColoring(int rows, int cols, const ColoringOptions& options) {
   const auto t0 = Clock::now();
   std::string error;
   if (!options.IsValid(&error)) throw std::invalid_argument("ColoringOptions: " + error);
-  if (rows < 1 || cols < 1) throw std::invalid_argument("SolveColoring: rows and cols must be >= 1");
+  if (rows < 1 || cols < 1)
+    throw std::invalid_argument("SolveColoring: rows and cols must be >= 1");
   NetColoring result;
   result.rows = rows;
   result.cols = cols;

@@ -11,7 +11,8 @@
 //   kMultiset  the multiset of colours;
 //   kCyclic    the cyclic sequence in geometric order, equal up to rotation and mirror image
 //              (the dihedral group of the present links). For degree <= 3 every permutation is a
-//              rotation or mirror, so there it equals the multiset; it differs only at 4-link knots.
+//              rotation or mirror, so there it equals the multiset; it differs only at 4-link
+//              knots.
 // Degree is visible in the image, so only knots of equal degree are compared.
 //
 // DISTANCE between two knots A and B of equal degree d, with link colours a and b in geometric
@@ -76,8 +77,8 @@ struct NetColoring {
   bool optimal = false;  // proven: lower bound reached, or the exact search exhausted colors - 1
   std::string method;    // "heuristic", "exact", "heuristic+exact"; "none" when nothing found
   double wall_s = 0.0;   // time SolveColoring took, seconds
-  bool time_limited = false;  // the wall-clock cap cut the search short (see time_limit_s)
-  bool exact_skipped = false; // more than kExactSearchMaxKnots knots: no exact stage was run
+  bool time_limited = false;   // the wall-clock cap cut the search short (see time_limit_s)
+  bool exact_skipped = false;  // more than kExactSearchMaxKnots knots: no exact stage was run
   std::vector<std::string> palette_names;  // optional, from a physical palette
 };
 

@@ -63,7 +63,7 @@ namespace {
 // Pairwise and background CIEDE2000 of the candidates as seen.
 struct PaletteDistances {
   int n = 0;
-  std::vector<double> pair;  // n x n
+  std::vector<double> pair;        // n x n
   std::vector<double> background;  // n (inf without background)
   double D(int i, int j) const { return pair[static_cast<size_t>(i) * n + j]; }
 };
@@ -230,8 +230,10 @@ std::vector<Candidate> LoadCandidates(const std::string& path) {
         const int slot = key == "name" ? 0 : key == "r" ? 1 : key == "g" ? 2 : key == "b" ? 3 : -1;
         if (slot < 0) fail("unknown key '" + key + "' (name, r, g, b)");
         seen[slot] = true;
-        if (slot == 0) name = value;
-        else values[slot - 1] = value;
+        if (slot == 0)
+          name = value;
+        else
+          values[slot - 1] = value;
       }
       if (!(seen[0] && seen[1] && seen[2] && seen[3])) fail("expected keys name, r, g, b");
     } else {
@@ -259,14 +261,12 @@ std::vector<Candidate> LoadCandidates(const std::string& path) {
 
 std::vector<Candidate> DefaultYarnCandidates() {
   return {
-      {"white", {240, 240, 235}},      {"black", {25, 25, 28}},
-      {"red", {200, 30, 40}},          {"dark red", {120, 20, 35}},
-      {"orange", {240, 120, 20}},      {"yellow", {250, 210, 30}},
-      {"lime", {150, 200, 40}},        {"green", {20, 140, 60}},
-      {"dark green", {20, 75, 40}},    {"turquoise", {30, 180, 180}},
-      {"light blue", {110, 170, 230}}, {"royal blue", {30, 60, 170}},
-      {"navy", {20, 30, 80}},          {"purple", {110, 40, 140}},
-      {"pink", {240, 120, 170}},       {"brown", {110, 70, 35}},
+      {"white", {240, 240, 235}},    {"black", {25, 25, 28}},         {"red", {200, 30, 40}},
+      {"dark red", {120, 20, 35}},   {"orange", {240, 120, 20}},      {"yellow", {250, 210, 30}},
+      {"lime", {150, 200, 40}},      {"green", {20, 140, 60}},        {"dark green", {20, 75, 40}},
+      {"turquoise", {30, 180, 180}}, {"light blue", {110, 170, 230}}, {"royal blue", {30, 60, 170}},
+      {"navy", {20, 30, 80}},        {"purple", {110, 40, 140}},      {"pink", {240, 120, 170}},
+      {"brown", {110, 70, 35}},
   };
 }
 

@@ -2,12 +2,11 @@
 // The physical palette: yarn dyes one can buy, how the cameras see them under the experiment's
 // lighting, and the choice of the dyes that stay most distinguishable (CIEDE2000) there.
 
+#include <Eigen/Core>
 #include <array>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "libreconstruct/coloring/colour.h"
 #include "libreconstruct/coloring/colour_science.h"
@@ -29,7 +28,7 @@ inline constexpr double kRenderIllumination = 0.85;
 // D65 for a white-balanced camera).
 struct Lighting {
   std::array<double, 3> gains_bgr{1.0, 1.0, 1.0};  // illuminant colour / white balance error, > 0
-  double exposure = 1.0;                            // brightness scale (> 0)
+  double exposure = 1.0;                           // brightness scale (> 0)
   Eigen::Vector3d white_xyz = D65White();          // Lab reference white (Y > 0)
   // The background the yarns are seen against, linear BGR as seen (after gains and exposure).
   // When set, every chosen colour must also differ from it by the reported minimum ΔE00.

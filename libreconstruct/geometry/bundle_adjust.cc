@@ -1,8 +1,12 @@
 #include "libreconstruct/geometry/bundle_adjust.h"
 
+#include <ceres/ceres.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
-#include <atomic>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -11,10 +15,6 @@
 #include <functional>
 #include <limits>
 #include <thread>
-
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
-#include <ceres/ceres.h>
 
 #include "common/errors.h"
 #include "libreconstruct/geometry/camera_offsets.h"
@@ -67,13 +67,16 @@ std::vector<Eigen::Matrix3d> SmoothedCovariances(const std::vector<Eigen::Matrix
     if (a == b && std::abs(i - j) <= 2) v += w * s(i, j);
     return v;
   };
-  std::vector<std::array<double, kBand + 1>> l(n), z(n);  // l[r][d] = L(r, r-d); z[r][d] = Z(r, r+d)
+  std::vector<std::array<double, kBand + 1>> l(n),
+      z(n);  // l[r][d] = L(r, r-d); z[r][d] = Z(r, r+d)
   for (int r = 0; r < n; ++r)
     for (int c = std::max(0, r - kBand); c <= r; ++c) {
       double sum = h(r, c);
       for (int k = std::max(0, r - kBand); k < c; ++k) sum -= l[r][r - k] * l[c][c - k];
-      if (c == r) l[r][0] = std::sqrt(std::max(sum, 0.0));
-      else l[r][r - c] = sum / l[c][0];
+      if (c == r)
+        l[r][0] = std::sqrt(std::max(sum, 0.0));
+      else
+        l[r][r - c] = sum / l[c][0];
     }
   auto zz = [&](int i, int j) { return i <= j ? z[i][j - i] : z[j][i - j]; };
   for (int i = n - 1; i >= 0; --i)
@@ -167,8 +170,12 @@ class SequenceSolver {
 
 SequenceSolver::SequenceSolver(const calib::Rig& rig, const LabelSet& labels,
                                const SequenceOptions& options)
-    : rig_(rig), labels_(labels), o_(options), tri_(options.triangulation),
-      t_(labels.frames()), k_(labels.knots()) {
+    : rig_(rig),
+      labels_(labels),
+      o_(options),
+      tri_(options.triangulation),
+      t_(labels.frames()),
+      k_(labels.knots()) {
   for (const std::string& name : labels.cameras) {
     const int c = rig.Find(name);
     if (c < 0)
@@ -425,12 +432,14 @@ void SequenceSolver::SolveFrame(int t, bool link, bool smooth,
         for (int j = 0; j < 3; ++j) {
           const int tj = centre - 1 + j;
           const size_t cj = Cell(tj, k);
-          if (!valid_[cj]) ok = false;
-          else blocks[j] = tj == t ? (*out)[cj].data() : hold(cj);
+          if (!valid_[cj])
+            ok = false;
+          else
+            blocks[j] = tj == t ? (*out)[cj].data() : hold(cj);
         }
         if (!ok) continue;
-        problem.AddResidualBlock(SmoothnessPrior::Create(o_.smoothness_sigma_m), nullptr,
-                                 blocks[0], blocks[1], blocks[2]);
+        problem.AddResidualBlock(SmoothnessPrior::Create(o_.smoothness_sigma_m), nullptr, blocks[0],
+                                 blocks[1], blocks[2]);
       }
   }
   if (problem.NumResidualBlocks() > 0) Solve(&problem, ceres::SPARSE_NORMAL_CHOLESKY);
@@ -494,8 +503,7 @@ std::vector<Eigen::Vector3d> SequenceSolver::SweepKnots(const std::vector<Eigen:
 
 // How far the valid points moved from `from` to `to`: RMS and max (m).
 void SequenceSolver::Shift(const std::vector<Eigen::Vector3d>& from,
-                           const std::vector<Eigen::Vector3d>& to, double* rms,
-                           double* max) const {
+                           const std::vector<Eigen::Vector3d>& to, double* rms, double* max) const {
   double ss = 0.0;
   int64_t n = 0;
   *max = 0.0;
@@ -604,8 +612,8 @@ int SequenceSolver::WorstTwoViewPoint(int k, int64_t* disagreeing) const {
     const PointEstimate& est = cells_[cell].estimate;
     double worst = 0.0;
     for (int i : est.inliers)
-      worst = std::max(worst, ReprojectionResidual(rig_, cells_[cell].observations[i],
-                                                   positions_[cell]));
+      worst = std::max(worst,
+                       ReprojectionResidual(rig_, cells_[cell].observations[i], positions_[cell]));
     const double ratio = worst / tri_.outlier_threshold_px;
     if (ratio <= 1.0) continue;
     if (est.inliers.size() > 2) {
@@ -622,8 +630,7 @@ int SequenceSolver::WorstTwoViewPoint(int k, int64_t* disagreeing) const {
 void SequenceSolver::LeaveOut(size_t cell) {
   PointEstimate& est = cells_[cell].estimate;
   for (int i : est.inliers)
-    est.residual_px[i] =
-        ReprojectionResidual(rig_, cells_[cell].observations[i], positions_[cell]);
+    est.residual_px[i] = ReprojectionResidual(rig_, cells_[cell].observations[i], positions_[cell]);
   est.outliers = est.inliers;
   est.inliers.clear();
   est.valid = false;
@@ -653,8 +660,9 @@ void SequenceSolver::FlagDegenerate(SequenceResult* result) {
   for (size_t i = 0; i < n; ++i) {
     if (!result->valid[i]) continue;
     const Eigen::Matrix3d& cov = result->covariance[i];
-    const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(
-                               cov, Eigen::EigenvaluesOnly).eigenvalues()[2];
+    const double largest =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov, Eigen::EigenvaluesOnly)
+            .eigenvalues()[2];
     sigma[i] = std::sqrt(std::max(largest, 0.0));
     all.push_back(sigma[i]);
   }
@@ -668,8 +676,8 @@ void SequenceSolver::FlagDegenerate(SequenceResult* result) {
     result->max_sigma_from = "given";
   } else {
     result->max_sigma_m = o_.degenerate_sigma_factor * result->median_sigma_m;
-    std::snprintf(text, sizeof text, "%g x the median sigma (%.3f mm)",
-                  o_.degenerate_sigma_factor, result->median_sigma_m * 1e3);
+    std::snprintf(text, sizeof text, "%g x the median sigma (%.3f mm)", o_.degenerate_sigma_factor,
+                  result->median_sigma_m * 1e3);
     result->max_sigma_from = text;
   }
   for (int t = 0; t < t_; ++t)
@@ -741,10 +749,9 @@ void SequenceSolver::SumUpPoints(SequenceResult* result) const {
       if (kf.observations.size() == 1) ++result->single_view;
       if (kf.observations.size() >= 2) ++result->candidates;
       for (int i : kf.estimate.outliers)
-        result->outliers.push_back({labels_.frame_index[t], k, kf.observations[i].camera,
-                                    kf.estimate.residual_px.empty()
-                                        ? kNaN
-                                        : kf.estimate.residual_px[i]});
+        result->outliers.push_back(
+            {labels_.frame_index[t], k, kf.observations[i].camera,
+             kf.estimate.residual_px.empty() ? kNaN : kf.estimate.residual_px[i]});
       if (!valid_[cell]) continue;
       ++result->triangulated;
       result->two_view += kf.estimate.inliers.size() == 2;
@@ -798,10 +805,14 @@ void SequenceSolver::InvertInformation(int k, SequenceResult* result) const {
 }  // namespace
 
 bool ParseAdjustment(const std::string& name, Adjustment* mode) {
-  if (name == "none") *mode = Adjustment::kNone;
-  else if (name == "points") *mode = Adjustment::kPoints;
-  else if (name == "rig") *mode = Adjustment::kRig;
-  else return false;
+  if (name == "none")
+    *mode = Adjustment::kNone;
+  else if (name == "points")
+    *mode = Adjustment::kPoints;
+  else if (name == "rig")
+    *mode = Adjustment::kRig;
+  else
+    return false;
   return true;
 }
 

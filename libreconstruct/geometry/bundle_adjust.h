@@ -29,12 +29,11 @@
 // priors, their terms at the point are added with its neighbours held fixed: the conditional
 // covariance, a slight underestimate of the marginal one.
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "calibration/rig.h"
 #include "libreconstruct/geometry/triangulation.h"
@@ -58,12 +57,12 @@ struct SequenceOptions {
   double outlier_sigmas = 5.0;
   double min_threshold_px = 0.5;
   Adjustment adjustment = Adjustment::kPoints;
-  double sigma_px = 0.0;           // labelling noise for the covariances; 0: estimated
-  double link_length_m = 0.0;      // > 0: link-length prior on
+  double sigma_px = 0.0;       // labelling noise for the covariances; 0: estimated
+  double link_length_m = 0.0;  // > 0: link-length prior on
   double link_sigma_m = 0.002;
   double smoothness_sigma_m = 0.0;  // > 0: smoothness prior on
-  int prior_sweeps = 4;              // at most; with both priors on
-  double prior_tolerance_m = 2e-5;   // a sweep moving the points less than this (RMS) ends them
+  int prior_sweeps = 4;             // at most; with both priors on
+  double prior_tolerance_m = 2e-5;  // a sweep moving the points less than this (RMS) ends them
   int rig_frames = 200;
   // kRig: the adjusted rig is adopted only when the sequence determines every camera this well
   // (standard deviations); otherwise the calibrated rig is kept (rig_adjusted false).
@@ -88,47 +87,47 @@ struct SequenceOptions {
 };
 
 struct ObservationOutlier {
-  int frame = 0;   // frame number (labels' frame_index)
-  int knot = 0;    // row * cols + col
-  int camera = 0;  // index into the rig
+  int frame = 0;             // frame number (labels' frame_index)
+  int knot = 0;              // row * cols + col
+  int camera = 0;            // index into the rig
   double residual_px = 0.0;  // NaN where the point was not triangulated at all
 };
 
 // A triangulated point left out as degenerate (SequenceOptions::max_sigma_m).
 struct DegeneratePoint {
-  int frame = 0;              // frame number (labels' frame_index)
-  int knot = 0;               // row * cols + col
-  double sigma_m = 0.0;       // its largest standard deviation, m
+  int frame = 0;         // frame number (labels' frame_index)
+  int knot = 0;          // row * cols + col
+  double sigma_m = 0.0;  // its largest standard deviation, m
   // The angle (0..180 deg) at which its two best-crossing rays meet at the point: near 0 the
   // cameras look along one line, near 180 they face each other across it.
   double ray_angle_deg = 0.0;
-  std::string reason;         // one sentence: the cameras, the angle, sigma against the bound
+  std::string reason;  // one sentence: the cameras, the angle, sigma against the bound
 };
 
 struct SequenceResult {
   int rows = 0, cols = 0;
-  std::vector<int> frame_index;         // [T]
-  std::vector<Eigen::Vector3d> position;  // [T*K] m, world frame
-  std::vector<uint8_t> valid;             // [T*K]
+  std::vector<int> frame_index;             // [T]
+  std::vector<Eigen::Vector3d> position;    // [T*K] m, world frame
+  std::vector<uint8_t> valid;               // [T*K]
   std::vector<Eigen::Matrix3d> covariance;  // [T*K] m^2
-  std::vector<double> rms_px;             // [T*K] RMS inlier reprojection residual, NaN if invalid
+  std::vector<double> rms_px;  // [T*K] RMS inlier reprojection residual, NaN if invalid
   std::vector<ObservationOutlier> outliers;
   // Degenerate points: valid 0, their position and covariance kept (degenerate[i] = 1).
-  std::vector<uint8_t> degenerate;        // [T*K]
+  std::vector<uint8_t> degenerate;  // [T*K]
   std::vector<DegeneratePoint> degenerate_points;
-  double max_sigma_m = 0.0;               // the bound used
-  std::string max_sigma_from;             // "given" or "10 x the median sigma (0.43 mm)"
-  double median_sigma_m = 0.0;            // over the points before the degenerate were taken out
+  double max_sigma_m = 0.0;     // the bound used
+  std::string max_sigma_from;   // "given" or "10 x the median sigma (0.43 mm)"
+  double median_sigma_m = 0.0;  // over the points before the degenerate were taken out
   // Labels of a camera with a clock offset that could not be moved to the frame time (no label
   // of the knot in a neighbouring frame of that camera): left out.
   int64_t offset_unshifted = 0;
-  calib::Rig rig;                         // as given, or refined (kRig)
+  calib::Rig rig;  // as given, or refined (kRig)
 
-  int64_t candidates = 0;     // knot-frames with two or more views
-  int64_t triangulated = 0;   // of those, valid (degenerate points not counted)
-  int64_t two_view = 0;       // of those, from exactly two views: a mislabel along the epipolar
-                              // line cannot be seen in them (the smoothness prior can)
-  int64_t single_view = 0;    // knot-frames with exactly one view (left out)
+  int64_t candidates = 0;    // knot-frames with two or more views
+  int64_t triangulated = 0;  // of those, valid (degenerate points not counted)
+  int64_t two_view = 0;      // of those, from exactly two views: a mislabel along the epipolar
+                             // line cannot be seen in them (the smoothness prior can)
+  int64_t single_view = 0;   // knot-frames with exactly one view (left out)
   int64_t unreviewed_skipped = 0;
   // Labels placed from the other cameras' (LabelSource::kProjected): they repeat those views,
   // and are left out.

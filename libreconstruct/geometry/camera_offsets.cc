@@ -1,5 +1,7 @@
 #include "libreconstruct/geometry/camera_offsets.h"
 
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -9,9 +11,6 @@
 #include <mutex>
 #include <sstream>
 #include <thread>
-
-#include <Eigen/Cholesky>
-#include <Eigen/LU>
 
 #include "common/yaml_util.h"
 #include "libreconstruct/geometry/triangulation.h"
@@ -114,9 +113,8 @@ FrameTimes FrameTimesFromTimestamps(const std::vector<int>& frame_index, double 
       os.precision(12);
       os << where[hi_c] << ": the cameras' timestamps of frame " << frame_index[t]
          << " disagree by " << Format("%.3g", (hi - lo) * fps) << " frames (" << cameras[lo_c]
-         << " " << lo
-         << " s, " << cameras[hi_c] << " " << hi << " s), more than one frame at " << fps
-         << " fps: not the same frame";
+         << " " << lo << " s, " << cameras[hi_c] << " " << hi << " s), more than one frame at "
+         << fps << " fps: not the same frame";
       throw InputError(os.str());
     }
     out.time_s[t] = sum / static_cast<double>(with.size());
@@ -182,8 +180,9 @@ OffsetEstimate EstimateCameraOffsets(const calib::Rig& rig, const LabelSet& labe
   std::vector<int> label_of(cameras, -1);
   for (size_t lc = 0; lc < labels.cameras.size(); ++lc) {
     const int c = rig.Find(labels.cameras[lc]);
-    if (c < 0) throw InputError("the labels use camera '" + labels.cameras[lc] +
-                                "', which the rig does not have");
+    if (c < 0)
+      throw InputError("the labels use camera '" + labels.cameras[lc] +
+                       "', which the rig does not have");
     label_of[c] = static_cast<int>(lc);
   }
   const std::vector<std::vector<uint8_t>> usable = UsableLabels(labels, options);
@@ -202,8 +201,8 @@ OffsetEstimate EstimateCameraOffsets(const calib::Rig& rig, const LabelSet& labe
   }
   TriangulationOptions tri = options.triangulation;
   if (options.sigma_px > 0.0 && options.auto_threshold) {
-    tri.outlier_threshold_px = std::max(options.min_threshold_px, options.outlier_sigmas *
-                                                                      options.sigma_px);
+    tri.outlier_threshold_px =
+        std::max(options.min_threshold_px, options.outlier_sigmas * options.sigma_px);
     tri.huber_px = std::max(2.0 * options.sigma_px, 0.4 * options.min_threshold_px);
   }
 
@@ -226,8 +225,7 @@ OffsetEstimate EstimateCameraOffsets(const calib::Rig& rig, const LabelSet& labe
           const size_t i = static_cast<size_t>(t) * knots + k;
           if (!usable[lo][i]) continue;
           Eigen::Vector2d q = labels.labels[lo][i].px;
-          if (at[o] != 0.0 && !LabelAtFrameTime(labels, lo, t, k, at[o], usable[lo], &q))
-            continue;
+          if (at[o] != 0.0 && !LabelAtFrameTime(labels, lo, t, k, at[o], usable[lo], &q)) continue;
           others.push_back({o, q});
         }
         if (others.size() < 2) continue;

@@ -23,12 +23,11 @@
 // standard deviation exceeds max_sigma_frames, or the motion (read at the labels' own times) is
 // not well above the labels' scatter, and no value is given.
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "calibration/rig.h"
 #include "libreconstruct/geometry/bundle_adjust.h"
@@ -37,8 +36,8 @@
 namespace netlab::recon {
 
 struct FrameTimes {
-  std::vector<double> time_s;    // [T] mean over the cameras with timestamps
-  std::vector<double> spread_s;  // [T] largest minus smallest of those
+  std::vector<double> time_s;        // [T] mean over the cameras with timestamps
+  std::vector<double> spread_s;      // [T] largest minus smallest of those
   std::vector<std::string> cameras;  // the cameras whose timestamps were used
 };
 

@@ -4,11 +4,11 @@
 // Points are world positions in m, 3 doubles each. Each functor's Create() returns a new
 // AutoDiffCostFunction that the ceres::Problem it is added to takes ownership of.
 
-#include <array>
-
-#include <Eigen/Core>
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
+
+#include <Eigen/Core>
+#include <array>
 
 #include "calibration/rig.h"
 

@@ -1,9 +1,8 @@
 #include "libreconstruct/geometry/point_motion.h"
 
-#include <cmath>
-
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
+#include <cmath>
 
 #include "calibration/ray.h"
 

@@ -1,14 +1,14 @@
 #include "libreconstruct/geometry/rig_refinement.h"
 
+#include <ceres/ceres.h>
+
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <memory>
 #include <string>
-
-#include <Eigen/Cholesky>
-#include <ceres/ceres.h>
 
 #include "libreconstruct/geometry/cost_functors.h"
 
@@ -43,9 +43,9 @@ UsedSum SumOverUsed(const std::vector<double>& r2, const std::vector<char>& use)
 // Where the parameters of the moving cameras sit among the Jacobian's columns: first the points'
 // (3 each), then per camera its rotation (3, tangent) and centre (3, or 2 on the sphere).
 struct CameraColumns {
-  ceres::Problem::EvaluateOptions eval;  // the parameter blocks in that order
-  int points = 0;                        // points in the problem
-  int point_cols = 0;                    // 3 x points
+  ceres::Problem::EvaluateOptions eval;              // the parameter blocks in that order
+  int points = 0;                                    // points in the problem
+  int point_cols = 0;                                // 3 x points
   std::vector<int> rot_col, centre_col, centre_dim;  // per camera, -1 / 0 when not in it
   int m = 0;                                         // camera columns in all
 };
@@ -65,8 +65,7 @@ class RigProblem {
   std::vector<double> SquaredResiduals() const;
   // Solves the poses and points on the entries in `use` (Huber-weighted when `robust`); returns
   // the problem, for the uncertainty at its solution.
-  std::unique_ptr<ceres::Problem> Solve(const std::vector<char>& use, bool robust,
-                                        int iterations);
+  std::unique_ptr<ceres::Problem> Solve(const std::vector<char>& use, bool robust, int iterations);
   // Standard deviations of the cameras' rotation (deg) and centre (mm), into result's
   // rig_rotation_sigma_deg and rig_center_sigma_mm, for residual variance sigma2 (px^2).
   void Uncertainty(ceres::Problem& problem, double sigma2, SequenceResult* result);
@@ -76,8 +75,7 @@ class RigProblem {
  private:
   MovingCameraReprojection Reprojection(const Observation& ob) const;
   CameraColumns LayOutColumns(const ceres::Problem& problem);
-  static Eigen::MatrixXd ReducedCameraSystem(ceres::Problem& problem,
-                                             const CameraColumns& columns);
+  static Eigen::MatrixXd ReducedCameraSystem(ceres::Problem& problem, const CameraColumns& columns);
 
   const calib::Rig& rig_;
   const SequenceOptions& o_;
@@ -222,8 +220,10 @@ Eigen::MatrixXd RigProblem::ReducedCameraSystem(ceres::Problem& problem,
     int point = -1;
     for (int i = jac.rows[row]; i < jac.rows[row + 1]; ++i) {
       const int col = jac.cols[i];
-      if (col < point_cols) point = col / 3, jp[col % 3] = jac.values[i];
-      else jc[col - point_cols] = jac.values[i];
+      if (col < point_cols)
+        point = col / 3, jp[col % 3] = jac.values[i];
+      else
+        jc[col - point_cols] = jac.values[i];
     }
     a += jc * jc.transpose();
     if (point < 0) continue;
@@ -231,8 +231,7 @@ Eigen::MatrixXd RigProblem::ReducedCameraSystem(ceres::Problem& problem,
     bpc[point] += jp * jc.transpose();
   }
   // The points eliminated (Schur complement).
-  for (size_t p = 0; p < cpp.size(); ++p)
-    a -= bpc[p].transpose() * cpp[p].ldlt().solve(bpc[p]);
+  for (size_t p = 0; p < cpp.size(); ++p) a -= bpc[p].transpose() * cpp[p].ldlt().solve(bpc[p]);
   return a;
 }
 
@@ -278,8 +277,7 @@ void RigProblem::CompareAndAdopt(bool adopt, calib::Rig* rig, SequenceResult* re
 }  // namespace
 
 void RefineRig(const std::vector<RigPoint>& points, const SequenceOptions& options,
-               const TriangulationOptions& triangulation, calib::Rig* rig,
-               SequenceResult* result) {
+               const TriangulationOptions& triangulation, calib::Rig* rig, SequenceResult* result) {
   const int cams = static_cast<int>(rig->cameras.size());
   if (cams < 2) return;
   RigProblem problem(*rig, points, options, triangulation);

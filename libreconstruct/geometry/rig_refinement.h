@@ -5,9 +5,8 @@
 // the reference camera (the rig's first) does not move, and the second camera keeps its distance
 // from it (the scale), its centre moving on a sphere about the first.
 
-#include <vector>
-
 #include <Eigen/Core>
+#include <vector>
 
 #include "calibration/rig.h"
 #include "libreconstruct/geometry/bundle_adjust.h"
@@ -37,7 +36,6 @@ struct RigPoint {
 // (result->rig_adjusted); otherwise *rig is left as it was. Reports "rig" progress through
 // options.progress. Does nothing with fewer than two cameras or no points.
 void RefineRig(const std::vector<RigPoint>& points, const SequenceOptions& options,
-               const TriangulationOptions& triangulation, calib::Rig* rig,
-               SequenceResult* result);
+               const TriangulationOptions& triangulation, calib::Rig* rig, SequenceResult* result);
 
 }  // namespace netlab::recon

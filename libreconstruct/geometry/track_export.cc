@@ -1,5 +1,7 @@
 #include "libreconstruct/geometry/track_export.h"
 
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <charconv>
@@ -13,9 +15,6 @@
 #include <regex>
 #include <stdexcept>
 
-#include <Eigen/Cholesky>
-#include <Eigen/Geometry>
-
 #include "common/errors.h"
 #include "libreconstruct/labels/csv_table.h"
 
@@ -27,8 +26,8 @@ namespace {
 bool TruthAt(const KnotTracks& truth, int k, double t, Eigen::Vector3d* p) {
   const auto& time = truth.time;
   if (time.empty() || t < time.front() - 1e-9 || t > time.back() + 1e-9) return false;
-  const size_t hi = std::min<size_t>(
-      time.size() - 1, std::lower_bound(time.begin(), time.end(), t) - time.begin());
+  const size_t hi = std::min<size_t>(time.size() - 1,
+                                     std::lower_bound(time.begin(), time.end(), t) - time.begin());
   const size_t lo = hi > 0 ? hi - 1 : 0;
   if (!truth.Valid(static_cast<int>(lo), k) || !truth.Valid(static_cast<int>(hi), k)) return false;
   const double span = time[hi] - time[lo];
@@ -167,9 +166,8 @@ std::vector<std::vector<double>> ReadXyzRes(const std::string& path) {
   return residual;
 }
 
-KnotTracks TracksFromSequence(const SequenceResult& result,
-                                      const std::vector<double>& time_s,
-                                      const std::string& source) {
+KnotTracks TracksFromSequence(const SequenceResult& result, const std::vector<double>& time_s,
+                              const std::string& source) {
   if (time_s.size() != result.frame_index.size())
     throw std::invalid_argument("track export: one time per frame row needed");
   KnotTracks tracks;
@@ -195,15 +193,13 @@ KnotTracks TracksFromSequence(const SequenceResult& result,
   return tracks;
 }
 
-KnotTracks TracksFromSequence(const SequenceResult& result, double fps,
-                                      const std::string& source) {
+KnotTracks TracksFromSequence(const SequenceResult& result, double fps, const std::string& source) {
   std::vector<double> time;
   for (int f : result.frame_index) time.push_back(f / fps);
   return TracksFromSequence(result, time, source);
 }
 
-TruthComparison CompareWithTruth(const KnotTracks& tracks,
-                                 const KnotTracks& truth) {
+TruthComparison CompareWithTruth(const KnotTracks& tracks, const KnotTracks& truth) {
   // The valid points and the degenerate ones with their true positions.
   TruthComparison c;
   std::vector<Eigen::Vector3d> measured, truth_of, degenerate, truth_of_degenerate;

@@ -1,13 +1,13 @@
 #include "libreconstruct/geometry/triangulation.h"
 
-#include <algorithm>
-#include <cmath>
-#include <limits>
+#include <ceres/jet.h>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
-#include <ceres/jet.h>
+#include <algorithm>
+#include <cmath>
+#include <limits>
 
 #include "calibration/ray.h"
 
@@ -87,8 +87,8 @@ std::optional<ProjectedPoint> ProjectAgreeingViews(const calib::Rig& rig, int ca
 
 double LargestSigmaM(const PointEstimate& estimate, double label_sigma_px) {
   if (!estimate.valid) return std::numeric_limits<double>::infinity();
-  const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(
-                             estimate.unit_covariance, Eigen::EigenvaluesOnly)
+  const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(estimate.unit_covariance,
+                                                                        Eigen::EigenvaluesOnly)
                              .eigenvalues()[2];
   if (!std::isfinite(largest)) return std::numeric_limits<double>::infinity();
   return label_sigma_px * std::sqrt(std::max(largest, 0.0));
@@ -171,8 +171,8 @@ bool RefinePoint(const calib::Rig& rig, const std::vector<Observation>& observat
       const Eigen::Vector3d trial = p + step;
       const double trial_cost = RobustCost(rig, observations, h, trial);
       if (trial_cost <= cost) {
-        const bool converged = step.norm() <= 1e-12 * (1.0 + p.norm()) ||
-                               cost - trial_cost <= 1e-14 * (1.0 + cost);
+        const bool converged =
+            step.norm() <= 1e-12 * (1.0 + p.norm()) || cost - trial_cost <= 1e-14 * (1.0 + cost);
         p = trial;
         cost = trial_cost;
         lambda = std::max(lambda * 0.1, 1e-12);
@@ -256,7 +256,8 @@ PointEstimate TriangulatePoint(const calib::Rig& rig, const std::vector<Observat
     if (largest.size() > 1) {
       // Report every view that some largest set leaves out: one of them is wrong.
       est.why = "ambiguous: " + std::to_string(largest.size()) + " sets of " +
-                std::to_string(largest[0].size()) + " views agree with each other but not "
+                std::to_string(largest[0].size()) +
+                " views agree with each other but not "
                 "together (cannot tell which view is wrong)";
       for (int i = 0; i < n; ++i)
         for (const auto& set : largest)

@@ -17,19 +17,18 @@
 // solution: first order, exact for Gaussian pixel noise of standard deviation sigma in the limit
 // of small noise, and what the Cramer-Rao bound is at the true point.
 
+#include <Eigen/Core>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "calibration/rig.h"
 
 namespace netlab::recon {
 
 struct Observation {
-  int camera = 0;          // index into the rig
-  Eigen::Vector2d px;      // OpenCV pixel convention
+  int camera = 0;      // index into the rig
+  Eigen::Vector2d px;  // OpenCV pixel convention
 };
 
 struct TriangulationOptions {
@@ -43,7 +42,7 @@ struct TriangulationOptions {
 
 struct PointEstimate {
   bool valid = false;
-  std::string why;                  // when not valid
+  std::string why;                                     // when not valid
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // world, m
   // (J^T J)^-1 of the inlier residuals in px: the covariance for sigma = 1 px (m^2 / px^2).
   Eigen::Matrix3d unit_covariance = Eigen::Matrix3d::Zero();

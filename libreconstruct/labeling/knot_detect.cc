@@ -1,14 +1,13 @@
 #include "libreconstruct/labeling/knot_detect.h"
 
+#include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
-#include <queue>
-
-#include <Eigen/Dense>
-#include <Eigen/Eigenvalues>
 #include <opencv2/imgproc.hpp>
+#include <queue>
 
 #include "libreconstruct/recording/bayer.h"
 
@@ -64,7 +63,8 @@ BayerPattern DemosaicedFrom(const cv::Mat& image) {
   // A central window is enough (and four demosaicings of a whole region are not free); its
   // origin at even offsets keeps the pattern's phase.
   const int w = std::min(image.cols, 40), h = std::min(image.rows, 40);
-  const cv::Mat eight_bgr = image(cv::Rect((image.cols - w) / 4 * 2, (image.rows - h) / 4 * 2, w, h));
+  const cv::Mat eight_bgr =
+      image(cv::Rect((image.cols - w) / 4 * 2, (image.rows - h) / 4 * 2, w, h));
   const cv::Rect inner(2, 2, eight_bgr.cols - 4, eight_bgr.rows - 4);
   const int allowed = inner.area() * 3 / 1000;
   int matches = 0;
@@ -95,8 +95,8 @@ struct YarnSample {
 double Erf(double x, double e) {
   const double t = 1.0 / (1.0 + 0.3275911 * std::abs(x));
   const double poly =
-      t * (0.254829592 +
-           t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
+      t *
+      (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
   const double v = 1.0 - poly * e;
   return x < 0 ? -v : v;
 }
@@ -142,8 +142,8 @@ struct YarnFit {
 constexpr int kMaxYarnChannels = 3;
 constexpr int kMaxYarnParams = 3 + 2 * kMaxYarnChannels;
 using YarnParams = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxYarnParams, 1>;
-using YarnNormal = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxYarnParams,
-                                 kMaxYarnParams>;
+using YarnNormal =
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxYarnParams, kMaxYarnParams>;
 
 double SolveLinear(const std::vector<YarnSample>& samples, int channels, double blur,
                    YarnParams* p) {
@@ -169,8 +169,8 @@ double SolveLinear(const std::vector<YarnSample>& samples, int channels, double 
     (*p)(3 + c) = area;
     (*p)(3 + channels + c) = offset;
     // The sum of (value - area g - offset)^2.
-    ss += m.vv + area * area * m.gg + offset * offset * m.n - 2 * area * m.gv -
-          2 * offset * m.v + 2 * area * offset * m.g;
+    ss += m.vv + area * area * m.gg + offset * offset * m.n - 2 * area * m.gv - 2 * offset * m.v +
+          2 * area * offset * m.g;
   }
   return ss;
 }
@@ -209,8 +209,7 @@ YarnFit FitYarn(const std::vector<YarnSample>& samples, int channels, double blu
     double sum = 0.0;
     for (const YarnSample& s : samples) {
       const double r = q(3 + channels + s.channel) +
-                       q(3 + s.channel) * StripValue(s.v - q(0) - q(1) * s.u, q(2), blur) -
-                       s.value;
+                       q(3 + s.channel) * StripValue(s.v - q(0) - q(1) * s.u, q(2), blur) - s.value;
       sum += r * r;
     }
     return sum;
@@ -544,7 +543,8 @@ void KnotDetector::FindSolids(const cv::Mat& blobs, const cv::Mat& level) {
     const double fx = q.x() - x, fy = q.y() - y;
     const float* r0 = level.ptr<float>(y);
     const float* r1 = level.ptr<float>(y + 1);
-    return (1 - fy) * ((1 - fx) * r0[x] + fx * r0[x + 1]) + fy * ((1 - fx) * r1[x] + fx * r1[x + 1]);
+    return (1 - fy) * ((1 - fx) * r0[x] + fx * r0[x + 1]) +
+           fy * ((1 - fx) * r1[x] + fx * r1[x + 1]);
   };
   for (int i = 1; i < n; ++i) {
     const int area = stats.at<int>(i, cv::CC_STAT_AREA);
@@ -572,7 +572,8 @@ void KnotDetector::FindSolids(const cv::Mat& blobs, const cv::Mat& level) {
       int best = -1;
       for (double r = 0.3 * r0; r <= 1.5 * r0 + 4; r += kStep) {
         drops.push_back(at(c0 + (r - 0.5) * d) - at(c0 + (r + 0.5) * d));
-        if (drops.back() > steepest) steepest = drops.back(), best = static_cast<int>(drops.size()) - 1;
+        if (drops.back() > steepest)
+          steepest = drops.back(), best = static_cast<int>(drops.size()) - 1;
       }
       if (best <= 0 || best + 1 >= static_cast<int>(drops.size())) continue;
       // Sub-sample: the vertex of the parabola through the steepest drop and its neighbours.
@@ -643,16 +644,15 @@ std::vector<double> KnotDetector::SampleRing(const Eigen::Vector2d& centre, doub
     const float fx = static_cast<float>(u - x0), fy = static_cast<float>(v - y0);
     const cv::Vec3f* r0 = field_.ptr<cv::Vec3f>(y0) + x0;
     const cv::Vec3f* r1 = field_.ptr<cv::Vec3f>(y0 + 1) + x0;
-    const cv::Vec3f q = (1 - fy) * ((1 - fx) * r0[0] + fx * r0[1]) +
-                        fy * ((1 - fx) * r1[0] + fx * r1[1]);
+    const cv::Vec3f q =
+        (1 - fy) * ((1 - fx) * r0[0] + fx * r0[1]) + fy * ((1 - fx) * r1[0] + fx * r1[1]);
     // R cos^2(theta - a) = R (1 + cos 2 theta cos 2a + sin 2 theta sin 2a) / 2.
     ring[i] = 0.5 * (q[0] + q[1] * t.c2[i] + q[2] * t.s2[i]);
   }
   return ring;
 }
 
-std::vector<double> KnotDetector::Peaks(const std::vector<double>& profile,
-                                        double* weakest) const {
+std::vector<double> KnotDetector::Peaks(const std::vector<double>& profile, double* weakest) const {
   const int n = static_cast<int>(profile.size());
   std::vector<double> p(n);
   for (int i = 0; i < n; ++i)
@@ -679,14 +679,16 @@ std::vector<double> KnotDetector::Peaks(const std::vector<double>& profile,
   }
   // Peaks closer than the least branch separation are one (the stronger).
   const double separation = o_.min_branch_separation_deg * M_PI / 180;
-  std::sort(peaks.begin(), peaks.end(), [](const Peak& x, const Peak& y) { return x.value > y.value; });
+  std::sort(peaks.begin(), peaks.end(),
+            [](const Peak& x, const Peak& y) { return x.value > y.value; });
   std::vector<Peak> kept;
   for (const Peak& pk : peaks) {
     bool near = false;
     for (const Peak& k : kept) near = near || AngleBetween(pk.angle, k.angle) < separation;
     if (!near) kept.push_back(pk);
   }
-  std::sort(kept.begin(), kept.end(), [](const Peak& x, const Peak& y) { return x.angle < y.angle; });
+  std::sort(kept.begin(), kept.end(),
+            [](const Peak& x, const Peak& y) { return x.angle < y.angle; });
   std::vector<double> angles;
   double weak = std::numeric_limits<double>::infinity();
   for (const Peak& k : kept) {
@@ -767,8 +769,8 @@ int KnotDetector::YarnsAlong(const Eigen::Vector2d& px, const std::vector<double
   }
   if (seen_along)
     for (size_t a = 0; a < angles.size(); ++a) (*seen_along)[a] = seen[a] >= quorum;
-  return static_cast<int>(std::count_if(seen.begin(), seen.end(),
-                                        [&](int s) { return s >= quorum; }));
+  return static_cast<int>(
+      std::count_if(seen.begin(), seen.end(), [&](int s) { return s >= quorum; }));
 }
 
 std::optional<Junction> KnotDetector::ExamineRings(const Eigen::Vector2d& px) const {
@@ -897,8 +899,7 @@ std::optional<Junction> KnotDetector::Refine(const Junction& j) const {
   if (!(o_.near_fit_to_px > 0.0)) return out;
   // Fitted again on the yarns' first few pixels, where the default strip settled (or, where it
   // fitted no line through the junction, a yarn turned within it, where the rings put it).
-  const std::optional<Junction> rings =
-      ExamineRings(out ? out->px : j.px, 0.5 * o_.near_fit_to_px);
+  const std::optional<Junction> rings = ExamineRings(out ? out->px : j.px, 0.5 * o_.near_fit_to_px);
   // Without the default's junction, the near fit alone, on the same yarns.
   if (!rings || (!out && rings->branches != j.branches)) return out;
   bool near_bends = false;
@@ -1004,10 +1005,14 @@ std::optional<Junction> KnotDetector::RefineOver(const Junction& j, double from,
       // branch, off solids; of a demosaiced image only each pixel's own colour.
       std::vector<YarnSample> samples;
       const Eigen::Vector2d a = centre + from * d, z = centre + to * d;
-      const int x0 = std::max(0, static_cast<int>(std::floor(std::min(a.x(), z.x()) - across)) - roi_.x);
-      const int x1 = std::min(diff_.cols - 1, static_cast<int>(std::ceil(std::max(a.x(), z.x()) + across)) - roi_.x);
-      const int y0 = std::max(0, static_cast<int>(std::floor(std::min(a.y(), z.y()) - across)) - roi_.y);
-      const int y1 = std::min(diff_.rows - 1, static_cast<int>(std::ceil(std::max(a.y(), z.y()) + across)) - roi_.y);
+      const int x0 =
+          std::max(0, static_cast<int>(std::floor(std::min(a.x(), z.x()) - across)) - roi_.x);
+      const int x1 = std::min(
+          diff_.cols - 1, static_cast<int>(std::ceil(std::max(a.x(), z.x()) + across)) - roi_.x);
+      const int y0 =
+          std::max(0, static_cast<int>(std::floor(std::min(a.y(), z.y()) - across)) - roi_.y);
+      const int y1 = std::min(
+          diff_.rows - 1, static_cast<int>(std::ceil(std::max(a.y(), z.y()) + across)) - roi_.y);
       for (int y = y0; y <= y1; ++y)
         for (int x = x0; x <= x1; ++x) {
           const Eigen::Vector2d q = Eigen::Vector2d(x + roi_.x, y + roi_.y) - centre;
@@ -1016,8 +1021,8 @@ std::optional<Junction> KnotDetector::RefineOver(const Junction& j, double from,
           const double polar = std::atan2(q.y(), q.x());
           bool nearest = true;
           for (size_t o = 0; o < angles.size(); ++o)
-            nearest = nearest && (o == b || AngleBetween(polar, angles[o]) >
-                                                AngleBetween(polar, angles[b]));
+            nearest = nearest &&
+                      (o == b || AngleBetween(polar, angles[o]) > AngleBetween(polar, angles[b]));
           if (!nearest) continue;
           if (pattern != BayerPattern::kNone) {
             const int c = BayerColor(pattern, y, x);
@@ -1105,9 +1110,10 @@ double KnotDetector::ColourStep(const Eigen::Vector2d& px, const Line& a, const 
   if (!(ca.norm() > 0.0) || !(cb.norm() > 0.0) || (ca.normalized() - cb.normalized()).norm() < 0.5)
     return nan;
   // The background left in the foreground: the three fits' offsets, averaged.
-  const Eigen::VectorXd offset = (pa.segment(3 + channels, channels) +
-                                  pb.segment(3 + channels, channels) +
-                                  pl.segment(3 + channels, channels)) / 3.0;
+  const Eigen::VectorXd offset =
+      (pa.segment(3 + channels, channels) + pb.segment(3 + channels, channels) +
+       pl.segment(3 + channels, channels)) /
+      3.0;
   const Eigen::VectorXd cl = pl.segment(3, channels);
   const double blur = o_.yarn_blur_px;
   const Eigen::Vector2d e = (b.second - a.second).normalized();  // along the pair, towards b
@@ -1187,9 +1193,10 @@ std::vector<Junction> KnotDetector::FindInCircle(const Eigen::Vector2d& centre,
   for (double dy = -radius; dy <= radius; dy += step)
     for (double dx = -radius; dx <= radius; dx += step)
       if (dx * dx + dy * dy <= radius * radius) seeds.emplace_back(dx, dy);
-  std::stable_sort(seeds.begin(), seeds.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-    return a.squaredNorm() < b.squaredNorm();
-  });
+  std::stable_sort(seeds.begin(), seeds.end(),
+                   [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+                     return a.squaredNorm() < b.squaredNorm();
+                   });
   std::vector<Junction> coarse;
   for (const Eigen::Vector2d& offset : seeds) {
     const Eigen::Vector2d seed = centre + offset;
@@ -1304,8 +1311,8 @@ FindNodeResult FindNode(const cv::Mat& image, const Eigen::Vector2d& centre, dou
                   radius, corner_mass);
 }
 
-FindNodeResult FindNode(const KnotDetector& detector, const Eigen::Vector2d& centre,
-                        double radius, bool corner_mass) {
+FindNodeResult FindNode(const KnotDetector& detector, const Eigen::Vector2d& centre, double radius,
+                        bool corner_mass) {
   FindNodeResult result;
   result.candidates = detector.FindInCircle(centre, radius);
   if (corner_mass) result.candidates = detector.SolidsFor(result.candidates);

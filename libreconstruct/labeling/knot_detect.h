@@ -49,36 +49,35 @@
 // Find Node (the circular brush): every junction inside the brush, refined and merged; exactly
 // one is returned as found, none or several (with the candidates) are said so — never a guess.
 
+#include <Eigen/Core>
 #include <limits>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
-
 namespace netlab::recon {
 
 struct KnotDetectorOptions {
-  double ridge_sigma_px = 1.2;    // Gaussian scale of the Hessian (about the thread's half width)
+  double ridge_sigma_px = 1.2;  // Gaussian scale of the Hessian (about the thread's half width)
   // Branches are counted on rings_count circles from ring_radius_px to twice that (all but one
   // must agree). The inner ring must clear the knot's own bump (a knot ball is three yarn
   // widths across, its rim a ridge too: at 6 px it gave false peaks as strong as dim yarns).
   double ring_radius_px = 9.0;
   int rings_count = 3;
   // A branch peak (of the ridge strength along the radius) exceeds the largest of:
-  double noise_factor = 15.0;     // this many times the median ridge strength (the noise),
-  double peak_fraction = 0.03;    // this fraction of the strong ridges (99th percentile),
-  double min_peak = 1e-4;         // and this (ridge units: foreground (0..1) / px^2).
+  double noise_factor = 15.0;   // this many times the median ridge strength (the noise),
+  double peak_fraction = 0.03;  // this fraction of the strong ridges (99th percentile),
+  double min_peak = 1e-4;       // and this (ridge units: foreground (0..1) / px^2).
   double min_branch_separation_deg = 25.0;
   double straight_angle_deg = 150.0;  // two branches this far apart are one yarn passing through
-  double merge_px = 2.5;          // refined junctions closer than this are one
+  double merge_px = 2.5;              // refined junctions closer than this are one
   // Sub-pixel fit of each branch (false: the lines through the branch's ring peaks, biased by
   // demosaicing, see above).
   bool fit_yarns = true;
-  double fit_from_px = 5.0;       // along each branch from here (clear of the knot's bump) to
-                                  // 2 ring_radius_px
-  double fit_half_width_px = 3.0; // samples this far either side of the branch line, px
+  double fit_from_px = 5.0;        // along each branch from here (clear of the knot's bump) to
+                                   // 2 ring_radius_px
+  double fit_half_width_px = 3.0;  // samples this far either side of the branch line, px
   // The check of each refined junction on the yarns' first pixels: its branches found again on
   // rings half as far out as near_fit_to_px and fitted from near_fit_from_px to near_fit_to_px
   // (0: off). Where that settles more than bend_px away, the yarns bend within the strip above
@@ -110,10 +109,10 @@ struct KnotDetectorOptions {
   // Junction::colour_step of every edge junction (knotless nets; a knot ball moves the change).
   // Off, it costs nothing; on, a few per cent of Find Node's time (docs/benchmarks.md).
   bool colour_step = false;
-  double yarn_blur_px = 0.5;      // Gaussian blur of the yarn's edges in the model (pixel
-                                  // footprint, lens, motion), px
-  int background_window_px = 11;  // median window of the local background (odd, >> a yarn)
-  double solid_fraction = 0.3;    // foreground above this fraction of the brightest that stays
+  double yarn_blur_px = 0.5;        // Gaussian blur of the yarn's edges in the model (pixel
+                                    // footprint, lens, motion), px
+  int background_window_px = 11;    // median window of the local background (odd, >> a yarn)
+  double solid_fraction = 0.3;      // foreground above this fraction of the brightest that stays
   double max_solid_area_px = 3000;  // under an opening, in a blob up to this area: a solid
                                     // (corner mass), where no ridge is taken
   // A solid whose outline's RMS distance from its fitted circle exceeds this is not round
@@ -129,18 +128,18 @@ struct Junction {
   Eigen::Vector2d px = Eigen::Vector2d::Zero();  // OpenCV pixel convention
   int branches = 0;
   std::vector<double> branch_angles_rad;  // image angles (atan2(dy, dx)) of the yarns leaving it
-  double fit_rms_px = 0.0;   // RMS distance of px from the branch lines
-  int fitted_branches = 0;   // branches whose yarn was fitted (a branch of four may be left out)
-  double sigma_px = 0.0;     // the largest standard deviation of px from the lines' offsets
-  double contrast = 0.0;     // weakest branch peak / the peak threshold (> 1)
+  double fit_rms_px = 0.0;                // RMS distance of px from the branch lines
+  int fitted_branches = 0;  // branches whose yarn was fitted (a branch of four may be left out)
+  double sigma_px = 0.0;    // the largest standard deviation of px from the lines' offsets
+  double contrast = 0.0;    // weakest branch peak / the peak threshold (> 1)
   // An edge junction (three yarns, two of them one straight line): where on that line the
   // colour changes from one link's dye to the other's (KnotDetectorOptions::colour_step); NaN
   // where the two links' colours are too alike to tell, not an edge junction, or not asked.
   Eigen::Vector2d colour_step = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
-  double confidence = 0.0;   // 0..1 from contrast and fit
-  bool solid = false;        // the centre of a solid (corner mass), not a yarn junction;
-                             // branches: the yarns leaving it, fit_rms_px: its outline's RMS
-                             // distance from the fitted circle
+  double confidence = 0.0;  // 0..1 from contrast and fit
+  bool solid = false;       // the centre of a solid (corner mass), not a yarn junction;
+                            // branches: the yarns leaving it, fit_rms_px: its outline's RMS
+                            // distance from the fitted circle
   // A solid whose outline is cut, so that its centre is uncertain: its outline is not round
   // (RMS distance from its circle over KnotDetectorOptions::solid_round_px), as a corner mass
   // lying half over the target's face is.
@@ -239,8 +238,8 @@ class KnotDetector {
   KnotDetectorOptions o_;
   cv::Rect roi_;
   cv::Mat ridge_;
-  cv::Mat field_;  // CV_32FC3: R, R cos 2 theta, R sin 2 theta (theta: the ridge's direction)
-  cv::Mat diff_;   // CV_32FC(n): the image minus its local background, 0..1
+  cv::Mat field_;   // CV_32FC3: R, R cos 2 theta, R sin 2 theta (theta: the ridge's direction)
+  cv::Mat diff_;    // CV_32FC(n): the image minus its local background, 0..1
   cv::Mat masked_;  // CV_8U: 255 on (dilated) solids, 128 on the background's edges, else 0
   std::vector<Solid> solids_;
   int pattern_ = 0;  // BayerPattern
@@ -287,8 +286,8 @@ struct FindNodeResult {
 FindNodeResult FindNode(const cv::Mat& image, const Eigen::Vector2d& centre, double radius,
                         const KnotDetectorOptions& options = {}, bool corner_mass = false);
 // The same with a detector built by the caller (FindNodeRegion: its ROI around the brush).
-FindNodeResult FindNode(const KnotDetector& detector, const Eigen::Vector2d& centre,
-                        double radius, bool corner_mass = false);
+FindNodeResult FindNode(const KnotDetector& detector, const Eigen::Vector2d& centre, double radius,
+                        bool corner_mass = false);
 cv::Rect FindNodeRegion(const Eigen::Vector2d& centre, double radius,
                         const KnotDetectorOptions& options);
 
@@ -301,8 +300,8 @@ cv::Rect FindNodeRegion(const Eigen::Vector2d& centre, double radius,
 struct FindPathResult {
   bool ok = false;
   std::string why;
-  std::vector<int> knots;           // row * cols + col of each knot between, from a towards b
-  std::vector<Junction> junctions;  // their junctions, in the same order
+  std::vector<int> knots;             // row * cols + col of each knot between, from a towards b
+  std::vector<Junction> junctions;    // their junctions, in the same order
   std::vector<Eigen::Vector2d> path;  // the followed yarn, pixel by pixel
 };
 

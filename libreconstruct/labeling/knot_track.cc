@@ -5,10 +5,9 @@
 #include <cstdio>
 #include <limits>
 #include <map>
-#include <optional>
-
 #include <opencv2/imgproc.hpp>
 #include <opencv2/video/tracking.hpp>
+#include <optional>
 
 namespace netlab::recon {
 namespace {
@@ -36,10 +35,10 @@ struct KnotTracking {
   int rows, cols;
   const TrackOptions& options;
   std::vector<cv::Point2f> p0{}, p1{};  // per knot: its position in `from`, its flow's end in `to`
-  std::vector<bool> trusted{};      // per knot: its flow passed the forward-backward check
-  std::map<int, size_t> index{};    // a knot's index in `knots`
-  std::vector<TrackedKnot> out{};   // per knot of `knots`
-  std::map<int, KnownMotion> known{};  // knots not tracked whose motion is known
+  std::vector<bool> trusted{};          // per knot: its flow passed the forward-backward check
+  std::map<int, size_t> index{};        // a knot's index in `knots`
+  std::vector<TrackedKnot> out{};       // per knot of `knots`
+  std::map<int, KnownMotion> known{};   // knots not tracked whose motion is known
 
   void Flow(const cv::Mat& from);
   bool Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot* t) const;
@@ -132,8 +131,9 @@ bool KnotTracking::Snap(size_t i, const Eigen::Vector2d& predicted, TrackedKnot*
   if (options.body_edge_px > 0.0 && !j.solid &&
       detector.NearBackgroundEdge(j.px, options.body_edge_px) &&
       (j.branches != degree || !YarnsPointAtNeighbours(i, j.branch_angles_rad))) {
-    t->why = "at the edge of the target, a yarn short or with a yarn that leads to no "
-             "neighbour (it may be behind the target)";
+    t->why =
+        "at the edge of the target, a yarn short or with a yarn that leads to no "
+        "neighbour (it may be behind the target)";
     return false;
   }
   if (j.branches == degree) return true;
@@ -341,8 +341,9 @@ void KnotTracking::CheckRelativeMotion() {
       const std::vector<double>& yarns = out[i].branch_angles_rad;
       if (!yarns.empty() && !YarnsPointAtNeighbours(i, yarns)) {
         out[i].accepted = false;
-        out[i].why = "no accepted neighbour moved with it, and a yarn of its junction leads to "
-                     "no neighbour";
+        out[i].why =
+            "no accepted neighbour moved with it, and a yarn of its junction leads to "
+            "no neighbour";
       }
       continue;
     }

@@ -20,13 +20,12 @@
 // knot whose result lies within the snap radius of another's is accepted. A knot not accepted
 // needs review, with the reason, at the best position there is.
 
+#include <Eigen/Core>
 #include <cmath>
+#include <opencv2/core.hpp>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
 
 #include "libreconstruct/labeling/knot_detect.h"
 
@@ -76,11 +75,11 @@ struct TrackOptions {
 };
 
 struct TrackedKnot {
-  int knot = 0;                         // row * cols + col
+  int knot = 0;                                  // row * cols + col
   Eigen::Vector2d px = Eigen::Vector2d::Zero();  // in the next frame
   bool accepted = false;
   double confidence = 0.0;
-  std::string why;                      // when not accepted
+  std::string why;  // when not accepted
   // Its junction has one yarn fewer than the knot's degree: accepted only where its accepted
   // neighbours' motion could check it (a junction in a fold, a yarn beside its own, passes
   // the yarn-direction test 2-3 px off).

@@ -1,17 +1,16 @@
 #include "libreconstruct/labeling/label_engine.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <functional>
 #include <map>
-#include <optional>
-#include <stdexcept>
-
-#include <Eigen/Eigenvalues>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
+#include <stdexcept>
 
 #include "libreconstruct/geometry/point_motion.h"
 #include "libreconstruct/geometry/triangulation.h"
@@ -191,8 +190,8 @@ EngineCounts LabelEngine::Commit(const std::string& name, const std::vector<Labe
   return n;
 }
 
-NeighbourSlots LabelEngine::Slots(
-    int camera, int t, int knot, const std::vector<std::optional<Eigen::Vector3d>>& point) const {
+NeighbourSlots LabelEngine::Slots(int camera, int t, int knot,
+                                  const std::vector<std::optional<Eigen::Vector3d>>& point) const {
   const LabelSet& set = store_->labels();
   const std::array<int, 4> slot_knot = SlotKnots(knot);
   NeighbourSlots slots;
@@ -277,8 +276,8 @@ void LabelEngine::FindFarSides(int camera, int t, const cv::Mat& image,
     const FindNodeResult found = FindNode(image, p, link_px / 3.0, o_.detector);
     if (found.status != FindNodeStatus::kFound || found.knot.solid) continue;
     // Accepted only if its yarns then leave it towards its neighbours (checked with the rest).
-    edits->push_back({camera, t, k,
-                      Made(found.knot.px, LabelSource::kFindPath, found.knot.confidence, true)});
+    edits->push_back(
+        {camera, t, k, Made(found.knot.px, LabelSource::kFindPath, found.knot.confidence, true)});
     (*junction_of)[k] = found.knot;
   }
 }
@@ -309,15 +308,15 @@ EngineCounts LabelEngine::LabelFirstFrame(int t) {
       return FindPath(image, cols, a, *pa, b, *pb, o_.detector);
     };
     // The four sides: each knot from one path (its junction count checked against the grid).
-    for (const auto& [a, b] : {std::pair(corners[0], corners[1]), std::pair(corners[2], corners[3]),
-                               std::pair(corners[0], corners[2]),
-                               std::pair(corners[1], corners[3])}) {
+    for (const auto& [a, b] :
+         {std::pair(corners[0], corners[1]), std::pair(corners[2], corners[3]),
+          std::pair(corners[0], corners[2]), std::pair(corners[1], corners[3])}) {
       const FindPathResult r = path(a, b);
       for (size_t i = 0; i < r.knots.size(); ++i)
         if (Free(set.at(camera, t, r.knots[i]))) {
-          edits.push_back({camera, t, r.knots[i],
-                           Made(r.junctions[i].px, LabelSource::kFindPath,
-                                r.junctions[i].confidence, true)});
+          edits.push_back(
+              {camera, t, r.knots[i],
+               Made(r.junctions[i].px, LabelSource::kFindPath, r.junctions[i].confidence, true)});
           junction_of[r.knots[i]] = r.junctions[i];
         }
     }
@@ -485,7 +484,7 @@ EngineCounts LabelEngine::Track(int from, int to) {
   struct CameraTrack {
     std::vector<std::pair<int, Eigen::Vector2d>> knots;
     std::vector<bool> was_accepted;
-    std::vector<bool> from_hand;  // placed by the person in `from`
+    std::vector<bool> from_hand;     // placed by the person in `from`
     std::vector<KnownMotion> known;  // knots accepted in both frames, not tracked again
     const cv::Mat* a = nullptr;
     const cv::Mat* b = nullptr;
@@ -534,8 +533,8 @@ EngineCounts LabelEngine::Track(int from, int to) {
       const bool off_hand = tk.accepted && job.from_hand[i] && o_.from_hand_snap_px > 0.0 &&
                             !(snapped <= o_.from_hand_snap_px);
       const bool accepted = tk.accepted && job.was_accepted[i] && !off_hand;
-      edits.push_back({camera, to, tk.knot,
-                       Made(tk.px, LabelSource::kTracked, tk.confidence, accepted)});
+      edits.push_back(
+          {camera, to, tk.knot, Made(tk.px, LabelSource::kTracked, tk.confidence, accepted)});
       if (off_hand)
         Note(camera, to, tk.knot,
              "tracked from a label placed by hand onto a junction " + Px(snapped) +
@@ -555,8 +554,7 @@ FindNodeResult LabelEngine::FindNodeAt(int camera, int t, int knot, const Eigen:
     r.why = "the frame cannot be read";
     return r;
   }
-  FindNodeResult r =
-      FindNode(image, centre, radius_px, o_.detector, Neighbours(knot).size() == 2);
+  FindNodeResult r = FindNode(image, centre, radius_px, o_.detector, Neighbours(knot).size() == 2);
   // Only a corner knot sits in a blob (its corner mass); elsewhere a blob is yarns bunched in a
   // fold (one once gave an inner knot 2.7 px off).
   if (r.status == FindNodeStatus::kFound && r.knot.solid && Neighbours(knot).size() != 2) {
@@ -567,8 +565,7 @@ FindNodeResult LabelEngine::FindNodeAt(int camera, int t, int knot, const Eigen:
   // and places the knot where the image shows none.
   bool by_motion = false;
   std::optional<Eigen::Vector2d> others = OthersPlace(camera, t, knot, &by_motion);
-  if (others && (*others - centre).norm() > radius_px + o_.projection_tolerance_px)
-    others.reset();
+  if (others && (*others - centre).norm() > radius_px + o_.projection_tolerance_px) others.reset();
   const auto agrees = [&](const Junction& j) {
     return others && (j.px - *others).norm() <= o_.projection_tolerance_px;
   };
@@ -584,8 +581,9 @@ FindNodeResult LabelEngine::FindNodeAt(int camera, int t, int knot, const Eigen:
     // The junction, where the other cameras agree with it (their word outweighs the doubts of
     // its yarns), else judged by its yarns and the other cameras' labels.
     const std::string doubt = agrees(r.knot) ? "" : FoundNodeDoubt(camera, t, knot, r.knot);
-    Commit("Find Node", {{camera, t, knot, Made(r.knot.px, LabelSource::kFindNode,
-                                                r.knot.confidence, doubt.empty())}});
+    Commit("Find Node",
+           {{camera, t, knot,
+             Made(r.knot.px, LabelSource::kFindNode, r.knot.confidence, doubt.empty())}});
     if (!doubt.empty()) Note(camera, t, knot, "Find Node: " + doubt);
     return r;
   }
@@ -648,9 +646,8 @@ int LabelEngine::CheckAgainstPerson(int t, int knot, const std::vector<int>& per
   if (persons_views.size() >= 2) {
     for (size_t i = 0; i < from.size(); ++i)
       if (!persons(from[i]))
-        if (const std::optional<double> off = OffTheViews(*rig_, obs[i], persons_views, topt,
-                                                          o_.projection_tolerance_px,
-                                                          o_.label_sigma_px))
+        if (const std::optional<double> off = OffTheViews(
+                *rig_, obs[i], persons_views, topt, o_.projection_tolerance_px, o_.label_sigma_px))
           flag(i, "after the person's labels: " + Px(*off) +
                       " px from where the person's labels put the knot");
     obs.clear();
@@ -856,8 +853,10 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
   const std::optional<double> moved = MotionOff(camera, t, knot, j.px);
   if (moved && *moved > o_.place_motion_px) {
     char why[96];
-    std::snprintf(why, sizeof why, "it moved %.1f px otherwise than its neighbours since the "
-                  "frame before", *moved);
+    std::snprintf(why, sizeof why,
+                  "it moved %.1f px otherwise than its neighbours since the "
+                  "frame before",
+                  *moved);
     return why;
   }
   confirmed = confirmed || moved.has_value();
@@ -887,8 +886,10 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
   if (!j.solid && !moved) {
     char why[160];
     if (j.branches < degree) {
-      std::snprintf(why, sizeof why, "the junction has %d yarns, the knot %d, and nothing checks "
-                    "its place (no motion, no other cameras that fix it)", j.branches, degree);
+      std::snprintf(why, sizeof why,
+                    "the junction has %d yarns, the knot %d, and nothing checks "
+                    "its place (no motion, no other cameras that fix it)",
+                    j.branches, degree);
       return why;
     }
     if (link_angles.size() >= 2 && !BranchesMatchLinks(j, slots, o_.track.max_yarn_angle_deg))
@@ -918,8 +919,7 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
       if (fitted && (!e.outliers.empty() ||
                      !(e.residual_px[0] + e.residual_px[1] <= o_.epipolar_tolerance_px))) {
         char why[112];
-        std::snprintf(why, sizeof why,
-                      "%.1f px from the epipolar line of the other camera's label",
+        std::snprintf(why, sizeof why, "%.1f px from the epipolar line of the other camera's label",
                       e.residual_px[0] + e.residual_px[1]);
         return why;
       }
@@ -1053,8 +1053,8 @@ std::vector<double> MedianColour(const cv::Mat& image, const cv::Rect& box) {
 std::vector<double> SceneBackground(const cv::Mat& image) {
   if (image.empty()) return {};
   cv::Mat sparse;
-  cv::resize(image, sparse, cv::Size(std::max(1, image.cols / 16), std::max(1, image.rows / 16)),
-             0, 0, cv::INTER_NEAREST);
+  cv::resize(image, sparse, cv::Size(std::max(1, image.cols / 16), std::max(1, image.rows / 16)), 0,
+             0, cv::INTER_NEAREST);
   return MedianColour(sparse, cv::Rect(0, 0, sparse.cols, sparse.rows));
 }
 
@@ -1065,13 +1065,13 @@ bool OnSceneBackground(const cv::Mat& image, const std::vector<double>& scene,
                        const Eigen::Vector2d& px, double reach, double tolerance) {
   if (image.empty() || static_cast<int>(scene.size()) != image.channels()) return false;
   const int r = static_cast<int>(std::ceil(reach));
-  for (const Eigen::Vector2d& d : {Eigen::Vector2d(0, 0), Eigen::Vector2d(reach, 0),
-                                   Eigen::Vector2d(-reach, 0), Eigen::Vector2d(0, reach),
-                                   Eigen::Vector2d(0, -reach)}) {
+  for (const Eigen::Vector2d& d :
+       {Eigen::Vector2d(0, 0), Eigen::Vector2d(reach, 0), Eigen::Vector2d(-reach, 0),
+        Eigen::Vector2d(0, reach), Eigen::Vector2d(0, -reach)}) {
     const Eigen::Vector2d at = px + d;
     const std::vector<double> m = MedianColour(
-        image, cv::Rect(static_cast<int>(at.x()) - r, static_cast<int>(at.y()) - r, 2 * r + 1,
-                        2 * r + 1));
+        image,
+        cv::Rect(static_cast<int>(at.x()) - r, static_cast<int>(at.y()) - r, 2 * r + 1, 2 * r + 1));
     for (size_t ch = 0; ch < m.size(); ++ch)
       if (std::abs(m[ch] - scene[ch]) > tolerance) return false;
   }
@@ -1225,8 +1225,7 @@ int LabelEngine::CheckHidden(int t) {
       const PointEstimate e = TriangulatePoint(*rig_, others, topt);
       if (!e.valid || !e.outliers.empty() || !UsableGeometry(e)) continue;
       const calib::Camera& camera = rig_->cameras[RigIndex(c)];
-      if (!TargetHides(target_, camera.Center(), e.position, time_s, -o_.target_margin_m))
-        continue;
+      if (!TargetHides(target_, camera.Center(), e.position, time_s, -o_.target_margin_m)) continue;
       std::string from;  // the cameras of `others` (OtherViews: every other one with the knot)
       for (int o = 0; o < static_cast<int>(set.cameras.size()); ++o)
         if (o != c && Observed(set.at(o, t, k)))
@@ -1295,13 +1294,11 @@ void LabelEngine::TriangulateAccepted(FrameCheck* f, std::vector<LabelEdit>* fla
         flag(static_cast<int>(i), "epipolar check: the cameras disagree (" + e.why + ")");
     } else if (!e.outliers.empty()) {
       for (int i : e.outliers)
-        flag(i, "epipolar check: " + Px(e.residual_px[i]) +
-                    " px off the point of all the cameras");
-    } else if (const auto off =
-                   ViewOffTheOthers(*rig_, obs, f->topt, o_.projection_tolerance_px,
-                                    o_.label_sigma_px)) {
-      flag(off->first, "epipolar check: " + Px(off->second) +
-                           " px from where the other cameras put the knot");
+        flag(i, "epipolar check: " + Px(e.residual_px[i]) + " px off the point of all the cameras");
+    } else if (const auto off = ViewOffTheOthers(*rig_, obs, f->topt, o_.projection_tolerance_px,
+                                                 o_.label_sigma_px)) {
+      flag(off->first,
+           "epipolar check: " + Px(off->second) + " px from where the other cameras put the knot");
     }
   }
 }
@@ -1335,9 +1332,9 @@ EngineCounts LabelEngine::FillGridPass(FrameCheck* f, int pass) {
   // Candidates become labels only when the cameras agree in 3D.
   AcceptCandidates(*f, candidates, &edits);
   const std::vector<LabelEdit> unique = OneLabelPerPlace(f->t, edits);
-  return Commit("Fill Grid (frame row " + std::to_string(f->t) + ", pass " +
-                    std::to_string(pass + 1) + ")",
-                unique);
+  return Commit(
+      "Fill Grid (frame row " + std::to_string(f->t) + ", pass " + std::to_string(pass + 1) + ")",
+      unique);
 }
 
 void LabelEngine::SearchCamera(FrameCheck* f, int c, std::vector<LabelEdit>* edits,
@@ -1379,8 +1376,7 @@ void LabelEngine::SearchCamera(FrameCheck* f, int c, std::vector<LabelEdit>* edi
 }
 
 std::optional<LabelEngine::FillCandidate> LabelEngine::PathCandidate(FrameCheck* f,
-                                                                     const FillView& view,
-                                                                     int k) {
+                                                                     const FillView& view, int k) {
   const int c = view.camera;
   const Eigen::Vector2d at = store_->labels().at(c, f->t, k).px;
   if (!view.Inside(at) || f->Repeat(c, k, at)) return std::nullopt;
@@ -1416,8 +1412,7 @@ std::optional<LabelEdit> LabelEngine::SearchAtProjection(FrameCheck* f, const Fi
   if (r.status == FindNodeStatus::kFound && (r.knot.px - q).norm() <= o_.projection_tolerance_px &&
       !TakenNear(*f, c, k, r.knot.px) && ColourChangesAt(r.knot, o_.edge_colour_step_px) &&
       BranchesMatchLinks(r.knot, Slots(c, f->t, k, f->point), o_.branch_tolerance_deg))
-    return LabelEdit{c, f->t, k,
-                     Made(r.knot.px, LabelSource::kFillGrid, r.knot.confidence, true)};
+    return LabelEdit{c, f->t, k, Made(r.knot.px, LabelSource::kFillGrid, r.knot.confidence, true)};
   return PlaceAtProjection(f, view, k);
 }
 
@@ -1443,8 +1438,8 @@ std::optional<LabelEdit> LabelEngine::PlaceAtProjection(FrameCheck* f, const Fil
   auto scene = f->background.find(c);
   if (scene == f->background.end())
     scene = f->background.emplace(c, SceneBackground(view.image)).first;
-  const bool over_body = !OnSceneBackground(view.image, scene->second, *q,
-                                            o_.background_reach_px, o_.background_tolerance);
+  const bool over_body = !OnSceneBackground(view.image, scene->second, *q, o_.background_reach_px,
+                                            o_.background_tolerance);
   // Over the target or another body, a knot may be behind it: there every one of its links
   // must be seen leaving it (at least three); or, where this camera saw the knot in an adjacent
   // frame row (its label there accepted), a yarn must pass through the place (two opposite
@@ -1629,8 +1624,8 @@ void LabelEngine::AcceptCandidates(const FrameCheck& f, const FillCandidates& ca
     // Not confirmed: for review, where the camera has no label of the knot.
     for (const auto& cand : list)
       if (!set.at(cand.camera, f.t, k).present()) {
-        edits->push_back({cand.camera, f.t, k,
-                          Made(cand.px, LabelSource::kFillGrid, cand.confidence, false)});
+        edits->push_back(
+            {cand.camera, f.t, k, Made(cand.px, LabelSource::kFillGrid, cand.confidence, false)});
         Note(cand.camera, f.t, k, why);
       }
   }

@@ -39,17 +39,16 @@
 // Colour check (SetCodebook): a label whose yarn colours contradict its knot's is flagged.
 // Without a rig (or with one camera) CrossCheck does the image-space part only, for review.
 
+#include <Eigen/Core>
 #include <array>
 #include <functional>
 #include <map>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <set>
 #include <string>
 #include <tuple>
 #include <vector>
-
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
 
 #include "calibration/rig.h"
 #include "libreconstruct/geometry/point_motion.h"
@@ -173,10 +172,10 @@ YarnDirections AcceptedNeighbourYarns(const LabelSet& set, int camera, int t, in
 // What LabelFrames did: the labels each step set (accepted, kept for review), summed over the
 // frames.
 struct LabelingSummary {
-  int frames = 0;               // frame rows labeled
-  EngineCounts first_frame;     // Find Path in the first frame row
-  EngineCounts tracked;         // Track into each later frame row
-  EngineCounts cross_checked;   // CrossCheck of every frame row (review: also those it flagged)
+  int frames = 0;              // frame rows labeled
+  EngineCounts first_frame;    // Find Path in the first frame row
+  EngineCounts tracked;        // Track into each later frame row
+  EngineCounts cross_checked;  // CrossCheck of every frame row (review: also those it flagged)
 };
 
 class LabelEngine {
@@ -306,8 +305,7 @@ class LabelEngine {
   int RigIndex(int camera) const { return rig_index_[camera]; }
   void Note(int camera, int t, int knot, const std::string& why);
   // The label of (camera, t, knot) as it is, turned to review with `why`, appended to `flags`.
-  void ToReview(int camera, int t, int knot, const std::string& why,
-                std::vector<LabelEdit>* flags);
+  void ToReview(int camera, int t, int knot, const std::string& why, std::vector<LabelEdit>* flags);
   EngineCounts Commit(const std::string& name, const std::vector<LabelEdit>& edits);
   // LabelFirstFrame with three corners seeded: Find Node on the knots of the fourth corner's
   // row and column (not the corner), where the homography of the other two sides' knots (`px`:
@@ -339,8 +337,8 @@ class LabelEngine {
   bool LabelNear(int camera, int t, int knot, const Eigen::Vector2d& px) const;
   // The image positions of a knot's neighbours in (camera, t), right, down, left, up: accepted
   // labels, else the projections of their triangulated points.
-  NeighbourSlots Slots(
-      int camera, int t, int knot, const std::vector<std::optional<Eigen::Vector3d>>& point) const;
+  NeighbourSlots Slots(int camera, int t, int knot,
+                       const std::vector<std::optional<Eigen::Vector3d>>& point) const;
 
   // CrossCheck's steps (label_engine.cc). FrameCheck: the state of one frame row's check, shared
   // by its steps; FillView: one camera's frame in a Fill Grid pass; FillCandidate: a junction a
@@ -371,8 +369,8 @@ class LabelEngine {
   std::optional<LabelEdit> PlaceAtProjection(FrameCheck* f, const FillView& view, int knot);
   // (b) The projected samples of the lens where spheres of link length around the knot's
   // triangulated neighbours meet (`how` says so); empty when they do not fix it.
-  std::vector<Eigen::Vector2d> LinkSphereRegion(const FrameCheck& f, const FillView& view,
-                                                int knot, std::string* how) const;
+  std::vector<Eigen::Vector2d> LinkSphereRegion(const FrameCheck& f, const FillView& view, int knot,
+                                                std::string* how) const;
   // The one unlabeled junction near a region's samples, as a candidate.
   std::optional<FillCandidate> SearchRegion(FrameCheck* f, const FillView& view, int knot,
                                             std::vector<Eigen::Vector2d> region,

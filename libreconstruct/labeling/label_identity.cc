@@ -371,12 +371,9 @@ KnotCodebook CodebookFromColoring(const NetColoring& coloring,
 
 std::string IdentityVerdictName(IdentityVerdict verdict) {
   switch (verdict) {
-    case IdentityVerdict::kConsistent:
-      return "consistent";
-    case IdentityVerdict::kMismatch:
-      return "mismatch";
-    case IdentityVerdict::kUnreadable:
-      return "unreadable";
+    case IdentityVerdict::kConsistent: return "consistent";
+    case IdentityVerdict::kMismatch: return "mismatch";
+    case IdentityVerdict::kUnreadable: return "unreadable";
   }
   return "?";
 }
@@ -464,9 +461,8 @@ JunctionReading ReadJunctionIdentity(const cv::Mat& bgr8, const KnotCodebook& co
   result.yarns = n;
 
   // How far along the yarns to read (nothing when a solid covers the junction).
-  const double link = link_px > 0 && std::isfinite(link_px)
-                          ? link_px
-                          : std::numeric_limits<double>::infinity();
+  const double link =
+      link_px > 0 && std::isfinite(link_px) ? link_px : std::numeric_limits<double>::infinity();
   const std::optional<IdentifyOptions> reading =
       ReadingRange(bgr8, px, link, junction, options, &result.why);
   if (!reading) return result;

@@ -22,13 +22,12 @@
 // dyes are those within the ambiguity margin of the best (YarnReading::plausible). A read yarn
 // contradicts a link when the link's dye is not plausible for it.
 
+#include <Eigen/Core>
 #include <array>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
 
 #include "libreconstruct/coloring/color_identify.h"
 #include "libreconstruct/coloring/net_coloring.h"

@@ -17,12 +17,9 @@ constexpr char kJournalMagic[] = "netlab-journal";
 
 const char* ChangeName(LabelStore::Change change) {
   switch (change) {
-    case LabelStore::Change::kApplied:
-      return "applied";
-    case LabelStore::Change::kUndone:
-      return "undone";
-    case LabelStore::Change::kRedone:
-      return "redone";
+    case LabelStore::Change::kApplied: return "applied";
+    case LabelStore::Change::kUndone: return "undone";
+    case LabelStore::Change::kRedone: return "redone";
   }
   return "?";
 }
@@ -91,9 +88,9 @@ std::vector<LabelEdit> ReadLabelJournal(const std::string& path, const LabelSet&
       if (source < 0 || source > static_cast<int>(LabelSource::kProjected) || state < 0 ||
           state > static_cast<int>(LabelState::kHidden) ||
           (label.hidden() && !(std::isnan(label.px.x()) && std::isnan(label.px.y()))))
-        throw InputError(path + ":" + std::to_string(line_no) +
-                         ": not a label (source, state, or a hidden mark with a position): " +
-                         line);
+        throw InputError(
+            path + ":" + std::to_string(line_no) +
+            ": not a label (source, state, or a hidden mark with a position): " + line);
       pending.emplace_back(Key{c, t, k}, label);
     }
   }

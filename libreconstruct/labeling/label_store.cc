@@ -11,12 +11,11 @@ int LabelStore::Apply(const std::string& name, const std::vector<LabelEdit>& edi
   for (const LabelEdit& e : edits)
     if (e.camera < 0 || e.camera >= cameras || e.t < 0 || e.t >= labels_.frames() || e.knot < 0 ||
         e.knot >= labels_.knots())
-      throw std::out_of_range("label store, step '" + name + "': camera " +
-                              std::to_string(e.camera) + ", frame row " + std::to_string(e.t) +
-                              ", knot " + std::to_string(e.knot) + " is outside the " +
-                              std::to_string(cameras) + " cameras x " +
-                              std::to_string(labels_.frames()) + " frames x " +
-                              std::to_string(labels_.knots()) + " knots");
+      throw std::out_of_range(
+          "label store, step '" + name + "': camera " + std::to_string(e.camera) + ", frame row " +
+          std::to_string(e.t) + ", knot " + std::to_string(e.knot) + " is outside the " +
+          std::to_string(cameras) + " cameras x " + std::to_string(labels_.frames()) +
+          " frames x " + std::to_string(labels_.knots()) + " knots");
   Step step{name, {}};
   for (const LabelEdit& e : edits) {
     Label& slot = labels_.at(e.camera, e.t, e.knot);
@@ -70,9 +69,8 @@ void LabelStore::SetReasons(const ReviewReasons& reasons) {
   const int cameras = static_cast<int>(labels_.cameras.size());
   for (const auto& [key, why] : reasons) {
     const auto [c, t, k] = key;
-    if (c >= 0 && c < cameras && t >= 0 && t < labels_.frames() && k >= 0 &&
-        k < labels_.knots() && labels_.at(c, t, k).present() &&
-        labels_.at(c, t, k).state == LabelState::kNeedsReview)
+    if (c >= 0 && c < cameras && t >= 0 && t < labels_.frames() && k >= 0 && k < labels_.knots() &&
+        labels_.at(c, t, k).present() && labels_.at(c, t, k).state == LabelState::kNeedsReview)
       labels_.reasons[key] = why;
   }
 }

@@ -6,8 +6,8 @@
 #include <cstdio>
 #include <limits>
 #include <optional>
-#include <unordered_map>
 #include <tuple>
+#include <unordered_map>
 
 #include "libreconstruct/labeling/label_engine.h"
 
@@ -117,8 +117,7 @@ class Points {
       std::vector<int> seen, review;
       for (int c = 0; c < static_cast<int>(labels_.cameras.size()); ++c) {
         const Label& l = labels_.at(c, s, k);
-        if (l.accepted() ||
-            (with_review && l.present() && l.state == LabelState::kNeedsReview)) {
+        if (l.accepted() || (with_review && l.present() && l.state == LabelState::kNeedsReview)) {
           views.push_back({rig_index_[c], l.px});
           seen.push_back(c);
           if (!l.accepted()) review.push_back(c);
@@ -223,8 +222,8 @@ std::optional<Rough> FromMotion(Points& points, int t, int k, const MissingKnots
       *rows = {t - before, t + after};
       const double w = static_cast<double>(before) / span;
       out.position = (1.0 - w) * a->position + w * b->position;
-      out.tolerance_m = 0.5 * o.neighbour_agreement * (b->position - a->position).norm() +
-                        o.motion_tolerance_m;
+      out.tolerance_m =
+          0.5 * o.neighbour_agreement * (b->position - a->position).norm() + o.motion_tolerance_m;
       return out;
     }
   // Carried on from two rows on one side.
@@ -237,9 +236,8 @@ std::optional<Rough> FromMotion(Points& points, int t, int k, const MissingKnots
         *rows = {t + sign * near, t + sign * far};
         const double f = static_cast<double>(far) / (far - near);
         out.position = f * a->position + (1.0 - f) * b->position;
-        out.tolerance_m =
-            0.5 * o.neighbour_agreement * f * (b->position - a->position).norm() +
-            o.motion_tolerance_m;
+        out.tolerance_m = 0.5 * o.neighbour_agreement * f * (b->position - a->position).norm() +
+                          o.motion_tolerance_m;
         return out;
       }
   return std::nullopt;
@@ -322,8 +320,7 @@ std::vector<MissingKnot> FindMissingKnots(const LabelSet& labels, const calib::R
   std::vector<MissingKnot> out;
   const int cameras = static_cast<int>(labels.cameras.size());
   Points points(labels, rig, rig_index, options);
-  const double time_s =
-      options.target.empty() ? 0.0 : labels.frame_index[t] / options.target.fps;
+  const double time_s = options.target.empty() ? 0.0 : labels.frame_index[t] / options.target.fps;
   for (int k = 0; k < labels.knots(); ++k) {
     // The cameras that have nothing of the knot.
     std::vector<int> open;
@@ -356,8 +353,7 @@ std::vector<MissingKnot> FindMissingKnots(const LabelSet& labels, const calib::R
       if (!rough) continue;
       // On the ray of the one camera with a label, where it passes near; else (no label, or a
       // label off the rough point: a wrong one) the rough point itself.
-      if (v.lone_camera >= 0)
-        p = OnRay(rig.cameras[rig_index[v.lone_camera]], v.lone_px, *rough);
+      if (v.lone_camera >= 0) p = OnRay(rig.cameras[rig_index[v.lone_camera]], v.lone_px, *rough);
       if (p) {
         m.seen_in = {v.lone_camera};
         if (!labels.at(v.lone_camera, t, k).accepted()) m.under_review = {v.lone_camera};
@@ -369,8 +365,7 @@ std::vector<MissingKnot> FindMissingKnots(const LabelSet& labels, const calib::R
       const calib::Camera& camera = rig.cameras[rig_index[c]];
       const auto q = SeenAt(camera, *p, options.margin_px);
       if (!q) continue;
-      if (TargetHides(options.target, camera.Center(), *p, time_s, options.target_grow_m))
-        continue;
+      if (TargetHides(options.target, camera.Center(), *p, time_s, options.target_grow_m)) continue;
       m.camera = c;
       m.expected_px = *q;
       out.push_back(m);
@@ -399,8 +394,7 @@ std::string MissingReason(const MissingKnot& missing, const std::vector<std::str
     rows += (rows.empty() ? "" : " and ") + std::to_string(frame);
   }
   switch (missing.basis) {
-    case MissingBasis::kCameras:
-      return "no label; " + seen + "; expected near " + where;
+    case MissingBasis::kCameras: return "no label; " + seen + "; expected near " + where;
     case MissingBasis::kNeighbours:
       return seen.empty() ? std::string("no label; its grid neighbours put it near ") + where
                           : "no label; " + seen +

@@ -46,8 +46,8 @@ namespace netlab::recon {
 struct TargetSolid {
   enum class Shape { kBox, kSphere };
   Shape shape = Shape::kBox;
-  Eigen::Vector3d center = Eigen::Vector3d::Zero();    // m, at time 0
-  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // m/s
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();                 // m, at time 0
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();               // m/s
   Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  // box axes to world
   Eigen::Vector3d half_extents = Eigen::Vector3d::Zero();           // box, m
   double radius = 0.0;                                              // sphere, m
@@ -99,14 +99,14 @@ struct MissingKnotsOptions {
 enum class MissingBasis { kCameras, kNeighbours, kMotion };
 
 struct MissingKnot {
-  int camera = 0, t = 0, knot = 0;   // store camera, frame row, knot
-  Eigen::Vector2d expected_px;       // where the point projects in `camera` (px)
+  int camera = 0, t = 0, knot = 0;  // store camera, frame row, knot
+  Eigen::Vector2d expected_px;      // where the point projects in `camera` (px)
   MissingBasis basis = MissingBasis::kCameras;
-  std::vector<int> seen_in;          // the store cameras whose labels place it (kNeighbours and
-                                     // kMotion: the one whose ray it is on, or none)
-  std::vector<int> under_review;     // of those, the ones whose label is under review
-  std::vector<int> rows;             // kMotion: the frame rows whose points place it
-  double rms_px = 0.0;               // kCameras: the triangulation's RMS residual (px)
+  std::vector<int> seen_in;       // the store cameras whose labels place it (kNeighbours and
+                                  // kMotion: the one whose ray it is on, or none)
+  std::vector<int> under_review;  // of those, the ones whose label is under review
+  std::vector<int> rows;          // kMotion: the frame rows whose points place it
+  double rms_px = 0.0;            // kCameras: the triangulation's RMS residual (px)
 };
 
 // The missing knots of frame row t, in (camera, knot) order. `rig_index[c]`: the rig camera of

@@ -17,8 +17,8 @@ namespace netlab::recon {
 std::string Number(double value) {
   if (!std::isfinite(value)) return "NaN";
   char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value,
-                                    std::chars_format::general, 17);
+  const auto result =
+      std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::general, 17);
   return std::string(buffer, result.ptr);
 }
 

@@ -86,8 +86,7 @@ void CheckConsistent(const LabelSet& labels) {
 
 void WriteIntAttribute(hid_t obj, const std::string& path, const std::string& name, int value) {
   h5::Id space(H5Screate(H5S_SCALAR));
-  h5::Id attr(H5Acreate2(obj, name.c_str(), H5T_NATIVE_INT, space.get(), H5P_DEFAULT,
-                         H5P_DEFAULT));
+  h5::Id attr(H5Acreate2(obj, name.c_str(), H5T_NATIVE_INT, space.get(), H5P_DEFAULT, H5P_DEFAULT));
   if (!attr.valid() || H5Awrite(attr.get(), H5T_NATIVE_INT, &value) < 0)
     throw std::runtime_error(path + ": cannot write attribute " + name);
 }
@@ -110,8 +109,8 @@ std::vector<std::string> GroupMembers(hid_t group) {
   if (H5Gget_info(group, &info) < 0) return {};
   std::vector<std::string> names;
   for (hsize_t i = 0; i < info.nlinks; ++i) {
-    const ssize_t size = H5Lget_name_by_idx(group, ".", H5_INDEX_NAME, H5_ITER_INC, i, nullptr, 0,
-                                            H5P_DEFAULT);
+    const ssize_t size =
+        H5Lget_name_by_idx(group, ".", H5_INDEX_NAME, H5_ITER_INC, i, nullptr, 0, H5P_DEFAULT);
     if (size < 0) continue;
     std::vector<char> name(size + 1, '\0');
     H5Lget_name_by_idx(group, ".", H5_INDEX_NAME, H5_ITER_INC, i, name.data(), name.size(),
@@ -221,8 +220,8 @@ LabelSet ReadLabelsFile(const std::string& path, hid_t f) {
   for (auto [name, value] : {std::pair("rows", &labels.rows), std::pair("cols", &labels.cols)}) {
     const std::optional<int> read = ReadIntAttribute(f, name);
     if (!read) fail(std::string("root attribute ") + name + " is missing or not an integer");
-    if (*read < 1) fail(std::string("root attribute ") + name + " must be >= 1, got " +
-                        std::to_string(*read));
+    if (*read < 1)
+      fail(std::string("root attribute ") + name + " must be >= 1, got " + std::to_string(*read));
     *value = *read;
   }
   if (int64_t{labels.rows} * labels.cols > std::numeric_limits<int>::max())
@@ -233,8 +232,8 @@ LabelSet ReadLabelsFile(const std::string& path, hid_t f) {
 
   // Every dataset present with the shape that /frame_index and the net's size give.
   auto expect = [&](const std::string& name, const std::vector<hsize_t>& dims) {
-    if (!h5::Exists(f, name)) fail("missing dataset " + name + " (expected shape " +
-                                   Shape(dims) + ")");
+    if (!h5::Exists(f, name))
+      fail("missing dataset " + name + " (expected shape " + Shape(dims) + ")");
     const std::vector<hsize_t> got = h5::DatasetDims(f, name);
     if (got != dims) fail(name + " has shape " + Shape(got) + ", expected " + Shape(dims));
   };
@@ -245,10 +244,9 @@ LabelSet ReadLabelsFile(const std::string& path, hid_t f) {
   const hsize_t t = frame_dims[0], k = static_cast<hsize_t>(labels.knots());
   // A dataset's extent costs nothing to declare: sized before anything is allocated (it ended in
   // a bare "out of memory" naming neither the file nor the frames).
-  if (const std::string shortfall =
-          MemoryShortfall(static_cast<double>(t) * static_cast<double>(k) *
-                          static_cast<double>(std::max<size_t>(1, labels.cameras.size())) *
-                          sizeof(Label));
+  if (const std::string shortfall = MemoryShortfall(
+          static_cast<double>(t) * static_cast<double>(k) *
+          static_cast<double>(std::max<size_t>(1, labels.cameras.size())) * sizeof(Label));
       !shortfall.empty())
     fail("/frame_index gives " + std::to_string(t) + " frames of " + std::to_string(k) +
          " knots in " + std::to_string(labels.cameras.size()) + " cameras: reading them " +
@@ -269,8 +267,8 @@ LabelSet ReadLabelsFile(const std::string& path, hid_t f) {
   for (hsize_t i = 0; i < k; ++i) {
     const int row = static_cast<int>(i) / labels.cols, col = static_cast<int>(i) % labels.cols;
     if (grid[2 * i] != row || grid[2 * i + 1] != col)
-      fail("/knots/grid: knot " + std::to_string(i) + " is (" + std::to_string(grid[2 * i]) +
-           ", " + std::to_string(grid[2 * i + 1]) + "), expected (" + std::to_string(row) + ", " +
+      fail("/knots/grid: knot " + std::to_string(i) + " is (" + std::to_string(grid[2 * i]) + ", " +
+           std::to_string(grid[2 * i + 1]) + "), expected (" + std::to_string(row) + ", " +
            std::to_string(col) + ") (row-major order)");
   }
 
@@ -313,8 +311,7 @@ LabelSet ReadLabelsFile(const std::string& path, hid_t f) {
         fail(prefix + "state: " + std::to_string(state[i]) + where(i) +
              " is not a LabelState (0.." + std::to_string(kLastState) + ")");
       if (!(confidence[i] >= 0.0f && confidence[i] <= 1.0f))
-        fail(prefix + "confidence: " + Number(confidence[i]) + where(i) +
-             " is outside 0..1");
+        fail(prefix + "confidence: " + Number(confidence[i]) + where(i) + " is outside 0..1");
       // A hidden mark says the knot is not seen: a position with it contradicts it.
       if (state[i] == static_cast<uint8_t>(LabelState::kHidden) &&
           !(std::isnan(position[2 * i]) && std::isnan(position[2 * i + 1])))
@@ -467,8 +464,8 @@ LabelSet ReadXyPts(const std::string& path, int rows, int cols,
   }
   for (const auto& [key, columns] : pairs)
     if (columns[0] < 0 || columns[1] < 0) {
-      const std::string stem = "pt" + std::to_string(key.first + 1) + "_cam" +
-                               std::to_string(key.second + 1);
+      const std::string stem =
+          "pt" + std::to_string(key.first + 1) + "_cam" + std::to_string(key.second + 1);
       throw InputError(path + ":1: column '" + stem + (columns[0] < 0 ? "_Y" : "_X") +
                        "' has no matching '" + stem + (columns[0] < 0 ? "_X" : "_Y") + "'");
     }
@@ -502,8 +499,8 @@ LabelSet ReadLabelsAny(const std::string& path, int rows, int cols,
   LabelSet labels = ReadLabels(path);
   if (labels.rows != rows || labels.cols != cols)
     throw InputError(path + ": the labels are for a " + std::to_string(labels.rows) + " x " +
-                     std::to_string(labels.cols) + " net, but the net is " +
-                     std::to_string(rows) + " x " + std::to_string(cols));
+                     std::to_string(labels.cols) + " net, but the net is " + std::to_string(rows) +
+                     " x " + std::to_string(cols));
   return labels;
 }
 

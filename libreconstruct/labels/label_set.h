@@ -26,6 +26,7 @@
 // Pixels and the knot order are the same in both files; a label exists where the position is
 // finite. Bad input throws netlab::InputError naming the file, the line or dataset and the field.
 
+#include <Eigen/Core>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -33,8 +34,6 @@
 #include <string>
 #include <tuple>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace netlab::recon {
 

@@ -111,12 +111,18 @@ bool ColorCorrection::identity_for_8bit() const {
 }
 
 bool ParseBayerPattern(const std::string& text, BayerPattern* pattern) {
-  if (text == "RGGB") *pattern = BayerPattern::kRGGB;
-  else if (text == "BGGR") *pattern = BayerPattern::kBGGR;
-  else if (text == "GRBG") *pattern = BayerPattern::kGRBG;
-  else if (text == "GBRG") *pattern = BayerPattern::kGBRG;
-  else if (text == "none") *pattern = BayerPattern::kNone;
-  else return false;
+  if (text == "RGGB")
+    *pattern = BayerPattern::kRGGB;
+  else if (text == "BGGR")
+    *pattern = BayerPattern::kBGGR;
+  else if (text == "GRBG")
+    *pattern = BayerPattern::kGRBG;
+  else if (text == "GBRG")
+    *pattern = BayerPattern::kGBRG;
+  else if (text == "none")
+    *pattern = BayerPattern::kNone;
+  else
+    return false;
   return true;
 }
 

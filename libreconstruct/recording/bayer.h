@@ -7,9 +7,8 @@
 // (OpenCvBayerCode; checked against synthetic mosaics in bayer_test.cc).
 
 #include <array>
-#include <string>
-
 #include <opencv2/core.hpp>
+#include <string>
 
 namespace netlab::recon {
 
@@ -27,8 +26,8 @@ int BayerColor(BayerPattern pattern, int row, int col);
 // black_level)), white = 2^bit_depth - 1. Applied to the mosaic before demosaicing, as a lookup
 // table per colour site.
 struct ColorCorrection {
-  int bit_depth = 8;          // significant bits of the raw values (8, 10, 12 or 16)
-  double black_level = 0.0;   // raw units
+  int bit_depth = 8;         // significant bits of the raw values (8, 10, 12 or 16)
+  double black_level = 0.0;  // raw units
   std::array<double, 3> gains_bgr = {1.0, 1.0, 1.0};  // white balance
   bool identity_for_8bit() const;
 };

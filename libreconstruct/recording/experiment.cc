@@ -69,8 +69,8 @@ Experiment ParseExperiment(const std::string& text, const std::string& origin,
   if (!list.IsSequence() || list.size() == 0) root.Fail("cameras", "expected a list of cameras");
   for (size_t i = 0; i < list.size(); ++i) {
     const YamlMap m(list[i], origin, "cameras[" + std::to_string(i) + "]");
-    m.AllowOnly({"name", "frames", "bayer", "timestamps", "bit_depth", "black_level",
-                 "white_balance"});
+    m.AllowOnly(
+        {"name", "frames", "bayer", "timestamps", "bit_depth", "black_level", "white_balance"});
     CameraSpec c;
     c.name = m.String("name");
     if (e.Find(c.name) >= 0) m.Fail("name", "camera '" + c.name + "' is listed twice");
@@ -150,7 +150,8 @@ std::map<int, double> ReadTimestamps(const std::string& path) {
     }
     first = false;
     if (index != std::floor(index) || !std::isfinite(time))
-      throw InputError(path + ":" + std::to_string(number) + ": frame index must be an integer "
+      throw InputError(path + ":" + std::to_string(number) +
+                       ": frame index must be an integer "
                        "and the time finite");
     if (!times.emplace(static_cast<int>(index), time).second)
       throw InputError(path + ":" + std::to_string(number) + ": frame " +

@@ -25,12 +25,12 @@ namespace netlab::recon {
 
 struct CameraSpec {
   std::string name;
-  std::string frames;                   // as written in the file
+  std::string frames;  // as written in the file
   BayerPattern bayer = BayerPattern::kNone;
-  std::string timestamps;               // resolved path, or ""
+  std::string timestamps;  // resolved path, or ""
   std::optional<int> bit_depth;
   double black_level = 0.0;
-  std::string black_level_where;        // "file:line: cameras[i].black_level" when given
+  std::string black_level_where;  // "file:line: cameras[i].black_level" when given
   std::array<double, 3> white_balance_rgb = {1.0, 1.0, 1.0};
 };
 

@@ -57,8 +57,7 @@ void FrameCache::Insert(const Key& key, std::shared_ptr<const cv::Mat> image) {
   stats_.peak_bytes = std::max(stats_.peak_bytes, stats_.bytes);
 }
 
-std::shared_ptr<const cv::Mat> FrameCache::Load(const Key& key, bool prefetch,
-                                                std::string* error) {
+std::shared_ptr<const cv::Mat> FrameCache::Load(const Key& key, bool prefetch, std::string* error) {
   {
     std::unique_lock<std::mutex> lock(mutex_);
     // Another thread is decoding it: wait for that instead of decoding twice.

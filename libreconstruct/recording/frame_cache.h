@@ -15,12 +15,11 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <opencv2/core.hpp>
 #include <set>
 #include <string>
 #include <thread>
 #include <tuple>
-
-#include <opencv2/core.hpp>
 
 #include "libreconstruct/recording/sequence.h"
 
@@ -28,9 +27,9 @@ namespace netlab::recon {
 
 struct FrameCacheOptions {
   size_t memory_limit_bytes = size_t{2} << 30;  // 2 GiB
-  int prefetch_ahead = 64;   // frames ahead of the playhead to decode (bounded by the budget)
-  int prefetch_behind = 4;   // frames behind it
-  bool prefetch = true;      // run the worker thread
+  int prefetch_ahead = 64;  // frames ahead of the playhead to decode (bounded by the budget)
+  int prefetch_behind = 4;  // frames behind it
+  bool prefetch = true;     // run the worker thread
 };
 
 class FrameCache {

@@ -55,8 +55,8 @@ bool ParseNumber(const std::string& b, size_t* i, int* value) {
 }
 
 // Parses a P5 header from the first bytes; sets the data offset.
-bool ParsePgmHeader(const std::string& head, FrameInfo* info, size_t* data_offset,
-                    int* maxval, std::string* error) {
+bool ParsePgmHeader(const std::string& head, FrameInfo* info, size_t* data_offset, int* maxval,
+                    std::string* error) {
   if (head.size() < 2 || head[0] != 'P' || head[1] != '5') {
     *error = "not a binary PGM (P5) file";
     return false;
@@ -128,7 +128,8 @@ uint32_t BigEndian32(const unsigned char* p) {
 
 class ImageSequenceSource final : public FrameSource {
  public:
-  ImageSequenceSource(std::string pattern, std::string spec) : pattern_(std::move(pattern)), spec_(std::move(spec)) {
+  ImageSequenceSource(std::string pattern, std::string spec)
+      : pattern_(std::move(pattern)), spec_(std::move(spec)) {
     SilenceOpenCvLogging();
     const size_t percent = pattern_.find('%');
     const fs::path dir = fs::path(pattern_).parent_path();
@@ -151,12 +152,14 @@ class ImageSequenceSource final : public FrameSource {
       if (file.size() <= prefix.size() + suffix.size() || file.compare(0, prefix.size(), prefix) ||
           file.compare(file.size() - suffix.size(), suffix.size(), suffix))
         continue;
-      const std::string digits = file.substr(prefix.size(), file.size() - prefix.size() - suffix.size());
+      const std::string digits =
+          file.substr(prefix.size(), file.size() - prefix.size() - suffix.size());
       if (digits.empty() || digits.size() > 9 ||
           !std::all_of(digits.begin(), digits.end(), ::isdigit))
         continue;
       const int index = std::stoi(digits);
-      if (Path(index) != entry.path().string() && fs::path(Path(index)).filename() != file) continue;
+      if (Path(index) != entry.path().string() && fs::path(Path(index)).filename() != file)
+        continue;
       indices_.push_back(index);
     }
     std::sort(indices_.begin(), indices_.end());
@@ -227,8 +230,8 @@ class VideoSource final : public FrameSource {
     std::error_code error;
     if (fs::file_size(path_, error) == 0 && !error)
       throw InputError(spec_ + ": empty file (0 bytes), not a video");
-    const int backend = cv::videoio_registry::hasBackend(cv::CAP_FFMPEG) ? cv::CAP_FFMPEG
-                                                                         : cv::CAP_ANY;
+    const int backend =
+        cv::videoio_registry::hasBackend(cv::CAP_FFMPEG) ? cv::CAP_FFMPEG : cv::CAP_ANY;
     bool opened = false;
     try {
       opened = capture_.open(path_, backend);
@@ -330,11 +333,11 @@ class Hdf5FrameSource final : public FrameSource {
     if (dims == std::vector<hsize_t>{dims_[0]}) return true;
     std::string shape;
     for (size_t i = 0; i < dims.size(); ++i) shape += (i ? " x " : "") + std::to_string(dims[i]);
-    throw InputError(file_path_ + ":" + path + " has " +
-                     (dims.size() == 1 ? std::to_string(dims[0]) + " entries"
-                                       : "shape [" + shape + "]") +
-                     ", " + dataset_path_ + " has " + std::to_string(dims_[0]) +
-                     " frames (one entry per frame expected)");
+    throw InputError(
+        file_path_ + ":" + path + " has " +
+        (dims.size() == 1 ? std::to_string(dims[0]) + " entries" : "shape [" + shape + "]") + ", " +
+        dataset_path_ + " has " + std::to_string(dims_[0]) +
+        " frames (one entry per frame expected)");
   }
 
   ~Hdf5FrameSource() override {
@@ -388,9 +391,8 @@ class Hdf5FrameSource final : public FrameSource {
 
 void SilenceOpenCvLogging() {
   static std::once_flag once;
-  std::call_once(once, [] {
-    cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
-  });
+  std::call_once(once,
+                 [] { cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT); });
 }
 
 cv::Mat ReadPgm(const std::string& path, std::string* error) {
@@ -415,7 +417,8 @@ cv::Mat ReadPgm(const std::string& path, std::string* error) {
   size_t offset;
   int maxval;
   if (!ParsePgmHeader(head, &info, &offset, &maxval, error)) return {};
-  const size_t bytes = static_cast<size_t>(info.width) * info.height * (info.depth == CV_16U ? 2 : 1);
+  const size_t bytes =
+      static_cast<size_t>(info.width) * info.height * (info.depth == CV_16U ? 2 : 1);
   if (static_cast<size_t>(size) < offset + bytes) {
     *error = "truncated: " + std::to_string(size - static_cast<std::streamsize>(offset)) + " of " +
              std::to_string(bytes) + " data bytes";
@@ -457,7 +460,8 @@ bool ReadImageHeader(const std::string& path, FrameInfo* info, std::string* erro
     size_t offset;
     int maxval;
     if (!ParsePgmHeader(head, info, &offset, &maxval, error)) return false;
-    const size_t bytes = static_cast<size_t>(info->width) * info->height * (info->depth == CV_16U ? 2 : 1);
+    const size_t bytes =
+        static_cast<size_t>(info->width) * info->height * (info->depth == CV_16U ? 2 : 1);
     if (static_cast<size_t>(size) < offset + bytes) {
       *error = "truncated: " + std::to_string(size - static_cast<std::streamsize>(offset)) +
                " of " + std::to_string(bytes) + " data bytes";

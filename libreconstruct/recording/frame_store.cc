@@ -73,8 +73,8 @@ Experiment ConvertToFrameStore(const SynchronizedSequence& sequence, const std::
                                          static_cast<hsize_t>(info.width)};
       if (info.channels == 3) frame_dims.push_back(3);
       const hid_t type = info.depth == CV_16U ? H5T_NATIVE_UINT16 : H5T_NATIVE_UINT8;
-      h5::Id data = h5::CreateFrameDataset(file.get(), spec.name, type, frame_dims, 1,
-                                           options.deflate_level);
+      h5::Id data =
+          h5::CreateFrameDataset(file.get(), spec.name, type, frame_dims, 1, options.deflate_level);
       h5::WriteStringAttribute(data.get(), "bayer", BayerPatternName(spec.bayer));
       h5::WriteStringAttribute(data.get(), "bit_depth",
                                std::to_string(sequence.Correction(c).bit_depth));

@@ -116,9 +116,9 @@ struct FrameResult {
 
 // Marks frames unlike the camera's first readable frame (`reference`) as unreadable, and lists
 // the unreadable, readable and duplicated (identical to the previous) frames in `cam`.
-void SortFrames(const FrameSource& source, const std::vector<int>& idx,
-                const FrameInfo& reference, bool decode, std::vector<FrameResult>& results,
-                CameraReport& cam, std::set<int>& readable) {
+void SortFrames(const FrameSource& source, const std::vector<int>& idx, const FrameInfo& reference,
+                bool decode, std::vector<FrameResult>& results, CameraReport& cam,
+                std::set<int>& readable) {
   for (size_t k = 0; k < idx.size(); ++k) {
     FrameResult& r = results[k];
     if (r.ok && !(r.info == reference)) {
@@ -178,15 +178,15 @@ void CompareCameras(CheckReport& report) {
                                 std::to_string(a.width) + "x" + std::to_string(a.height) + " and " +
                                 std::to_string(b.width) + "x" + std::to_string(b.height) + ")");
     if (a.frames != b.frames)
-      report.warnings.push_back("cameras " + a.name + " and " + b.name + " differ in frame count (" +
-                                std::to_string(a.frames) + " and " + std::to_string(b.frames) + ")");
+      report.warnings.push_back("cameras " + a.name + " and " + b.name +
+                                " differ in frame count (" + std::to_string(a.frames) + " and " +
+                                std::to_string(b.frames) + ")");
   }
 }
 
 }  // namespace
 
-CheckReport SynchronizedSequence::Check(bool decode,
-                                        const std::function<void(int, int)>& progress,
+CheckReport SynchronizedSequence::Check(bool decode, const std::function<void(int, int)>& progress,
                                         int threads) const {
   const auto start = std::chrono::steady_clock::now();
   CheckReport report;
@@ -261,12 +261,12 @@ CheckReport SynchronizedSequence::Check(bool decode,
     if (!experiment_.cameras[c].timestamps.empty() && timestamps_[c].empty())
       cam.untimed = idx;  // a timestamps file without a row
     if (!cam.untimed.empty())
-      report.warnings.push_back(
-          cam.name + ": " + std::to_string(cam.untimed.size()) + " of " +
-          std::to_string(cam.frames) + " frames have no time in " +
-          (experiment_.cameras[c].timestamps.empty() ? sources_[c]->Describe()
-                                                     : experiment_.cameras[c].timestamps) +
-          " (" + ListIndices(cam.untimed) + ")");
+      report.warnings.push_back(cam.name + ": " + std::to_string(cam.untimed.size()) + " of " +
+                                std::to_string(cam.frames) + " frames have no time in " +
+                                (experiment_.cameras[c].timestamps.empty()
+                                     ? sources_[c]->Describe()
+                                     : experiment_.cameras[c].timestamps) +
+                                " (" + ListIndices(cam.untimed) + ")");
     report.frames_read += cam.frames;
     report.cameras.push_back(cam);
   }
@@ -292,7 +292,8 @@ std::string CheckReport::BriefReport() const {
     if (!c.missing.empty()) os << "; missing " << ListIndices(c.missing);
     if (!c.unreadable.empty()) os << "; unreadable " << ListIndices(c.unreadable);
     if (!c.duplicated.empty()) os << "; duplicated " << ListIndices(c.duplicated);
-    if (!c.timestamp_gaps.empty()) os << "; timestamps skip after " << ListIndices(c.timestamp_gaps);
+    if (!c.timestamp_gaps.empty())
+      os << "; timestamps skip after " << ListIndices(c.timestamp_gaps);
     if (!c.untimed.empty()) os << "; no timestamp " << ListIndices(c.untimed);
     os << "\n";
     for (size_t i = 0; i < c.problems.size() && i < 10; ++i) os << "    " << c.problems[i] << "\n";

@@ -7,10 +7,9 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/core.hpp>
 
 #include "libreconstruct/recording/experiment.h"
 #include "libreconstruct/recording/frame_source.h"
@@ -19,14 +18,14 @@ namespace netlab::recon {
 
 struct CameraReport {
   std::string name;
-  int frames = 0;                  // frames present
-  int width = 0, height = 0;       // of its first readable frame
-  int depth_bits = 0;              // container depth, 8 or 16
-  std::vector<int> missing;        // indices in the sequence's range without a frame
-  std::vector<int> unreadable;     // present but unreadable (truncated, corrupt, wrong size)
-  std::vector<int> duplicated;     // same timestamp as, or identical to, the previous frame
-  std::vector<int> timestamp_gaps; // indices after which the timestamps skip frames
-  std::vector<int> untimed;        // present, but without a time where the camera has times
+  int frames = 0;                     // frames present
+  int width = 0, height = 0;          // of its first readable frame
+  int depth_bits = 0;                 // container depth, 8 or 16
+  std::vector<int> missing;           // indices in the sequence's range without a frame
+  std::vector<int> unreadable;        // present but unreadable (truncated, corrupt, wrong size)
+  std::vector<int> duplicated;        // same timestamp as, or identical to, the previous frame
+  std::vector<int> timestamp_gaps;    // indices after which the timestamps skip frames
+  std::vector<int> untimed;           // present, but without a time where the camera has times
   std::vector<std::string> problems;  // one line per unreadable frame: where and why
 };
 
@@ -36,7 +35,7 @@ struct CheckReport {
   int synchronized_frames = 0;  // frames every camera has readable
   int frames_read = 0;
   double wall_s = 0.0;
-  double read_fps = 0.0;        // frames (per camera) read (and decoded) per second
+  double read_fps = 0.0;  // frames (per camera) read (and decoded) per second
   bool decoded = false;
   std::vector<std::string> warnings;  // different sizes or counts across cameras, untimed frames
   std::string BriefReport() const;

@@ -3,10 +3,9 @@
 // coloured links facing one camera, rendered by the twin's renderer, with the codebook of its
 // knots and the knots as the camera sees them.
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "calibration/camera.h"
 #include "libreconstruct/coloring/color_identify.h"
@@ -16,9 +15,9 @@ namespace netlab::recon {
 
 // A flat square net of coloured links facing a camera, with its codebook.
 struct ColouredNet {
-  Scene scene;                              // straight threads, no knot balls (bare crossings)
-  KnotCodebook codebook;                    // knot k = row * knots_per_side + col
-  std::vector<Eigen::Vector3d> knot_points; // world, m
+  Scene scene;                               // straight threads, no knot balls (bare crossings)
+  KnotCodebook codebook;                     // knot k = row * knots_per_side + col
+  std::vector<Eigen::Vector3d> knot_points;  // world, m
   // Neighbouring knots of each knot in cyclic order around it (+col, +row, -col, -row).
   std::vector<std::vector<int>> neighbours;
 };

@@ -131,10 +131,10 @@ const DiscKernel& DiscOf(double diameter) {
 
 cv::Mat ApplyDepthOfField(const cv::Mat& linear_bgr, const cv::Mat& depth, double fx,
                           const DepthOfField& dof) {
-  if (linear_bgr.type() != CV_32FC3 || depth.type() != CV_32F ||
-      depth.size() != linear_bgr.size())
-    throw std::invalid_argument("ApplyDepthOfField: a CV_32FC3 image and a CV_32F depth map of "
-                                "its size");
+  if (linear_bgr.type() != CV_32FC3 || depth.type() != CV_32F || depth.size() != linear_bgr.size())
+    throw std::invalid_argument(
+        "ApplyDepthOfField: a CV_32FC3 image and a CV_32F depth map of "
+        "its size");
   cv::Mat out(linear_bgr.size(), CV_32FC3, cv::Scalar::all(0));
   const int width = linear_bgr.cols, height = linear_bgr.rows;
   for (int y = 0; y < height; ++y) {
@@ -211,7 +211,8 @@ std::vector<CameraResponse> ReadCameraResponses(const std::string& path, const c
       const std::string k = key.first.as<std::string>();
       if (k != "white_balance" && k != "gain" && k != "gamma" && k != "prnu" && k != "dsnu" &&
           k != "hot_pixels" && k != "seed")
-        throw InputError(where + "." + k + ": unknown key (white_balance, gain, gamma, prnu, "
+        throw InputError(where + "." + k +
+                         ": unknown key (white_balance, gain, gamma, prnu, "
                          "dsnu, hot_pixels, seed)");
     }
     if (const YAML::Node wb = node["white_balance"]) {
@@ -351,8 +352,7 @@ cv::Mat TextileBackground(const calib::CameraIntrinsics& intrinsics, double albe
     for (int x = 0; x < width; ++x) {
       const Eigen::Vector2d p(x * scale, y * scale);
       Eigen::Vector2d slope = Eigen::Vector2d::Zero();
-      for (const Fold& f : folds)
-        slope += f.amplitude * std::cos(f.k.dot(p) + f.phase) * f.k;
+      for (const Fold& f : folds) slope += f.amplitude * std::cos(f.k.dot(p) + f.phase) * f.k;
       const Eigen::Vector3d normal = Eigen::Vector3d(-slope.x(), -slope.y(), 1.0).normalized();
       const double shade = std::max(0.0, normal.dot(light)) / flat;
       // A plain weave: threads over and under in a 2-px check.

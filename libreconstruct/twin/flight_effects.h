@@ -9,13 +9,12 @@
 //   DepthOfField dof{4.0, 3.0, 5.5e-6};              // f/4 focused at 3 m
 //   cv::Mat sharp_to_blurred = ApplyDepthOfField(linear, depth, camera.intrinsics.fx, dof);
 
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <opencv2/core.hpp>
 
 #include "calibration/rig.h"
 #include "libreconstruct/twin/render.h"

@@ -62,8 +62,8 @@ class RayGrid {
     max_radius_ = 10.0;
     for (double r = 0.005; r <= 10.0; r += 0.005) {
       const double r2 = r * r, r4 = r2 * r2, r6 = r4 * r2;
-      const double rd = r * (1 + k[0] * r2 + k[1] * r4 + k[4] * r6) /
-                        (1 + k[5] * r2 + k[6] * r4 + k[7] * r6);
+      const double rd =
+          r * (1 + k[0] * r2 + k[1] * r4 + k[4] * r6) / (1 + k[5] * r2 + k[6] * r4 + k[7] * r6);
       if (!(rd > previous)) {
         max_radius_ = r - 0.005;
         break;
@@ -75,8 +75,7 @@ class RayGrid {
   bool Matches(const calib::CameraIntrinsics& k) const {
     const calib::CameraIntrinsics& m = intrinsics_;
     return m.width == k.width && m.height == k.height && m.fx == k.fx && m.fy == k.fy &&
-           m.cx == k.cx && m.cy == k.cy && m.distortion == k.distortion &&
-           m.rational == k.rational;
+           m.cx == k.cx && m.cy == k.cy && m.distortion == k.distortion && m.rational == k.rational;
   }
 
   // Normalised coordinates of the ray through pixel corner (u - 1/2, v - 1/2),
@@ -120,8 +119,8 @@ class RayGrid {
   const Eigen::Vector2d& Node(int i, int j) {
     const size_t index = static_cast<size_t>(j) * nodes_x_ + i;
     if (!done_[index]) {
-      nodes_[index] = calib::UndistortPoint(
-          intrinsics_, Eigen::Vector2d(i * kStep - 0.5, j * kStep - 0.5));
+      nodes_[index] =
+          calib::UndistortPoint(intrinsics_, Eigen::Vector2d(i * kStep - 0.5, j * kStep - 0.5));
       done_[index] = 1;
     }
     return nodes_[index];
@@ -171,7 +170,7 @@ struct Tile {
   std::array<float, kPixels> thread_alpha;
   std::array<float, kPixels> thread_depth;
   std::array<float, kPixels> thread_shade;  // with lamps: the thread's shading there
-  int tx = 0, ty = 0;  // where the tile is in the image (tiles)
+  int tx = 0, ty = 0;                       // where the tile is in the image (tiles)
 };
 
 // The image being rendered, in tiles allocated when first touched (a pool kept between renders).
@@ -440,14 +439,12 @@ class Lighting {
 };
 
 Colour Solid::Shade(const Eigen::Vector3d& ray, double depth, int face,
-                    const Eigen::Vector3d& light, double ambient,
-                    const Lighting* lighting) const {
+                    const Eigen::Vector3d& light, double ambient, const Lighting* lighting) const {
   if (lighting == nullptr) return ShadeDirectional(ray, depth, face, light, ambient);
   const Eigen::Vector3d p = depth * ray;
   if (is_ball) return lighting->Surface(colour, p, (p - center) / radius, false, nullptr);
   const int axis = face / 2;
-  const Eigen::Vector3d normal =
-      (face % 2 ? -1.0 : 1.0) * box_from_cam.row(axis).transpose();
+  const Eigen::Vector3d normal = (face % 2 ? -1.0 : 1.0) * box_from_cam.row(axis).transpose();
   return lighting->Surface(colour, p, normal, true, this);
 }
 
@@ -514,10 +511,10 @@ std::vector<Solid> CameraSolids(const calib::Camera& camera, const Scene& scene,
     s.colour = box.colour;
     if ((s.camera_in_box.cwiseAbs() - s.half_extents).maxCoeff() < 0.0) continue;  // inside
     for (int axis = 0; axis < 3; ++axis) {
-      s.face_colours[2 * axis] = Lambert(box.colour, cam_from_box.col(axis), light,
-                                         options.ambient);
-      s.face_colours[2 * axis + 1] = Lambert(box.colour, -cam_from_box.col(axis), light,
-                                             options.ambient);
+      s.face_colours[2 * axis] =
+          Lambert(box.colour, cam_from_box.col(axis), light, options.ambient);
+      s.face_colours[2 * axis + 1] =
+          Lambert(box.colour, -cam_from_box.col(axis), light, options.ambient);
     }
     // The outline: the twelve edges, each sampled (distortion bends them).
     constexpr int kEdgeSamples = 8;
@@ -541,17 +538,15 @@ std::vector<Solid> CameraSolids(const calib::Camera& camera, const Scene& scene,
       }
     if (min_z == std::numeric_limits<double>::infinity()) continue;
     if (behind) {
-      const bool all_behind = std::all_of(outline.begin(), outline.end(), [](const auto& p) {
-        return !p.allFinite();
-      });
+      const bool all_behind =
+          std::all_of(outline.begin(), outline.end(), [](const auto& p) { return !p.allFinite(); });
       if (all_behind) continue;
       s.rect = {0, 0, k.width - 1, k.height - 1};
     } else {
       s.rect = RectAround(outline, 1.5, k.width, k.height);
     }
     if (s.rect.empty()) continue;
-    s.supersample_all =
-        s.rect.x1 - s.rect.x0 < kSmallPx || s.rect.y1 - s.rect.y0 < kSmallPx;
+    s.supersample_all = s.rect.x1 - s.rect.x0 < kSmallPx || s.rect.y1 - s.rect.y0 < kSmallPx;
     solids.push_back(s);
   }
   return solids;
@@ -564,8 +559,7 @@ std::vector<Solid> CameraSolids(const calib::Camera& camera, const Scene& scene,
 class SolidCaster {
  public:
   SolidCaster(const std::vector<Solid>& solids, const SceneRenderOptions& options,
-              const Eigen::Vector3d& light, const Lighting* lighting, RayGrid& rays,
-              Canvas& canvas)
+              const Eigen::Vector3d& light, const Lighting* lighting, RayGrid& rays, Canvas& canvas)
       : lighting_(lighting),
         solids_(solids),
         options_(options),
@@ -685,8 +679,9 @@ class SolidCaster {
     const int tile_x0 = tx << Tile::kShift, tile_y0 = ty << Tile::kShift;
     const int tile_x1 = std::min(tile_x0 + Tile::kMask, canvas_.width() - 1);
     const int tile_y1 = std::min(tile_y0 + Tile::kMask, canvas_.height() - 1);
-    if (!(lighting_ == nullptr && list_.size() == 1 && !first.is_ball && !first.supersample_all && region_.x0 == tile_x0 &&
-          region_.y0 == tile_y0 && region_.x1 == tile_x1 && region_.y1 == tile_y1))
+    if (!(lighting_ == nullptr && list_.size() == 1 && !first.is_ball && !first.supersample_all &&
+          region_.x0 == tile_x0 && region_.y0 == tile_y0 && region_.x1 == tile_x1 &&
+          region_.y1 == tile_y1))
       return false;
     // The rays through the corners on the border: top, bottom, left, right.
     border_rays_.resize(2 * (cw_ + ch_));
@@ -817,12 +812,12 @@ void DrawSolids(const std::vector<Solid>& solids, const SceneRenderOptions& opti
 
 // A point of a thread in the image.
 struct ThreadVertex {
-  Eigen::Vector3d in_cam;    // camera frame, m
-  Eigen::Vector2d pixel;     // px
+  Eigen::Vector3d in_cam;      // camera frame, m
+  Eigen::Vector2d pixel;       // px
   Eigen::Vector2d normalised;  // X/Z, Y/Z
-  double width = 0.0;        // px
-  bool valid = false;        // where the camera model is one-to-one
-  float shade = 1.0f;        // with lamps: the thread's shading here
+  double width = 0.0;          // px
+  bool valid = false;          // where the camera model is one-to-one
+  float shade = 1.0f;          // with lamps: the thread's shading here
 };
 
 // The fraction of a pixel covered by a straight strip: the pixel's footprint across the strip.
@@ -953,8 +948,7 @@ class ThreadDrawer {
     const bool valid = a.valid && b.valid;
     // A piece shorter than one in the undistorted image that reaches where the camera model
     // folds back: not drawn.
-    if (!valid && (b.normalised - a.normalised).norm() * params_[0] < options_.max_piece_px)
-      return;
+    if (!valid && (b.normalised - a.normalised).norm() * params_[0] < options_.max_piece_px) return;
     if ((valid && (b.pixel - a.pixel).norm() <= options_.max_piece_px) || level >= kMaxLevel) {
       if (valid) Rasterise(a, b);
       return;
@@ -968,16 +962,16 @@ class ThreadDrawer {
   // polyline's other pieces so far.
   void Rasterise(const ThreadVertex& a, const ThreadVertex& b) {
     const double extent = 0.5 * std::max(a.width, b.width) + kMaxFootprint;
-    const int x0 = std::max(0, static_cast<int>(std::ceil(std::min(a.pixel.x(), b.pixel.x()) -
-                                                          extent)));
-    const int x1 = std::min(canvas_.width() - 1,
-                            static_cast<int>(std::floor(std::max(a.pixel.x(), b.pixel.x()) +
-                                                        extent)));
-    const int y0 = std::max(0, static_cast<int>(std::ceil(std::min(a.pixel.y(), b.pixel.y()) -
-                                                          extent)));
-    const int y1 = std::min(canvas_.height() - 1,
-                            static_cast<int>(std::floor(std::max(a.pixel.y(), b.pixel.y()) +
-                                                        extent)));
+    const int x0 =
+        std::max(0, static_cast<int>(std::ceil(std::min(a.pixel.x(), b.pixel.x()) - extent)));
+    const int x1 =
+        std::min(canvas_.width() - 1,
+                 static_cast<int>(std::floor(std::max(a.pixel.x(), b.pixel.x()) + extent)));
+    const int y0 =
+        std::max(0, static_cast<int>(std::ceil(std::min(a.pixel.y(), b.pixel.y()) - extent)));
+    const int y1 =
+        std::min(canvas_.height() - 1,
+                 static_cast<int>(std::floor(std::max(a.pixel.y(), b.pixel.y()) + extent)));
     if (x1 < x0 || y1 < y0) return;
     const Eigen::Vector2d e = b.pixel - a.pixel;
     const PixelFootprint footprint(e, options_.square_pixel_footprint);
@@ -1007,7 +1001,7 @@ class ThreadDrawer {
       }
   }
 
-  cv::Mat* depth_;  // null, or where to keep the least depth per pixel
+  cv::Mat* depth_;            // null, or where to keep the least depth per pixel
   const Lighting* lighting_;  // null: threads unshaded
   Eigen::Vector3d tangent_ = Eigen::Vector3d::UnitX();  // of the piece being drawn, with lamps
   const calib::Camera& camera_;
@@ -1023,9 +1017,7 @@ class ThreadDrawer {
 
 // Throws std::invalid_argument naming the first non-finite or negative value of the scene.
 void CheckScene(const Scene& scene) {
-  auto fail = [](const std::string& what) {
-    throw std::invalid_argument("RenderScene: " + what);
-  };
+  auto fail = [](const std::string& what) { throw std::invalid_argument("RenderScene: " + what); };
   for (size_t i = 0; i < scene.threads.size(); ++i) {
     const ThreadPolyline& t = scene.threads[i];
     if (!(t.radius >= 0.0) || !std::isfinite(t.radius))
@@ -1066,22 +1058,21 @@ bool SceneRenderOptions::IsValid(std::string* error) const {
   else if (!(shininess > 0.0) || !std::isfinite(shininess))
     os << "shininess " << shininess << " must be positive";
   for (const Lamp& lamp : lamps)
-    if (os.str().empty() && (!lamp.position.allFinite() || !(lamp.power >= 0.0) ||
-                             !std::isfinite(lamp.power)))
+    if (os.str().empty() &&
+        (!lamp.position.allFinite() || !(lamp.power >= 0.0) || !std::isfinite(lamp.power)))
       os << "a lamp needs a finite position and a power >= 0";
   if (os.str().empty()) return true;
   if (error) *error = os.str();
   return false;
 }
 
-void RenderScene(const calib::Camera& camera, const Scene& scene,
-                 const SceneRenderOptions& options, float weight, cv::Mat* accumulator) {
+void RenderScene(const calib::Camera& camera, const Scene& scene, const SceneRenderOptions& options,
+                 float weight, cv::Mat* accumulator) {
   RenderScene(camera, scene, options, weight, accumulator, nullptr);
 }
 
-void RenderScene(const calib::Camera& camera, const Scene& scene,
-                 const SceneRenderOptions& options, float weight, cv::Mat* accumulator,
-                 cv::Mat* depth) {
+void RenderScene(const calib::Camera& camera, const Scene& scene, const SceneRenderOptions& options,
+                 float weight, cv::Mat* accumulator, cv::Mat* depth) {
   std::string error;
   if (!options.IsValid(&error)) throw std::invalid_argument("RenderScene: " + error);
   const calib::CameraIntrinsics& k = camera.intrinsics;
@@ -1104,16 +1095,20 @@ void RenderScene(const calib::Camera& camera, const Scene& scene,
   if (background_image != nullptr &&
       (background_image->type() != CV_32FC3 || background_image->cols != k.width ||
        background_image->rows != k.height))
-    throw std::invalid_argument("RenderScene: the background image must be CV_32FC3 of the "
-                                "camera's size (camera " + camera.name + ")");
+    throw std::invalid_argument(
+        "RenderScene: the background image must be CV_32FC3 of the "
+        "camera's size (camera " +
+        camera.name + ")");
   if (depth != nullptr) {
     if (depth->empty()) {
       depth->create(k.height, k.width, CV_32F);
       depth->setTo(cv::Scalar::all(std::numeric_limits<float>::infinity()));
     }
     if (depth->type() != CV_32F || depth->cols != k.width || depth->rows != k.height)
-      throw std::invalid_argument("RenderScene: the depth map must be CV_32F of the camera's "
-                                  "size (camera " + camera.name + ")");
+      throw std::invalid_argument(
+          "RenderScene: the depth map must be CV_32F of the camera's "
+          "size (camera " +
+          camera.name + ")");
   }
   CheckScene(scene);
 
@@ -1239,9 +1234,8 @@ cv::Mat Expose(const cv::Mat& linear_bgr, const calib::CameraIntrinsics& intrins
   if (linear_bgr.type() != CV_32FC3 || linear_bgr.cols != intrinsics.width ||
       linear_bgr.rows != intrinsics.height) {
     std::ostringstream os;
-    os << "Expose: the image must be CV_32FC3 of " << intrinsics.width << "x"
-       << intrinsics.height << ", not type " << linear_bgr.type() << " of " << linear_bgr.cols
-       << "x" << linear_bgr.rows;
+    os << "Expose: the image must be CV_32FC3 of " << intrinsics.width << "x" << intrinsics.height
+       << ", not type " << linear_bgr.type() << " of " << linear_bgr.cols << "x" << linear_bgr.rows;
     throw std::invalid_argument(os.str());
   }
   const int width = linear_bgr.cols, height = linear_bgr.rows;
@@ -1310,8 +1304,7 @@ cv::Mat Expose(const cv::Mat& linear_bgr, const calib::CameraIntrinsics& intrins
     }
     // A non-finite value would round to anything: report where it is.
     int bad = 0;
-    for (int x = 0; x < width; ++x)
-      bad |= !(std::abs(raw[x]) <= std::numeric_limits<float>::max());
+    for (int x = 0; x < width; ++x) bad |= !(std::abs(raw[x]) <= std::numeric_limits<float>::max());
     if (bad)
       for (int x = 0; x < width; ++x)
         if (!std::isfinite(raw[x]))

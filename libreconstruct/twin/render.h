@@ -39,14 +39,13 @@
 // grid of one ray every 8 pixels, interpolated bilinearly: < 0.01 px error for the paper's
 // lenses). RenderScene is thread-safe: several threads may render different cameras at once.
 
-#include <array>
-#include <cstdint>
-#include <string>
-#include <vector>
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
 #include <opencv2/core.hpp>
+#include <string>
+#include <vector>
 
 #include "calibration/rig.h"
 #include "libreconstruct/coloring/colour.h"
@@ -64,15 +63,15 @@ struct ThreadPolyline {
 // Knots and corner masses: shaded spheres.
 struct Ball {
   Eigen::Vector3d center = Eigen::Vector3d::Zero();  // world, m
-  double radius = 0.0;                                // m
+  double radius = 0.0;                               // m
   Colour colour{1, 1, 1};
 };
 
 // The target body: a shaded box.
 struct Box {
-  Eigen::Vector3d center = Eigen::Vector3d::Zero();  // world, m
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();                 // world, m
   Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  // box axes to world
-  Eigen::Vector3d half_extents = Eigen::Vector3d::Zero();          // along the box axes, m
+  Eigen::Vector3d half_extents = Eigen::Vector3d::Zero();           // along the box axes, m
   Colour colour{1, 1, 1};
 };
 
@@ -131,14 +130,13 @@ struct SceneRenderOptions {
 // created zeroed if empty. Motion blur = several calls with weights summing to 1. Throws
 // std::invalid_argument on invalid options or camera intrinsics, a null accumulator, or one of
 // the wrong type or size.
-void RenderScene(const calib::Camera& camera, const Scene& scene,
-                 const SceneRenderOptions& options, float weight, cv::Mat* accumulator);
+void RenderScene(const calib::Camera& camera, const Scene& scene, const SceneRenderOptions& options,
+                 float weight, cv::Mat* accumulator);
 // The same, also keeping in *depth (CV_32F of the camera's size, created +inf if empty) the
 // least depth (camera z, m) of what each pixel sees: the nearest thread drawn there (not behind
 // a solid covering the whole pixel) or solid; +inf where only the background is seen.
-void RenderScene(const calib::Camera& camera, const Scene& scene,
-                 const SceneRenderOptions& options, float weight, cv::Mat* accumulator,
-                 cv::Mat* depth);
+void RenderScene(const calib::Camera& camera, const Scene& scene, const SceneRenderOptions& options,
+                 float weight, cv::Mat* accumulator, cv::Mat* depth);
 // The rendered linear image (CV_32FC3, weight 1).
 cv::Mat RenderScene(const calib::Camera& camera, const Scene& scene,
                     const SceneRenderOptions& options);

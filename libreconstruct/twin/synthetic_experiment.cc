@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -10,12 +11,10 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <sstream>
 #include <thread>
-
-#include <Eigen/Eigenvalues>
-#include <opencv2/imgcodecs.hpp>
 
 #include "calibration/synthetic.h"
 #include "calibration/target.h"
@@ -141,8 +140,6 @@ Eigen::Vector3d AimPoint(const calib::Rig& rig) {
   return a.ldlt().solve(b);
 }
 
-
-
 // Writes an image (the format from the extension); std::runtime_error naming the file if not.
 void WriteImage(const fs::path& path, const cv::Mat& image) {
   if (!cv::imwrite(path.string(), image))
@@ -166,7 +163,8 @@ void WriteTrueLabels(const fs::path& path, const calib::Rig& rig,
     for (size_t t = 0; t < frames.size(); ++t)
       for (size_t j = 0; j < knots; ++j) {
         if (visibility[c][t * knots + j] != 0) continue;
-        Label& l = labels.at(static_cast<int>(c), static_cast<int>(t), grid[j][0] * cols + grid[j][1]);
+        Label& l =
+            labels.at(static_cast<int>(c), static_cast<int>(t), grid[j][0] * cols + grid[j][1]);
         l.px = {pixels[c][(t * knots + j) * 2], pixels[c][(t * knots + j) * 2 + 1]};
         l.source = LabelSource::kImported;
         l.confidence = 1.0f;
@@ -231,9 +229,9 @@ void SimulatedShot::CheckFinite(const std::string& path) const {
     for (size_t n = 0; n < nodes_[t].size(); ++n) {
       if (nodes_[t][n].allFinite()) continue;
       std::ostringstream os;
-      os << path << ": /nodes/position is not finite at frame " << t << " (t = "
-         << (t < tracks_.time.size() ? tracks_.time[t] : std::nan("")) << " s), node " << n
-         << " (" << model_->DescribeNode(static_cast<int>(n)) << "): (" << nodes_[t][n].x()
+      os << path << ": /nodes/position is not finite at frame " << t
+         << " (t = " << (t < tracks_.time.size() ? tracks_.time[t] : std::nan("")) << " s), node "
+         << n << " (" << model_->DescribeNode(static_cast<int>(n)) << "): (" << nodes_[t][n].x()
          << ", " << nodes_[t][n].y() << ", " << nodes_[t][n].z() << ")";
       throw InputError(os.str());
     }
@@ -356,9 +354,9 @@ void CheckColouring(const std::vector<YarnColoring>& coloring, const std::string
     const netsim::NetInfo& net = model.nets[n];
     if (static_cast<int>(coloring[n].link_colour.size()) != net.num_links())
       throw InputError((file.empty() ? std::string() : file + ": ") + "the colouring has " +
-                       std::to_string(coloring[n].link_colour.size()) + " links, net '" +
-                       net.name + "' (" + std::to_string(net.rows) + "x" +
-                       std::to_string(net.cols) + " knots) has " + std::to_string(net.num_links()));
+                       std::to_string(coloring[n].link_colour.size()) + " links, net '" + net.name +
+                       "' (" + std::to_string(net.rows) + "x" + std::to_string(net.cols) +
+                       " knots) has " + std::to_string(net.num_links()));
   }
 }
 
@@ -422,14 +420,13 @@ FrameRange FramesOf(const RenderJob& job, const SimulatedShot& shot) {
   for (size_t c = 0; c < job.camera_time_offset_frames.size(); ++c) {
     const double d = job.camera_time_offset_frames[c];
     if (!(std::abs(d) < 1.0))
-      throw InputError("--camera-time-offset " + job.rig.cameras[c].name + "=" +
-                       std::to_string(d) +
+      throw InputError("--camera-time-offset " + job.rig.cameras[c].name + "=" + std::to_string(d) +
                        ": a clock offset is a fraction of a frame (-1 < d < 1)");
     if (range.Time(first) + d / job.fps < shot.start_time() - 1e-9 ||
         range.Time(last) + d / job.fps > shot.end_time() + 1e-9)
-      throw InputError("--camera-time-offset " + job.rig.cameras[c].name + "=" +
-                       std::to_string(d) + ": frames " + std::to_string(first) + ":" +
-                       std::to_string(last) + " of that camera would be exposed outside the "
+      throw InputError("--camera-time-offset " + job.rig.cameras[c].name + "=" + std::to_string(d) +
+                       ": frames " + std::to_string(first) + ":" + std::to_string(last) +
+                       " of that camera would be exposed outside the "
                        "simulation's time; render fewer frames");
   }
   return range;
@@ -557,9 +554,9 @@ void RenderFrames(const RenderJob& job, const SimulatedShot& shot, const FrameRa
   std::vector<cv::Mat> backgrounds(cameras);
   if (job.textile_background)
     for (int c = 0; c < cameras; ++c)
-      backgrounds[c] = TextileBackground(job.rig.cameras[c].intrinsics,
-                                         kTextileAlbedo * job.illumination,
-                                         job.background_clutter, job.sensor.seed * 31 + c);
+      backgrounds[c] =
+          TextileBackground(job.rig.cameras[c].intrinsics, kTextileAlbedo * job.illumination,
+                            job.background_clutter, job.sensor.seed * 31 + c);
   const int total = range.count() * cameras;
   std::atomic<int> next{0}, done{0};
   std::mutex mutex;
@@ -684,10 +681,9 @@ std::string EffectsYaml(const RenderJob& job) {
   os << "camera_motion:\n";
   for (size_t c = 0; c < job.rig.cameras.size(); ++c) {
     const CameraMotion m = c < job.camera_motion.size() ? job.camera_motion[c] : CameraMotion();
-    os << "  " << job.rig.cameras[c].name << ": {amplitude_m: " << m.amplitude_m
-       << ", hz: " << m.hz << ", direction: [" << m.direction.x() << ", " << m.direction.y()
-       << ", " << m.direction.z() << "], phase: " << m.phase << ", step_time: " << m.step_time
-       << "}\n";
+    os << "  " << job.rig.cameras[c].name << ": {amplitude_m: " << m.amplitude_m << ", hz: " << m.hz
+       << ", direction: [" << m.direction.x() << ", " << m.direction.y() << ", " << m.direction.z()
+       << "], phase: " << m.phase << ", step_time: " << m.step_time << "}\n";
   }
   return os.str();
 }
@@ -728,8 +724,10 @@ void WriteTruth(const fs::path& out, const RenderJob& job, const FrameTruth& tru
       h5::WriteStringAttribute(h5::Id(H5Dopen2(group_r.get(), "white_balance", H5P_DEFAULT)).get(),
                                "order", "B,G,R");
       const std::pair<const char*, double> values[] = {
-          {"gain", response.gain},   {"gamma", response.gamma},
-          {"prnu", response.prnu},   {"dsnu", response.dsnu},
+          {"gain", response.gain},
+          {"gamma", response.gamma},
+          {"prnu", response.prnu},
+          {"dsnu", response.dsnu},
           {"hot_pixels", response.hot_pixels},
           {"pattern_seed", static_cast<double>(response.pattern_seed)}};
       for (const auto& [name, value] : values)
@@ -746,8 +744,8 @@ void WriteTruth(const fs::path& out, const RenderJob& job, const FrameTruth& tru
       offsets.push_back(OffsetOf(job, static_cast<int>(c)));
       names += (c ? "\n" : "") + rig.cameras[c].name;
     }
-    h5::WriteDataset(file.get(), "camera_time_offset_frames", H5T_NATIVE_DOUBLE,
-                     {offsets.size()}, offsets.data());
+    h5::WriteDataset(file.get(), "camera_time_offset_frames", H5T_NATIVE_DOUBLE, {offsets.size()},
+                     offsets.data());
     h5::SetUnits(file.get(), "camera_time_offset_frames", "frames");
     h5::Id dataset(H5Dopen2(file.get(), "camera_time_offset_frames", H5P_DEFAULT));
     h5::WriteStringAttribute(dataset.get(), "cameras", names);

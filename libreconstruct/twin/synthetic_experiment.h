@@ -41,8 +41,8 @@
 #include <vector>
 
 #include "calibration/rig.h"
-#include "libnetsim/scenario/scenario.h"
 #include "common/tracks/track_file.h"
+#include "libnetsim/scenario/scenario.h"
 #include "libreconstruct/coloring/palette.h"
 #include "libreconstruct/coloring/yarn_coloring.h"
 #include "libreconstruct/twin/flight_effects.h"
@@ -81,7 +81,7 @@ class SimulatedShot {
   std::vector<std::vector<Eigen::Vector3d>> nodes_;  // [T][N]
   netsim::Scenario scenario_;
   std::unique_ptr<netsim::Model> model_;
-  std::vector<int> knot_nodes_;   // node of each track-file knot
+  std::vector<int> knot_nodes_;  // node of each track-file knot
   std::vector<int> corner_nodes_;
   std::vector<double> corner_radius_;
   std::vector<double> knot_radius_;  // per net: 0 for knotless
@@ -92,16 +92,16 @@ struct RenderJob {
   std::string out_dir;
   calib::Rig rig;
   int first_frame = 0;
-  int last_frame = -1;        // -1: the last frame the simulation covers
+  int last_frame = -1;  // -1: the last frame the simulation covers
   double fps = 179.0;
-  double exposure_s = 1e-3;   // motion blur interval, centred on the frame time
-  int blur_samples = 3;       // renders averaged over the exposure
-  SensorOptions sensor;       // Bayer pattern, bit depth, noise, vignetting
+  double exposure_s = 1e-3;  // motion blur interval, centred on the frame time
+  int blur_samples = 3;      // renders averaged over the exposure
+  SensorOptions sensor;      // Bayer pattern, bit depth, noise, vignetting
   Colour background{0.f, 0.f, 0.f};
   double illumination = kRenderIllumination;  // scene white in sensor units (palette.h)
-  std::vector<YarnColoring> coloring;  // per net; empty: DefaultColoring
-  std::string coloring_file;           // where `coloring` was read from, for messages
-  int calibration_views = 20; // foil poses seen by all cameras (0: no calibration images)
+  std::vector<YarnColoring> coloring;         // per net; empty: DefaultColoring
+  std::string coloring_file;                  // where `coloring` was read from, for messages
+  int calibration_views = 20;  // foil poses seen by all cameras (0: no calibration images)
   // Per rig camera: its clock offset, frames, -1 < d < 1 (empty: all 0).
   std::vector<double> camera_time_offset_frames;
   // The flight's acquisition effects (flight_effects.h), all off by default.
@@ -110,7 +110,7 @@ struct RenderJob {
   Flicker flicker;                          // the light's intensity over time
   DepthOfField depth_of_field;              // the thin lens (the same for every camera)
   std::vector<CameraResponse> responses;    // per rig camera (empty: the ideal sensor)
-  bool textile_background = false;         // a textile panel instead of `background`
+  bool textile_background = false;          // a textile panel instead of `background`
   bool background_clutter = false;          // the rig's structure along the frame's edges
   std::vector<CameraMotion> camera_motion;  // per rig camera (empty: all still)
   int threads = 2;
@@ -137,8 +137,7 @@ void CheckOutsideOutput(const std::string& input, const std::string& option,
 // it in place of job.out_dir (common/files.h FolderReplacement): a failing run leaves an existing
 // out_dir as it was and removes its partial folder; every input is checked before any output.
 // progress(done, total) counts camera frames; it may be empty.
-RenderSummary RenderExperiment(const RenderJob& job,
-                               const std::function<void(int, int)>& progress);
+RenderSummary RenderExperiment(const RenderJob& job, const std::function<void(int, int)>& progress);
 
 // A rig with every camera's image scaled by `scale` (focal lengths, principal point, size).
 calib::Rig ScaleRig(const calib::Rig& rig, double scale);

@@ -65,10 +65,9 @@ void ExpectFoilLandsInOneFrame(const BoardPattern& pattern, bool name_back_camer
   CalibrationTarget foil = CalibrationTarget::Foil(pattern, 0.0005);
   if (name_back_cameras) foil.back_cameras = {"cam2", "cam3"};
   std::mt19937 rng(5);
-  const auto poses = RandomTargetPoses(truth, foil, {0, 1, 2, 3}, 20,
-                                       Eigen::Vector3d(1.25, 0.0, 0.1),
-                                       Eigen::Vector3d(0.3, 0.3, 0.25), FacingPlusX(pattern), 0.6,
-                                       rng);
+  const auto poses =
+      RandomTargetPoses(truth, foil, {0, 1, 2, 3}, 20, Eigen::Vector3d(1.25, 0.0, 0.1),
+                        Eigen::Vector3d(0.3, 0.3, 0.25), FacingPlusX(pattern), 0.6, rng);
   const auto data = Render(truth, foil, poses, 2.0, 7);
   const CalibrationResult result = CalibrateRig(foil, data.input, CalibrationOptions{});
   EXPECT_EQ(result.summary.face_of_camera, (std::vector<int>{0, 0, 1, 1}));
@@ -106,12 +105,14 @@ TEST(CalibrateRig, FixedIntrinsicsStayFixed) {
   const CalibrationResult result = CalibrateRig(board, data.input, options);
   for (int c = 0; c < 2; ++c) {
     EXPECT_EQ(result.rig.cameras[c].intrinsics.fx, truth.cameras[c].intrinsics.fx);
-    EXPECT_EQ(result.rig.cameras[c].intrinsics.distortion[0], truth.cameras[c].intrinsics.distortion[0]);
+    EXPECT_EQ(result.rig.cameras[c].intrinsics.distortion[0],
+              truth.cameras[c].intrinsics.distortion[0]);
   }
   EXPECT_LT(CompareRelativePoses(result.rig, truth).translation_m, 3e-3);
   // Four views are few: said so.
   bool warned = false;
-  for (const std::string& w : result.summary.warnings) warned |= w.find("only 4 views") != std::string::npos;
+  for (const std::string& w : result.summary.warnings)
+    warned |= w.find("only 4 views") != std::string::npos;
   EXPECT_TRUE(warned);
 }
 
@@ -126,10 +127,10 @@ TEST(CalibrateRig, MarkerMapPutsTheRigInTheMapFrame) {
     const Eigen::Vector3d normal(x > 1.0 ? -1.0 : 1.0, 0.0, 0.0);
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j)
-        markers.emplace_back(id++, MarkerCorners(Eigen::Vector3d(x + 0.05 * ((i + j) % 2),
-                                                                 0.2 * (i - 1), 0.2 * (j - 1)),
-                                                 Eigen::Vector3d(0, x > 1.0 ? -1.0 : 1.0, 0),
-                                                 normal, 0.12));
+        markers.emplace_back(
+            id++,
+            MarkerCorners(Eigen::Vector3d(x + 0.05 * ((i + j) % 2), 0.2 * (i - 1), 0.2 * (j - 1)),
+                          Eigen::Vector3d(0, x > 1.0 ? -1.0 : 1.0, 0), normal, 0.12));
   }
   const CalibrationTarget map = CalibrationTarget::MarkerMap("DICT_4X4_50", markers);
   const auto data = Render(truth, map, {Rigid3d(), Rigid3d()}, 1.0, 9);
@@ -169,13 +170,12 @@ TEST(CalibrateRig, ACameraThatSharesNoFrameIsNamed) {
   std::mt19937 rng(2);
   // Boards only the 16 mm pair sees, and boards only cam2 sees.
   auto front = RandomTargetPoses(truth, board, {0, 1}, 5, Eigen::Vector3d(0.5, 0.0, 0.1),
-                                 Eigen::Vector3d(0.2, 0.2, 0.2), FacingPlusX(board.faces[0].pattern),
-                                 0.4, rng);
+                                 Eigen::Vector3d(0.2, 0.2, 0.2),
+                                 FacingPlusX(board.faces[0].pattern), 0.4, rng);
   Eigen::Matrix3d flip = Eigen::Vector3d(-1, 1, -1).asDiagonal();
-  auto back = RandomTargetPoses(truth, board, {2}, 5, Eigen::Vector3d(2.0, 0.0, 0.2),
-                                Eigen::Vector3d(0.2, 0.2, 0.2),
-                                FacingPlusX(board.faces[0].pattern) * Eigen::Quaterniond(flip), 0.4,
-                                rng);
+  auto back = RandomTargetPoses(
+      truth, board, {2}, 5, Eigen::Vector3d(2.0, 0.0, 0.2), Eigen::Vector3d(0.2, 0.2, 0.2),
+      FacingPlusX(board.faces[0].pattern) * Eigen::Quaterniond(flip), 0.4, rng);
   truth.cameras.resize(3);
   std::vector<Rigid3d> poses = front;
   poses.insert(poses.end(), back.begin(), back.end());
@@ -217,7 +217,8 @@ TEST(CalibrateRig, AllViewsAlikeIsWarned) {
   const auto data = Render(truth, board, poses, 1.0, 4);
   const CalibrationResult result = CalibrateRig(board, data.input, CalibrationOptions{});
   bool warned = false;
-  for (const std::string& w : result.summary.warnings) warned |= w.find("views are alike") != std::string::npos;
+  for (const std::string& w : result.summary.warnings)
+    warned |= w.find("views are alike") != std::string::npos;
   EXPECT_TRUE(warned) << result.summary.BriefReport();
 }
 
@@ -230,10 +231,9 @@ class DetectInImagesTest : public ::testing::Test {
     const CalibrationTarget board = CalibrationTarget::Board(BoardPattern::Chessboard(9, 6, 0.08));
     Eigen::Matrix3d r;
     r << Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(0, 0, -1), Eigen::Vector3d(1, 0, 0);
-    image_ = RenderTarget(rig.cameras[0], CameraRays(rig.cameras[0].intrinsics),
-                          MakeTargetPrints(board),
-                          Rigid3d(Eigen::Quaterniond(r), Eigen::Vector3d(0.6, 0.32, 0.73)),
-                          RenderOptions{});
+    image_ = RenderTarget(
+        rig.cameras[0], CameraRays(rig.cameras[0].intrinsics), MakeTargetPrints(board),
+        Rigid3d(Eigen::Quaterniond(r), Eigen::Vector3d(0.6, 0.32, 0.73)), RenderOptions{});
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
   std::string Save(const std::string& name, const cv::Mat& image) {

@@ -115,9 +115,9 @@ TEST(Camera, UndistortPointAgreesWithOpenCV) {
   const CameraIntrinsics k = Lens(false);
   std::vector<cv::Point2d> pixels = {{100, 120}, {1024, 1024}, {1900, 300}};
   std::vector<cv::Point2d> normalised;
-  cv::undistortPoints(pixels, normalised, k.CameraMatrix(), k.DistortionCoefficients(),
-                      cv::noArray(), cv::noArray(),
-                      cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-14));
+  cv::undistortPoints(
+      pixels, normalised, k.CameraMatrix(), k.DistortionCoefficients(), cv::noArray(),
+      cv::noArray(), cv::TermCriteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-14));
   for (size_t i = 0; i < pixels.size(); ++i) {
     const Eigen::Vector2d x = UndistortPoint(k, Eigen::Vector2d(pixels[i].x, pixels[i].y));
     EXPECT_NEAR(x.x(), normalised[i].x, 1e-7);
@@ -143,7 +143,8 @@ TEST(Camera, UndistortedImageMatchesThePinholeProjection) {
   pinhole.distortion.fill(0.0);
   double worst = 0.0;
   for (size_t i = 0; i < found.ids.size(); ++i) {
-    const Eigen::Vector3d x = camera.cam_from_world * (pose * board.faces[0].pattern.points[found.ids[i]]);
+    const Eigen::Vector3d x =
+        camera.cam_from_world * (pose * board.faces[0].pattern.points[found.ids[i]]);
     worst = std::max(worst, (Project(pinhole, x) - found.pixels[i]).norm());
   }
   EXPECT_LT(worst, 0.3);  // bilinear resampling plus detection

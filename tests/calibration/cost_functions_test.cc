@@ -1,9 +1,8 @@
 #include "calibration/cost_functions.h"
 
-#include <gtest/gtest.h>
-
 #include <ceres/gradient_checker.h>
 #include <ceres/manifold.h>
+#include <gtest/gtest.h>
 
 #include <memory>
 
@@ -19,8 +18,8 @@ TEST(ReprojectionCostFunctor, PassesTheGradientChecker) {
   Eigen::Quaterniond q_wt(Eigen::AngleAxisd(-0.7, Eigen::Vector3d(1.0, 0.4, 0.3).normalized()));
   double cam_q[4] = {q_cw.x(), q_cw.y(), q_cw.z(), q_cw.w()};
   double cam_t[3] = {0.1, -0.2, 2.5};
-  double intrinsics[kNumIntrinsics] = {2900, 2905, 1030, 1020, -0.1, 0.05, 0.001, -0.002,
-                                       -0.01, 0.0, 0.0, 0.0};
+  double intrinsics[kNumIntrinsics] = {2900,  2905,   1030,  1020, -0.1, 0.05,
+                                       0.001, -0.002, -0.01, 0.0,  0.0,  0.0};
   double target_q[4] = {q_wt.x(), q_wt.y(), q_wt.z(), q_wt.w()};
   double target_t[3] = {0.3, 0.1, 0.2};
   std::vector<double*> parameters = {cam_q, cam_t, intrinsics, target_q, target_t};

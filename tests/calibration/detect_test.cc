@@ -40,7 +40,8 @@ Accuracy Measure(const PatternDetection& found, const FaceProjection& truth) {
   return a;
 }
 
-void ExpectAccurate(const CalibrationTarget& target, double noise, double max_rms, double max_bias) {
+void ExpectAccurate(const CalibrationTarget& target, double noise, double max_rms,
+                    double max_bias) {
   const Rig rig = PaperRig(0.5);
   std::mt19937 rng(11);
   const auto poses = RandomTargetPoses(rig, target, {0}, 6, Eigen::Vector3d(0.8, 0.0, 0.2),
@@ -73,8 +74,9 @@ TEST(Detect, ChessboardCornersAreSubPixelAndInCanonicalOrder) {
 
 // OpenCV 4.6 returns ChArUco corners half a pixel off; the refinement removes the bias.
 TEST(Detect, CharucoCornersAreSubPixelAndUnbiased) {
-  ExpectAccurate(CalibrationTarget::Board(BoardPattern::Charuco(10, 7, 0.06, 0.045, "DICT_5X5_100")),
-                 2.0, 0.25, 0.05);
+  ExpectAccurate(
+      CalibrationTarget::Board(BoardPattern::Charuco(10, 7, 0.06, 0.045, "DICT_5X5_100")), 2.0,
+      0.25, 0.05);
 }
 
 // A ChArUco board half out of the image still gives its visible corners, with the right ids.
@@ -106,10 +108,9 @@ TEST(Detect, PartlyVisibleCharucoBoardsStillCount) {
 TEST(Detect, ArucoMarkerCornersAreFoundWithTheirIds) {
   std::vector<std::pair<int, std::array<Eigen::Vector3d, 4>>> markers;
   for (int i = 0; i < 6; ++i)
-    markers.emplace_back(i * 3, MarkerCorners(Eigen::Vector3d(0.0, 0.15 * (i % 3) - 0.15,
-                                                              0.15 * (i / 3) - 0.075),
-                                              Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(-1, 0, 0),
-                                              0.1));
+    markers.emplace_back(
+        i * 3, MarkerCorners(Eigen::Vector3d(0.0, 0.15 * (i % 3) - 0.15, 0.15 * (i / 3) - 0.075),
+                             Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(-1, 0, 0), 0.1));
   const CalibrationTarget map = CalibrationTarget::MarkerMap("DICT_4X4_50", markers);
   const Rig rig = PaperRig(0.5);
   const Rigid3d pose(Eigen::Quaterniond::Identity(), Eigen::Vector3d(1.0, 0.0, 0.1));
@@ -129,9 +130,9 @@ TEST(Detect, ChessboardOrderHoldsFromBothSidesOfAFoil) {
   const CalibrationTarget foil = CalibrationTarget::Foil(pattern, 0.001);
   const Rig rig = PaperRig(0.5);
   std::mt19937 rng(4);
-  const auto poses = RandomTargetPoses(rig, foil, {0, 2}, 3, Eigen::Vector3d(1.25, 0.0, 0.1),
-                                       Eigen::Vector3d(0.2, 0.2, 0.2),
-                                       testing::FacingPlusX(pattern), 0.5, rng);
+  const auto poses =
+      RandomTargetPoses(rig, foil, {0, 2}, 3, Eigen::Vector3d(1.25, 0.0, 0.1),
+                        Eigen::Vector3d(0.2, 0.2, 0.2), testing::FacingPlusX(pattern), 0.5, rng);
   const auto prints = MakeTargetPrints(foil);
   for (int c : {0, 2}) {
     const CameraRays rays(rig.cameras[c].intrinsics);
@@ -158,7 +159,8 @@ TEST(Detect, NothingIsFoundInAnEmptyImage) {
   cv::add(plain, faint, plain, cv::noArray(), CV_8U);
   EXPECT_TRUE(DetectPattern(plain, BoardPattern::Chessboard(9, 6, 0.05)).empty());
   EXPECT_TRUE(DetectPattern(noise, BoardPattern::Chessboard(9, 6, 0.05)).empty());
-  EXPECT_TRUE(DetectPattern(noise, BoardPattern::Charuco(10, 7, 0.04, 0.03, "DICT_5X5_100")).empty());
+  EXPECT_TRUE(
+      DetectPattern(noise, BoardPattern::Charuco(10, 7, 0.04, 0.03, "DICT_5X5_100")).empty());
 }
 
 TEST(Detect, AWrongBoardSizeIsNotFound) {
@@ -166,10 +168,9 @@ TEST(Detect, AWrongBoardSizeIsNotFound) {
   const Rig rig = PaperRig(0.5);
   Eigen::Matrix3d r;
   r << Eigen::Vector3d(0, -1, 0), Eigen::Vector3d(0, 0, -1), Eigen::Vector3d(1, 0, 0);
-  const cv::Mat image = RenderTarget(rig.cameras[0], CameraRays(rig.cameras[0].intrinsics),
-                                     MakeTargetPrints(board),
-                                     Rigid3d(Eigen::Quaterniond(r), Eigen::Vector3d(0.8, 0.45, 0.7)),
-                                     RenderOptions{});
+  const cv::Mat image = RenderTarget(
+      rig.cameras[0], CameraRays(rig.cameras[0].intrinsics), MakeTargetPrints(board),
+      Rigid3d(Eigen::Quaterniond(r), Eigen::Vector3d(0.8, 0.45, 0.7)), RenderOptions{});
   EXPECT_FALSE(DetectPattern(image, BoardPattern::Chessboard(9, 6, 0.06)).empty());
   EXPECT_TRUE(DetectPattern(image, BoardPattern::Chessboard(7, 6, 0.06)).empty());
 }

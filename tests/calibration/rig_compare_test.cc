@@ -2,11 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
 #include <cmath>
 #include <stdexcept>
 #include <string>
-
-#include <Eigen/Dense>
 
 namespace netlab::calib {
 namespace {

@@ -40,7 +40,8 @@ TEST_F(RigFile, RoundTripKeepsEveryCamera) {
     EXPECT_EQ(a.intrinsics.width, b.intrinsics.width);
     EXPECT_NEAR(a.intrinsics.fx, b.intrinsics.fx, 1e-9);
     EXPECT_EQ(a.intrinsics.rational, b.intrinsics.rational);
-    for (int i = 0; i < 8; ++i) EXPECT_NEAR(a.intrinsics.distortion[i], b.intrinsics.distortion[i], 1e-12);
+    for (int i = 0; i < 8; ++i)
+      EXPECT_NEAR(a.intrinsics.distortion[i], b.intrinsics.distortion[i], 1e-12);
     EXPECT_LT(a.cam_from_world.rotation.angularDistance(b.cam_from_world.rotation), 1e-9);
     EXPECT_LT((a.cam_from_world.translation - b.cam_from_world.translation).norm(), 1e-12);
   }

@@ -10,8 +10,7 @@ namespace {
 // A chessboard 1 m ahead of the camera, facing it.
 Rigid3d BoardAhead(const Camera& camera, double distance) {
   const Rigid3d world_from_cam = camera.cam_from_world.Inverse();
-  return Rigid3d(world_from_cam.rotation,
-                 world_from_cam * Eigen::Vector3d(-0.2, -0.15, distance));
+  return Rigid3d(world_from_cam.rotation, world_from_cam * Eigen::Vector3d(-0.2, -0.15, distance));
 }
 
 TEST(Synthetic, RaysAreTheUndistortedPixelCorners) {
@@ -37,7 +36,8 @@ TEST(Synthetic, ABoardSeenFromBehindIsNotDrawn) {
   EXPECT_LE(min_value, options.black + 1);
   EXPECT_GE(max_value, options.white - 1);
   // Turned around its own y axis: the camera now faces the back of the print.
-  pose.rotation = pose.rotation * Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY()));
+  pose.rotation =
+      pose.rotation * Eigen::Quaterniond(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY()));
   const cv::Mat back = RenderTarget(rig.cameras[0], rays, prints, pose, options);
   cv::minMaxLoc(back, &min_value, &max_value);
   EXPECT_EQ(min_value, options.background);
@@ -52,7 +52,8 @@ TEST(Synthetic, TheNearerPrintOccludesTheFarther) {
   const CameraRays rays(camera.intrinsics);
   const Rigid3d near = camera.cam_from_world * BoardAhead(camera, 1.0);
   const Rigid3d far = camera.cam_from_world * BoardAhead(camera, 2.0);
-  const cv::Mat both = RenderPrints(rays, {{print.get(), far}, {print.get(), near}}, RenderOptions{});
+  const cv::Mat both =
+      RenderPrints(rays, {{print.get(), far}, {print.get(), near}}, RenderOptions{});
   const cv::Mat only_near = RenderPrints(rays, {{print.get(), near}}, RenderOptions{});
   // Where the near board is, the image is the near board's.
   const Eigen::Vector2d centre = Project(camera.intrinsics, near * Eigen::Vector3d(0.2, 0.125, 0));
@@ -73,7 +74,8 @@ TEST(Synthetic, NoiseHasTheRequestedSigma) {
 
 TEST(Synthetic, RandomPosesAreSeenWhole) {
   const Rig rig = PaperRig(0.5);
-  const CalibrationTarget foil = CalibrationTarget::Foil(BoardPattern::Chessboard(9, 6, 0.06), 0.001);
+  const CalibrationTarget foil =
+      CalibrationTarget::Foil(BoardPattern::Chessboard(9, 6, 0.06), 0.001);
   std::mt19937 rng(1);
   const auto poses = RandomTargetPoses(rig, foil, {0, 1, 2, 3}, 5, Eigen::Vector3d(1.25, 0, 0.1),
                                        Eigen::Vector3d(0.3, 0.3, 0.2),

@@ -43,7 +43,8 @@ TEST(Target, ParsesCharucoSpec) {
 TEST(Target, BadSpecsSayWhatIsWrong) {
   EXPECT_NE(ErrorOf("chessboard:9-6:0.05").find("expected COLSxROWS"), std::string::npos);
   EXPECT_NE(ErrorOf("chessboard:8x6:0.05").find("odd by even"), std::string::npos);
-  EXPECT_NE(ErrorOf("chessboard:9x6:-1").find("SQUARE must be a positive length"), std::string::npos);
+  EXPECT_NE(ErrorOf("chessboard:9x6:-1").find("SQUARE must be a positive length"),
+            std::string::npos);
   EXPECT_NE(ErrorOf("charuco:10x7:0.04:0.05:DICT_5X5_100").find("marker < square"),
             std::string::npos);
   EXPECT_NE(ErrorOf("charuco:10x7:0.04:0.03:DICT_9X9").find("unknown ArUco dictionary"),
@@ -96,7 +97,7 @@ TEST(Target, ParsesFoilAndMarkerMapFiles) {
   const auto& points = m.faces[0].pattern.points;
   ASSERT_EQ(points.size(), 32u);
   EXPECT_NEAR((points[12] - points[13]).norm(), 0.1, 1e-12);  // marker 3's top edge
-  EXPECT_NEAR(points[29].x(), 0.1, 1e-12);                     // marker 7's corner 1
+  EXPECT_NEAR(points[29].x(), 0.1, 1e-12);                    // marker 7's corner 1
 }
 
 TEST(Target, BadFilesNameTheLineAndKey) {

@@ -6,7 +6,6 @@
 #include "common/files.h"
 
 #include <gtest/gtest.h>
-
 #include <unistd.h>
 
 #include <algorithm>
@@ -136,7 +135,7 @@ TEST_F(FolderReplacementTest, AnOutputSetPutsItsOutputsInPlaceOnlyTogether) {
     // The second output fails: the set is never committed.
   }
   EXPECT_EQ(Contents(dir_), (std::map<std::string, std::string>{{"out.h5", "old out"},
-                                                                 {"report.html", "old report"}}));
+                                                                {"report.html", "old report"}}));
   {
     OutputSet outputs({(dir_ / "out.h5").string(), (dir_ / "report.html").string(), ""});
     WriteThroughPartial(dir_ / "out.h5", "new out");
@@ -145,7 +144,7 @@ TEST_F(FolderReplacementTest, AnOutputSetPutsItsOutputsInPlaceOnlyTogether) {
     outputs.Commit();
   }
   EXPECT_EQ(Contents(dir_), (std::map<std::string, std::string>{{"out.h5", "new out"},
-                                                                 {"report.html", "new report"}}));
+                                                                {"report.html", "new report"}}));
   {
     // A writer that fails half way leaves its partial: the set removes it.
     OutputSet outputs({(dir_ / "out.h5").string(), (dir_ / "report.html").string()});
@@ -153,7 +152,7 @@ TEST_F(FolderReplacementTest, AnOutputSetPutsItsOutputsInPlaceOnlyTogether) {
     std::ofstream((dir_ / "report.html.partial").string()) << "half a new report";
   }
   EXPECT_EQ(Contents(dir_), (std::map<std::string, std::string>{{"out.h5", "new out"},
-                                                                 {"report.html", "new report"}}));
+                                                                {"report.html", "new report"}}));
   // Without a set, a rename happens at once; an output the set never saw written is skipped.
   WriteThroughPartial(dir_ / "out.h5", "newer out");
   EXPECT_EQ(Contents(dir_).at("out.h5"), "newer out");
@@ -163,7 +162,7 @@ TEST_F(FolderReplacementTest, AnOutputSetPutsItsOutputsInPlaceOnlyTogether) {
     outputs.Commit();
   }
   EXPECT_EQ(Contents(dir_), (std::map<std::string, std::string>{{"out.h5", "newest out"},
-                                                                 {"report.html", "new report"}}));
+                                                                {"report.html", "new report"}}));
 }
 
 TEST_F(FolderReplacementTest, AWriteThatRunsOutOfSpaceLeavesTheFileAsItWas) {

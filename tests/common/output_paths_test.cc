@@ -5,7 +5,6 @@
 #include "common/output_paths.h"
 
 #include <gtest/gtest.h>
-
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -49,10 +48,10 @@ class OutputPathsTest : public ::testing::Test {
 };
 
 TEST_F(OutputPathsTest, DistinctWritableOutputsPass) {
-  EXPECT_EQ(Refusal({{"--in", Path("in.h5")}}, {{"--out", Path("out.h5")},
-                                                 {"--report", Path("sub/report.html")},
-                                                 {"--csv", ""}}),
-            "");
+  EXPECT_EQ(
+      Refusal({{"--in", Path("in.h5")}},
+              {{"--out", Path("out.h5")}, {"--report", Path("sub/report.html")}, {"--csv", ""}}),
+      "");
   std::ofstream(Path("out.h5")) << "a previous output";  // replaced, as before
   EXPECT_EQ(Refusal({{"--in", Path("in.h5")}}, {{"--out", Path("out.h5")}}), "");
 }
@@ -86,10 +85,9 @@ TEST_F(OutputPathsTest, SpecialFilesAndMissingFoldersAreRefused) {
   EXPECT_NE(Refusal({}, {{"--out", Path("fifo")}}).find("a FIFO"), std::string::npos);
   EXPECT_NE(Refusal({}, {{"--out", Path("null")}}).find("a character device"), std::string::npos);
   EXPECT_NE(Refusal({}, {{"--out", Path("sub")}}).find("is a folder"), std::string::npos);
-  const std::string missing = Refusal({}, {{"--out", Path("a.h5")},
-                                           {"--report", Path("no/such/r.html")}});
-  EXPECT_NE(missing.find("--report " + Path("no/such/r.html") + ": the folder"),
-            std::string::npos)
+  const std::string missing =
+      Refusal({}, {{"--out", Path("a.h5")}, {"--report", Path("no/such/r.html")}});
+  EXPECT_NE(missing.find("--report " + Path("no/such/r.html") + ": the folder"), std::string::npos)
       << missing;
   EXPECT_NE(missing.find("does not exist"), std::string::npos) << missing;
   EXPECT_NE(Refusal({}, {{"--out", Path("in.h5/a.h5")}}).find("is not a folder"),

@@ -5,7 +5,6 @@
 #include "common/yaml_util.h"
 
 #include <gtest/gtest.h>
-
 #include <unistd.h>
 
 #include <chrono>
@@ -32,11 +31,12 @@ TEST(LoadYaml, AKeyGivenTwiceIsRefusedNamingBothLines) {
             "f.yaml:3: duration: given twice, at lines 1 and 3 (a YAML reader keeps one of "
             "them silently); keep one");
   // In a nested mapping and in a list's mapping, by its dotted path.
-  EXPECT_NE(Refusal("materials:\n  nylon:\n    a: 1\n    a: 2\n").find(
-                "f.yaml:4: materials.nylon.a: given twice, at lines 3 and 4"),
+  EXPECT_NE(Refusal("materials:\n  nylon:\n    a: 1\n    a: 2\n")
+                .find("f.yaml:4: materials.nylon.a: given twice, at lines 3 and 4"),
             std::string::npos);
-  EXPECT_NE(Refusal("nets:\n  - knots: 1\n    knots: 2\n").find("f.yaml:3: nets[0].knots: given "
-                                                                "twice"),
+  EXPECT_NE(Refusal("nets:\n  - knots: 1\n    knots: 2\n")
+                .find("f.yaml:3: nets[0].knots: given "
+                      "twice"),
             std::string::npos);
   EXPECT_NE(Refusal("materials: {}\nmaterials: {}\n").find("materials: given twice"),
             std::string::npos);
@@ -96,8 +96,9 @@ TEST(LoadYaml, AFolderADeviceOrAMissingFileIsNamed) {
   };
   EXPECT_EQ(message(dir), dir + ": is a folder, not a YAML file");
   EXPECT_EQ(message(dir + "/missing.yaml"), dir + "/missing.yaml: cannot open file");
-  EXPECT_EQ(message("/dev/zero"), "/dev/zero: more than 64 MiB; not a YAML file netlab reads (a "
-                                  "device?)");
+  EXPECT_EQ(message("/dev/zero"),
+            "/dev/zero: more than 64 MiB; not a YAML file netlab reads (a "
+            "device?)");
   std::ofstream(dir + "/twice.yaml") << "a: 1\na: 2\n";
   EXPECT_EQ(message(dir + "/twice.yaml").rfind(dir + "/twice.yaml:2: a: given twice", 0), 0u);
   std::filesystem::remove_all(dir);

@@ -61,8 +61,7 @@ inline std::vector<std::unique_ptr<Force>> ElasticForces(const Model& model) {
 
 // A straight rod along +x from the origin.
 inline std::pair<Model, State> StraightRod(const Material& material, double length, int segments,
-                                           Fixity start = Fixity::kFree,
-                                           Fixity end = Fixity::kFree,
+                                           Fixity start = Fixity::kFree, Fixity end = Fixity::kFree,
                                            ModelBuilderOptions options = {}) {
   ModelBuilder builder(options);
   RodSpec rod;

@@ -1,18 +1,17 @@
 #pragma once
 // Scratch folders and hand-written image files for the libreconstruct tests.
 
+#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <functional>
-#include <initializer_list>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
-#include <string>
-
-#include <gtest/gtest.h>
+#include <functional>
+#include <initializer_list>
 #include <opencv2/core.hpp>
+#include <string>
 
 #include "common/errors.h"
 
@@ -102,8 +101,8 @@ inline ::testing::AssertionResult Mentions(const std::string& message,
   if (message.empty()) return ::testing::AssertionFailure() << "no error";
   for (const std::string& part : parts)
     if (message.find(part) == std::string::npos)
-      return ::testing::AssertionFailure() << "'" << message << "' does not mention '" << part
-                                           << "'";
+      return ::testing::AssertionFailure()
+             << "'" << message << "' does not mention '" << part << "'";
   return ::testing::AssertionSuccess();
 }
 

@@ -1,6 +1,5 @@
 #include "app/gui/document/calibration_presenter.h"
 
-
 #include <QFileInfo>
 #include <QStringList>
 #include <QUndoCommand>
@@ -47,7 +46,9 @@ class ExcludeCommand : public QUndoCommand {
  public:
   ExcludeCommand(CalibrationPresenter* presenter, std::set<ImageKey> before,
                  std::set<ImageKey> after, const QString& text)
-      : QUndoCommand(text), presenter_(presenter), before_(std::move(before)),
+      : QUndoCommand(text),
+        presenter_(presenter),
+        before_(std::move(before)),
         after_(std::move(after)) {}
   void redo() override { presenter_->SetExcluded(after_); }
   void undo() override { presenter_->SetExcluded(before_); }
@@ -59,7 +60,9 @@ class ExcludeCommand : public QUndoCommand {
 
 CalibrationPresenter::CalibrationPresenter(const calib::Rig* rig, std::string rig_path,
                                            std::string project_path)
-    : rig_(rig), rig_path_(std::move(rig_path)), project_path_(std::move(project_path)),
+    : rig_(rig),
+      rig_path_(std::move(rig_path)),
+      project_path_(std::move(project_path)),
       undo_(std::make_unique<QUndoStack>()) {}
 
 CalibrationPresenter::~CalibrationPresenter() = default;
@@ -211,9 +214,9 @@ std::vector<std::pair<std::string, std::string>> CalibrationPresenter::GlobsInFo
         ++by_extension[e.path().extension().string()];
     }
     if (by_extension.empty()) continue;
-    const auto most = std::max_element(
-        by_extension.begin(), by_extension.end(),
-        [](const auto& a, const auto& b) { return a.second < b.second; });
+    const auto most =
+        std::max_element(by_extension.begin(), by_extension.end(),
+                         [](const auto& a, const auto& b) { return a.second < b.second; });
     globs.emplace_back(p.filename().string(), (p / ("*" + most->first)).string());
   }
   return globs;
@@ -296,7 +299,8 @@ DetectionAnswer CalibrationPresenter::Detect(const DetectionJob& job,
   std::map<int, std::string> first_path;
   for (CalibrationImage& image : answer.images) {
     if (image.width == 0) continue;
-    const auto [it, inserted] = first_size.emplace(image.camera, std::pair(image.width, image.height));
+    const auto [it, inserted] =
+        first_size.emplace(image.camera, std::pair(image.width, image.height));
     if (inserted) {
       first_path[image.camera] = image.path;
       continue;
@@ -425,7 +429,7 @@ QString CalibrationPresenter::CalibrationText() const {
                .arg(s.observations)
                .arg(s.outliers)
                .arg(r->excluded.size() == 1 ? QString("1 image")
-                                             : QString("%1 images").arg(r->excluded.size()))
+                                            : QString("%1 images").arg(r->excluded.size()))
                .arg(r->wall_s, 0, 'f', 1);
   QStringList baselines, metric;
   for (const calib::PairCheck& p : s.pairs) {
@@ -484,13 +488,15 @@ std::vector<PointResidual> CalibrationPresenter::Residuals(ImageKey key) const {
   if (i.status != CalibrationImage::Status::kFound) return out;
   const std::vector<int>& faces = r->summary.face_of_camera;
   const int face = c < static_cast<int>(faces.size()) ? faces[c] : 0;
-  const calib::TargetFace& target_face = target_->faces[std::min<size_t>(face, target_->faces.size() - 1)];
+  const calib::TargetFace& target_face =
+      target_->faces[std::min<size_t>(face, target_->faces.size() - 1)];
   const calib::Rigid3d world_from_face = r->world_from_target[f] * target_face.target_from_face;
   const calib::Camera& camera = r->rig.cameras[c];
   for (size_t k = 0; k < i.found.ids.size(); ++k) {
     const int id = i.found.ids[k];
     if (id < 0 || id >= static_cast<int>(target_face.pattern.points.size())) continue;
-    const Eigen::Vector2d predicted = camera.ProjectWorld(world_from_face * target_face.pattern.points[id]);
+    const Eigen::Vector2d predicted =
+        camera.ProjectWorld(world_from_face * target_face.pattern.points[id]);
     if (!predicted.allFinite()) continue;
     out.push_back({i.found.pixels[k], i.found.pixels[k] - predicted});
   }
@@ -504,7 +510,8 @@ CoverageGrid CalibrationPresenter::Coverage(int c, int cols, int rows) const {
   grid.counts.assign(static_cast<size_t>(cols) * rows, 0);
   if (c < 0 || c >= cameras()) return grid;
   int width = 0, height = 0;
-  for (int f = 0; f < frames() && width == 0; ++f) width = image({c, f}).width, height = image({c, f}).height;
+  for (int f = 0; f < frames() && width == 0; ++f)
+    width = image({c, f}).width, height = image({c, f}).height;
   if (width == 0) return grid;
   for (int f = 0; f < frames(); ++f) {
     const CalibrationImage& i = image({c, f});
@@ -534,8 +541,7 @@ void CalibrationPresenter::ToggleExcluded(ImageKey key) {
   else
     after.erase(key);
   const QString text = QString("%1 %2 of %3")
-                           .arg(exclude ? "Exclude" : "Include",
-                                FileName(image(key).path),
+                           .arg(exclude ? "Exclude" : "Include", FileName(image(key).path),
                                 QString::fromStdString(camera_name(key.first)));
   undo_->push(new ExcludeCommand(this, excluded_, std::move(after), text));
 }

@@ -46,16 +46,16 @@ namespace netlab::gui {
 
 struct RigCameraRow {
   std::string name;
-  int width = 0, height = 0;             // px
-  double fx = 0, fy = 0, cx = 0, cy = 0;  // px
-  double k1 = 0, k2 = 0;                 // the first radial distortion terms
-  Eigen::Vector3d centre = Eigen::Vector3d::Zero();     // world, m
+  int width = 0, height = 0;                             // px
+  double fx = 0, fy = 0, cx = 0, cy = 0;                 // px
+  double k1 = 0, k2 = 0;                                 // the first radial distortion terms
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();      // world, m
   Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();  // optical axis, world, unit
 };
 
 struct Baseline {
-  int a = 0, b = 0;        // rig cameras
-  double length_m = 0.0;   // between their centres
+  int a = 0, b = 0;       // rig cameras
+  double length_m = 0.0;  // between their centres
 };
 
 // One image of one camera: (camera, frame) in the order of the images given.
@@ -66,9 +66,9 @@ struct CalibrationImage {
   std::string path;
   enum class Status { kNotDetected, kFound, kFailed };
   Status status = Status::kNotDetected;
-  std::string why;                   // kFailed: why (unreadable, wrong size, target not found)
-  calib::PatternDetection found;     // kFound: the target's points
-  int width = 0, height = 0;         // px, once read
+  std::string why;                // kFailed: why (unreadable, wrong size, target not found)
+  calib::PatternDetection found;  // kFound: the target's points
+  int width = 0, height = 0;      // px, once read
 };
 
 // What detection needs (copied, so that it runs on a worker) and what it answers.
@@ -115,8 +115,7 @@ class CalibrationPresenter {
  public:
   // `rig` (may be null: no rig yet) must outlive the presenter; `rig_path` is shown as where it
   // comes from; `project_path` (may be "") is the project whose `rig` Save points at the file.
-  CalibrationPresenter(const calib::Rig* rig, std::string rig_path,
-                       std::string project_path = "");
+  CalibrationPresenter(const calib::Rig* rig, std::string rig_path, std::string project_path = "");
   ~CalibrationPresenter();
   CalibrationPresenter(const CalibrationPresenter&) = delete;
   CalibrationPresenter& operator=(const CalibrationPresenter&) = delete;
@@ -148,7 +147,7 @@ class CalibrationPresenter {
   // twin's calibration/camN/), and the target file beside them (a .yaml naming a board type;
   // "" when none): what the room proposes when a folder is chosen.
   static std::vector<std::pair<std::string, std::string>> GlobsInFolder(const std::string& folder,
-                                                                         std::string* target);
+                                                                        std::string* target);
   // Where a project's calibration images likely are: the folder "calibration" beside its
   // experiment (the rendered twin's layout), when it exists; else "".
   std::string SuggestedImagesFolder() const;

@@ -37,8 +37,6 @@ void Cursor::SetKnot(int k) {
   knot_ = k;
 }
 
-QString Cursor::KnotName(int k) const {
-  return QString("(%1, %2)").arg(k / cols_).arg(k % cols_);
-}
+QString Cursor::KnotName(int k) const { return QString("(%1, %2)").arg(k / cols_).arg(k % cols_); }
 
 }  // namespace netlab::gui

@@ -8,20 +8,14 @@ namespace netlab::gui {
 QColor LabelColour(const recon::Label& l) {
   if (l.state == recon::LabelState::kNeedsReview) return QColor(255, 140, 0);
   switch (l.source) {
-    case recon::LabelSource::kManual:
-      return QColor(0, 230, 255);
-    case recon::LabelSource::kFindNode:
-      return QColor(80, 255, 120);
-    case recon::LabelSource::kFindPath:
-      return QColor(170, 255, 60);
-    case recon::LabelSource::kFillGrid:
-      return QColor(255, 240, 80);
-    case recon::LabelSource::kTracked:
-      return QColor(60, 220, 60);
+    case recon::LabelSource::kManual: return QColor(0, 230, 255);
+    case recon::LabelSource::kFindNode: return QColor(80, 255, 120);
+    case recon::LabelSource::kFindPath: return QColor(170, 255, 60);
+    case recon::LabelSource::kFillGrid: return QColor(255, 240, 80);
+    case recon::LabelSource::kTracked: return QColor(60, 220, 60);
     case recon::LabelSource::kProjected:  // placed from the other cameras: violet
       return QColor(200, 150, 255);
-    default:
-      return QColor(200, 200, 255);
+    default: return QColor(200, 200, 255);
   }
 }
 
@@ -54,8 +48,7 @@ int ReviewWalk::NextRow(const LabelKey& here, bool backwards) const {
 
 int ReviewWalk::AdvanceRow(const LabelKey& fixed, bool was_queued) const {
   const auto [c, t, k] = fixed;
-  if (!was_queued || reviewing_ != fixed || InQueue(c, t, k) || model_->rowCount() == 0)
-    return -1;
+  if (!was_queued || reviewing_ != fixed || InQueue(c, t, k) || model_->rowCount() == 0) return -1;
   // The frame's next label for review first; its missing knots (mostly the target's shadow,
   // marked hidden a run at a time with Shift+D once tracking is done) only after a missing knot.
   const std::vector<LabelKey>& items = model_->items();
@@ -137,14 +130,14 @@ QString PreviewSummary(const Session::FillGridPreview& p, int frame_number,
       .arg(PreviewName(p.from_corners))
       .arg(frame_number)
       .arg(parts.join(", "), accept_keys,
-           p.from_corners ? "two undo steps: Find Path, Fill Grid" : "one undo step",
-           discard_keys);
+           p.from_corners ? "two undo steps: Find Path, Fill Grid" : "one undo step", discard_keys);
 }
 
 QString EmptyPreviewMessage(bool from_corners, int frame_number) {
   return from_corners
-             ? QString("Find Path from the corners, frame %1: nothing found; seed three or four "
-                       "corners in a camera first (pick the knot, click it)")
+             ? QString(
+                   "Find Path from the corners, frame %1: nothing found; seed three or four "
+                   "corners in a camera first (pick the knot, click it)")
                    .arg(frame_number)
              : QString("Fill Grid, frame %1: nothing to add or change; no preview pending")
                    .arg(frame_number);
@@ -214,8 +207,8 @@ ViewOverlay LabelingPresenter::Overlay(int c, const std::vector<Eigen::Vector2d>
   if (point.valid) {
     o.reprojected = session_->rig_camera(c).ProjectWorld(point.position);
     if (doc.at(c, t, knot).present())
-      residual = QString(" · residual %1 px").arg((doc.at(c, t, knot).px - *o.reprojected).norm(),
-                                                  0, 'f', 2);
+      residual = QString(" · residual %1 px")
+                     .arg((doc.at(c, t, knot).px - *o.reprojected).norm(), 0, 'f', 2);
   }
   o.candidates = candidates;
   if (preview != nullptr) o.ghosts = PreviewGhosts(doc, *preview, c, t);
@@ -247,9 +240,9 @@ QString LabelingPresenter::FrameStatus() const {
 
 QString LabelingPresenter::KnotStatus() const {
   const recon::PointEstimate point = session_->Triangulate(cursor_->frame(), cursor_->knot());
-  return QString("knot %1%2").arg(
-      cursor_->KnotName(cursor_->knot()),
-      point.valid ? QString(" · RMS residual %1 px").arg(point.rms_px, 0, 'f', 2) : QString());
+  return QString("knot %1%2")
+      .arg(cursor_->KnotName(cursor_->knot()),
+           point.valid ? QString(" · RMS residual %1 px").arg(point.rms_px, 0, 'f', 2) : QString());
 }
 
 QString LabelingPresenter::Where() const {
@@ -291,15 +284,15 @@ QString LabelingPresenter::FindNodeMessage(int c, const recon::FindNodeResult& r
       return "Find Node: no knot in the brush (" + QString::fromStdString(r.why) +
              "); Shift+click places the label exactly";
     case recon::FindNodeStatus::kSeveral:
-      return QString("Find Node: %1 junctions in the brush (red crosses); "
-                     "click closer with a smaller brush (-), or Shift+click")
+      return QString(
+                 "Find Node: %1 junctions in the brush (red crosses); "
+                 "click closer with a smaller brush (-), or Shift+click")
           .arg(r.candidates.size());
   }
   return {};
 }
 
-QString LabelingPresenter::ColoursText(
-    const std::optional<Session::KnotColours>& colours) const {
+QString LabelingPresenter::ColoursText(const std::optional<Session::KnotColours>& colours) const {
   if (!colours) return "No colouring in the project, or the frame cannot be read.";
   const Session::KnotColours& k = *colours;
   QString text = QString("<b>knot %1 in %2, frame %3</b><br>expected, by link:<br>")
@@ -307,8 +300,9 @@ QString LabelingPresenter::ColoursText(
                      .arg(QString::fromStdString(session_->camera_names()[cursor_->camera()]))
                      .arg(session_->frame_number(cursor_->frame()));
   for (const auto& link : k.expected)
-    text += QString("<span style=\"background-color:rgb(%1,%2,%3)\">&nbsp;&nbsp;&nbsp;&nbsp;"
-                    "</span> %4 towards %5<br>")
+    text += QString(
+                "<span style=\"background-color:rgb(%1,%2,%3)\">&nbsp;&nbsp;&nbsp;&nbsp;"
+                "</span> %4 towards %5<br>")
                 .arg(std::lround(link.srgb[0]))
                 .arg(std::lround(link.srgb[1]))
                 .arg(std::lround(link.srgb[2]))
@@ -317,9 +311,9 @@ QString LabelingPresenter::ColoursText(
                        : k.verdict == "mismatch" ? "#b2182b"
                                                  : "#555555";
   const char* meaning = k.verdict == "consistent" ? "the label's knot"
-                        : k.verdict == "mismatch"   ? "not the label's knot: check it"
-                                                    : "too few yarns read for sure: no evidence "
-                                                      "either way";
+                        : k.verdict == "mismatch" ? "not the label's knot: check it"
+                                                  : "too few yarns read for sure: no evidence "
+                                                    "either way";
   text += QString("<br>the yarns say: <b style=\"color:%1\">%2</b> (%3)")
               .arg(colour, QString::fromStdString(k.verdict), meaning);
   if (!k.knots_read.empty() && k.knots_read.size() <= 3) {

@@ -35,8 +35,7 @@ QColor LabelColour(const recon::Label& label);
 // queue's order), the document and the missing knots (null: none).
 class ReviewWalk {
  public:
-  ReviewWalk(const ReviewModel* model, const LabelDocument* document,
-             const MissingKnots* missing);
+  ReviewWalk(const ReviewModel* model, const LabelDocument* document, const MissingKnots* missing);
 
   // (camera, t, knot) has a label under review.
   bool UnderReview(int camera, int t, int knot) const;

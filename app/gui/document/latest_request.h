@@ -31,8 +31,7 @@ class LatestRequest {
   using Answer = std::function<void(Result)>;
 
   LatestRequest(QObject* context, Answer answer) : answer_(std::move(answer)) {
-    QObject::connect(&watcher_, &QFutureWatcher<Result>::finished, context,
-                     [this] { Finished(); });
+    QObject::connect(&watcher_, &QFutureWatcher<Result>::finished, context, [this] { Finished(); });
   }
   ~LatestRequest() {
     watcher_.disconnect();
@@ -74,8 +73,8 @@ class LatestRequest {
   void Launch(Work work) {
     launched_ = wanted_;
     cancel_ = std::make_shared<std::atomic<bool>>(false);
-    watcher_.setFuture(QtConcurrent::run(
-        [work = std::move(work), cancel = cancel_] { return work(*cancel); }));
+    watcher_.setFuture(
+        QtConcurrent::run([work = std::move(work), cancel = cancel_] { return work(*cancel); }));
   }
   void Finished() {
     if (next_) {  // a newer request waited: this answer is stale

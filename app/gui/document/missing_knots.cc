@@ -1,11 +1,12 @@
 #include "app/gui/document/missing_knots.h"
 
-#include <stdexcept>
 #include <yaml-cpp/yaml.h>
 
+#include <stdexcept>
+
 #include "common/errors.h"
-#include "libnetsim/scenario/scenario.h"
 #include "common/tracks/track_file.h"
+#include "libnetsim/scenario/scenario.h"
 
 namespace netlab::gui {
 
@@ -21,8 +22,9 @@ recon::Target LoadTarget(const std::string& path, double fps) {
     throw InputError(path + ": cannot be read as the target (" + e.what() + ")");
   }
   if (text.empty())
-    throw InputError(path + ": no /scenario (the target is a scenario file or a netlab simulate "
-                            "result)");
+    throw InputError(path +
+                     ": no /scenario (the target is a scenario file or a netlab simulate "
+                     "result)");
   // Only the bodies matter: the data files the scenario names (gravity, frame rotation, drag)
   // are not read.
   const std::string origin = result ? path + ":/scenario" : path;
@@ -65,8 +67,7 @@ recon::Target LoadTarget(const std::string& path, double fps) {
 }
 
 MissingKnots::MissingKnots(const LabelDocument* document, const calib::Rig* rig,
-                           std::vector<int> rig_index, MissingKnotsOptions options,
-                           QObject* parent)
+                           std::vector<int> rig_index, MissingKnotsOptions options, QObject* parent)
     : QObject(parent),
       document_(document),
       rig_(rig),

@@ -46,9 +46,8 @@ Project LoadProject(const std::string& path) {
   RefuseDuplicateKeys(root.node(), path, "");
   if (root.node()["net"] && root.node()["net"].IsMap())
     RefuseDuplicateKeys(root.node()["net"], path, "net.");
-  root.AllowOnly(
-      {"netlab_project", "experiment", "rig", "coloring", "target", "labels", "net",
-       "illumination", "tracks", "simulations"});
+  root.AllowOnly({"netlab_project", "experiment", "rig", "coloring", "target", "labels", "net",
+                  "illumination", "tracks", "simulations"});
   if (root.Int("netlab_project") != 1)
     throw InputError(root.Where("netlab_project") + ": version 1 expected");
   Project p;

@@ -42,9 +42,9 @@ struct Project {
   std::string labels;
   std::string tracks;                    // "" when none
   std::vector<std::string> simulations;  // absolute
-  int rows = 0, cols = 0;  // the net's knots
-  double mesh_m = 0.0;     // link length, m; 0: estimated by the engine
-  bool knotless = false;   // no knot balls: an edge knot is where its links' colours change
+  int rows = 0, cols = 0;                // the net's knots
+  double mesh_m = 0.0;                   // link length, m; 0: estimated by the engine
+  bool knotless = false;  // no knot balls: an edge knot is where its links' colours change
   double illumination = recon::kRenderIllumination;  // the colour check's exposure (--illumination)
 
   int knots() const { return rows * cols; }

@@ -49,9 +49,9 @@ TriangulationJob ReconstructionPresenter::MakeJob(const TriangulationOptions& op
     where[c] = experiment.cameras[e].timestamps;
     timestamps[c] = recon::ReadTimestamps(where[c]);
   }
-  job.time_s = recon::FrameTimesFromTimestamps(job.labels.frame_index, s.fps(), names, timestamps,
-                                               where)
-                   .time_s;
+  job.time_s =
+      recon::FrameTimesFromTimestamps(job.labels.frame_index, s.fps(), names, timestamps, where)
+          .time_s;
   return job;
 }
 
@@ -178,8 +178,9 @@ int ReconstructionPresenter::TrackRow(int t) const {
 QString ReconstructionPresenter::Summary() const {
   if (!run_) return "Not triangulated yet.";
   if (!run_->result && run_->error.empty())
-    return QString("Tracks read from %1: %2 frames x %3 knots (triangulate to renew them from "
-                   "the labels).")
+    return QString(
+               "Tracks read from %1: %2 frames x %3 knots (triangulate to renew them from "
+               "the labels).")
         .arg(QString::fromStdString(tracks_path_))
         .arg(run_->tracks.frames())
         .arg(run_->tracks.knots());

@@ -50,7 +50,7 @@ struct TriangulationJob {
 };
 struct TriangulationRun {
   std::optional<recon::SequenceResult> result;
-  KnotTracks tracks;          // valid with a result
+  KnotTracks tracks;                  // valid with a result
   std::vector<std::string> warnings;  // recon::SequenceWarnings
   std::string error;                  // why there is no result
   bool cancelled = false;

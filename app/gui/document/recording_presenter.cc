@@ -10,8 +10,8 @@ namespace netlab::gui {
 
 RecordingPresenter::RecordingPresenter(const std::string& experiment_path)
     : experiment_path_(experiment_path),
-      sequence_(std::make_unique<recon::SynchronizedSequence>(
-          recon::LoadExperiment(experiment_path))) {}
+      sequence_(
+          std::make_unique<recon::SynchronizedSequence>(recon::LoadExperiment(experiment_path))) {}
 
 recon::CheckReport RecordingPresenter::Check(const recon::SynchronizedSequence& sequence,
                                              bool decode,
@@ -67,9 +67,9 @@ QString RecordingPresenter::Summary() const {
   for (const RecordingFinding& f : Findings()) findings += static_cast<int>(f.frames.size());
   text += QString(" · %1 synchronized frames · %2 · checked in %3 s")
               .arg(report_->synchronized_frames)
-              .arg(findings == 0 ? QString("no findings: every camera whole")
-                                 : QString("%1 frame finding%2").arg(findings).arg(
-                                       findings == 1 ? "" : "s"))
+              .arg(findings == 0
+                       ? QString("no findings: every camera whole")
+                       : QString("%1 frame finding%2").arg(findings).arg(findings == 1 ? "" : "s"))
               .arg(report_->wall_s, 0, 'f', 2);
   for (const std::string& w : report_->warnings) text += " · " + QString::fromStdString(w);
   return text;
@@ -88,8 +88,7 @@ std::vector<TimestampSeries> RecordingPresenter::Offsets() const {
     if (!times[c].empty()) timed.push_back(c);
   std::vector<TimestampSeries> series;
   if (timed.size() < 2) return series;
-  for (int c : timed)
-    series.push_back({sequence_->experiment().cameras[c].name, {}});
+  for (int c : timed) series.push_back({sequence_->experiment().cameras[c].name, {}});
   for (int f = sequence_->first_frame(); f <= sequence_->last_frame(); ++f) {
     double sum = 0.0;
     bool all = true;

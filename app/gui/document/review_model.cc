@@ -16,24 +16,15 @@ bool QueueOrder(const LabelKey& a, const LabelKey& b) {
 
 QString SourceName(recon::LabelSource source) {
   switch (source) {
-    case recon::LabelSource::kNone:
-      return "none";
-    case recon::LabelSource::kManual:
-      return "person";
-    case recon::LabelSource::kFindNode:
-      return "Find Node";
-    case recon::LabelSource::kFindPath:
-      return "Find Path";
-    case recon::LabelSource::kFillGrid:
-      return "Fill Grid";
-    case recon::LabelSource::kTracked:
-      return "tracked";
-    case recon::LabelSource::kColour:
-      return "colour";
-    case recon::LabelSource::kImported:
-      return "imported";
-    case recon::LabelSource::kProjected:
-      return "other cameras";
+    case recon::LabelSource::kNone: return "none";
+    case recon::LabelSource::kManual: return "person";
+    case recon::LabelSource::kFindNode: return "Find Node";
+    case recon::LabelSource::kFindPath: return "Find Path";
+    case recon::LabelSource::kFillGrid: return "Fill Grid";
+    case recon::LabelSource::kTracked: return "tracked";
+    case recon::LabelSource::kColour: return "colour";
+    case recon::LabelSource::kImported: return "imported";
+    case recon::LabelSource::kProjected: return "other cameras";
   }
   return "?";
 }
@@ -45,8 +36,7 @@ ReviewModel::ReviewModel(const LabelDocument* document, std::vector<int> frame_n
   connect(document_, &LabelDocument::labelsChanged, this, &ReviewModel::Refresh);
   // A reason given after its label's edit: the same rows, their severity and reason anew.
   connect(document_, &LabelDocument::reasonsChanged, this, [this] {
-    if (!items_.empty())
-      emit dataChanged(index(0, kSeverity), index(rowCount() - 1, kReason));
+    if (!items_.empty()) emit dataChanged(index(0, kSeverity), index(rowCount() - 1, kReason));
   });
 }
 
@@ -131,22 +121,18 @@ QVariant ReviewModel::data(const QModelIndex& index, int role) const {
   if (role == kKnotRole) return k;
   const bool missing = IsMissing(index.row());
   if (role == kMissingRole) return missing;
-  const std::string why =
-      missing ? missing_->Reason(c, t, k) : document_->Reason(c, t, k);
+  const std::string why = missing ? missing_->Reason(c, t, k) : document_->Reason(c, t, k);
   if (role == Qt::ToolTipRole) return QString::fromStdString(why);
   if (role != Qt::DisplayRole && role != Qt::EditRole) return {};
   // EditRole gives sortable values (numbers), DisplayRole the text.
   const bool sort = role == Qt::EditRole;
   switch (index.column()) {
-    case kCamera:
-      return QString::fromStdString(set.cameras[c]);
-    case kFrame:
-      return frame_numbers_[t];
+    case kCamera: return QString::fromStdString(set.cameras[c]);
+    case kFrame: return frame_numbers_[t];
     case kKnot:
       if (sort) return k;
       return QString("(%1, %2)").arg(k / set.cols).arg(k % set.cols);
-    case kSource:
-      return missing ? QString("missing") : SourceName(document_->at(c, t, k).source);
+    case kSource: return missing ? QString("missing") : SourceName(document_->at(c, t, k).source);
     case kSeverity:
       if (sort) return Severity(key);
       return QString::number(Severity(key), 'f', 2);

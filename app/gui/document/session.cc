@@ -108,8 +108,8 @@ std::unique_ptr<Session> Session::Open(const Project& project,
     s->target_ = LoadTarget(project.target, s->sequence_->experiment().fps);
     missing_options.target = s->target_;
   }
-  s->missing_ = std::make_unique<MissingKnots>(s->document_.get(), &s->rig_, s->rig_index_,
-                                               missing_options);
+  s->missing_ =
+      std::make_unique<MissingKnots>(s->document_.get(), &s->rig_, s->rig_index_, missing_options);
   return s;
 }
 
@@ -395,9 +395,10 @@ Session::JunctionHint Session::IdentifyJunction(int camera, int t, const Eigen::
   const recon::FindNodeResult found =
       recon::FindNode(image, centre, radius_px, engine_options_.detector);
   if (found.status != recon::FindNodeStatus::kFound) {
-    hint.reading.why = found.status == recon::FindNodeStatus::kSeveral
-                           ? "several junctions in the brush: point at one"
-                           : "no junction in the brush" + (found.why.empty() ? "" : ": " + found.why);
+    hint.reading.why =
+        found.status == recon::FindNodeStatus::kSeveral
+            ? "several junctions in the brush: point at one"
+            : "no junction in the brush" + (found.why.empty() ? "" : ": " + found.why);
     return hint;
   }
   hint.found = true;
@@ -413,9 +414,8 @@ Session::JunctionHint Session::IdentifyJunction(int camera, int t, const Eigen::
   }
   const int n = static_cast<int>(found.knot.branch_angles_rad.size());
   if (n >= 2 && n <= 4)
-    hint.reading = recon::ReadJunctionIdentity(image, *codebook_, hint.px,
-                                               found.knot.branch_angles_rad, hint.link_px,
-                                               identity_, exclude);
+    hint.reading = recon::ReadJunctionIdentity(
+        image, *codebook_, hint.px, found.knot.branch_angles_rad, hint.link_px, identity_, exclude);
   else
     hint.reading.why = std::to_string(n) + " yarns leave the junction: its colours are not read";
   if (hint.corner_mass) {

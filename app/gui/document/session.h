@@ -84,10 +84,11 @@ class Session {
   // The epipolar check and Fill Grid in frame t.
   recon::EngineCounts FillGrid(int t);
 
-  // What FillGrid(t) (from_corners: FindPathFromCorners(t)) would change, computed on `snapshot` (document().labels(), copied on the GUI
-  // thread) by an engine of its own: any thread, never touches the document. It starts from the
-  // link length the GUI thread's engine has (the project's mesh, or its estimate once made), so
-  // that applying it (ApplyFillGridPreview) gives exactly the labels FillGrid(t) gives.
+  // What FillGrid(t) (from_corners: FindPathFromCorners(t)) would change, computed on `snapshot`
+  // (document().labels(), copied on the GUI thread) by an engine of its own: any thread, never
+  // touches the document. It starts from the link length the GUI thread's engine has (the project's
+  // mesh, or its estimate once made), so that applying it (ApplyFillGridPreview) gives exactly the
+  // labels FillGrid(t) gives.
   struct FillGridPreview {
     int t = 0;
     // Find Path from the corners first (Ctrl+P): applied as two steps, "Find Path from the
@@ -99,12 +100,12 @@ class Session {
     recon::ReviewReasons reasons;  // why labels are kept for review (the engine's, this run)
     double link_length_m = 0.0;    // the link length the run used or estimated (m; 0: none)
     recon::LabelEngine::KnotsInFrames one_path;  // its labels found along one path alone
-    int added = 0;         // labels where there was none
-    int added_review = 0;  // ... of them kept for review
-    int to_review = 0;     // accepted labels the checks turn to review
-    int confirmed = 0;     // labels under review accepted (at the junction the check found)
-  int moved = 0;         // accepted labels moved (flagged, then found again elsewhere)
-  int changed = 0;       // any other change (a label removed, say)
+    int added = 0;                               // labels where there was none
+    int added_review = 0;                        // ... of them kept for review
+    int to_review = 0;                           // accepted labels the checks turn to review
+    int confirmed = 0;  // labels under review accepted (at the junction the check found)
+    int moved = 0;      // accepted labels moved (flagged, then found again elsewhere)
+    int changed = 0;    // any other change (a label removed, say)
     bool empty() const { return edits.empty(); }
   };
   FillGridPreview PreviewFillGrid(recon::LabelSet snapshot, int t, bool from_corners = false) const;
@@ -159,10 +160,10 @@ class Session {
   // the net's corners that fit. Nothing is labeled: the person picks. GUI thread (a few ms once
   // the frame is cached).
   struct JunctionHint {
-    bool found = false;          // Find Node found one junction (or corner mass) in the brush
+    bool found = false;  // Find Node found one junction (or corner mass) in the brush
     Eigen::Vector2d px = Eigen::Vector2d::Zero();  // where
     bool corner_mass = false;
-    double link_px = 0.0;        // the link length the yarns were read against (0: unknown)
+    double link_px = 0.0;            // the link length the yarns were read against (0: unknown)
     recon::JunctionReading reading;  // reading.why also says why nothing was found
   };
   // `link_px` < 0: the link length from the labels (LinkLengthPx); else the one given (0: unknown).

@@ -177,8 +177,7 @@ ScoreRun SimulationPresenter::RunScore(const ScoreJob& job) {
   run.index = job.index;
   try {
     const auto start = std::chrono::steady_clock::now();
-    run.result =
-        netsim::Score(job.measured, job.sim, job.options, job.measured_name, job.sim_name);
+    run.result = netsim::Score(job.measured, job.sim, job.options, job.measured_name, job.sim_name);
     run.result->summary.wall_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   } catch (const std::exception& e) {
@@ -302,7 +301,7 @@ QString SimulationPresenter::FitText(int start) const {
     const QString sigma = std::isfinite(f.sigma) ? QString::number(f.sigma, 'g', 3) : "∞";
     QString verdict = f.identified ? "identified by the " + QString::fromStdString(f.determined_by)
                       : f.determined_by == "prior" ? QString("from its prior")
-                                                    : QString("not identified");
+                                                   : QString("not identified");
     if (f.rough) verdict += "; the cost is rough there: σ means little";
     if (f.ambiguous) verdict += QString("; another valley at %1").arg(f.alternative, 0, 'g', 4);
     text += QString("\n  %1 = %2 ± %3 %4 (%5)")
@@ -351,12 +350,11 @@ void Flatten(const YAML::Node& node, const std::string& path,
       rows->emplace_back(path, out.c_str());
       return;
     }
-    for (size_t i = 0; i < node.size(); ++i)
-      Flatten(node[i], path + "." + std::to_string(i), rows);
+    for (size_t i = 0; i < node.size(); ++i) Flatten(node[i], path + "." + std::to_string(i), rows);
   } else if (node.IsMap()) {
     for (auto it = node.begin(); it != node.end(); ++it)
-      Flatten(it->second, path.empty() ? it->first.as<std::string>()
-                                       : path + "." + it->first.as<std::string>(),
+      Flatten(it->second,
+              path.empty() ? it->first.as<std::string>() : path + "." + it->first.as<std::string>(),
               rows);
   }
 }
@@ -367,8 +365,8 @@ std::vector<std::pair<std::string, std::string>> SimulationPresenter::ScenarioKe
     const std::string& path) {
   std::vector<std::pair<std::string, std::string>> rows;
   const YAML::Node root = LoadYamlFile(path);
-  for (const char* key : {"duration", "integrator", "drag", "gravity", "materials", "nets",
-                          "bodies"})
+  for (const char* key :
+       {"duration", "integrator", "drag", "gravity", "materials", "nets", "bodies"})
     if (root[key]) Flatten(root[key], key, &rows);
   return rows;
 }
@@ -406,16 +404,15 @@ std::vector<Eigen::Vector3d> SimulationPresenter::KnotsAt(int i, double time_s) 
   if (n == 0 || time_s < sim.time.front() || time_s > sim.time.back()) return out;
   // The score's interpolant: 4-point Lagrange on the stored frames around the time (fewer at
   // the ends of the run).
-  const int upper = static_cast<int>(
-      std::upper_bound(sim.time.begin(), sim.time.end(), time_s) - sim.time.begin());
+  const int upper = static_cast<int>(std::upper_bound(sim.time.begin(), sim.time.end(), time_s) -
+                                     sim.time.begin());
   const int points = std::min(4, n);
   const int first = std::clamp(upper - 2, 0, n - points);
   std::vector<double> weight(points);
   for (int a = 0; a < points; ++a) {
     double w = 1.0;
     for (int b = 0; b < points; ++b)
-      if (b != a)
-        w *= (time_s - sim.time[first + b]) / (sim.time[first + a] - sim.time[first + b]);
+      if (b != a) w *= (time_s - sim.time[first + b]) / (sim.time[first + a] - sim.time[first + b]);
     weight[a] = w;
   }
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();

@@ -28,9 +28,9 @@
 #include <utility>
 #include <vector>
 
+#include "common/tracks/track_file.h"
 #include "libnetsim/identification/shot_fit.h"
 #include "libnetsim/scenario/scenario_override.h"
-#include "common/tracks/track_file.h"
 #include "libnetsim/validation/score.h"
 
 namespace netlab::gui {
@@ -47,9 +47,9 @@ struct SimulationJob {
 };
 // A simulation, run or loaded.
 struct SimulationRun {
-  std::string path;                     // the knot-track file
+  std::string path;  // the knot-track file
   std::optional<KnotTracks> tracks;
-  std::string error;                    // why there are no tracks
+  std::string error;  // why there are no tracks
   bool cancelled = false;
   double wall_s = 0.0;
 };
@@ -141,7 +141,8 @@ class SimulationPresenter {
   // ---- Scores. The measured tracks are the reconstruction's (null: not triangulated yet).
   const KnotTracks* measured() const;
   // std::logic_error without measured tracks. `alignment` as --align.
-  ScoreJob MakeScoreJob(int i, netsim::Alignment alignment = netsim::Alignment::kTimeAndRigid) const;
+  ScoreJob MakeScoreJob(int i,
+                        netsim::Alignment alignment = netsim::Alignment::kTimeAndRigid) const;
   static ScoreRun RunScore(const ScoreJob& job);  // any thread
   // The answer (GUI thread). With `folder` non-empty, score_NAME.h5 and score_NAME.html are
   // written there as netlab score --out --report writes them (their paths kept).

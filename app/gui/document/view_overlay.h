@@ -30,7 +30,7 @@ struct ViewOverlay {
   // The selected knot missing in this view (no label, two other cameras see it): where they put
   // it, drawn as a ring so it is found when zoomed out.
   std::optional<Eigen::Vector2d> expected;
-  std::vector<Eigen::Vector2d> candidates;             // Find Node's when it found several
+  std::vector<Eigen::Vector2d> candidates;  // Find Node's when it found several
   // A pending Fill Grid preview: what accepting it would do here, drawn dashed (not labels yet).
   struct Ghost {
     enum Kind {
@@ -43,7 +43,7 @@ struct ViewOverlay {
     int knot = -1;
     Eigen::Vector2d px;  // where the label would be (the label's own place for kToReview)
     Eigen::Vector2d from = Eigen::Vector2d::Constant(NAN);  // kChanged: where it is now
-    bool review = false;  // the label would be kept for review
+    bool review = false;                                    // the label would be kept for review
   };
   std::vector<Ghost> ghosts;
   // A simulated net over the frame (the simulation room): its knots as squares and its links as
@@ -51,7 +51,7 @@ struct ViewOverlay {
   std::vector<Mark> simulated;
   std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> simulated_links;
   QColor simulated_colour = QColor(0, 230, 255);
-  QString caption;                                     // camera, frame, residual
+  QString caption;  // camera, frame, residual
 };
 
 }  // namespace netlab::gui

@@ -7,6 +7,7 @@
 // must leave as they were (an output never replaces an input, a failed run leaves every
 // existing output unchanged).
 
+#include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
@@ -14,8 +15,6 @@
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "tests/app/cli/run_netlab.h"
 #include "tests/file_size_limit.h"
@@ -43,9 +42,8 @@ inline std::string Snapshot(const std::string& path) {
   std::error_code error;
   const fs::file_status link = fs::symlink_status(path, error);
   if (!fs::exists(link)) return "(missing)";
-  std::string kind = fs::is_symlink(link) ? "link to " + fs::read_symlink(path, error).string() +
-                                                ": "
-                                          : "";
+  std::string kind =
+      fs::is_symlink(link) ? "link to " + fs::read_symlink(path, error).string() + ": " : "";
   const fs::file_status status = fs::status(path, error);
   if (!fs::is_regular_file(status))
     return kind + "(not a regular file, type " + std::to_string(static_cast<int>(status.type())) +

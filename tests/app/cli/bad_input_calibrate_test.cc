@@ -7,10 +7,9 @@
 
 #include <filesystem>
 #include <fstream>
-#include <string>
-
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <string>
 
 #include "tests/app/cli/bad_input.h"
 
@@ -39,47 +38,72 @@ TEST_F(BadInputCalibrate, EachKindEndsInAClearError) {
   const std::string board = "calibrate --board chessboard:9x6:0.06 ";
   ExpectBadInputs(
       {
-          {"no --board", "calibrate --images cam0='{dir}/blank/*.png' --out {dir}/rig.yaml", 2,
+          {"no --board",
+           "calibrate --images cam0='{dir}/blank/*.png' --out {dir}/rig.yaml",
+           2,
            {"--board"}},
-          {"a board spec with a typo", "calibrate --board chessbord:9x6:0.06 --images "
-                                       "cam0='{dir}/blank/*.png' --out {dir}/rig.yaml",
-           1, {"chessbord"}},
-          {"a board with a negative square", "calibrate --board chessboard:9x6:-0.06 --images "
-                                             "cam0='{dir}/blank/*.png' --out {dir}/rig.yaml",
-           1, {"SQUARE", "-0.06"}},
-          {"a broken board file", "calibrate --board {dir}/board.yaml --images "
-                                  "cam0='{dir}/blank/*.png' --out {dir}/rig.yaml",
-           1, {"{dir}/board.yaml"}},
-          {"--images without a camera name", board + "--images '{dir}/blank/*.png' --out "
-                                                     "{dir}/rig.yaml",
-           2, {"--images"}},
-          {"a glob that matches nothing", board + "--images cam0='{dir}/none/*.png' --out "
-                                                  "{dir}/rig.yaml",
-           1, {"{dir}/none/*.png"}},
-          {"a text file named .png", board + "--images cam0='{dir}/text/*.png' --out "
-                                             "{dir}/rig.yaml",
-           1, {"{dir}/text/frame_0.png"}},
-          {"a truncated PNG", board + "--images cam0='{dir}/truncated/*.png' --out "
-                                      "{dir}/rig.yaml",
-           1, {"{dir}/truncated/frame_1.png", "truncated PNG"}},
-          {"no board in any image", board + "--images cam0='{dir}/blank/*.png' --out "
-                                            "{dir}/rig.yaml",
-           1, {"cam0"}},
-          {"a missing --fix-intrinsics", board + "--images cam0='{dir}/blank/*.png' --out "
-                                                 "{dir}/rig.yaml --fix-intrinsics "
-                                                 "{dir}/missing.yaml",
-           1, {"{dir}/missing.yaml"}},
-          {"empty --out", board + "--images cam0='{dir}/blank/*.png' --out ''", 2,
+          {"a board spec with a typo",
+           "calibrate --board chessbord:9x6:0.06 --images "
+           "cam0='{dir}/blank/*.png' --out {dir}/rig.yaml",
+           1,
+           {"chessbord"}},
+          {"a board with a negative square",
+           "calibrate --board chessboard:9x6:-0.06 --images "
+           "cam0='{dir}/blank/*.png' --out {dir}/rig.yaml",
+           1,
+           {"SQUARE", "-0.06"}},
+          {"a broken board file",
+           "calibrate --board {dir}/board.yaml --images "
+           "cam0='{dir}/blank/*.png' --out {dir}/rig.yaml",
+           1,
+           {"{dir}/board.yaml"}},
+          {"--images without a camera name",
+           board + "--images '{dir}/blank/*.png' --out "
+                   "{dir}/rig.yaml",
+           2,
+           {"--images"}},
+          {"a glob that matches nothing",
+           board + "--images cam0='{dir}/none/*.png' --out "
+                   "{dir}/rig.yaml",
+           1,
+           {"{dir}/none/*.png"}},
+          {"a text file named .png",
+           board + "--images cam0='{dir}/text/*.png' --out "
+                   "{dir}/rig.yaml",
+           1,
+           {"{dir}/text/frame_0.png"}},
+          {"a truncated PNG",
+           board + "--images cam0='{dir}/truncated/*.png' --out "
+                   "{dir}/rig.yaml",
+           1,
+           {"{dir}/truncated/frame_1.png", "truncated PNG"}},
+          {"no board in any image",
+           board + "--images cam0='{dir}/blank/*.png' --out "
+                   "{dir}/rig.yaml",
+           1,
+           {"cam0"}},
+          {"a missing --fix-intrinsics",
+           board + "--images cam0='{dir}/blank/*.png' --out "
+                   "{dir}/rig.yaml --fix-intrinsics "
+                   "{dir}/missing.yaml",
+           1,
+           {"{dir}/missing.yaml"}},
+          {"empty --out",
+           board + "--images cam0='{dir}/blank/*.png' --out ''",
+           2,
            {"--out needs a non-empty value"}},
           // The rig over one of the run's inputs.
           {"--out is the --fix-intrinsics file",
            board + "--images cam0='{dir}/blank/*.png' --out {dir}/board.yaml --fix-intrinsics "
                    "{dir}/board.yaml",
-           1, {"--out {dir}/board.yaml", "the --fix-intrinsics file {dir}/board.yaml"},
+           1,
+           {"--out {dir}/board.yaml", "the --fix-intrinsics file {dir}/board.yaml"},
            {"{dir}/board.yaml"}},
-          {"--out is an image", board + "--images cam0='{dir}/blank/*.png' --out "
-                                        "{dir}/blank/frame_0.png",
-           1, {"--out {dir}/blank/frame_0.png", "the --images cam0 file"},
+          {"--out is an image",
+           board + "--images cam0='{dir}/blank/*.png' --out "
+                   "{dir}/blank/frame_0.png",
+           1,
+           {"--out {dir}/blank/frame_0.png", "the --images cam0 file"},
            {"{dir}/blank/frame_0.png"}},
       },
       dir_.string());

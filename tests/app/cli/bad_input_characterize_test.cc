@@ -43,9 +43,10 @@ std::string Tensile(bool moving, double force_scale = 1.0) {
 
 // A cantilever test of a 0.5 m thread whose shape is `points` [x, y]; rows from line 6 on.
 std::string Cantilever(const std::vector<std::pair<double, double>>& points) {
-  std::string text = "test: cantilever\nmaterial: m\nlength: 0.5\n"
-                     "weighing: {mass: 1e-3, mass_sigma: 1e-6, length: 1, length_sigma: 1e-3}\n"
-                     "shape:\n";
+  std::string text =
+      "test: cantilever\nmaterial: m\nlength: 0.5\n"
+      "weighing: {mass: 1e-3, mass_sigma: 1e-6, length: 1, length_sigma: 1e-3}\n"
+      "shape:\n";
   for (const auto& [x, y] : points)
     text += "  - [" + std::to_string(x) + ", " + std::to_string(y) + "]\n";
   return text;
@@ -88,8 +89,8 @@ class BadInputCharacterize : public CommandTest {
           Cantilever({{0.1, -0.01}, {0.2, -0.04}, {0.15, -0.09}, {0.1, -0.15}}));
     Write("no_material.yaml", Replace(Torsion(), "material: nylon_1mm\n", ""));
     // What a YAML reader takes without a word and netlab would misread.
-    Write("twice.yaml", Replace(Torsion(), "material: nylon_1mm\n",
-                                "material: nylon_1mm\ntest: tensile\n"));
+    Write("twice.yaml",
+          Replace(Torsion(), "material: nylon_1mm\n", "material: nylon_1mm\ntest: tensile\n"));
     Write("tagged.yaml", Replace(Torsion(), "length: 0.18", "length: !!str 0.18"));
     Write("two_documents.yaml", Torsion() + "---\ntest: tensile\n");
     std::filesystem::create_directory(Path("folder.yaml"));
@@ -109,8 +110,11 @@ TEST_F(BadInputCharacterize, EachKindEndsInAClearError) {
       {
           {"no test file", "characterize --out {dir}/m.yaml", 2, {"expected one TEST.yaml"}},
           {"no --out", "characterize {dir}/good.yaml", 2, {"--out"}},
-          {"--out is the test file", "characterize {dir}/good.yaml --out {dir}/good.yaml", 1,
-           {"--out {dir}/good.yaml", "the test file {dir}/good.yaml"}, {"{dir}/good.yaml"}},
+          {"--out is the test file",
+           "characterize {dir}/good.yaml --out {dir}/good.yaml",
+           1,
+           {"--out {dir}/good.yaml", "the test file {dir}/good.yaml"},
+           {"{dir}/good.yaml"}},
           {"missing file",
            "characterize {dir}/missing.yaml" + out,
            1,
@@ -223,11 +227,16 @@ TEST_F(BadInputCharacterize, EachKindEndsInAClearError) {
 }
 
 // A disk that fills while the material file is written (a file-size limit of 400 bytes, below
-// the file's 522 and above the message's, stands in for it): exit 1 naming the file, the previous file byte for byte, no partial file beside it.
+// the file's 522 and above the message's, stands in for it): exit 1 naming the file, the previous
+// file byte for byte, no partial file beside it.
 TEST_F(BadInputCharacterize, AFullDiskLeavesThePreviousMaterialFile) {
   Write("previous.yaml", "the previous material file");
-  ExpectBadInput({"characterize onto a full disk", "characterize {dir}/good.yaml --out "
-                  "{dir}/previous.yaml", 1, {"{dir}/previous.yaml: cannot write"}, {"{dir}/previous.yaml"},
+  ExpectBadInput({"characterize onto a full disk",
+                  "characterize {dir}/good.yaml --out "
+                  "{dir}/previous.yaml",
+                  1,
+                  {"{dir}/previous.yaml: cannot write"},
+                  {"{dir}/previous.yaml"},
                   400},
                  dir_.string());
 }

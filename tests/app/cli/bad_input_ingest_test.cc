@@ -8,10 +8,9 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
 
 #include "tests/app/cli/bad_input.h"
 #include "tests/app/cli/h5_edit.h"
@@ -35,8 +34,8 @@ class BadInputIngest : public CommandTest {
     for (int c = 0; c < 2; ++c) {
       fs::create_directories(Path("cam" + std::to_string(c)));
       for (int k = 0; k < kFrames; ++k)
-        ASSERT_TRUE(cv::imwrite(FramePath(c, k), cv::Mat(kHeight, kWidth, CV_8UC1,
-                                                         cv::Scalar(10 * k + c))));
+        ASSERT_TRUE(cv::imwrite(FramePath(c, k),
+                                cv::Mat(kHeight, kWidth, CV_8UC1, cv::Scalar(10 * k + c))));
     }
     std::ofstream times(Path("cam0/timestamps.csv"));
     times << "frame_index,time_s\n";
@@ -55,8 +54,7 @@ class BadInputIngest : public CommandTest {
     std::ofstream(Path(name)) << top << "cameras:\n"
                               << "  - name: cam0\n    frames: cam0/frame_%04d.pgm\n"
                               << "    bayer: RGGB\n    timestamps: cam0/timestamps.csv\n"
-                              << cam0_extra
-                              << "  - name: cam1\n    frames: cam1/frame_%04d.pgm\n"
+                              << cam0_extra << "  - name: cam1\n    frames: cam1/frame_%04d.pgm\n"
                               << "    bayer: RGGB\n";
     return Path(name);
   }
@@ -159,80 +157,137 @@ TEST_F(BadInputIngest, EveryBadInputIsNamed) {
   ExpectBadInputs(
       {
           {"missing experiment", "ingest {dir}/missing.yaml" + check, 1, {"{dir}/missing.yaml"}},
-          {"fps given twice", "ingest {dir}/fps_twice.yaml" + check, 1,
+          {"fps given twice",
+           "ingest {dir}/fps_twice.yaml" + check,
+           1,
            {"{dir}/fps_twice.yaml:3: fps: given twice, at lines 2 and 3"}},
-          {"a tag on fps", "ingest {dir}/fps_tagged.yaml" + check, 1,
+          {"a tag on fps",
+           "ingest {dir}/fps_tagged.yaml" + check,
+           1,
            {"{dir}/fps_tagged.yaml:2: fps: the tag '!fps'"}},
-          {"a second document", "ingest {dir}/two_documents.yaml" + check, 1,
+          {"a second document",
+           "ingest {dir}/two_documents.yaml" + check,
+           1,
            {"{dir}/two_documents.yaml:", "a second YAML document"}},
-          {"a folder as the experiment", "ingest {dir}/cam0" + check, 1,
+          {"a folder as the experiment",
+           "ingest {dir}/cam0" + check,
+           1,
            {"{dir}/cam0: is a folder, not a YAML experiment file"}},
           {"empty experiment", "ingest {dir}/empty.yaml" + check, 1, {"{dir}/empty.yaml"}},
           {"truncated experiment", "ingest {dir}/cut.yaml" + check, 1, {"{dir}/cut.yaml"}},
           {"binary experiment", "ingest {dir}/binary.yaml" + check, 1, {"{dir}/binary.yaml"}},
-          {"fps not a number", "ingest {dir}/fps_text.yaml" + check, 1,
+          {"fps not a number",
+           "ingest {dir}/fps_text.yaml" + check,
+           1,
            {"{dir}/fps_text.yaml:2", "fps"}},
-          {"fps negative", "ingest {dir}/fps_negative.yaml" + check, 1,
+          {"fps negative",
+           "ingest {dir}/fps_negative.yaml" + check,
+           1,
            {"{dir}/fps_negative.yaml:2", "fps"}},
           {"fps NaN", "ingest {dir}/fps_nan.yaml" + check, 1, {"{dir}/fps_nan.yaml:2", "fps"}},
-          {"cameras not a list", "ingest {dir}/cameras_number.yaml" + check, 1,
+          {"cameras not a list",
+           "ingest {dir}/cameras_number.yaml" + check,
+           1,
            {"{dir}/cameras_number.yaml:3", "cameras"}},
-          {"unknown key", "ingest {dir}/unknown_key.yaml" + check, 1,
+          {"unknown key",
+           "ingest {dir}/unknown_key.yaml" + check,
+           1,
            {"{dir}/unknown_key.yaml", "exposure"}},
-          {"bit_depth 9", "ingest {dir}/bit_depth.yaml" + check, 1,
+          {"bit_depth 9",
+           "ingest {dir}/bit_depth.yaml" + check,
+           1,
            {"{dir}/bit_depth.yaml:8", "cameras[0].bit_depth", "9"}},
-          {"bayer unknown", "ingest {dir}/bayer.yaml" + check, 1,
+          {"bayer unknown",
+           "ingest {dir}/bayer.yaml" + check,
+           1,
            {"{dir}/bayer.yaml:6", "cameras[0].bayer", "RGBG"}},
-          {"black_level above 8 bits (S10)", "ingest {dir}/black_8.yaml" + check, 1,
+          {"black_level above 8 bits (S10)",
+           "ingest {dir}/black_8.yaml" + check,
+           1,
            {"{dir}/black_8.yaml:9: cameras[0].black_level: 300 is above the 8-bit white level "
             "255"}},
-          {"black_level above the frames' 8 bits (S10)", "ingest {dir}/black_auto.yaml" + check, 1,
+          {"black_level above the frames' 8 bits (S10)",
+           "ingest {dir}/black_auto.yaml" + check,
+           1,
            {"{dir}/black_auto.yaml:8: cameras[0].black_level: 300 is above the 8-bit white "
-            "level 255", "cam0/frame_%04d.pgm"}},
-          {"black_level negative", "ingest {dir}/black_negative.yaml" + check, 1,
+            "level 255",
+            "cam0/frame_%04d.pgm"}},
+          {"black_level negative",
+           "ingest {dir}/black_negative.yaml" + check,
+           1,
            {"{dir}/black_negative.yaml:8", "black_level"}},
-          {"white_balance zero", "ingest {dir}/white_balance.yaml" + check, 1,
+          {"white_balance zero",
+           "ingest {dir}/white_balance.yaml" + check,
+           1,
            {"{dir}/white_balance.yaml:8", "white_balance"}},
-          {"camera listed twice", "ingest {dir}/twice.yaml" + check, 1,
+          {"camera listed twice",
+           "ingest {dir}/twice.yaml" + check,
+           1,
            {"{dir}/twice.yaml:5", "cam0", "twice"}},
-          {"pattern matches nothing", "ingest {dir}/nowhere.yaml" + check, 1,
+          {"pattern matches nothing",
+           "ingest {dir}/nowhere.yaml" + check,
+           1,
            {"{dir}/nowhere.yaml", "camX", "nowhere/f_%06d.pgm"}},
-          {"timestamps file missing", "ingest {dir}/no_times.yaml" + check, 1,
+          {"timestamps file missing",
+           "ingest {dir}/no_times.yaml" + check,
+           1,
            {"{dir}/cam0/no_times.csv"}},
-          {"timestamps row not a number", "ingest {dir}/bad_times.yaml" + check, 1,
+          {"timestamps row not a number",
+           "ingest {dir}/bad_times.yaml" + check,
+           1,
            {"{dir}/cam0/bad_times.csv:3"}},
-          {"empty video (U8)", "ingest {dir}/video_empty.yaml" + check, 1,
+          {"empty video (U8)",
+           "ingest {dir}/video_empty.yaml" + check,
+           1,
            {"{dir}/video_empty.yaml: camera cam0: empty.avi: empty file"}},
-          {"random bytes as video (U8)", "ingest {dir}/video_random.yaml" + check, 1,
+          {"random bytes as video (U8)",
+           "ingest {dir}/video_random.yaml" + check,
+           1,
            {"{dir}/video_random.yaml: camera cam0: random.avi: cannot open as a video"}},
-          {"store _valid too short (S9)", "ingest {dir}/short_valid.yaml" + check, 1,
+          {"store _valid too short (S9)",
+           "ingest {dir}/short_valid.yaml" + check,
+           1,
            {"{dir}/short_valid.h5:/cam0_valid has 5 entries, /cam0 has 10 frames"}},
-          {"store _timestamps too short (S9)", "ingest {dir}/short_times.yaml" + check, 1,
+          {"store _timestamps too short (S9)",
+           "ingest {dir}/short_times.yaml" + check,
+           1,
            {"{dir}/short_times.h5:/cam1_timestamps has 9 entries, /cam1 has 10 frames"}},
-          {"store dataset missing", "ingest {dir}/no_dataset.yaml" + check, 1,
+          {"store dataset missing",
+           "ingest {dir}/no_dataset.yaml" + check,
+           1,
            {"{dir}/no_dataset.yaml: camera cam1", "/cam7"}},
-          {"store not HDF5", "ingest {dir}/text_store.yaml" + check, 1,
+          {"store not HDF5",
+           "ingest {dir}/text_store.yaml" + check,
+           1,
            {"{dir}/text_store.yaml: camera cam0", "text_store.h5"}},
-          {"store written under a file", "ingest {dir}/experiment.yaml --quiet --to-hdf5 "
-           "{dir}/cam0/timestamps.csv/x.h5", 1, {"{dir}/cam0/timestamps.csv/x.h5"}},
+          {"store written under a file",
+           "ingest {dir}/experiment.yaml --quiet --to-hdf5 "
+           "{dir}/cam0/timestamps.csv/x.h5",
+           1,
+           {"{dir}/cam0/timestamps.csv/x.h5"}},
           {"empty --to-hdf5", "ingest {dir}/experiment.yaml --to-hdf5 ''", 2, {"--to-hdf5"}},
-          {"--compress 12", "ingest {dir}/experiment.yaml --to-hdf5 {dir}/o.h5 --compress 12", 2,
+          {"--compress 12",
+           "ingest {dir}/experiment.yaml --to-hdf5 {dir}/o.h5 --compress 12",
+           2,
            {"--compress"}},
           {"--threads 0", "ingest {dir}/experiment.yaml --check --threads 0", 2, {"--threads"}},
           {"no EXPERIMENT", "ingest --check", 2, {"EXPERIMENT.yaml"}},
           {"neither --check nor --to-hdf5", "ingest {dir}/experiment.yaml", 2, {"--check"}},
           // The store, or the experiment file written beside it, over an input.
           {"--to-hdf5 is the experiment file",
-           "ingest {dir}/experiment.yaml --quiet --to-hdf5 {dir}/experiment.yaml", 1,
+           "ingest {dir}/experiment.yaml --quiet --to-hdf5 {dir}/experiment.yaml",
+           1,
            {"--to-hdf5 {dir}/experiment.yaml", "the experiment file {dir}/experiment.yaml"},
            {"{dir}/experiment.yaml"}},
           {"the experiment file beside --to-hdf5 is the experiment file",
-           "ingest {dir}/experiment.yaml --quiet --to-hdf5 {dir}/experiment.h5", 1,
+           "ingest {dir}/experiment.yaml --quiet --to-hdf5 {dir}/experiment.h5",
+           1,
            {"--to-hdf5 (the experiment file written beside it) {dir}/experiment.yaml",
             "the experiment file {dir}/experiment.yaml", "name another --to-hdf5"},
            {"{dir}/experiment.yaml", "{dir}/experiment.h5"}},
           {"--to-hdf5 is a camera's timestamps",
-           "ingest {dir}/experiment.yaml --quiet --to-hdf5 {dir}/cam0/timestamps.csv", 1,
+           "ingest {dir}/experiment.yaml --quiet --to-hdf5 {dir}/cam0/timestamps.csv",
+           1,
            {"--to-hdf5 {dir}/cam0/timestamps.csv", "the cam0 timestamps file"},
            {"{dir}/cam0/timestamps.csv"}},
       },
@@ -247,8 +302,11 @@ TEST_F(BadInputIngest, AFullDiskLeavesThePreviousStore) {
   std::ofstream(Path("old.h5")) << "the previous store";
   std::ofstream(Path("old.yaml")) << "the previous experiment file";
   ExpectBadInput({"ingest --to-hdf5 onto a full disk",
-                  "ingest {dir}/experiment.yaml --quiet --to-hdf5 {dir}/old.h5", 1,
-                  {"{dir}/old.h5"}, {"{dir}/old.h5", "{dir}/old.yaml"}, 4096},
+                  "ingest {dir}/experiment.yaml --quiet --to-hdf5 {dir}/old.h5",
+                  1,
+                  {"{dir}/old.h5"},
+                  {"{dir}/old.h5", "{dir}/old.yaml"},
+                  4096},
                  dir_.string());
 }
 
@@ -279,9 +337,9 @@ TEST_F(BadInputIngest, FramesWithoutATimestampRowAreReported) {
   const NetlabResult r = RunNetlab("ingest " + Experiment("experiment.yaml") + " --check --json");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.err.find("no timestamp 7, 8, 9"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("warning: cam0: 3 of 10 frames have no time in " +
-                       Path("cam0/timestamps.csv")),
-            std::string::npos)
+  EXPECT_NE(
+      r.err.find("warning: cam0: 3 of 10 frames have no time in " + Path("cam0/timestamps.csv")),
+      std::string::npos)
       << r.err;
   const Json json = LastJson(r.out);
   EXPECT_EQ(json["cameras"].array()[0]["untimed"].array().size(), 3u);

@@ -37,8 +37,8 @@ class BadInputRender : public CommandTest {
   std::string Simulate(const std::string& name, const std::string& set = "") {
     if (!fs::exists(Path("scenario.yaml")))
       std::ofstream(Path("scenario.yaml")) << kSmallShotScenario;
-    const NetlabResult r = RunNetlab("simulate " + Path("scenario.yaml") + " --out " + Path(name) +
-                                     set + " --quiet");
+    const NetlabResult r =
+        RunNetlab("simulate " + Path("scenario.yaml") + " --out " + Path(name) + set + " --quiet");
     EXPECT_EQ(r.status, 0) << r.err;
     return Path(name);
   }
@@ -104,42 +104,68 @@ TEST_F(BadInputRender, EveryBadInputIsNamed) {
           {"empty simulation", render + "{dir}/empty.h5" + out, 1, {"{dir}/empty.h5"}},
           {"truncated simulation", render + "{dir}/cut.h5" + out, 1, {"{dir}/cut.h5"}},
           {"text as simulation", render + "{dir}/text.h5" + out, 1, {"{dir}/text.h5"}},
-          {"knot tracks without /nodes", render + "{dir}/shot/truth.h5" + out, 1,
+          {"knot tracks without /nodes",
+           render + "{dir}/shot/truth.h5" + out,
+           1,
            {"{dir}/shot/truth.h5", "/nodes/position"}},
-          {"a NaN node (U4)", render + "{dir}/simnan.h5" + out, 1,
+          {"a NaN node (U4)",
+           render + "{dir}/simnan.h5" + out,
+           1,
            {"{dir}/simnan.h5: /nodes/position is not finite at frame 3 (t = 0.0167",
             "node 0 (net 'net' knot (0,0))"}},
-          {"frames beyond the simulation", render + "{dir}/sim.h5 --frames 0:500" + out, 1,
+          {"frames beyond the simulation",
+           render + "{dir}/sim.h5 --frames 0:500" + out,
+           1,
            {"frames 0:500", "0:10"}},
           {"--frames backwards", render + "{dir}/sim.h5 --frames 5:2" + out, 2, {"--frames"}},
           {"--scale 0", render + "{dir}/sim.h5 --scale 0 --out {dir}/o", 2, {"--scale"}},
-          {"--scale not a number", render + "{dir}/sim.h5 --scale half --out {dir}/o", 2,
+          {"--scale not a number",
+           render + "{dir}/sim.h5 --scale half --out {dir}/o",
+           2,
            {"--scale", "half"}},
           {"--fps negative", render + "{dir}/sim.h5 --fps -179" + out, 2, {"--fps"}},
           {"--noise nan", render + "{dir}/sim.h5 --noise nan" + out, 2, {"--noise"}},
           {"--bit-depth 9", render + "{dir}/sim.h5 --bit-depth 9" + out, 2, {"--bit-depth"}},
           {"--bayer unknown", render + "{dir}/sim.h5 --bayer RGBG" + out, 2, {"--bayer", "RGBG"}},
-          {"--background unknown", render + "{dir}/sim.h5 --background grey" + out, 2,
+          {"--background unknown",
+           render + "{dir}/sim.h5 --background grey" + out,
+           2,
            {"--background", "grey"}},
           {"--threads 0", render + "{dir}/sim.h5 --threads 0" + out, 2, {"--threads"}},
           {"missing --out", render + "{dir}/sim.h5" + std::string(kQuick), 2, {"--out"}},
           {"empty --out", render + "{dir}/sim.h5 --out ''" + std::string(kQuick), 2, {"--out"}},
-          {"missing rig", render + "{dir}/sim.h5 --rig {dir}/norig.yaml" + out, 1,
+          {"missing rig",
+           render + "{dir}/sim.h5 --rig {dir}/norig.yaml" + out,
+           1,
            {"{dir}/norig.yaml"}},
-          {"a rig of the wrong shape", render + "{dir}/sim.h5 --rig {dir}/badrig.yaml" + out, 1,
+          {"a rig of the wrong shape",
+           render + "{dir}/sim.h5 --rig {dir}/badrig.yaml" + out,
+           1,
            {"{dir}/badrig.yaml"}},
-          {"missing colouring", render + "{dir}/sim.h5 --coloring {dir}/nocol.yaml" + out, 1,
+          {"missing colouring",
+           render + "{dir}/sim.h5 --coloring {dir}/nocol.yaml" + out,
+           1,
            {"{dir}/nocol.yaml"}},
-          {"a colouring of another net", render + "{dir}/sim.h5 --coloring {dir}/col5.yaml" + out,
-           1, {"{dir}/col5.yaml", "40 links", "6x6"}},
-          {"output under a file", render + "{dir}/sim.h5 --out {dir}/file/shot" + kQuick, 1,
+          {"a colouring of another net",
+           render + "{dir}/sim.h5 --coloring {dir}/col5.yaml" + out,
+           1,
+           {"{dir}/col5.yaml", "40 links", "6x6"}},
+          {"output under a file",
+           render + "{dir}/sim.h5 --out {dir}/file/shot" + kQuick,
+           1,
            {"{dir}/file/shot"}},
-          {"output is a file", render + "{dir}/sim.h5 --out {dir}/file" + kQuick, 1,
+          {"output is a file",
+           render + "{dir}/sim.h5 --out {dir}/file" + kQuick,
+           1,
            {"{dir}/file: exists and is not a folder"}},
-          {"output is the working folder", render + "{dir}/sim.h5 --out ." + kQuick, 1,
+          {"output is the working folder",
+           render + "{dir}/sim.h5 --out ." + kQuick,
+           1,
            {"'.'", "name the output folder itself"}},
-          {"simulation inside the output", render + "{dir}/inside/sim.h5 --out {dir}/inside" +
-           kQuick, 1, {"--sim {dir}/inside/sim.h5 is inside the output folder {dir}/inside"}},
+          {"simulation inside the output",
+           render + "{dir}/inside/sim.h5 --out {dir}/inside" + kQuick,
+           1,
+           {"--sim {dir}/inside/sim.h5 is inside the output folder {dir}/inside"}},
       },
       dir_.string());
   // None of them left an output or a partial folder behind.
@@ -155,10 +181,10 @@ TEST_F(BadInputRender, OnePerLinkNetRendersWithoutStabilitySetUp) {
   // simulation from the stored scenario (without its gravity, frame rotation and drag) failed in
   // the contact set-up: "no elastic stiffness to scale the contact stiffness from". Render needs
   // only the geometry.
-  const NetlabResult sim = RunNetlab(
-      "simulate " NETLAB_SOURCE_DIR "/scenarios/net_a_0.5.yaml --out " + Path("one.h5") +
-      " --set duration=0.05 --set 'nets.0.knots=[6,6]' --set nets.0.segments_per_link=1"
-      " --set integrator.type=implicit --quiet");
+  const NetlabResult sim =
+      RunNetlab("simulate " NETLAB_SOURCE_DIR "/scenarios/net_a_0.5.yaml --out " + Path("one.h5") +
+                " --set duration=0.05 --set 'nets.0.knots=[6,6]' --set nets.0.segments_per_link=1"
+                " --set integrator.type=implicit --quiet");
   ASSERT_EQ(sim.status, 0) << sim.err;
   const NetlabResult r = Render(Path("one.h5"), Path("shot"));
   EXPECT_EQ(r.status, 0) << r.err;
@@ -173,8 +199,7 @@ TEST_F(BadInputRender, AFailingRenderLeavesTheShotByteIdentical) {
   const fs::file_time_type written = fs::last_write_time(Path("shot/cam0/timestamps.csv"));
 
   // Another seed: any frame the failing run wrote would differ from the old one.
-  const NetlabResult r =
-      Render(NanCopy(sim, "simnan.h5"), Path("shot"), " --frames 0:3 --seed 2");
+  const NetlabResult r = Render(NanCopy(sim, "simnan.h5"), Path("shot"), " --frames 0:3 --seed 2");
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("simnan.h5"), std::string::npos) << r.err;
   EXPECT_EQ(Contents(Path("shot")), before);
@@ -197,8 +222,8 @@ TEST_F(BadInputRender, ASmallerRenderReplacesTheFolderWithoutStaleFrames) {
   for (const auto& entry : fs::directory_iterator(Path("shot/cam0")))
     cam0.push_back(entry.path().filename().string());
   std::sort(cam0.begin(), cam0.end());
-  EXPECT_EQ(cam0, (std::vector<std::string>{"frame_000000.pgm", "frame_000001.pgm",
-                                             "timestamps.csv"}));
+  EXPECT_EQ(cam0,
+            (std::vector<std::string>{"frame_000000.pgm", "frame_000001.pgm", "timestamps.csv"}));
   EXPECT_FALSE(fs::exists(Path("shot/notes.txt")));
   const NetlabResult check =
       RunNetlab("ingest " + Path("shot/experiment.yaml") + " --check --json");
@@ -219,8 +244,7 @@ TEST_F(BadInputRender, TheShotNamesItsFilesRelativelyAndMovesWhole) {
   ASSERT_EQ(check.status, 0) << check.err;
   const Json json = LastJson(check.out);
   EXPECT_EQ(json["synchronized_frames"].number(), 4);
-  for (const Json& camera : json["cameras"].array())
-    EXPECT_TRUE(camera["untimed"].array().empty());
+  for (const Json& camera : json["cameras"].array()) EXPECT_TRUE(camera["untimed"].array().empty());
 }
 
 }  // namespace

@@ -3,7 +3,6 @@
 // (tests/app/cli/bad_input.h). The fixtures are written at run time.
 
 #include <gtest/gtest.h>
-
 #include <sys/stat.h>
 
 #include <chrono>
@@ -46,8 +45,7 @@ class BadInputSimulate : public CommandTest {
     Write("twice.yaml", std::string(kSmallShotScenario) + "duration: -3\n");
     Write("materials_twice.yaml",
           std::string(kSmallShotScenario) + "materials:\n  nylon: {diameter: 1.0e-3}\n");
-    Write("tagged.yaml",
-          Replace(kSmallShotScenario, "duration: 0.06", "duration: !!str 0.06"));
+    Write("tagged.yaml", Replace(kSmallShotScenario, "duration: 0.06", "duration: !!str 0.06"));
     Write("custom_tag.yaml",
           Replace(kSmallShotScenario, "duration: 0.06", "duration: !seconds 0.06"));
     Write("two_documents.yaml", std::string(kSmallShotScenario) + "---\nduration: 5\n");
@@ -60,7 +58,9 @@ class BadInputSimulate : public CommandTest {
     std::filesystem::create_symlink(Path("scene.yaml"), Path("link_to_scene.h5"));
     mkfifo(Path("fifo").c_str(), 0644);
   }
-  void Write(const std::string& name, const std::string& text) { std::ofstream(Path(name)) << text; }
+  void Write(const std::string& name, const std::string& text) {
+    std::ofstream(Path(name)) << text;
+  }
   static std::string Replace(std::string text, const std::string& from, const std::string& to) {
     text.replace(text.find(from), from.size(), to);
     return text;
@@ -154,8 +154,9 @@ TEST_F(BadInputSimulate, EachKindEndsInAClearError) {
           {"a number of a hundred thousand digits",
            "simulate {dir}/scene.yaml --out {dir}/a.h5 --duration " + std::string(100000, '9'),
            2,
-           {"--duration expects a number", "'9999999999999999999999999999999999999999... (100000 "
-                                            "characters)'"}},
+           {"--duration expects a number",
+            "'9999999999999999999999999999999999999999... (100000 "
+            "characters)'"}},
           {"--set with a value of a hundred thousand digits",
            "simulate {dir}/scene.yaml --out {dir}/a.h5 --set drag.coefficient=" +
                std::string(100000, '9'),
@@ -190,8 +191,7 @@ TEST_F(BadInputSimulate, EachKindEndsInAClearError) {
           {"a step longer than the run",
            "simulate {dir}/scene.yaml --out {dir}/a.h5 --set integrator.dt=10",
            1,
-           {"{dir}/scene.yaml: integrator.dt 10 s is longer than the duration 0.06 s",
-            "no step"}},
+           {"{dir}/scene.yaml: integrator.dt 10 s is longer than the duration 0.06 s", "no step"}},
           {"a key given twice",
            "simulate {dir}/twice.yaml --out {dir}/previous.h5",
            1,
@@ -255,36 +255,51 @@ TEST_F(BadInputSimulate, SweepEndsInAClearError) {
   ExpectBadInputs(
       {
           {"no --vary", "sweep {dir}/scene.yaml --out {dir}/s.h5", 2, {"--vary"}},
-          {"--vary without a range", "sweep {dir}/scene.yaml --vary duration --out {dir}/s.h5",
-           2, {"--vary", "PATH=a:b:n"}},
+          {"--vary without a range",
+           "sweep {dir}/scene.yaml --vary duration --out {dir}/s.h5",
+           2,
+           {"--vary", "PATH=a:b:n"}},
           {"--vary of an unknown path",
-           "sweep {dir}/scene.yaml --vary nets.0.knotz=1:2:2 --out {dir}/s.h5", 1,
+           "sweep {dir}/scene.yaml --vary nets.0.knotz=1:2:2 --out {dir}/s.h5",
+           1,
            {"{dir}/scene.yaml", "knotz", "unknown key"}},
           {"--vary with n = 0",
-           "sweep {dir}/scene.yaml --vary drag.drag_coefficient=1:2:0 --out {dir}/s.h5", 2,
+           "sweep {dir}/scene.yaml --vary drag.drag_coefficient=1:2:0 --out {dir}/s.h5",
+           2,
            {"--vary"}},
-          {"missing scenario", "sweep {dir}/missing.yaml --vary duration=0.01:0.02:2 --out "
-                               "{dir}/s.h5", 1, {"{dir}/missing.yaml"}},
-          {"empty --out", "sweep {dir}/scene.yaml --vary duration=0.01:0.02:2 --out ''", 2,
+          {"missing scenario",
+           "sweep {dir}/missing.yaml --vary duration=0.01:0.02:2 --out "
+           "{dir}/s.h5",
+           1,
+           {"{dir}/missing.yaml"}},
+          {"empty --out",
+           "sweep {dir}/scene.yaml --vary duration=0.01:0.02:2 --out ''",
+           2,
            {"--out needs a non-empty value"}},
           {"empty --report",
-           "sweep {dir}/scene.yaml --vary duration=0.01:0.02:2 --out {dir}/s.h5 --report ''", 2,
+           "sweep {dir}/scene.yaml --vary duration=0.01:0.02:2 --out {dir}/s.h5 --report ''",
+           2,
            {"--report needs a non-empty value"}},
           {"out-of-range --jobs",
-           "sweep {dir}/scene.yaml --vary duration=0.01:0.02:2 --out {dir}/s.h5 --jobs 0", 2,
+           "sweep {dir}/scene.yaml --vary duration=0.01:0.02:2 --out {dir}/s.h5 --jobs 0",
+           2,
            {"--jobs"}},
           // An output over an input, another output or a special file.
           {"--out is the scenario",
-           "sweep {dir}/scene.yaml --vary duration=0.01:0.02:2 --out {dir}/scene.yaml", 1,
-           {"--out {dir}/scene.yaml", "the scenario file {dir}/scene.yaml"}, {"{dir}/scene.yaml"}},
+           "sweep {dir}/scene.yaml --vary duration=0.01:0.02:2 --out {dir}/scene.yaml",
+           1,
+           {"--out {dir}/scene.yaml", "the scenario file {dir}/scene.yaml"},
+           {"{dir}/scene.yaml"}},
           {"--report is --out",
            "sweep {dir}/scene.yaml --vary duration=0.01:0.02:2 --out {dir}/previous.h5 --report "
-           "{dir}/previous.h5", 1,
+           "{dir}/previous.h5",
+           1,
            {"--report {dir}/previous.h5", "is also --out {dir}/previous.h5"},
            {"{dir}/previous.h5"}},
           {"--report in a folder that does not exist",
            "sweep {dir}/scene.yaml --vary duration=0.01:0.02:2 --out {dir}/previous.h5 --report "
-           "{dir}/no/such/r.html", 1,
+           "{dir}/no/such/r.html",
+           1,
            {"--report {dir}/no/such/r.html", "does not exist", "nothing was written"},
            {"{dir}/previous.h5"}},
       },
@@ -305,7 +320,8 @@ TEST_F(BadInputSimulate, SweepEndsInAClearError) {
                     "sweep {dir}/scene.yaml --vary materials.nylon.linear_density=-2:-1:2 --out "
                     "{dir}/previous.h5 --report {dir}/previous.html --quiet",
                     1,
-                    {"run 1", "all 2 runs failed", "{dir}/previous.h5 was not written, the "
+                    {"run 1", "all 2 runs failed",
+                     "{dir}/previous.h5 was not written, the "
                      "existing file is as it was"},
                     {"{dir}/previous.h5", "{dir}/previous.html"}}},
                   dir_.string());
@@ -351,12 +367,11 @@ TEST_F(BadInputSimulate, AFullDiskLeavesThePreviousOutput) {
 // length: the message stays a line or two, whichever option or --set carries it.
 TEST_F(BadInputSimulate, AHugeValueGivesAOneLineMessage) {
   const std::string huge(100000, '9');
-  for (const std::string& args :
-       {"--duration " + huge, "--set duration=" + huge, "--set drag.coefficient=" + huge,
-        "--set " + huge, "--" + huge}) {
+  for (const std::string& args : {"--duration " + huge, "--set duration=" + huge,
+                                  "--set drag.coefficient=" + huge, "--set " + huge, "--" + huge}) {
     SCOPED_TRACE(args.substr(0, 30));
-    const NetlabResult r = RunNetlab("simulate " + Path("scene.yaml") + " --out " +
-                                     Path("a.h5") + " " + args);
+    const NetlabResult r =
+        RunNetlab("simulate " + Path("scene.yaml") + " --out " + Path("a.h5") + " " + args);
     EXPECT_NE(r.status, 0);
     EXPECT_NE(r.err.find("(1000"), std::string::npos) << r.err.substr(0, 300);
     EXPECT_LT(r.err.size(), 600u) << r.err.substr(0, 300);
@@ -370,8 +385,10 @@ TEST_F(BadInputSimulate, AnOutputTooLargeIsRefusedBeforeAnyStep) {
           {"a frame every 1e-12 s",
            "simulate {dir}/dense.yaml --out {dir}/previous.h5",
            1,
-           {"{dir}/dense.yaml", "output_interval 1e-12 s", "6e+10 output frames", "TB in "
-            "{dir}/previous.h5", "free there"},
+           {"{dir}/dense.yaml", "output_interval 1e-12 s", "6e+10 output frames",
+            "TB in "
+            "{dir}/previous.h5",
+            "free there"},
            {"{dir}/previous.h5"}},
           {"a frame every 1e-9 s of a 6 s flight",
            "simulate {dir}/dense_flight.yaml --out {dir}/a.h5",

@@ -4,7 +4,6 @@
 // cameras, the net's true tracks) are written at run time, then broken (tests/app/cli/h5_edit.h).
 
 #include <gtest/gtest.h>
-
 #include <sys/stat.h>
 
 #include <cmath>
@@ -75,8 +74,7 @@ void ToUnits(const std::string& path, const std::string& time_units, double per_
   h5::Id file = h5::OpenFileReadWrite(path);
   h5::SetUnits(file.get(), "time", time_units);
   h5::SetUnits(file.get(), "knots/position", length_units);
-  if (!tracks.covariance.empty())
-    h5::SetUnits(file.get(), "knots/covariance", length_units + "^2");
+  if (!tracks.covariance.empty()) h5::SetUnits(file.get(), "knots/covariance", length_units + "^2");
 }
 
 // Gives the datasets `names` (each [T, ...] of `type`s) of the file at `path` an extent of
@@ -138,8 +136,8 @@ class BadInputTriangulate : public CommandTest {
     PokeH5(Path("backwards.h5"), "/time", 5, -0.05);
     RetypeH5ToInt32(Path("int.h5"), "/knots/position");
     std::ofstream(Path("text.h5")) << "not an HDF5 file\n";
-    const NetlabResult measured = RunNetlab(Base() + "--labels " + Path("labels.h5") +
-                                            " --out " + Path("measured.h5") + " --quiet");
+    const NetlabResult measured = RunNetlab(Base() + "--labels " + Path("labels.h5") + " --out " +
+                                            Path("measured.h5") + " --quiet");
     ASSERT_EQ(measured.status, 0) << measured.err;
 
     // Legal files score used to crash on, and files in other units.
@@ -152,8 +150,8 @@ class BadInputTriangulate : public CommandTest {
     // The truth measured with 1 mm of noise (a fixed pattern), in s and m, and in ms and mm.
     KnotTracks noisy = Truth(kRows, kCols);
     for (size_t i = 0; i < noisy.position.size(); ++i) {
-      noisy.position[i] += 1e-3 * Eigen::Vector3d(std::sin(1.0 * i), std::cos(2.0 * i),
-                                                  std::sin(3.0 * i + 1));
+      noisy.position[i] +=
+          1e-3 * Eigen::Vector3d(std::sin(1.0 * i), std::cos(2.0 * i), std::sin(3.0 * i + 1));
       noisy.covariance.push_back(Eigen::Matrix3d::Identity() * 1e-6);
     }
     WriteKnotTracks(Path("noisy.h5"), noisy);
@@ -170,8 +168,8 @@ class BadInputTriangulate : public CommandTest {
     std::ofstream(Path("old_xyzres.csv")) << "the previous residuals";
     // Numbers no measurement has: variances of 1e-300 and 1e300 m^2, a contact time stored as NaN
     // or a billion seconds before the flight, a grid that lists knot (1,0) twice and (1,1) not.
-    for (const auto& [name, variance] : {std::pair<const char*, double>{"cov_tiny.h5", 1e-300},
-                                         {"cov_huge.h5", 1e300}}) {
+    for (const auto& [name, variance] :
+         {std::pair<const char*, double>{"cov_tiny.h5", 1e-300}, {"cov_huge.h5", 1e300}}) {
       KnotTracks tracks = Truth(kRows, kCols);
       tracks.covariance.assign(tracks.position.size(), Eigen::Matrix3d::Identity() * variance);
       WriteKnotTracks(Path(name), tracks);
@@ -197,7 +195,8 @@ class BadInputTriangulate : public CommandTest {
     // Files that declare 1e11 frames (3 kB each): a bare "out of memory" named neither.
     std::filesystem::copy_file(Path("truth.h5"), Path("declared_huge.h5"));
     DeclareFrames(Path("declared_huge.h5"), 100000000000ULL,
-                  {{"/time", H5T_NATIVE_DOUBLE}, {"/knots/position", H5T_NATIVE_DOUBLE},
+                  {{"/time", H5T_NATIVE_DOUBLE},
+                   {"/knots/position", H5T_NATIVE_DOUBLE},
                    {"/knots/valid", H5T_NATIVE_UINT8}});
     std::filesystem::copy_file(Path("labels.h5"), Path("labels_huge.h5"));
     DeclareFrames(Path("labels_huge.h5"), 100000000000ULL, {{"/frame_index", H5T_NATIVE_INT}});
@@ -215,68 +214,123 @@ TEST_F(BadInputTriangulate, EachKindEndsInAClearError) {
   const std::string good = base + "--labels {dir}/labels.h5 ";
   ExpectBadInputs(
       {
-          {"missing labels", base + "--labels {dir}/missing.h5 --out {dir}/t.h5", 1,
+          {"missing labels",
+           base + "--labels {dir}/missing.h5 --out {dir}/t.h5",
+           1,
            {"{dir}/missing.h5"}},
-          {"labels not HDF5", base + "--labels {dir}/text.h5 --out {dir}/t.h5", 1,
+          {"labels not HDF5",
+           base + "--labels {dir}/text.h5 --out {dir}/t.h5",
+           1,
            {"{dir}/text.h5"}},
-          {"labels of another net", "triangulate --rig {dir}/rig.yaml --knots 5x5 --fps 179 "
-                                    "--labels {dir}/labels.h5 --out {dir}/t.h5", 1,
+          {"labels of another net",
+           "triangulate --rig {dir}/rig.yaml --knots 5x5 --fps 179 "
+           "--labels {dir}/labels.h5 --out {dir}/t.h5",
+           1,
            {"{dir}/labels.h5", "4", "5"}},
-          {"a repeated frame", base + "--labels {dir}/repeated.h5 --out {dir}/t.h5", 1,
+          {"a repeated frame",
+           base + "--labels {dir}/repeated.h5 --out {dir}/t.h5",
+           1,
            {"{dir}/repeated.h5", "/frame_index[3] = 2 is not after [2] = 2"}},
-          {"a negative frame", base + "--labels {dir}/negative.h5 --out {dir}/t.h5", 1,
+          {"a negative frame",
+           base + "--labels {dir}/negative.h5 --out {dir}/t.h5",
+           1,
            {"{dir}/negative.h5", "/frame_index[0] = -5 is negative"}},
-          {"a label at infinity", base + "--labels {dir}/inf.h5 --out {dir}/t.h5", 1,
+          {"a label at infinity",
+           base + "--labels {dir}/inf.h5 --out {dir}/t.h5",
+           1,
            {"{dir}/inf.h5", "/cameras/cam0/position_px", "row 0, knot 0", "not a position"}},
-          {"every label NaN", base + "--labels {dir}/nan.h5 --out {dir}/t.h5", 1,
+          {"every label NaN",
+           base + "--labels {dir}/nan.h5 --out {dir}/t.h5",
+           1,
            {"{dir}/nan.h5", "position_px", "not a position"}},
-          {"no label at all", base + "--labels {dir}/empty.h5 --out {dir}/t.h5", 1,
+          {"no label at all",
+           base + "--labels {dir}/empty.h5 --out {dir}/t.h5",
+           1,
            {"{dir}/empty.h5", "no knot is labeled in two cameras", "12 frames"}},
-          {"the truth of another net", good + "--out {dir}/t.h5 --truth {dir}/truth6.h5", 1,
+          {"the truth of another net",
+           good + "--out {dir}/t.h5 --truth {dir}/truth6.h5",
+           1,
            {"--truth {dir}/truth6.h5", "a 6x6 net", "4x4"}},
-          {"the truth of other frames", good + "--out {dir}/t.h5 --truth {dir}/truth_late.h5", 1,
+          {"the truth of other frames",
+           good + "--out {dir}/t.h5 --truth {dir}/truth_late.h5",
+           1,
            {"--truth {dir}/truth_late.h5", "no frame in common"}},
-          {"a truth whose time runs back", good + "--out {dir}/t.h5 --truth {dir}/backwards.h5",
-           1, {"{dir}/backwards.h5", "/time is not increasing at row 5"}},
-          {"a truth stored as integers", good + "--out {dir}/t.h5 --truth {dir}/int.h5", 1,
+          {"a truth whose time runs back",
+           good + "--out {dir}/t.h5 --truth {dir}/backwards.h5",
+           1,
+           {"{dir}/backwards.h5", "/time is not increasing at row 5"}},
+          {"a truth stored as integers",
+           good + "--out {dir}/t.h5 --truth {dir}/int.h5",
+           1,
            {"{dir}/int.h5", "/knots/position is int32, expected floating point"}},
           {"a prior of 0", good + "--out {dir}/t.h5 --smooth-sigma 0", 2, {"--smooth-sigma"}},
           {"a noise of 0", good + "--out {dir}/t.h5 --sigma-px 0", 2, {"--sigma-px"}},
-          {"a link length of 0", good + "--out {dir}/t.h5 --link-length 0", 2,
-           {"--link-length"}},
-          {"no --fps", "triangulate --rig {dir}/rig.yaml --knots 4x4 --labels {dir}/labels.h5 "
-                       "--out {dir}/t.h5", 2, {"--fps"}},
-          {"a bad --knots", "triangulate --rig {dir}/rig.yaml --knots 4by4 --fps 179 "
-                            "--labels {dir}/labels.h5 --out {dir}/t.h5", 2, {"--knots"}},
-          {"missing rig", "triangulate --rig {dir}/missing.yaml --knots 4x4 --fps 179 "
-                          "--labels {dir}/labels.h5 --out {dir}/t.h5", 1, {"{dir}/missing.yaml"}},
-          {"a folder as the rig", "triangulate --rig {dir}/folder.yaml --knots 4x4 --fps 179 "
-                                  "--labels {dir}/labels.h5 --out {dir}/t.h5", 1,
+          {"a link length of 0", good + "--out {dir}/t.h5 --link-length 0", 2, {"--link-length"}},
+          {"no --fps",
+           "triangulate --rig {dir}/rig.yaml --knots 4x4 --labels {dir}/labels.h5 "
+           "--out {dir}/t.h5",
+           2,
+           {"--fps"}},
+          {"a bad --knots",
+           "triangulate --rig {dir}/rig.yaml --knots 4by4 --fps 179 "
+           "--labels {dir}/labels.h5 --out {dir}/t.h5",
+           2,
+           {"--knots"}},
+          {"missing rig",
+           "triangulate --rig {dir}/missing.yaml --knots 4x4 --fps 179 "
+           "--labels {dir}/labels.h5 --out {dir}/t.h5",
+           1,
+           {"{dir}/missing.yaml"}},
+          {"a folder as the rig",
+           "triangulate --rig {dir}/folder.yaml --knots 4x4 --fps 179 "
+           "--labels {dir}/labels.h5 --out {dir}/t.h5",
+           1,
            {"{dir}/folder.yaml: is a folder, not a rig file"}},
           {"a rig with fewer cameras than the labels",
            "triangulate --rig {dir}/rig3.yaml --knots 4x4 --fps 179 --labels {dir}/labels.h5 "
-           "--out {dir}/t.h5", 1,
+           "--out {dir}/t.h5",
+           1,
            {"{dir}/labels.h5", "cam3", "{dir}/rig3.yaml"}},
-          {"labels declaring 1e11 frames", base + "--labels {dir}/labels_huge.h5 --out {dir}/t.h5",
-           1, {"{dir}/labels_huge.h5: /frame_index gives 100000000000 frames of 16 knots in 4 "
-               "cameras: reading them needs ~", "available"}},
+          {"labels declaring 1e11 frames",
+           base + "--labels {dir}/labels_huge.h5 --out {dir}/t.h5",
+           1,
+           {"{dir}/labels_huge.h5: /frame_index gives 100000000000 frames of 16 knots in 4 "
+            "cameras: reading them needs ~",
+            "available"}},
           {"empty --out", good + "--out ''", 2, {"--out needs a non-empty value"}},
-          {"--out in a folder that is a file", good + "--out {dir}/rig.yaml/t.h5", 1,
+          {"--out in a folder that is a file",
+           good + "--out {dir}/rig.yaml/t.h5",
+           1,
            {"{dir}/rig.yaml/t.h5"}},
           // An output over an input or the other output, or where no file can go.
-          {"--out is the --labels file", good + "--out {dir}/labels.h5", 1,
-           {"--out {dir}/labels.h5", "the --labels file {dir}/labels.h5"}, {"{dir}/labels.h5"}},
-          {"--out is the --rig file", good + "--out {dir}/rig.yaml", 1,
-           {"--out {dir}/rig.yaml", "the --rig file {dir}/rig.yaml"}, {"{dir}/rig.yaml"}},
-          {"--out is the --truth file", good + "--out {dir}/truth.h5 --truth {dir}/truth.h5", 1,
-           {"--out {dir}/truth.h5", "the --truth file {dir}/truth.h5"}, {"{dir}/truth.h5"}},
-          {"--csv names --out", good + "--out {dir}/t_xyzpts.csv --csv {dir}/t_", 1,
+          {"--out is the --labels file",
+           good + "--out {dir}/labels.h5",
+           1,
+           {"--out {dir}/labels.h5", "the --labels file {dir}/labels.h5"},
+           {"{dir}/labels.h5"}},
+          {"--out is the --rig file",
+           good + "--out {dir}/rig.yaml",
+           1,
+           {"--out {dir}/rig.yaml", "the --rig file {dir}/rig.yaml"},
+           {"{dir}/rig.yaml"}},
+          {"--out is the --truth file",
+           good + "--out {dir}/truth.h5 --truth {dir}/truth.h5",
+           1,
+           {"--out {dir}/truth.h5", "the --truth file {dir}/truth.h5"},
+           {"{dir}/truth.h5"}},
+          {"--csv names --out",
+           good + "--out {dir}/t_xyzpts.csv --csv {dir}/t_",
+           1,
            {"--csv {dir}/t_xyzpts.csv", "is also --out {dir}/t_xyzpts.csv"}},
           {"--csv in a folder that does not exist",
-           good + "--out {dir}/old_score.h5 --csv {dir}/no/such/run_", 1,
+           good + "--out {dir}/old_score.h5 --csv {dir}/no/such/run_",
+           1,
            {"--csv {dir}/no/such/run_xyzpts.csv", "does not exist", "nothing was written"},
            {"{dir}/old_score.h5"}},
-          {"--out is a FIFO", good + "--out {dir}/fifo", 1, {"--out {dir}/fifo", "a FIFO"},
+          {"--out is a FIFO",
+           good + "--out {dir}/fifo",
+           1,
+           {"--out {dir}/fifo", "a FIFO"},
            {"{dir}/fifo"}},
       },
       dir_.string());
@@ -288,69 +342,116 @@ TEST_F(BadInputTriangulate, ScoreEndsInAClearError) {
   const std::string base = "score --measured {dir}/measured.h5 ";
   ExpectBadInputs(
       {
-          {"missing measurement", "score --measured {dir}/missing.h5 --sim {dir}/truth.h5 --out "
-                                  "{dir}/s.h5", 1, {"{dir}/missing.h5"}},
-          {"measurement not HDF5", "score --measured {dir}/text.h5 --sim {dir}/truth.h5 --out "
-                                   "{dir}/s.h5", 1, {"{dir}/text.h5"}},
-          {"a simulation stored as integers", base + "--sim {dir}/int.h5 --out {dir}/s.h5", 1,
+          {"missing measurement",
+           "score --measured {dir}/missing.h5 --sim {dir}/truth.h5 --out "
+           "{dir}/s.h5",
+           1,
+           {"{dir}/missing.h5"}},
+          {"measurement not HDF5",
+           "score --measured {dir}/text.h5 --sim {dir}/truth.h5 --out "
+           "{dir}/s.h5",
+           1,
+           {"{dir}/text.h5"}},
+          {"a simulation stored as integers",
+           base + "--sim {dir}/int.h5 --out {dir}/s.h5",
+           1,
            {"{dir}/int.h5", "/knots/position is int32, expected floating point"}},
-          {"a simulation whose time runs back", base + "--sim {dir}/backwards.h5 --out {dir}/s.h5",
-           1, {"{dir}/backwards.h5", "/time is not increasing at row 5"}},
-          {"an unknown --align", base + "--sim {dir}/truth.h5 --out {dir}/s.h5 --align sideways",
-           2, {"--align"}},
-          {"empty --out", base + "--sim {dir}/truth.h5 --out ''", 2,
+          {"a simulation whose time runs back",
+           base + "--sim {dir}/backwards.h5 --out {dir}/s.h5",
+           1,
+           {"{dir}/backwards.h5", "/time is not increasing at row 5"}},
+          {"an unknown --align",
+           base + "--sim {dir}/truth.h5 --out {dir}/s.h5 --align sideways",
+           2,
+           {"--align"}},
+          {"empty --out",
+           base + "--sim {dir}/truth.h5 --out ''",
+           2,
            {"--out needs a non-empty value"}},
-          {"empty --report", base + "--sim {dir}/truth.h5 --out {dir}/s.h5 --report ''", 2,
+          {"empty --report",
+           base + "--sim {dir}/truth.h5 --out {dir}/s.h5 --report ''",
+           2,
            {"--report needs a non-empty value"}},
           // An output over an input or the other output, or where no file can go.
-          {"--out is the --measured file", base + "--sim {dir}/truth.h5 --out {dir}/measured.h5",
-           1, {"--out {dir}/measured.h5", "the --measured file {dir}/measured.h5"},
+          {"--out is the --measured file",
+           base + "--sim {dir}/truth.h5 --out {dir}/measured.h5",
+           1,
+           {"--out {dir}/measured.h5", "the --measured file {dir}/measured.h5"},
            {"{dir}/measured.h5"}},
           {"--out is a link to the --sim file",
-           base + "--sim {dir}/truth.h5 --out {dir}/link_to_truth.h5", 1,
+           base + "--sim {dir}/truth.h5 --out {dir}/link_to_truth.h5",
+           1,
            {"--out {dir}/link_to_truth.h5", "the --sim file {dir}/truth.h5"},
            {"{dir}/truth.h5", "{dir}/link_to_truth.h5"}},
-          {"--report is --out", base + "--sim {dir}/truth.h5 --out {dir}/s.h5 --report {dir}/s.h5",
-           1, {"--report {dir}/s.h5", "is also --out {dir}/s.h5"}},
-          {"--out is a FIFO", base + "--sim {dir}/truth.h5 --out {dir}/fifo", 1,
-           {"--out {dir}/fifo", "a FIFO", "not a regular file"}, {"{dir}/fifo"}},
+          {"--report is --out",
+           base + "--sim {dir}/truth.h5 --out {dir}/s.h5 --report {dir}/s.h5",
+           1,
+           {"--report {dir}/s.h5", "is also --out {dir}/s.h5"}},
+          {"--out is a FIFO",
+           base + "--sim {dir}/truth.h5 --out {dir}/fifo",
+           1,
+           {"--out {dir}/fifo", "a FIFO", "not a regular file"},
+           {"{dir}/fifo"}},
           {"--out is a link to a character device",
-           base + "--sim {dir}/truth.h5 --out {dir}/link_to_null", 1,
-           {"--out {dir}/link_to_null", "a character device"}, {"{dir}/link_to_null"}},
+           base + "--sim {dir}/truth.h5 --out {dir}/link_to_null",
+           1,
+           {"--out {dir}/link_to_null", "a character device"},
+           {"{dir}/link_to_null"}},
           {"--report in a folder that does not exist",
-           base + "--sim {dir}/truth.h5 --out {dir}/old_score.h5 --report {dir}/no/such/r.html", 1,
+           base + "--sim {dir}/truth.h5 --out {dir}/old_score.h5 --report {dir}/no/such/r.html",
+           1,
            {"--report {dir}/no/such/r.html", "does not exist", "nothing was written"},
            {"{dir}/old_score.h5"}},
-          {"positions in unknown units", "score --measured {dir}/measured_furlong.h5 --sim "
-                                         "{dir}/truth.h5 --out {dir}/s.h5", 1,
+          {"positions in unknown units",
+           "score --measured {dir}/measured_furlong.h5 --sim "
+           "{dir}/truth.h5 --out {dir}/s.h5",
+           1,
            {"{dir}/measured_furlong.h5:/knots/position has units 'furlong'", "mm"}},
-          {"variances of 1e-300 m^2", "score --measured {dir}/cov_tiny.h5 --sim {dir}/truth.h5 "
-                                      "--out {dir}/s.h5", 1,
+          {"variances of 1e-300 m^2",
+           "score --measured {dir}/cov_tiny.h5 --sim {dir}/truth.h5 "
+           "--out {dir}/s.h5",
+           1,
            {"{dir}/cov_tiny.h5:/knots/covariance: frame 0, knot 0: variance 1e-300 m^2",
             "outside 1e-40..1e6 m^2"}},
-          {"variances of 1e300 m^2", "score --measured {dir}/measured.h5 --sim {dir}/cov_huge.h5 "
-                                     "--out {dir}/s.h5", 1,
+          {"variances of 1e300 m^2",
+           "score --measured {dir}/measured.h5 --sim {dir}/cov_huge.h5 "
+           "--out {dir}/s.h5",
+           1,
            {"{dir}/cov_huge.h5:/knots/covariance: frame 0, knot 0: variance 1e+300 m^2"}},
-          {"a contact time before the simulation", base + "--sim {dir}/truth.h5 --out {dir}/s.h5 "
-                                                          "--contact-time -5", 1,
+          {"a contact time before the simulation",
+           base + "--sim {dir}/truth.h5 --out {dir}/s.h5 "
+                  "--contact-time -5",
+           1,
            {"--contact-time -5 s is outside the time of the simulation {dir}/truth.h5"}},
-          {"a /contact_start of NaN", base + "--sim {dir}/contact_nan.h5 --out {dir}/s.h5", 1,
+          {"a /contact_start of NaN",
+           base + "--sim {dir}/contact_nan.h5 --out {dir}/s.h5",
+           1,
            {"{dir}/contact_nan.h5:/contact_start is nan, not a time"}},
           {"a /contact_start a billion seconds early",
-           base + "--sim {dir}/contact_early.h5 --out {dir}/s.h5", 1,
+           base + "--sim {dir}/contact_early.h5 --out {dir}/s.h5",
+           1,
            {"{dir}/contact_early.h5:/contact_start -1e+09 s is outside the time of the "
             "simulation"}},
-          {"a measurement of one frame", "score --measured {dir}/one_frame.h5 --sim "
-                                         "{dir}/truth.h5 --meas-sigma 0.001 --out {dir}/s.h5", 1,
+          {"a measurement of one frame",
+           "score --measured {dir}/one_frame.h5 --sim "
+           "{dir}/truth.h5 --meas-sigma 0.001 --out {dir}/s.h5",
+           1,
            {"{dir}/one_frame.h5: 1 frame: a score compares a flight over time"}},
-          {"a simulation with every knot lost", base + "--sim {dir}/all_lost.h5 --out {dir}/s.h5",
-           1, {"{dir}/all_lost.h5: no knot is valid in any of its 12 frames"}},
-          {"a measurement declaring 1e11 frames", "score --measured {dir}/declared_huge.h5 --sim "
-                                                  "{dir}/truth.h5 --out {dir}/s.h5", 1,
+          {"a simulation with every knot lost",
+           base + "--sim {dir}/all_lost.h5 --out {dir}/s.h5",
+           1,
+           {"{dir}/all_lost.h5: no knot is valid in any of its 12 frames"}},
+          {"a measurement declaring 1e11 frames",
+           "score --measured {dir}/declared_huge.h5 --sim "
+           "{dir}/truth.h5 --out {dir}/s.h5",
+           1,
            {"{dir}/declared_huge.h5: /time and /knots/grid give 100000000000 frames of 16 knots: "
-            "reading them needs ~", "available"}},
-          {"a grid with a knot twice", "score --measured {dir}/grid_twice.h5 --sim "
-                                       "{dir}/truth.h5 --out {dir}/s.h5", 1,
+            "reading them needs ~",
+            "available"}},
+          {"a grid with a knot twice",
+           "score --measured {dir}/grid_twice.h5 --sim "
+           "{dir}/truth.h5 --out {dir}/s.h5",
+           1,
            {"{dir}/grid_twice.h5:/knots/grid: knots 4 and 5 are both (1, 0)"}},
       },
       dir_.string());
@@ -364,15 +465,25 @@ TEST_F(BadInputTriangulate, AFullDiskLeavesThePreviousOutputs) {
   const std::string good = Base() + "--labels {dir}/labels.h5 --quiet ";
   ExpectBadInputs(
       {
-          {"triangulate onto a full disk", good + "--out {dir}/old_score.h5", 1,
-           {"{dir}/old_score.h5"}, {"{dir}/old_score.h5"}, 4096},
+          {"triangulate onto a full disk",
+           good + "--out {dir}/old_score.h5",
+           1,
+           {"{dir}/old_score.h5"},
+           {"{dir}/old_score.h5"},
+           4096},
           {"triangulate with --csv onto a full disk",
-           good + "--out {dir}/old_score.h5 --csv {dir}/old_", 1, {"{dir}/old_"},
-           {"{dir}/old_score.h5", "{dir}/old_xyzpts.csv", "{dir}/old_xyzres.csv"}, 4096},
+           good + "--out {dir}/old_score.h5 --csv {dir}/old_",
+           1,
+           {"{dir}/old_"},
+           {"{dir}/old_score.h5", "{dir}/old_xyzpts.csv", "{dir}/old_xyzres.csv"},
+           4096},
           {"score onto a full disk",
            "score --measured {dir}/measured.h5 --sim {dir}/truth.h5 --out {dir}/old_score.h5 "
            "--report {dir}/old_report.html --quiet",
-           1, {"{dir}/old_"}, {"{dir}/old_score.h5", "{dir}/old_report.html"}, 4096},
+           1,
+           {"{dir}/old_"},
+           {"{dir}/old_score.h5", "{dir}/old_report.html"},
+           4096},
       },
       dir_.string());
 }
@@ -385,9 +496,9 @@ TEST_F(BadInputTriangulate, ScoreSkipsTheKnotsASimulationLost) {
   for (const char* sim : {"lost.h5", "measured_lost.h5"})
     for (const char* align : {"none", "rigid", "time", "time+rigid"}) {
       SCOPED_TRACE(std::string(sim) + " --align " + align);
-      const NetlabResult r = RunNetlab("score --measured " + Path("measured.h5") + " --sim " +
-                                       Path(sim) + " --out " + Path("s.h5") + " --align " + align +
-                                       " --json --quiet");
+      const NetlabResult r =
+          RunNetlab("score --measured " + Path("measured.h5") + " --sim " + Path(sim) + " --out " +
+                    Path("s.h5") + " --align " + align + " --json --quiet");
       ASSERT_EQ(r.status, 0) << r.err;
       const Json json = LastJson(r.out);
       EXPECT_GT(json["masked"].number(), 0);
@@ -401,9 +512,9 @@ TEST_F(BadInputTriangulate, ScoreSkipsTheKnotsASimulationLost) {
 // was read as metres: a net 1000 times larger).
 TEST_F(BadInputTriangulate, ScoreConvertsMillisecondsAndMillimetres) {
   auto score = [&](const std::string& measured) {
-    const NetlabResult r = RunNetlab("score --measured " + Path(measured) + " --sim " +
-                                     Path("truth.h5") + " --out " + Path("s.h5") +
-                                     " --align none --json --quiet");
+    const NetlabResult r =
+        RunNetlab("score --measured " + Path(measured) + " --sim " + Path("truth.h5") + " --out " +
+                  Path("s.h5") + " --align none --json --quiet");
     EXPECT_EQ(r.status, 0) << r.err;
     return LastJson(r.out);
   };

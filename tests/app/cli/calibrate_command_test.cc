@@ -31,7 +31,8 @@ using netlab::testing::LastJson;
 class CalibrateCommand : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = std::filesystem::temp_directory_path() / ("netlab_calibrate_cli_" + std::to_string(getpid()));
+    dir_ = std::filesystem::temp_directory_path() /
+           ("netlab_calibrate_cli_" + std::to_string(getpid()));
     std::filesystem::create_directories(dir_ / "cam0");
     std::filesystem::create_directories(dir_ / "cam1");
     truth_ = calib::PaperRig(0.5);
@@ -68,8 +69,8 @@ calib::Rig CalibrateCommand::truth_;
 
 TEST_F(CalibrateCommand, WritesTheRigAndTheJsonSummary) {
   const std::string out = (dir_ / "rig.yaml").string();
-  const Result r = Netlab("calibrate --board chessboard:9x6:0.06 " + Images() + " --out " + out +
-                          " --json");
+  const Result r =
+      Netlab("calibrate --board chessboard:9x6:0.06 " + Images() + " --out " + out + " --json");
   ASSERT_EQ(r.status, 0) << r.err;
   const Json json = LastJson(r.out);
   EXPECT_LT(json["rms_px"].number(), 0.15);
@@ -77,7 +78,8 @@ TEST_F(CalibrateCommand, WritesTheRigAndTheJsonSummary) {
   const Json& cam0 = json["cameras"].array()[0];
   EXPECT_EQ(cam0["name"].string(), "cam0");
   EXPECT_EQ(cam0["views"].number(), 10);
-  EXPECT_NEAR(cam0["fx"].number(), truth_.cameras[0].intrinsics.fx, 0.003 * truth_.cameras[0].intrinsics.fx);
+  EXPECT_NEAR(cam0["fx"].number(), truth_.cameras[0].intrinsics.fx,
+              0.003 * truth_.cameras[0].intrinsics.fx);
   for (const char* key : {"fy", "cx", "cy", "rms_px"}) EXPECT_TRUE(cam0.has(key)) << key;
   EXPECT_NEAR(json["baselines"]["cam0-cam1"].number(), 1.0, 0.005);
   EXPECT_TRUE(json.has("warnings"));
@@ -174,7 +176,7 @@ TEST_F(CalibrateCommand, BadInputIsNamed) {
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("no chessboard of 7x6 inner corners found"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(out));
-  EXPECT_EQ(Netlab("calibrate --board chessboard:9x6:0.06 " + Images()).status, 2);  // no --out
+  EXPECT_EQ(Netlab("calibrate --board chessboard:9x6:0.06 " + Images()).status, 2);   // no --out
   EXPECT_EQ(Netlab("calibrate --board chessboard:9x6:0.06 --out " + out).status, 2);  // no images
 }
 

@@ -79,8 +79,8 @@ TEST_F(ColorNetCommand, BadInputIsNamed) {
   EXPECT_EQ(RunNetlab("color-net --knots 6 --out " + Path("x.yaml")).status, 2);
   EXPECT_EQ(RunNetlab("color-net --knots 6x6 --rule colours --out " + Path("x.yaml")).status, 2);
   EXPECT_EQ(RunNetlab("color-net --knots 6x6").status, 2);  // no --out
-  const auto r = RunNetlab("color-net --knots 4x4 --palette " + Path("none.csv") + " --out " +
-                           Path("x.yaml"));
+  const auto r =
+      RunNetlab("color-net --knots 4x4 --palette " + Path("none.csv") + " --out " + Path("x.yaml"));
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("none.csv"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(Path("x.yaml")));

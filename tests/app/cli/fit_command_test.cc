@@ -143,9 +143,8 @@ TEST_F(FitCommand, APriorDeterminesWhatTheFlightCannot) {
 TEST_F(FitCommand, BadInputsAreNamed) {
   std::ofstream(Path("zero_sigma.yaml"))
       << std::string(kPrior).replace(std::string(kPrior).find("sigma: 1.0e-11"), 14, "sigma: 0");
-  std::ofstream(Path("huge_sigma.yaml"))
-      << std::string(kPrior).replace(std::string(kPrior).find("sigma: 1.0e-11"), 14,
-                                     "sigma: 1e300");
+  std::ofstream(Path("huge_sigma.yaml")) << std::string(kPrior).replace(
+      std::string(kPrior).find("sigma: 1.0e-11"), 14, "sigma: 1e300");
   ASSERT_EQ(RunNetlab("simulate " + Path("shot.yaml") + " --set nets.0.knots=[4,4] --out " +
                       Path("other_net.h5"))
                 .status,
@@ -183,8 +182,9 @@ TEST_F(FitCommand, BadInputsAreNamed) {
        {"--out {dir}/measured.h5", "the --measured file {dir}/measured.h5"},
        {"{dir}/measured.h5"}},
       {"--out is the prior",
-       shot.substr(0, shot.find("--out")) + "--out {dir}/prior.yaml --measured "
-       "{dir}/measured.h5 --prior {dir}/prior.yaml --free materials.nylon.twist_damping",
+       shot.substr(0, shot.find("--out")) +
+           "--out {dir}/prior.yaml --measured "
+           "{dir}/measured.h5 --prior {dir}/prior.yaml --free materials.nylon.twist_damping",
        1,
        {"--out {dir}/prior.yaml", "the --prior file {dir}/prior.yaml"},
        {"{dir}/prior.yaml"}},

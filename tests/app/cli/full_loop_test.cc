@@ -115,7 +115,8 @@ TEST_F(FullLoop, LabelsFromTheCornersScoreConsistentWithTheirSimulationOnly) {
   // from half the true speed; within 3 of its sigmas, and the sigma small.
   const auto fit = RunNetlab("fit " + Path("shot.yaml") + " --measured " + Path("tracks.h5") +
                              " --free nets.0.velocity,time_offset --set nets.0.velocity=[0.25,0,0]"
-                             " --out " + Path("fit.yaml") + " --json --quiet");
+                             " --out " +
+                             Path("fit.yaml") + " --json --quiet");
   ASSERT_EQ(fit.status, 0) << fit.err;
   const Json fitted = LastJson(fit.out);
   const Json& vx = fitted["parameters"]["nets.0.velocity.0"];

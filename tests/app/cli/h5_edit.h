@@ -3,12 +3,12 @@
 // one value changed, a dataset stored as another type, its values or shape edited. netlab's
 // writers refuse to write such files, so the tests write a good one and edit it here.
 
+#include <hdf5.h>
+
 #include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <hdf5.h>
 
 #include "common/hdf5_util.h"
 
@@ -53,8 +53,8 @@ inline void RetypeH5ToInt32(const std::string& path, const std::string& name) {
   H5Dclose(dataset);
   H5Ldelete(file, name.c_str(), H5P_DEFAULT);
   std::vector<int> ints(values.begin(), values.end());
-  dataset = H5Dcreate2(file, name.c_str(), H5T_STD_I32LE, space, H5P_DEFAULT, H5P_DEFAULT,
-                       H5P_DEFAULT);
+  dataset =
+      H5Dcreate2(file, name.c_str(), H5T_STD_I32LE, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   H5Dwrite(dataset, H5T_NATIVE_INT, H5S_ALL, H5S_ALL, H5P_DEFAULT, ints.data());
   H5Sclose(space);
   H5Dclose(dataset);

@@ -25,7 +25,8 @@ constexpr int kFrames = 20, kWidth = 64, kHeight = 48;
 cv::Mat Frame(int camera, int k) {
   cv::Mat m(kHeight, kWidth, CV_8UC1);
   for (int y = 0; y < kHeight; ++y)
-    for (int x = 0; x < kWidth; ++x) m.at<uint8_t>(y, x) = static_cast<uint8_t>(10 * k + 3 * camera + (x + y) % 3);
+    for (int x = 0; x < kWidth; ++x)
+      m.at<uint8_t>(y, x) = static_cast<uint8_t>(10 * k + 3 * camera + (x + y) % 3);
   return m;
 }
 
@@ -148,16 +149,18 @@ TEST_F(IngestCommand, ConvertsToAFrameStoreThatReadsTheSamePixels) {
 
 TEST_F(IngestCommand, BadInputIsNamed) {
   // A pattern that matches nothing names the camera and the pattern.
-  std::ofstream(Path("nothing.yaml")) << "experiment: x\nfps: 179\ncameras:\n"
-                                         "  - name: camA\n    frames: nowhere/f_%06d.pgm\n    bayer: RGGB\n";
+  std::ofstream(Path("nothing.yaml"))
+      << "experiment: x\nfps: 179\ncameras:\n"
+         "  - name: camA\n    frames: nowhere/f_%06d.pgm\n    bayer: RGGB\n";
   auto r = RunNetlab("ingest " + Path("nothing.yaml") + " --check");
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("camA"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("nowhere/f_%06d.pgm"), std::string::npos) << r.err;
 
   // A bad key value names the file, line and key.
-  std::ofstream(Path("badbayer.yaml")) << "experiment: x\nfps: 179\ncameras:\n"
-                                          "  - name: cam0\n    frames: cam0/frame_%04d.pgm\n    bayer: RGBG\n";
+  std::ofstream(Path("badbayer.yaml"))
+      << "experiment: x\nfps: 179\ncameras:\n"
+         "  - name: cam0\n    frames: cam0/frame_%04d.pgm\n    bayer: RGBG\n";
   r = RunNetlab("ingest " + Path("badbayer.yaml") + " --check");
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("badbayer.yaml"), std::string::npos) << r.err;

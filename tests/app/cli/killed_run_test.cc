@@ -3,7 +3,6 @@
 // (docs/bad_input.md): simulate, label and triangulate each write into "<out>.partial" and rename.
 
 #include <gtest/gtest.h>
-
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -78,9 +77,9 @@ TEST_F(KilledRun, SimulateKeepsThePreviousTracks) {
   std::ofstream(Path("short.yaml")) << scene;
   scene.replace(scene.find("duration: 0.06"), 14, "duration: 30.0");
   std::ofstream(Path("long.yaml")) << scene;
-  ASSERT_EQ(RunNetlab("simulate " + Path("short.yaml") + " --out " + Path("sim.h5") + " --quiet")
-                .status,
-            0);
+  ASSERT_EQ(
+      RunNetlab("simulate " + Path("short.yaml") + " --out " + Path("sim.h5") + " --quiet").status,
+      0);
   ExpectKillKeepsPrevious("simulate " + Path("long.yaml") + " --out " + Path("sim.h5"),
                           Path("sim.h5"), 3000);
 }
@@ -117,13 +116,14 @@ TEST_F(KilledRun, TriangulateKeepsThePreviousTracks) {
 
 TEST_F(KilledRun, LabelKeepsThePreviousLabels) {
   std::ofstream(Path("scenario.yaml")) << kSmallShotScenario;
-  ASSERT_EQ(RunNetlab("simulate " + Path("scenario.yaml") + " --out " + Path("sim.h5") +
-                      " --quiet").status, 0);
+  ASSERT_EQ(RunNetlab("simulate " + Path("scenario.yaml") + " --out " + Path("sim.h5") + " --quiet")
+                .status,
+            0);
   ASSERT_EQ(RunNetlab("color-net --knots 6x6 --out " + Path("coloring.yaml") + " --quiet").status,
             0);
-  const NetlabResult render = RunNetlab(
-      "render --sim " + Path("sim.h5") + " --out " + Path("shot") +
-      " --calibration-views 0 --coloring " + Path("coloring.yaml") + " --quiet");
+  const NetlabResult render =
+      RunNetlab("render --sim " + Path("sim.h5") + " --out " + Path("shot") +
+                " --calibration-views 0 --coloring " + Path("coloring.yaml") + " --quiet");
   ASSERT_EQ(render.status, 0) << render.err;
   const std::string base = "label " + Path("shot/experiment.yaml") + " --rig " +
                            Path("shot/rig_true.yaml") + " --coloring " + Path("coloring.yaml") +

@@ -18,17 +18,16 @@ using netlab::testing::LastJson;
 using netlab::testing::RunNetlab;
 namespace recon = netlab::recon;
 
-
 class LabelCommand : public netlab::testing::CommandTest {
  protected:
   LabelCommand() : CommandTest("label_cli") {}
   void SetUp() override {
     CommandTest::SetUp();
     std::ofstream(Path("scenario.yaml")) << netlab::testing::kSmallShotScenario;
-    ASSERT_EQ(RunNetlab("simulate " + Path("scenario.yaml") + " --out " + Path("sim.h5") +
-                        " --quiet")
-                  .status,
-              0);
+    ASSERT_EQ(
+        RunNetlab("simulate " + Path("scenario.yaml") + " --out " + Path("sim.h5") + " --quiet")
+            .status,
+        0);
     ASSERT_EQ(RunNetlab("color-net --knots 6x6 --out " + Path("coloring.yaml") + " --quiet").status,
               0);
     const auto render = RunNetlab("render --sim " + Path("sim.h5") + " --out " + Path("shot") +
@@ -51,8 +50,8 @@ class LabelCommand : public netlab::testing::CommandTest {
 };
 
 TEST_F(LabelCommand, LabelsFromSeedsAndNeverAcceptsAWrongLabel) {
-  const auto r = RunNetlab(Base() + "--seed " + Path("seeds.h5") + " --out " +
-                           Path("labels.h5") + " --xypts " + Path("xypts.csv") + " --json");
+  const auto r = RunNetlab(Base() + "--seed " + Path("seeds.h5") + " --out " + Path("labels.h5") +
+                           " --xypts " + Path("xypts.csv") + " --json");
   ASSERT_EQ(r.status, 0) << r.err;
   const Json json = LastJson(r.out);
   for (const char* key : {"labeled", "needs_review", "frames", "wall_s"})
@@ -71,7 +70,8 @@ TEST_F(LabelCommand, LabelsFromSeedsAndNeverAcceptsAWrongLabel) {
         ++accepted;
         const recon::Label& truth = truth_.at(c, t, k);
         ASSERT_TRUE(truth.present()) << "accepted a label for a hidden knot";
-        EXPECT_LT((l.px - truth.px).norm(), 2.0) << "camera " << c << " frame " << t << " knot " << k;
+        EXPECT_LT((l.px - truth.px).norm(), 2.0)
+            << "camera " << c << " frame " << t << " knot " << k;
       }
   EXPECT_EQ(json["labeled"].number(), present);
   EXPECT_EQ(json["needs_review"].number(), review);

@@ -23,7 +23,6 @@ using netlab::testing::RunNetlab;
 namespace fs = std::filesystem;
 namespace h5 = netlab::h5;
 
-
 class RenderCommand : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -186,8 +185,8 @@ TEST_F(RenderCommand, TheRenderedFoilCalibratesToTheTrueRig) {
   ASSERT_EQ(render_.status, 0) << render_.err;
   std::string images;
   for (const char* camera : {"cam0", "cam1", "cam2", "cam3"})
-    images += std::string(" --images ") + camera + "='" + Path("shot/calibration/") + camera +
-              "/*.png'";
+    images +=
+        std::string(" --images ") + camera + "='" + Path("shot/calibration/") + camera + "/*.png'";
   const auto r = RunNetlab("calibrate --board " + Path("shot/calibration/foil.yaml") + images +
                            " --out " + Path("calibrated.yaml") + " --truth " +
                            Path("shot/rig_true.yaml") + " --json --quiet");

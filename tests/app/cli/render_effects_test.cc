@@ -9,10 +9,9 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <vector>
-
-#include <opencv2/imgcodecs.hpp>
 
 #include "calibration/rig.h"
 #include "common/hdf5_util.h"
@@ -140,7 +139,8 @@ TEST_F(RenderEffects, TheCamerasResponsesAreInTheTruth) {
   r = Render("bad", 0.1, "--camera-response " + Path("bad_response.yaml"));
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("bad_response.yaml: cameras.cam1: gamma -1 must be in (0, 4]"),
-            std::string::npos) << r.err;
+            std::string::npos)
+      << r.err;
   r = Render("bad", 0.1, "--camera-response " + Path("response.yaml") + " --camera-variation 1");
   EXPECT_EQ(r.status, 2);
   EXPECT_FALSE(fs::exists(Path("bad")));
@@ -160,7 +160,8 @@ TEST_F(RenderEffects, LampsLightTheShotAndABadLampFileIsNamed) {
   const auto bad = Render("bad", 0.1, "--lamps " + Path("lamps.yaml"));
   EXPECT_EQ(bad.status, 1);
   EXPECT_NE(bad.err.find("lamps.yaml: lamps[0]: expected {position: [x, y, z], power}"),
-            std::string::npos) << bad.err;
+            std::string::npos)
+      << bad.err;
   EXPECT_FALSE(fs::exists(Path("bad")));
 }
 
@@ -183,8 +184,7 @@ TEST_F(RenderEffects, AMovingCamerasPosesAreInTheTruthAndItsPixelsFollowThem) {
     for (int t = 0; t < 8; ++t) {
       netlab::calib::Camera posed = rig.cameras[c];
       posed.cam_from_world = netlab::calib::Rigid3d(
-          Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(&rotation[9 * t])
-              .eval(),
+          Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(&rotation[9 * t]).eval(),
           Eigen::Vector3d(translation[3 * t], translation[3 * t + 1], translation[3 * t + 2]));
       shift[t] = (posed.Center() - rig.cameras[c].Center()).norm();
       most = std::max(most, shift[t]);
@@ -192,8 +192,8 @@ TEST_F(RenderEffects, AMovingCamerasPosesAreInTheTruthAndItsPixelsFollowThem) {
         const Eigen::Vector2d got(px[(t * 36 + k) * 2], px[(t * 36 + k) * 2 + 1]);
         EXPECT_LT((got - posed.ProjectWorld(truth.Position(t, k))).norm(), 1e-6)
             << c << " " << t << " " << k;
-        moved_px = std::max(moved_px, (got - rig.cameras[c].ProjectWorld(truth.Position(t, k)))
-                                          .norm());
+        moved_px =
+            std::max(moved_px, (got - rig.cameras[c].ProjectWorld(truth.Position(t, k))).norm());
       }
     }
     if (c == 0) {  // a 4 mm vibration at 60 Hz: within 4 mm, and moving

@@ -2,6 +2,7 @@
 // Runs the `netlab` executable as a user does (NETLAB_EXE, set by tests/app/CMakeLists.txt) and
 // captures its exit status, stdout and stderr; LastJson parses the --json summary strictly.
 
+#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <array>
@@ -10,8 +11,6 @@
 #include <fstream>
 #include <sstream>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "tests/app/cli/json_parse.h"
 
@@ -25,9 +24,9 @@ struct NetlabResult {
 
 inline NetlabResult RunNetlab(const std::string& args) {
   static int calls = 0;
-  const auto err_path = std::filesystem::temp_directory_path() /
-                        ("netlab_cli_stderr_" + std::to_string(getpid()) + "_" +
-                         std::to_string(calls++) + ".txt");
+  const auto err_path =
+      std::filesystem::temp_directory_path() /
+      ("netlab_cli_stderr_" + std::to_string(getpid()) + "_" + std::to_string(calls++) + ".txt");
   const std::string command = std::string(NETLAB_EXE) + " " + args + " 2>" + err_path.string();
   FILE* pipe = popen(command.c_str(), "r");
   std::string out;

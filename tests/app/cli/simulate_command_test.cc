@@ -2,7 +2,6 @@
 // the output file.
 
 #include <gtest/gtest.h>
-
 #include <unistd.h>
 
 #include <array>
@@ -64,7 +63,8 @@ TEST_F(SimulateCommand, DurationOverridesTheScenario) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NEAR(LastJson(r.out)["sim_time"].number(), 0.01, 1e-12);
   EXPECT_EQ(netlab::ReadKnotTracks(out).frames(), 3);  // t = 0, 0.005, 0.01
-  EXPECT_EQ(Netlab("simulate " + Write("net.yaml", kNet) + " --out " + out + " --duration -1").status, 2);
+  EXPECT_EQ(
+      Netlab("simulate " + Write("net.yaml", kNet) + " --out " + out + " --duration -1").status, 2);
 }
 
 // The JSON summary is the last line of stdout; every field of the contract is there.
@@ -87,8 +87,7 @@ TEST_F(SimulateCommand, JsonSummaryHasTheContractFields) {
   EXPECT_NEAR(json["steps"].number() * json["dt"].number(), 0.02, 1e-9);
   EXPECT_GT(json["segment_steps_per_s"].number(), 0.0);
   EXPECT_EQ(json["probes"]["corner"].array().size(), 3u);
-  for (const char* e : {"kinetic", "elastic", "potential"})
-    EXPECT_TRUE(json["energy"].has(e)) << e;
+  for (const char* e : {"kinetic", "elastic", "potential"}) EXPECT_TRUE(json["energy"].has(e)) << e;
   EXPECT_GT(json["energy"]["kinetic"].number(), 0.0);  // it is falling
   // The knot tracks: 5 frames of 12 knots.
   const auto tracks = netlab::ReadKnotTracks(out);
@@ -100,8 +99,8 @@ TEST_F(SimulateCommand, JsonSummaryHasTheContractFields) {
 TEST_F(SimulateCommand, BadScenarioFailsWithFileLineAndKey) {
   std::string text = kNet;
   text.replace(text.find("mesh: 0.1"), 9, "mesh: -0.1");
-  const Result r = Netlab("simulate " + Write("bad.yaml", text) + " --out " +
-                       (dir_ / "x.h5").string());
+  const Result r =
+      Netlab("simulate " + Write("bad.yaml", text) + " --out " + (dir_ / "x.h5").string());
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("bad.yaml:9: nets[0].mesh: must be > 0"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir_ / "x.h5"));

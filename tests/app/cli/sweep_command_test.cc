@@ -312,12 +312,14 @@ TEST_F(SweepCommand, AnEnsembleMakesTheDefaultStepConsistentInContact) {
   NetlabResult r = RunNetlab("sweep " + scenario_ + set +
                              " --ensemble 8 --vary integrator.dt=1e-5:2.5e-5:4"
                              " --vary nets.0.segments_per_link=2:3:2"
-                             " --vary nets.0.velocity.2=-1.005:-0.995:3 --out " + ens +
-                             " --json --quiet");
+                             " --vary nets.0.velocity.2=-1.005:-0.995:3 --out " +
+                             ens + " --json --quiet");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_EQ(LastJson(r.out)["runs"].number(), 8);
   ASSERT_EQ(RunNetlab("simulate " + scenario_ + set + " --set integrator.dt=5e-6 --out " + truth +
-                      " --quiet").status, 0);
+                      " --quiet")
+                .status,
+            0);
   ASSERT_EQ(RunNetlab("simulate " + scenario_ + set + " --out " + model + " --quiet").status, 0);
   const std::string score = "score --measured " + truth + " --meas-sigma 1e-4 --sim " + model +
                             " --align none --out " + Path("score.h5") + " --json --quiet";

@@ -49,7 +49,8 @@ class TriangulateCommand : public netlab::testing::CommandTest {
       for (int t = 0; t < kFrames; ++t)
         for (int k = 0; k < kRows * kCols; ++k) {
           recon::Label& l = labels_.at(c, t, k);
-          l.px = rig_.cameras[c].ProjectWorld(KnotAt(t, k)) + Eigen::Vector2d(noise(rng), noise(rng));
+          l.px =
+              rig_.cameras[c].ProjectWorld(KnotAt(t, k)) + Eigen::Vector2d(noise(rng), noise(rng));
           l.source = recon::LabelSource::kManual;
           l.confidence = 1.0f;
           l.state = recon::LabelState::kAccepted;
@@ -198,8 +199,7 @@ TEST_F(TriangulateCommand, ADegeneratePointIsCountedAndSaidNotValid) {
   EXPECT_GT(json["max_sigma_m"].number(), 0.0);
   EXPECT_NE(r.err.find("1 degenerate point left out: largest sigma over"), std::string::npos)
       << r.err;
-  EXPECT_NE(r.err.find("frame 3, knot (3,3): the rays of cam0 and cam3 meet at"),
-            std::string::npos)
+  EXPECT_NE(r.err.find("frame 3, knot (3,3): the rays of cam0 and cam3 meet at"), std::string::npos)
       << r.err;
   const netlab::KnotTracks tracks = netlab::ReadKnotTracks(Path("tracks.h5"));
   EXPECT_FALSE(tracks.Valid(3, 15));
@@ -292,8 +292,10 @@ TEST_F(TriangulateCommand, TimesComeFromTheRecordingsTimestamps) {
     out << "experiment: shot\nfps: 179\ncameras:\n";
     for (const std::string c : {"cam0", "cam1", "cam2", "cam3"}) {
       out << "  - name: " << c << "\n    frames: " << c << "/frame_%06d.pgm\n    bayer: none\n";
-      if (c == "cam2") out << "    timestamps: " << cam2 << "\n";
-      else if (c != "cam3") out << "    timestamps: " << c << ".csv\n";
+      if (c == "cam2")
+        out << "    timestamps: " << cam2 << "\n";
+      else if (c != "cam3")
+        out << "    timestamps: " << c << ".csv\n";
     }
   };
   experiment("experiment.yaml", "cam2.csv");

@@ -59,8 +59,7 @@ TEST(RunGuarded, ABrokenInvariantIsAnInternalErrorWithItsOwnStatus) {
   EXPECT_EQ(r.status, kInternalErrorStatus);
   EXPECT_NE(r.status, 1);
   EXPECT_NE(r.status, 2);
-  EXPECT_EQ(r.err.rfind("netlab demo: internal error: AppendFrame after Commit\n", 0), 0u)
-      << r.err;
+  EXPECT_EQ(r.err.rfind("netlab demo: internal error: AppendFrame after Commit\n", 0), 0u) << r.err;
   EXPECT_NE(r.err.find("not a fault in the input"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("error: error"), std::string::npos);
 }

@@ -108,7 +108,8 @@ TEST(CalibrationPresenter, DetectCalibrateExcludeTheWorstImageRerunAndSave) {
 
   // Detection: a cancel flag set before the start stops it at once; then the whole run.
   std::atomic<bool> cancel{true};
-  const DetectionAnswer cancelled = CalibrationPresenter::Detect(calibration.MakeDetectionJob(), cancel);
+  const DetectionAnswer cancelled =
+      CalibrationPresenter::Detect(calibration.MakeDetectionJob(), cancel);
   EXPECT_TRUE(cancelled.cancelled);
   cancel = false;
   int last_done = 0, last_total = 0;
@@ -146,7 +147,8 @@ TEST(CalibrationPresenter, DetectCalibrateExcludeTheWorstImageRerunAndSave) {
   int points = 0;
   for (int n : coverage.counts) points += n;
   EXPECT_EQ(points, 54 * (kFrames - 1));
-  EXPECT_TRUE(calibration.CalibrationText().contains("Metric check")) << calibration.CalibrationText().toStdString();
+  EXPECT_TRUE(calibration.CalibrationText().contains("Metric check"))
+      << calibration.CalibrationText().toStdString();
   // What the CLI writes for the same images.
   ExpectSameRig(calibration.result()->rig, CliRig(shot, {}));
 

@@ -11,6 +11,8 @@
 // true one, are printed; with NETLAB_CALIBRATION_SCREENSHOT=OUT.png the window is saved as the
 // person sees it.
 
+#include "app/gui/calibration_room.h"
+
 #include <gtest/gtest.h>
 
 #include <QApplication>
@@ -26,7 +28,6 @@
 #include <QUndoStack>
 #include <cstdlib>
 
-#include "app/gui/calibration_room.h"
 #include "app/gui/document/project.h"
 #include "app/gui/document/session.h"
 #include "app/gui/main_window.h"
@@ -59,9 +60,9 @@ std::pair<double, double> RunDetectAndCalibrate(CalibrationRoom& room, int timeo
 
 // The person's session up to the exclusion: the target typed, one row per camera added and its
 // glob typed, Detect, Calibrate. Returns the seconds detection and calibration took.
-std::pair<double, double> DetectAndCalibrate(CalibrationRoom& room, const std::string& target,
-                                             const std::vector<std::pair<std::string, std::string>>& globs,
-                                             int timeout_ms) {
+std::pair<double, double> DetectAndCalibrate(
+    CalibrationRoom& room, const std::string& target,
+    const std::vector<std::pair<std::string, std::string>>& globs, int timeout_ms) {
   QTest::mouseClick(room.target_edit(), Qt::LeftButton);
   QTest::keyClicks(room.target_edit(), QString::fromStdString(target));
   QPushButton* add = nullptr;
@@ -124,8 +125,9 @@ TEST(CalibrationRoom, APersonCalibratesExcludesTheWorstImageUndoesAndSaves) {
   EXPECT_EQ(room.progress()->maximum(), 4 * kFrames);
   EXPECT_EQ(room.progress()->value(), 4 * kFrames);
   // The blank image is listed failed, with why.
-  EXPECT_EQ(room.images_table()->item(3 * kFrames + kFrames - 1, CalibrationRoom::kUsedColumn)->text(),
-            "failed: no chessboard of 9x6 inner corners found");
+  EXPECT_EQ(
+      room.images_table()->item(3 * kFrames + kFrames - 1, CalibrationRoom::kUsedColumn)->text(),
+      "failed: no chessboard of 9x6 inner corners found");
   EXPECT_EQ(room.cameras_table()->rowCount(), 4);
   EXPECT_TRUE(room.results_label()->text().contains("Metric check"));
   EXPECT_TRUE(room.summary_label()->text().startsWith("calibrated here (not saved)"));
@@ -160,7 +162,8 @@ TEST(CalibrationRoom, APersonCalibratesExcludesTheWorstImageUndoesAndSaves) {
       arrows.begin(), arrows.end(), [](const PointResidual& a, const PointResidual& b) {
         return a.residual.norm() < b.residual.norm();
       });
-  const QPointF tip = view->ToScreen(longest.pixel + 0.75 * view->residual_scale() * longest.residual);
+  const QPointF tip =
+      view->ToScreen(longest.pixel + 0.75 * view->residual_scale() * longest.residual);
   const QColor at_tip = drawn.pixelColor(tip.toPoint());
   EXPECT_GT(at_tip.red(), 180) << at_tip.name().toStdString();
   EXPECT_LT(at_tip.green(), 120) << at_tip.name().toStdString();
@@ -172,7 +175,8 @@ TEST(CalibrationRoom, APersonCalibratesExcludesTheWorstImageUndoesAndSaves) {
   ASSERT_NE(presenter.result(), nullptr);
   const double rms_without = presenter.result()->summary.rms_px;
   EXPECT_LT(rms_without, 0.7 * rms_all);
-  EXPECT_EQ(room.images_table()->item(worst_row, CalibrationRoom::kUsedColumn)->text(), "✗ excluded");
+  EXPECT_EQ(room.images_table()->item(worst_row, CalibrationRoom::kUsedColumn)->text(),
+            "✗ excluded");
   EXPECT_EQ(room.images_table()->item(worst_row, 3)->text(), "");
 
   // Ctrl+Z brings the first result back, Ctrl+Shift+Z the second.
@@ -197,7 +201,8 @@ TEST(CalibrationRoom, APersonCalibratesExcludesTheWorstImageUndoesAndSaves) {
 
 // Inputs that cannot be used are said, naming what is wrong, and nothing runs.
 TEST(CalibrationRoom, BadInputsAreSaidAndNothingRuns) {
-  const fs::path dir = fs::temp_directory_path() / ("netlab_calibration_bad_" + std::to_string(getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("netlab_calibration_bad_" + std::to_string(getpid()));
   fs::create_directories(dir / "cam0");
   CalibrationPresenter presenter(nullptr, "");
   CalibrationRoom room;
@@ -214,9 +219,11 @@ TEST(CalibrationRoom, BadInputsAreSaidAndNothingRuns) {
       << room.status_label()->text().toStdString();
   room.globs_table()->insertRow(0);
   room.globs_table()->setItem(0, 0, new QTableWidgetItem("cam0"));
-  room.globs_table()->setItem(0, 1, new QTableWidgetItem(QString::fromStdString((dir / "cam0/*.png").string())));
+  room.globs_table()->setItem(
+      0, 1, new QTableWidgetItem(QString::fromStdString((dir / "cam0/*.png").string())));
   Click(room.detect_button());
-  EXPECT_TRUE(room.status_label()->text().startsWith("Target: ")) << room.status_label()->text().toStdString();
+  EXPECT_TRUE(room.status_label()->text().startsWith("Target: "))
+      << room.status_label()->text().toStdString();
   room.target_edit()->setText("chessboard:9x6:0.06");
   Click(room.detect_button());
   EXPECT_TRUE(room.status_label()->text().contains("matches no file"))
@@ -236,7 +243,8 @@ TEST(CalibrationRoom, TheTwinsFoilImagesInTheWindow) {
   if (twin == nullptr) GTEST_SKIP() << "NETLAB_CALIBRATION_TWIN not set";
   const fs::path shot = twin;
   const calib::Rig truth = calib::ReadRig((shot / "rig_true.yaml").string());
-  const fs::path dir = fs::temp_directory_path() / ("netlab_twin_project_" + std::to_string(getpid()));
+  const fs::path dir =
+      fs::temp_directory_path() / ("netlab_twin_project_" + std::to_string(getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   fs::copy_file(shot / "rig_true.yaml", dir / "rig_before.yaml");
@@ -263,11 +271,12 @@ TEST(CalibrationRoom, TheTwinsFoilImagesInTheWindow) {
       std::printf("twin: %s %s failed: %s\n", presenter.camera_name(image.camera).c_str(),
                   fs::path(image.path).filename().c_str(), image.why.c_str());
   const ImageKey worst = *presenter.WorstImage();
-  std::printf("twin: %d images, detection %.1f s, calibration %.1f s, RMS %.3f px; worst image "
-              "%s %s (%.3f px)\n",
-              static_cast<int>(presenter.images().size()), detect_s, calibrate_s,
-              presenter.result()->summary.rms_px, presenter.camera_name(worst.first).c_str(),
-              presenter.image(worst).path.c_str(), *presenter.ImageRms(worst));
+  std::printf(
+      "twin: %d images, detection %.1f s, calibration %.1f s, RMS %.3f px; worst image "
+      "%s %s (%.3f px)\n",
+      static_cast<int>(presenter.images().size()), detect_s, calibrate_s,
+      presenter.result()->summary.rms_px, presenter.camera_name(worst.first).c_str(),
+      presenter.image(worst).path.c_str(), *presenter.ImageRms(worst));
   ClickCell(room.images_table(), worst.first * presenter.frames() + worst.second,
             CalibrationRoom::kUsedColumn);
   QElapsedTimer clock;
@@ -291,17 +300,20 @@ TEST(CalibrationRoom, TheTwinsFoilImagesInTheWindow) {
   EXPECT_TRUE(presenter.saved());
 
   calib::Rig true_cameras;
-  for (const calib::Camera& c : rig.cameras) true_cameras.cameras.push_back(truth.cameras[truth.Find(c.name)]);
+  for (const calib::Camera& c : rig.cameras)
+    true_cameras.cameras.push_back(truth.cameras[truth.Find(c.name)]);
   const calib::RigComparison comparison = calib::CompareRigs(rig, true_cameras, false);
   for (size_t c = 0; c < rig.cameras.size(); ++c) {
     const double sigma = presenter.result()->summary.cameras[c].position_sigma_m;
-    std::printf("twin: %s centre error %.2f mm, stated sigma %.2f mm\n", rig.cameras[c].name.c_str(),
-                1000 * comparison.cameras[c].centre_error_m, 1000 * sigma);
+    std::printf("twin: %s centre error %.2f mm, stated sigma %.2f mm\n",
+                rig.cameras[c].name.c_str(), 1000 * comparison.cameras[c].centre_error_m,
+                1000 * sigma);
     EXPECT_LT(comparison.cameras[c].centre_error_m, 3 * sigma) << rig.cameras[c].name;
   }
   if (const char* screenshot = std::getenv("NETLAB_CALIBRATION_SCREENSHOT")) {
     // The knocked camera's next image shown with its coverage.
-    ClickCell(room.images_table(), worst.first * presenter.frames() + (worst.second + 1) % presenter.frames(), 1);
+    ClickCell(room.images_table(),
+              worst.first * presenter.frames() + (worst.second + 1) % presenter.frames(), 1);
     for (QCheckBox* box : room.findChildren<QCheckBox*>())
       if (box->text() == "Coverage") Click(box);
     ASSERT_TRUE(WaitIdle(room, 10000));

@@ -48,7 +48,8 @@ inline FoilShot RenderFoilShot(const std::string& name) {
     foil << "type: double_sided_foil\nboard: {type: chessboard, cols: 9, rows: 6, square: 0.06}\n"
             "thickness: 0.0005\nflip_axis: y\n";
   }
-  const calib::CalibrationTarget target = calib::CalibrationTarget::Parse((shot.dir / "foil.yaml").string());
+  const calib::CalibrationTarget target =
+      calib::CalibrationTarget::Parse((shot.dir / "foil.yaml").string());
   std::mt19937 rng(11);
   const auto poses = calib::RandomTargetPoses(
       shot.truth, target, {0, 1, 2, 3}, kFrames, Eigen::Vector3d(1.25, 0.0, 0.1),
@@ -66,7 +67,8 @@ inline FoilShot RenderFoilShot(const std::string& name) {
       calib::Camera seen = camera;
       if (c == kKnockedCamera && f == kKnockedFrame)
         seen.cam_from_world.rotation =
-            Eigen::AngleAxisd(0.15 * M_PI / 180, Eigen::Vector3d::UnitY()) * seen.cam_from_world.rotation;
+            Eigen::AngleAxisd(0.15 * M_PI / 180, Eigen::Vector3d::UnitY()) *
+            seen.cam_from_world.rotation;
       cv::Mat image = calib::RenderTarget(seen, rays, prints, poses[f], options);
       if (c == 3 && f == kFrames - 1) image.setTo(90);
       char name[32];
@@ -78,9 +80,11 @@ inline FoilShot RenderFoilShot(const std::string& name) {
   return shot;
 }
 
-// What `netlab calibrate` computes for these images, minus `excluded` (app/cli/calibrate_command.cc).
+// What `netlab calibrate` computes for these images, minus `excluded`
+// (app/cli/calibrate_command.cc).
 inline calib::Rig CliRig(const FoilShot& shot, const std::set<ImageKey>& excluded) {
-  const calib::CalibrationTarget target = calib::CalibrationTarget::Parse((shot.dir / "foil.yaml").string());
+  const calib::CalibrationTarget target =
+      calib::CalibrationTarget::Parse((shot.dir / "foil.yaml").string());
   std::vector<std::string> names;
   std::vector<std::vector<std::string>> files;
   for (const auto& [name, pattern] : shot.globs) {
@@ -97,7 +101,8 @@ inline calib::Rig CliRig(const FoilShot& shot, const std::set<ImageKey>& exclude
     return excluded.count({o.camera, o.frame}) != 0;
   });
   const fs::path out = shot.dir / "cli_rig.yaml";
-  calib::WriteRig(out.string(), calib::CalibrateRig(target, input, calib::CalibrationOptions{}).rig);
+  calib::WriteRig(out.string(),
+                  calib::CalibrateRig(target, input, calib::CalibrationOptions{}).rig);
   return calib::ReadRig(out.string());
 }
 

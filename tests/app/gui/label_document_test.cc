@@ -170,7 +170,8 @@ TEST_F(LabelDocumentTest, AHiddenMarkUndoesAndSurvivesTheSaveAndTheJournal) {
     EXPECT_TRUE(doc.at(0, 1, 2).hidden());
     doc.Save();
     // After the save, more marks; the session ends without saving them.
-    doc.Apply("Mark hidden", {{1, 3, 0, recon::Label::Hidden()}, {1, 4, 4, recon::Label::Hidden()}});
+    doc.Apply("Mark hidden",
+              {{1, 3, 0, recon::Label::Hidden()}, {1, 4, 4, recon::Label::Hidden()}});
   }
   const recon::LabelSet saved = recon::ReadLabels(path_);
   EXPECT_TRUE(saved.at(0, 1, 2).hidden());

@@ -46,8 +46,9 @@ struct Queue {
   ReviewModel model{&doc, {10, 11, 12}};
   ReviewWalk walk{&model, &doc, nullptr};
   Queue() {
-    doc.Apply("Track", {{0, 0, 1, Review(1)}, {1, 0, 2, Review(2)}, {0, 1, 3, Review(3)},
-                        {1, 2, 0, Review(4)}});
+    doc.Apply(
+        "Track",
+        {{0, 0, 1, Review(1)}, {1, 0, 2, Review(2)}, {0, 1, 3, Review(3)}, {1, 2, 0, Review(4)}});
   }
   int Row(const LabelKey& key) const {
     const auto& items = model.items();
@@ -82,8 +83,10 @@ TEST(ReviewWalk, NextWrapsAndATrackingRunsStopShowsTheFramesFirstLabelForReview)
   EXPECT_EQ(q.model.items()[q.walk.NextRow({0, 0, 1}, true)], (LabelKey{1, 2, 0}));
   EXPECT_EQ(q.model.items()[q.walk.StopRow(1)], (LabelKey{0, 1, 3}));
   EXPECT_EQ(q.walk.StopRow(2), q.Row({1, 2, 0}));
-  q.doc.Apply("Accept all", {{0, 0, 1, Accepted(1)}, {1, 0, 2, Accepted(2)},
-                             {0, 1, 3, Accepted(3)}, {1, 2, 0, Accepted(4)}});
+  q.doc.Apply("Accept all", {{0, 0, 1, Accepted(1)},
+                             {1, 0, 2, Accepted(2)},
+                             {0, 1, 3, Accepted(3)},
+                             {1, 2, 0, Accepted(4)}});
   EXPECT_EQ(q.walk.NextRow({0, 0, 0}), -1) << "empty queue";
   EXPECT_EQ(q.walk.StopRow(1), -1);
   EXPECT_TRUE(q.walk.InQueue(0, 0, 1) == false && q.walk.UnderReview(0, 0, 1) == false);
@@ -95,11 +98,11 @@ TEST(PreviewGhosts, SayNewChangedToReviewAndRemovedAgainstTheLabelsNow) {
   Session::FillGridPreview p;
   p.t = 0;
   recon::Label moved = Accepted(9);
-  p.edits = {{0, 0, 0, Accepted(1)},   // new
-             {0, 0, 1, Review(5)},     // the check turns it to review, in place
+  p.edits = {{0, 0, 0, Accepted(1)},     // new
+             {0, 0, 1, Review(5)},       // the check turns it to review, in place
              {0, 0, 2, recon::Label{}},  // removed
-             {0, 0, 3, moved},         // under review, accepted elsewhere: changed
-             {1, 0, 4, Accepted(2)}};  // another camera's
+             {0, 0, 3, moved},           // under review, accepted elsewhere: changed
+             {1, 0, 4, Accepted(2)}};    // another camera's
   const std::vector<ViewOverlay::Ghost> g = PreviewGhosts(doc, p, 0, 0);
   ASSERT_EQ(g.size(), 4u);
   EXPECT_EQ(g[0].kind, ViewOverlay::Ghost::kNew);
@@ -124,8 +127,10 @@ TEST(PreviewTexts, CountWhatThePreviewChangesAndNameItsKeys) {
             "review accepted, 1 label moved — dashed pink marks, not labels yet. <b>Enter</b> "
             "accepts (one undo step), <b>Esc</b> discards");
   p.from_corners = true;
-  EXPECT_TRUE(PreviewSummary(p, 40, "Enter", "Esc").contains("two undo steps: Find Path, Fill Grid"));
-  EXPECT_TRUE(EmptyPreviewMessage(true, 7).startsWith("Find Path from the corners, frame 7: nothing"));
+  EXPECT_TRUE(
+      PreviewSummary(p, 40, "Enter", "Esc").contains("two undo steps: Find Path, Fill Grid"));
+  EXPECT_TRUE(
+      EmptyPreviewMessage(true, 7).startsWith("Find Path from the corners, frame 7: nothing"));
   Session::TrackRun run;
   run.stopped_for_review = true;
   EXPECT_EQ(TrackMessage(run, 12, 30),

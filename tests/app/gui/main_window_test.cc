@@ -15,8 +15,8 @@
 #include <QElapsedTimer>
 #include <QFileDialog>
 #include <QInputDialog>
-#include <QLineEdit>
 #include <QLabel>
+#include <QLineEdit>
 #include <QMenu>
 #include <QMenuBar>
 #include <QMessageBox>
@@ -27,18 +27,17 @@
 #include <QTabBar>
 #include <QTableView>
 #include <QTableWidget>
-#include <QTextBrowser>
 #include <QTest>
+#include <QTextBrowser>
 #include <QTimer>
 #include <QUndoStack>
 #include <QWheelEvent>
-
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <future>
+#include <iterator>
 #include <map>
 #include <set>
 #include <string>
@@ -54,8 +53,8 @@
 #include "app/gui/timeline.h"
 #include "libreconstruct/geometry/triangulation.h"
 #include "tests/app/cli/run_netlab.h"
-#include "tests/app/gui/small_shot_film.h"
 #include "tests/app/gui/scripted_person.h"
+#include "tests/app/gui/small_shot_film.h"
 
 namespace netlab::gui {
 namespace {
@@ -88,8 +87,8 @@ class MainWindowTest : public ::testing::Test {
     fs::remove_all(Dir());
     fs::create_directories(Dir());
     // The command tests' small shot (a 6 x 6-knot net past a box), 0.2 s long (36 frames).
-    const auto film = testing::FilmSmallShot(Dir().string(), testing::SmallShotLasting(0.2),
-                                             kLastFrame);
+    const auto film =
+        testing::FilmSmallShot(Dir().string(), testing::SmallShotLasting(0.2), kLastFrame);
     ASSERT_EQ(film.status, 0) << film.err;
   }
   static void TearDownTestSuite() {
@@ -153,31 +152,17 @@ TEST_F(MainWindowTest, AScriptedSessionLabelsAsTheEngineDoesWithNoWrongLabel) {
   // The same actions on the engine, without a window.
   auto engine = Session::Open(LoadProject(MakeProjectFile("engine")));
   for (const Action& a : actions) switch (a.kind) {
-      case Action::kFindNode:
-        engine->FindNode(a.camera, a.t, a.knot, a.px, 6.0);
-        break;
-      case Action::kPlace:
-        engine->PlaceLabel(a.camera, a.t, a.knot, a.px);
-        break;
-      case Action::kDelete:
-        engine->DeleteLabel(a.camera, a.t, a.knot);
-        break;
-      case Action::kAccept:
-        engine->AcceptLabel(a.camera, a.t, a.knot);
-        break;
-      case Action::kFindPath:
-        engine->FindPathFromCorners(0);
-        break;
+      case Action::kFindNode: engine->FindNode(a.camera, a.t, a.knot, a.px, 6.0); break;
+      case Action::kPlace: engine->PlaceLabel(a.camera, a.t, a.knot, a.px); break;
+      case Action::kDelete: engine->DeleteLabel(a.camera, a.t, a.knot); break;
+      case Action::kAccept: engine->AcceptLabel(a.camera, a.t, a.knot); break;
+      case Action::kFindPath: engine->FindPathFromCorners(0); break;
       case Action::kTrack:
         engine->ApplyTrackRun(engine->Track(engine->document().labels(), a.t, kLastFrame, nullptr,
                                             {}, MainWindow::kMaxReviewPerFrame));
         break;
-      case Action::kHide:
-        engine->MarkHidden(a.camera, a.t, a.knot);
-        break;
-      case Action::kHideRun:
-        engine->MarkHiddenRun(a.camera, a.t, a.knot);
-        break;
+      case Action::kHide: engine->MarkHidden(a.camera, a.t, a.knot); break;
+      case Action::kHideRun: engine->MarkHiddenRun(a.camera, a.t, a.knot); break;
     }
   const recon::LabelSet& direct = engine->document().labels();
   int differ = 0;
@@ -186,12 +171,11 @@ TEST_F(MainWindowTest, AScriptedSessionLabelsAsTheEngineDoesWithNoWrongLabel) {
       for (int k = 0; k < saved.knots(); ++k) {
         const recon::Label &a = saved.at(c, t, k), &b = direct.at(c, t, k);
         const bool different = a.present() != b.present() || a.state != b.state ||
-                               a.source != b.source ||
-                               (a.present() && (a.px - b.px).norm() > 1e-9);
+                               a.source != b.source || (a.present() && (a.px - b.px).norm() > 1e-9);
         if (different && ++differ <= 5)
           ADD_FAILURE() << "camera " << c << " frame " << t << " knot " << k << ": window "
-                        << (a.present() ? "present" : "absent") << " state "
-                        << int(a.state) << " source " << int(a.source) << ", engine "
+                        << (a.present() ? "present" : "absent") << " state " << int(a.state)
+                        << " source " << int(a.source) << ", engine "
                         << (b.present() ? "present" : "absent") << " state " << int(b.state)
                         << " source " << int(b.source);
       }
@@ -547,9 +531,10 @@ TEST_F(MainWindowTest, IOffersTheKnotsTheColoursFitAndTheGridPicksTheKnotToLabel
       }
     }
   }
-  std::printf("knot picker, frame 0: %d junctions asked, %d identified, %d offered (%.1f knots "
-              "each)\n",
-              asked, identified, offered, offered ? double(candidates) / offered : 0.0);
+  std::printf(
+      "knot picker, frame 0: %d junctions asked, %d identified, %d offered (%.1f knots "
+      "each)\n",
+      asked, identified, offered, offered ? double(candidates) / offered : 0.0);
   EXPECT_GT(identified + offered, 0);
   w.grab().save((Dir() / "picker.png").string().c_str());
 
@@ -772,7 +757,8 @@ TEST_F(MainWindowTest, LetterKeysReachTheViewAfterTheWindowMovesToAnotherCamera)
     if (b->prefix() == "frame ") box = b;
   ASSERT_NE(box, nullptr);
   EXPECT_EQ(box->focusPolicy(), Qt::ClickFocus);
-  QTest::mouseClick(box, Qt::LeftButton, Qt::NoModifier, QPoint(box->width() / 2, box->height() / 2));
+  QTest::mouseClick(box, Qt::LeftButton, Qt::NoModifier,
+                    QPoint(box->width() / 2, box->height() / 2));
   ASSERT_EQ(QApplication::focusWidget(), box);
   Type(&w, Qt::Key_F);
   EXPECT_EQ(w.frame(), items.t + 1);
@@ -780,8 +766,8 @@ TEST_F(MainWindowTest, LetterKeysReachTheViewAfterTheWindowMovesToAnotherCamera)
   QTest::keyClicks(box, QString::number(s->frame_number(12)));
   Type(&w, Qt::Key_Return);
   EXPECT_EQ(w.frame(), 12);
-  EXPECT_TRUE(QTest::qWaitFor(
-      [&] { return QApplication::focusWidget() == w.view(w.camera()); }, 2000));
+  EXPECT_TRUE(
+      QTest::qWaitFor([&] { return QApplication::focusWidget() == w.view(w.camera()); }, 2000));
   Type(&w, Qt::Key_Z, Qt::ControlModifier);  // the delete undone: the keys are the window's
   EXPECT_TRUE(s->document().at(2, items.t, items.b).present());
 }
@@ -854,9 +840,9 @@ TEST_F(MainWindowTest, TShowsTheLabelThatStoppedItNotAMissingKnotBeforeIt) {
   // The test means something: frame 1 has a missing knot before that label in the queue.
   bool missing_before = false;
   for (const LabelKey& key : s->missing().Items())
-    missing_before = missing_before || (std::get<1>(key) == 1 &&
-                                        std::pair(std::get<0>(key), std::get<2>(key)) <
-                                            std::pair(c, k));
+    missing_before =
+        missing_before ||
+        (std::get<1>(key) == 1 && std::pair(std::get<0>(key), std::get<2>(key)) < std::pair(c, k));
   EXPECT_TRUE(missing_before) << "camera " << c << " knot " << k;
   EXPECT_TRUE(w.statusBar()->currentMessage().startsWith("Review"))
       << w.statusBar()->currentMessage().toStdString();
@@ -1000,35 +986,37 @@ TEST_F(MainWindowTest, NewProjectAsksRowsColumnsAndKnotBalls) {
   answer.setInterval(50);
   QObject::connect(&answer, &QTimer::timeout, [&] {
     QWidget* modal = QApplication::activeModalWidget();
-    if (modal == nullptr || (!titles.isEmpty() && titles.back() == modal->windowTitle() + "#" +
-                                                       QString::number(quintptr(modal))))
+    if (modal == nullptr ||
+        (!titles.isEmpty() &&
+         titles.back() == modal->windowTitle() + "#" + QString::number(quintptr(modal))))
       return;
     titles << modal->windowTitle() + "#" + QString::number(quintptr(modal));
     // Answered from within its own event loop (a dialog answered while it is being shown
     // leaves exec() waiting on a hidden dialog).
     QTimer::singleShot(100, modal, [&, modal] {
-    const QString title = modal->windowTitle();
-    if (auto* files = qobject_cast<QFileDialog*>(modal)) {
-      const QString file = title.contains("target")        ? QString::fromStdString(d + "/shot/truth.h5")
-                           : title.contains("experiment")  ? QString::fromStdString(d + "/shot/experiment.yaml")
-                           : title.contains("rig")         ? QString::fromStdString(d + "/shot/rig_true.yaml")
-                           : title.contains("labels")      ? QString::fromStdString(labels)
-                           : title.contains("project as")  ? QString::fromStdString(project)
-                                                           : QString();
-      if (file.isEmpty()) {
-        files->reject();  // the colouring: none
-      } else {
-        // Typed into its file name box, then its Open / Save button.
-        auto* name = files->findChild<QLineEdit*>("fileNameEdit");
-        if (name != nullptr) name->setText(file);
-        QMetaObject::invokeMethod(files, "accept");
+      const QString title = modal->windowTitle();
+      if (auto* files = qobject_cast<QFileDialog*>(modal)) {
+        const QString file =
+            title.contains("target")       ? QString::fromStdString(d + "/shot/truth.h5")
+            : title.contains("experiment") ? QString::fromStdString(d + "/shot/experiment.yaml")
+            : title.contains("rig")        ? QString::fromStdString(d + "/shot/rig_true.yaml")
+            : title.contains("labels")     ? QString::fromStdString(labels)
+            : title.contains("project as") ? QString::fromStdString(project)
+                                           : QString();
+        if (file.isEmpty()) {
+          files->reject();  // the colouring: none
+        } else {
+          // Typed into its file name box, then its Open / Save button.
+          auto* name = files->findChild<QLineEdit*>("fileNameEdit");
+          if (name != nullptr) name->setText(file);
+          QMetaObject::invokeMethod(files, "accept");
+        }
+      } else if (auto* number = qobject_cast<QInputDialog*>(modal)) {
+        number->setIntValue(number->labelText().contains("rows") ? 6 : 7);
+        number->accept();
+      } else if (auto* box = qobject_cast<QMessageBox*>(modal)) {
+        box->button(QMessageBox::No)->click();  // no knot balls
       }
-    } else if (auto* number = qobject_cast<QInputDialog*>(modal)) {
-      number->setIntValue(number->labelText().contains("rows") ? 6 : 7);
-      number->accept();
-    } else if (auto* box = qobject_cast<QMessageBox*>(modal)) {
-      box->button(QMessageBox::No)->click();  // no knot balls
-    }
     });
   });
   answer.start();
@@ -1231,7 +1219,8 @@ class FillGridPreviewTest : public MainWindowTest {
         ZoomAt(w.view(c), want.px, 8);
         actions_.push_back({Action::kFindNode, c, 0, k, ClickAt(w.view(c), want.px)});
         if (!s->document().at(c, 0, k).present())
-          actions_.push_back({Action::kPlace, c, 0, k, ClickAt(w.view(c), want.px, Qt::ShiftModifier)});
+          actions_.push_back(
+              {Action::kPlace, c, 0, k, ClickAt(w.view(c), want.px, Qt::ShiftModifier)});
         QTest::keyClick(&w, Qt::Key_F, Qt::ControlModifier);
       }
     QTest::keyClick(&w, Qt::Key_P, Qt::ControlModifier);  // a preview on a worker
@@ -1314,11 +1303,12 @@ TEST_F(FillGridPreviewTest, GPreviewsAndEnterAppliesWhatFillGridGivesAsOneStep) 
   EXPECT_EQ(undo->count(), steps);
   EXPECT_EQ(undo->index(), index);
   EXPECT_GT(preview->added, 0);
-  EXPECT_EQ(preview->added + preview->to_review + preview->confirmed + preview->moved +
-                preview->changed,
-            static_cast<int>(preview->edits.size()));
+  EXPECT_EQ(
+      preview->added + preview->to_review + preview->confirmed + preview->moved + preview->changed,
+      static_cast<int>(preview->edits.size()));
   EXPECT_TRUE(Banner()->isVisible());
-  EXPECT_TRUE(BannerText().contains(QString("Fill Grid preview, frame %1:").arg(s->frame_number(0))))
+  EXPECT_TRUE(
+      BannerText().contains(QString("Fill Grid preview, frame %1:").arg(s->frame_number(0))))
       << BannerText().toStdString();
   EXPECT_TRUE(BannerText().contains(QString("%1 new labels").arg(preview->added)));
   EXPECT_TRUE(BannerText().contains("<b>Enter</b> accepts")) << BannerText().toStdString();
@@ -1379,11 +1369,12 @@ TEST_F(FillGridPreviewTest, GPreviewsAndEnterAppliesWhatFillGridGivesAsOneStep) 
   EXPECT_EQ(undo->index(), index);
   QTest::keyClick(&w, Qt::Key_Return);
   EXPECT_EQ(undo->index(), index);
-  std::printf("Fill Grid preview on the small shot: %zu edits (%d new, %d of them for review; %d "
-              "under review accepted; %d to review; %d moved; %d other); %d labels under review "
-              "in frame 0 once applied\n",
-              shown.edits.size(), shown.added, shown.added_review, shown.confirmed,
-              shown.to_review, shown.moved, shown.changed, review);
+  std::printf(
+      "Fill Grid preview on the small shot: %zu edits (%d new, %d of them for review; %d "
+      "under review accepted; %d to review; %d moved; %d other); %d labels under review "
+      "in frame 0 once applied\n",
+      shown.edits.size(), shown.added, shown.added_review, shown.confirmed, shown.to_review,
+      shown.moved, shown.changed, review);
 }
 
 // Esc discards a preview; so do a label edit, a frame change, an undo and a tracking run, even
@@ -1454,9 +1445,9 @@ TEST_F(FillGridPreviewTest, EscAnEditAFrameChangeOrAnUndoDiscardThePreview) {
   EXPECT_TRUE(QTest::qWaitFor([&] { return zoomed->height() < height; }, 5000))
       << "the view kept its height " << height << " under the bar";
   EXPECT_EQ(zoomed->scale(), scale);
-  EXPECT_LT((zoomed->ToImage(QPointF(zoomed->width() / 2.0, zoomed->height() / 2.0)) - centre)
-                .norm(),
-            1.0);
+  EXPECT_LT(
+      (zoomed->ToImage(QPointF(zoomed->width() / 2.0, zoomed->height() / 2.0)) - centre).norm(),
+      1.0);
   QTest::keyClick(&w, Qt::Key_Escape);
   expect_none_pending("Esc");
   EXPECT_EQ(w.statusBar()->currentMessage(), "Fill Grid preview discarded");
@@ -1575,8 +1566,7 @@ TEST_F(MainWindowTest, PreviewFillGridAppliesAsFillGridDoesWithTheSessionsLinkLe
   EXPECT_EQ(preview.t, 0);
   EXPECT_GT(preview.added, removed / 2);
   EXPECT_LE(preview.added, removed);
-  EXPECT_EQ(preview.added + preview.to_review + preview.confirmed + preview.moved +
-                preview.changed,
+  EXPECT_EQ(preview.added + preview.to_review + preview.confirmed + preview.moved + preview.changed,
             static_cast<int>(preview.edits.size()));
   bool moved_judged = false;  // the label 6 px off is flagged or put right
   for (const recon::LabelEdit& e : preview.edits) {
@@ -1602,9 +1592,10 @@ TEST_F(MainWindowTest, PreviewFillGridAppliesAsFillGridDoesWithTheSessionsLinkLe
   // Undo: the start again.
   previewed->document().undo_stack()->undo();
   EXPECT_EQ(DifferentLabels(previewed->document().labels(), before), 0);
-  std::printf("PreviewFillGrid: %zu edits in %.0f ms (the process's first engine run, warm-up "
-              "included); FillGrid %.0f ms (%d labels removed)\n",
-              preview.edits.size(), preview_ms, direct_ms, removed);
+  std::printf(
+      "PreviewFillGrid: %zu edits in %.0f ms (the process's first engine run, warm-up "
+      "included); FillGrid %.0f ms (%d labels removed)\n",
+      preview.edits.size(), preview_ms, direct_ms, removed);
 
   // The link length: a preview judges with the one the session's engine already has (estimated
   // on another frame), not an estimate of its own; a preview applied to a session without one
@@ -1616,7 +1607,7 @@ TEST_F(MainWindowTest, PreviewFillGridAppliesAsFillGridDoesWithTheSessionsLinkLe
       for (int t = 0; t < noisy.frames(); ++t)
         for (int k = 0; k < noisy.knots(); ++k)
           noisy.at(c, t, k).px += 0.3 * Eigen::Vector2d(std::sin(7.1 * (c + 3 * t + 11 * k)),
-                                                         std::cos(5.3 * (2 * c + t + 7 * k)));
+                                                        std::cos(5.3 * (2 * c + t + 7 * k)));
     const std::string truth = (Dir() / "link_noisy.h5").string();
     recon::WriteLabels(truth, noisy);
     auto estimated = Session::Open(LoadProject(MakeProjectFile("link_estimated", truth)));
@@ -1639,8 +1630,6 @@ TEST_F(MainWindowTest, PreviewFillGridAppliesAsFillGridDoesWithTheSessionsLinkLe
     std::printf("link length: %.9f m from frame 0, %.9f m from frame 20\n", frame0, frame20);
   }
 }
-
-
 
 // netlab gui --keys G --screenshot: the screenshot shows the preview's ghosts (pink below the
 // bar, where a screenshot without it has none); an unknown key, or --keys without a screenshot,
@@ -1717,7 +1706,8 @@ TEST_F(MainWindowTest, TheRecordingRoomListsAMissingFrameAndAClickGoesToIt) {
     if (table->item(r, 0)->text() == "cam2" && table->item(r, 1)->text() == "missing") row = r;
   ASSERT_GE(row, 0) << "no row says cam2 misses a frame";
   EXPECT_EQ(table->item(row, 2)->text(), "5 (1 frame)");
-  EXPECT_TRUE(w.recording_room()->timeline()->review_frames().count(5 - w.session()->frame_number(0)));
+  EXPECT_TRUE(
+      w.recording_room()->timeline()->review_frames().count(5 - w.session()->frame_number(0)));
   // The labeling room's docks and keys are not the recording room's.
   EXPECT_FALSE(w.findChild<QDockWidget*>("review_dock")->isVisible());
   const QImage image = w.grab().toImage();

@@ -6,8 +6,6 @@
 // incremental count always equals a count from scratch.
 
 #include "app/gui/document/missing_knots.h"
-#include "app/gui/document/project.h"
-#include "common/errors.h"
 
 #include <gtest/gtest.h>
 
@@ -18,6 +16,9 @@
 #include <set>
 #include <string>
 #include <vector>
+
+#include "app/gui/document/project.h"
+#include "common/errors.h"
 
 namespace netlab::gui {
 namespace {
@@ -44,7 +45,9 @@ struct Scene {
       knots.push_back(x);
     }
   }
-  Eigen::Vector2d Truth(int c, int t, int k) const { return rig.cameras[c].ProjectWorld(knots[t][k]); }
+  Eigen::Vector2d Truth(int c, int t, int k) const {
+    return rig.cameras[c].ProjectWorld(knots[t][k]);
+  }
   bool InsideByMargin(int c, int t, int k) const {
     const Eigen::Vector2d q = Truth(c, t, k);
     return q.allFinite() && q.minCoeff() >= kMargin && q.maxCoeff() <= 1023 - kMargin;
@@ -166,7 +169,8 @@ TEST(MissingKnots, AKnotOneCameraSeesIsListedOnItsRayWhereItsNeighboursPutIt) {
   EXPECT_EQ(missing.Find(4, 0, 4), nullptr);  // the back camera looks away
   const std::string reason = missing.Reason(1, 0, 4);
   EXPECT_EQ(reason.rfind("no label; seen in a, at the depth its grid neighbours give; expected "
-                         "near (", 0),
+                         "near (",
+                         0),
             0u)
       << reason;
 }

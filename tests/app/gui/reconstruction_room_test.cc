@@ -6,6 +6,8 @@
 // frame slider and the window's frame; a drag turns it, the wheel zooms. Export writes tracks.h5
 // equal to `netlab triangulate`'s from the same labels, and xyzpts.csv / xyzres.csv beside it.
 
+#include "app/gui/reconstruction_room.h"
+
 #include <gtest/gtest.h>
 
 #include <QApplication>
@@ -26,7 +28,6 @@
 #include "app/gui/document/project.h"
 #include "app/gui/document/session.h"
 #include "app/gui/main_window.h"
-#include "app/gui/reconstruction_room.h"
 #include "common/tracks/track_file.h"
 #include "libreconstruct/labels/label_set.h"
 #include "tests/app/cli/run_netlab.h"
@@ -38,7 +39,7 @@ namespace {
 namespace fs = std::filesystem;
 using testing::RunNetlab;
 
-constexpr int kLastFrame = 17;                    // frames 0..17 (0.1 s at 179 fps)
+constexpr int kLastFrame = 17;                     // frames 0..17 (0.1 s at 179 fps)
 constexpr int kMovedCamera = 1, kMovedFrame = 10;  // the label moved off its knot
 
 const fs::path& Dir() {

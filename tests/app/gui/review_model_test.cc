@@ -80,8 +80,10 @@ TEST(ReviewModel, NextAndPreviousWalkTheQueueInOrderAndWrap) {
 TEST(ReviewModel, SeverityFollowsTheReasonsDistance) {
   LabelDocument doc(recon::LabelSet::Empty(2, 2, {"a", "b"}, {0, 1}), "/nonexistent/l.h5");
   ReviewModel model(&doc, {0, 1});
-  doc.Apply("Track", {{0, 0, 0, Review(1, 0.95f)}, {0, 0, 1, Review(2, 0.95f)},
-                      {0, 0, 2, Review(3, 0.95f)}, {0, 0, 3, Review(4, 0.6f)}});
+  doc.Apply("Track", {{0, 0, 0, Review(1, 0.95f)},
+                      {0, 0, 1, Review(2, 0.95f)},
+                      {0, 0, 2, Review(3, 0.95f)},
+                      {0, 0, 3, Review(4, 0.6f)}});
   doc.MergeReasons({{{0, 0, 0}, "epipolar check: 1555.8 px off the point of all the cameras"},
                     {{0, 0, 1}, "epipolar check: 4.0 px from where the other cameras put the knot"},
                     {{0, 0, 2}, "epipolar check: the cameras disagree (rays 0.00 deg apart)"},

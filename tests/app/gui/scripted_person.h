@@ -147,8 +147,7 @@ inline ScriptedSession PlayScriptedSession(MainWindow* w, const recon::LabelSet&
   for (int c = 0; c < s->cameras(); ++c)
     for (int k = 0; k < rows * cols; ++k) {
       const recon::Label& l = s->document().at(c, 0, k);
-      if (!want(c, 0, k).present() || l.accepted())
-        continue;
+      if (!want(c, 0, k).present() || l.accepted()) continue;
       PickKnot(w, k);
       ZoomAt(w->view(c), want(c, 0, k).px, 8);
       out.actions.push_back({Action::kFindNode, c, 0, k, ClickAt(w->view(c), want(c, 0, k).px)});

@@ -7,6 +7,8 @@
 // pixels). The same scenario without drag, simulated from the room (cancelled once, then run to
 // the end) and scored: "inconsistent".
 
+#include "app/gui/simulation_room.h"
+
 #include <gtest/gtest.h>
 
 #include <QApplication>
@@ -28,7 +30,6 @@
 #include "app/gui/document/project.h"
 #include "app/gui/knot_grid.h"
 #include "app/gui/main_window.h"
-#include "app/gui/simulation_room.h"
 #include "libreconstruct/labels/label_set.h"
 #include "tests/app/cli/run_netlab.h"
 #include "tests/app/gui/small_shot_film.h"
@@ -196,8 +197,7 @@ TEST_F(SimulationRoomTest, TheTrueSimulationLiesOnTheLabelsAndIsConsistentTheNoD
   EXPECT_FALSE(fs::exists(Dir() / "sim_no_drag.h5"));
   Click(room->simulate_button());
   ASSERT_TRUE(WaitIdle(*room, 120000));
-  ASSERT_EQ(room->simulations_table()->rowCount(), 2)
-      << room->status_label()->text().toStdString();
+  ASSERT_EQ(room->simulations_table()->rowCount(), 2) << room->status_label()->text().toStdString();
   EXPECT_TRUE(fs::exists(Dir() / "sim_no_drag.h5"));
   ASSERT_EQ(room->selected(), 1);
   const std::string no_drag = ScoreSelected(room);
@@ -248,9 +248,9 @@ TEST_F(SimulationRoomTest, AProjectWithTracksAndSimulationsOpensOnTheirVerdicts)
                       " --knots 6x6 --fps 179 --sigma-px 0.1 --out " + d + "/cli_tracks.h5 --quiet")
                 .status,
             0);
-  ASSERT_EQ(RunNetlab("simulate " + d + "/no_drag.yaml --out " + d + "/cli_no_drag.h5 --quiet")
-                .status,
-            0);
+  ASSERT_EQ(
+      RunNetlab("simulate " + d + "/no_drag.yaml --out " + d + "/cli_no_drag.h5 --quiet").status,
+      0);
   p.tracks = d + "/cli_tracks.h5";
   p.simulations = {d + "/sim.h5", d + "/cli_no_drag.h5"};
   SaveProject(p, project);
@@ -311,11 +311,12 @@ TEST_F(SimulationRoomTest, AFitOfTheDragCoefficientIsCancelledThenRunToTheEnd) {
   const FitRun& fit = *w.simulation()->fit();
   ASSERT_TRUE(fit.result.has_value()) << fit.error;
   const netsim::FittedParameter& drag = fit.result->parameters.at(0);
-  std::printf("fit: drag coefficient %.4f +- %.4f (%s), cost %.4g -> %.4g, %d simulations, "
-              "%.1f s; fitted model %s\n",
-              drag.value, drag.sigma, drag.determined_by.c_str(), fit.result->cost_initial,
-              fit.result->cost_final, fit.result->simulations, clock.elapsed() / 1000.0,
-              fit.result->score.verdict.c_str());
+  std::printf(
+      "fit: drag coefficient %.4f +- %.4f (%s), cost %.4g -> %.4g, %d simulations, "
+      "%.1f s; fitted model %s\n",
+      drag.value, drag.sigma, drag.determined_by.c_str(), fit.result->cost_initial,
+      fit.result->cost_final, fit.result->simulations, clock.elapsed() / 1000.0,
+      fit.result->score.verdict.c_str());
   EXPECT_NEAR(drag.value, 1.2, std::max(3 * drag.sigma, 0.01));
   EXPECT_TRUE(drag.identified);
   EXPECT_EQ(fit.result->score.verdict, "consistent");

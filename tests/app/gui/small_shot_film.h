@@ -33,8 +33,8 @@ inline NetlabResult FilmSmallShot(const std::string& dir, const std::string& sce
     NetlabResult r = RunNetlab(step);
     if (r.status != 0) return r;
   }
-  return RunNetlab("render --sim " + dir + "/sim.h5 --out " + dir + "/shot --frames 0:" +
-                   std::to_string(last_frame) + " " + render_options +
+  return RunNetlab("render --sim " + dir + "/sim.h5 --out " + dir +
+                   "/shot --frames 0:" + std::to_string(last_frame) + " " + render_options +
                    " --calibration-views 0 --coloring " + dir + "/coloring.yaml --quiet");
 }
 

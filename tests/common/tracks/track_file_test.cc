@@ -1,7 +1,6 @@
 #include "common/tracks/track_file.h"
 
 #include <gtest/gtest.h>
-
 #include <unistd.h>
 
 #include <cmath>
@@ -148,8 +147,8 @@ TEST_F(TrackFile, MismatchedShapesAreNamed) {
   EXPECT_THROW(WriteKnotTracks(Path("bad.h5"), t), std::invalid_argument);
 }
 
-// A "units" attribute is honoured (docs/bad_input.md): ms, mm and mm^2 are converted to s, m and m^2,
-// and a unit netlab does not know is refused by file, dataset and units (mm read as m made a
+// A "units" attribute is honoured (docs/bad_input.md): ms, mm and mm^2 are converted to s, m and
+// m^2, and a unit netlab does not know is refused by file, dataset and units (mm read as m made a
 // net 1000 times larger).
 TEST_F(TrackFile, UnitsAttributesAreConvertedOrRefused) {
   KnotTracks in = Example();

@@ -26,8 +26,8 @@ TEST(Rotation, Director3IsTheRotatedZAxis) {
 
 TEST(Rotation, LogInvertsExpOverTheWholeRange) {
   // Either side of each series/closed-form switch: |phi| = 0.02 (Exp), theta = 2 atan(0.2) (Log).
-  for (double angle : {0.0, 1e-9, 1e-5, 1e-3, 0.01, 0.0199, 0.0201, 0.0999, 0.1001, 0.3947, 0.3948, 0.5, 2.0, 3.1,
-                       std::numbers::pi - 1e-6}) {
+  for (double angle : {0.0, 1e-9, 1e-5, 1e-3, 0.01, 0.0199, 0.0201, 0.0999, 0.1001, 0.3947, 0.3948,
+                       0.5, 2.0, 3.1, std::numbers::pi - 1e-6}) {
     const Vector3d phi = angle * Vector3d(1, -2, 0.5).normalized();
     const LogResult log = LogMap(ExpMap(phi));
     EXPECT_LT((log.phi - phi).norm(), 1e-12 * std::max(1.0, angle)) << "angle " << angle;

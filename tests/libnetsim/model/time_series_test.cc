@@ -1,7 +1,6 @@
 #include "libnetsim/model/time_series.h"
 
 #include <gtest/gtest.h>
-
 #include <unistd.h>
 
 #include <filesystem>
@@ -18,7 +17,7 @@ std::string WriteTemp(const std::string& name, const std::string& text) {
 
 TEST(TimeSeries, InterpolatesLinearlyAndHoldsTheEnds) {
   const TimeSeries3 s({0.0, 1.0, 3.0}, {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(2, 0, 0),
-                                       Eigen::Vector3d(2, 4, 0)});
+                                        Eigen::Vector3d(2, 4, 0)});
   EXPECT_NEAR(s.Value(0.5).x(), 1.0, 1e-15);
   EXPECT_NEAR(s.Value(2.0).y(), 2.0, 1e-15);
   EXPECT_EQ(s.Value(-1.0), Eigen::Vector3d(0, 0, 0));

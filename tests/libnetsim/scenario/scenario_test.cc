@@ -1,7 +1,6 @@
 #include "libnetsim/scenario/scenario.h"
 
 #include <gtest/gtest.h>
-
 #include <unistd.h>
 
 #include <algorithm>
@@ -10,8 +9,8 @@
 #include <fstream>
 
 #include "common/errors.h"
-#include "libnetsim/scenario/run_scenario.h"
 #include "common/tracks/track_file.h"
+#include "libnetsim/scenario/run_scenario.h"
 
 namespace netlab::netsim {
 namespace {
@@ -86,7 +85,8 @@ TEST(Scenario, OnlyTheForcesASceneUsesAreBuilt) {
   EXPECT_EQ(built.simulation->active_forces(),
             (std::vector<std::string>{"stretch+coupling", "bend_twist", "gravity", "point_loads"}));
   const std::string no_gravity = Replace(kPendulum, "gravity: [0, -9.81, 0]\n", "");
-  const auto forces = BuildScenario(ParseScenario(no_gravity, "t.yaml", "")).simulation->active_forces();
+  const auto forces =
+      BuildScenario(ParseScenario(no_gravity, "t.yaml", "")).simulation->active_forces();
   EXPECT_EQ(std::count(forces.begin(), forces.end(), "gravity"), 0);
 }
 
@@ -123,19 +123,22 @@ TEST(Scenario, UnknownMaterialIsNamed) {
 }
 
 TEST(Scenario, UnknownRodInALoadIsNamed) {
-  const std::string error = ParseError(Replace(kPendulum, "{type: force, rod: yarn", "{type: force, rod: thread"));
+  const std::string error =
+      ParseError(Replace(kPendulum, "{type: force, rod: yarn", "{type: force, rod: thread"));
   EXPECT_NE(error.find("unknown rod 'thread'"), std::string::npos) << error;
   EXPECT_NE(error.find("loads[0]"), std::string::npos) << error;
 }
 
 TEST(Scenario, NodeIndexOutsideTheRodIsNamed) {
-  const std::string error = ParseError(Replace(kPendulum, "tip: {rod: yarn, node: end}", "tip: {rod: yarn, node: 12}"));
+  const std::string error =
+      ParseError(Replace(kPendulum, "tip: {rod: yarn, node: end}", "tip: {rod: yarn, node: 12}"));
   EXPECT_NE(error.find("probes.tip.node"), std::string::npos) << error;
   EXPECT_NE(error.find("outside 0..11"), std::string::npos) << error;
 }
 
 TEST(Scenario, NodeGivenAsAListIsNamed) {
-  const std::string error = ParseError(Replace(kPendulum, "tip: {rod: yarn, node: end}", "tip: {rod: yarn, node: [1, 2]}"));
+  const std::string error = ParseError(
+      Replace(kPendulum, "tip: {rod: yarn, node: end}", "tip: {rod: yarn, node: [1, 2]}"));
   EXPECT_NE(error.find("probes.tip.node: expected start, end or a node index"), std::string::npos)
       << error;
 }
@@ -214,10 +217,10 @@ bodies:
   EXPECT_EQ(ReadKnotTracks(options.out_path).contact_start_s, hit.contact_start_s);
 
   options.out_path = (dir / "miss.h5").string();
-  const RunSummary miss = RunScenario(
-      ParseScenario(Replace(scenario, "center: [0.12, 0, 0]", "center: [0.5, 0, 0]"), "test.yaml",
-                    ""),
-      options);
+  const RunSummary miss =
+      RunScenario(ParseScenario(Replace(scenario, "center: [0.12, 0, 0]", "center: [0.5, 0, 0]"),
+                                "test.yaml", ""),
+                  options);
   EXPECT_TRUE(std::isnan(miss.contact_start_s));
   EXPECT_TRUE(std::isnan(ReadKnotTracks(options.out_path).contact_start_s));
   std::filesystem::remove_all(dir);

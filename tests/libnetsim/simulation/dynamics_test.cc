@@ -245,8 +245,8 @@ TEST_P(Dynamics, RotatingFrameReproducesInertialStraightLine) {
     for (Vector3d& x : state.x) x += Vector3d(0.3, -0.1, 0.2);
     const Vector3d v0(0.2, 0.1, -0.05);  // velocity in the rotating frame
     for (Vector3d& v : state.v) v = v0;
-    const double alpha = 4.0;                 // rad/s^2 for the ramp
-    const Vector3d omega0(0.0, 0.0, 2.0);     // rad/s, constant case
+    const double alpha = 4.0;              // rad/s^2 for the ramp
+    const Vector3d omega0(0.0, 0.0, 2.0);  // rad/s, constant case
     std::unique_ptr<RotatingFrameForce> frame;
     if (ramp) {
       frame = std::make_unique<RotatingFrameForce>(
@@ -317,8 +317,8 @@ TEST_P(Dynamics, GravityTimeSeriesIsIntegrated) {
   const double k = 3.0;
   auto [model, state] = StraightRod(PpYarn(), 0.05, 2);
   auto forces = ElasticForces(model);
-  forces.push_back(std::make_unique<GravityForce>(
-      TimeSeries3({0.0, 1.0, 2.0}, {Vector3d::Zero(), Vector3d(0, 0, -k), Vector3d(0, 0, -2 * k)})));
+  forces.push_back(std::make_unique<GravityForce>(TimeSeries3(
+      {0.0, 1.0, 2.0}, {Vector3d::Zero(), Vector3d(0, 0, -k), Vector3d(0, 0, -2 * k)})));
   Simulation sim(std::move(model), std::move(state), std::move(forces), Options());
   ASSERT_TRUE(sim.Advance(std::lround(0.4 / sim.dt())));
   const double t = sim.state().time;
@@ -337,8 +337,9 @@ TEST_P(Dynamics, ThinNylonThreadOf100SegmentsIsStable) {
   for (const Vector3d& x : sim.state().x) ASSERT_TRUE(x.allFinite());
   double max_strain = 0.0;
   for (const Segment& s : sim.model().segments)
-    max_strain = std::max(max_strain, std::abs((sim.state().x[s.node_b] - sim.state().x[s.node_a])
-                                                   .norm() / s.rest_length - 1.0));
+    max_strain = std::max(
+        max_strain,
+        std::abs((sim.state().x[s.node_b] - sim.state().x[s.node_a]).norm() / s.rest_length - 1.0));
   EXPECT_LT(max_strain, 1e-3);
   const Energy e = sim.ComputeEnergy();
   EXPECT_LT(std::abs(e.total() - e0), 0.01 * std::abs(e.potential));

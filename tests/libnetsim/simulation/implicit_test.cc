@@ -50,7 +50,8 @@ TEST(AxialStep, IsBackwardEulerOnASpring) {
 
 // The same spring under the whole step (AxialStep::Step): the two-stage SDIRK of gamma
 // 1 - 1/sqrt(2), each stage the backward Euler above, exactly, on the state (u, v) of
-// y' = A y, A = [0 1; -k/m -c/m]: Y1 = B y, Y2 = B (y + (1 - gamma) h A Y1), B = (1 - gamma h A)^-1.
+// y' = A y, A = [0 1; -k/m -c/m]: Y1 = B y, Y2 = B (y + (1 - gamma) h A Y1), B = (1 - gamma h
+// A)^-1.
 TEST(AxialStep, IsTwoStageSdirkOnASpring) {
   Material material = Nylon();
   material.stretch_damping = 0.3;

@@ -10,8 +10,8 @@
 #include <fstream>
 #include <thread>
 
-#include "libnetsim/scenario/run_scenario.h"
 #include "common/tracks/track_file.h"
+#include "libnetsim/scenario/run_scenario.h"
 
 namespace netlab::netsim {
 namespace {

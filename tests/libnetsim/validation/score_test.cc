@@ -165,9 +165,8 @@ TEST(Score, OverstatedCovariancesAreSaid) {
 // contact phase.
 TEST(Score, TheContactPhaseStartsAtTheSimulationsFirstContact) {
   KnotTracks sim = MakeTracks(5, 5, 200, 0.0);
-  const KnotTracks meas =
-      Measure(5, 5, 150, 0.01, Eigen::Isometry3d::Identity(), Eigen::Matrix3d::Identity() * 1e-8,
-              nullptr);
+  const KnotTracks meas = Measure(5, 5, 150, 0.01, Eigen::Isometry3d::Identity(),
+                                  Eigen::Matrix3d::Identity() * 1e-8, nullptr);
   ScoreOptions options;
   options.alignment = Alignment::kNone;
   options.time_offset_s = 0.01;

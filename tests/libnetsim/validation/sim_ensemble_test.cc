@@ -3,6 +3,8 @@
 // with Sigma_sim = 0 and consistent with the ensemble's spread; the ensemble is refused when it
 // has one member, another net, or does not cover the simulation's time.
 
+#include "libnetsim/validation/sim_ensemble.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,7 +12,6 @@
 
 #include "common/errors.h"
 #include "libnetsim/validation/score.h"
-#include "libnetsim/validation/sim_ensemble.h"
 #include "score_test_data.h"
 
 namespace netlab::netsim {

@@ -8,11 +8,10 @@
 #include <cstdlib>
 #include <fstream>
 #include <limits>
+#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <opencv2/imgproc.hpp>
 
 #include "calibration/rig.h"
 #include "libreconstruct/recording/bayer.h"
@@ -194,8 +193,9 @@ TEST(LoadCandidates, ReadsCsvAndYamlForms) {
   ASSERT_EQ(csv.size(), 2u);
   EXPECT_EQ(csv[1].name, "sky blue");
   EXPECT_EQ(csv[1].srgb[2], 230);
-  const auto yaml = LoadCandidates(WriteTemp(
-      "cand.yaml", "candidates:\n  - [red, 200, 30, 40]\n  - {name: green, r: 20, g: 140, b: 60}\n"));
+  const auto yaml = LoadCandidates(
+      WriteTemp("cand.yaml",
+                "candidates:\n  - [red, 200, 30, 40]\n  - {name: green, r: 20, g: 140, b: 60}\n"));
   ASSERT_EQ(yaml.size(), 2u);
   EXPECT_EQ(yaml[1].name, "green");
   EXPECT_EQ(yaml[1].srgb[1], 140);
@@ -276,15 +276,16 @@ Tally IdentifyAll(const calib::Camera& camera, const ColouredNet& net, double no
   sensor.bayer = BayerPattern::kRGGB;
   sensor.noise_sigma = noise;
   sensor.seed = 7;
-  const cv::Mat frame = Demosaic(Expose(linear, camera.intrinsics, sensor), BayerPattern::kRGGB,
-                                 ColorCorrection{});
+  const cv::Mat frame =
+      Demosaic(Expose(linear, camera.intrinsics, sensor), BayerPattern::kRGGB, ColorCorrection{});
   Tally tally;
   for (const KnotView& view : VisibleKnots(camera, net, 20)) {
     const KnotIdentification id =
         IdentifyKnot(frame, view.pixel, view.directions, options, net.codebook);
     if (std::getenv("IDENT_DEBUG")) {
       std::string text = "knot " + std::to_string(view.knot) + " true";
-      for (int c : net.codebook.knots[view.knot].link_colours) text += " " + net.codebook.palette[c].name;
+      for (int c : net.codebook.knots[view.knot].link_colours)
+        text += " " + net.codebook.palette[c].name;
       text += " -> " + IdentifyStatusName(id.status) + ":";
       for (const std::string& r : id.reasons) text += " " + r + ";";
       std::printf("%s\n", text.c_str());
@@ -345,9 +346,8 @@ TEST_F(RenderedNet, NoiseAndAColourShiftFlagMoreButNeverMisidentify) {
       IdentifyAll(camera_, net_, 8.0, {1.3f, 1.0f, 0.7f}, IdentifyOptions{}, &failures);
   EXPECT_EQ(shifted.wrong, 0);
   for (const std::string& f : failures) ADD_FAILURE() << f;
-  std::printf("noise 8: %d correct %d ambiguous %d unknown; + shift: %d / %d / %d\n",
-              noisy.correct, noisy.ambiguous, noisy.unknown, shifted.correct, shifted.ambiguous,
-              shifted.unknown);
+  std::printf("noise 8: %d correct %d ambiguous %d unknown; + shift: %d / %d / %d\n", noisy.correct,
+              noisy.ambiguous, noisy.unknown, shifted.correct, shifted.ambiguous, shifted.unknown);
 }
 
 TEST(RenderedAxisAlignedNet, AxisAlignedThreadsAreFlaggedNotMisread) {
@@ -384,7 +384,8 @@ TEST_F(RenderedNet, TwoKnotsSharingACodeAreAmbiguousListingBoth) {
   // Restricted to the knots tracking predicts near it (5 and its neighbours except 6), unique.
   IdentifyOptions local;
   local.candidate_knots = {1, 4, 5, 9};
-  const KnotIdentification restricted = IdentifyKnot(frame, view.pixel, view.directions, local, book);
+  const KnotIdentification restricted =
+      IdentifyKnot(frame, view.pixel, view.directions, local, book);
   EXPECT_EQ(restricted.status, IdentifyStatus::kIdentified);
   EXPECT_EQ(restricted.knots, (std::vector<int>{5}));
 }
@@ -394,8 +395,8 @@ TEST(IdentifyKnot, AnEmptyImageIsUnknownNotAGuess) {
   book.palette = {{"red", {0, 0, 0.6f}}, {"green", {0, 0.5f, 0}}};
   book.knots = {{0, 0, {0, 1}}};
   const cv::Mat black(100, 100, CV_8UC3, cv::Scalar(5, 5, 5));
-  const KnotIdentification id = IdentifyKnot(black, {50, 50}, {{1, 0}, {0, 1}},
-                                             IdentifyOptions{}, book);
+  const KnotIdentification id =
+      IdentifyKnot(black, {50, 50}, {{1, 0}, {0, 1}}, IdentifyOptions{}, book);
   // Both yarns unreadable -> every reading plausible; one knot of degree 2 fits, but the best
   // reading does not exist: never identified from nothing.
   EXPECT_NE(id.status, IdentifyStatus::kIdentified);
@@ -455,22 +456,22 @@ TEST(IdentifyKnot, AnUnreadableYarnStillIdentifiesWhenEveryReadingGivesOneKnot) 
   options.bayer = BayerPattern::kNone;
   std::vector<Eigen::Vector2d> dirs;
   // All three read: knot (0, 0) with full confidence.
-  const cv::Mat clear = DrawnKnot({kRgbyPalette[0].linear_bgr, kRgbyPalette[1].linear_bgr,
-                                   kRgbyPalette[2].linear_bgr}, &dirs);
+  const cv::Mat clear = DrawnKnot(
+      {kRgbyPalette[0].linear_bgr, kRgbyPalette[1].linear_bgr, kRgbyPalette[2].linear_bgr}, &dirs);
   const KnotIdentification a = IdentifyKnot(clear, {100, 100}, dirs, options, book);
   ASSERT_EQ(a.status, IdentifyStatus::kIdentified);
   EXPECT_EQ(a.knots, (std::vector<int>{0}));
   // The third yarn grey (no palette colour): red + green fit only knot (0, 0): identified, less
   // sure.
-  const cv::Mat grey = DrawnKnot({kRgbyPalette[0].linear_bgr, kRgbyPalette[1].linear_bgr,
-                                  Colour(0.4f, 0.4f, 0.4f)}, &dirs);
+  const cv::Mat grey = DrawnKnot(
+      {kRgbyPalette[0].linear_bgr, kRgbyPalette[1].linear_bgr, Colour(0.4f, 0.4f, 0.4f)}, &dirs);
   const KnotIdentification b = IdentifyKnot(grey, {100, 100}, dirs, options, book);
   ASSERT_EQ(b.status, IdentifyStatus::kIdentified);
   EXPECT_EQ(b.knots, (std::vector<int>{0}));
   EXPECT_LT(b.confidence, a.confidence);
   // Red + blue + grey fit both knots: ambiguous, both listed.
-  const cv::Mat both = DrawnKnot({kRgbyPalette[0].linear_bgr, kRgbyPalette[2].linear_bgr,
-                                  Colour(0.4f, 0.4f, 0.4f)}, &dirs);
+  const cv::Mat both = DrawnKnot(
+      {kRgbyPalette[0].linear_bgr, kRgbyPalette[2].linear_bgr, Colour(0.4f, 0.4f, 0.4f)}, &dirs);
   const KnotIdentification c = IdentifyKnot(both, {100, 100}, dirs, options, book);
   EXPECT_EQ(c.status, IdentifyStatus::kAmbiguous);
   EXPECT_EQ(c.knots, (std::vector<int>{0, 1}));

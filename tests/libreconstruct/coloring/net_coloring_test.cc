@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <bitset>
 #include <cmath>
-#include <functional>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <set>
 #include <string>
@@ -53,7 +53,8 @@ TEST(KnotCode, CyclicTreatsRotationsAndMirrorImagesAsEqual) {
   EXPECT_EQ(KnotCode(CodeRule::kCyclic, {1, 0, 3, 2}), code);  // mirror of a rotation
   EXPECT_NE(KnotCode(CodeRule::kCyclic, {0, 2, 1, 3}), code);  // a different cyclic order
   // Opposite vs. neighbouring equal colours: same multiset, different cyclic codes.
-  EXPECT_EQ(KnotCode(CodeRule::kMultiset, {0, 0, 1, 1}), KnotCode(CodeRule::kMultiset, {0, 1, 0, 1}));
+  EXPECT_EQ(KnotCode(CodeRule::kMultiset, {0, 0, 1, 1}),
+            KnotCode(CodeRule::kMultiset, {0, 1, 0, 1}));
   EXPECT_NE(KnotCode(CodeRule::kCyclic, {0, 0, 1, 1}), KnotCode(CodeRule::kCyclic, {0, 1, 0, 1}));
   EXPECT_EQ(KnotCode(CodeRule::kCyclic, {0, 0, 1, 1}), KnotCode(CodeRule::kCyclic, {1, 0, 0, 1}));
   EXPECT_EQ(KnotCode(CodeRule::kSet, {2, 0, 2, 0}), (std::vector<int>{0, 2}));
@@ -198,7 +199,8 @@ bool AllPairsValid(const NetColoring& c) {
       const int y = queue[i], r = y / c.cols, col = y % c.cols;
       for (auto [nr, nc] : {std::pair(r, col + 1), std::pair(r + 1, col), std::pair(r, col - 1),
                             std::pair(r - 1, col)}) {
-        if (nr < 0 || nr >= c.rows || nc < 0 || nc >= c.cols || hops[nr * c.cols + nc] >= 0) continue;
+        if (nr < 0 || nr >= c.rows || nc < 0 || nc >= c.cols || hops[nr * c.cols + nc] >= 0)
+          continue;
         hops[nr * c.cols + nc] = hops[y] + 1;
         queue.push_back(nr * c.cols + nc);
       }
@@ -230,8 +232,8 @@ TEST(VerifyColoring, AgreesWithComparingEveryPair) {
             std::string why;
             const bool expected = AllPairsValid(c);
             EXPECT_EQ(VerifyColoring(c, &why), expected)
-                << CodeRuleName(rule) << " D=" << d << " R=" << radius << " " << rows << "x"
-                << cols << " link " << link << ": " << why;
+                << CodeRuleName(rule) << " D=" << d << " R=" << radius << " " << rows << "x" << cols
+                << " link " << link << ": " << why;
             ++(expected ? valid : invalid);
           }
         }
@@ -273,9 +275,9 @@ TEST(SolveColoring, EveryResultPassesTheVerifier) {
             o.time_limit_s = 0.05;
             const NetColoring c = SolveColoring(rows, cols, o);
             const std::string what = CodeRuleName(rule) + " D=" + std::to_string(d) +
-                                     " adj=" + std::to_string(adj) + " R=" +
-                                     std::to_string(radius) + " " + std::to_string(rows) + "x" +
-                                     std::to_string(cols);
+                                     " adj=" + std::to_string(adj) +
+                                     " R=" + std::to_string(radius) + " " + std::to_string(rows) +
+                                     "x" + std::to_string(cols);
             ASSERT_GT(c.colors, 0) << what;
             EXPECT_GE(c.colors, c.lower_bound) << what;
             std::string why;
@@ -426,7 +428,8 @@ class Exhaustive {
   }
   int Index(const std::vector<int>& links) const {
     int idx = 0;
-    for (int i = static_cast<int>(links.size()) - 1; i >= 0; --i) idx = idx * k_ + colour_[links[i]];
+    for (int i = static_cast<int>(links.size()) - 1; i >= 0; --i)
+      idx = idx * k_ + colour_[links[i]];
     return idx;
   }
   bool Valid() const {
@@ -440,7 +443,8 @@ class Exhaustive {
         if (knots_[w].size() != knots_[x].size()) continue;
         const int hops = std::abs(x / cols_ - w / cols_) + std::abs(x % cols_ - w % cols_);
         if (o_.radius > 0 && hops > o_.radius) continue;
-        if (dist_.at(static_cast<int>(knots_[x].size())).at(Index(knots_[x])).at(Index(knots_[w])) < o_.min_distance)
+        if (dist_.at(static_cast<int>(knots_[x].size())).at(Index(knots_[x])).at(Index(knots_[w])) <
+            o_.min_distance)
           return false;
       }
     }

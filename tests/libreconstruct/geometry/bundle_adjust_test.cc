@@ -19,7 +19,8 @@ Eigen::Vector3d KnotAt(int t, int k) {
   const double s = t / kFps;
   const double angle = 0.3 * s;
   const Eigen::Vector3d local(0.0, (k % kCols - 2) * kLink, (k / kCols - 2) * kLink);
-  const Eigen::Matrix3d turn = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Matrix3d turn =
+      Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   return Eigen::Vector3d(1.0 + 0.5 * s, 0.1, -0.05) + turn * local;
 }
 
@@ -161,7 +162,8 @@ calib::Rig Knocked(const calib::Rig& truth) {
 void ExpectRigNear(const calib::Rig& got, const calib::Rig& truth, double deg, double m) {
   for (int c = 0; c < 4; ++c) {
     EXPECT_LT(got.cameras[c].cam_from_world.rotation.angularDistance(
-                  truth.cameras[c].cam_from_world.rotation) * 180 / M_PI,
+                  truth.cameras[c].cam_from_world.rotation) *
+                  180 / M_PI,
               deg)
         << c;
     EXPECT_LT((got.cameras[c].Center() - truth.cameras[c].Center()).norm(), m) << c;
@@ -218,7 +220,8 @@ TEST(ReconstructSequence, RigUncertaintyMatchesTheScatterAndAPoorSequenceKeepsTh
     for (int c = 1; c < 4; ++c) {
       const double centre = 1e3 * (r.rig.cameras[c].Center() - truth.cameras[c].Center()).norm();
       const double rotation = r.rig.cameras[c].cam_from_world.rotation.angularDistance(
-                                  truth.cameras[c].cam_from_world.rotation) * 180 / M_PI;
+                                  truth.cameras[c].cam_from_world.rotation) *
+                              180 / M_PI;
       z_centre += std::pow(centre / r.rig_center_sigma_mm[c], 2);
       z_rotation += std::pow(rotation / r.rig_rotation_sigma_deg[c], 2);
       ++n;
@@ -235,8 +238,7 @@ TEST(ReconstructSequence, RigUncertaintyMatchesTheScatterAndAPoorSequenceKeepsTh
   const SequenceResult poor = ReconstructSequence(truth, LabelAll(truth, 0.2, 4), o);
   EXPECT_FALSE(poor.rig_adjusted);
   EXPECT_GT(poor.rig_center_sigma_mm[2], o.rig_max_center_sigma_mm);
-  for (int c = 0; c < 4; ++c)
-    EXPECT_EQ(poor.rig.cameras[c].Center(), truth.cameras[c].Center());
+  for (int c = 0; c < 4; ++c) EXPECT_EQ(poor.rig.cameras[c].Center(), truth.cameras[c].Center());
   o.adjustment = Adjustment::kNone;
   EXPECT_EQ(RmsError(poor), RmsError(ReconstructSequence(truth, LabelAll(truth, 0.2, 4), o)));
 }
@@ -314,11 +316,11 @@ TEST(ReconstructSequence, TheSmoothnessPriorCatchesATwoViewMislabelGeometryCanno
   EXPECT_EQ(smooth.track_outliers, 1);
   EXPECT_EQ(smooth.prior_disagreements, 0);
   int reported = 0;
-  for (const auto& outlier : smooth.outliers) reported += outlier.frame == 100 + t && outlier.knot == k;
+  for (const auto& outlier : smooth.outliers)
+    reported += outlier.frame == 100 + t && outlier.knot == k;
   EXPECT_EQ(reported, 2);  // both views: either may be the wrong one
   EXPECT_LT(RmsError(smooth), 0.5 * RmsError(plain));
 }
-
 
 TEST(SequenceWarnings, NoneWhenAllIsWell) {
   SequenceResult r;

@@ -77,8 +77,8 @@ TEST(FrameTimes, MeanOverTheCamerasWithTheirSpread) {
     stamps[0][f] = f / 100.0;
     stamps[1][f] = f / 100.0 + 2e-4;
   }
-  const FrameTimes times = FrameTimesFromTimestamps(frames, 100.0, {"cam0", "cam1", "cam2"},
-                                                    stamps, {"a.csv", "b.csv", ""});
+  const FrameTimes times = FrameTimesFromTimestamps(frames, 100.0, {"cam0", "cam1", "cam2"}, stamps,
+                                                    {"a.csv", "b.csv", ""});
   ASSERT_EQ(times.time_s.size(), 3u);
   EXPECT_NEAR(times.time_s[1], 0.11 + 1e-4, 1e-12);
   EXPECT_NEAR(times.spread_s[2], 2e-4, 1e-12);
@@ -214,20 +214,20 @@ TEST(EstimateCameraOffsets, ItsSigmaCoversLabelErrorsThatPersistFromFrameToFrame
 TEST(EstimateCameraOffsets, ANetAtRestDeterminesNoOffsetAndSaysSo) {
   const calib::Rig rig = calib::PaperRig();
   for (uint64_t seed = 3; seed <= 6; ++seed) {
-  const LabelSet labels = Labels(rig, {0, 0, 0, 0}, 0.1, 0.0, seed);
-  SequenceOptions options;
-  options.sigma_px = 0.1;
-  const OffsetEstimate estimate = EstimateCameraOffsets(rig, labels, options);
-  for (int c = 1; c < 4; ++c) {
-    SCOPED_TRACE(testing::Message() << "seed " << seed << ", camera " << c);
-    EXPECT_FALSE(estimate.cameras[c].determined);
-    EXPECT_TRUE(std::isnan(estimate.cameras[c].offset_frames));
-    EXPECT_GT(estimate.cameras[c].sigma_frames, 0.0);
-    EXPECT_NE(estimate.cameras[c].why.find("too little motion to determine it: sigma"),
-              std::string::npos)
-        << estimate.cameras[c].why;
-    EXPECT_EQ(estimate.Applicable()[c], 0.0);
-  }
+    const LabelSet labels = Labels(rig, {0, 0, 0, 0}, 0.1, 0.0, seed);
+    SequenceOptions options;
+    options.sigma_px = 0.1;
+    const OffsetEstimate estimate = EstimateCameraOffsets(rig, labels, options);
+    for (int c = 1; c < 4; ++c) {
+      SCOPED_TRACE(testing::Message() << "seed " << seed << ", camera " << c);
+      EXPECT_FALSE(estimate.cameras[c].determined);
+      EXPECT_TRUE(std::isnan(estimate.cameras[c].offset_frames));
+      EXPECT_GT(estimate.cameras[c].sigma_frames, 0.0);
+      EXPECT_NE(estimate.cameras[c].why.find("too little motion to determine it: sigma"),
+                std::string::npos)
+          << estimate.cameras[c].why;
+      EXPECT_EQ(estimate.Applicable()[c], 0.0);
+    }
   }
 }
 

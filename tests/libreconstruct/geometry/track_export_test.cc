@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -12,18 +13,16 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Geometry>
-
 #include "calibration/rig.h"
 #include "tests/libreconstruct/test_files.h"
 
 namespace netlab::recon {
 namespace {
 
-using testing::ScratchDir;
-using testing::WriteBytes;
 using testing::ErrorOf;
 using testing::Mentions;
+using testing::ScratchDir;
+using testing::WriteBytes;
 namespace fs = std::filesystem;
 
 constexpr int kRows = 2, kCols = 3, kFrames = 4;
@@ -138,15 +137,13 @@ TEST(TrackExport, RefusesTracksThatDoNotFitTheNet) {
   EXPECT_THROW(WriteXyzRes(dir / "xyzres.csv", twice, kRows, kCols), std::invalid_argument);
   KnotTracks short_valid = Example();
   short_valid.valid.pop_back();
-  EXPECT_THROW(WriteXyzPts(dir / "xyzpts.csv", short_valid, kRows, kCols),
-               std::invalid_argument);
+  EXPECT_THROW(WriteXyzPts(dir / "xyzpts.csv", short_valid, kRows, kCols), std::invalid_argument);
   EXPECT_TRUE(fs::is_empty(dir.path()));
 }
 
 TEST(TrackExport, WriteIntoAMissingFolderFails) {
   ScratchDir dir("track_export");
-  EXPECT_THROW(WriteXyzPts(dir / "absent/xyzpts.csv", Example(), kRows, kCols),
-               std::runtime_error);
+  EXPECT_THROW(WriteXyzPts(dir / "absent/xyzpts.csv", Example(), kRows, kCols), std::runtime_error);
   EXPECT_FALSE(fs::exists(dir / "absent"));
 }
 
@@ -164,8 +161,8 @@ std::string ReadError(const std::string& text, bool residuals = false) {
 
 TEST(XyzPts, MalformedFilesAreNamedByLineAndColumn) {
   const std::string header = "pt1_X,pt1_Y,pt1_Z\n";
-  EXPECT_TRUE(Mentions(ReadError(header + "1,2,3\n4,five,6\n"),
-                       {"bad.csv:3:", "'pt1_Y'", "'five'"}));
+  EXPECT_TRUE(
+      Mentions(ReadError(header + "1,2,3\n4,five,6\n"), {"bad.csv:3:", "'pt1_Y'", "'five'"}));
   EXPECT_TRUE(Mentions(ReadError(header + "1,2,3\n4,5\n"), {"bad.csv:3:", "expected 3 cells"}));
   EXPECT_TRUE(Mentions(ReadError("pt1_X,pt1_Y\n1,2\n"), {"bad.csv:1:", "pt1_Z"}));
   EXPECT_TRUE(Mentions(ReadError("pt1_X,pt1_Y,pt1_W\n1,2,3\n"), {"bad.csv:1:", "'pt1_W'"}));
@@ -181,7 +178,6 @@ TEST(XyzRes, MalformedFilesAreNamedByLineAndColumn) {
   EXPECT_TRUE(Mentions(ReadError("pt1_dltres,pt2_X\n0.5,1\n", true), {"bad.csv:1:", "'pt2_X'"}));
   EXPECT_TRUE(Mentions(ReadError("pt1_dltres\n0.5,1\n", true), {"bad.csv:2:", "got 2"}));
 }
-
 
 // A 2 x 3 net's reconstruction over frames 4 and 5, knot 4 not valid in frame 5, one outlier.
 SequenceResult ExampleResult() {
@@ -241,8 +237,8 @@ KnotTracks Truth() {
 // Measured tracks between the truth's samples: true positions through `motion`; covariances
 // diag(var) (m^2).
 KnotTracks Measured(const std::vector<double>& times,
-                            const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& motion,
-                            double var) {
+                    const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& motion,
+                    double var) {
   KnotTracks tracks = Truth();
   tracks.time = times;
   tracks.position.clear();
@@ -277,8 +273,8 @@ TEST(CompareWithTruth, ErrorsAndMahalanobisInTheTruthsFrame) {
   // explains any of them (their mean and their moments along the rows and columns are zero), so
   // they are the errors in the truth's frame. Covariance (3 mm)^2 / 2 per axis.
   const double var = 0.5 * 0.003 * 0.003;
-  KnotTracks tracks =
-      Measured({0.05, 0.125}, [](const Eigen::Vector3d& p) { return p; }, var);
+  KnotTracks tracks = Measured(
+      {0.05, 0.125}, [](const Eigen::Vector3d& p) { return p; }, var);
   for (int t = 0; t < 2; ++t)
     for (int k = 0; k < kRows * kCols; ++k)
       tracks.position[static_cast<size_t>(t) * kRows * kCols + k].z() +=
@@ -309,8 +305,8 @@ TEST(CompareWithTruth, ARigidMotionVanishesAfterAlignment) {
 TEST(CompareWithTruth, LeavesOutPointsTheTruthCannotGive) {
   // Frame 0 before the truth's span, frame 2 after it; in frame 1 knot 0 not valid, knot 1 at a
   // grid position the truth lacks, and knot 2 between a valid and an invalid true sample.
-  KnotTracks tracks =
-      Measured({-0.01, 0.15, 0.21}, [](const Eigen::Vector3d& p) { return p; }, 1e-6);
+  KnotTracks tracks = Measured(
+      {-0.01, 0.15, 0.21}, [](const Eigen::Vector3d& p) { return p; }, 1e-6);
   tracks.valid[kRows * kCols + 0] = 0;
   tracks.grid[1] = {5, 5};
   KnotTracks truth = Truth();

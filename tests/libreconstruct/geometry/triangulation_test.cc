@@ -2,12 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
-
-#include <Eigen/Eigenvalues>
 
 namespace netlab::recon {
 namespace {
@@ -83,7 +82,8 @@ TEST(Triangulation, ErrorIsAtTheCramerRaoBoundFor2To4Views) {
   for (const std::vector<int>& cams : {std::vector<int>{0, 1}, {0, 1, 2}, {0, 1, 2, 3}})
     for (double sigma : {0.2, 1.0}) {
       const Scatter s = Draw(rig, kPoint, cams, sigma, 4000, 7);
-      const std::string what = std::to_string(cams.size()) + " views, sigma " + std::to_string(sigma);
+      const std::string what =
+          std::to_string(cams.size()) + " views, sigma " + std::to_string(sigma);
       EXPECT_NEAR(s.mse / s.crb_trace, 1.0, 0.05) << what;
       // Reported covariance vs the scatter: per-axis variances within 6 %, and the Mahalanobis
       // norm of the error has the chi-square mean 3.
@@ -96,8 +96,10 @@ TEST(Triangulation, ErrorIsAtTheCramerRaoBoundFor2To4Views) {
 TEST(Triangulation, NearParallelViewsStayConsistentWithTheirLargeUncertainty) {
   // Two cameras 2 cm apart looking at a point 3 m away: rays 0.4 degrees apart.
   calib::Rig rig;
-  rig.cameras.push_back(calib::LookAtCamera("a", {-1.8, -0.01, 0.0}, {1.2, 0.0, 0.0}, 16, 5.5, 2048));
-  rig.cameras.push_back(calib::LookAtCamera("b", {-1.8, 0.01, 0.0}, {1.2, 0.0, 0.0}, 16, 5.5, 2048));
+  rig.cameras.push_back(
+      calib::LookAtCamera("a", {-1.8, -0.01, 0.0}, {1.2, 0.0, 0.0}, 16, 5.5, 2048));
+  rig.cameras.push_back(
+      calib::LookAtCamera("b", {-1.8, 0.01, 0.0}, {1.2, 0.0, 0.0}, 16, 5.5, 2048));
   const Eigen::Vector3d p(1.2, 0.05, 0.02);
   const Scatter s = Draw(rig, p, {0, 1}, 0.1, 2000, 11);
   // Depth (x) is ~100x less certain than the lateral position; errors follow the covariance.

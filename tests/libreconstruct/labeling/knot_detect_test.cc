@@ -16,11 +16,11 @@
 namespace netlab::recon {
 namespace {
 
+using testing::kCols;
+using testing::kRows;
 using testing::NetImage;
 using testing::RenderNet;
 using testing::RenderNetOptions;
-using testing::kCols;
-using testing::kRows;
 
 bool IsCorner(int r, int c) { return (r == 0 || r == kRows - 1) && (c == 0 || c == kCols - 1); }
 int Degree(int r, int c) { return (r > 0) + (r + 1 < kRows) + (c > 0) + (c + 1 < kCols); }
@@ -139,7 +139,7 @@ TEST(FindNode, ReturnsTheCentreOfACornerMassWithItsTwoYarns) {
 TEST(FindNode, TakesACornerMassCentreOverItsBentYarnsMeeting) {
   const std::string data = std::string(NETLAB_SOURCE_DIR) + "/tests/libreconstruct/labeling/data/";
   const std::vector<std::pair<std::string, Eigen::Vector2d>> crops = {
-      {"corner_mass_folded_cam0.pgm", {49.28, 48.988}},   // the truth in the crop, px
+      {"corner_mass_folded_cam0.pgm", {49.28, 48.988}},  // the truth in the crop, px
       {"corner_mass_folded_cam1.pgm", {49.05, 49.749}}};
   for (const auto& [file, truth] : crops) {
     const cv::Mat raw = cv::imread(data + file, cv::IMREAD_UNCHANGED);
@@ -291,9 +291,10 @@ TEST(FindNode, FindsTheKnotWhereItsLinksTurnSharplyNearIt) {
     }
   // Measured: 9 of 12 found, worst 0.11 px; without one of the checks 0.11 px, without the
   // three 2.22 px.
-  std::printf("sharp turns: %d of 12 found, worst %.2f px; without the lone yarn's check %.2f px, "
-              "without the settle check %.2f px, without them and the near fit %.2f px\n",
-              found, worst, worst_no_lone, worst_no_settle, worst_neither);
+  std::printf(
+      "sharp turns: %d of 12 found, worst %.2f px; without the lone yarn's check %.2f px, "
+      "without the settle check %.2f px, without them and the near fit %.2f px\n",
+      found, worst, worst_no_lone, worst_no_settle, worst_neither);
   EXPECT_GT(worst_neither, 2.0);  // the case is hard
   EXPECT_LT(worst_no_lone, 0.5);
   EXPECT_LT(worst_no_settle, 0.5);
@@ -345,8 +346,8 @@ cv::Mat TJunction(const Eigen::Vector2d& at, double beside) {
 // the junction tells the two apart, so it is refused; the same junction without it is found.
 TEST(FindNode, RefusesAJunctionWithAnotherYarnBesideItsOwn) {
   const Eigen::Vector2d at(31.3, 30.6);
-  for (const Eigen::Vector2d& shift : {Eigen::Vector2d(0, 0), Eigen::Vector2d(0.25, 0.5),
-                                       Eigen::Vector2d(0.5, 0.25)}) {
+  for (const Eigen::Vector2d& shift :
+       {Eigen::Vector2d(0, 0), Eigen::Vector2d(0.25, 0.5), Eigen::Vector2d(0.5, 0.25)}) {
     const FindNodeResult clean = FindNode(TJunction(at + shift, 0.0), at + shift, 6);
     ASSERT_EQ(clean.status, FindNodeStatus::kFound) << shift.transpose();
     EXPECT_LT((clean.knot.px - at - shift).norm(), 0.3) << shift.transpose();
@@ -407,7 +408,8 @@ TEST(FindNode, FindsNoJunctionOnThePlainYarnsOfADemosaicedFrame) {
   for (int k = 0; k < kRows * kCols; ++k)
     for (int n : {k + 1, k + kCols}) {
       if (n >= kRows * kCols || (n == k + 1 && n / kCols != k / kCols)) continue;
-      const Eigen::Vector2d a = net.Pixel(k / kCols, k % kCols), b = net.Pixel(n / kCols, n % kCols);
+      const Eigen::Vector2d a = net.Pixel(k / kCols, k % kCols),
+                            b = net.Pixel(n / kCols, n % kCols);
       for (double t : {0.3, 0.5, 0.7}) {
         const FindNodeResult found = FindNode(net.image, a + t * (b - a), 6);
         EXPECT_EQ(found.status, FindNodeStatus::kNone) << "link " << k << "-" << n << " at " << t;
@@ -420,7 +422,8 @@ TEST(FindNode, FindsNoJunctionOnThePlainYarnsOfADemosaicedFrame) {
 TEST(KnotDetector, TellsTheBayerPhaseOfADemosaicedImageAndNoneOfAPlainOne) {
   const NetImage shot = RenderNet(ShotLike(1.5, 0.0, 11));
   const Eigen::Vector2d knot = shot.Pixel(1, 1);
-  const cv::Rect even(static_cast<int>(knot.x()) / 2 * 2 - 30, static_cast<int>(knot.y()) / 2 * 2 - 30, 60, 60);
+  const cv::Rect even(static_cast<int>(knot.x()) / 2 * 2 - 30,
+                      static_cast<int>(knot.y()) / 2 * 2 - 30, 60, 60);
   EXPECT_EQ(KnotDetector(shot.image, even).bayer_pattern(), static_cast<int>(BayerPattern::kRGGB));
   // One column further: the block there starts green, red.
   EXPECT_EQ(KnotDetector(shot.image, even + cv::Point(1, 0)).bayer_pattern(),

@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-
 #include <opencv2/imgproc.hpp>
 
 #include "tests/libreconstruct/labeling/rendered_net.h"
@@ -181,8 +180,8 @@ TEST(TrackKnots, AKnotOneYarnShortWithoutAcceptedNeighboursIsLeftForReview) {
   o.seed = 13;
   o.offset = Eigen::Vector3d(0.0, 0.004, -0.002);
   // (1,1)-(1,2) gone; knots 1, 2, 4, 7, 9 and 10 around them two yarns short each.
-  o.missing = {{5, 6},  {0, 1},  {1, 2},  {2, 3},  {0, 4},   {4, 8},
-               {3, 7},  {7, 11}, {8, 9},  {9, 13}, {10, 11}, {10, 14}};
+  o.missing = {{5, 6}, {0, 1},  {1, 2}, {2, 3},  {0, 4},   {4, 8},
+               {3, 7}, {7, 11}, {8, 9}, {9, 13}, {10, 11}, {10, 14}};
   const NetImage b = RenderNet(o);
   const std::vector<TrackedKnot> tracked = TrackKnots(a.image, b.image, AllKnots(a), kRows, kCols);
   for (const int k : {1, 2, 4, 7, 9, 10}) EXPECT_FALSE(tracked[k].accepted) << "knot " << k;

@@ -24,16 +24,15 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <opencv2/core.hpp>
 #include <random>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Geometry>
-#include <opencv2/core.hpp>
 
 #include "calibration/rig.h"
 #include "libreconstruct/labeling/knot_detect.h"
@@ -126,10 +125,9 @@ cv::Mat Photograph(const calib::Camera& camera, const Scene& scene, uint64_t see
 // `draw`: the seed of the links' buckles.
 Shot Render(unsigned draw) {
   Shot shot;
-  shot.rig.cameras = {
-      calib::LookAtCamera("a", {-1.9, 0.0, 0.1}, {0, 0, 0}, 16.0, 5.5, 1024),
-      calib::LookAtCamera("b", {-1.95, 0.7, 0.2}, {0, 0, 0}, 16.0, 5.5, 1024),
-      calib::LookAtCamera("c", {-1.95, -0.55, -0.35}, {0, 0, 0}, 16.0, 5.5, 1024)};
+  shot.rig.cameras = {calib::LookAtCamera("a", {-1.9, 0.0, 0.1}, {0, 0, 0}, 16.0, 5.5, 1024),
+                      calib::LookAtCamera("b", {-1.95, 0.7, 0.2}, {0, 0, 0}, 16.0, 5.5, 1024),
+                      calib::LookAtCamera("c", {-1.95, -0.55, -0.35}, {0, 0, 0}, 16.0, 5.5, 1024)};
   for (int k = 0; k < kKnots; ++k) {
     if (k % kCols + 1 < kCols) shot.links.emplace_back(k, k + 1);
     if (k / kCols + 1 < kRows) shot.links.emplace_back(k, k + kCols);
@@ -232,8 +230,7 @@ struct Tally {
   std::string wrong_ones;  // which, how far off, and the knot's yarns there
 
   // `by`: the tool that made the label, when the tally mixes them.
-  void Add(const Shot& shot, int c, int t, int k, const Eigen::Vector2d& px,
-           const char* by = "") {
+  void Add(const Shot& shot, int c, int t, int k, const Eigen::Vector2d& px, const char* by = "") {
     const Eigen::Vector2d off = px - shot.Truth(c, t, k);
     ++accepted;
     over_1px += off.norm() > 1.0;
@@ -242,8 +239,8 @@ struct Tally {
     ++wrong;
     char s[112];
     std::snprintf(s, sizeof s,
-                  "\n  camera %d frame %d knot (%d,%d)%s: %.2f px off (%+.1f, %+.1f), yarns", c,
-                  t, k / kCols, k % kCols, by, off.norm(), off.x(), off.y());
+                  "\n  camera %d frame %d knot (%d,%d)%s: %.2f px off (%+.1f, %+.1f), yarns", c, t,
+                  k / kCols, k % kCols, by, off.norm(), off.x(), off.y());
     wrong_ones += s + Yarns(shot, c, t, k);
   }
   void Print(const char* what, int of) const {
@@ -329,8 +326,10 @@ Tally FindPathAlongTheSides(const Shot& shot, const std::vector<int>& cameras, i
   const int corners[4] = {0, kCols - 1, (kRows - 1) * kCols, kKnots - 1};
   Tally tally;
   *taken = 0;
-  const std::pair<int, int> sides[4] = {{corners[0], corners[1]}, {corners[2], corners[3]},
-                                        {corners[0], corners[2]}, {corners[1], corners[3]}};
+  const std::pair<int, int> sides[4] = {{corners[0], corners[1]},
+                                        {corners[2], corners[3]},
+                                        {corners[0], corners[2]},
+                                        {corners[1], corners[3]}};
   for (int c : cameras)
     for (const auto& [a, b] : sides) {
       const FindPathResult r =

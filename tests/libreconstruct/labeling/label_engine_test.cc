@@ -2,18 +2,18 @@
 // border through the rig, the epipolar check, tracking, and that no knot is accepted with another
 // knot's identity.
 
+#include "libreconstruct/labeling/label_engine.h"
+
 #include <gtest/gtest.h>
 
-#include <cmath>
-#include <vector>
-
 #include <Eigen/Geometry>
+#include <cmath>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "calibration/rig.h"
 #include "libreconstruct/geometry/triangulation.h"
-#include "libreconstruct/labeling/label_engine.h"
 #include "libreconstruct/twin/render.h"
 
 namespace netlab::recon {
@@ -40,10 +40,9 @@ Shot Render(int frames, const std::vector<std::pair<int, int>>& hidden_links = {
             const std::vector<std::pair<int, Eigen::Vector3d>>& moved = {},
             const std::vector<std::pair<int, Eigen::Vector3d>>& drift = {}) {
   Shot shot;
-  shot.rig.cameras = {
-      calib::LookAtCamera("a", {-1.5, 0.0, 0.0}, {0, 0, 0}, 16.0, 5.5, 1024),
-      calib::LookAtCamera("b", {-1.4, 0.55, 0.1}, {0, 0, 0}, 16.0, 5.5, 1024),
-      calib::LookAtCamera("c", {-1.35, -0.45, -0.3}, {0, 0, 0}, 16.0, 5.5, 1024)};
+  shot.rig.cameras = {calib::LookAtCamera("a", {-1.5, 0.0, 0.0}, {0, 0, 0}, 16.0, 5.5, 1024),
+                      calib::LookAtCamera("b", {-1.4, 0.55, 0.1}, {0, 0, 0}, 16.0, 5.5, 1024),
+                      calib::LookAtCamera("c", {-1.35, -0.45, -0.3}, {0, 0, 0}, 16.0, 5.5, 1024)};
   const Eigen::Matrix3d turn = (Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()) *
                                 Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()))
                                    .toRotationMatrix();
@@ -447,8 +446,7 @@ TEST(LabelEngine, FindNodeOnAnotherKnotIsKeptForReview) {
   EXPECT_NE(review_reason(engine, store).find("other cameras"), std::string::npos)
       << review_reason(engine, store);
   // The right knot there is accepted: the other cameras agree with it.
-  ASSERT_EQ(engine.FindNodeAt(0, 0, 12, shot.Truth(0, 0, 12), 6.0).status,
-            FindNodeStatus::kFound);
+  ASSERT_EQ(engine.FindNodeAt(0, 0, 12, shot.Truth(0, 0, 12), 6.0).status, FindNodeStatus::kFound);
   EXPECT_EQ(store.at(0, 0, 12).state, LabelState::kAccepted);
   EXPECT_FALSE(engine.reasons().count({0, 0, 12}));
 }
@@ -1042,8 +1040,7 @@ TEST(LabelEngine, FindNodeDoubtsAJunctionAYarnShortTheOtherCamerasDoNotFix) {
   EXPECT_EQ(r.knot.branches, 3);
   EXPECT_EQ(store.at(0, 0, 12).state, LabelState::kNeedsReview);
   ASSERT_TRUE(engine.reasons().count({0, 0, 12}));
-  EXPECT_NE(engine.reasons().at({0, 0, 12}).find("no other cameras that fix it"),
-            std::string::npos)
+  EXPECT_NE(engine.reasons().at({0, 0, 12}).find("no other cameras that fix it"), std::string::npos)
       << engine.reasons().at({0, 0, 12});
 }
 
@@ -1101,8 +1098,7 @@ TEST(LabelEngine, FindNodeKeepsAJunctionNothingConfirmsForReview) {
   for (int k : {7, 11, 13, 17}) labels.at(0, 0, k) = Accepted(shot.Truth(0, 0, k));
   LabelStore store(std::move(labels));
   LabelEngine engine(&store, &shot.rig, Images(shot));
-  ASSERT_EQ(engine.FindNodeAt(0, 0, 12, shot.Truth(0, 0, 12), 6.0).status,
-            FindNodeStatus::kFound);
+  ASSERT_EQ(engine.FindNodeAt(0, 0, 12, shot.Truth(0, 0, 12), 6.0).status, FindNodeStatus::kFound);
   EXPECT_TRUE(store.at(0, 0, 12).accepted()) << engine.reasons().at({0, 0, 12});
 }
 
@@ -1269,8 +1265,7 @@ TEST(LabelEngine, ToolsLabelsThatAgreeWithEachOtherAgainstThePersonGoToReview) {
   EXPECT_EQ(store.at(1, 0, 7).state, LabelState::kNeedsReview);
   EXPECT_TRUE(store.at(2, 0, 7).accepted());
   ASSERT_TRUE(engine.reasons().count({0, 0, 7}));
-  EXPECT_NE(engine.reasons().at({0, 0, 7}).find("after the person's label in c"),
-            std::string::npos)
+  EXPECT_NE(engine.reasons().at({0, 0, 7}).find("after the person's label in c"), std::string::npos)
       << engine.reasons().at({0, 0, 7});
 }
 
@@ -1308,7 +1303,8 @@ TEST(LabelEngine, ALabelOfAKnotTheTargetHidesGoesToReview) {
       }
     if (!persons) {
       ASSERT_TRUE(engine.reasons().count({0, 0, kKnot}));
-      EXPECT_EQ(engine.reasons().at({0, 0, kKnot}), "the target hides the knot here (where b, c put it)");
+      EXPECT_EQ(engine.reasons().at({0, 0, kKnot}),
+                "the target hides the knot here (where b, c put it)");
     }
   }
 }

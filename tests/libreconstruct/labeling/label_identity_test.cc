@@ -6,13 +6,12 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <opencv2/imgproc.hpp>
 #include <optional>
 #include <ostream>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <opencv2/imgproc.hpp>
 
 #include "calibration/rig.h"
 #include "libreconstruct/recording/bayer.h"
@@ -494,7 +493,6 @@ TEST(CheckIdentity, DegenerateInputIsRejectedWithTheReason) {
             IdentityVerdict::kUnreadable);
 }
 
-
 // ---------------------------------------------------------------------------------------------
 // ReadJunctionIdentity: the knot picker's hint at an unlabeled junction.
 
@@ -516,8 +514,8 @@ TEST(ReadJunctionIdentity, ADistinctCodeIdentifiesItsKnotEvenWithABranchMissed) 
   EXPECT_EQ(three.status, IdentifyStatus::kIdentified) << three.why;
   EXPECT_EQ(three.knots, std::vector<int>{kCentre});
   // The centre labeled elsewhere in the view: nothing is offered, and the reason says why.
-  const JunctionReading taken = ReadJunctionIdentity(centre.image, book, centre.knot,
-                                                     centre.angles, 80, FullColour(), {kCentre});
+  const JunctionReading taken = ReadJunctionIdentity(centre.image, book, centre.knot, centre.angles,
+                                                     80, FullColour(), {kCentre});
   EXPECT_EQ(taken.status, IdentifyStatus::kUnknown);
   EXPECT_TRUE(taken.knots.empty());
   EXPECT_EQ(taken.excluded, 1);
@@ -566,8 +564,8 @@ TEST(ReadJunctionIdentity, TheTrueKnotIsAlwaysOfferedOnARenderedNet) {
       double link = std::numeric_limits<double>::infinity();
       for (const auto& nb : y.neighbour_px)
         if (nb) link = std::min(link, (*nb - net.pixels[k]).norm());
-      const JunctionReading j = ReadJunctionIdentity(net.frame, net.codebook, net.pixels[k],
-                                                     y.branch_angles_rad, link);
+      const JunctionReading j =
+          ReadJunctionIdentity(net.frame, net.codebook, net.pixels[k], y.branch_angles_rad, link);
       if (j.status == IdentifyStatus::kUnknown) {
         ++unknown;
         continue;

@@ -27,7 +27,8 @@ TEST(LabelStore, EveryStepUndoesAndRedoesAsOne) {
   LabelStore store = Fresh();
   EXPECT_FALSE(store.CanUndo());
   EXPECT_EQ(store.Apply("Find Node", {{0, 1, 4, Manual(100.5, 200.25)}}), 1);
-  EXPECT_EQ(store.Apply("Find Path", {{0, 1, 3, Manual(90, 200)}, {0, 1, 5, Manual(110, 200)},
+  EXPECT_EQ(store.Apply("Find Path", {{0, 1, 3, Manual(90, 200)},
+                                      {0, 1, 5, Manual(110, 200)},
                                       {1, 1, 4, Manual(300, 40)}}),
             3);
   EXPECT_EQ(store.labels().CountPresent(), 4);
@@ -55,7 +56,7 @@ TEST(LabelStore, AHiddenMarkIsAStepThatUndoesAndRedoes) {
   EXPECT_TRUE(store.at(0, 2, 1).hidden());
   EXPECT_FALSE(store.at(0, 2, 1).present());
   EXPECT_EQ(store.Apply("again", {{1, 2, 1, Label::Hidden()}}), 0);  // no change: no step
-  EXPECT_EQ(store.Apply("unmark", {{1, 2, 1, Label{}}}), 1);          // absent is not hidden
+  EXPECT_EQ(store.Apply("unmark", {{1, 2, 1, Label{}}}), 1);         // absent is not hidden
   store.Undo();
   EXPECT_TRUE(store.at(1, 2, 1).hidden());
   store.Undo();

@@ -4,13 +4,12 @@
 // cameras of a shot see it (netlab render): grey knot balls, corner masses, a Bayer mosaic
 // demosaiced bilinearly, farther away (thinner yarns).
 
+#include <Eigen/Geometry>
 #include <cmath>
+#include <opencv2/core.hpp>
 #include <random>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Geometry>
-#include <opencv2/core.hpp>
 
 #include "calibration/rig.h"
 #include "libreconstruct/recording/bayer.h"
@@ -35,7 +34,7 @@ inline std::vector<Colour> NetADyes() {
     const double c = srgb / 255.0;
     return static_cast<float>(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
   };
-  const int srgb[7][3] = {{240, 240, 235}, {240, 120, 20}, {150, 200, 40}, {30, 180, 180},
+  const int srgb[7][3] = {{240, 240, 235}, {240, 120, 20},  {150, 200, 40}, {30, 180, 180},
                           {30, 60, 170},   {240, 120, 170}, {110, 70, 35}};
   std::vector<Colour> dyes;
   for (const auto& c : srgb) dyes.emplace_back(linear(c[2]), linear(c[1]), linear(c[0]));
@@ -43,23 +42,23 @@ inline std::vector<Colour> NetADyes() {
 }
 
 struct RenderNetOptions {
-  double tilt_deg = 0.0;   // turn about the vertical, besides a fixed 20 degree roll
+  double tilt_deg = 0.0;  // turn about the vertical, besides a fixed 20 degree roll
   // A turn of the net about its own normal first: with tilt_deg, its links meet at acute angles
   // in the image (a mesh seen sheared, as where a net folds).
   double in_plane_deg = 0.0;
-  double noise_grey = 0.0; // Gaussian noise, grey levels of the 8-bit image
+  double noise_grey = 0.0;  // Gaussian noise, grey levels of the 8-bit image
   uint64_t seed = 1;
   std::vector<std::pair<int, int>> missing;  // links (knot a, knot b) left out of the picture
-  Eigen::Vector3d offset = Eigen::Vector3d::Zero();  // moves the net (a later frame), m
-  double spin_deg = 0.0;                             // turns it about the optical axis
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();    // moves the net (a later frame), m
+  double spin_deg = 0.0;                               // turns it about the optical axis
   std::vector<std::pair<int, Eigen::Vector3d>> moved;  // single knots moved besides, m
-  double distance_m = 1.5;      // camera to net centre: 1.5 m, yarns ~2 px; 3 m, ~1 px
+  double distance_m = 1.5;               // camera to net centre: 1.5 m, yarns ~2 px; 3 m, ~1 px
   std::vector<Colour> dyes = SixDyes();  // cycled over the links
   std::vector<std::pair<int, int>> dim;  // links (knot a, knot b) dyed dim_factor as bright
   double dim_factor = 0.1;
-  double knot_radius_m = 0.0;   // grey balls at the knots (netlab render: 1.5 yarn diameters)
-  double corner_radius_m = 0.0; // grey corner masses at the four corners
-  bool bayer = false;           // an RGGB mosaic (sensor noise), demosaiced bilinearly
+  double knot_radius_m = 0.0;    // grey balls at the knots (netlab render: 1.5 yarn diameters)
+  double corner_radius_m = 0.0;  // grey corner masses at the four corners
+  bool bayer = false;            // an RGGB mosaic (sensor noise), demosaiced bilinearly
   // Buckled links (a slack knotless net): each link straight from its knots for bend_fraction of
   // its length, then shifted sideways by bend_m in the net's plane (all to one side: a sag).
   double bend_fraction = 0.0;
@@ -101,8 +100,8 @@ inline NetImage RenderNet(const RenderNetOptions& o) {
     t.points = {net.knots[a], net.knots[b]};
     if (o.bend_m > 0.0) {
       const Eigen::Vector3d along = net.knots[b] - net.knots[a];
-      const Eigen::Vector3d side =
-          (o.bend_alternate && n % 2 ? -1.0 : 1.0) * along.cross(turn * Eigen::Vector3d::UnitX()).normalized();
+      const Eigen::Vector3d side = (o.bend_alternate && n % 2 ? -1.0 : 1.0) *
+                                   along.cross(turn * Eigen::Vector3d::UnitX()).normalized();
       t.points = {net.knots[a], net.knots[a] + o.bend_fraction * along + o.bend_m * side,
                   net.knots[b] - o.bend_fraction * along + o.bend_m * side, net.knots[b]};
     }
@@ -118,7 +117,8 @@ inline NetImage RenderNet(const RenderNetOptions& o) {
       if (r + 1 < kRows) link(r * kCols + c, (r + 1) * kCols + c);
     }
   for (int k = 0; k < kRows * kCols; ++k) {
-    const bool corner = k == 0 || k == kCols - 1 || k == (kRows - 1) * kCols || k == kRows * kCols - 1;
+    const bool corner =
+        k == 0 || k == kCols - 1 || k == (kRows - 1) * kCols || k == kRows * kCols - 1;
     if (corner && o.corner_radius_m > 0)
       scene.balls.push_back({net.knots[k], o.corner_radius_m, Colour(0.7f, 0.7f, 0.7f)});
     else if (o.knot_radius_m > 0)

@@ -22,10 +22,10 @@
 namespace netlab::recon {
 namespace {
 
-using testing::ScratchDir;
-using testing::WriteBytes;
 using testing::ErrorOf;
 using testing::Mentions;
+using testing::ScratchDir;
+using testing::WriteBytes;
 namespace fs = std::filesystem;
 
 constexpr int kRows = 3, kCols = 4, kFrames = 5;
@@ -56,8 +56,8 @@ bool SameDouble(double a, double b) { return (std::isnan(a) && std::isnan(b)) ||
 // Equal in every field, bit for bit; NaN positions match NaN.
 ::testing::AssertionResult SameLabels(const LabelSet& a, const LabelSet& b) {
   if (a.rows != b.rows || a.cols != b.cols)
-    return ::testing::AssertionFailure() << "shape " << a.rows << "x" << a.cols << " vs "
-                                         << b.rows << "x" << b.cols;
+    return ::testing::AssertionFailure()
+           << "shape " << a.rows << "x" << a.cols << " vs " << b.rows << "x" << b.cols;
   if (a.cameras != b.cameras) return ::testing::AssertionFailure() << "camera names differ";
   if (a.frame_index != b.frame_index) return ::testing::AssertionFailure() << "frames differ";
   if (a.labels.size() != b.labels.size())
@@ -91,12 +91,11 @@ void ReplaceDataset(hid_t file, const std::string& name, hid_t type,
   const size_t n = std::accumulate(dims.begin(), dims.end(), size_t{1}, std::multiplies<>());
   const std::vector<double> values(n, value);
   h5::Id space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr));
-  h5::Id dataset(H5Dcreate2(file, name.c_str(), type, space.get(), H5P_DEFAULT, H5P_DEFAULT,
-                            H5P_DEFAULT));
+  h5::Id dataset(
+      H5Dcreate2(file, name.c_str(), type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
   ASSERT_TRUE(dataset.valid()) << name;
-  ASSERT_GE(H5Dwrite(dataset.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT,
-                     values.data()),
-            0);
+  ASSERT_GE(
+      H5Dwrite(dataset.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()), 0);
 }
 
 // Sets element `index` (flat) of an existing uint8 dataset.
@@ -251,8 +250,9 @@ TEST(LabelsFile, ReviewReasonsAsAVariableLengthStringAreReadAsText) {
     const char* data = text.c_str();
     H5Dwrite(dataset.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, &data);
   };
-  EditFile(dir / "labels.h5",
-           [&](hid_t f) { write_vlen(f, "1\t4\t2\tmoved 2.1 px otherwise than its neighbours\n"); });
+  EditFile(dir / "labels.h5", [&](hid_t f) {
+    write_vlen(f, "1\t4\t2\tmoved 2.1 px otherwise than its neighbours\n");
+  });
   EXPECT_EQ(ReadLabels(dir / "labels.h5").reasons.at({1, 4, 2}),
             "moved 2.1 px otherwise than its neighbours");
   EditFile(dir / "labels.h5", [&](hid_t f) { write_vlen(f, "9 9 9 out of the set\n"); });
@@ -263,8 +263,8 @@ TEST(LabelsFile, ReviewReasonsAsAVariableLengthStringAreReadAsText) {
 
 TEST(LabelsFile, RoundTripOfNoFramesAndNoCameras) {
   ScratchDir dir("labels");
-  for (const LabelSet& written : {LabelSet::Empty(2, 2, {"a", "b"}, {}),
-                                  LabelSet::Empty(2, 2, {}, {0, 1, 2})}) {
+  for (const LabelSet& written :
+       {LabelSet::Empty(2, 2, {"a", "b"}, {}), LabelSet::Empty(2, 2, {}, {0, 1, 2})}) {
     WriteLabels(dir / "labels.h5", written);
     EXPECT_TRUE(SameLabels(ReadLabels(dir / "labels.h5"), written));
   }
@@ -385,9 +385,8 @@ TEST(LabelsFile, MissingDatasetIsNamed) {
   ScratchDir dir("labels");
   const std::string path = dir / "labels.h5";
   WriteLabels(path, Example());
-  EditFile(path, [](hid_t f) {
-    EXPECT_GE(H5Ldelete(f, "/cameras/cam_right/state", H5P_DEFAULT), 0);
-  });
+  EditFile(path,
+           [](hid_t f) { EXPECT_GE(H5Ldelete(f, "/cameras/cam_right/state", H5P_DEFAULT), 0); });
   EXPECT_TRUE(Mentions(ErrorOf([&] { ReadLabels(path); }),
                        {"missing dataset /cameras/cam_right/state", "[5,12]"}));
 }
@@ -439,9 +438,8 @@ TEST(LabelsFile, CamerasAttributeMustMatchTheGroups) {
   EditFile(path, [](hid_t f) { h5::WriteStringAttribute(f, "cameras", "cam_left"); });
   EXPECT_TRUE(Mentions(ErrorOf([&] { ReadLabels(path); }), {"/cameras/cam_right", "not listed"}));
 
-  EditFile(path, [](hid_t f) {
-    h5::WriteStringAttribute(f, "cameras", "cam_right\ncam_left\ncam_top");
-  });
+  EditFile(path,
+           [](hid_t f) { h5::WriteStringAttribute(f, "cameras", "cam_right\ncam_left\ncam_top"); });
   EXPECT_TRUE(Mentions(ErrorOf([&] { ReadLabels(path); }), {"cam_top", "no group"}));
 
   EditFile(path, [](hid_t f) {
@@ -457,8 +455,7 @@ TEST(LabelsFile, CamerasAttributeMustMatchTheGroups) {
 LabelSet AsImported(LabelSet set) {
   for (std::vector<Label>& camera : set.labels)
     for (Label& label : camera)
-      label = label.present() ? Label{label.px, LabelSource::kImported, 1.0f,
-                                      LabelState::kAccepted}
+      label = label.present() ? Label{label.px, LabelSource::kImported, 1.0f, LabelState::kAccepted}
                               : Label{};
   return set;
 }
@@ -494,7 +491,8 @@ TEST(XyPts, AHiddenMarkIsWrittenAsAbsent) {
   set.at(0, 0, 0) = Label::Hidden();
   set.at(0, 0, 1).px = Eigen::Vector2d(1.5, 2.0);
   WriteXyPts(dir / "xypts.csv", set);
-  EXPECT_EQ(ReadText(dir / "xypts.csv"), "pt1_cam1_X,pt1_cam1_Y,pt2_cam1_X,pt2_cam1_Y\nNaN,NaN,1.5,2\n");
+  EXPECT_EQ(ReadText(dir / "xypts.csv"),
+            "pt1_cam1_X,pt1_cam1_Y,pt2_cam1_X,pt2_cam1_Y\nNaN,NaN,1.5,2\n");
 }
 
 TEST(XyPts, RowIIsFrameI) {
@@ -596,8 +594,8 @@ TEST(XyPts, WrongNumberOfCellsIsNamedByLine) {
 
 TEST(XyPts, UnknownOrRepeatedColumnsAreNamed) {
   EXPECT_TRUE(Mentions(XyPtsError("frame,pt1_cam1_X,pt1_cam1_Y\n0,1,2\n"), {"'frame'"}));
-  EXPECT_TRUE(Mentions(XyPtsError("pt1_cam1_X,pt1_cam1_Y,pt1_cam1_X\n1,2,3\n"),
-                       {"'pt1_cam1_X'", "twice"}));
+  EXPECT_TRUE(
+      Mentions(XyPtsError("pt1_cam1_X,pt1_cam1_Y,pt1_cam1_X\n1,2,3\n"), {"'pt1_cam1_X'", "twice"}));
   EXPECT_TRUE(Mentions(XyPtsError(""), {"bad.csv", "header"}));
 }
 
@@ -610,8 +608,8 @@ TEST(ReadLabelsAny, ChoosesTheReaderByExtension) {
   WriteLabels(dir / "labels.h5", set);
   WriteXyPts(dir / "xypts.CSV", set);
   EXPECT_TRUE(SameLabels(ReadLabelsAny(dir / "labels.h5", kRows, kCols, {"x"}), set));
-  EXPECT_TRUE(SameLabels(ReadLabelsAny(dir / "xypts.CSV", kRows, kCols, set.cameras),
-                         AsImported(set)));
+  EXPECT_TRUE(
+      SameLabels(ReadLabelsAny(dir / "xypts.CSV", kRows, kCols, set.cameras), AsImported(set)));
 }
 
 TEST(ReadLabelsAny, NetShapeOfALabelsFileMustMatch) {

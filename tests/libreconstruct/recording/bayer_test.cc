@@ -201,11 +201,11 @@ TEST(ColorCorrection, TwelveBitRawWithBlackLevelAndWhiteBalance) {
     uint16_t raw;
     cv::Vec3b bgr;
   } cases[] = {
-      {1770, {40, 100, 200}},     // (1770 - 270) / 15 = 100
-      {270, {0, 0, 0}},           // black
-      {100, {0, 0, 0}},           // below black: clamped
-      {4095, {102, 255, 255}},    // white; red 510 clamps
-      {65535, {255, 255, 255}},   // beyond 12 bits (corrupt data): clamped
+      {1770, {40, 100, 200}},    // (1770 - 270) / 15 = 100
+      {270, {0, 0, 0}},          // black
+      {100, {0, 0, 0}},          // below black: clamped
+      {4095, {102, 255, 255}},   // white; red 510 clamps
+      {65535, {255, 255, 255}},  // beyond 12 bits (corrupt data): clamped
   };
   for (BayerPattern p : kAllPatterns) {
     for (const auto& c : cases) {
@@ -260,9 +260,8 @@ TEST(ColorCorrection, MonoFramesAreScaledToEightBits) {
 
   // An 8-bit colour frame without correction comes back as it is.
   const cv::Mat colour = Scene();
-  EXPECT_EQ(cv::norm(Demosaic(colour, BayerPattern::kNone, ColorCorrection{}), colour,
-                     cv::NORM_INF),
-            0);
+  EXPECT_EQ(
+      cv::norm(Demosaic(colour, BayerPattern::kNone, ColorCorrection{}), colour, cv::NORM_INF), 0);
 }
 
 TEST(Downscale, FactorTwoAveragesEachBlock) {

@@ -154,8 +154,7 @@ TEST_F(FrameCacheTest, PrefetchFollowsTheDirectionOfPlay) {
 
   // Forwards from 10: 10..19 ahead (20 images), 9..6 behind (8 images).
   cache.SetPlayhead(10, +1, 0);
-  ASSERT_TRUE(WaitFor([&] { return cache.stats().prefetched >= 38; }))
-      << cache.stats().prefetched;
+  ASSERT_TRUE(WaitFor([&] { return cache.stats().prefetched >= 38; })) << cache.stats().prefetched;
   for (int k = 10; k < kFrames; ++k)
     for (int c = 0; c < 2; ++c) {
       const auto image = cache.Get(c, k, 0);
@@ -168,8 +167,7 @@ TEST_F(FrameCacheTest, PrefetchFollowsTheDirectionOfPlay) {
 
   // Backwards from 10: only frame 5 is new (camera 0 only: camera 1 lacks it).
   cache.SetPlayhead(10, -1, 0);
-  ASSERT_TRUE(WaitFor([&] { return cache.stats().prefetched >= 39; }))
-      << cache.stats().prefetched;
+  ASSERT_TRUE(WaitFor([&] { return cache.stats().prefetched >= 39; })) << cache.stats().prefetched;
   for (int k = 9; k >= 0; --k)
     for (int c = 0; c < 2; ++c)
       if (!(c == 1 && k == 5)) {

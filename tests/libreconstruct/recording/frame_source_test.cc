@@ -36,7 +36,8 @@ cv::Mat Frame(int k, int depth, int channels = 1) {
     for (int x = 0; x < kWidth; ++x)
       for (int c = 0; c < channels; ++c) {
         if (depth == CV_8U)
-          m.ptr<uint8_t>(y)[x * channels + c] = static_cast<uint8_t>(3 * x + 5 * y + 7 * k + 50 * c);
+          m.ptr<uint8_t>(y)[x * channels + c] =
+              static_cast<uint8_t>(3 * x + 5 * y + 7 * k + 50 * c);
         else
           m.ptr<uint16_t>(y)[x * channels + c] =
               static_cast<uint16_t>((1021 * x + 37 * y + 4099 * k + 9001 * c) % 65536);
@@ -106,19 +107,16 @@ TEST_P(ImageSequenceTest, FindsTheNumberedFilesAndReadsThemExactly) {
   EXPECT_FALSE(error.empty());
 }
 
-INSTANTIATE_TEST_SUITE_P(Formats, ImageSequenceTest,
-                         ::testing::Values(SequenceCase{".pgm", CV_8U, 1},
-                                           SequenceCase{".pgm", CV_16U, 1},
-                                           SequenceCase{".png", CV_8U, 1},
-                                           SequenceCase{".png", CV_16U, 1},
-                                           SequenceCase{".png", CV_8U, 3},
-                                           SequenceCase{".tif", CV_8U, 1},
-                                           SequenceCase{".tif", CV_16U, 1}),
-                         [](const ::testing::TestParamInfo<SequenceCase>& param_info) {
-                           return param_info.param.extension.substr(1) +
-                                  (param_info.param.depth == CV_8U ? "8" : "16") + "bit" +
-                                  std::to_string(param_info.param.channels) + "ch";
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Formats, ImageSequenceTest,
+    ::testing::Values(SequenceCase{".pgm", CV_8U, 1}, SequenceCase{".pgm", CV_16U, 1},
+                      SequenceCase{".png", CV_8U, 1}, SequenceCase{".png", CV_16U, 1},
+                      SequenceCase{".png", CV_8U, 3}, SequenceCase{".tif", CV_8U, 1},
+                      SequenceCase{".tif", CV_16U, 1}),
+    [](const ::testing::TestParamInfo<SequenceCase>& param_info) {
+      return param_info.param.extension.substr(1) + (param_info.param.depth == CV_8U ? "8" : "16") +
+             "bit" + std::to_string(param_info.param.channels) + "ch";
+    });
 
 TEST(ImageSequence, UnpaddedPatternAndAbsoluteSpec) {
   ScratchDir dir("frame_source");
@@ -201,8 +199,8 @@ TEST(ReadPgm, GarbageMissingAndCorruptHeadersAreErrors) {
   EXPECT_TRUE(ReadPgm(dir / "empty.pgm", &error).empty());
   EXPECT_FALSE(error.empty());
 
-  for (const std::string header : {"P5\n64 -48\n255\n", "P5\n64\n", "P5\n64 48\n70000\n",
-                                   "P5\n0 48\n255\n"}) {
+  for (const std::string header :
+       {"P5\n64 -48\n255\n", "P5\n64\n", "P5\n64 48\n70000\n", "P5\n0 48\n255\n"}) {
     WriteBytes(dir / "bad.pgm", header + std::string(kWidth * kHeight * 2, '\0'));
     error.clear();
     EXPECT_TRUE(ReadPgm(dir / "bad.pgm", &error).empty()) << header;
@@ -342,7 +340,8 @@ TEST(VideoSource, ReadsTheFramesOfAnMjpegAviInAnyOrder) {
 Experiment WriteRecording(const ScratchDir& dir) {
   for (int k : {3, 4, 6}) WriteImage(dir / Numbered("cam0/f", k, ".pgm"), Frame(k, CV_16U));
   for (int k = 3; k <= 7; ++k) WriteImage(dir / Numbered("cam1/f", k, ".png"), Frame(k, CV_8U, 3));
-  for (int k = 3; k <= 7; ++k) WriteImage(dir / Numbered("cam2/f", k, ".pgm"), Frame(k + 20, CV_8U));
+  for (int k = 3; k <= 7; ++k)
+    WriteImage(dir / Numbered("cam2/f", k, ".pgm"), Frame(k + 20, CV_8U));
   WriteBytes(dir / "cam2/f0005.pgm", "garbage");
   WriteBytes(dir / "cam0_times.csv", "frame_index,time_s\n3,0.03\n4,0.04\n6,0.06\n");
   Experiment e;
@@ -376,12 +375,12 @@ TEST(FrameStore, RoundTripKeepsPixelsGapsAndFrameIndices) {
     SCOPED_TRACE("deflate " + std::to_string(deflate));
     const std::string path = dir / "store.h5";
     int calls = 0, last_done = 0, last_total = 0;
-    const Experiment out = ConvertToFrameStore(sequence, path, FrameStoreOptions{deflate},
-                                               [&](int done, int total) {
-                                                 ++calls;
-                                                 last_done = done;
-                                                 last_total = total;
-                                               });
+    const Experiment out =
+        ConvertToFrameStore(sequence, path, FrameStoreOptions{deflate}, [&](int done, int total) {
+          ++calls;
+          last_done = done;
+          last_total = total;
+        });
     EXPECT_TRUE(fs::exists(path));
     EXPECT_FALSE(fs::exists(path + ".partial"));
     EXPECT_EQ(last_total, 3 * 5);
@@ -408,8 +407,7 @@ TEST(FrameStore, RoundTripKeepsPixelsGapsAndFrameIndices) {
     EXPECT_EQ(cam2->indices(), (std::vector<int>{3, 4, 6, 7}));
     std::string error;
     for (int k : cam0->indices()) EXPECT_TRUE(SameImage(cam0->Read(k, &error), Frame(k, CV_16U)));
-    for (int k : cam1->indices())
-      EXPECT_TRUE(SameImage(cam1->Read(k, &error), Frame(k, CV_8U, 3)));
+    for (int k : cam1->indices()) EXPECT_TRUE(SameImage(cam1->Read(k, &error), Frame(k, CV_8U, 3)));
     for (int k : cam2->indices())
       EXPECT_TRUE(SameImage(cam2->Read(k, &error), Frame(k + 20, CV_8U)));
     FrameInfo info;

@@ -134,8 +134,7 @@ void ExpectFourCameraReport(const CheckReport& r, bool decoded, const std::strin
   EXPECT_EQ(r.frames_read, 4 * kFrames - 1);
   // Different frame counts (cam1 has 9) are worth a warning; sizes agree.
   ASSERT_EQ(r.warnings.size(), 1u);
-  EXPECT_NE(r.warnings[0].find("cam0 and cam1 differ in frame count (10 and 9)"),
-            std::string::npos)
+  EXPECT_NE(r.warnings[0].find("cam0 and cam1 differ in frame count (10 and 9)"), std::string::npos)
       << r.warnings[0];
 }
 
@@ -235,7 +234,8 @@ TEST(SynchronizedSequence, DifferentSizesCountsAndRangesAreWarnedAbout) {
   // left: 64x48, frames 0..5 with frame 3 at the wrong size; right: 32x24, frames 2..6.
   ScratchDir dir("sequence");
   for (int k = 0; k <= 5; ++k)
-    WritePgm(dir / ("a/" + FrameName(k)), Frame(0, k, k == 3 ? cv::Size(32, 24) : cv::Size(64, 48)));
+    WritePgm(dir / ("a/" + FrameName(k)),
+             Frame(0, k, k == 3 ? cv::Size(32, 24) : cv::Size(64, 48)));
   for (int k = 2; k <= 6; ++k) WritePgm(dir / ("b/" + FrameName(k)), Frame(1, k, {32, 24}));
   const SynchronizedSequence sequence(LeftAndRight(dir));
   EXPECT_EQ(sequence.first_frame(), 0);

@@ -118,11 +118,11 @@ TEST(Lamps, TheTargetsShadowEdgeIsWhereTheLampsRayGrazesTheBox) {
     for (int u = 155; u <= 164; ++u) row_light[v] += image.at<cv::Vec3f>(v, u)[1];
   // Lit at row 60 (y = -0.329 m): 0.1 + sqrt(1 - (t . l)^2) / r^2 of the colour; shadowed: 0.1.
   const double lit = row_light[60], dark = row_light[100];
-  const Eigen::Vector3d to_lamp = Eigen::Vector3d(-1.0, 0.0, 2.5) -
-                                  Eigen::Vector3d(0.5, (60 - 99.5) / 300.0 * 2.5, 2.5);
+  const Eigen::Vector3d to_lamp =
+      Eigen::Vector3d(-1.0, 0.0, 2.5) - Eigen::Vector3d(0.5, (60 - 99.5) / 300.0 * 2.5, 2.5);
   const double along = to_lamp.normalized().y();
-  EXPECT_NEAR(dark / lit,
-              0.1 / (0.1 + std::sqrt(1.0 - along * along) / to_lamp.squaredNorm()), 0.002);
+  EXPECT_NEAR(dark / lit, 0.1 / (0.1 + std::sqrt(1.0 - along * along) / to_lamp.squaredNorm()),
+              0.002);
   // Where the light crosses half way between the two, from the top and from the bottom.
   const double half = 0.5 * (lit + dark);
   auto crossing = [&](int from, int step) {

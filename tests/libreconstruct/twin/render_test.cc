@@ -31,8 +31,7 @@ calib::Camera DistortedCamera() {
 }
 
 // World point whose image is `pixel` at camera depth `depth` (m).
-Eigen::Vector3d Unproject(const calib::Camera& camera, const Eigen::Vector2d& pixel,
-                          double depth) {
+Eigen::Vector3d Unproject(const calib::Camera& camera, const Eigen::Vector2d& pixel, double depth) {
   const Eigen::Vector2d n = calib::UndistortPoint(camera.intrinsics, pixel);
   return camera.cam_from_world.Inverse() * Eigen::Vector3d(n.x() * depth, n.y() * depth, depth);
 }
@@ -93,8 +92,8 @@ struct LocalCurve {
   }
   double Along(const Eigen::Vector2d& q) const { return (q - center).dot(tangent); }
 };
-LocalCurve CurveAt(const calib::Camera& camera, const Eigen::Vector3d& a,
-                   const Eigen::Vector3d& b, double s, double radius) {
+LocalCurve CurveAt(const calib::Camera& camera, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                   double s, double radius) {
   LocalCurve c;
   const Eigen::Vector3d p = a + s * (b - a);
   c.center = camera.ProjectWorld(p);
@@ -121,8 +120,7 @@ struct Sample {
   double across;
   double intensity;
 };
-std::vector<Sample> SamplesNear(const cv::Mat& image, const LocalCurve& curve,
-                                double half_length) {
+std::vector<Sample> SamplesNear(const cv::Mat& image, const LocalCurve& curve, double half_length) {
   const double reach = 0.5 * curve.width + 1.5, box = std::max(reach, half_length) + 1.0;
   std::vector<Sample> samples;
   for (int y = static_cast<int>(std::floor(curve.center.y() - box));
@@ -211,8 +209,7 @@ template <typename F>
 void ForEachCrossSection(const ThreadCase& c, double width_px, double step, F&& f) {
   const calib::Camera& camera = *c.camera;
   const double radius = width_px * Depth(camera, c.a) / (2.0 * camera.intrinsics.fx);
-  const cv::Mat image =
-      RenderScene(camera, ThreadScene(c.a, c.b, radius), SceneRenderOptions());
+  const cv::Mat image = RenderScene(camera, ThreadScene(c.a, c.b, radius), SceneRenderOptions());
   const double length_px = (camera.ProjectWorld(c.b) - camera.ProjectWorld(c.a)).norm();
   const int steps = static_cast<int>(length_px / step);
   const int w = camera.intrinsics.width, h = camera.intrinsics.height;
@@ -237,16 +234,16 @@ TEST(RenderScene, ThreadPixelsHoldTheAreaOfTheTrueThreadInThem) {
     for (const ThreadCase& c : ThreadCases(distorted, paper))
       ForEachCrossSection(c, width, 11.0, [&](const cv::Mat& image, const LocalCurve& curve) {
         for (const Sample& s : SamplesNear(image, curve, 0.5)) {
-          worst = std::max(worst, std::abs(s.intensity - StripArea(s.across, curve.width,
-                                                                   curve.normal)));
+          worst = std::max(worst,
+                           std::abs(s.intensity - StripArea(s.across, curve.width, curve.normal)));
           ++pixels;
         }
       });
     // Measured: 0.0004 (w 0.7) and 0.0010 (w 3) at most, over 3824 and 5996 pixels.
     EXPECT_LT(worst, 0.005) << "width " << width;
     EXPECT_GT(pixels, 1000);
-    std::printf("width %.1f px: largest difference from the true area %.4f over %d pixels\n",
-                width, worst, pixels);
+    std::printf("width %.1f px: largest difference from the true area %.4f over %d pixels\n", width,
+                worst, pixels);
   }
 }
 
@@ -282,14 +279,13 @@ TEST(RenderScene, ThreadCentrelineLiesOnTheTrueProjectionWithDistortion) {
     EXPECT_LT(std::abs(Mean(fitted)), 0.01);
     EXPECT_LT(Rms(centroid), 0.05);
     EXPECT_LT(std::abs(Mean(centroid)), 0.01);
-    std::printf("width %.1f px: fitted peak %.4f px RMS (mean %+.4f, max %.4f), centroid %.4f px "
-                "RMS (mean %+.4f), %zu cross-sections\n",
-                width, Rms(fitted), Mean(fitted),
-                std::abs(*std::max_element(fitted.begin(), fitted.end(),
-                                           [](double x, double y) {
-                                             return std::abs(x) < std::abs(y);
-                                           })),
-                Rms(centroid), Mean(centroid), fitted.size());
+    std::printf(
+        "width %.1f px: fitted peak %.4f px RMS (mean %+.4f, max %.4f), centroid %.4f px "
+        "RMS (mean %+.4f), %zu cross-sections\n",
+        width, Rms(fitted), Mean(fitted),
+        std::abs(*std::max_element(fitted.begin(), fitted.end(),
+                                   [](double x, double y) { return std::abs(x) < std::abs(y); })),
+        Rms(centroid), Mean(centroid), fitted.size());
   }
 }
 
@@ -367,14 +363,12 @@ TEST(RenderScene, ThreadsAndBallsBehindTheCameraAreNotDrawn) {
   const calib::Camera camera = DistortedCamera();
   Scene scene = ThreadScene({0.1, 0.05, -1.0}, {0.1, 0.05, -3.0}, 0.01);
   scene.balls.push_back({{0.0, 0.0, -2.0}, 0.1, {1, 1, 1}});
-  EXPECT_EQ(cv::countNonZero(RenderScene(camera, scene, SceneRenderOptions())
-                                 .reshape(1)),
-            0);
+  EXPECT_EQ(cv::countNonZero(RenderScene(camera, scene, SceneRenderOptions()).reshape(1)), 0);
   // A thread from behind the camera to in front of it: only the part in front is drawn, and
   // it ends where it leaves the image.
   const Eigen::Vector3d front = Unproject(camera, {60.0, 128.0}, 2.0);
-  const cv::Mat image = RenderScene(
-      camera, ThreadScene({front.x(), front.y(), -1.0}, front, 0.01), SceneRenderOptions());
+  const cv::Mat image = RenderScene(camera, ThreadScene({front.x(), front.y(), -1.0}, front, 0.01),
+                                    SceneRenderOptions());
   EXPECT_GT(Green(image, 60, 128), 0.99f);  // w = 3 px
   // A line parallel to the optical axis images as a ray from the principal point outwards; the
   // part behind the camera would appear on the other side.
@@ -386,7 +380,7 @@ TEST(RenderScene, ThreadsAndBallsBehindTheCameraAreNotDrawn) {
 TEST(Expose, ColourOfAThickThreadSurvivesMosaicAndDemosaic) {
   const calib::Camera camera = DistortedCamera();
   const Colour colour(0.2f, 0.55f, 0.8f);  // BGR
-  const cv::Vec3b expected(51, 140, 204);   // round(255 colour)
+  const cv::Vec3b expected(51, 140, 204);  // round(255 colour)
   Scene scene = ThreadScene(Unproject(camera, {30.0, 90.0}, 2.0),
                             Unproject(camera, {220.0, 110.0}, 2.0), 8.0 * 2.0 / (2.0 * 300.0),
                             colour);  // w = 8 px
@@ -394,8 +388,8 @@ TEST(Expose, ColourOfAThickThreadSurvivesMosaicAndDemosaic) {
   options.ambient = 1.0;  // flat shading: the ball shows its colour
   scene.balls.push_back({Unproject(camera, {128.0, 200.0}, 1.5), 0.04, colour});  // r = 8 px
   const cv::Mat linear = RenderScene(camera, scene, options);
-  const Eigen::Vector2d thread_center = camera.ProjectWorld(0.5 * (scene.threads[0].points[0] +
-                                                                   scene.threads[0].points[1]));
+  const Eigen::Vector2d thread_center =
+      camera.ProjectWorld(0.5 * (scene.threads[0].points[0] + scene.threads[0].points[1]));
   const cv::Point points[] = {{static_cast<int>(std::lround(thread_center.x())),
                                static_cast<int>(std::lround(thread_center.y()))},
                               {128, 200}};
@@ -412,8 +406,7 @@ TEST(Expose, ColourOfAThickThreadSurvivesMosaicAndDemosaic) {
       const cv::Mat bgr = Demosaic(raw, pattern, correction);
       for (const cv::Point& p : points)
         for (int c = 0; c < 3; ++c)
-          EXPECT_NEAR(bgr.at<cv::Vec3b>(p)[c], expected[c], 2)
-              << "channel " << c << " at " << p;
+          EXPECT_NEAR(bgr.at<cv::Vec3b>(p)[c], expected[c], 2) << "channel " << c << " at " << p;
     }
 }
 
@@ -513,10 +506,10 @@ TEST(RenderScene, BoxFacesFollowLambertShading) {
   const cv::Mat image = RenderScene(camera, scene, options);
   // Two faces are seen (+x and -z of the box), turned 30 and 60 degrees from the light:
   // 0.25 + 0.75 cos(angle).
-  const Eigen::Vector2d left = camera.ProjectWorld(box.center + box.orientation *
-                                                   Eigen::Vector3d(0.2, 0.0, 0.0));
-  const Eigen::Vector2d right = camera.ProjectWorld(box.center + box.orientation *
-                                                    Eigen::Vector3d(0.0, 0.0, -0.2));
+  const Eigen::Vector2d left =
+      camera.ProjectWorld(box.center + box.orientation * Eigen::Vector3d(0.2, 0.0, 0.0));
+  const Eigen::Vector2d right =
+      camera.ProjectWorld(box.center + box.orientation * Eigen::Vector3d(0.0, 0.0, -0.2));
   const float a = image.at<cv::Vec3f>(static_cast<int>(std::lround(left.y())),
                                       static_cast<int>(std::lround(left.x())))[1];
   const float b = image.at<cv::Vec3f>(static_cast<int>(std::lround(right.y())),
@@ -545,9 +538,8 @@ TEST(RenderScene, BallIsCentredOnItsProjectedCentre) {
         sy += v * y;
       }
     const Eigen::Vector2d centroid(sx / sum, sy / sum);
-    std::printf("ball at (%.2f, %.2f): centroid off by %.4f px, area / pi r^2 = %.4f\n",
-                pixel.x(), pixel.y(),
-                (centroid - camera.ProjectWorld(scene.balls[0].center)).norm(),
+    std::printf("ball at (%.2f, %.2f): centroid off by %.4f px, area / pi r^2 = %.4f\n", pixel.x(),
+                pixel.y(), (centroid - camera.ProjectWorld(scene.balls[0].center)).norm(),
                 sum / (std::numbers::pi * std::pow(0.03 * camera.intrinsics.fx / 2.0, 2)));
     // Measured: 0.014, 0.019, 0.027 px with the default 4 x 4 samples per pixel; 0.002, 0.003,
     // 0.009 px with 32 x 32 (what remains is real: off the axis, perspective and distortion
@@ -577,9 +569,9 @@ TEST(RenderScene, BackgroundFillsPixelsWithoutSolidsAndShowsThroughThinThreads) 
   calib::Camera straight = camera;
   straight.intrinsics.distortion[0] = 0.0;
   straight.intrinsics.cx = straight.intrinsics.cy = 127.0;
-  Scene scene = ThreadScene(Unproject(straight, {10.0, 64.0}, 2.0),
-                            Unproject(straight, {246.0, 64.0}, 2.0), 0.5 * 2.0 / 600.0,
-                            {1, 1, 1});  // 0.5 px
+  Scene scene =
+      ThreadScene(Unproject(straight, {10.0, 64.0}, 2.0), Unproject(straight, {246.0, 64.0}, 2.0),
+                  0.5 * 2.0 / 600.0, {1, 1, 1});  // 0.5 px
   scene.background = {0.1f, 0.2f, 0.3f};
   const cv::Mat image = RenderScene(straight, scene, SceneRenderOptions());
   EXPECT_EQ(image.at<cv::Vec3f>(200, 200), scene.background);
@@ -594,10 +586,11 @@ TEST(RenderScene, HalfWeightRendersSumToTheMeanImage) {
   Scene a, b;
   for (Scene* s : {&a, &b}) {
     const double dx = s == &a ? 0.0 : 0.01;
-    s->threads.push_back({{{1.0 + dx, -0.3, -0.2}, {1.05 + dx, 0.3, 0.25}}, 0.002, {0.3f, 0.6f, 0.9f}});
+    s->threads.push_back(
+        {{{1.0 + dx, -0.3, -0.2}, {1.05 + dx, 0.3, 0.25}}, 0.002, {0.3f, 0.6f, 0.9f}});
     s->balls.push_back({{1.0 + dx, 0.0, 0.0}, 0.02, {0.9f, 0.9f, 0.9f}});
-    s->boxes.push_back({{2.2, 0.0, 0.0}, Eigen::Quaterniond::Identity(), {0.2, 0.15, 0.15},
-                        {0.4f, 0.4f, 0.5f}});
+    s->boxes.push_back(
+        {{2.2, 0.0, 0.0}, Eigen::Quaterniond::Identity(), {0.2, 0.15, 0.15}, {0.4f, 0.4f, 0.5f}});
     s->background = {0.05f, 0.05f, 0.05f};
   }
   const SceneRenderOptions options;
@@ -606,9 +599,9 @@ TEST(RenderScene, HalfWeightRendersSumToTheMeanImage) {
   RenderScene(camera, b, options, 0.5f, &blurred);
   const cv::Mat mean = 0.5 * (RenderScene(camera, a, options) + RenderScene(camera, b, options));
   EXPECT_LT(cv::norm(blurred, mean, cv::NORM_INF), 1e-6);
-  EXPECT_GT(cv::norm(RenderScene(camera, a, options), RenderScene(camera, b, options),
-                     cv::NORM_INF),
-            0.2);  // the two positions differ
+  EXPECT_GT(
+      cv::norm(RenderScene(camera, a, options), RenderScene(camera, b, options), cv::NORM_INF),
+      0.2);  // the two positions differ
 }
 
 TEST(RenderScene, RejectsBadAccumulatorsOptionsAndScenes) {
@@ -650,8 +643,8 @@ TEST(Expose, NoiseHasTheRequestedStandardDeviation) {
     // Rounding adds 1/12 grey level^2 of variance: sqrt(4 + 1/12) = 2.02 at 8 bits. Measured:
     // 2.026 (8 bit) and 32.19 of 32.12 (12 bit).
     EXPECT_NEAR(stddev[0], 2.0 * scale, 0.05 * 2.0 * scale);
-    std::printf("%d bit: noise %.3f (expected %.3f), mean %.3f (expected %.3f)\n", depth,
-                stddev[0], 2.0 * scale, mean[0], 0.5 * sensor.white());
+    std::printf("%d bit: noise %.3f (expected %.3f), mean %.3f (expected %.3f)\n", depth, stddev[0],
+                2.0 * scale, mean[0], 0.5 * sensor.white());
     EXPECT_NEAR(mean[0], 0.5 * sensor.white(), 0.05 * scale);
     // Another seed gives other noise; the same seed the same.
     EXPECT_EQ(cv::norm(raw, Expose(flat, camera.intrinsics, sensor), cv::NORM_INF), 0.0);
