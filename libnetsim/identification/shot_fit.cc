@@ -1110,13 +1110,22 @@ std::vector<std::string> ResolutionNotes(const Scenario& scenario,
       char size[64];
       std::snprintf(size, sizeof size, "%.3g cm segments (%d per link)", segment * 100,
                     net.segments_per_link);
+      // The step matters as much as the links: the implicit step damps the bending response
+      // at any resolution (docs/simulator.md, "Accuracy as the response to a parameter").
+      const std::string step =
+          scenario.simulation.integrator == IntegratorType::kImplicit
+              ? " The implicit step hides most of EI's effect whatever the links (0.15 of "
+                "those 1.23 mm at 2.5 cm segments, 0.75 of the 1.46 mm at 1.25 cm): fit EI with "
+                "--set integrator.type=explicit."
+              : "";
       notes.push_back(
           "net '" + net.name + "' of " + name + " has " + size +
-          ", too coarse to show EI in a flight: the fitted " + par.name +
-          " is this model's, not the thread's (Net A's flight, implicit step: a tenth of EI's "
-          "effect on the knots at 2.5 cm segments, two thirds at 1.25 cm; docs/benchmarks.md). "
-          "To fit the thread's, refine the links: --set nets." +
-          std::to_string(n) + ".segments_per_link=" +
+          ", coarser than EI's bending in a flight: the fitted " + par.name +
+          " is this model's, not the thread's (Net A's first 1 s of flight, explicit step: EI x4 "
+          "moves the knots 1.23 mm RMS at 2.5 cm segments, 1.46 mm at 1.25 cm; "
+          "docs/simulator.md)." +
+          step + " To fit the thread's, refine the links: --set nets." + std::to_string(n) +
+          ".segments_per_link=" +
           std::to_string(static_cast<int>(std::ceil(net.mesh / kBendingSegment - 1e-9))) +
           ", with the bench's values as a prior (--prior) to pick the valley");
     }

@@ -158,8 +158,9 @@ FitResult FitShots(const std::vector<FitShotInput>& shots,
 
 // Notes for a free bending stiffness whose net is too coarse to show it: a link's segments
 // longer than kBendingSegment, where a flight shows only part of EI's effect on the knots, so the
-// fitted EI is that resolution's, not the thread's (docs/benchmarks.md, "Bending waves"). `name`
-// names the scenario in the note.
+// fitted EI is that resolution's, not the thread's (docs/benchmarks.md, "Bending waves"); under
+// the implicit step the note adds that the step hides most of EI's effect at any resolution
+// (docs/simulator.md). `name` names the scenario in the note.
 inline constexpr double kBendingSegment = 0.0125;  // m
 std::vector<std::string> ResolutionNotes(const Scenario& scenario,
                                          const std::vector<FitParameter>& parameters,

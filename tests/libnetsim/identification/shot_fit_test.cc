@@ -165,7 +165,8 @@ TEST_F(ShotFit, SaysWhatTheFlightCannotDetermine) {
 }
 
 // A free EI is noted when a net of its material has segments longer than 1.25 cm, with the count
-// per link that brings them there; not for another parameter, another material or fine links.
+// per link that brings them there (and, under the implicit step, the explicit one); not for
+// another parameter, another material or fine links.
 TEST_F(ShotFit, NotesLinksTooCoarseForTheBendingStiffness) {
   const auto notes = [&](const std::string& free, const std::vector<ScenarioOverride>& set) {
     return ResolutionNotes(LoadScenario(scenario_, set),
@@ -179,6 +180,14 @@ TEST_F(ShotFit, NotesLinksTooCoarseForTheBendingStiffness) {
             std::string::npos)
       << coarse[0];
   EXPECT_NE(coarse[0].find("--set nets.0.segments_per_link=8"), std::string::npos) << coarse[0];
+  // The twin's implicit step hides EI whatever the links: the note says so, and not under explicit.
+  EXPECT_NE(coarse[0].find("The implicit step hides most of EI's effect"), std::string::npos)
+      << coarse[0];
+  EXPECT_NE(coarse[0].find("--set integrator.type=explicit"), std::string::npos) << coarse[0];
+  const auto explicit_step =
+      notes("materials.nylon.bend_stiffness", {{"integrator.type", "explicit"}});
+  ASSERT_EQ(explicit_step.size(), 1u);
+  EXPECT_EQ(explicit_step[0].find("implicit"), std::string::npos) << explicit_step[0];
   EXPECT_TRUE(notes("materials.nylon.twist_stiffness,drag.drag_coefficient", {}).empty());
   EXPECT_TRUE(notes("materials.nylon.bend_stiffness", {{"nets.0.segments_per_link", "8"}}).empty());
   EXPECT_EQ(notes("materials.nylon.bend_stiffness", {{"nets.0.segments_per_link", "7"}}).size(),
