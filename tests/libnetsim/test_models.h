@@ -3,9 +3,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <memory>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "libnetsim/forces/bend_twist_force.h"
@@ -90,6 +92,22 @@ inline std::pair<Model, State> PaperNetFalling(double height) {
   net.velocity = Vector3d(0, 0, -5.0);
   builder.AddNet(net);
   return std::move(builder).Build();
+}
+
+// An oscillation's period, from the upward crossings of the middle of its range (interpolated
+// between samples), and its range (max - min): of a signal y sampled at times t. Expects at least
+// three crossings; the period is 0 with fewer than two.
+inline std::pair<double, double> PeriodAndRange(const std::vector<double>& t,
+                                                const std::vector<double>& y) {
+  const auto [low, high] = std::minmax_element(y.begin(), y.end());
+  const double middle = 0.5 * (*low + *high);
+  std::vector<double> crossings;
+  for (size_t i = 0; i + 1 < y.size(); ++i)
+    if (y[i] < middle && y[i + 1] >= middle)
+      crossings.push_back(t[i] + (middle - y[i]) / (y[i + 1] - y[i]) * (t[i + 1] - t[i]));
+  EXPECT_GE(crossings.size(), 3u);
+  if (crossings.size() < 2) return {0.0, *high - *low};
+  return {(crossings.back() - crossings.front()) / (crossings.size() - 1), *high - *low};
 }
 
 // Moves every node and turns every frame by random amounts (m, rad).

@@ -24,6 +24,7 @@ namespace {
 
 using testing::ElasticForces;
 using testing::Nylon;
+using testing::PeriodAndRange;
 
 constexpr double kSample = 2.5e-4;  // s between samples; the automatic steps divide it
 
@@ -91,20 +92,6 @@ std::vector<double> Opening(const KnotRun& run) {
     opening.push_back(sum / knots.size());
   }
   return opening;
-}
-
-// Period (from the upward crossings of the middle of its range) and range (max - min) of a signal.
-std::pair<double, double> PeriodAndRange(const std::vector<double>& t,
-                                         const std::vector<double>& y) {
-  const auto [low, high] = std::minmax_element(y.begin(), y.end());
-  const double middle = 0.5 * (*low + *high);
-  std::vector<double> crossings;
-  for (size_t i = 0; i + 1 < y.size(); ++i)
-    if (y[i] < middle && y[i + 1] >= middle)
-      crossings.push_back(t[i] + (middle - y[i]) / (y[i + 1] - y[i]) * (t[i + 1] - t[i]));
-  EXPECT_GE(crossings.size(), 3u);
-  if (crossings.size() < 2) return {0.0, *high - *low};
-  return {(crossings.back() - crossings.front()) / (crossings.size() - 1), *high - *low};
 }
 
 // RMS over knots and samples of the knots' response b - a to a change of parameter.
