@@ -13,7 +13,9 @@
 //    again), at full and half resolution.
 // B. The scripted person (tests/app/gui/scripted_person.h) labeling the shot through the window:
 //    actions per knot-frame and wall time per action, and the visible knot-frames the review
-//    queue never offered (left unlabeled), by how many other cameras labeled the knot there.
+//    queue never offered (left unlabeled), by how many other cameras labeled the knot there, and
+//    each on a line: camera, frame, knot, where the truth has it and why the missing knots do
+//    not list it (recon::WhyNotMissing).
 //    --target (the project's target: the simulation the shot was rendered from, or the shot's
 //    truth.h5) keeps the knots the target hides off the queue, as a project with a target does.
 // C. Frame change with the 3D view open: the reconstruction room over the true labels
@@ -35,9 +37,11 @@
 #include <tuple>
 #include <vector>
 
+#include "app/gui/document/missing_knots.h"
 #include "app/gui/document/project.h"
 #include "app/gui/main_window.h"
 #include "app/gui/reconstruction_room.h"
+#include "libreconstruct/labeling/missing_knots.h"
 #include "libreconstruct/labels/label_set.h"
 #include "tests/app/gui/scripted_person.h"
 
@@ -248,9 +252,12 @@ int main(int argc, char** argv) {
     per_knot_frame = knot_frames > 0 ? double(actions) / knot_frames : 0.0;
     // What the session left: accepted labels right (<= 2 px) and wrong, visible knots unlabeled.
     long right = 0, wrong = 0, unlabeled = 0;
-    // The unlabeled ones by how many other cameras have a label of the knot in that frame.
+    // The unlabeled ones by how many other cameras have a label of the knot in that frame, and
+    // each with why the missing knots do not list it.
     std::array<long, 4> unlabeled_by_others{};
+    std::vector<std::string> unlabeled_lines;
     const netlab::recon::LabelSet& got = w.session()->document().labels();
+    const MissingKnots& missing = w.session()->missing();
     for (int c = 0; c < static_cast<int>(got.cameras.size()); ++c)
       for (int t = 0; t < got.frames(); ++t)
         for (int k = 0; k < got.knots(); ++k) {
@@ -267,6 +274,15 @@ int main(int argc, char** argv) {
             for (int o = 0; o < static_cast<int>(got.cameras.size()); ++o)
               others += o != c && got.at(o, t, k).present();
             ++unlabeled_by_others[std::min(others, 3)];
+            char head[160];
+            std::snprintf(head, sizeof head,
+                          "   never offered: %s frame %d knot %d (row %d, col %d) at (%.1f, "
+                          "%.1f) in the truth, labeled in %d other cameras: ",
+                          got.cameras[c].c_str(), got.frame_index[t], k, k / got.cols, k % got.cols,
+                          want.px.x(), want.px.y(), others);
+            unlabeled_lines.push_back(head + netlab::recon::WhyNotMissing(got, w.session()->rig(),
+                                                                          missing.rig_index(), c, t,
+                                                                          k, missing.options()));
           }
         }
     std::printf(
@@ -291,6 +307,7 @@ int main(int argc, char** argv) {
         right, wrong, unlabeled, unlabeled_by_others[0], unlabeled_by_others[1],
         unlabeled_by_others[2], unlabeled_by_others[3],
         w.session()->document().ReviewItems().size(), w.session()->missing().size());
+    for (const std::string& line : unlabeled_lines) std::printf("%s\n", line.c_str());
     never_offered = unlabeled;
     wrong_accepted = wrong;
   }

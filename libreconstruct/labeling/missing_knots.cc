@@ -45,28 +45,53 @@ bool SegmentHitsBall(const Eigen::Vector3d& from, const Eigen::Vector3d& to,
 
 // Whether a triangulation of `views` observations is one the person can trust for "expected
 // here": every view an inlier, each within `max_px`, and a usable ray geometry.
-bool Consistent(const PointEstimate& e, size_t views, const MissingKnotsOptions& o) {
-  if (!e.valid || !e.outliers.empty() || e.residual_px.size() != views) return false;
+// "" when it is; else why not.
+std::string Inconsistency(const PointEstimate& e, size_t views, const MissingKnotsOptions& o) {
+  if (!e.valid || !e.outliers.empty() || e.residual_px.size() != views)
+    return "do not triangulate to one point";
   for (double r : e.residual_px)
-    if (!(r <= o.max_residual_px)) return false;  // NaN (behind a camera) fails too
-  return UsableGeometry(e, o.max_unit_sigma_mm * 1e-3);
+    if (!(r <= o.max_residual_px)) {  // NaN (behind a camera) fails too
+      char s[96];
+      std::snprintf(s, sizeof s, "disagree (a residual of %.1f px, more than %.1f)", r,
+                    o.max_residual_px);
+      return s;
+    }
+  if (!UsableGeometry(e, o.max_unit_sigma_mm * 1e-3))
+    return "have rays too near head-on to place it (UsableGeometry)";
+  return "";
+}
+
+std::string Px(const Eigen::Vector2d& q) {
+  char s[64];
+  std::snprintf(s, sizeof s, "(%.1f, %.1f)", q.x(), q.y());
+  return s;
 }
 
 // Where `camera` sees the world point p: in front of it, inside its image by `margin` px, and
 // its own projection (the pixel undistorts back to p's ray: a lens model's polynomial can fold a
 // point far outside the field of view into the image).
+// `why` (when given) says why not.
 std::optional<Eigen::Vector2d> SeenAt(const calib::Camera& camera, const Eigen::Vector3d& p,
-                                      double margin) {
+                                      double margin, std::string* why = nullptr) {
   const Eigen::Vector3d p_in_cam = camera.cam_from_world * p;
-  if (!(p_in_cam.z() > 0.0)) return std::nullopt;
+  if (!(p_in_cam.z() > 0.0)) {
+    if (why) *why = "its point is behind the camera";
+    return std::nullopt;
+  }
   const Eigen::Vector2d q = calib::Project(camera.intrinsics, p_in_cam);
   const calib::CameraIntrinsics& in = camera.intrinsics;
-  if (!q.allFinite() || q.x() < margin || q.y() < margin || q.x() > in.width - 1 - margin ||
-      q.y() > in.height - 1 - margin)
+  // The image's outer edge: pixel centres at integers, -0.5 .. width - 0.5.
+  if (!q.allFinite() || q.x() < margin - 0.5 || q.y() < margin - 0.5 ||
+      q.x() > in.width - 0.5 - margin || q.y() > in.height - 0.5 - margin) {
+    if (why) *why = "its point projects to " + Px(q) + ", outside the image";
     return std::nullopt;
+  }
   const Eigen::Vector2d ray = p_in_cam.head<2>() / p_in_cam.z();
   const Eigen::Vector2d back = calib::UndistortPoint(in, q);
-  if (!back.allFinite() || (back - ray).norm() > 1e-4 * (1.0 + ray.norm())) return std::nullopt;
+  if (!back.allFinite() || (back - ray).norm() > 1e-4 * (1.0 + ray.norm())) {
+    if (why) *why = "its point projects to " + Px(q) + " only by the lens model's fold";
+    return std::nullopt;
+  }
   return q;
 }
 
@@ -86,6 +111,7 @@ struct ViewsPoint {
   double rms_px = 0.0;
   int lone_camera = -1;  // the one camera with a label (accepted or under review), or -1
   Eigen::Vector2d lone_px = Eigen::Vector2d::Zero();
+  std::string why;  // when not valid: why the cameras give no point
 };
 
 // The points of frame rows computed once each, on demand: (row, knot) -> ViewsPoint.
@@ -128,10 +154,18 @@ class Points {
         out.lone_px = views[0].px;
       }
       if (with_review && review.empty()) break;  // nothing more than the accepted ones
-      if (views.size() < 2) continue;
+      if (views.size() < 2) {
+        out.why = views.empty() ? "no other camera has a label of it"
+                                : "only " + labels_.cameras[seen[0]] + " has a label of it";
+        continue;
+      }
       out.lone_camera = -1;
       const PointEstimate e = TriangulatePoint(rig_, views, topt_);
-      if (!Consistent(e, views.size(), o_)) {
+      const std::string inconsistency = Inconsistency(e, views.size(), o_);
+      if (!inconsistency.empty()) {
+        std::string names;
+        for (int c : seen) names += (names.empty() ? "" : ", ") + labels_.cameras[c];
+        out.why = "the labels in " + names + " " + inconsistency;
         if (!with_review) return out;  // accepted labels that do not agree: no point
         continue;
       }
@@ -259,6 +293,50 @@ std::optional<Eigen::Vector3d> OnRay(const calib::Camera& camera, const Eigen::V
   return p;
 }
 
+// Knot k's point in frame row t (1.-3. of the header), with where it came from in `out`; none,
+// with `why` (when given) saying why, when nothing places it.
+std::optional<Eigen::Vector3d> KnotPoint(Points& points, int t, int k,
+                                         const MissingKnotsOptions& options, MissingKnot* out,
+                                         std::string* why) {
+  const LabelSet& labels = points.labels();
+  MissingKnot& m = *out;
+  m.t = t;
+  m.knot = k;
+  // The cameras; else one camera's ray where its neighbours or its motion put it; else its
+  // neighbours (two grid lines agreeing) or its motion alone.
+  const ViewsPoint& v = points.At(t, k);
+  if (v.valid) {
+    m.seen_in = v.seen_in;
+    m.under_review = v.under_review;
+    m.rms_px = v.rms_px;
+    return v.position;
+  }
+  std::optional<Rough> rough = FromNeighbours(points, t, k, options);
+  m.basis = MissingBasis::kNeighbours;
+  if (!rough) {
+    rough = FromMotion(points, t, k, options, &m.rows);
+    m.basis = MissingBasis::kMotion;
+  }
+  if (!rough) {
+    if (why)
+      *why = "no point: " + v.why +
+             ", its grid neighbours' points do not place it and its own points in the rows "
+             "around do not";
+    return std::nullopt;
+  }
+  // On the ray of the one camera with a label, where it passes near; else (no label, or a label
+  // off the rough point: a wrong one) the rough point itself.
+  std::optional<Eigen::Vector3d> p;
+  if (v.lone_camera >= 0)
+    p = OnRay(points.rig().cameras[points.rig_index()[v.lone_camera]], v.lone_px, *rough);
+  if (p) {
+    m.seen_in = {v.lone_camera};
+    if (!labels.at(v.lone_camera, t, k).accepted()) m.under_review = {v.lone_camera};
+    return p;
+  }
+  return rough->position;
+}
+
 std::string Names(const std::vector<int>& cameras, const std::vector<std::string>& names) {
   std::string s;
   for (int c : cameras) s += (s.empty() ? "" : ", ") + names[c];
@@ -331,36 +409,9 @@ std::vector<MissingKnot> FindMissingKnots(const LabelSet& labels, const calib::R
         open.push_back(c);
     }
     if (open.empty()) continue;
-    // Where the knot is: the cameras; else one camera's ray where its neighbours or its motion
-    // put it; else its neighbours (two grid lines agreeing) or its motion alone.
     MissingKnot m;
-    m.t = t;
-    m.knot = k;
-    std::optional<Eigen::Vector3d> p;
-    const ViewsPoint& v = points.At(t, k);
-    if (v.valid) {
-      p = v.position;
-      m.seen_in = v.seen_in;
-      m.under_review = v.under_review;
-      m.rms_px = v.rms_px;
-    } else {
-      std::optional<Rough> rough = FromNeighbours(points, t, k, options);
-      m.basis = MissingBasis::kNeighbours;
-      if (!rough) {
-        rough = FromMotion(points, t, k, options, &m.rows);
-        m.basis = MissingBasis::kMotion;
-      }
-      if (!rough) continue;
-      // On the ray of the one camera with a label, where it passes near; else (no label, or a
-      // label off the rough point: a wrong one) the rough point itself.
-      if (v.lone_camera >= 0) p = OnRay(rig.cameras[rig_index[v.lone_camera]], v.lone_px, *rough);
-      if (p) {
-        m.seen_in = {v.lone_camera};
-        if (!labels.at(v.lone_camera, t, k).accepted()) m.under_review = {v.lone_camera};
-      } else {
-        p = rough->position;
-      }
-    }
+    const std::optional<Eigen::Vector3d> p = KnotPoint(points, t, k, options, &m, nullptr);
+    if (!p) continue;
     for (int c : open) {
       const calib::Camera& camera = rig.cameras[rig_index[c]];
       const auto q = SeenAt(camera, *p, options.margin_px);
@@ -375,6 +426,30 @@ std::vector<MissingKnot> FindMissingKnots(const LabelSet& labels, const calib::R
     return std::tie(a.camera, a.knot) < std::tie(b.camera, b.knot);
   });
   return out;
+}
+
+std::string WhyNotMissing(const LabelSet& labels, const calib::Rig& rig,
+                          const std::vector<int>& rig_index, int camera, int t, int knot,
+                          const MissingKnotsOptions& options) {
+  const Label& l = labels.at(camera, t, knot);
+  if (l.present()) return "it has a label";
+  if (l.hidden()) return "it is marked hidden";
+  if (options.need_labeled_neighbour && !HasLabeledNeighbour(labels, camera, t, knot))
+    return "none of its grid neighbours has a label in " + labels.cameras[camera];
+  Points points(labels, rig, rig_index, options);
+  MissingKnot m;
+  std::string why;
+  const std::optional<Eigen::Vector3d> p = KnotPoint(points, t, knot, options, &m, &why);
+  if (!p) return why;
+  const calib::Camera& cam = rig.cameras[rig_index[camera]];
+  const auto q = SeenAt(cam, *p, options.margin_px, &why);
+  if (!q) return why;
+  m.camera = camera;
+  m.expected_px = *q;
+  const double time_s = options.target.empty() ? 0.0 : labels.frame_index[t] / options.target.fps;
+  if (TargetHides(options.target, cam.Center(), *p, time_s, options.target_grow_m))
+    return "the target hides its point (" + MissingReason(m, labels.cameras) + ")";
+  return "";
 }
 
 std::string MissingReason(const MissingKnot& missing, const std::vector<std::string>& cameras,

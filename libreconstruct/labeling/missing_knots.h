@@ -73,7 +73,8 @@ struct MissingKnotsOptions {
   // The ray geometry: a point whose largest standard deviation for 1 px of label noise exceeds
   // this (mm) places nothing (UsableGeometry of triangulation.h, whose bound it is by default).
   double max_unit_sigma_mm = kMaxUnitSigmaM * 1e3;
-  // The expected point at least this far inside the image (px).
+  // The expected point at least this far inside the image (px), whose outer edge is at -0.5
+  // and width - 0.5 (pixel centres at integers, as `netlab render` counts a knot in view).
   double margin_px = 0.0;
   // A point from the neighbours (2.): the two grid lines through the knot put it within this
   // fraction of their mean link length of each other, and one camera's ray passes within half
@@ -114,6 +115,14 @@ struct MissingKnot {
 std::vector<MissingKnot> FindMissingKnots(const recon::LabelSet& labels, const calib::Rig& rig,
                                           const std::vector<int>& rig_index, int t,
                                           const MissingKnotsOptions& options = {});
+
+// Why knot `knot` of frame row t is not missing in store camera `camera` (FindMissingKnots does
+// not list it): "it has a label", "the target hides its point (no label; seen in cam0, cam2;
+// expected near ...)", "its point projects to (2049.3, 611.0), outside the image", "no point: the
+// labels in cam0, cam2 disagree (...)", ...; "" when it is missing.
+std::string WhyNotMissing(const recon::LabelSet& labels, const calib::Rig& rig,
+                          const std::vector<int>& rig_index, int camera, int t, int knot,
+                          const MissingKnotsOptions& options = {});
 
 // What the person reads, e.g. "no label; seen in cam0, cam2; expected near (812.4, 1033.0)",
 // "no label; seen in cam0, cam2 (cam2 under review); expected near ...", "no label; seen in cam3,

@@ -61,6 +61,9 @@ class MissingKnots : public QObject {
   // The frame rows from t on (t first) in which (camera, knot) is missing without a break; empty
   // when it is not missing in t.
   std::vector<int> RunFrom(int camera, int t, int knot) const;
+  // What it counts with: the rig camera of each store camera, and the options.
+  const std::vector<int>& rig_index() const { return rig_index_; }
+  const MissingKnotsOptions& options() const { return options_; }
 
  signals:
   // After every labelsChanged of the document, once the rows it names (`frames`) and their

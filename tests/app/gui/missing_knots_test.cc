@@ -50,7 +50,7 @@ struct Scene {
   }
   bool InsideByMargin(int c, int t, int k) const {
     const Eigen::Vector2d q = Truth(c, t, k);
-    return q.allFinite() && q.minCoeff() >= kMargin && q.maxCoeff() <= 1023 - kMargin;
+    return q.allFinite() && q.minCoeff() >= kMargin - 0.5 && q.maxCoeff() <= 1023.5 - kMargin;
   }
   // Cameras a, b and c label every knot exactly (accepted); edge and back label nothing.
   recon::LabelSet Labels() const {
@@ -118,6 +118,35 @@ TEST(MissingKnots, AKnotTwoOtherCamerasSeeIsListedWhereTheyPutIt) {
   EXPECT_EQ(missing.Reason(2, 1, 4), std::string("no label; seen in a, b; expected near ") + where);
   EXPECT_EQ(missing.Reason(2, 0, 4), "");
   EXPECT_EQ(missing.Frames(), (std::set<int>{0, 1, 2, 3}));
+}
+
+// The image spans -0.5 .. width - 0.5 px (pixel centres at integers, as `netlab render` and the
+// true labels count a knot in the picture): a knot whose point falls in the outer half pixel of
+// the edge is missing there, one beyond the edge is not; WhyNotMissing says which.
+TEST(MissingKnots, AKnotInTheOuterHalfPixelOfThePictureIsListed) {
+  const Scene scene;
+  const recon::LabelSet labels = scene.Labels();  // a, b and c label every knot
+  const int t = 1, k = 4;
+  for (const double want_x : {1023.3, -0.3, 1023.7, -0.7}) {
+    // The edge camera's principal point moved so that knot k falls at want_x.
+    calib::Rig rig = scene.rig;
+    calib::CameraIntrinsics& in = rig.cameras[3].intrinsics;
+    in.cx += want_x - rig.cameras[3].ProjectWorld(scene.knots[t][k]).x();
+    ASSERT_NEAR(rig.cameras[3].ProjectWorld(scene.knots[t][k]).x(), want_x, 1e-6);
+    const bool inside = std::abs(want_x - 511.5) < 512.0;
+    bool listed = false;
+    for (const MissingKnot& m : FindMissingKnots(labels, rig, kRigIndex, t))
+      if (m.camera == 3 && m.knot == k) {
+        listed = true;
+        EXPECT_NEAR(m.expected_px.x(), want_x, 1e-6);
+      }
+    EXPECT_EQ(listed, inside) << want_x;
+    const std::string why = recon::WhyNotMissing(labels, rig, kRigIndex, 3, t, k);
+    if (inside)
+      EXPECT_EQ(why, "") << want_x;
+    else
+      EXPECT_NE(why.find("outside the image"), std::string::npos) << want_x << ": " << why;
+  }
 }
 
 TEST(MissingKnots, ALabelOrAHiddenMarkTakesItOffTheListAndUndoPutsItBack) {
@@ -338,7 +367,7 @@ TEST(MissingKnots, WithTheNeighbourRuleAKnotAmongUnlabeledNeighboursWaits) {
   // c's knot 4 has its four neighbours labeled in c; the edge camera has no label at all.
   EXPECT_EQ(missing.Items(), (std::vector<LabelKey>{{2, 1, 4}}));
   // One of the edge camera's knots labeled: its neighbours in the picture are listed.
-  const int k = std::get<2>(EdgeItems(scene, 0).front());
+  const int k = EdgeItems(scene, 0).front().knot;
   doc.Apply("Place", {{3, 0, k, Scene::Accepted(scene.Truth(3, 0, k))}});
   std::set<int> listed;
   for (const auto& [c, t, knot] : missing.Items())
