@@ -228,6 +228,10 @@ void MainWindow::BuildWorkspace() {
   review_table_->setSortingEnabled(true);
   review_table_->horizontalHeader()->setStretchLastSection(true);
   review_table_->verticalHeader()->setVisible(false);
+  // One line per item: the Reason cut at its end ("…"), whole in the cell's tooltip and in the
+  // status bar once the item is shown.
+  review_table_->setWordWrap(false);
+  review_table_->setTextElideMode(Qt::ElideRight);
   dock->setWidget(review_table_);
   dock->setMinimumWidth(480);
   addDockWidget(Qt::RightDockWidgetArea, dock);
@@ -242,6 +246,9 @@ void MainWindow::BuildWorkspace() {
   colours_dock->setWidget(colours_label_);
   addDockWidget(Qt::RightDockWidgetArea, colours_dock);
   addDockWidget(Qt::RightDockWidgetArea, grid_dock);
+  // The panels 640 px wide: the queue's Reason column shows what a missing knot's reason says up
+  // to its expected place; the four views, stacked two by two, lose nothing of their height.
+  resizeDocks({dock}, {640}, Qt::Horizontal);
   colours_timer_ = new QTimer(this);
   colours_timer_->setSingleShot(true);
   colours_timer_->setInterval(150);

@@ -143,6 +143,9 @@ QVariant ReviewModel::data(const QModelIndex& index, int role) const {
 }
 
 QVariant ReviewModel::headerData(int section, Qt::Orientation orientation, int role) const {
+  // A first click on Severity puts the worst first.
+  if (role == Qt::InitialSortOrderRole && orientation == Qt::Horizontal && section == kSeverity)
+    return static_cast<int>(Qt::DescendingOrder);
   if (role != Qt::DisplayRole) return {};
   if (orientation == Qt::Vertical) return section + 1;
   static const char* const kNames[kColumns] = {"Camera", "Frame",    "Knot",

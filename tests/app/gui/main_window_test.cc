@@ -14,6 +14,7 @@
 #include <QDockWidget>
 #include <QElapsedTimer>
 #include <QFileDialog>
+#include <QHeaderView>
 #include <QInputDialog>
 #include <QLabel>
 #include <QLineEdit>
@@ -39,6 +40,7 @@
 #include <future>
 #include <iterator>
 #include <map>
+#include <mutex>
 #include <set>
 #include <string>
 #include <vector>
@@ -51,6 +53,7 @@
 #include "app/gui/settings.h"
 #include "app/gui/shortcut_editor.h"
 #include "app/gui/timeline.h"
+#include "common/hdf5_util.h"
 #include "libreconstruct/geometry/triangulation.h"
 #include "tests/app/cli/run_netlab.h"
 #include "tests/app/gui/scripted_person.h"
@@ -438,6 +441,31 @@ TEST_F(MainWindowTest, AStatusMessageHasTheBarsWidthAndIsWholeInItsTooltip) {
   EXPECT_LE(beside, w.statusBar()->width() / 4);
 }
 
+// Places the other cameras' labels of knot k in frame row t at one point beside it: consistent
+// views that put the knot `px` px from its label in camera c (as when one is off along its
+// epipolar line).
+void MoveTheOthersBeside(Session* s, int c, int t, int k, double px) {
+  const auto rig_camera = [&](int camera) -> const calib::Camera& {
+    for (const calib::Camera& cam : s->rig().cameras)
+      if (cam.name == s->camera_names()[camera]) return cam;
+    throw std::runtime_error("no rig camera " + s->camera_names()[camera]);
+  };
+  std::vector<recon::Observation> views;
+  for (int o = 0; o < s->cameras(); ++o)
+    for (size_t r = 0; r < s->rig().cameras.size(); ++r)
+      if (o != c && s->rig().cameras[r].name == s->camera_names()[o])
+        views.push_back({static_cast<int>(r), s->document().at(o, t, k).px});
+  const recon::PointEstimate point = recon::TriangulatePoint(s->rig(), views, {});
+  ASSERT_TRUE(point.valid);
+  const Eigen::Vector2d where = s->document().at(c, t, k).px;
+  const Eigen::Vector3d side =
+      (rig_camera(c).Center() - point.position).cross(Eigen::Vector3d::UnitZ()).normalized();
+  double d = 0.0;
+  while ((rig_camera(c).ProjectWorld(point.position + d * side) - where).norm() < px) d += 1e-5;
+  for (int o = 0; o < s->cameras(); ++o)
+    if (o != c) s->PlaceLabel(o, t, k, rig_camera(o).ProjectWorld(point.position + d * side));
+}
+
 // The other three cameras' labels of a knot moved together (one point 2.5 px from the knot in
 // camera b: consistent views, as when one is off along its epipolar line): a Find Node click on
 // the knot's junction in b keeps it for review, and the status bar says why once, without
@@ -451,31 +479,10 @@ TEST_F(MainWindowTest, AFindNodeClickTheOtherCamerasPutElsewhereIsKeptForReviewA
   Session* s = w.session();
   const int t = 12, c = 1, k = KnotSeenByAll(truth, t);
   ASSERT_GE(k, 0);
-  const auto rig_camera = [&](int camera) -> const calib::Camera& {
-    for (const calib::Camera& cam : s->rig().cameras)
-      if (cam.name == s->camera_names()[camera]) return cam;
-    throw std::runtime_error("no rig camera " + s->camera_names()[camera]);
-  };
-  std::vector<recon::Observation> views;
-  for (int o = 0; o < s->cameras(); ++o)
-    if (o != c) {
-      for (size_t r = 0; r < s->rig().cameras.size(); ++r)
-        if (s->rig().cameras[r].name == s->camera_names()[o])
-          views.push_back({static_cast<int>(r), s->document().at(o, t, k).px});
-    }
-  const recon::PointEstimate point = recon::TriangulatePoint(s->rig(), views, {});
-  ASSERT_TRUE(point.valid);
-  // A point beside the knot, 2.5 px from it in b.
   const Eigen::Vector2d where = s->document().at(c, t, k).px;
-  const Eigen::Vector3d side =
-      (rig_camera(c).Center() - point.position).cross(Eigen::Vector3d::UnitZ()).normalized();
-  double d = 0.0;
-  while ((rig_camera(c).ProjectWorld(point.position + d * side) - where).norm() < 2.5) d += 1e-5;
-  const Eigen::Vector3d elsewhere = point.position + d * side;
   w.SetFrame(t);
   ASSERT_TRUE(w.WaitForFrame());
-  for (int o = 0; o < s->cameras(); ++o)
-    if (o != c) s->PlaceLabel(o, t, k, rig_camera(o).ProjectWorld(elsewhere));
+  ASSERT_NO_FATAL_FAILURE(MoveTheOthersBeside(s, c, t, k, 2.5));
   s->DeleteLabel(c, t, k);
   w.SetKnot(k);
   ClickAt(w.view(c), where);
@@ -893,6 +900,187 @@ TEST_F(MainWindowTest, ADoubleClickedReviewRowShowsItsCameraAlone) {
   EXPECT_FALSE(s->document().at(0, items.t, items.a).accepted());
   QCoreApplication::processEvents();  // the layout of the camera shown alone (a posted event)
   w.grab().save((Dir() / "dclick.png").string().c_str());
+}
+
+// The queue's row of (camera, t, knot) in the table as sorted; -1 when it has none.
+int TableRow(QTableView* table, int camera, int t, int knot) {
+  const QAbstractItemModel* m = table->model();
+  for (int row = 0; row < m->rowCount(); ++row) {
+    const QModelIndex i = m->index(row, 0);
+    if (i.data(ReviewModel::kCameraRole).toInt() == camera &&
+        i.data(ReviewModel::kFrameRowRole).toInt() == t &&
+        i.data(ReviewModel::kKnotRole).toInt() == knot)
+      return row;
+  }
+  return -1;
+}
+
+// A click on the queue's Severity header puts the worst item first (a label flagged 1555.8 px
+// off, behind a 0.5 px doubt in the queue's order); Home and Enter in the queue show it, and A
+// accepts it, not the other.
+TEST_F(MainWindowTest, ASeverityClickPutsTheWorstItemFirstAndEnterShowsIt) {
+  const recon::LabelSet truth = Truth();
+  const std::string project = MakeProjectFile("severity", (Dir() / "shot/labels_true.h5").string());
+  MainWindow w;
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, project));
+  Session* s = w.session();
+  const TwoItems items = PlantTwoItems(&w, truth);
+  ASSERT_GE(items.b, 0);
+  s->document().MergeReasons(
+      {{{0, items.t, items.a}, "moved 0.5 px otherwise than its neighbours"},
+       {{2, items.t, items.b}, "epipolar check: 1555.8 px off the point of all the cameras"}});
+  QTableView* table = w.review_table();
+  ASSERT_EQ(table->model()->rowCount(), 2);
+  ASSERT_EQ(TableRow(table, 0, items.t, items.a), 0) << "the queue's order puts camera 0 first";
+  QHeaderView* header = table->horizontalHeader();
+  const int x = header->sectionViewportPosition(ReviewModel::kSeverity) +
+                header->sectionSize(ReviewModel::kSeverity) / 2;
+  QTest::mouseClick(header->viewport(), Qt::LeftButton, Qt::NoModifier,
+                    QPoint(x, header->height() / 2));
+  EXPECT_EQ(TableRow(table, 2, items.t, items.b), 0);
+  EXPECT_EQ(table->model()->index(0, ReviewModel::kSeverity).data().toString(), "1.00");
+  EXPECT_EQ(table->model()->index(1, ReviewModel::kSeverity).data().toString(), "0.05");
+  // Into the queue (a click on its second row), Home, Enter: the worst item, its camera alone.
+  QTest::mouseClick(table->viewport(), Qt::LeftButton, Qt::NoModifier,
+                    table->visualRect(table->model()->index(1, ReviewModel::kKnot)).center());
+  ASSERT_EQ(QApplication::focusWidget(), table);
+  Type(&w, Qt::Key_Home);
+  Type(&w, Qt::Key_Return);
+  ASSERT_EQ(w.camera(), 2);
+  EXPECT_EQ(w.frame(), items.t);
+  EXPECT_EQ(w.knot(), items.b);
+  EXPECT_EQ(w.maximised(), 2);
+  EXPECT_TRUE(w.statusBar()->currentMessage().contains("1555.8 px off"))
+      << w.statusBar()->currentMessage().toStdString();
+  Type(&w, Qt::Key_A);
+  EXPECT_TRUE(s->document().at(2, items.t, items.b).accepted());
+  EXPECT_FALSE(s->document().at(0, items.t, items.a).accepted());
+}
+
+// A label under review for one reason, fixed by a Find Node click the other cameras disagree
+// with: the queue's row says the new reason (and its severity), not the old one.
+TEST_F(MainWindowTest, TheQueueSaysTheReasonOfTheLabelAsItIsAfterAFindNodeClick) {
+  const recon::LabelSet truth = Truth();
+  const std::string project = MakeProjectFile("stale", (Dir() / "shot/labels_true.h5").string());
+  MainWindow w;
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, project));
+  Session* s = w.session();
+  for (const auto& [mc, mt, mk] : s->missing().Items()) s->MarkHidden(mc, mt, mk);
+  const int t = 12, c = 1, k = KnotSeenByAll(truth, t);
+  ASSERT_GE(k, 0);
+  const Eigen::Vector2d where = s->document().at(c, t, k).px;
+  ASSERT_NO_FATAL_FAILURE(MoveTheOthersBeside(s, c, t, k, 2.5));
+  // c's label under review for an old reason.
+  recon::Label doubt = s->document().at(c, t, k);
+  doubt.state = recon::LabelState::kNeedsReview;
+  s->document().Apply("doubt", {{c, t, k, doubt}});
+  const std::string old_reason = "kept for review by the test";
+  s->document().MergeReasons({{{c, t, k}, old_reason}});
+  QTableView* table = w.review_table();
+  const auto cell = [&](int column) {
+    const int row = TableRow(table, c, t, k);
+    return row < 0 ? QString("(not in the queue)")
+                   : table->model()->index(row, column).data().toString();
+  };
+  ASSERT_EQ(cell(ReviewModel::kReason).toStdString(), old_reason);
+  // The person goes to it (Space) and clicks Find Node on the junction.
+  w.SetFrame(0);
+  ASSERT_TRUE(SpaceTo(&w, c, t, k));
+  ASSERT_TRUE(w.WaitForFrame());
+  ClickAt(w.view(c), where);
+  QCoreApplication::processEvents();
+  ASSERT_EQ(s->document().at(c, t, k).state, recon::LabelState::kNeedsReview)
+      << w.statusBar()->currentMessage().toStdString();
+  const std::string now = s->document().Reason(c, t, k);
+  ASSERT_NE(now.find("from where the other cameras' labels put the knot"), std::string::npos)
+      << now;
+  EXPECT_EQ(cell(ReviewModel::kReason).toStdString(), now);
+  const int row = TableRow(table, c, t, k);
+  ASSERT_GE(row, 0);
+  EXPECT_EQ(table->model()->index(row, ReviewModel::kReason).data(Qt::ToolTipRole).toString(),
+            QString::fromStdString(now));
+  EXPECT_EQ(cell(ReviewModel::kSeverity), QString::number(ReasonSeverity(now), 'f', 2));
+  EXPECT_GT(ReasonSeverity(now), 0.2);
+}
+
+// A labels file whose /review_reasons another tool wrote as a variable-length string: the window
+// shows its reason as written, in the status bar when Ctrl+Home goes to the item and in the
+// queue's row.
+TEST_F(MainWindowTest, ReviewReasonsWrittenAsAVariableLengthStringAreShownAsWritten) {
+  recon::LabelSet start = Truth();
+  const int t = 5, k = KnotSeenByAll(start, t);
+  ASSERT_GE(k, 0);
+  start.at(0, t, k).state = recon::LabelState::kNeedsReview;
+  start.reasons[{0, t, k}] = "placeholder";
+  const std::string file = (Dir() / "vlen_reasons.h5").string();
+  recon::WriteLabels(file, start);
+  const std::string reason = "moved 2.1 px otherwise than its neighbours";
+  {
+    std::lock_guard<std::mutex> lock(h5::Mutex());
+    h5::Id f = h5::OpenFileReadWrite(file);
+    ASSERT_GE(H5Ldelete(f.get(), "review_reasons", H5P_DEFAULT), 0);
+    h5::Id type(H5Tcopy(H5T_C_S1));
+    H5Tset_size(type.get(), H5T_VARIABLE);
+    H5Tset_cset(type.get(), H5T_CSET_UTF8);
+    h5::Id space(H5Screate(H5S_SCALAR));
+    h5::Id dataset(H5Dcreate2(f.get(), "review_reasons", type.get(), space.get(), H5P_DEFAULT,
+                              H5P_DEFAULT, H5P_DEFAULT));
+    const std::string text =
+        "0\t" + std::to_string(t) + "\t" + std::to_string(k) + "\t" + reason + "\n";
+    const char* data = text.c_str();
+    ASSERT_GE(H5Dwrite(dataset.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, &data), 0);
+  }
+  MainWindow w;
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, MakeProjectFile("vlen_reasons", file)));
+  Session* s = w.session();
+  for (const auto& [mc, mt, mk] : s->missing().Items()) s->MarkHidden(mc, mt, mk);
+  ASSERT_EQ(w.review_table()->model()->rowCount(), 1);
+  Type(&w, Qt::Key_Home, Qt::ControlModifier);
+  ASSERT_EQ(w.camera(), 0);
+  ASSERT_EQ(w.frame(), t);
+  ASSERT_EQ(w.knot(), k);
+  EXPECT_TRUE(w.statusBar()->currentMessage().contains(QString::fromStdString(reason)))
+      << w.statusBar()->currentMessage().toStdString();
+  EXPECT_EQ(
+      w.review_table()->model()->index(0, ReviewModel::kReason).data().toString().toStdString(),
+      reason);
+}
+
+// The queue's Reason column in the window as it opens: one line per item, wide enough to show a
+// missing knot's reason up to where it is expected, the whole reason in the cell's tooltip.
+TEST_F(MainWindowTest, TheQueuesReasonColumnShowsAMissingKnotsReasonOnOneLine) {
+  const recon::LabelSet truth = Truth();
+  const std::string project =
+      MakeProjectFile("reason_column", (Dir() / "shot/labels_true.h5").string());
+  MainWindow w;
+  ASSERT_NO_FATAL_FAILURE(OpenShown(w, project));
+  Session* s = w.session();
+  const int t = 7, c = 2, k = KnotSeenByAll(truth, t);
+  ASSERT_GE(k, 0);
+  w.SetFrame(t);
+  ASSERT_TRUE(w.WaitForFrame());
+  QTest::mouseClick(w.view(c), Qt::LeftButton, Qt::NoModifier,
+                    w.view(c)->ToWidget(s->document().at(c, t, k).px).toPoint());
+  ASSERT_EQ(w.knot(), k);
+  QTest::keyClick(&w, Qt::Key_Delete);
+  w.SetFrame(0);
+  ASSERT_TRUE(SpaceTo(&w, c, t, k));
+  QCoreApplication::processEvents();
+  QTableView* table = w.review_table();
+  const int row = TableRow(table, c, t, k);
+  ASSERT_GE(row, 0);
+  const QModelIndex reason = table->model()->index(row, ReviewModel::kReason);
+  const QString text = reason.data().toString();
+  const int to = text.indexOf("expected near");
+  ASSERT_GE(to, 0) << text.toStdString();
+  EXPECT_FALSE(table->wordWrap());
+  EXPECT_LE(table->rowHeight(row), 2 * table->fontMetrics().height());
+  // The text up to "expected near" fits the column (with the cell's margins).
+  EXPECT_GE(table->columnWidth(ReviewModel::kReason),
+            table->fontMetrics().horizontalAdvance(text.left(to + 13)) + 12)
+      << text.toStdString();
+  EXPECT_EQ(reason.data(Qt::ToolTipRole).toString(), text);
+  w.grab().save((Dir() / "reason_column.png").string().c_str());
 }
 
 // A camera is made current without a click that runs Find Node: a click on its view's caption
