@@ -95,6 +95,11 @@ std::optional<Eigen::Vector2d> SeenAt(const calib::Camera& camera, const Eigen::
   return q;
 }
 
+// How far inside the image's outer edge an expected point must be (px; negative: outside).
+double Margin(const MissingKnotsOptions& o) {
+  return o.margin_px > 0.0 ? o.margin_px : -o.beyond_edge_px;
+}
+
 // Whether camera c has a label of one of knot k's grid neighbours in frame row t.
 bool HasLabeledNeighbour(const LabelSet& labels, int c, int t, int k) {
   for (int n : GridSlots(labels.rows, labels.cols, k))
@@ -373,6 +378,10 @@ bool MissingKnotsOptions::IsValid(std::string* why) const {
     *why = "margin_px must be >= 0 (px)";
     return false;
   }
+  if (!(beyond_edge_px >= 0.0)) {
+    *why = "beyond_edge_px must be >= 0 (px)";
+    return false;
+  }
   if (!(neighbour_agreement >= 0.0)) {
     *why = "neighbour_agreement must be >= 0";
     return false;
@@ -414,7 +423,7 @@ std::vector<MissingKnot> FindMissingKnots(const LabelSet& labels, const calib::R
     if (!p) continue;
     for (int c : open) {
       const calib::Camera& camera = rig.cameras[rig_index[c]];
-      const auto q = SeenAt(camera, *p, options.margin_px);
+      const auto q = SeenAt(camera, *p, Margin(options));
       if (!q) continue;
       if (TargetHides(options.target, camera.Center(), *p, time_s, options.target_grow_m)) continue;
       m.camera = c;
@@ -442,7 +451,7 @@ std::string WhyNotMissing(const LabelSet& labels, const calib::Rig& rig,
   const std::optional<Eigen::Vector3d> p = KnotPoint(points, t, knot, options, &m, &why);
   if (!p) return why;
   const calib::Camera& cam = rig.cameras[rig_index[camera]];
-  const auto q = SeenAt(cam, *p, options.margin_px, &why);
+  const auto q = SeenAt(cam, *p, Margin(options), &why);
   if (!q) return why;
   m.camera = camera;
   m.expected_px = *q;

@@ -3,10 +3,10 @@
 //
 // Knot k of frame row t is *missing* in camera c when c has neither a label of it nor a hidden
 // mark (LabelState::kHidden), and a point of the knot is known that lies in front of c, inside
-// c's image by margin_px (and is no artefact of the lens model folding a point far outside the
-// field of view back into the image), and that the target does not hide from c (the segment from
-// c's centre to the point passes through none of the target's solids). The point, first found
-// first taken:
+// c's image (inside by margin_px, or at most beyond_edge_px outside its outer edge; no artefact of
+// the lens model folding a point far outside the field of view back into the image), and that the
+// target does not hide from c (the segment from c's centre to the point passes through none of the
+// target's solids). The point, first found first taken:
 //   1. the other cameras' labels: two or more, accepted ones or, where those are too few, those
 //      under review as well, that triangulate consistently (TriangulatePoint; every view's
 //      reprojection residual within max_residual_px: an inconsistent pair never says where the
@@ -76,6 +76,10 @@ struct MissingKnotsOptions {
   // The expected point at least this far inside the image (px), whose outer edge is at -0.5
   // and width - 0.5 (pixel centres at integers, as `netlab render` counts a knot in view).
   double margin_px = 0.0;
+  // With margin_px 0, an expected point at most this far outside the outer edge (px) is listed
+  // too: a knot just inside the edge is expected up to the point's error beyond it (the labels'
+  // error carried into the camera, a few tenths of a pixel).
+  double beyond_edge_px = 1.0;
   // A point from the neighbours (2.): the two grid lines through the knot put it within this
   // fraction of their mean link length of each other, and one camera's ray passes within half
   // of it to be taken.

@@ -24,7 +24,7 @@ namespace netlab::gui {
 namespace {
 
 constexpr int kRows = 3, kCols = 3, kKnots = kRows * kCols, kFrames = 4;
-constexpr double kMargin = 0.0;  // MissingKnotsOptions::margin_px's default
+constexpr double kBeyondEdge = 1.0;  // MissingKnotsOptions::beyond_edge_px's default
 
 // Cameras a, b, c see the whole net; "edge" is aimed 0.2 m beside it (its far column falls
 // outside the picture); "back" stands beyond the net looking away from it.
@@ -50,7 +50,8 @@ struct Scene {
   }
   bool InsideByMargin(int c, int t, int k) const {
     const Eigen::Vector2d q = Truth(c, t, k);
-    return q.allFinite() && q.minCoeff() >= kMargin - 0.5 && q.maxCoeff() <= 1023.5 - kMargin;
+    return q.allFinite() && q.minCoeff() >= -0.5 - kBeyondEdge &&
+           q.maxCoeff() <= 1023.5 + kBeyondEdge;
   }
   // Cameras a, b and c label every knot exactly (accepted); edge and back label nothing.
   recon::LabelSet Labels() const {
@@ -121,31 +122,39 @@ TEST(MissingKnots, AKnotTwoOtherCamerasSeeIsListedWhereTheyPutIt) {
 }
 
 // The image spans -0.5 .. width - 0.5 px (pixel centres at integers, as `netlab render` and the
-// true labels count a knot in the picture): a knot whose point falls in the outer half pixel of
-// the edge is missing there, one beyond the edge is not; WhyNotMissing says which.
-TEST(MissingKnots, AKnotInTheOuterHalfPixelOfThePictureIsListed) {
+// true labels count a knot in the picture), and a point up to beyond_edge_px (1 px) outside that
+// edge is still listed (a knot just inside the edge is expected up to the point's error beyond
+// it); a point further out is not, and WhyNotMissing says why.
+TEST(MissingKnots, AKnotAtThePicturesOuterEdgeIsListed) {
   const Scene scene;
   const recon::LabelSet labels = scene.Labels();  // a, b and c label every knot
   const int t = 1, k = 4;
-  for (const double want_x : {1023.3, -0.3, 1023.7, -0.7}) {
+  for (const double want_x : {1023.3, -0.3, 1024.3, -1.3, 1024.7, -1.7}) {
     // The edge camera's principal point moved so that knot k falls at want_x.
     calib::Rig rig = scene.rig;
     calib::CameraIntrinsics& in = rig.cameras[3].intrinsics;
     in.cx += want_x - rig.cameras[3].ProjectWorld(scene.knots[t][k]).x();
     ASSERT_NEAR(rig.cameras[3].ProjectWorld(scene.knots[t][k]).x(), want_x, 1e-6);
-    const bool inside = std::abs(want_x - 511.5) < 512.0;
+    const bool listed_wanted = want_x >= -1.5 && want_x <= 1024.5;
     bool listed = false;
     for (const MissingKnot& m : FindMissingKnots(labels, rig, kRigIndex, t))
       if (m.camera == 3 && m.knot == k) {
         listed = true;
         EXPECT_NEAR(m.expected_px.x(), want_x, 1e-6);
       }
-    EXPECT_EQ(listed, inside) << want_x;
+    EXPECT_EQ(listed, listed_wanted) << want_x;
     const std::string why = recon::WhyNotMissing(labels, rig, kRigIndex, 3, t, k);
-    if (inside)
+    if (listed_wanted)
       EXPECT_EQ(why, "") << want_x;
     else
       EXPECT_NE(why.find("outside the image"), std::string::npos) << want_x << ": " << why;
+    // With no point beyond the edge taken, only the points inside it are listed.
+    MissingKnotsOptions strict;
+    strict.beyond_edge_px = 0.0;
+    bool strictly = false;
+    for (const MissingKnot& m : FindMissingKnots(labels, rig, kRigIndex, t, strict))
+      strictly = strictly || (m.camera == 3 && m.knot == k);
+    EXPECT_EQ(strictly, want_x >= -0.5 && want_x <= 1023.5) << want_x;
   }
 }
 
