@@ -67,10 +67,10 @@ std::string Px(const Eigen::Vector2d& q) {
   return s;
 }
 
-// Where `camera` sees the world point p: in front of it, inside its image by `margin` px, and
-// its own projection (the pixel undistorts back to p's ray: a lens model's polynomial can fold a
-// point far outside the field of view into the image).
-// `why` (when given) says why not.
+// Where `camera` sees the world point p: in front of it, inside its image's outer edge by
+// `margin` px (negative: at most that far outside), and its own projection (the pixel undistorts
+// back to p's ray: a lens model's polynomial can fold a point far outside the field of view into
+// the image). `why` (when given) says why not.
 std::optional<Eigen::Vector2d> SeenAt(const calib::Camera& camera, const Eigen::Vector3d& p,
                                       double margin, std::string* why = nullptr) {
   const Eigen::Vector3d p_in_cam = camera.cam_from_world * p;
