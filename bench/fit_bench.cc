@@ -221,10 +221,10 @@ int Flight(double seconds, int shots, const std::string& integrator, int segment
   for (int k = 0; k < shots; ++k) inputs.push_back({paths[k], &measured[k], cases[k]});
   FitOptions options = Options(start, 1e-3);
   options.priors = priors;
-  options.progress = [](const FitProgress& p) {
-    std::fprintf(stderr, "  %s, iteration %d: cost %.6g, %d simulations, %.0f s, ETA <= %.0f s\n",
-                 p.stage.c_str(), p.iteration, p.cost, p.simulations, p.elapsed_s, p.eta_s);
-  };
+  options.progress = ProgressReporter([](const Progress& p) {
+    std::fprintf(stderr, "  %s, %s, %.0f of at most %.0f simulations\n", p.stage.c_str(),
+                 p.detail.c_str(), p.done, p.total);
+  });
   const FitResult r = FitShots(inputs, parameters, options);
   std::printf("flight: %d shot%s (", shots, shots > 1 ? "s" : "");
   for (int k = 0; k < shots; ++k) std::printf("%s%s", k ? ", " : "", cases[k]);

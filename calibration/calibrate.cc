@@ -929,8 +929,8 @@ std::vector<std::string> ImagesMatching(const std::string& pattern) {
 
 CalibrationInput DetectInImages(const std::vector<std::string>& camera_names,
                                 const std::vector<std::vector<std::string>>& files,
-                                const CalibrationTarget& target,
-                                const std::function<void(int, int)>& progress, int threads) {
+                                const CalibrationTarget& target, const ProgressReporter& progress,
+                                int threads) {
   const int num_cameras = static_cast<int>(camera_names.size());
   if (num_cameras == 0 || files.size() != camera_names.size())
     Fail("calibration images: one image list per camera is needed");
@@ -957,7 +957,7 @@ CalibrationInput DetectInImages(const std::vector<std::string>& camera_names,
   std::string first_error;
   const int total = num_cameras * num_frames;
   auto worker = [&] {
-    while (true) {
+    while (!progress.cancelled()) {
       const int task = next++;
       if (task >= total) return;
       const int c = task / num_frames, f = task % num_frames;
@@ -974,9 +974,9 @@ CalibrationInput DetectInImages(const std::vector<std::string>& camera_names,
       sizes[c][f] = image.size();
       found[c][f] = DetectPattern(ToGray8(image), pattern);
       const int d = ++done;
-      if (progress) {
+      if (progress.reports()) {
         std::lock_guard<std::mutex> lock(mutex);
-        progress(d, total);
+        progress.Report("images searched", d, total);
       }
     }
   };
@@ -984,6 +984,7 @@ CalibrationInput DetectInImages(const std::vector<std::string>& camera_names,
   for (int t = 1; t < std::max(1, threads); ++t) pool.emplace_back(worker);
   worker();
   for (std::thread& t : pool) t.join();
+  progress.ThrowIfCancelled();
   if (!first_error.empty()) Fail(first_error);
 
   for (int c = 0; c < num_cameras; ++c) {

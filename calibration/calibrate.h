@@ -27,6 +27,7 @@
 #include "calibration/detect.h"
 #include "calibration/rig.h"
 #include "calibration/target.h"
+#include "common/progress.h"
 
 namespace netlab::calib {
 
@@ -122,10 +123,12 @@ std::vector<std::string> ImagesMatching(const std::string& pattern);
 // Image files per camera (sorted: the index is the frame) -> detections. Throws
 // std::runtime_error naming the file on an unreadable image or one whose size differs from its
 // camera's first; and naming the camera and images when the target is found in none of them.
-// `progress(done, total)` may be empty. Detection runs on `threads` threads.
+// Progress: stage "images searched" (of all cameras), from any of the threads (one at a
+// time); a cancel stops them between images and throws Cancelled. Detection runs on `threads`
+// threads.
 CalibrationInput DetectInImages(const std::vector<std::string>& camera_names,
                                 const std::vector<std::vector<std::string>>& files,
                                 const CalibrationTarget& target,
-                                const std::function<void(int, int)>& progress, int threads = 2);
+                                const ProgressReporter& progress = {}, int threads = 2);
 
 }  // namespace netlab::calib

@@ -12,6 +12,7 @@
 
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "app/cli/progress_bar.h"
 #include "app/command_line/command_line.h"
 #include "calibration/calibrate.h"
 #include "calibration/rig_compare.h"
@@ -183,16 +184,10 @@ int RunCalibrate(const std::vector<std::string>& args) {
       }
     }
 
-    const bool progress = !cl.Flag("quiet") && isatty(fileno(stderr));
+    ProgressBar bar("calibrate", !cl.Flag("quiet"));
     const calib::CalibrationInput input =
-        calib::DetectInImages(names, files, target,
-                              progress ? std::function<void(int, int)>([](int done, int total) {
-                                std::fprintf(stderr, "\rdetecting %d/%d", done, total);
-                                std::fflush(stderr);
-                              })
-                                       : std::function<void(int, int)>(),
-                              2);
-    if (progress) std::fprintf(stderr, "\n");
+        calib::DetectInImages(names, files, target, bar.Reporter(), 2);
+    bar.Break();
     calib::CalibrationResult result = calib::CalibrateRig(target, input, options);
     result.summary.wall_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

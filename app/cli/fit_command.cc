@@ -4,6 +4,7 @@
 #include <glog/logging.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -13,6 +14,7 @@
 
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "app/cli/progress_bar.h"
 #include "app/command_line/command_line.h"
 #include "common/errors.h"
 #include "common/files.h"
@@ -393,18 +395,19 @@ int RunFit(const std::vector<std::string>& args) {
     CheckOutputPaths(inputs, {{"--out", out}});
     // Ceres' own warnings (a rejected step is part of the method) would bury netlab's lines.
     FLAGS_minloglevel = google::GLOG_ERROR;
-    const bool tty = isatty(fileno(stderr));
-    if (!quiet)
-      options.progress = [tty](const netsim::FitProgress& p) {
-        std::string where;
-        if (p.starts > 1)
-          where += "start " + std::to_string(p.start + 1) + "/" + std::to_string(p.starts) + ", ";
-        if (!p.stage.empty()) where += "stage " + p.stage + ", ";
-        if (p.iteration >= 0) where += "iteration " + std::to_string(p.iteration) + ", ";
-        std::fprintf(stderr, "%sfit: %scost %s, %d simulations, %s, ETA <= %s%s", tty ? "\r" : "",
-                     where.c_str(), Number(p.cost).c_str(), p.simulations,
-                     Duration(p.elapsed_s).c_str(), Duration(p.eta_s).c_str(), tty ? "   " : "\n");
-      };
+    // A line per iteration: where the fit is, its cost, the simulations, the time so far and an
+    // upper bound of the time left (the simulations left at the pace so far).
+    ProgressBar bar("fit", !quiet);
+    const auto fit_start = std::chrono::steady_clock::now();
+    options.progress = bar.Reporter().Mapped([fit_start](Progress p) {
+      const double elapsed =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - fit_start).count();
+      const double eta = p.done > 0 ? elapsed / p.done * (p.total - p.done) : 0.0;
+      p.detail += ", " + std::to_string(static_cast<long>(p.done)) + " simulations, " +
+                  Duration(elapsed) + ", ETA <= " + Duration(eta);
+      p.done = p.total = 0;  // the detail says it all
+      return p;
+    });
 
     const std::vector<netsim::FitParameter> parameters =
         netsim::ParseFreeParameters(free, scenarios, options.set, options.score.time_offset_s);
@@ -429,7 +432,7 @@ int RunFit(const std::vector<std::string>& args) {
                    parameters.size() == 1 ? "" : "s");
     }
     const netsim::FitResult result = netsim::FitShots(shots, parameters, options);
-    if (!quiet && tty) std::fputc('\n', stderr);
+    bar.Break();
     WriteTextFile(out, FitYaml(scenarios, measured_paths, result));
     if (!quiet || !cl.Flag("json")) std::cerr << Summary(result) << "  wrote " << out << "\n";
     if (cl.Flag("json")) PrintJson(result, out);

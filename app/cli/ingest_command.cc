@@ -172,9 +172,9 @@ int RunIngest(const std::vector<std::string>& args) {
     bool sampled = false;
     if (cl.Flag("check")) {
       const bool decode = cl.Flag("decode");
-      ProgressBar bar(decode ? "decoding" : "checking", !quiet && isatty(fileno(stderr)));
-      check = sequence.Check(
-          decode, [&](int done, int total) { bar.Update(done, total); }, threads);
+      ProgressBar bar("ingest", !quiet);
+      check = sequence.Check(decode, bar.Reporter(), threads);
+      bar.Break();
       if (decode) {
         decode_fps = check.read_fps;
       } else {
@@ -189,11 +189,12 @@ int RunIngest(const std::vector<std::string>& args) {
     Conversion conversion;
     if (to_hdf5) {
       const auto start = std::chrono::steady_clock::now();
-      ProgressBar bar("converting", !quiet);
+      ProgressBar bar("ingest", !quiet);
       // The store and its experiment file put in place together once both are complete.
       OutputSet outputs({*to_hdf5, recon::FrameStoreExperimentPath(*to_hdf5)});
-      const recon::Experiment stored = recon::ConvertToFrameStore(
-          sequence, *to_hdf5, {compress}, [&](int done, int total) { bar.Update(done, total); });
+      const recon::Experiment stored =
+          recon::ConvertToFrameStore(sequence, *to_hdf5, {compress}, bar.Reporter());
+      bar.Break();
       recon::WriteExperiment(stored.path, stored);
       outputs.Commit();
       conversion.output = *to_hdf5;

@@ -16,6 +16,7 @@
 
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "app/cli/progress_bar.h"
 #include "app/command_line/command_line.h"
 #include "calibration/rig.h"
 #include "common/errors.h"
@@ -283,11 +284,15 @@ int RunLabel(const std::vector<std::string>& args) {
         },
         setup.options);
     setup.ApplyColourCheck(&engine);
-    // Every frame labeled, with progress every ten frames.
+    // Every frame labeled, with its progress; Ctrl+C stops it between frames.
     const int rows_t = static_cast<int>(job.frame_index.size());
+    ProgressBar bar("label", !quiet);
+    const ProgressReporter progress = bar.Reporter();
     engine.LabelFrames(0, rows_t - 1, [&](int t) {
-      if (!quiet && t > 0 && t % 10 == 0) std::fprintf(stderr, "frame %d of %d\n", t + 1, rows_t);
+      progress.Report("frames labeled", t + 1, rows_t);
+      progress.ThrowIfCancelled();
     });
+    bar.Break();
     // Counted, written, reported.
     report.counts = CountLabels(job, store, notes);
     store.SetReasons(engine.reasons());

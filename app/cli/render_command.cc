@@ -315,9 +315,9 @@ int RunRender(const std::vector<std::string>& args) {
     for (const char* input : {"rig", "coloring", "camera-response", "lamps"})
       if (const auto path = cl.Option(input); path && *path != "paper")
         recon::CheckOutsideOutput(*path, std::string("--") + input, job.out_dir);
-    ProgressBar bar("rendering", !cl.Flag("quiet"));
-    const recon::RenderSummary summary =
-        recon::RenderExperiment(job, [&](int done, int total) { bar.Update(done, total); });
+    ProgressBar bar("render", !cl.Flag("quiet"));
+    const recon::RenderSummary summary = recon::RenderExperiment(job, bar.Reporter());
+    bar.Break();
     if (!cl.Flag("quiet")) {
       std::fprintf(stderr, "rendered %d frames x %d cameras (%d knots) into %s in %.1f s\n",
                    summary.frames, summary.cameras, summary.knots, job.out_dir.c_str(),

@@ -10,6 +10,7 @@
 
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "app/cli/progress_bar.h"
 #include "app/command_line/command_line.h"
 #include "common/files.h"
 #include "common/log.h"
@@ -96,20 +97,14 @@ int RunSimulate(const std::vector<std::string>& args) {
     netsim::RunOptions options;
     options.out_path = out;
     const bool quiet = cl.Flag("quiet");
-    // A progress line redrawn in place: only where a person watches a terminal.
-    const bool show_progress = !quiet && isatty(fileno(stderr));
-    if (show_progress) {
-      options.progress = [](double fraction) {
-        std::fprintf(stderr, "\rsimulating %3.0f%%", 100.0 * fraction);
-        std::fflush(stderr);
-      };
-    }
-    // A run that throws (a full disk) leaves no partial file; one that blows up keeps its
+    ProgressBar bar("simulate", !quiet);
+    options.progress = bar.Reporter();
+    // A run that throws (a full disk, Ctrl+C) leaves no partial file; one that blows up keeps its
     // frames up to the failure in OUT.partial (RunScenario names it), and OUT as it was.
     OutputSet outputs({out});
     const netsim::RunSummary summary = netsim::RunScenario(scenario, options);
     outputs.Commit();
-    if (show_progress) std::fprintf(stderr, "\r");
+    bar.Break();
     if (!quiet || !cl.Flag("json")) std::cerr << summary.BriefReport();
     if (!summary.stable) {
       NETLAB_LOG(kError) << summary.error;

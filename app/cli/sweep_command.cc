@@ -16,6 +16,7 @@
 
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "app/cli/progress_bar.h"
 #include "app/command_line/command_line.h"
 #include "common/errors.h"
 #include "common/files.h"
@@ -69,55 +70,6 @@ constexpr char kHelp[] =
     "frame).\n\n"
     "exit status: 0 SWEEP.h5 written (some runs may have failed: see \"failed\"), 1 bad\n"
     "scenario, parameter path or output, or every run failed (nothing written), 2 usage error.\n";
-
-// Progress on stderr: a bar redrawn in place on a terminal, a line per 10 % otherwise.
-class SweepProgress {
- public:
-  explicit SweepProgress(bool enabled)
-      : enabled_(enabled), tty_(isatty(fileno(stderr))), start_(Clock::now()) {}
-
-  void Update(double done, int total, int failed) {
-    if (!enabled_ || total <= 0) return;
-    // Never backwards: the parts of runs under way are counted until the run is collected.
-    done = std::max(done, done_);
-    done_ = done;
-    const double elapsed = std::chrono::duration<double>(Clock::now() - start_).count();
-    const int percent = static_cast<int>(100.0 * done / total);
-    const int eta = done > 0 ? static_cast<int>(elapsed * (total - done) / done) : -1;
-    const std::string eta_text = eta < 0
-                                     ? "--:--"
-                                     : std::to_string(eta / 60) + ":" + (eta % 60 < 10 ? "0" : "") +
-                                           std::to_string(eta % 60);
-    const int whole = static_cast<int>(done + 1e-9);
-    if (tty_) {
-      constexpr int kWidth = 30;
-      const int filled = static_cast<int>(kWidth * done / total);
-      std::fprintf(stderr, "\rsweep [%s%s] %3d%% %d/%d runs, %d failed  ETA %s ",
-                   std::string(filled, '#').c_str(), std::string(kWidth - filled, ' ').c_str(),
-                   percent, whole, total, failed, eta_text.c_str());
-      on_line_ = true;
-    } else {
-      if (percent / 10 == last_decile_) return;
-      last_decile_ = percent / 10;
-      std::fprintf(stderr, "sweep %3d%% %d/%d runs, %d failed (%.1f s, ETA %s)\n", percent, whole,
-                   total, failed, elapsed, eta_text.c_str());
-    }
-    std::fflush(stderr);
-  }
-  // Ends the bar's line before other text.
-  void Break() {
-    if (on_line_) std::fputc('\n', stderr);
-    on_line_ = false;
-  }
-
- private:
-  using Clock = std::chrono::steady_clock;
-  bool enabled_, tty_;
-  Clock::time_point start_;
-  double done_ = 0.0;
-  int last_decile_ = -1;
-  bool on_line_ = false;  // the bar is drawn and its line not ended
-};
 
 std::string OverridesText(const std::vector<netsim::ScenarioOverride>& overrides, size_t skip) {
   std::string text;
@@ -285,8 +237,13 @@ int RunSweep(const std::vector<std::string>& args) {
     }
 
     const bool quiet = cl.Flag("quiet");
-    SweepProgress progress(root && !quiet);
+    ProgressBar bar("sweep", root && !quiet);
     int failed = 0;
+    double shown = 0.0;  // runs done as last shown: never backwards (a collected run's part)
+    auto show = [&](double done, int total) {
+      shown = std::max(shown, done);
+      bar.Update({"runs", shown, static_cast<double>(total), std::to_string(failed) + " failed"});
+    };
     netsim::SweepOptions options;
     options.jobs = jobs;
     options.decimate = decimate;
@@ -296,7 +253,7 @@ int RunSweep(const std::vector<std::string>& args) {
       writer->AddRun(run);
       if (!run.ok()) {
         ++failed;
-        progress.Break();
+        bar.Break();
         // A blow-up's message says what happened; the others are headed by the status.
         const std::string what =
             run.status == netsim::SweepRun::Status::kBlewUp
@@ -305,9 +262,10 @@ int RunSweep(const std::vector<std::string>& args) {
         std::fprintf(stderr, "netlab sweep: run %d (%s): %s\n", run.index,
                      OverridesText(run.overrides, fixed.size()).c_str(), what.c_str());
       }
-      progress.Update(done, total, failed);
+      show(done, total);
     };
-    options.progress = [&](double done, int total) { progress.Update(done, total, failed); };
+    options.progress = ProgressReporter(
+        [&](const Progress& p) { show(p.done, static_cast<int>(p.total)); }, InterruptToken());
     netsim::SweepResult result;
     try {
       result = netsim::RunSweep(scenario_path, sets, options);
@@ -320,7 +278,7 @@ int RunSweep(const std::vector<std::string>& args) {
       throw;
     }
     if (!root) return 0;
-    progress.Break();
+    bar.Break();
 
     auto sensitivity = netsim::ComputeSensitivities(parameters, result.runs);
     if (ensemble > 0)

@@ -17,6 +17,7 @@
 
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
+#include "app/cli/progress_bar.h"
 #include "app/command_line/command_line.h"
 #include "calibration/rig.h"
 #include "common/errors.h"
@@ -192,28 +193,6 @@ recon::FrameTimes FrameTimesOf(const TriangulateArgs& a, const calib::Rig& rig,
   }
   return recon::FrameTimesFromTimestamps(labels.frame_index, a.fps, names, timestamps, where);
 }
-
-// Progress on stderr: a line when a stage starts or reaches the next tenth (called from the
-// reconstruction's worker threads); nothing when quiet.
-class ProgressPrinter {
- public:
-  explicit ProgressPrinter(bool quiet) : quiet_(quiet) {}
-  void Report(const std::string& stage, double fraction) {
-    if (quiet_) return;
-    const std::lock_guard<std::mutex> lock(mutex_);
-    const int decile = static_cast<int>(fraction * 10);
-    if (stage == last_stage_ && decile == last_decile_) return;
-    last_stage_ = stage;
-    last_decile_ = decile;
-    std::fprintf(stderr, "%s %3d%%\n", stage.c_str(), decile * 10);
-  }
-
- private:
-  bool quiet_;
-  std::mutex mutex_;
-  std::string last_stage_;
-  int last_decile_ = -1;
-};
 
 // What one run produced, for the summary on stderr and the JSON on stdout.
 struct Outcome {
@@ -506,10 +485,8 @@ int RunTriangulate(const std::vector<std::string>& args) {
     }
 
     // The reconstruction, with its progress on stderr.
-    ProgressPrinter progress(a.quiet);
-    a.options.progress = [&progress](const std::string& stage, double fraction) {
-      progress.Report(stage, fraction);
-    };
+    ProgressBar bar("triangulate", !a.quiet);
+    a.options.progress = bar.Reporter();
     o.frames = labels.frames();
     if (a.estimate_offsets) {
       o.offsets = recon::EstimateCameraOffsets(rig, labels, a.options);
@@ -519,6 +496,7 @@ int RunTriangulate(const std::vector<std::string>& args) {
       }
     }
     o.result = recon::ReconstructSequence(rig, labels, a.options);
+    bar.Break();
     if (o.result.candidates == 0)
       throw InputError(a.labels_path + ": no knot is labeled in two cameras in any of its " +
                        std::to_string(labels.frames()) + " frames: nothing to triangulate" +

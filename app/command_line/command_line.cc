@@ -1,6 +1,7 @@
 #include "app/command_line/command_line.h"
 
 #include <algorithm>
+#include <csignal>
 #include <cstdio>
 #include <new>
 
@@ -153,9 +154,33 @@ bool CommandLine::FrameRange(const std::string& name, int* first, int* last) con
   return true;
 }
 
+namespace {
+
+std::atomic<bool>* interrupt_flag = nullptr;
+
+extern "C" void OnInterrupt(int) {
+  if (interrupt_flag != nullptr) interrupt_flag->store(true, std::memory_order_relaxed);
+  std::signal(SIGINT, SIG_DFL);  // a second Ctrl+C ends the process at once
+}
+
+}  // namespace
+
+const CancelToken& InterruptToken() {
+  static const CancelToken token = [] {
+    CancelToken t;
+    interrupt_flag = t.flag();
+    std::signal(SIGINT, OnInterrupt);
+    return t;
+  }();
+  return token;
+}
+
 int RunGuarded(const char* name, const std::function<int()>& body) {
   try {
     return body();
+  } catch (const Cancelled&) {
+    std::fprintf(stderr, "netlab %s: cancelled\n", name);
+    return kCancelledStatus;
   } catch (const UsageError& e) {
     std::fprintf(stderr, "netlab %s: %s\n(see netlab %s --help)\n", name, e.what(), name);
     return 2;

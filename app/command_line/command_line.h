@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "common/progress.h"
 #include "libnetsim/scenario/scenario_override.h"
 
 namespace netlab::app {
@@ -50,6 +51,13 @@ class CommandLine {
 
 // The exit status of a command stopped by a broken invariant of netlab itself (a bug).
 inline constexpr int kInternalErrorStatus = 3;
+// The exit status of a command stopped by Ctrl+C (128 + SIGINT, as a shell reports it).
+inline constexpr int kCancelledStatus = 130;
+
+// The token Ctrl+C sets: the first call installs a SIGINT handler that cancels it, so a command's
+// long call (given a reporter with this token) stops within about a second and throws Cancelled.
+// A second Ctrl+C while the call winds down kills the process as SIGINT does by default.
+const CancelToken& InterruptToken();
 
 // Runs a subcommand's body and turns what it throws into the exit status and message every
 // command has (docs/architecture.md, "Errors"):
@@ -60,6 +68,7 @@ inline constexpr int kInternalErrorStatus = 3;
 //     and std::out_of_range)
 //   std::logic_error (an invariant) "netlab NAME: internal error: <what>" and a line saying it is
 //                                   a bug of netlab's, status kInternalErrorStatus
+//   Cancelled (Ctrl+C)              "netlab NAME: cancelled", status kCancelledStatus
 // Otherwise the body's status.
 int RunGuarded(const char* name, const std::function<int()>& body);
 

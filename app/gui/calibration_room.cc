@@ -632,11 +632,13 @@ void CalibrationRoom::Detect() {
   progress_->setValue(0);
   calibrator_.Drop();
   requested_.reset();
-  detector_.Request([job, done = done_, total = total_](const std::atomic<bool>& cancel) {
-    return CalibrationPresenter::Detect(job, cancel, [done, total](int d, int t) {
-      *done = d;
-      *total = t;
-    });
+  detector_.Request([job, done = done_, total = total_](const CancelToken& cancel) {
+    return CalibrationPresenter::Detect(job, ProgressReporter(
+                                                 [done, total](const Progress& p) {
+                                                   *done = static_cast<int>(p.done);
+                                                   *total = static_cast<int>(p.total);
+                                                 },
+                                                 cancel));
   });
   progress_timer_->start();
   Refresh();
@@ -649,7 +651,7 @@ void CalibrationRoom::Calibrate() {
     return;
   }
   requested_ = presenter_->excluded();
-  calibrator_.Request([job = presenter_->MakeCalibrationJob()](const std::atomic<bool>&) {
+  calibrator_.Request([job = presenter_->MakeCalibrationJob()](const CancelToken&) {
     return CalibrationPresenter::Calibrate(job);
   });
   Refresh();
@@ -691,7 +693,7 @@ void CalibrationRoom::SelectImage(int row) {
       QString::fromStdString(presenter_->camera_name(key.first)), ImageName(image)));
   view_->Set(presenter_, std::nullopt, {});
   view_->Set(presenter_, selected_, {});
-  loader_.Request([key, path = image.path](const std::atomic<bool>&) {
+  loader_.Request([key, path = image.path](const CancelToken&) {
     Loaded loaded{key, {}};
     const cv::Mat read = cv::imread(path, cv::IMREAD_UNCHANGED);
     if (read.empty()) return loaded;

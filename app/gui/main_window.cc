@@ -580,7 +580,7 @@ void MainWindow::RequestFrame() {
   for (int c = 0; c < session->cameras() && c < 4; ++c)
     fit[c] = views_[c]->FitScreenPerImage(session->rig_camera(c).intrinsics.width);
   const cv::Mat tone = ToneTable(gain_, 0, gamma_);
-  loader_.Request([session, t, level, fit, tone](const std::atomic<bool>&) {
+  loader_.Request([session, t, level, fit, tone](const CancelToken&) {
     Loaded loaded;
     loaded.t = t;
     for (int c = 0; c < session->cameras() && c < 4; ++c) {
@@ -700,7 +700,7 @@ void MainWindow::RequestColours() {
   const Eigen::Vector2d px = label.px;
   const recon::YarnDirections yarns =
       recon::AcceptedNeighbourYarns(session_->document().labels(), c, t, k);
-  colours_.Request([session, c, t, k, px, yarns](const std::atomic<bool>&) {
+  colours_.Request([session, c, t, k, px, yarns](const CancelToken&) {
     return session->CheckKnotColours(c, t, k, px, yarns);
   });
 }
@@ -1032,7 +1032,8 @@ void MainWindow::TrackTo(int to, bool wait, int max_review) {
   progress_ = progress;
   const Session* session = session_.get();
   QPointer<QProgressDialog> bar(progress);
-  auto report = [this, bar](int done, int) {
+  auto report = [this, bar](const Progress& p) {
+    const int done = static_cast<int>(p.done);
     QMetaObject::invokeMethod(
         this,
         [bar, done] {
@@ -1042,8 +1043,8 @@ void MainWindow::TrackTo(int to, bool wait, int max_review) {
   };
   tracking_ = true;
   tracker_.Request([session, snapshot = session_->document().labels(), from, to, report,
-                    max_review](const std::atomic<bool>& cancel) {
-    return session->Track(snapshot, from, to, &cancel, report, max_review);
+                    max_review](const CancelToken& cancel) {
+    return session->Track(snapshot, from, to, ProgressReporter(report, cancel), max_review);
   });
   if (wait) {
     while (busy()) QCoreApplication::processEvents(QEventLoop::AllEvents, 20);
@@ -1335,7 +1336,7 @@ void MainWindow::StartPreview(bool from_corners) {
   // The snapshot on the GUI thread; the worker never touches the document.
   previewer_.Request([session = static_cast<const Session*>(session_.get()),
                       snapshot = session_->document().labels(), t = preview_frame_,
-                      corners = from_corners](const std::atomic<bool>&) {
+                      corners = from_corners](const CancelToken&) {
     return session->PreviewFillGrid(snapshot, t, corners);
   });
 }
@@ -1592,7 +1593,7 @@ void MainWindow::StartCheck() {
   const RecordingPresenter* recording = recording_.get();
   if (recording == nullptr) return;
   statusBar()->showMessage("Checking every frame's header (netlab ingest --check)…", 4000);
-  checker_.Request([recording](const std::atomic<bool>&) {
+  checker_.Request([recording](const CancelToken&) {
     try {
       return RecordingPresenter::Check(recording->sequence(), false);
     } catch (const std::exception& e) {

@@ -550,9 +550,9 @@ void ReconstructionRoom::Triangulate() {
   progress_timer_->start();
   status_->setText("Triangulating the labels…");
   auto fraction = fraction_;
-  triangulator_.Request([job = std::move(job), fraction](const std::atomic<bool>& cancel) {
+  triangulator_.Request([job = std::move(job), fraction](const CancelToken& cancel) {
     return ReconstructionPresenter::Triangulate(
-        job, cancel, [fraction](const std::string&, double f) { *fraction = f; });
+        job, ProgressReporter([fraction](const Progress& p) { *fraction = p.fraction(); }, cancel));
   });
   Refresh();
 }

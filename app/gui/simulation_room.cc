@@ -22,6 +22,7 @@
 #include <QTimer>
 #include <QUrl>
 #include <QVBoxLayout>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -616,7 +617,7 @@ void SimulationRoom::RequestFrame() {
   const int t = frame_;
   std::array<double, 4> fit{};
   for (int c = 0; c < 4; ++c) fit[c] = views_[c]->FitScreenPerImage(2048);
-  loader_.Request([session, t, fit](const std::atomic<bool>&) {
+  loader_.Request([session, t, fit](const CancelToken&) {
     Loaded loaded;
     loaded.t = t;
     for (int c = 0; c < std::min(4, session->cameras()); ++c) {
@@ -761,9 +762,9 @@ void SimulationRoom::Triangulate() {
   }
   status_->setText("Triangulating the labels…");
   auto fraction = fraction_;
-  triangulator_.Request([job = std::move(job), fraction](const std::atomic<bool>& cancel) {
+  triangulator_.Request([job = std::move(job), fraction](const CancelToken& cancel) {
     return ReconstructionPresenter::Triangulate(
-        job, cancel, [fraction](const std::string&, double f) { *fraction = f; });
+        job, ProgressReporter([fraction](const Progress& p) { *fraction = p.fraction(); }, cancel));
   });
   StartProgress("triangulate");
 }
@@ -793,8 +794,9 @@ void SimulationRoom::Simulate() {
   }
   status_->setText("Simulating " + QString::fromStdString(scenario) + "…");
   auto fraction = fraction_;
-  simulator_.Request([job = std::move(job), fraction](const std::atomic<bool>& cancel) {
-    return SimulationPresenter::Simulate(job, cancel, [fraction](double f) { *fraction = f; });
+  simulator_.Request([job = std::move(job), fraction](const CancelToken& cancel) {
+    return SimulationPresenter::Simulate(
+        job, ProgressReporter([fraction](const Progress& p) { *fraction = p.fraction(); }, cancel));
   });
   StartProgress("simulate");
 }
@@ -833,9 +835,8 @@ void SimulationRoom::Score(int i) {
   ScoreJob job = simulation_->MakeScoreJob(i, alignment);
   scoring_ = i;
   status_->setText("Scoring " + QString::fromStdString(simulation_->simulation(i).name) + "…");
-  scorer_.Request([job = std::move(job)](const std::atomic<bool>&) {
-    return SimulationPresenter::RunScore(job);
-  });
+  scorer_.Request(
+      [job = std::move(job)](const CancelToken&) { return SimulationPresenter::RunScore(job); });
   progress_->setRange(0, 0);  // the score has no progress to tell: busy
   RefreshButtons();
 }
@@ -926,11 +927,18 @@ void SimulationRoom::Fit() {
   status_->setText("Fitting " + QString::fromStdString(free) + "…");
   fit_->setText("");
   auto status = fit_status_;
-  fitter_.Request([job = std::move(job), status](const std::atomic<bool>& cancel) {
-    return SimulationPresenter::Fit(job, cancel, [status](const netsim::FitProgress& p) {
-      const std::lock_guard<std::mutex> lock(status->mutex);
-      status->text = SimulationPresenter::ProgressText(p);
-    });
+  fitter_.Request([job = std::move(job), status](const CancelToken& cancel) {
+    const auto start = std::chrono::steady_clock::now();
+    return SimulationPresenter::Fit(
+        job,
+        ProgressReporter(
+            [status, start](const Progress& p) {
+              const double elapsed_s =
+                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+              const std::lock_guard<std::mutex> lock(status->mutex);
+              status->text = SimulationPresenter::ProgressText(p, elapsed_s);
+            },
+            cancel));
   });
   progress_->setRange(0, 0);  // busy: the fit's ETA is in the status line
   progress_timer_->start();
@@ -947,7 +955,7 @@ void SimulationRoom::OpenReport() {
 void SimulationRoom::Cancel() {
   triangulator_.Cancel();
   simulator_.Cancel();
-  fitter_.Cancel();  // stops at its next iteration; the answer says cancelled
+  fitter_.Cancel();  // stops its simulations under way; the answer says cancelled
   // A score is not cancellable inside: its answer is dropped.
   to_score_.clear();
   if (scorer_.pending()) {

@@ -155,7 +155,15 @@ class Simulator {
     SweepOptions sweep;
     sweep.jobs = options_.jobs;
     sweep.on_run = [this](const SweepRun&, int, int) { ++simulations_; };
-    SweepResult result = RunSweep(path_, runs, sweep);
+    sweep.progress = options_.progress.Silent();  // its token stops the runs
+    SweepResult result;
+    try {
+      result = RunSweep(path_, runs, sweep);
+    } catch (const Cancelled&) {
+      // Not thrown through Ceres: every run fails, and the fit throws at its next poll.
+      if (error) *error = "cancelled";
+      return out;
+    }
     if (cache_.size() > 64) cache_.clear();
     for (size_t r = 0; r < runs.size(); ++r) {
       const SweepRun& run = result.runs[r];
@@ -396,50 +404,48 @@ class ShotCost : public ceres::CostFunction {
   mutable std::string failure_;
 };
 
-// The ETA: at most `runs` more simulations at the pace so far (every run of the fit takes about
-// as long; the start's run is done before any report, so the pace is known from the first).
-double EtaSeconds(const ShotCost& cost, Clock::time_point start, long runs) {
-  const int done = cost.simulations();
-  return done > 0 ? Seconds(start) / done * static_cast<double>(runs) : 0.0;
+// A report of the fit (FitOptions::progress says what it holds).
+void ReportFit(const FitOptions& options, int start_index, const std::string& stage, int iteration,
+               double cost, int simulations, long simulations_left) {
+  if (!options.progress.reports()) return;
+  std::string where;
+  if (options.starts > 1)
+    where = "start " + std::to_string(start_index + 1) + "/" + std::to_string(options.starts);
+  if (!stage.empty()) where += (where.empty() ? "" : ", ") + std::string("stage ") + stage;
+  char cost_text[32];
+  std::snprintf(cost_text, sizeof cost_text, "%.6g", cost);
+  const std::string detail =
+      (iteration >= 0 ? "iteration " + std::to_string(iteration) + ", " : std::string()) + "cost " +
+      cost_text;
+  options.progress.Report(where, simulations, static_cast<double>(simulations + simulations_left),
+                          detail);
 }
 
 // Progress once per Levenberg-Marquardt iteration; `after` (simulations of the stages after this
 // one) and the run's own iterations left bound the ETA.
 class ProgressCallback : public ceres::IterationCallback {
  public:
-  ProgressCallback(const FitOptions& options, const ShotCost& cost, Clock::time_point start,
-                   int start_index, std::string stage, const std::vector<bool>& active, long after)
+  ProgressCallback(const FitOptions& options, const ShotCost& cost, int start_index,
+                   std::string stage, const std::vector<bool>& active, long after)
       : options_(options),
         cost_(cost),
-        start_(start),
         start_index_(start_index),
         stage_(std::move(stage)),
         per_iteration_(cost.RunsPerIteration(active)),
         after_(after) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& s) override {
-    if (options_.progress) {
-      FitProgress p;
-      p.iteration = s.iteration;
-      // Ceres reports a rejected step's cost; the fit stays where it was.
-      if (s.iteration == 0 || s.step_is_successful) cost_now_ = 2 * s.cost;
-      p.cost = cost_now_;
-      p.simulations = cost_.simulations();
-      p.elapsed_s = Seconds(start_);
-      p.simulations_left =
-          static_cast<long>(options_.max_iterations - s.iteration) * per_iteration_ + after_;
-      p.eta_s = EtaSeconds(cost_, start_, p.simulations_left);
-      p.start = start_index_;
-      p.starts = options_.starts;
-      p.stage = stage_;
-      options_.progress(p);
-    }
+    if (options_.progress.cancelled()) return ceres::SOLVER_ABORT;  // LevenbergMarquardt throws
+    // Ceres reports a rejected step's cost; the fit stays where it was.
+    if (s.iteration == 0 || s.step_is_successful) cost_now_ = 2 * s.cost;
+    const long left =
+        static_cast<long>(options_.max_iterations - s.iteration) * per_iteration_ + after_;
+    ReportFit(options_, start_index_, stage_, s.iteration, cost_now_, cost_.simulations(), left);
     return ceres::SOLVER_CONTINUE;
   }
 
  private:
   const FitOptions& options_;
   const ShotCost& cost_;
-  Clock::time_point start_;
   int start_index_;
   std::string stage_;
   long per_iteration_;
@@ -650,6 +656,7 @@ void LevenbergMarquardt(ShotCost* cost, const std::vector<bool>& active, const F
   solver.num_threads = 1;
   solver.callbacks.push_back(&callback);
   ceres::Solve(solver, &problem, summary);
+  options.progress.ThrowIfCancelled();
   if (summary->termination_type == ceres::FAILURE && summary->iterations.empty())
     throw std::runtime_error("the fit could not start: " + cost->last_failure());
 }
@@ -736,8 +743,7 @@ long ScanRuns(const ShotCost& cost, const std::vector<FitParameter>& parameters,
 // basins).
 std::vector<std::pair<int, std::vector<double>>> ScanMaterial(
     const ShotCost& cost, const std::vector<FitParameter>& parameters, const FitOptions& options,
-    Clock::time_point start, int start_index, const std::string& stage, long after,
-    std::vector<double>* x) {
+    int start_index, const std::string& stage, long after, std::vector<double>* x) {
   std::vector<std::pair<int, std::vector<double>>> rivals;
   if (options.scan_steps <= 0) return rivals;
   const int steps = options.scan_steps, n = 2 * steps + 1;
@@ -750,22 +756,13 @@ std::vector<std::pair<int, std::vector<double>>> ScanMaterial(
     std::vector<std::vector<double>> xs(n, *x);
     for (int k = 0; k < n; ++k) xs[k][i] = along[k];
     const std::vector<double> c = cost.CostsAt(xs);
+    options.progress.ThrowIfCancelled();
     const auto [best, rival] = FindScanMinima(c, steps);
     if (rival >= 0) rivals.push_back({static_cast<int>(i), xs[rival]});
     (*x)[i] = xs[best][i];
-    if (options.progress) {
-      FitProgress p;
-      p.cost = c[best];
-      p.simulations = cost.simulations();
-      p.elapsed_s = Seconds(start);
-      p.iteration = -1;
-      p.simulations_left = left + after;
-      p.eta_s = EtaSeconds(cost, start, p.simulations_left);
-      p.start = start_index;
-      p.starts = options.starts;
-      p.stage = stage + " " + parameters[i].name + (rival >= 0 ? " (2 minima)" : "");
-      options.progress(p);
-    }
+    ReportFit(options, start_index,
+              stage + " " + parameters[i].name + (rival >= 0 ? " (2 minima)" : ""), -1, c[best],
+              cost.simulations(), left + after);
   }
   return rivals;
 }
@@ -787,8 +784,8 @@ struct FitEnd {
 // *rival_failed when the last stage from one ended unusable.
 std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& parameters,
                              const FitOptions& options, const std::vector<double>& x0,
-                             Clock::time_point start, FitResult* result, std::vector<FitEnd>* ends,
-                             bool* valley_found, bool* rival_failed) {
+                             FitResult* result, std::vector<FitEnd>* ends, bool* valley_found,
+                             bool* rival_failed) {
   const int p = static_cast<int>(parameters.size());
   std::vector<bool> all(p, true), launch(p);
   for (int i = 0; i < p; ++i) launch[i] = !IsMaterial(parameters[i]);
@@ -824,7 +821,7 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
                         ceres::Solver::Summary* summary) -> bool {
     LevenbergMarquardt(
         cost, all, options,
-        ProgressCallback(options, *cost, start, s,
+        ProgressCallback(options, *cost, s,
                          stage(stages, "all") + (from.empty() || stages == 1 ? "" : ", " + from),
                          all, after),
         &x, summary);
@@ -848,15 +845,15 @@ std::vector<double> Minimise(ShotCost* cost, const std::vector<FitParameter>& pa
     if (staged) {
       cost->SetActive(launch);
       LevenbergMarquardt(cost, launch, options,
-                         ProgressCallback(options, *cost, start, s, stage(1, "material held"),
-                                          launch, scan + lm_all + later),
+                         ProgressCallback(options, *cost, s, stage(1, "material held"), launch,
+                                          scan + lm_all + later),
                          &x, &summary);
       result->iterations += static_cast<int>(summary.iterations.size()) - 1;
       cost->SetActive(all);
       if (summary.termination_type == ceres::FAILURE) continue;
     }
     if (scanned)
-      rivals = ScanMaterial(*cost, parameters, options, start, s, stage(1 + staged, "scan"),
+      rivals = ScanMaterial(*cost, parameters, options, s, stage(1 + staged, "scan"),
                             lm_all + later, &x);
     long valleys = static_cast<long>(rivals.size());
     last_stage(x, s, "", valleys * lm_all + later, &summary);
@@ -1139,8 +1136,9 @@ FitResult FitShot(const std::string& scenario_path, const KnotTracks& measured,
   return FitShots({{scenario_path, &measured, measured_name}}, parameters, options);
 }
 
-FitResult FitShots(const std::vector<FitShotInput>& inputs,
-                   const std::vector<FitParameter>& parameters, const FitOptions& options) {
+// FitShots, before its check for a cancel.
+static FitResult RunFit(const std::vector<FitShotInput>& inputs,
+                        const std::vector<FitParameter>& parameters, const FitOptions& options) {
   const auto start = Clock::now();
   if (inputs.empty()) throw std::invalid_argument("fit: no shot");
   if (options.starts < 1 || options.max_iterations < 1 || !(options.step > 0))
@@ -1173,7 +1171,7 @@ FitResult FitShots(const std::vector<FitShotInput>& inputs,
   std::vector<FitEnd> ends;
   bool valley_found = false, rival_failed = false;
   const std::vector<double> best =
-      Minimise(&cost, parameters, options, x0, start, &result, &ends, &valley_found, &rival_failed);
+      Minimise(&cost, parameters, options, x0, &result, &ends, &valley_found, &rival_failed);
 
   // The covariance: the data's information (inflated per shot) plus the priors'.
   const std::vector<double> jac = JacobianAt(cost, best);
@@ -1204,6 +1202,20 @@ FitResult FitShots(const std::vector<FitShotInput>& inputs,
   result.simulations = cost.simulations();
   result.wall_s = Seconds(start);
   return result;
+}
+
+FitResult FitShots(const std::vector<FitShotInput>& inputs,
+                   const std::vector<FitParameter>& parameters, const FitOptions& options) {
+  try {
+    FitResult result = RunFit(inputs, parameters, options);
+    options.progress.ThrowIfCancelled();  // a result reached while cancelling is not the fit's
+    return result;
+  } catch (const Cancelled&) {
+    throw;
+  } catch (...) {
+    options.progress.ThrowIfCancelled();  // runs that failed because they were cancelled
+    throw;
+  }
 }
 
 }  // namespace netlab::netsim

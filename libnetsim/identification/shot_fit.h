@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "common/progress.h"
 #include "common/tracks/track_file.h"
 #include "libnetsim/identification/fit_parameters.h"
 #include "libnetsim/scenario/scenario.h"
@@ -40,22 +41,6 @@ struct FitPrior {
   std::string name;  // the parameter's name (a dotted path)
   double value = 0.0, sigma = 0.0;
   std::string source;  // where it came from, for the report
-};
-
-struct FitProgress {
-  int iteration = 0;    // of Levenberg-Marquardt; -1 in the scan's reports
-  double cost = 0.0;    // sum of squared whitened residuals (data + priors) where the fit stands
-  int simulations = 0;  // done so far
-  double elapsed_s = 0.0;
-  // At most this many more simulations: every Levenberg-Marquardt run to max_iterations, the
-  // scan, the last stage from each other valley found so far (a valley found later adds its
-  // own), the final check.
-  long simulations_left = 0;
-  double eta_s = 0.0;  // simulations_left at the mean pace so far
-  int start = 0, starts = 1;
-  // "1/3 material held", "2/3 scan <parameter>", "3/3 all" (without the first when only material
-  // parameters are free), or empty when no material parameter is
-  std::string stage;
 };
 
 struct FitOptions {
@@ -74,7 +59,16 @@ struct FitOptions {
   // first stage left it (or over its prior's reach, ScanCoordinates), this many values either
   // way (0: no scan).
   int scan_steps = 8;
-  std::function<void(const FitProgress&)> progress;
+  // A report per Levenberg-Marquardt iteration and per scanned parameter, on the calling thread:
+  // stage "start 2/3, stage 1/3 material held" (the start when starts > 1; the stage "1/3
+  // material held", "2/3 scan <parameter>", "3/3 all", without the first when only material
+  // parameters are free, none when no material parameter is), done the simulations so far,
+  // total at most the simulations in all (every Levenberg-Marquardt run to max_iterations, the
+  // scan, the last stage from each other valley found so far, the final check), detail
+  // "iteration 4, cost 812.3" (the cost, %.6g, the sum of squared whitened residuals where the
+  // fit stands; no iteration in the scan's reports). Its token stops the simulations under way:
+  // the fit throws Cancelled.
+  ProgressReporter progress;
 };
 
 struct FittedParameter {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <iomanip>
 #include <limits>
@@ -180,14 +181,19 @@ RunSummary RunScenario(const Scenario& scenario, const RunOptions& options) {
   const long progress_every = std::max(1L, total_steps / 50);
   double contact_start = std::numeric_limits<double>::quiet_NaN();
   for (long step = 1; step <= total_steps; ++step) {
+    if (options.progress.cancelled()) {
+      const std::string partial = writer ? writer->partial_path() : "";
+      writer.reset();  // closes the file before it goes
+      if (!partial.empty()) std::remove(partial.c_str());
+      throw Cancelled();
+    }
     if (!sim.Step()) break;
     if (std::isnan(contact_start) && sim.max_penetration() > 0.0) {
       contact_start = sim.state().time;  // the first step that found a node inside a body
       if (writer) writer->SetContactStart(contact_start);
     }
     if (step % steps_per_frame == 0) write_frame();
-    if (options.progress && step % progress_every == 0)
-      options.progress(static_cast<double>(step) / total_steps);
+    if (step % progress_every == 0) options.progress.Report("steps", step, total_steps);
   }
   summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 

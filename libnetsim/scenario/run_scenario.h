@@ -8,14 +8,18 @@
 #include <utility>
 #include <vector>
 
+#include "common/progress.h"
 #include "libnetsim/scenario/scenario.h"
 
 namespace netlab::netsim {
 
 struct RunOptions {
   std::string out_path;  // knot-track HDF5 file; empty: write nothing
-  // Called about every 2 % of the run with the fraction done (0..1); may be empty.
-  std::function<void(double fraction)> progress;
+  // Stage "steps" (done and total counted in integrator steps), about every 2 % of the run, on
+  // the calling thread; its token is polled at every step: a cancelled run throws Cancelled and
+  // leaves no
+  // "<out_path>.partial".
+  ProgressReporter progress;
   // Called at every output frame (the frames the file gets) with the time (s) and the knots'
   // positions (m, in Model::knots order), e.g. to keep the tracks in memory; may be empty.
   std::function<void(double time, const std::vector<Vector3d>& knots)> on_frame;
@@ -60,9 +64,10 @@ struct RunSummary {
   std::string BriefReport() const;
 };
 
-// Throws InputError for scenarios that cannot be built and std::runtime_error when the output
-// cannot be written. A blow-up is not an exception: it is reported in the summary (stable false),
-// and the frames written so far stay in "<out_path>.partial".
+// Throws InputError for scenarios that cannot be built, std::runtime_error when the output
+// cannot be written and Cancelled when options.progress's token is set. A blow-up is not an
+// exception: it is reported in the summary (stable false), and the frames written so far stay in
+// "<out_path>.partial".
 RunSummary RunScenario(const Scenario& scenario, const RunOptions& options);
 
 }  // namespace netlab::netsim

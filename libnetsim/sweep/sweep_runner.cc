@@ -193,14 +193,21 @@ int BytesInt(const std::string& bytes) {
 class Pool {
  public:
   Pool(const std::string& scenario_path, const std::vector<std::vector<ScenarioOverride>>& runs,
-       int jobs, int decimate, int rank, std::function<int()> next)
+       int jobs, int decimate, int rank, std::function<int()> next, const CancelToken& cancel)
       : fractions_(runs.size()) {
     for (auto& f : fractions_) f = 0.0;
     for (int j = 0; j < jobs; ++j)
-      threads_.emplace_back([this, &scenario_path, &runs, decimate, rank, next] {
+      threads_.emplace_back([this, &scenario_path, &runs, decimate, rank, next, cancel] {
         for (int i = next(); i >= 0; i = next()) {
-          SweepRun run = RunOne(scenario_path, i, runs[i], decimate,
-                                [this, i](double f) { fractions_[i] = f; });
+          SweepRun run;
+          try {
+            run =
+                RunOne(scenario_path, i, runs[i], decimate,
+                       ProgressReporter(
+                           [this, i](const Progress& p) { fractions_[i] = p.fraction(); }, cancel));
+          } catch (const Cancelled&) {
+            break;  // the calling thread sees the token and throws
+          }
           run.rank = rank;
           fractions_[i] = 0.0;
           std::lock_guard<std::mutex> lock(mutex_);
@@ -280,7 +287,7 @@ int SweepResult::failed() const {
 
 SweepRun RunOne(const std::string& scenario_path, int index,
                 const std::vector<ScenarioOverride>& overrides, int decimate,
-                const std::function<void(double)>& progress) {
+                const ProgressReporter& progress) {
   SweepRun run;
   run.index = index;
   run.overrides = overrides;
@@ -341,6 +348,8 @@ SweepRun RunOne(const std::string& scenario_path, int index,
       run.status = SweepRun::Status::kBlewUp;
       run.error = run.summary.error;
     }
+  } catch (const Cancelled&) {
+    throw;
   } catch (const InputError& e) {
     run.status = SweepRun::Status::kBadValue;
     run.error = e.what();
@@ -371,18 +380,27 @@ SweepResult RunSweep(const std::string& scenario_path,
     std::condition_variable cv;
     std::deque<int> queue;
     bool finished = false;
-    Pool pool(scenario_path, runs, result.jobs, options.decimate, mpi->rank(), [&]() {
-      std::unique_lock<std::mutex> lock(mutex);
-      cv.wait(lock, [&] { return !queue.empty() || finished; });
-      if (queue.empty()) return -1;
-      const int i = queue.front();
-      queue.pop_front();
-      return i;
-    });
+    Pool pool(
+        scenario_path, runs, result.jobs, options.decimate, mpi->rank(),
+        [&]() {
+          std::unique_lock<std::mutex> lock(mutex);
+          cv.wait(lock, [&] { return !queue.empty() || finished; });
+          if (queue.empty()) return -1;
+          const int i = queue.front();
+          queue.pop_front();
+          return i;
+        },
+        options.progress.cancel_token());
     int asked = 0, answered = 0, received = 0, sent = 0;
     for (int j = 0; j < result.jobs; ++j, ++asked) mpi->Send(0, kAsk, "");
     bool no_more = false;
     while (!(no_more && answered == asked && sent == received)) {
+      if (options.progress.cancelled()) {
+        std::lock_guard<std::mutex> lock(mutex);
+        finished = true;
+        cv.notify_all();
+        throw Cancelled();
+      }
       int from = 0, tag = 0;
       std::string bytes;
       while (mpi->Poll(&from, &tag, &bytes)) {
@@ -435,7 +453,8 @@ SweepResult RunSweep(const std::string& scenario_path,
     }
   };
   {
-    Pool pool(scenario_path, runs, result.jobs, options.decimate, 0, take_index);
+    Pool pool(scenario_path, runs, result.jobs, options.decimate, 0, take_index,
+              options.progress.cancel_token());
     auto last_progress = Clock::now();
     const int other_ranks = mpi ? mpi->size() - 1 : 0;
     // A callback that throws (e.g. the file cannot be written) ends the sweep: the threads
@@ -448,6 +467,7 @@ SweepResult RunSweep(const std::string& scenario_path,
       }
     } stop{next, total};
     while (done < total || byes < other_ranks) {
+      options.progress.ThrowIfCancelled();
       if (mpi) {
         int from = 0, tag = 0;
         std::string bytes;
@@ -462,12 +482,14 @@ SweepResult RunSweep(const std::string& scenario_path,
         }
       }
       for (SweepRun& run : pool.Take(poll)) finish(std::move(run));
-      if (options.progress && Clock::now() - last_progress > std::chrono::milliseconds(200)) {
+      if (Clock::now() - last_progress > std::chrono::milliseconds(200)) {
         last_progress = Clock::now();
-        options.progress(done + pool.UnderWay(), total);
+        options.progress.Report("runs", done + pool.UnderWay(), total);
       }
-      if (!mpi && pool.Exited() && done < total)
+      if (!mpi && pool.Exited() && done < total) {
+        options.progress.ThrowIfCancelled();  // the threads stopped for the cancel
         throw std::logic_error("RunSweep: the pool ended with runs missing");
+      }
     }
   }
   result.wall_s = std::chrono::duration<double>(Clock::now() - start).count();

@@ -94,9 +94,10 @@ struct SweepOptions {
   // Called on the calling thread (rank 0), in order of completion, as each run ends; done counts
   // the runs ended so far (this one included).
   std::function<void(const SweepRun& run, int done, int total)> on_run;
-  // Called on the calling thread about every 0.2 s with the runs done, counting the parts of this
-  // process's runs under way (e.g. 3.4 of 12): for a progress bar and an ETA.
-  std::function<void(double runs_done, int total)> progress;
+  // Stage "runs", reported on the calling thread about every 0.2 s: the runs done, counting the
+  // parts of this process's runs under way (e.g. 3.4 of 12). Its token stops the sweep within a
+  // second (every run under way polls it): RunSweep throws Cancelled.
+  ProgressReporter progress;
 };
 
 struct SweepResult {
@@ -119,9 +120,9 @@ SweepResult RunSweep(const std::string& scenario_path,
                      const SweepOptions& options);
 
 // One run, on the calling thread: what the pool runs (exposed for tests and `fit`).
-// `progress`: the fraction of this run done, may be empty.
+// `progress`: RunScenario's (stage "steps"); a cancel throws Cancelled.
 SweepRun RunOne(const std::string& scenario_path, int index,
                 const std::vector<ScenarioOverride>& overrides, int decimate,
-                const std::function<void(double)>& progress = {});
+                const ProgressReporter& progress = {});
 
 }  // namespace netlab::netsim

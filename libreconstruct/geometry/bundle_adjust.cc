@@ -31,18 +31,22 @@ double Since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-// Runs body(i) for i in [0, n) on `threads` threads (contiguous chunks taken in turn).
-void ParallelFor(int n, int threads, const std::function<void(int)>& body) {
+// Runs body(i) for i in [0, n) on `threads` threads (contiguous chunks taken in turn); a cancel
+// stops them between chunks and throws Cancelled.
+void ParallelFor(int n, int threads, const ProgressReporter& progress,
+                 const std::function<void(int)>& body) {
   std::atomic<int> next{0};
   constexpr int kChunk = 16;
   auto work = [&] {
-    for (int start = next.fetch_add(kChunk); start < n; start = next.fetch_add(kChunk))
+    for (int start = next.fetch_add(kChunk); start < n && !progress.cancelled();
+         start = next.fetch_add(kChunk))
       for (int i = start; i < std::min(n, start + kChunk); ++i) body(i);
   };
   std::vector<std::thread> pool;
   for (int t = 1; t < std::max(1, threads); ++t) pool.emplace_back(work);
   work();
   for (auto& th : pool) th.join();
+  progress.ThrowIfCancelled();
 }
 
 // The diagonal 3x3 blocks of H^-1 for H = blockdiag(info) + w (D2' D2 (x) I3), D2 the second
@@ -111,8 +115,8 @@ class SequenceSolver {
  private:
   std::string RigNames() const;
   size_t Cell(int t, int k) const { return static_cast<size_t>(t) * k_ + k; }
-  void Progress(const std::string& stage, double f) const {
-    if (o_.progress) o_.progress(stage, f);
+  void Progress(const std::string& stage, double done, double total) const {
+    o_.progress.Report(stage, done, total);
   }
   std::vector<int> GridNeighbours(int k) const;
 
@@ -273,11 +277,11 @@ void SequenceSolver::Gather(SequenceResult* result) {
 void SequenceSolver::TriangulateAll() {
   const int n = static_cast<int>(cells_.size());
   std::atomic<int> done{0};
-  ParallelFor(n, o_.threads, [&](int i) {
+  ParallelFor(n, o_.threads, o_.progress, [&](int i) {
     KnotFrame& cell = cells_[i];
     cell.estimate = TriangulatePoint(rig_, cell.observations, tri_);
     const int d = ++done;
-    if (d % 20000 == 0) Progress("triangulate", static_cast<double>(d) / n);
+    if (d % 20000 == 0) Progress("knot-frames triangulated", d, n);
   });
 }
 
@@ -491,13 +495,13 @@ void SequenceSolver::Solve(ceres::Problem* problem, ceres::LinearSolverType type
 std::vector<Eigen::Vector3d> SequenceSolver::SweepFrames(const std::vector<Eigen::Vector3d>& prev,
                                                          bool link, bool smooth) const {
   std::vector<Eigen::Vector3d> out = prev;
-  ParallelFor(t_, o_.threads, [&](int t) { SolveFrame(t, link, smooth, prev, &out); });
+  ParallelFor(t_, o_.threads, o_.progress, [&](int t) { SolveFrame(t, link, smooth, prev, &out); });
   return out;
 }
 std::vector<Eigen::Vector3d> SequenceSolver::SweepKnots(const std::vector<Eigen::Vector3d>& prev,
                                                         bool smooth, bool link) const {
   std::vector<Eigen::Vector3d> out = prev;
-  ParallelFor(k_, o_.threads, [&](int k) { SolveKnot(k, smooth, link, prev, &out); });
+  ParallelFor(k_, o_.threads, o_.progress, [&](int k) { SolveKnot(k, smooth, link, prev, &out); });
   return out;
 }
 
@@ -529,7 +533,7 @@ void SequenceSolver::ApplyPriors(SequenceResult* result) {
     Shift(start, smooth_only, &result->smoothness_shift_rms_m, &result->smoothness_shift_max_m);
   }
   if (link) {
-    Progress("link prior", 0.0);
+    Progress("link prior", 0, 0);
     link_only = SweepFrames(start, true, false);
     Shift(start, link_only, &result->link_shift_rms_m, &result->link_shift_max_m);
   }
@@ -545,7 +549,7 @@ void SequenceSolver::ApplyPriors(SequenceResult* result) {
 // left out (CheckAgainstTracks).
 std::vector<Eigen::Vector3d> SequenceSolver::SolveSmoothness(
     const std::vector<Eigen::Vector3d>& start, SequenceResult* result) {
-  Progress("smoothness prior", 0.0);
+  Progress("smoothness prior", 0, 0);
   std::vector<Eigen::Vector3d> smooth_only = SweepKnots(start, true, false);
   // A wrong point drags its neighbours in time along: drop only the worst of each knot's
   // track per round, and solve that knot again.
@@ -553,7 +557,7 @@ std::vector<Eigen::Vector3d> SequenceSolver::SolveSmoothness(
     positions_ = smooth_only;
     const std::vector<int> knots = CheckAgainstTracks(result);
     if (knots.empty()) break;
-    ParallelFor(static_cast<int>(knots.size()), o_.threads,
+    ParallelFor(static_cast<int>(knots.size()), o_.threads, o_.progress,
                 [&](int i) { SolveKnot(knots[i], true, false, start, &smooth_only); });
   }
   return smooth_only;
@@ -565,7 +569,7 @@ std::vector<Eigen::Vector3d> SequenceSolver::SolveSmoothness(
 std::vector<Eigen::Vector3d> SequenceSolver::AlternatePriors(std::vector<Eigen::Vector3d> pos,
                                                              SequenceResult* result) const {
   for (int sweep = 0; sweep < o_.prior_sweeps; ++sweep) {
-    Progress("both priors", static_cast<double>(sweep) / o_.prior_sweeps);
+    Progress("sweeps of both priors", sweep, o_.prior_sweeps);
     std::vector<Eigen::Vector3d> next = SweepKnots(SweepFrames(pos, true, true), true, true);
     double change_max = 0.0;
     Shift(pos, next, &result->prior_sweep_change_rms_m, &change_max);
@@ -584,7 +588,7 @@ std::vector<Eigen::Vector3d> SequenceSolver::AlternatePriors(std::vector<Eigen::
 // too small for the motion). Returns the knots that lost a point.
 std::vector<int> SequenceSolver::CheckAgainstTracks(SequenceResult* result) {
   std::vector<int64_t> dropped(k_, 0), disagreeing(k_, 0);
-  ParallelFor(k_, o_.threads, [&](int k) {
+  ParallelFor(k_, o_.threads, o_.progress, [&](int k) {
     const int worst_t = WorstTwoViewPoint(k, &disagreeing[k]);
     if (worst_t < 0) return;
     LeaveOut(Cell(worst_t, k));
@@ -647,7 +651,7 @@ void SequenceSolver::Finish(SequenceResult* result) {
   result->covariance.assign(n, Eigen::Matrix3d::Constant(kNaN));
   result->rms_px.assign(n, kNaN);
   SumUpPoints(result);
-  ParallelFor(k_, o_.threads, [&](int k) { InvertInformation(k, result); });
+  ParallelFor(k_, o_.threads, o_.progress, [&](int k) { InvertInformation(k, result); });
   FlagDegenerate(result);
 }
 

@@ -36,6 +36,7 @@
 #include <vector>
 
 #include "calibration/rig.h"
+#include "common/progress.h"
 #include "libreconstruct/geometry/triangulation.h"
 #include "libreconstruct/labels/label_set.h"
 
@@ -83,7 +84,10 @@ struct SequenceOptions {
   // label of a camera with a non-zero offset is moved to the frame time along its own 2D track
   // (CameraOffsets, camera_offsets.h) before triangulation.
   std::vector<double> camera_offset_frames;
-  std::function<void(const std::string& stage, double fraction)> progress;
+  // Stages "knot-frames triangulated", "rig stages" (of 2), "smoothness prior" and "link prior"
+  // (no count), "sweeps of both priors", from the calling thread or the workers (the callback
+  // must be thread-safe); a cancel stops the workers between chunks and throws Cancelled.
+  ProgressReporter progress;
 };
 
 struct ObservationOutlier {

@@ -16,7 +16,8 @@ namespace netlab::recon {
 namespace {
 
 void Progress(const SequenceOptions& options, double fraction) {
-  if (options.progress) options.progress("rig", fraction);
+  options.progress.Report("rig stages", 2 * fraction, 2);
+  options.progress.ThrowIfCancelled();
 }
 
 // One observation of a point: a residual of the rig problem.

@@ -33,8 +33,9 @@ struct RigPoint {
 // (rig_rotation_change_deg, rig_center_change_mm) and its standard deviation
 // (rig_rotation_sigma_deg, rig_center_sigma_mm). The new poses replace *rig's only when every
 // camera is determined to options.rig_max_center_sigma_mm and options.rig_max_rotation_sigma_deg
-// (result->rig_adjusted); otherwise *rig is left as it was. Reports "rig" progress through
-// options.progress. Does nothing with fewer than two cameras or no points.
+// (result->rig_adjusted); otherwise *rig is left as it was. Reports "rig stages" through
+// options.progress; a cancel of its token throws Cancelled. Does nothing with fewer than two
+// cameras or no points.
 void RefineRig(const std::vector<RigPoint>& points, const SequenceOptions& options,
                const TriangulationOptions& triangulation, calib::Rig* rig, SequenceResult* result);
 

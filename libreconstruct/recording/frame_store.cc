@@ -37,8 +37,7 @@ std::vector<std::pair<std::string, std::string>> RecordingFiles(const Experiment
 }
 
 Experiment ConvertToFrameStore(const SynchronizedSequence& sequence, const std::string& path,
-                               const FrameStoreOptions& options,
-                               const std::function<void(int, int)>& progress) {
+                               const FrameStoreOptions& options, const ProgressReporter& progress) {
   const Experiment& in = sequence.experiment();
   const int first = sequence.first_frame(), count = sequence.last_frame() - first + 1;
   const std::string partial = path + ".partial";
@@ -99,7 +98,8 @@ Experiment ConvertToFrameStore(const SynchronizedSequence& sequence, const std::
         valid[t] = !frame.empty();
         h5::AppendFrame(data.get(), type, (frame.empty() ? blank : frame).data, t);
         if (const auto it = timestamps.find(index); it != timestamps.end()) times[t] = it->second;
-        if (progress) progress(++done, total);
+        progress.Report("frames converted", ++done, total);
+        progress.ThrowIfCancelled();
       }
       h5::WriteDataset(file.get(), spec.name + "_valid", H5T_NATIVE_UINT8,
                        {static_cast<hsize_t>(count)}, valid.data());

@@ -33,9 +33,11 @@ std::string FrameStoreExperimentPath(const std::string& path);
 std::vector<std::pair<std::string, std::string>> RecordingFiles(const Experiment& experiment);
 
 // Converts `sequence` into the store at `path` (via "<path>.partial" and a rename) and returns the
-// experiment that reads it (frames "<file name>:/<camera>"). progress(done, total) may be empty.
+// experiment that reads it (frames "<file name>:/<camera>"). Progress: stage "frames converted"
+// (of all cameras), on the calling thread; polled between frames, a cancel throws Cancelled
+// and leaves no "<path>.partial".
 Experiment ConvertToFrameStore(const SynchronizedSequence& sequence, const std::string& path,
                                const FrameStoreOptions& options,
-                               const std::function<void(int, int)>& progress);
+                               const ProgressReporter& progress = {});
 
 }  // namespace netlab::recon

@@ -186,7 +186,7 @@ void CompareCameras(CheckReport& report) {
 
 }  // namespace
 
-CheckReport SynchronizedSequence::Check(bool decode, const std::function<void(int, int)>& progress,
+CheckReport SynchronizedSequence::Check(bool decode, const ProgressReporter& progress,
                                         int threads) const {
   const auto start = std::chrono::steady_clock::now();
   CheckReport report;
@@ -205,7 +205,7 @@ CheckReport SynchronizedSequence::Check(bool decode, const std::function<void(in
   std::atomic<int> next{0}, done{0};
   std::mutex mutex;
   auto worker = [&] {
-    for (int t; (t = next++) < static_cast<int>(tasks.size());) {
+    for (int t; !progress.cancelled() && (t = next++) < static_cast<int>(tasks.size());) {
       const auto [c, k] = tasks[t];
       const int index = sources_[c]->indices()[k];
       FrameResult& r = results[c][k];
@@ -221,9 +221,10 @@ CheckReport SynchronizedSequence::Check(bool decode, const std::function<void(in
         r.ok = sources_[c]->Header(index, &r.info, &r.error);
       }
       const int d = ++done;
-      if (progress) {
+      if (progress.reports()) {
         std::lock_guard<std::mutex> lock(mutex);
-        progress(d, static_cast<int>(tasks.size()));
+        progress.Report(decode ? "frames decoded" : "frame headers read", d,
+                        static_cast<double>(tasks.size()));
       }
     }
   };
@@ -231,6 +232,7 @@ CheckReport SynchronizedSequence::Check(bool decode, const std::function<void(in
   for (int t = 1; t < std::max(1, threads); ++t) pool.emplace_back(worker);
   worker();
   for (std::thread& t : pool) t.join();
+  progress.ThrowIfCancelled();
 
   // Per camera: its frame size (that of its first readable frame), then each frame's verdict,
   // the frames missing from the sequence's range, and the timestamps.

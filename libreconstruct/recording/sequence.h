@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "common/progress.h"
 #include "libreconstruct/recording/experiment.h"
 #include "libreconstruct/recording/frame_source.h"
 
@@ -62,9 +63,10 @@ class SynchronizedSequence {
   ColorCorrection Correction(int camera) const { return corrections_[camera]; }
 
   // Reads every frame header (decode: every frame, demosaiced) and reports gaps and problems.
-  // `progress(done, total)` may be empty. Decoding runs on `threads` threads.
-  CheckReport Check(bool decode, const std::function<void(int, int)>& progress,
-                    int threads = 2) const;
+  // Progress: stage "frames decoded" (or "frame headers read"; of all cameras), from any of the
+  // threads (one at a time); a cancel stops them between frames and throws Cancelled. Decoding
+  // runs on `threads` threads.
+  CheckReport Check(bool decode, const ProgressReporter& progress = {}, int threads = 2) const;
 
  private:
   Experiment experiment_;

@@ -546,10 +546,10 @@ void RenderFrame(const RenderJob& job, const SimulatedShot& shot, const FrameRan
   WriteImage(out / camera.name / name, raw);
 }
 
-// Renders every (frame, camera) on job.threads threads, reporting progress(done, total) after
-// each; the first failure stops them and is thrown as std::runtime_error.
+// Renders every (frame, camera) on job.threads threads, reporting progress after each; the first
+// failure stops them and is thrown as std::runtime_error, a cancel as Cancelled.
 void RenderFrames(const RenderJob& job, const SimulatedShot& shot, const FrameRange& range,
-                  const fs::path& out, const std::function<void(int, int)>& progress) {
+                  const fs::path& out, const ProgressReporter& progress) {
   const int cameras = static_cast<int>(job.rig.cameras.size());
   std::vector<cv::Mat> backgrounds(cameras);
   if (job.textile_background)
@@ -562,7 +562,7 @@ void RenderFrames(const RenderJob& job, const SimulatedShot& shot, const FrameRa
   std::mutex mutex;
   std::string failure;
   RunOnThreads(job.threads, [&] {
-    for (int task; (task = next++) < total;) {
+    for (int task; !progress.cancelled() && (task = next++) < total;) {
       try {
         RenderFrame(job, shot, range, out, range.first + task / cameras, task % cameras,
                     backgrounds);
@@ -572,12 +572,13 @@ void RenderFrames(const RenderJob& job, const SimulatedShot& shot, const FrameRa
         next = total;
       }
       const int d = ++done;
-      if (progress) {
+      if (progress.reports()) {
         std::lock_guard<std::mutex> lock(mutex);
-        progress(d, total);
+        progress.Report("frames rendered", d, total);
       }
     }
   });
+  progress.ThrowIfCancelled();
   if (!failure.empty()) throw std::runtime_error(failure);
 }
 
@@ -852,8 +853,7 @@ int RenderCalibrationImages(const RenderJob& job, const SimulatedShot& shot, con
 
 }  // namespace
 
-RenderSummary RenderExperiment(const RenderJob& given,
-                               const std::function<void(int, int)>& progress) {
+RenderSummary RenderExperiment(const RenderJob& given, const ProgressReporter& progress) {
   const auto start = std::chrono::steady_clock::now();
   // Check the job against the simulation.
   const SimulatedShot shot(given.simulation);

@@ -41,6 +41,7 @@
 #include <vector>
 
 #include "calibration/rig.h"
+#include "common/progress.h"
 #include "common/tracks/track_file.h"
 #include "libnetsim/scenario/scenario.h"
 #include "libreconstruct/coloring/palette.h"
@@ -136,8 +137,9 @@ void CheckOutsideOutput(const std::string& input, const std::string& option,
 // Renders the experiment (frames, truth, calibration images) into job.out_dir.partial, then puts
 // it in place of job.out_dir (common/files.h FolderReplacement): a failing run leaves an existing
 // out_dir as it was and removes its partial folder; every input is checked before any output.
-// progress(done, total) counts camera frames; it may be empty.
-RenderSummary RenderExperiment(const RenderJob& job, const std::function<void(int, int)>& progress);
+// Progress: stage "frames rendered" (of all cameras), from any of the threads (one at a time); a
+// cancel stops them between frames and throws Cancelled (the partial folder removed).
+RenderSummary RenderExperiment(const RenderJob& job, const ProgressReporter& progress = {});
 
 // A rig with every camera's image scaled by `scale` (focal lengths, principal point, size).
 calib::Rig ScaleRig(const calib::Rig& rig, double scale);

@@ -246,7 +246,7 @@ class DetectInImagesTest : public ::testing::Test {
     std::vector<std::string> names;
     for (size_t i = 0; i < files.size(); ++i) names.push_back("cam" + std::to_string(i));
     try {
-      DetectInImages(names, files, CalibrationTarget::Parse(spec), nullptr);
+      DetectInImages(names, files, CalibrationTarget::Parse(spec), {});
     } catch (const std::runtime_error& e) {
       return e.what();
     }
@@ -260,7 +260,7 @@ TEST_F(DetectInImagesTest, FindsTheBoardAndRecordsSizes) {
   const std::string a = Save("a.png", image_);
   std::vector<std::string> names = {"cam0"};
   const CalibrationInput input =
-      DetectInImages(names, {{a, a}}, CalibrationTarget::Parse("chessboard:9x6:0.08"), nullptr);
+      DetectInImages(names, {{a, a}}, CalibrationTarget::Parse("chessboard:9x6:0.08"), {});
   EXPECT_EQ(input.observations.size(), 2u);
   EXPECT_EQ(input.image_sizes[0], cv::Size(512, 512));
 }

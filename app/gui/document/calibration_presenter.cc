@@ -255,8 +255,7 @@ DetectionJob CalibrationPresenter::MakeDetectionJob() const {
 }
 
 DetectionAnswer CalibrationPresenter::Detect(const DetectionJob& job,
-                                             const std::atomic<bool>& cancel,
-                                             const std::function<void(int, int)>& progress) {
+                                             const ProgressReporter& progress) {
   const auto start = std::chrono::steady_clock::now();
   DetectionAnswer answer;
   answer.images = job.images;
@@ -266,7 +265,7 @@ DetectionAnswer CalibrationPresenter::Detect(const DetectionJob& job,
   std::atomic<int> next{0}, done{0};
   std::mutex mutex;
   auto worker = [&] {
-    while (!cancel) {
+    while (!progress.cancelled()) {
       const int task = next++;
       if (task >= total) return;
       CalibrationImage& image = answer.images[task];
@@ -283,9 +282,9 @@ DetectionAnswer CalibrationPresenter::Detect(const DetectionJob& job,
         if (image.found.empty()) image.why = "no " + what + " found";
       }
       const int d = ++done;
-      if (progress) {
+      if (progress.reports()) {
         std::lock_guard<std::mutex> lock(mutex);
-        progress(d, total);
+        progress.Report("images searched", d, total);
       }
     }
   };

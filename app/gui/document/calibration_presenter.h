@@ -39,6 +39,7 @@
 
 #include "calibration/calibrate.h"
 #include "calibration/rig.h"
+#include "common/progress.h"
 
 class QUndoStack;
 
@@ -157,10 +158,10 @@ class CalibrationPresenter {
 
   // ---- Detection.
   DetectionJob MakeDetectionJob() const;  // std::logic_error without a target or images
-  // Reads and searches every image (any thread; `threads` of its own). progress(done, total)
-  // from the threads doing it; a set `cancel` stops at the next image (the answer says so).
-  static DetectionAnswer Detect(const DetectionJob& job, const std::atomic<bool>& cancel,
-                                const std::function<void(int, int)>& progress = {});
+  // Reads and searches every image (any thread; `threads` of its own). Progress: stage
+  // "images searched", from the threads doing it (one at a time); a cancel of the
+  // reporter's token stops at the next image (the answer says so).
+  static DetectionAnswer Detect(const DetectionJob& job, const ProgressReporter& progress = {});
   // The answer (GUI thread); a cancelled one is kept for the images it reached.
   void SetDetections(DetectionAnswer answer);
   const std::vector<CalibrationImage>& images() const { return images_; }

@@ -4,30 +4,32 @@
 // Grid preview and a tracking run each go through one of these.
 //
 //   LatestRequest<Image> loader(window, [window](Image image) { window->Show(image); });
-//   loader.Request([t](const std::atomic<bool>& cancel) { return Decode(t, &cancel); });
+//   loader.Request([t](const CancelToken& cancel) { return Decode(t, cancel); });
 //
 // One worker at a time per helper. A request made while one runs waits for it; only the newest
 // waiting request is kept, and the running one's answer is dropped. Drop() forgets the wanted
-// request: no answer comes. Cancel() sets the running work's cancel flag; its answer still comes
-// (a cancelled tracking run's frames are kept). Answers reach `answer` on the thread of `context`
+// request: no answer comes. Cancel() cancels the running work's token (common/progress.h: the
+// token a long library call polls); its answer still comes (a cancelled tracking run's frames are
+// kept). Answers reach `answer` on the thread of `context`
 // (the GUI thread) through its event loop: no blocking queued connection. The destructor cancels
 // and waits for the worker.
 
 #include <QFutureWatcher>
 #include <QObject>
 #include <QtConcurrent/QtConcurrent>
-#include <atomic>
 #include <functional>
 #include <memory>
 #include <optional>
 #include <utility>
+
+#include "common/progress.h"
 
 namespace netlab::gui {
 
 template <typename Result>
 class LatestRequest {
  public:
-  using Work = std::function<Result(const std::atomic<bool>& cancel)>;
+  using Work = std::function<Result(const CancelToken& cancel)>;
   using Answer = std::function<void(Result)>;
 
   LatestRequest(QObject* context, Answer answer) : answer_(std::move(answer)) {
@@ -58,10 +60,8 @@ class LatestRequest {
     pending_ = false;
     next_.reset();
   }
-  // Asks the running work to stop (its cancel flag); its answer still comes unless dropped.
-  void Cancel() {
-    if (cancel_) *cancel_ = true;
-  }
+  // Asks the running work to stop (its token); its answer still comes unless dropped.
+  void Cancel() { cancel_.Cancel(); }
   // A worker is busy (with the wanted request or a stale one).
   bool running() const { return watcher_.isRunning(); }
   // A request is wanted and its answer has not been delivered yet.
@@ -72,9 +72,9 @@ class LatestRequest {
  private:
   void Launch(Work work) {
     launched_ = wanted_;
-    cancel_ = std::make_shared<std::atomic<bool>>(false);
+    cancel_ = CancelToken();  // a fresh token: an earlier Cancel() is not this work's
     watcher_.setFuture(
-        QtConcurrent::run([work = std::move(work), cancel = cancel_] { return work(*cancel); }));
+        QtConcurrent::run([work = std::move(work), cancel = cancel_] { return work(cancel); }));
   }
   void Finished() {
     if (next_) {  // a newer request waited: this answer is stale
@@ -91,7 +91,7 @@ class LatestRequest {
   Answer answer_;
   QFutureWatcher<Result> watcher_;
   std::optional<Work> next_;
-  std::shared_ptr<std::atomic<bool>> cancel_;
+  CancelToken cancel_;
   long wanted_ = 0, launched_ = 0;
   bool pending_ = false;
 };

@@ -55,12 +55,11 @@ TriangulationJob ReconstructionPresenter::MakeJob(const TriangulationOptions& op
   return job;
 }
 
-TriangulationRun ReconstructionPresenter::Triangulate(
-    const TriangulationJob& job, const std::atomic<bool>& cancel,
-    const std::function<void(const std::string&, double)>& progress) {
+TriangulationRun ReconstructionPresenter::Triangulate(const TriangulationJob& job,
+                                                      const ProgressReporter& progress) {
   const auto start = std::chrono::steady_clock::now();
   TriangulationRun run;
-  if (cancel) {
+  if (progress.cancelled()) {
     run.cancelled = true;
     return run;
   }
@@ -68,7 +67,7 @@ TriangulationRun ReconstructionPresenter::Triangulate(
     recon::SequenceOptions options = job.options;
     options.progress = progress;
     recon::SequenceResult result = recon::ReconstructSequence(job.rig, job.labels, options);
-    if (cancel) {
+    if (progress.cancelled()) {
       run.cancelled = true;
     } else if (result.candidates == 0) {
       run.error = "no knot is labeled in two cameras in any frame: nothing to triangulate" +
@@ -84,6 +83,8 @@ TriangulationRun ReconstructionPresenter::Triangulate(
       run.warnings = recon::SequenceWarnings(result);
       run.result = std::move(result);
     }
+  } catch (const Cancelled&) {
+    run.cancelled = true;
   } catch (const std::exception& e) {
     run.error = e.what();
   }

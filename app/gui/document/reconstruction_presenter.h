@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "calibration/rig.h"
+#include "common/progress.h"
 #include "common/tracks/track_file.h"
 #include "libreconstruct/geometry/bundle_adjust.h"
 #include "libreconstruct/labels/label_set.h"
@@ -66,11 +67,11 @@ class ReconstructionPresenter {
   // recording's times cannot be used (as netlab triangulate --experiment), std::invalid_argument
   // naming the option for a prior without adjustment.
   TriangulationJob MakeJob(const TriangulationOptions& options) const;
-  // Any thread. progress(stage, fraction) from the engine's threads. A set `cancel` is honoured
-  // between the engine's stages only: the answer then says cancelled and holds nothing.
-  static TriangulationRun Triangulate(
-      const TriangulationJob& job, const std::atomic<bool>& cancel,
-      const std::function<void(const std::string&, double)>& progress = {});
+  // Any thread, reporting as ReconstructSequence does (SequenceOptions::progress, from the
+  // engine's threads). A cancel of the reporter's token stops the engine within a chunk of its
+  // work: the answer then says cancelled and holds nothing.
+  static TriangulationRun Triangulate(const TriangulationJob& job,
+                                      const ProgressReporter& progress = {});
   void SetRun(TriangulationRun run);
   const TriangulationRun* run() const { return run_ ? &*run_ : nullptr; }
   // Tracks written before (netlab triangulate --out, or the project's `tracks`) in place of a

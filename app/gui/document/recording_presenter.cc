@@ -14,8 +14,7 @@ RecordingPresenter::RecordingPresenter(const std::string& experiment_path)
           std::make_unique<recon::SynchronizedSequence>(recon::LoadExperiment(experiment_path))) {}
 
 recon::CheckReport RecordingPresenter::Check(const recon::SynchronizedSequence& sequence,
-                                             bool decode,
-                                             const std::function<void(int, int)>& progress) {
+                                             bool decode, const ProgressReporter& progress) {
   return sequence.Check(decode, progress);
 }
 

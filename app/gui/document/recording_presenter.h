@@ -48,10 +48,9 @@ class RecordingPresenter {
   const std::string& experiment_path() const { return experiment_path_; }
   const recon::SynchronizedSequence& sequence() const { return *sequence_; }
 
-  // `netlab ingest --check` (decode: --decode) on `sequence`: any thread. progress(done, total)
-  // from the running thread.
+  // `netlab ingest --check` (decode: --decode) on `sequence`: any thread, reporting from it.
   static recon::CheckReport Check(const recon::SynchronizedSequence& sequence, bool decode,
-                                  const std::function<void(int, int)>& progress = {});
+                                  const ProgressReporter& progress = {});
 
   // The check's answer (GUI thread), and whether there is one.
   void SetReport(recon::CheckReport report) { report_ = std::move(report); }

@@ -285,9 +285,7 @@ int Session::ApplyFillGridPreview(const FillGridPreview& preview) {
 }
 
 Session::TrackRun Session::Track(recon::LabelSet snapshot, int from, int to,
-                                 const std::atomic<bool>* cancel,
-                                 const std::function<void(int, int)>& progress,
-                                 int max_review) const {
+                                 const ProgressReporter& progress, int max_review) const {
   TrackRun run;
   run.from = from, run.to = to, run.last_done = from;
   recon::LabelStore store(std::move(snapshot));
@@ -295,8 +293,8 @@ Session::TrackRun Session::Track(recon::LabelSet snapshot, int from, int to,
   const int total = std::abs(to - from);
   engine->TrackFrames(from, to, [&](int t) {
     run.last_done = t;
-    if (progress) progress(std::abs(t - from), total);
-    if (cancel && cancel->load()) {
+    progress.Report("frames tracked", std::abs(t - from), total);
+    if (progress.cancelled()) {
       run.cancelled = true;
       return false;
     }

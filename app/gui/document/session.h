@@ -27,6 +27,7 @@
 #include "app/gui/document/missing_knots.h"
 #include "app/gui/document/project.h"
 #include "calibration/rig.h"
+#include "common/progress.h"
 #include "libreconstruct/geometry/triangulation.h"
 #include "libreconstruct/labeling/label_engine.h"
 #include "libreconstruct/recording/frame_cache.h"
@@ -119,8 +120,9 @@ class Session {
 
   // A tracking run from labeled row `from` towards `to` on `snapshot` (document().labels(),
   // copied on the GUI thread); runs on any thread and never touches the document. Stops when
-  // `cancel` is set, or after a frame with more than max_review labels kept for review (0: the
-  // first frame with one; negative: no limit). progress(done, total) is called from the running
+  // the reporter's token is cancelled (the run says cancelled and keeps the frames it went
+  // through), or after a frame with more than max_review labels kept for review (0: the first
+  // frame with one; negative: no limit). Progress: stage "frames tracked", from the running
   // thread.
   struct TrackRun {
     int from = 0, to = 0, last_done = 0;
@@ -128,8 +130,7 @@ class Session {
     std::vector<recon::LabelEdit> edits;  // the rows it went through, as it left them
     recon::ReviewReasons reasons;
   };
-  TrackRun Track(recon::LabelSet snapshot, int from, int to, const std::atomic<bool>* cancel,
-                 const std::function<void(int done, int total)>& progress = {},
+  TrackRun Track(recon::LabelSet snapshot, int from, int to, const ProgressReporter& progress = {},
                  int max_review = -1) const;
   // Applies a run as one undo step (GUI thread). Returns the labels changed.
   int ApplyTrackRun(const TrackRun& run);

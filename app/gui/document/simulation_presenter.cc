@@ -24,9 +24,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// Thrown from the run's progress call to stop it (never leaves Simulate).
-struct Cancelled {};
-
 // A name for files: the simulation's file name without its extension, safe characters only.
 std::string Stem(const std::string& path) {
   std::string stem = std::filesystem::path(path).stem().string();
@@ -34,9 +31,6 @@ std::string Stem(const std::string& path) {
     if (!std::isalnum(static_cast<unsigned char>(ch)) && ch != '_' && ch != '-') ch = '_';
   return stem.empty() ? "sim" : stem;
 }
-
-// Thrown from the fit's progress call to stop it (never leaves Fit).
-struct FitCancelled {};
 
 QString Seconds(double s) {
   return s < 90 ? QString("%1 s").arg(s, 0, 'f', 0) : QString("%1 min").arg(s / 60, 0, 'f', 1);
@@ -67,8 +61,7 @@ SimulationJob SimulationPresenter::MakeSimulationJob(const std::string& scenario
 }
 
 SimulationRun SimulationPresenter::Simulate(const SimulationJob& job,
-                                            const std::atomic<bool>& cancel,
-                                            const std::function<void(double)>& progress) {
+                                            const ProgressReporter& progress) {
   const auto start = std::chrono::steady_clock::now();
   SimulationRun run;
   run.path = job.out_path;
@@ -77,10 +70,7 @@ SimulationRun SimulationPresenter::Simulate(const SimulationJob& job,
     if (job.duration_s > 0) scenario.duration = job.duration_s;
     netsim::RunOptions options;
     options.out_path = job.out_path;
-    options.progress = [&](double fraction) {
-      if (cancel) throw Cancelled{};
-      if (progress) progress(fraction);
-    };
+    options.progress = progress;
     // A cancelled or failed run leaves no file (and job.out_path as it was).
     OutputSet outputs({job.out_path});
     const netsim::RunSummary summary = netsim::RunScenario(scenario, options);
@@ -257,22 +247,18 @@ FitJob SimulationPresenter::MakeFitJob(const std::string& scenario_path,
   return job;
 }
 
-FitRun SimulationPresenter::Fit(const FitJob& job, const std::atomic<bool>& cancel,
-                                const std::function<void(const netsim::FitProgress&)>& progress) {
+FitRun SimulationPresenter::Fit(const FitJob& job, const ProgressReporter& progress) {
   FitRun run;
-  if (cancel) {
+  if (progress.cancelled()) {
     run.cancelled = true;
     return run;
   }
   netsim::FitOptions options = job.options;
-  options.progress = [&](const netsim::FitProgress& p) {
-    if (cancel) throw FitCancelled{};
-    if (progress) progress(p);
-  };
+  options.progress = progress;
   try {
     run.result = netsim::FitShot(job.scenario_path, job.measured, job.parameters, options,
                                  "the triangulated labels");
-  } catch (const FitCancelled&) {
+  } catch (const Cancelled&) {
     run.cancelled = true;
   } catch (const std::exception& e) {
     run.error = e.what();
@@ -280,15 +266,15 @@ FitRun SimulationPresenter::Fit(const FitJob& job, const std::atomic<bool>& canc
   return run;
 }
 
-QString SimulationPresenter::ProgressText(const netsim::FitProgress& p) {
+QString SimulationPresenter::ProgressText(const Progress& p, double elapsed_s) {
   QString text;
-  if (!p.stage.empty()) text += "stage " + QString::fromStdString(p.stage) + ", ";
-  if (p.iteration >= 0) text += QString("iteration %1, ").arg(p.iteration);
-  return text + QString("cost %1, %2 simulations, %3, ETA at most %4")
-                    .arg(p.cost, 0, 'g', 5)
-                    .arg(p.simulations)
-                    .arg(Seconds(p.elapsed_s))
-                    .arg(Seconds(p.eta_s));
+  if (!p.stage.empty()) text += QString::fromStdString(p.stage) + ", ";
+  const double eta_s = p.done > 0 ? elapsed_s / p.done * (p.total - p.done) : 0.0;
+  return text + QString("%1, %2 simulations, %3, ETA at most %4")
+                    .arg(QString::fromStdString(p.detail))
+                    .arg(static_cast<long>(p.done))
+                    .arg(Seconds(elapsed_s))
+                    .arg(Seconds(eta_s));
 }
 
 QString SimulationPresenter::FitText(int start) const {

@@ -28,6 +28,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/progress.h"
 #include "common/tracks/track_file.h"
 #include "libnetsim/identification/shot_fit.h"
 #include "libnetsim/scenario/scenario_override.h"
@@ -111,12 +112,11 @@ class SimulationPresenter {
   static SimulationJob MakeSimulationJob(const std::string& scenario_path,
                                          const std::vector<std::string>& overrides,
                                          const std::string& out_path, double duration_s = 0.0);
-  // Runs the scenario (any thread), writing out_path as netlab simulate does; progress(fraction)
-  // about every 2 % of the run. A set `cancel` stops it at the next progress call: the answer
-  // says cancelled and no file is left. A scenario that cannot be built, or a run that blows up,
+  // Runs the scenario (any thread), writing out_path as netlab simulate does, reporting as
+  // RunScenario does. A cancel of the reporter's token stops it within a step: the answer says
+  // cancelled and no file is left. A scenario that cannot be built, or a run that blows up,
   // answers the reason.
-  static SimulationRun Simulate(const SimulationJob& job, const std::atomic<bool>& cancel,
-                                const std::function<void(double)>& progress = {});
+  static SimulationRun Simulate(const SimulationJob& job, const ProgressReporter& progress = {});
   // The scenario's main keys (duration, integrator, drag, gravity, materials, nets, bodies) as
   // (`--set`'s dotted path, value) rows, lists of numbers as one value. InputError naming the
   // file when it cannot be read.
@@ -174,18 +174,18 @@ class SimulationPresenter {
   // entry; std::logic_error without measured tracks.
   FitJob MakeFitJob(const std::string& scenario_path, const std::vector<std::string>& overrides,
                     const std::string& free) const;
-  // Any thread. progress(p) once per iteration; a set `cancel` stops the fit at the next one (the
-  // answer says cancelled).
-  static FitRun Fit(const FitJob& job, const std::atomic<bool>& cancel,
-                    const std::function<void(const netsim::FitProgress&)>& progress = {});
+  // Any thread, reporting as FitShot does (FitOptions::progress); a cancel of the reporter's
+  // token stops the fit's simulations under way (the answer says cancelled).
+  static FitRun Fit(const FitJob& job, const ProgressReporter& progress = {});
   void SetFit(FitRun run) { fit_ = std::move(run); }
   const FitRun* fit() const { return fit_ ? &*fit_ : nullptr; }
   // The fitted values with sigma and whether the flight data, a prior or neither determined
   // each; the cost from start to end; the fitted model's score beside the starting one's (the
   // simulation `start` when scored, -1: none).
   QString FitText(int start = -1) const;
-  // One line of a fit's progress: stage, iteration, cost, simulations, time and ETA.
-  static QString ProgressText(const netsim::FitProgress& p);
+  // One line of a fit's progress `elapsed_s` into the fit: stage, iteration, cost, simulations,
+  // time and ETA.
+  static QString ProgressText(const Progress& p, double elapsed_s);
 
   std::weak_ptr<const int> lifetime() const { return alive_; }
 

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <csignal>
 #include <new>
 #include <stdexcept>
 #include <string>
@@ -52,6 +53,21 @@ TEST(RunGuarded, AUsersInputIsAnErrorWithStatus1) {
        {Guarded([]() -> int { throw std::invalid_argument("3 rows for 4 knots"); }),
         Guarded([]() -> int { throw std::out_of_range("stoi"); })})
     EXPECT_EQ(given.status, 1) << given.err;
+}
+
+TEST(RunGuarded, ACancelSaysCancelledWithStatus130) {
+  const Outcome r = Guarded([]() -> int { throw Cancelled(); });
+  EXPECT_EQ(r.status, kCancelledStatus);
+  EXPECT_EQ(r.status, 130);
+  EXPECT_EQ(r.err, "netlab demo: cancelled\n");
+}
+
+TEST(InterruptToken, SigintCancelsIt) {
+  const CancelToken& token = InterruptToken();
+  EXPECT_FALSE(token.cancelled());
+  ASSERT_EQ(raise(SIGINT), 0);  // the handler sets the token; the process carries on
+  EXPECT_TRUE(token.cancelled());
+  EXPECT_TRUE(InterruptToken().cancelled()) << "one token for the process";
 }
 
 TEST(RunGuarded, ABrokenInvariantIsAnInternalErrorWithItsOwnStatus) {

@@ -106,16 +106,18 @@ TEST(CalibrationPresenter, DetectCalibrateExcludeTheWorstImageRerunAndSave) {
   ASSERT_EQ(calibration.frames(), kFrames);
   EXPECT_FALSE(calibration.detected());
 
-  // Detection: a cancel flag set before the start stops it at once; then the whole run.
-  std::atomic<bool> cancel{true};
+  // Detection: a token cancelled before the start stops it at once; then the whole run.
+  CancelToken cancel;
+  cancel.Cancel();
   const DetectionAnswer cancelled =
-      CalibrationPresenter::Detect(calibration.MakeDetectionJob(), cancel);
+      CalibrationPresenter::Detect(calibration.MakeDetectionJob(), ProgressReporter({}, cancel));
   EXPECT_TRUE(cancelled.cancelled);
-  cancel = false;
   int last_done = 0, last_total = 0;
-  calibration.SetDetections(CalibrationPresenter::Detect(
-      calibration.MakeDetectionJob(), cancel,
-      [&](int done, int total) { last_done = done, last_total = total; }));
+  calibration.SetDetections(CalibrationPresenter::Detect(calibration.MakeDetectionJob(),
+                                                         ProgressReporter([&](const Progress& p) {
+                                                           last_done = static_cast<int>(p.done);
+                                                           last_total = static_cast<int>(p.total);
+                                                         })));
   EXPECT_EQ(last_done, 4 * kFrames);
   EXPECT_EQ(last_total, 4 * kFrames);
   ASSERT_TRUE(calibration.detected());

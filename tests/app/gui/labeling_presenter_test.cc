@@ -179,11 +179,11 @@ TEST(LatestRequest, OnlyTheNewestAnswerArrives) {
   std::vector<int> answers;
   LatestRequest<int> request(&context, [&](int v) { answers.push_back(v); });
   std::atomic<bool> release{false};
-  request.Request([&](const std::atomic<bool>&) {
+  request.Request([&](const CancelToken&) {
     while (!release) std::this_thread::sleep_for(std::chrono::milliseconds(1));
     return 1;
   });
-  for (int v = 2; v <= 4; ++v) request.Request([v](const std::atomic<bool>&) { return v; });
+  for (int v = 2; v <= 4; ++v) request.Request([v](const CancelToken&) { return v; });
   EXPECT_TRUE(request.pending());
   release = true;
   ASSERT_TRUE(Pump([&] { return !request.pending(); }));
@@ -194,14 +194,14 @@ TEST(LatestRequest, ADroppedRequestNeverAnswersAndCancelReachesTheWork) {
   QObject context;
   std::vector<int> answers;
   LatestRequest<int> request(&context, [&](int v) { answers.push_back(v); });
-  request.Request([](const std::atomic<bool>& cancel) {
-    while (!cancel) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  request.Request([](const CancelToken& cancel) {
+    while (!cancel.cancelled()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
     return 5;
   });
   request.Cancel();
   ASSERT_TRUE(Pump([&] { return !answers.empty(); }));
   EXPECT_EQ(answers, std::vector<int>{5}) << "a cancelled run still answers";
-  request.Request([](const std::atomic<bool>&) { return 6; });
+  request.Request([](const CancelToken&) { return 6; });
   request.Drop();
   EXPECT_FALSE(request.pending());
   request.Wait();

@@ -161,8 +161,8 @@ TEST_F(MainWindowTest, AScriptedSessionLabelsAsTheEngineDoesWithNoWrongLabel) {
       case Action::kAccept: engine->AcceptLabel(a.camera, a.t, a.knot); break;
       case Action::kFindPath: engine->FindPathFromCorners(0); break;
       case Action::kTrack:
-        engine->ApplyTrackRun(engine->Track(engine->document().labels(), a.t, kLastFrame, nullptr,
-                                            {}, MainWindow::kMaxReviewPerFrame));
+        engine->ApplyTrackRun(engine->Track(engine->document().labels(), a.t, kLastFrame, {},
+                                            MainWindow::kMaxReviewPerFrame));
         break;
       case Action::kHide: engine->MarkHidden(a.camera, a.t, a.knot); break;
       case Action::kHideRun: engine->MarkHiddenRun(a.camera, a.t, a.knot); break;

@@ -116,30 +116,35 @@ TEST_F(ShotFit, SaysWhatTheFlightCannotDetermine) {
   const std::string free = "drag.drag_coefficient,materials.nylon.twist_damping";
   FitOptions options = Options({});
   std::vector<std::string> stages;
-  std::vector<FitProgress> reports;
-  options.progress = [&](const FitProgress& p) {
+  std::vector<Progress> reports;
+  options.progress = ProgressReporter([&](const Progress& p) {
     if (stages.empty() || stages.back() != p.stage) stages.push_back(p.stage);
     reports.push_back(p);
-  };
+  });
   FitResult r =
       FitShot(scenario_, measured, ParseFreeParameters(free, scenario_, {}, 0.0), options);
-  // The ETA's count bounds what the fit still ran, from the first report on (the scan found no
-  // second valley here: nothing was added later), and it shrinks.
+  // The cost in a report's detail ("iteration 4, cost 812.3" or "cost 812.3").
+  auto cost_of = [](const Progress& p) {
+    const size_t at = p.detail.find("cost ");
+    EXPECT_NE(at, std::string::npos) << p.detail;
+    return at == std::string::npos ? 0.0 : std::stod(p.detail.substr(at + 5));
+  };
+  // The total bounds what the fit still ran, from the first report on (the scan found no second
+  // valley here: nothing was added later), and it shrinks; the pace is known from the first
+  // report (the start's simulation is done before it).
   ASSERT_FALSE(reports.empty());
-  for (const FitProgress& p : reports) {
-    EXPECT_GE(p.simulations + p.simulations_left, r.simulations)
-        << p.stage << ", iteration " << p.iteration;
-    EXPECT_GT(p.eta_s, 0.0) << p.stage << ", iteration " << p.iteration;
+  for (const Progress& p : reports) {
+    EXPECT_GE(p.total, r.simulations) << p.stage << ", " << p.detail;
+    EXPECT_GT(p.done, 0.0) << p.stage << ", " << p.detail;
   }
   // The cost reported is where the fit stands: it never rises within a stage (a rejected step's
   // cost is not reported), and the scan moves to its lowest point.
   for (size_t i = 1; i < reports.size(); ++i) {
-    EXPECT_LE(reports[i].simulations + reports[i].simulations_left,
-              reports[i - 1].simulations + reports[i - 1].simulations_left)
-        << reports[i].stage << ", iteration " << reports[i].iteration;
+    EXPECT_LE(reports[i].total, reports[i - 1].total)
+        << reports[i].stage << ", " << reports[i].detail;
     if (reports[i].stage == reports[i - 1].stage) {
-      EXPECT_LE(reports[i].cost, reports[i - 1].cost)
-          << reports[i].stage << ", iteration " << reports[i].iteration;
+      EXPECT_LE(cost_of(reports[i]), cost_of(reports[i - 1]))
+          << reports[i].stage << ", " << reports[i].detail;
     }
   }
   const FittedParameter& damping = Find(r, "materials.nylon.twist_damping");
@@ -148,8 +153,8 @@ TEST_F(ShotFit, SaysWhatTheFlightCannotDetermine) {
   EXPECT_GT(damping.sigma, 5 * damping.value);
   EXPECT_TRUE(Find(r, "drag.drag_coefficient").identified);
   // The stages: the drag with the material held, the damping scanned, then both.
-  const std::vector<std::string> expected = {"1/3 material held",
-                                             "2/3 scan materials.nylon.twist_damping", "3/3 all"};
+  const std::vector<std::string> expected = {
+      "stage 1/3 material held", "stage 2/3 scan materials.nylon.twist_damping", "stage 3/3 all"};
   EXPECT_EQ(stages, expected);
   EXPECT_GE(r.ends, 1);
 

@@ -375,12 +375,12 @@ TEST(FrameStore, RoundTripKeepsPixelsGapsAndFrameIndices) {
     SCOPED_TRACE("deflate " + std::to_string(deflate));
     const std::string path = dir / "store.h5";
     int calls = 0, last_done = 0, last_total = 0;
-    const Experiment out =
-        ConvertToFrameStore(sequence, path, FrameStoreOptions{deflate}, [&](int done, int total) {
-          ++calls;
-          last_done = done;
-          last_total = total;
-        });
+    const Experiment out = ConvertToFrameStore(sequence, path, FrameStoreOptions{deflate},
+                                               ProgressReporter([&](const Progress& p) {
+                                                 ++calls;
+                                                 last_done = static_cast<int>(p.done);
+                                                 last_total = static_cast<int>(p.total);
+                                               }));
     EXPECT_TRUE(fs::exists(path));
     EXPECT_FALSE(fs::exists(path + ".partial"));
     EXPECT_EQ(last_total, 3 * 5);

@@ -144,11 +144,12 @@ TEST_F(FourCameras, HeaderCheckReportsGapsUnreadableFilesAndTimestamps) {
   EXPECT_EQ(sequence.first_frame(), 0);
   EXPECT_EQ(sequence.last_frame(), kFrames - 1);
   int calls = 0, last = 0;
-  const CheckReport report = sequence.Check(false, [&](int done, int total) {
-    ++calls;
-    last = done;
-    EXPECT_EQ(total, 4 * kFrames - 1);
-  });
+  const CheckReport report = sequence.Check(false, ProgressReporter([&](const Progress& p) {
+                                              ++calls;
+                                              last = static_cast<int>(p.done);
+                                              EXPECT_EQ(p.total, 4 * kFrames - 1);
+                                              EXPECT_EQ(p.stage, "frame headers read");
+                                            }));
   EXPECT_EQ(calls, 4 * kFrames - 1);
   EXPECT_EQ(last, 4 * kFrames - 1);
   ExpectFourCameraReport(report, false, dir_.path().string());
