@@ -73,6 +73,17 @@ class Interrupt : public CommandTest {
     return r;
   }
 
+  // Stopped within 2 s with the message and status 130, neither `out` nor its partial left.
+  static void ExpectCancelled(const Interrupted& r, const std::string& command,
+                              const std::string& out) {
+    ASSERT_FALSE(r.ended_early) << "netlab " << command << " ended before the interrupt";
+    EXPECT_EQ(r.status, 130) << r.err;
+    EXPECT_LT(r.stop_s, 2.0);
+    EXPECT_NE(r.err.find("netlab " + command + ": cancelled\n"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(out));
+    EXPECT_FALSE(std::filesystem::exists(out + ".partial"));
+  }
+
   // A 30 s flight of the small shot: minutes of work.
   std::string LongScenario() {
     std::string scene = kSmallShotScenario;
@@ -86,12 +97,7 @@ TEST_F(Interrupt, CtrlCStopsASimulationAndLeavesNoFile) {
   const std::string out = Path("sim.h5");
   const Interrupted r =
       RunAndInterrupt("simulate " + LongScenario() + " --out " + out, out + ".partial", 500);
-  ASSERT_FALSE(r.ended_early) << "the simulation ended before the interrupt";
-  EXPECT_EQ(r.status, 130) << r.err;
-  EXPECT_LT(r.stop_s, 2.0);
-  EXPECT_NE(r.err.find("netlab simulate: cancelled\n"), std::string::npos) << r.err;
-  EXPECT_FALSE(std::filesystem::exists(out));
-  EXPECT_FALSE(std::filesystem::exists(out + ".partial"));
+  ExpectCancelled(r, "simulate", out);
 }
 
 TEST_F(Interrupt, CtrlCStopsASweepOnEveryThreadAndLeavesNoFile) {
@@ -101,12 +107,7 @@ TEST_F(Interrupt, CtrlCStopsASweepOnEveryThreadAndLeavesNoFile) {
                                             " --jobs 2 --out " +
                                             out,
                                         out + ".partial", 500);
-  ASSERT_FALSE(r.ended_early) << "the sweep ended before the interrupt";
-  EXPECT_EQ(r.status, 130) << r.err;
-  EXPECT_LT(r.stop_s, 2.0);
-  EXPECT_NE(r.err.find("netlab sweep: cancelled\n"), std::string::npos) << r.err;
-  EXPECT_FALSE(std::filesystem::exists(out));
-  EXPECT_FALSE(std::filesystem::exists(out + ".partial"));
+  ExpectCancelled(r, "sweep", out);
 }
 
 }  // namespace
