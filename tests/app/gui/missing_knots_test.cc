@@ -1,9 +1,10 @@
 // The review queue's missing knots without a window (app/gui/document/missing_knots.h): a 3 x 3
 // net 1.5 m in front of three cameras that label it exactly, a fourth that sees part of it and a
-// fifth that looks away. Listed where two other cameras put the knot, where one camera's ray and
-// the grid neighbours do, never where a disagreeing pair or two facing cameras alone would, nor
-// where the target hides it; off the list once labeled or marked hidden, back on undo; the
-// incremental count always equals a count from scratch.
+// fifth that looks away. Listed where two other cameras put the knot (to the picture's outer
+// edge and 1 px beyond), where one camera's ray and the grid neighbours do, never where a
+// disagreeing pair or two facing cameras alone would, nor where the target hides it; off the list
+// once labeled or marked hidden, back on undo; the incremental count always equals a count from
+// scratch.
 
 #include "app/gui/document/missing_knots.h"
 
