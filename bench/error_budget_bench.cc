@@ -113,6 +113,7 @@ int main(int argc, char** argv) {
     std::printf("| %s | %.2f | %lld | %.3f | %.3f | %.2f | %.3f | %.2f | %s | %.1f |\n",
                 r.what.c_str(), r.stated_px, static_cast<long long>(r.truth.points),
                 r.truth.rms_m * 1e3, r.predicted_rms_m * 1e3, r.truth.mean_mahalanobis2,
-                r.score.rms_m * 1e3, r.score.mean_d2, r.score.verdict.c_str(), r.seconds);
+                r.score.rms_m * 1e3, r.score.mean_d2, netsim::VerdictName(r.score.verdict).c_str(),
+                r.seconds);
   return 0;
 }

@@ -244,7 +244,7 @@ int Flight(double seconds, int shots, const std::string& integrator, int segment
     const double t = truth_of.at(p.parameter.name);
     std::printf("| %s | %.4g | %.4g | %.3g | %.2f | %.2f / %.2f | %s%s |\n",
                 p.parameter.name.c_str(), t, p.value, p.sigma, (p.value - t) / p.sigma, p.check[0],
-                p.check[1], p.determined_by.c_str(), Note(p).c_str());
+                p.check[1], netsim::DeterminedByName(p.determined_by).c_str(), Note(p).c_str());
   }
   std::printf(
       "cost %.4g -> %.4g (%d residuals), %d simulations, %d iterations, %d ends, %.1f s wall\n",

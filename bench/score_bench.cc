@@ -103,7 +103,8 @@ int main(int argc, char** argv) {
     }
     const auto& s = result.summary;
     std::printf("| %s | %.2f | %.2f | %.2f | %.1f | %.3f | %.2f | %s |\n", name, best, write,
-                report, (s.time_offset_s - tau) * 1e6, s.mean_d2, s.tau_int, s.verdict.c_str());
+                report, (s.time_offset_s - tau) * 1e6, s.mean_d2, s.tau_int,
+                netlab::netsim::VerdictName(s.verdict).c_str());
   }
   std::filesystem::remove_all(dir);
   return 0;

@@ -208,6 +208,23 @@ void WriteStringAttribute(hid_t obj, const std::string& name, const std::string&
   H5Awrite(attr.get(), type.get(), stored.data());
 }
 
+std::string JoinLines(const std::vector<std::string>& lines) {
+  std::string joined;
+  for (size_t i = 0; i < lines.size(); ++i) joined += (i ? "\n" : "") + lines[i];
+  return joined;
+}
+
+std::vector<std::string> SplitLines(const std::string& text) {
+  std::vector<std::string> lines;
+  for (size_t start = 0; !text.empty();) {
+    const size_t end = text.find('\n', start);
+    lines.push_back(text.substr(start, end - start));
+    if (end == std::string::npos) break;
+    start = end + 1;
+  }
+  return lines;
+}
+
 std::string ReadStringAttribute(hid_t obj, const std::string& name) {
   if (H5Aexists(obj, name.c_str()) <= 0) return "";
   Id attr(H5Aopen(obj, name.c_str(), H5P_DEFAULT));

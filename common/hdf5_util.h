@@ -66,6 +66,11 @@ std::string ReadStringAttribute(hid_t obj, const std::string& name);
 void WriteStringDataset(hid_t loc, const std::string& name, const std::string& value);
 std::string ReadStringDataset(hid_t loc, const std::string& name);
 
+// A list of names kept in one string attribute or dataset, a name per line (names hold no line
+// break). SplitLines("") is the empty list.
+std::string JoinLines(const std::vector<std::string>& lines);
+std::vector<std::string> SplitLines(const std::string& text);
+
 // Sets the "units" attribute of dataset `name` under `loc`.
 void SetUnits(hid_t loc, const std::string& name, const std::string& units);
 

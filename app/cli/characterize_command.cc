@@ -83,8 +83,8 @@ int RunCharacterize(const std::vector<std::string>& args) {
                          std::to_string(e.value) + " +- " + std::to_string(e.sigma) +
                          " (are the samples in SI units, within a physical range?)");
     netsim::WriteMaterialFile(out, c.estimates,
-                              "netlab characterize: " + test.kind + " test from " + test.path +
-                                  "\nmaterial " + test.material +
+                              "netlab characterize: " + netsim::BenchKindName(test.kind) +
+                                  " test from " + test.path + "\nmaterial " + test.material +
                                   "; sigma: standard uncertainty, test: where the value came from");
     std::cout << c.BriefReport() << "wrote " << out << "\n";
     if (cl.Flag("json")) PrintJson(c, out);

@@ -124,7 +124,7 @@ std::string FitYaml(const std::vector<std::string>& scenarios,
       << ", alternative: " << Number(p.alternative)
       << ", alternative_rise: " << Number(p.alternative_rise) << ", check: [" << Number(p.check[0])
       << ", " << Number(p.check[1]) << "]"
-      << ", determined_by: " << Quoted(p.determined_by);
+      << ", determined_by: " << Quoted(netsim::DeterminedByName(p.determined_by));
     if (p.has_prior)
       o << ", prior: {value: " << Number(p.prior_value) << ", sigma: " << Number(p.prior_sigma)
         << "}";
@@ -145,7 +145,8 @@ std::string FitYaml(const std::vector<std::string>& scenarios,
     << "\ndt_s: " << Number(r.dt_s) << "  # the automatic step held for every run; 0: the "
     << "scenario's own\n";
   o << "score: {rms_mm: " << Number(r.score.rms_m * 1e3) << ", mean_d2: " << Number(r.score.mean_d2)
-    << ", p_value: " << Number(r.score.p_value) << ", verdict: " << r.score.verdict << "}\n";
+    << ", p_value: " << Number(r.score.p_value)
+    << ", verdict: " << netsim::VerdictName(r.score.verdict) << "}\n";
   o << "set:\n";
   for (const auto& s : r.fitted_set) o << "  - " << Quoted(s.Text()) << "\n";
   o << "notes:" << (r.notes.empty() ? " []" : "") << "\n";
@@ -156,7 +157,7 @@ std::string FitYaml(const std::vector<std::string>& scenarios,
       const netsim::ScoreSummary& sc = r.scores[k];
       o << "  - scenario: " << Quoted(scenarios[k]) << "\n    measured: " << Quoted(measured[k])
         << "\n    score: {rms_mm: " << Number(sc.rms_m * 1e3) << ", mean_d2: " << Number(sc.mean_d2)
-        << ", p_value: " << Number(sc.p_value) << ", verdict: " << sc.verdict
+        << ", p_value: " << Number(sc.p_value) << ", verdict: " << netsim::VerdictName(sc.verdict)
         << "}\n    inflation: " << Number(r.inflations[k]) << "\n    set:\n";
       for (const auto& s : r.fitted_sets[k]) o << "      - " << Quoted(s.Text()) << "\n";
     }
@@ -185,7 +186,7 @@ std::string Summary(const netsim::FitResult& r) {
     return std::string(text);
   };
   for (const auto& p : r.parameters) {
-    std::string by = p.determined_by;
+    std::string by = netsim::DeterminedByName(p.determined_by);
     if (p.rough)
       by += ": the cost is rough in it (" + ratio(p.check[0]) + " / " + ratio(p.check[1]) +
             " the quadratic rise at -/+ 2 sigma), sigma means nothing";
@@ -210,7 +211,7 @@ std::string Summary(const netsim::FitResult& r) {
     const netsim::ScoreSummary& sc = r.scores[k];
     o << "  score of the fit" << (r.scores.size() > 1 ? ", shot " + std::to_string(k + 1) : "")
       << ": RMS " << Number(sc.rms_m * 1e3) << " mm, mean d2 " << Number(sc.mean_d2) << ", "
-      << sc.verdict << " (p = " << Number(sc.p_value) << ")\n";
+      << netsim::VerdictName(sc.verdict) << " (p = " << Number(sc.p_value) << ")\n";
   }
   for (int i = 0; i < r.correlation.rows(); ++i)
     for (int j = i + 1; j < r.correlation.cols(); ++j)
@@ -236,7 +237,7 @@ void PrintJson(const netsim::FitResult& r, const std::string& out) {
     json.Key("alternative").Number(p.alternative);
     json.Key("alternative_rise").Number(p.alternative_rise);
     json.Key("check").BeginArray().Number(p.check[0]).Number(p.check[1]).EndArray();
-    json.Key("determined_by").String(p.determined_by);
+    json.Key("determined_by").String(netsim::DeterminedByName(p.determined_by));
     json.Key("start").Number(p.parameter.start);
     json.Key("data_sigma").Number(p.data_sigma);
     json.Key("units").String(p.parameter.units);
@@ -266,7 +267,7 @@ void PrintJson(const netsim::FitResult& r, const std::string& out) {
   json.Key("rms_mm").Number(r.score.rms_m * 1e3);
   json.Key("mean_d2").Number(r.score.mean_d2);
   json.Key("p_value").Number(r.score.p_value);
-  json.Key("verdict").String(r.score.verdict);
+  json.Key("verdict").String(netsim::VerdictName(r.score.verdict));
   json.EndObject();
   json.Key("set").BeginArray();
   for (const auto& s : r.fitted_set) json.String(s.Text());
@@ -279,7 +280,7 @@ void PrintJson(const netsim::FitResult& r, const std::string& out) {
     json.BeginObject();
     json.Key("rms_mm").Number(r.scores[k].rms_m * 1e3);
     json.Key("mean_d2").Number(r.scores[k].mean_d2);
-    json.Key("verdict").String(r.scores[k].verdict);
+    json.Key("verdict").String(netsim::VerdictName(r.scores[k].verdict));
     json.Key("inflation").Number(r.inflations[k]);
     json.Key("set").BeginArray();
     for (const auto& s : r.fitted_sets[k]) json.String(s.Text());

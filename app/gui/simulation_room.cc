@@ -648,9 +648,9 @@ void SimulationRoom::Select(int i) {
   verdict_->setText("<b>" + QString::fromStdString(simulation_->simulation(i).name) + "</b><br>" +
                     simulation_->Verdict(i).toHtmlEscaped().replace("\n", "<br>"));
   const auto& score = simulation_->simulation(i).score;
-  const QString colour = !score                                   ? "palette(window)"
-                         : score->summary.verdict == "consistent" ? "#d8f5d0"
-                                                                  : "#f8d4d0";
+  const QString colour = !score ? "palette(window)"
+                         : score->summary.verdict == netsim::Verdict::kConsistent ? "#d8f5d0"
+                                                                                  : "#f8d4d0";
   verdict_->setStyleSheet("QLabel { background: " + colour + "; padding: 6px; }");
   error_chart_->SetScore(score ? &*score : nullptr);
   d2_chart_->SetScore(score ? &*score : nullptr);
@@ -701,15 +701,16 @@ void SimulationRoom::RefreshTable() {
       table_->setItem(i, column, item);
     };
     set(0, QString::fromStdString(s.name));
-    set(1, s.score                 ? QString::fromStdString(s.score->summary.verdict)
+    set(1, s.score ? QString::fromStdString(netsim::VerdictName(s.score->summary.verdict))
            : s.score_error.empty() ? "—"
                                    : "error");
     set(2, s.score ? Number(s.score->summary.rms_m * 1e3) : "");
     set(3, s.score ? Number(s.score->summary.mean_d2) : "");
     set(4, s.score ? Number(s.score->summary.p_value, 2) : "");
     if (s.score)
-      table_->item(i, 1)->setForeground(
-          s.score->summary.verdict == "consistent" ? QColor(0, 130, 0) : QColor(190, 0, 0));
+      table_->item(i, 1)->setForeground(s.score->summary.verdict == netsim::Verdict::kConsistent
+                                            ? QColor(0, 130, 0)
+                                            : QColor(190, 0, 0));
   }
   table_->resizeColumnsToContents();
   table_->horizontalHeader()->setSectionResizeMode(0, QHeaderView::Stretch);

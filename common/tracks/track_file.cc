@@ -27,24 +27,6 @@ void WriteRootAttributes(hid_t file, const std::string& source) {
   h5::WriteStringAttribute(file, "source", source);
 }
 
-std::string JoinNames(const std::vector<std::string>& names) {
-  std::string joined;
-  for (size_t i = 0; i < names.size(); ++i) joined += (i ? "\n" : "") + names[i];
-  return joined;
-}
-
-std::vector<std::string> SplitNames(const std::string& text) {
-  std::vector<std::string> names;
-  size_t start = 0;
-  while (!text.empty() && start <= text.size()) {
-    const size_t end = text.find('\n', start);
-    names.push_back(text.substr(start, end - start));
-    if (end == std::string::npos) break;
-    start = end + 1;
-  }
-  return names;
-}
-
 void WriteGrid(hid_t knots, const std::vector<std::array<int, 2>>& grid,
                const std::vector<int>& net, const std::vector<std::string>& net_names) {
   std::vector<int32_t> flat;
@@ -59,7 +41,7 @@ void WriteGrid(hid_t knots, const std::vector<std::array<int, 2>>& grid,
   h5::WriteDataset(knots, "net", H5T_NATIVE_INT32, {nets.size()}, nets.data());
   h5::SetUnits(knots, "net", "index");
   h5::Id dataset(H5Dopen2(knots, "net", H5P_DEFAULT));
-  h5::WriteStringAttribute(dataset.get(), "names", JoinNames(net_names));
+  h5::WriteStringAttribute(dataset.get(), "names", h5::JoinLines(net_names));
 }
 
 const std::vector<std::pair<std::string, double>> kTimeUnits = {
@@ -92,7 +74,7 @@ void WriteDegenerate(hid_t file, hid_t knots, const KnotTracks& tracks) {
     h5::SetUnits(group.get(), "sigma_m", "m");
     h5::WriteDataset(group.get(), "ray_angle_deg", H5T_NATIVE_DOUBLE, {n}, angle.data());
     h5::SetUnits(group.get(), "ray_angle_deg", "deg");
-    h5::WriteStringDataset(group.get(), "reason", JoinNames(reasons));
+    h5::WriteStringDataset(group.get(), "reason", h5::JoinLines(reasons));
   }
   h5::WriteDataset(group.get(), "max_sigma_m", H5T_NATIVE_DOUBLE, {1},
                    &tracks.degenerate_max_sigma_m);
@@ -111,7 +93,7 @@ void WriteClocks(hid_t file, const KnotTracks& tracks) {
   if (tracks.camera_offset_frames.empty()) return;
   const hsize_t c = tracks.camera_offset_frames.size();
   h5::Id group = h5::CreateGroup(file, "camera_offsets");
-  h5::WriteStringAttribute(group.get(), "cameras", JoinNames(tracks.camera_names));
+  h5::WriteStringAttribute(group.get(), "cameras", h5::JoinLines(tracks.camera_names));
   h5::WriteStringAttribute(group.get(), "applied", tracks.camera_offsets_applied ? "yes" : "no");
   h5::WriteDataset(group.get(), "frames", H5T_NATIVE_DOUBLE, {c},
                    tracks.camera_offset_frames.data());
@@ -186,7 +168,7 @@ void WriteKnotTracks(const std::string& path, const KnotTracks& tracks) {
     }
     if (!tracks.camera_names.empty()) {
       h5::Id outliers = h5::CreateGroup(file.get(), "outliers");
-      h5::WriteStringAttribute(outliers.get(), "cameras", JoinNames(tracks.camera_names));
+      h5::WriteStringAttribute(outliers.get(), "cameras", h5::JoinLines(tracks.camera_names));
       if (!tracks.outliers.empty()) {
         const hsize_t n = tracks.outliers.size();
         std::vector<int32_t> obs;
@@ -247,7 +229,7 @@ void ReadDegenerate(hid_t f, const std::string& path, KnotTracks* tracks) {
   h5::ReadDataset(f, "/degenerate/ray_angle_deg", H5T_NATIVE_DOUBLE, angle.data());
   std::vector<std::string> reasons;
   if (h5::Exists(f, "/degenerate/reason"))
-    reasons = SplitNames(h5::ReadStringDataset(f, "/degenerate/reason"));
+    reasons = h5::SplitLines(h5::ReadStringDataset(f, "/degenerate/reason"));
   for (hsize_t i = 0; i < n; ++i)
     tracks->degenerate_points.push_back(
         {point[2 * i], point[2 * i + 1], sigma[i], angle[i], i < reasons.size() ? reasons[i] : ""});
@@ -263,7 +245,7 @@ void ReadClocks(hid_t f, const std::string& path, KnotTracks* tracks) {
   if (!h5::Exists(f, "/camera_offsets/frames")) return;
   h5::Id group(H5Gopen2(f, "/camera_offsets", H5P_DEFAULT));
   const std::vector<std::string> names =
-      SplitNames(h5::ReadStringAttribute(group.get(), "cameras"));
+      h5::SplitLines(h5::ReadStringAttribute(group.get(), "cameras"));
   if (!tracks->camera_names.empty() && names != tracks->camera_names)
     throw std::runtime_error(path + ": /camera_offsets names other cameras than /outliers");
   tracks->camera_names = names;
@@ -342,7 +324,7 @@ KnotTracks ReadKnotTracks(const std::string& path) {
     tracks.net.resize(k);
     h5::ReadDataset(f, "/knots/net", H5T_NATIVE_INT32, tracks.net.data());
     h5::Id dataset(H5Dopen2(f, "/knots/net", H5P_DEFAULT));
-    tracks.net_names = SplitNames(h5::ReadStringAttribute(dataset.get(), "names"));
+    tracks.net_names = h5::SplitLines(h5::ReadStringAttribute(dataset.get(), "names"));
   }
   tracks.position.resize(t * k);
   h5::ReadDataset(f, "/knots/position", H5T_NATIVE_DOUBLE, tracks.position.data());
@@ -383,7 +365,7 @@ KnotTracks ReadKnotTracks(const std::string& path) {
   }
   if (h5::Exists(f, "/outliers")) {
     h5::Id group(H5Gopen2(f, "/outliers", H5P_DEFAULT));
-    tracks.camera_names = SplitNames(h5::ReadStringAttribute(group.get(), "cameras"));
+    tracks.camera_names = h5::SplitLines(h5::ReadStringAttribute(group.get(), "cameras"));
     if (h5::Exists(f, "/outliers/observation")) {
       const auto dims = h5::DatasetDims(f, "/outliers/observation");
       if (dims.size() != 2 || dims[1] != 3) fail("/outliers/observation must be [N,3]");

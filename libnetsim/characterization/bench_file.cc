@@ -144,19 +144,22 @@ BenchTest ReadTree(const YAML::Node& tree, const std::string& origin) {
   BenchTest test;
   test.path = origin;
   test.source = std::filesystem::path(origin).filename().string();
-  test.kind = root.String("test");
+  const std::string kind = root.String("test");
   test.material = root.String("material");
   if (test.material.empty()) root.Fail("material", "must not be empty");
   test.description = root.String("description", "");
   if (root.Has("weighing")) test.weighing = ReadWeighing(root.Map("weighing"));
-  if (test.kind == "tensile") {
+  if (kind == "tensile") {
+    test.kind = BenchKind::kTensile;
     ReadTensile(root, &test.tensile);
-  } else if (test.kind == "cantilever") {
+  } else if (kind == "cantilever") {
+    test.kind = BenchKind::kCantilever;
     ReadCantilever(root, &test.cantilever);
-  } else if (test.kind == "torsion") {
+  } else if (kind == "torsion") {
+    test.kind = BenchKind::kTorsion;
     ReadTorsion(root, &test.torsion);
   } else {
-    root.Fail("test", "expected tensile, cantilever or torsion, got '" + test.kind + "'");
+    root.Fail("test", "expected tensile, cantilever or torsion, got '" + kind + "'");
   }
   return test;
 }
@@ -178,11 +181,11 @@ void WriteSeries(std::ostream& out, const std::string& key, const std::string& c
 }
 
 void WriteTestKeys(std::ostream& out, const BenchTest& t) {
-  if (t.kind == "tensile") {
+  if (t.kind == BenchKind::kTensile) {
     out << "gauge_length: " << Format(t.tensile.gauge_length) << "  # m\n";
     if (t.tensile.max_force) out << "max_force: " << Format(*t.tensile.max_force) << "  # N\n";
     WriteSeries(out, "samples", "[time s, extension m, force N]", t.tensile.samples);
-  } else if (t.kind == "cantilever") {
+  } else if (t.kind == BenchKind::kCantilever) {
     const CantileverTest& c = t.cantilever;
     out << "length: " << Format(c.length) << "  # m\ngravity: " << Format(c.gravity)
         << "  # m/s^2\n";
@@ -215,6 +218,15 @@ std::vector<double> Series::Column(int c) const {
   return out;
 }
 
+std::string BenchKindName(BenchKind kind) {
+  switch (kind) {
+    case BenchKind::kTensile: return "tensile";
+    case BenchKind::kCantilever: return "cantilever";
+    case BenchKind::kTorsion: return "torsion";
+  }
+  return "?";
+}
+
 BenchTest ReadBenchTest(const std::string& path) { return ReadTree(LoadYamlFile(path), path); }
 
 BenchTest ParseBenchTest(const std::string& text, const std::string& origin) {
@@ -225,7 +237,7 @@ std::string BenchTestText(const BenchTest& test, const std::string& comment) {
   std::ostringstream out;
   std::istringstream lines(comment);
   for (std::string line; std::getline(lines, line);) out << "# " << line << "\n";
-  out << "test: " << test.kind << "\nmaterial: " << test.material << "\n";
+  out << "test: " << BenchKindName(test.kind) << "\nmaterial: " << test.material << "\n";
   if (!test.description.empty()) out << "description: " << test.description << "\n";
   if (test.weighing) {
     const Weighing& w = *test.weighing;

@@ -66,16 +66,20 @@ struct TorsionTest {
   Series samples;            // [t s, angle rad]
 };
 
+// The bench tests a thread is characterized with; each has its own keys in the test's file.
+enum class BenchKind { kTensile, kCantilever, kTorsion };
+std::string BenchKindName(BenchKind kind);  // "tensile" | "cantilever" | "torsion"
+
 struct BenchTest {
-  std::string kind;  // "tensile" | "cantilever" | "torsion"
+  BenchKind kind = BenchKind::kTensile;
   std::string material;
   std::string description;
   std::string path;    // the file read ("" when parsed from text)
   std::string source;  // its file name, for the output's `source`
   std::optional<Weighing> weighing;
-  TensileTest tensile;        // when kind == "tensile"
-  CantileverTest cantilever;  // when kind == "cantilever"
-  TorsionTest torsion;        // when kind == "torsion"
+  TensileTest tensile;        // when kind == kTensile
+  CantileverTest cantilever;  // when kind == kCantilever
+  TorsionTest torsion;        // when kind == kTorsion
 };
 
 // Minimum points of a series: below it no fit is attempted.

@@ -22,7 +22,7 @@ class Builder {
  public:
   explicit Builder(const BenchTest& test) {
     result_.material = test.material;
-    result_.test = test.kind;
+    result_.test = BenchKindName(test.kind);
     result_.source = test.source;
   }
   void Estimate(const std::string& key, double value, double sigma, const std::string& test) {
@@ -293,9 +293,11 @@ Characterization Characterize(const BenchTest& test) {
   if (test.weighing)
     out.Estimate("linear_density", test.weighing->LinearDensity(),
                  test.weighing->LinearDensitySigma(), "weighing");
-  if (test.kind == "tensile") FitTensile(test, &out);
-  if (test.kind == "cantilever") FitCantilever(test, &out);
-  if (test.kind == "torsion") FitTorsion(test, &out);
+  switch (test.kind) {
+    case BenchKind::kTensile: FitTensile(test, &out); break;
+    case BenchKind::kCantilever: FitCantilever(test, &out); break;
+    case BenchKind::kTorsion: FitTorsion(test, &out); break;
+  }
   return out.Done();
 }
 

@@ -43,12 +43,11 @@ class Noise {
   std::normal_distribution<double> normal_{0.0, 1.0};
 };
 
-BenchTest NewTest(const std::string& kind, const Material& truth, const SyntheticWeighing& w,
-                  Noise& noise) {
+BenchTest NewTest(BenchKind kind, const Material& truth, const SyntheticWeighing& w, Noise& noise) {
   BenchTest test;
   test.kind = kind;
   test.material = truth.name.empty() ? "nylon_1mm" : truth.name;
-  test.source = kind + ".yaml";
+  test.source = BenchKindName(kind) + ".yaml";
   test.path = test.source;
   Weighing weighing;
   weighing.mass = truth.linear_density * w.length + noise(w.mass_sigma);
@@ -73,17 +72,18 @@ void RelaxCantilever(Simulation& sim) {
 
 // The truth with only the dampings `kind` measures: the others change nothing the test records
 // but would set the explicit step (a stretch damping of 0.5 N s makes it 40 times smaller).
-Material OnlyDampingsOf(Material m, const std::string& kind) {
-  if (kind != "tensile") m.stretch_damping = 0;
-  if (kind != "cantilever") m.bend_damping = 0;
-  if (kind != "torsion") m.twist_damping = 0;
+Material OnlyDampingsOf(Material m, BenchKind kind) {
+  if (kind != BenchKind::kTensile) m.stretch_damping = 0;
+  if (kind != BenchKind::kCantilever) m.bend_damping = 0;
+  if (kind != BenchKind::kTorsion) m.twist_damping = 0;
   return m;
 }
 
 // A one-rod scene: `integrator` and `extra` (gravity, loads) as YAML lines, the rod as a flow map.
-BuiltScenario Build(const std::string& name, double interval, const std::string& integrator,
+BuiltScenario Build(BenchKind kind, double interval, const std::string& integrator,
                     const Material& truth, const std::string& rod, const std::string& extra) {
-  const Material m = OnlyDampingsOf(truth, name);
+  const Material m = OnlyDampingsOf(truth, kind);
+  const std::string name = BenchKindName(kind);
   const std::string text = "name: " + name + "\nduration: 1\noutput_interval: " + Num(interval) +
                            "\nintegrator: " + integrator +
                            "\nmaterials:\n  thread: " + MaterialYaml(m) + "\nrods:\n  - " + rod +
@@ -123,14 +123,14 @@ Material BenchNylon(double loss_factor) {
 BenchTest SimulateTensileTest(const Material& truth, const SyntheticTensile& s,
                               const SyntheticWeighing& weighing, uint32_t seed) {
   Noise noise(seed);
-  BenchTest test = NewTest("tensile", truth, weighing, noise);
+  BenchTest test = NewTest(BenchKind::kTensile, truth, weighing, noise);
   test.description = "simulated cyclic stretch at " + Num(s.frequency) + " Hz";
   test.tensile.gauge_length = s.gauge_length;
   const double duration = s.cycles / s.frequency, interval = duration / s.samples;
   const std::string rod = "{name: specimen, material: thread, start: [0, 0, 0], end: [" +
                           Num(s.gauge_length) + ", 0, 0], segments: " + std::to_string(s.segments) +
                           ", fixed: {start: pinned, end: pinned}}";
-  BuiltScenario built = Build("tensile", interval, "{type: explicit}", truth, rod, "");
+  BuiltScenario built = Build(BenchKind::kTensile, interval, "{type: explicit}", truth, rod, "");
   Simulation& sim = *built.simulation;
   const int grip = sim.model().num_nodes() - 1;
   const long steps_per_sample = std::lround(interval / sim.dt());
@@ -156,7 +156,7 @@ BenchTest SimulateTensileTest(const Material& truth, const SyntheticTensile& s,
 BenchTest SimulateCantileverTest(const Material& truth, const SyntheticCantilever& s,
                                  const SyntheticWeighing& weighing, uint32_t seed) {
   Noise noise(seed);
-  BenchTest test = NewTest("cantilever", truth, weighing, noise);
+  BenchTest test = NewTest(BenchKind::kCantilever, truth, weighing, noise);
   test.description = "simulated clamped thread under its own weight, then tapped";
   test.cantilever.length = s.length;
   test.cantilever.gravity = kGravity;
@@ -164,7 +164,7 @@ BenchTest SimulateCantileverTest(const Material& truth, const SyntheticCantileve
   const std::string gravity = "gravity: [0, " + Num(-kGravity) + ", 0]\n";
   // The shape at rest.
   BuiltScenario rest =
-      Build("cantilever", interval, "{type: explicit}", truth, CantileverRod(s), gravity);
+      Build(BenchKind::kCantilever, interval, "{type: explicit}", truth, CantileverRod(s), gravity);
   RelaxCantilever(*rest.simulation);
   const std::vector<Vector3d>& x = rest.simulation->state().x;
   for (int k = 1; k <= s.shape_points; ++k) {
@@ -175,12 +175,12 @@ BenchTest SimulateCantileverTest(const Material& truth, const SyntheticCantileve
   // Pushed down by a tip force, released: the free oscillation about the rest shape.
   const double push = s.push * truth.linear_density * kGravity * s.length;
   BuiltScenario pushed =
-      Build("cantilever", interval, "{type: explicit}", truth, CantileverRod(s),
+      Build(BenchKind::kCantilever, interval, "{type: explicit}", truth, CantileverRod(s),
             gravity + "loads:\n  - {type: force, rod: thread, node: end, vector: [0, " +
                 Num(-push) + ", 0]}\n");
   RelaxCantilever(*pushed.simulation);
   BuiltScenario released =
-      Build("cantilever", interval, "{type: explicit}", truth, CantileverRod(s), gravity);
+      Build(BenchKind::kCantilever, interval, "{type: explicit}", truth, CantileverRod(s), gravity);
   Simulation& sim = *released.simulation;
   sim.mutable_state().x = pushed.simulation->state().x;
   sim.mutable_state().q = pushed.simulation->state().q;
@@ -196,7 +196,7 @@ BenchTest SimulateCantileverTest(const Material& truth, const SyntheticCantileve
 BenchTest SimulateTorsionTest(const Material& truth, const SyntheticTorsion& s,
                               const SyntheticWeighing& weighing, uint32_t seed) {
   Noise noise(seed);
-  BenchTest test = NewTest("torsion", truth, weighing, noise);
+  BenchTest test = NewTest(BenchKind::kTorsion, truth, weighing, noise);
   test.description = "simulated torsion pendulum, twisted from rest by a constant moment";
   const double free_length = TorsionFreeLength(s);
   test.torsion.length = free_length;
@@ -210,7 +210,7 @@ BenchTest SimulateTorsionTest(const Material& truth, const SyntheticTorsion& s,
                           Num(s.inertia) + "]}}";
   // The moment about d3, which points down the thread (-z).
   BuiltScenario built = Build(
-      "torsion", interval, "{type: explicit, rotational_inertia: physical}", truth, rod,
+      BenchKind::kTorsion, interval, "{type: explicit, rotational_inertia: physical}", truth, rod,
       "loads:\n  - {type: moment, rod: thread, node: end, vector: [0, 0, " + Num(-moment) + "]}\n");
   Simulation& sim = *built.simulation;
   const Quaterniond start = sim.state().q.back();

@@ -1027,7 +1027,9 @@ void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
       }
     }
     f.identified = looks_identified[i] && !f.rough && !f.ambiguous;
-    f.determined_by = f.identified ? "flight data" : f.has_prior ? "prior" : "neither";
+    f.determined_by = f.identified  ? DeterminedBy::kFlightData
+                      : f.has_prior ? DeterminedBy::kPrior
+                                    : DeterminedBy::kNeither;
     result->parameters.push_back(f);
   }
 }
@@ -1040,6 +1042,15 @@ int EndElsewhere(const std::vector<std::vector<double>>& ends, const std::vector
     for (size_t j = 0; j < best.size(); ++j)
       if (material[j] && std::abs(ends[k][j] - best[j]) > 2 * sigma[j]) return static_cast<int>(k);
   return -1;
+}
+
+std::string DeterminedByName(DeterminedBy by) {
+  switch (by) {
+    case DeterminedBy::kFlightData: return "flight data";
+    case DeterminedBy::kPrior: return "prior";
+    case DeterminedBy::kNeither: return "neither";
+  }
+  return "?";
 }
 
 std::string PriorConflictNote(const FittedParameter& f, const std::string& source) {

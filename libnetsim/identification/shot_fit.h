@@ -71,6 +71,10 @@ struct FitOptions {
   ProgressReporter progress;
 };
 
+// What settled a fitted parameter: the flight data (identified), its prior, or neither.
+enum class DeterminedBy { kFlightData, kPrior, kNeither };
+std::string DeterminedByName(DeterminedBy by);  // "flight data" | "prior" | "neither"
+
 struct FittedParameter {
   FitParameter parameter;
   double value = 0.0;       // the estimate
@@ -98,7 +102,7 @@ struct FittedParameter {
   // sigma < half the reference spread (the prior's sigma, or spread), the cost not rough and no
   // other end as good
   bool identified = false;
-  std::string determined_by;  // "flight data", "prior", "neither"
+  DeterminedBy determined_by = DeterminedBy::kNeither;
 };
 
 struct FitResult {

@@ -295,6 +295,19 @@ std::string AlignmentName(Alignment alignment) {
   return "?";
 }
 
+std::string VerdictName(Verdict verdict) {
+  return verdict == Verdict::kConsistent ? "consistent" : "inconsistent";
+}
+
+std::string ContactFromName(ContactFrom from) {
+  switch (from) {
+    case ContactFrom::kNone: return "none";
+    case ContactFrom::kGiven: return "given";
+    case ContactFrom::kSimulation: return "simulation";
+  }
+  return "?";
+}
+
 bool ScoreOptions::IsValid(std::string* error) const {
   auto fail = [&](const std::string& what) {
     if (error) *error = what;
@@ -980,7 +993,7 @@ void ConsistencyTest(const ScoreInput& in, const ResidualSums& sums, int paramet
   s.p_value = UpperGammaQ(nu_eff / 2, sums.d2 / inflation / 2);
   s.critical_mean_d2 = Chi2Quantile(1 - in.options.significance, nu_eff) * inflation / n;
   s.margin = s.critical_mean_d2 - s.mean_d2;
-  s.verdict = s.p_value >= in.options.significance ? "consistent" : "inconsistent";
+  s.verdict = s.p_value >= in.options.significance ? Verdict::kConsistent : Verdict::kInconsistent;
   s.covariance_too_large =
       1 - UpperGammaQ(nu_eff / 2, sums.d2 / inflation / 2) < in.options.significance;
   s.skill = sums.baseline_d2 > 0 ? 1 - sums.d2 / sums.baseline_d2 : kNaN;
@@ -1177,9 +1190,9 @@ void ScorePhases(const ScoreInput& in, double tau, ScoreResult* result) {
   // The contact phase from the given time, else from the simulation's own first contact.
   s.contact_time_s =
       std::isfinite(in.options.contact_time_s) ? in.options.contact_time_s : in.sim.contact_start_s;
-  s.contact_from = std::isfinite(in.options.contact_time_s) ? "given"
-                   : std::isfinite(in.sim.contact_start_s)  ? "simulation"
-                                                            : "none";
+  s.contact_from = std::isfinite(in.options.contact_time_s) ? ContactFrom::kGiven
+                   : std::isfinite(in.sim.contact_start_s)  ? ContactFrom::kSimulation
+                                                            : ContactFrom::kNone;
   for (const PhaseSpan& span : PhaseSpans(in.meas, *result, max_t, tau))
     s.per_phase.push_back(PhaseRow(span, in.meas, *result));
 }

@@ -48,6 +48,15 @@ enum class Alignment { kNone, kTime, kRigid, kTimeAndRigid };
 bool ParseAlignment(const std::string& text, Alignment* alignment);
 std::string AlignmentName(Alignment alignment);
 
+// The consistency test's answer: consistent when its p-value is at least the significance.
+enum class Verdict { kConsistent, kInconsistent };
+std::string VerdictName(Verdict verdict);  // "consistent" | "inconsistent"
+
+// Where the contact phase's start came from: the given time of first contact, the simulation's
+// own first contact with the target, or nowhere (no contact phase).
+enum class ContactFrom { kNone, kGiven, kSimulation };
+std::string ContactFromName(ContactFrom from);  // "none" | "given" | "simulation"
+
 enum class KnotClass { kCorner = 0, kEdge = 1, kInner = 2 };  // 2, 3, 4 links
 inline constexpr const char* kKnotClassNames[3] = {"corner", "edge", "inner"};
 
@@ -131,9 +140,9 @@ struct ScoreSummary {
   double design_effect = 1.0;   // within-frame inflation
   double effective_points = 0;  // N / (tau_int * design_effect)
   double p_value = 1.0;
-  double critical_mean_d2 = 0;        // mean d2 above which the verdict is "inconsistent"
-  double margin = 0.0;                // critical_mean_d2 - mean_d2 (negative: rejected)
-  std::string verdict;                // "consistent" | "inconsistent"
+  double critical_mean_d2 = 0;  // mean d2 above which the verdict is kInconsistent
+  double margin = 0.0;          // critical_mean_d2 - mean_d2 (negative: rejected)
+  Verdict verdict = Verdict::kInconsistent;
   bool covariance_too_large = false;  // lower tail also below significance: Sigma looks inflated
   // The time alignment.
   Alignment alignment = Alignment::kTime;
@@ -161,10 +170,10 @@ struct ScoreSummary {
   std::vector<ScoreRow> per_knot;     // [K], name "(row,col)"
   std::vector<ScoreRow> per_phase;    // ejection, spreading, opened, contact
   // Global measures (measured vs simulated).
-  // Simulated time the contact phase starts at (NaN: no contact phase), and whence: "given"
-  // (ScoreOptions::contact_time_s), "simulation" (its first contact, /contact_start) or "none".
+  // Simulated time the contact phase starts at (NaN: no contact phase), and whence: kGiven
+  // (ScoreOptions::contact_time_s), kSimulation (its first contact, /contact_start) or kNone.
   double contact_time_s = std::numeric_limits<double>::quiet_NaN();
-  std::string contact_from = "none";
+  ContactFrom contact_from = ContactFrom::kNone;
   double max_area_measured_m2 = 0.0, max_area_time_measured_s = 0.0;  // NaN: never measured
   double max_area_simulated_m2 = 0.0, max_area_time_simulated_s = 0.0;
   std::vector<std::string> notes;  // what a reader must know (Sigma_sim zero, sparse output...)

@@ -56,7 +56,7 @@ void WriteScore(const std::string& path, const ScoreResult& r) {
     const hid_t f = file.get();
     h5::WriteStringAttribute(f, "format", kScoreFileFormat);
     h5::WriteStringAttribute(f, "version", "1");
-    h5::WriteStringAttribute(f, "verdict", s.verdict);
+    h5::WriteStringAttribute(f, "verdict", VerdictName(s.verdict));
     h5::WriteStringAttribute(f, "alignment", AlignmentName(s.alignment));
     std::string notes;
     for (const auto& n : s.notes) notes += (notes.empty() ? "" : "\n") + n;

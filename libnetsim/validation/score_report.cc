@@ -237,7 +237,7 @@ std::string Histogram(const ScoreResult& r) {
 // The document's head (title, inline style) and the opening of its body.
 void WriteHead(std::ostringstream& o, const ScoreSummary& s) {
   o << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n"
-    << "<title>netlab score: " << Escape(s.verdict) << "</title>\n<style>\n"
+    << "<title>netlab score: " << Escape(VerdictName(s.verdict)) << "</title>\n<style>\n"
     << "body{font-family:system-ui,sans-serif;max-width:1180px;margin:24px auto;padding:0 16px;"
        "color:#222}\n"
     << "h1{font-size:22px;margin:0 0 4px}h2{font-size:17px;margin:28px 0 4px}\n"
@@ -261,7 +261,7 @@ void WriteHead(std::ostringstream& o, const ScoreSummary& s) {
 
 // The title and the files, the verdict, the few numbers that decide it and how to read them.
 void WriteVerdict(std::ostringstream& o, const ScoreSummary& s, const ReportInfo& info) {
-  const bool ok = s.verdict == "consistent";
+  const bool ok = s.verdict == Verdict::kConsistent;
   o << "<h1>netlab score</h1>\n<div class=\"files\">measured: " << Escape(info.measured_path)
     << " &nbsp; simulation: " << Escape(info.sim_path)
     << " &nbsp; data: " << Escape(info.score_path) << "</div>\n";
@@ -362,12 +362,13 @@ void WriteClassAndPhaseTables(std::ostringstream& o, const ScoreSummary& s) {
     o << Row({"phase: " + row.name, std::to_string(row.points), Fixed(row.rms_m * 1e3, 2),
               Fixed(row.max_m * 1e3, 2), Fixed(row.mean_d2, 2), Fixed(row.start_s, 3),
               Fixed(row.end_s, 3)});
-  const std::string contact =
-      s.contact_from == "given"        ? "contact from the given time of first contact"
-      : s.contact_from == "simulation" ? "contact from the simulation's first contact with the "
-                                         "target (" +
-                                             Fixed(s.contact_time_s, 3) + " s simulated)"
-                                       : "no contact phase (the simulation has no contact)";
+  const std::string contact = s.contact_from == ContactFrom::kGiven
+                                  ? "contact from the given time of first contact"
+                              : s.contact_from == ContactFrom::kSimulation
+                                  ? "contact from the simulation's first contact with the "
+                                    "target (" +
+                                        Fixed(s.contact_time_s, 3) + " s simulated)"
+                                  : "no contact phase (the simulation has no contact)";
   o << "</table>\n<p class=\"caption\">Phases from the simulated corner polygon: ejection until "
        "it reaches half its largest area, spreading until the largest, opened after it; "
     << contact << ". Phases the measurement does not reach have no knot-frames.</p>\n";

@@ -295,7 +295,7 @@ class LabelEngine {
   }
   // (camera, frame row, knot) of the labels Find Path found along their row or column alone:
   // Fill Grid takes them as candidates that other cameras may confirm.
-  using KnotsInFrames = std::set<std::tuple<int, int, int>>;
+  using KnotsInFrames = std::set<LabelAddress>;
   const KnotsInFrames& one_path() const { return one_path_; }
   // Takes those of another engine that ran on a copy of the same labels (the GUI's previews).
   void AdoptOnePath(const KnotsInFrames& more) { one_path_.insert(more.begin(), more.end()); }

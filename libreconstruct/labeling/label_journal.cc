@@ -61,9 +61,8 @@ std::vector<LabelEdit> ReadLabelJournal(const std::string& path, const LabelSet&
     throw InputError(path + ":1: the journal is of another label set (" + line + ", this is " +
                      LabelJournalHeader(set) + ")");
   // Every complete step's labels as they ended up; a step cut short by the crash is left out.
-  using Key = std::tuple<int, int, int>;
-  std::map<Key, Label> last;
-  std::vector<std::pair<Key, Label>> pending;
+  std::map<LabelAddress, Label> last;
+  std::vector<std::pair<LabelAddress, Label>> pending;
   for (int line_no = 2; std::getline(in, line); ++line_no) {
     if (line.rfind("step ", 0) == 0) {
       pending.clear();
@@ -91,12 +90,11 @@ std::vector<LabelEdit> ReadLabelJournal(const std::string& path, const LabelSet&
         throw InputError(
             path + ":" + std::to_string(line_no) +
             ": not a label (source, state, or a hidden mark with a position): " + line);
-      pending.emplace_back(Key{c, t, k}, label);
+      pending.emplace_back(LabelAddress{c, t, k}, label);
     }
   }
   std::vector<LabelEdit> edits;
-  for (const auto& [key, label] : last)
-    edits.push_back({std::get<0>(key), std::get<1>(key), std::get<2>(key), label});
+  for (const auto& [key, label] : last) edits.push_back({key.camera, key.t, key.knot, label});
   return edits;
 }
 

@@ -38,24 +38,6 @@ std::string Shape(const std::vector<hsize_t>& dims) {
   return "[" + shape + "]";
 }
 
-std::string JoinLines(const std::vector<std::string>& names) {
-  std::string joined;
-  for (size_t i = 0; i < names.size(); ++i) joined += (i ? "\n" : "") + names[i];
-  return joined;
-}
-
-std::vector<std::string> SplitLines(const std::string& text) {
-  std::vector<std::string> names;
-  size_t start = 0;
-  while (!text.empty()) {
-    const size_t end = text.find('\n', start);
-    names.push_back(text.substr(start, end - start));
-    if (end == std::string::npos) break;
-    start = end + 1;
-  }
-  return names;
-}
-
 // Sizes and value ranges: a set that breaks them is a programming error, and writing it would
 // give a file that ReadLabels refuses.
 void CheckConsistent(const LabelSet& labels) {
@@ -156,7 +138,7 @@ void WriteLabelsFile(const std::string& file_path, const LabelSet& labels) {
   h5::WriteStringAttribute(f, "version", "1");
   WriteIntAttribute(f, file_path, "rows", labels.rows);
   WriteIntAttribute(f, file_path, "cols", labels.cols);
-  h5::WriteStringAttribute(f, "cameras", JoinLines(labels.cameras));
+  h5::WriteStringAttribute(f, "cameras", h5::JoinLines(labels.cameras));
   const hsize_t t = labels.frames(), k = labels.knots();
   h5::WriteDataset(f, "frame_index", H5T_NATIVE_INT, {t}, labels.frame_index.data());
   h5::SetUnits(f, "frame_index", "index");
@@ -175,8 +157,8 @@ void WriteLabelsFile(const std::string& file_path, const LabelSet& labels) {
       std::string line = why;  // one line each: no tab or line break inside
       for (char& ch : line)
         if (ch == '\t' || ch == '\n' || ch == '\r') ch = ' ';
-      text += std::to_string(std::get<0>(key)) + "\t" + std::to_string(std::get<1>(key)) + "\t" +
-              std::to_string(std::get<2>(key)) + "\t" + line + "\n";
+      text += std::to_string(key.camera) + "\t" + std::to_string(key.t) + "\t" +
+              std::to_string(key.knot) + "\t" + line + "\n";
     }
     h5::WriteStringDataset(f, "review_reasons", text);
   }
@@ -228,7 +210,7 @@ LabelSet ReadLabelsFile(const std::string& path, hid_t f) {
     fail("rows x cols (" + std::to_string(labels.rows) + " x " + std::to_string(labels.cols) +
          ") is too large");
   if (H5Aexists(f, "cameras") <= 0) fail("root attribute cameras is missing");
-  labels.cameras = SplitLines(h5::ReadStringAttribute(f, "cameras"));
+  labels.cameras = h5::SplitLines(h5::ReadStringAttribute(f, "cameras"));
 
   // Every dataset present with the shape that /frame_index and the net's size give.
   auto expect = [&](const std::string& name, const std::vector<hsize_t>& dims) {

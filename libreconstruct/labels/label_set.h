@@ -28,6 +28,7 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <compare>
 #include <cstdint>
 #include <limits>
 #include <map>
@@ -87,8 +88,23 @@ inline bool SameLabel(const Label& a, const Label& b) {
          a.confidence == b.confidence && a.state == b.state;
 }
 
-// Per (camera, frame row, knot): why a label is under review (the labeling tools' reasons).
-using ReviewReasons = std::map<std::tuple<int, int, int>, std::string>;
+// The address of one label: camera index, frame row t (of frame_index), knot, in the order
+// LabelSet::at takes them. Ordered camera first; ByFrame orders frame row first (the review
+// queue's order).
+struct LabelAddress {
+  int camera = 0;
+  int t = 0;
+  int knot = 0;
+  auto operator<=>(const LabelAddress&) const = default;
+  struct ByFrame {
+    bool operator()(const LabelAddress& a, const LabelAddress& b) const {
+      return std::tie(a.t, a.camera, a.knot) < std::tie(b.t, b.camera, b.knot);
+    }
+  };
+};
+
+// Per label: why it is under review (the labeling tools' reasons).
+using ReviewReasons = std::map<LabelAddress, std::string>;
 
 struct LabelSet {
   int rows = 0, cols = 0;

@@ -54,7 +54,7 @@ LabelDocument::LabelDocument(recon::LabelSet labels, std::string labels_path, QO
     for (int t = 0; t < set.frames(); ++t)
       for (int k = 0; k < set.knots(); ++k)
         if (set.at(c, t, k).present() && set.at(c, t, k).state == recon::LabelState::kNeedsReview)
-          review_.insert({t, c, k});
+          review_.insert({c, t, k});
   store_.SetListener(
       [this](recon::LabelStore::Change change, const std::string& step,
              const std::vector<recon::LabelEdit>& now) { OnStoreChanged(change, step, now); });
@@ -76,9 +76,9 @@ void LabelDocument::OnStoreChanged(recon::LabelStore::Change change, const std::
   for (const recon::LabelEdit& e : now) {
     frames.insert(e.t);
     if (e.label.present() && e.label.state == recon::LabelState::kNeedsReview)
-      review_.insert({e.t, e.camera, e.knot});
+      review_.insert({e.camera, e.t, e.knot});
     else
-      review_.erase({e.t, e.camera, e.knot});
+      review_.erase({e.camera, e.t, e.knot});
   }
   if (change == recon::LabelStore::Change::kApplied && !replaying_undo_)
     undo_.push(new StoreStep(this, step));
@@ -119,15 +119,12 @@ void LabelDocument::MergeReasons(const recon::ReviewReasons& reasons) {
 }
 
 std::vector<LabelKey> LabelDocument::ReviewItems() const {
-  std::vector<LabelKey> items;
-  items.reserve(review_.size());
-  for (const auto& [t, c, k] : review_) items.emplace_back(c, t, k);
-  return items;
+  return {review_.begin(), review_.end()};
 }
 
 std::set<int> LabelDocument::ReviewFrames() const {
   std::set<int> frames;
-  for (const auto& item : review_) frames.insert(std::get<0>(item));
+  for (const LabelKey& item : review_) frames.insert(item.t);
   return frames;
 }
 

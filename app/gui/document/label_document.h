@@ -30,8 +30,8 @@
 
 namespace netlab::gui {
 
-// A label's address: camera index, frame row, knot.
-using LabelKey = std::tuple<int, int, int>;
+// A label's address (camera index, frame row, knot), the labels' own.
+using LabelKey = recon::LabelAddress;
 
 class LabelDocument : public QObject {
   Q_OBJECT
@@ -99,7 +99,7 @@ class LabelDocument : public QObject {
   QUndoStack undo_;
   std::string labels_path_;
   recon::ReviewReasons reasons_;
-  std::set<std::tuple<int, int, int>> review_;  // (t, camera, knot) under review
+  std::set<LabelKey, LabelKey::ByFrame> review_;  // under review, in the queue's order
   std::ofstream journal_;
   bool journal_failed_ = false;
   bool replaying_undo_ = false;  // the stack is driving the store: do not push again

@@ -56,7 +56,7 @@ int ReviewWalk::AdvanceRow(const LabelKey& fixed, bool was_queued) const {
   int label_row = -1, missing_row = -1;
   for (int i = 0; i < n && label_row < 0; ++i) {
     const int row = (start + i) % n;
-    if (std::get<1>(items[row]) != t) continue;
+    if (items[row].t != t) continue;
     if (!model_->IsMissing(row))
       label_row = row;
     else if (missing_row < 0)
@@ -69,7 +69,7 @@ int ReviewWalk::AdvanceRow(const LabelKey& fixed, bool was_queued) const {
 int ReviewWalk::StopRow(int t) const {
   int first = -1, label = -1;
   for (int row = 0; row < model_->rowCount() && label < 0; ++row) {
-    if (std::get<1>(model_->items()[row]) != t) continue;
+    if (model_->items()[row].t != t) continue;
     if (first < 0) first = row;
     if (!model_->IsMissing(row)) label = row;
   }
@@ -307,15 +307,16 @@ QString LabelingPresenter::ColoursText(const std::optional<Session::KnotColours>
                 .arg(std::lround(link.srgb[1]))
                 .arg(std::lround(link.srgb[2]))
                 .arg(QString::fromStdString(link.dye), QString::fromStdString(link.side));
-  const char* colour = k.verdict == "consistent" ? "#1b7837"
-                       : k.verdict == "mismatch" ? "#b2182b"
-                                                 : "#555555";
-  const char* meaning = k.verdict == "consistent" ? "the label's knot"
-                        : k.verdict == "mismatch" ? "not the label's knot: check it"
-                                                  : "too few yarns read for sure: no evidence "
-                                                    "either way";
+  using recon::IdentityVerdict;
+  const char* colour = k.verdict == IdentityVerdict::kConsistent ? "#1b7837"
+                       : k.verdict == IdentityVerdict::kMismatch ? "#b2182b"
+                                                                 : "#555555";
+  const char* meaning = k.verdict == IdentityVerdict::kConsistent ? "the label's knot"
+                        : k.verdict == IdentityVerdict::kMismatch
+                            ? "not the label's knot: check it"
+                            : "too few yarns read for sure: no evidence either way";
   text += QString("<br>the yarns say: <b style=\"color:%1\">%2</b> (%3)")
-              .arg(colour, QString::fromStdString(k.verdict), meaning);
+              .arg(colour, QString::fromStdString(recon::IdentityVerdictName(k.verdict)), meaning);
   if (!k.knots_read.empty() && k.knots_read.size() <= 3) {
     QStringList names;
     for (int n : k.knots_read) names << cursor_->KnotName(n);

@@ -7,10 +7,7 @@ namespace netlab::gui {
 namespace {
 
 // The queue's order: frame row, then camera, then knot (LabelDocument::ReviewItems).
-bool QueueOrder(const LabelKey& a, const LabelKey& b) {
-  return std::tie(std::get<1>(a), std::get<0>(a), std::get<2>(a)) <
-         std::tie(std::get<1>(b), std::get<0>(b), std::get<2>(b));
-}
+constexpr LabelKey::ByFrame QueueOrder;
 
 }  // namespace
 

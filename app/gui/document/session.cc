@@ -346,7 +346,7 @@ std::optional<Session::KnotColours> Session::CheckKnotColours(
   }
   const recon::IdentityCheck check =
       recon::CheckIdentity(image, *codebook_, knot, px, yarns, identity_);
-  out.verdict = recon::IdentityVerdictName(check.verdict);
+  out.verdict = check.verdict;
   out.why = check.why;
   out.knots_read = check.knots_read;
   return out;

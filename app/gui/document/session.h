@@ -147,7 +147,7 @@ class Session {
       std::array<double, 3> srgb{0, 0, 0};  // as the camera sees it, for a swatch (R, G, B)
     };
     std::vector<Link> expected;
-    std::string verdict;          // "consistent", "mismatch", "unreadable"
+    recon::IdentityVerdict verdict = recon::IdentityVerdict::kUnreadable;
     std::string why;              // the check's line for the reviewer
     std::vector<int> knots_read;  // the knots the colours fit (one: identified)
   };

@@ -208,10 +208,10 @@ QString SimulationPresenter::Verdict(int i) const {
     return "Not scored yet.";
   }
   const netsim::ScoreSummary& m = s.score->summary;
-  const bool consistent = m.verdict == "consistent";
+  const bool consistent = m.verdict == netsim::Verdict::kConsistent;
   QString text =
       QString("%1: %2 (mean d² %3 %4 the critical %5, p = %6, over %7 knot-frames).")
-          .arg(QString::fromStdString(m.verdict))
+          .arg(QString::fromStdString(netsim::VerdictName(m.verdict)))
           .arg(consistent ? "the simulated net lies where the cameras saw the real one, within "
                             "the measurement's uncertainty"
                           : "the simulated net is not where the cameras saw the real one: the "
@@ -285,9 +285,11 @@ QString SimulationPresenter::FitText(int start) const {
   QString text = "Fitted:";
   for (const netsim::FittedParameter& f : r.parameters) {
     const QString sigma = std::isfinite(f.sigma) ? QString::number(f.sigma, 'g', 3) : "∞";
-    QString verdict = f.identified ? "identified by the " + QString::fromStdString(f.determined_by)
-                      : f.determined_by == "prior" ? QString("from its prior")
-                                                   : QString("not identified");
+    QString verdict = f.identified
+                          ? "identified by the " +
+                                QString::fromStdString(netsim::DeterminedByName(f.determined_by))
+                      : f.determined_by == netsim::DeterminedBy::kPrior ? QString("from its prior")
+                                                                        : QString("not identified");
     if (f.rough) verdict += "; the cost is rough there: σ means little";
     if (f.ambiguous) verdict += QString("; another valley at %1").arg(f.alternative, 0, 'g', 4);
     text += QString("\n  %1 = %2 ± %3 %4 (%5)")
@@ -304,14 +306,14 @@ QString SimulationPresenter::FitText(int start) const {
               .arg(r.simulations)
               .arg(Seconds(r.wall_s));
   text += QString("\nThe fitted model: %1, RMS %2 mm, mean d² %3.")
-              .arg(QString::fromStdString(r.score.verdict))
+              .arg(QString::fromStdString(netsim::VerdictName(r.score.verdict)))
               .arg(r.score.rms_m * 1e3, 0, 'g', 3)
               .arg(r.score.mean_d2, 0, 'g', 3);
   if (start >= 0 && start < simulations() && simulations_[start].score) {
     const netsim::ScoreSummary& s = simulations_[start].score->summary;
     text += QString("\nThe start (%1): %2, RMS %3 mm, mean d² %4.")
                 .arg(QString::fromStdString(simulations_[start].name))
-                .arg(QString::fromStdString(s.verdict))
+                .arg(QString::fromStdString(netsim::VerdictName(s.verdict)))
                 .arg(s.rms_m * 1e3, 0, 'g', 3)
                 .arg(s.mean_d2, 0, 'g', 3);
   }

@@ -641,8 +641,7 @@ TEST_F(MainWindowTest, AfterAFixTheWindowGoesOnToTheFramesNextItem) {
   ASSERT_NE(s->missing().Find(1, t, k), nullptr);
   // Only these two in frame t: the others the queue lists there (the target hides them) hidden.
   for (const LabelKey& key : s->missing().Items())
-    if (std::get<1>(key) == t && std::get<2>(key) != k)
-      s->MarkHidden(std::get<0>(key), t, std::get<2>(key));
+    if (key.t == t && key.knot != k) s->MarkHidden(key.camera, t, key.knot);
   ASSERT_TRUE(SpaceTo(&w, 0, t, k));
   QTest::keyClick(&w, Qt::Key_D);  // hidden in camera 0: on to camera 1
   EXPECT_TRUE(s->document().at(0, t, k).hidden());
@@ -706,8 +705,7 @@ TwoItems PlantTwoItems(MainWindow* w, const recon::LabelSet& truth) {
   TwoItems items;
   items.a = KnotSeenByAll(truth, items.t);
   items.b = KnotSeenByAll(truth, items.t, items.a + 1);
-  for (const LabelKey& key : s->missing().Items())
-    s->MarkHidden(std::get<0>(key), std::get<1>(key), std::get<2>(key));
+  for (const LabelKey& key : s->missing().Items()) s->MarkHidden(key.camera, key.t, key.knot);
   for (const auto& [c, k] : {std::pair{0, items.a}, std::pair{2, items.b}}) {
     recon::Label doubt = s->document().at(c, items.t, k);
     doubt.state = recon::LabelState::kNeedsReview;
@@ -848,8 +846,7 @@ TEST_F(MainWindowTest, TShowsTheLabelThatStoppedItNotAMissingKnotBeforeIt) {
   bool missing_before = false;
   for (const LabelKey& key : s->missing().Items())
     missing_before =
-        missing_before ||
-        (std::get<1>(key) == 1 && std::pair(std::get<0>(key), std::get<2>(key)) < std::pair(c, k));
+        missing_before || (key.t == 1 && std::pair(key.camera, key.knot) < std::pair(c, k));
   EXPECT_TRUE(missing_before) << "camera " << c << " knot " << k;
   EXPECT_TRUE(w.statusBar()->currentMessage().startsWith("Review"))
       << w.statusBar()->currentMessage().toStdString();

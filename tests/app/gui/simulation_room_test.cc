@@ -314,12 +314,12 @@ TEST_F(SimulationRoomTest, AFitOfTheDragCoefficientIsCancelledThenRunToTheEnd) {
   std::printf(
       "fit: drag coefficient %.4f +- %.4f (%s), cost %.4g -> %.4g, %d simulations, "
       "%.1f s; fitted model %s\n",
-      drag.value, drag.sigma, drag.determined_by.c_str(), fit.result->cost_initial,
-      fit.result->cost_final, fit.result->simulations, clock.elapsed() / 1000.0,
-      fit.result->score.verdict.c_str());
+      drag.value, drag.sigma, netsim::DeterminedByName(drag.determined_by).c_str(),
+      fit.result->cost_initial, fit.result->cost_final, fit.result->simulations,
+      clock.elapsed() / 1000.0, netsim::VerdictName(fit.result->score.verdict).c_str());
   EXPECT_NEAR(drag.value, 1.2, std::max(3 * drag.sigma, 0.01));
   EXPECT_TRUE(drag.identified);
-  EXPECT_EQ(fit.result->score.verdict, "consistent");
+  EXPECT_EQ(fit.result->score.verdict, netsim::Verdict::kConsistent);
   const std::string text = room->fit_label()->text().toStdString();
   EXPECT_NE(text.find("drag.drag_coefficient = "), std::string::npos) << text;
   EXPECT_NE(text.find("The fitted model: consistent"), std::string::npos) << text;

@@ -30,7 +30,7 @@ std::string ErrorOf(const std::string& text) {
 
 TEST(BenchTest, TorsionFileReads) {
   const BenchTest test = ParseBenchTest(Torsion(30), "dir/t.yaml");
-  EXPECT_EQ(test.kind, "torsion");
+  EXPECT_EQ(test.kind, BenchKind::kTorsion);
   EXPECT_EQ(test.material, "nylon_1mm");
   EXPECT_EQ(test.source, "t.yaml");
   EXPECT_DOUBLE_EQ(test.torsion.inertia, 5e-8);

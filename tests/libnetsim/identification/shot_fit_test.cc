@@ -80,7 +80,7 @@ TEST_F(ShotFit, RecoversDragLaunchAndTimeFromAStartOffByTwo) {
     EXPECT_LT(std::abs(p.value - value), 3 * p.sigma)
         << name << " = " << p.value << " +- " << p.sigma << ", truth " << value;
     EXPECT_TRUE(p.identified) << name;
-    EXPECT_EQ(p.determined_by, "flight data") << name;
+    EXPECT_EQ(p.determined_by, DeterminedBy::kFlightData) << name;
   }
   // The cost is smooth in the drag: at -+ sigma it rises as the Jacobian predicts.
   const FittedParameter& drag = Find(r, "drag.drag_coefficient");
@@ -91,7 +91,7 @@ TEST_F(ShotFit, RecoversDragLaunchAndTimeFromAStartOffByTwo) {
   // Tight, not merely honest: 1 mm noise on 25 knots over 0.4 s fixes the drag to about 2 %.
   EXPECT_LT(Find(r, "drag.drag_coefficient").sigma, 0.05);
   EXPECT_LT(r.cost_final, 1e-2 * r.cost_initial);
-  EXPECT_EQ(r.score.verdict, "consistent") << "mean d2 " << r.score.mean_d2;
+  EXPECT_EQ(r.score.verdict, Verdict::kConsistent) << "mean d2 " << r.score.mean_d2;
   EXPECT_NEAR(r.cost_final / r.residuals, 1.0, 0.1);  // whitened: about 1 per residual
   EXPECT_GT(r.simulations, 5);
   ASSERT_EQ(r.correlation.rows(), 5);
@@ -149,7 +149,7 @@ TEST_F(ShotFit, SaysWhatTheFlightCannotDetermine) {
   }
   const FittedParameter& damping = Find(r, "materials.nylon.twist_damping");
   EXPECT_FALSE(damping.identified);
-  EXPECT_EQ(damping.determined_by, "neither");
+  EXPECT_EQ(damping.determined_by, DeterminedBy::kNeither);
   EXPECT_GT(damping.sigma, 5 * damping.value);
   EXPECT_TRUE(Find(r, "drag.drag_coefficient").identified);
   // The stages: the drag with the material held, the damping scanned, then both.
@@ -163,7 +163,7 @@ TEST_F(ShotFit, SaysWhatTheFlightCannotDetermine) {
   r = FitShot(scenario_, measured, ParseFreeParameters(free, scenario_, {}, 0.0), with_prior);
   const FittedParameter& informed = Find(r, "materials.nylon.twist_damping");
   EXPECT_FALSE(informed.identified);
-  EXPECT_EQ(informed.determined_by, "prior");
+  EXPECT_EQ(informed.determined_by, DeterminedBy::kPrior);
   EXPECT_TRUE(informed.has_prior);
   EXPECT_NEAR(informed.value, 6e-11, 1e-12);
   EXPECT_NEAR(informed.sigma, 1e-11, 1e-12);
@@ -368,7 +368,7 @@ TEST_F(ShotFit, TwoShotsShareTheDragAndKeepTheirLaunches) {
   EXPECT_LT(std::abs(v1.value - 0.5), 3 * v1.sigma);
   EXPECT_LT(std::abs(v2.value - 0.8), 3 * v2.sigma);
   ASSERT_EQ(two.scores.size(), 2u);
-  EXPECT_EQ(two.scores[1].verdict, "consistent");
+  EXPECT_EQ(two.scores[1].verdict, Verdict::kConsistent);
   // Each shot's --set lines: the shared drag, its own velocity, by the scenario's own paths.
   ASSERT_EQ(two.fitted_sets.size(), 2u);
   EXPECT_EQ(two.fitted_sets[1][1].path, "nets.0.velocity.0");

@@ -28,7 +28,7 @@ TEST(ScoreFile, HoldsTheResultWithUnitsAndNaNWhereMasked) {
   h5::Id file = h5::OpenFileReadOnly(path);
   const hid_t f = file.get();
   EXPECT_EQ(h5::ReadStringAttribute(f, "format"), kScoreFileFormat);
-  EXPECT_EQ(h5::ReadStringAttribute(f, "verdict"), r.summary.verdict);
+  EXPECT_EQ(h5::ReadStringAttribute(f, "verdict"), VerdictName(r.summary.verdict));
   EXPECT_EQ(h5::DatasetDims(f, "/residual"), (std::vector<hsize_t>{200, 36, 3}));
   EXPECT_EQ(Units(f, "/residual"), "m");
   EXPECT_EQ(Units(f, "/time"), "s");

@@ -75,7 +75,7 @@ TEST(Score, SimulationAgainstItselfIsZero) {
   EXPECT_LT(s.max_m, 1e-12);
   EXPECT_LT(s.mean_d2, 1e-18);
   EXPECT_NEAR(s.time_offset_s, 0.0, 1e-9);
-  EXPECT_EQ(s.verdict, "consistent");
+  EXPECT_EQ(s.verdict, Verdict::kConsistent);
   EXPECT_NEAR(s.skill, 1.0, 1e-9);
   EXPECT_EQ(s.per_class[0].points, 4 * 120);
   EXPECT_EQ(s.per_class[1].points, 36 * 120);
@@ -96,7 +96,7 @@ TEST(Score, RecoversAKnownTimeShiftToAFractionOfAMillisecond) {
   EXPECT_GT(s.time_offset_sigma_s, 0.0);
   EXPECT_LT(s.rms_m, 1e-5);
   EXPECT_EQ(s.fitted_parameters, 1);
-  EXPECT_EQ(s.verdict, "consistent");
+  EXPECT_EQ(s.verdict, Verdict::kConsistent);
 }
 
 TEST(Score, RecoversAKnownRigidMotionAndTimeShift) {
@@ -119,7 +119,7 @@ TEST(Score, RecoversAKnownRigidMotionAndTimeShift) {
   EXPECT_LT(s.rms_m, 1e-5);
   EXPECT_EQ(s.fitted_parameters, 7);
   EXPECT_GT(s.rigid_covariance(0, 0), 0.0);
-  EXPECT_EQ(s.verdict, "consistent");
+  EXPECT_EQ(s.verdict, Verdict::kConsistent);
 }
 
 TEST(Score, GaussianNoiseOfKnownCovarianceGivesMeanD2ThreeAndConsistent) {
@@ -132,7 +132,7 @@ TEST(Score, GaussianNoiseOfKnownCovarianceGivesMeanD2ThreeAndConsistent) {
   ScoreOptions options;
   const ScoreSummary s = Score(meas, sim, options).summary;
   EXPECT_NEAR(s.mean_d2, 3.0, 0.05);  // sd of the mean: sqrt(6 / 18150) = 0.018
-  EXPECT_EQ(s.verdict, "consistent");
+  EXPECT_EQ(s.verdict, Verdict::kConsistent);
   EXPECT_NEAR(s.time_offset_s, 0.01, 1e-4);
   EXPECT_LT(s.tau_int, 1.5);
   EXPECT_LT(s.design_effect, 1.5);
@@ -152,7 +152,7 @@ TEST(Score, OverstatedCovariancesAreSaid) {
   EXPECT_FALSE(right.covariance_too_large);
   for (auto& c : meas.covariance) c *= 4.0;
   const ScoreSummary s = Score(meas, sim, options).summary;
-  EXPECT_EQ(s.verdict, "consistent");
+  EXPECT_EQ(s.verdict, Verdict::kConsistent);
   EXPECT_NEAR(s.mean_d2, 0.75, 0.03);
   EXPECT_TRUE(s.covariance_too_large);
   bool said = false;
@@ -172,12 +172,12 @@ TEST(Score, TheContactPhaseStartsAtTheSimulationsFirstContact) {
   options.time_offset_s = 0.01;
   auto contact = [](const ScoreSummary& s) { return s.per_phase.back(); };
   const ScoreSummary none = Score(meas, sim, options).summary;
-  EXPECT_EQ(none.contact_from, "none");
+  EXPECT_EQ(none.contact_from, ContactFrom::kNone);
   EXPECT_EQ(contact(none).points, 0);
 
   sim.contact_start_s = 0.5;
   const ScoreSummary from_sim = Score(meas, sim, options).summary;
-  EXPECT_EQ(from_sim.contact_from, "simulation");
+  EXPECT_EQ(from_sim.contact_from, ContactFrom::kSimulation);
   EXPECT_EQ(from_sim.contact_time_s, 0.5);
   EXPECT_EQ(contact(from_sim).name, "contact");
   EXPECT_NEAR(contact(from_sim).start_s, 0.49, 1e-9);
@@ -186,7 +186,7 @@ TEST(Score, TheContactPhaseStartsAtTheSimulationsFirstContact) {
 
   options.contact_time_s = 0.3;
   const ScoreSummary given = Score(meas, sim, options).summary;
-  EXPECT_EQ(given.contact_from, "given");
+  EXPECT_EQ(given.contact_from, ContactFrom::kGiven);
   EXPECT_NEAR(contact(given).start_s, 0.29, 1e-9);
 }
 
@@ -201,7 +201,7 @@ TEST(Score, RejectsARightSimulationAtTheStatedRate) {
   int rejected = 0;
   for (int trial = 0; trial < 200; ++trial) {
     const KnotTracks meas = Measure(5, 5, 60, 0.02, Eigen::Isometry3d::Identity(), cov, &rng);
-    rejected += Score(meas, sim, options).summary.verdict == "inconsistent";
+    rejected += Score(meas, sim, options).summary.verdict == Verdict::kInconsistent;
   }
   EXPECT_GE(rejected, 8);
   EXPECT_LE(rejected, 34);
@@ -265,7 +265,7 @@ TEST(Score, PointsOfHugeSigmaLeaveTheErrorsInMillimetresButNotTheTest) {
   for (const auto& frame : r.rms_per_class) EXPECT_FALSE(frame[0] > 1e-3);
   EXPECT_LT(s.weighted_rms_m, 2.5e-4);
   // d2 keeps them, weighed by their covariance: consistent.
-  EXPECT_EQ(s.verdict, "consistent");
+  EXPECT_EQ(s.verdict, Verdict::kConsistent);
   EXPECT_NEAR(s.mean_d2, 3.0, 0.2);
   EXPECT_NE(s.headline.find("over 9677 of the 9679 compared knot-frames; 2 left out of both "
                             "because their own sigma (up to 2500 mm) exceeds"),
@@ -328,8 +328,8 @@ nets:
   meas.covariance.assign(meas.position.size(), Eigen::Matrix3d::Identity() * 9e-8);
   const ScoreSummary good = Score(meas, right, ScoreOptions{}).summary;
   const ScoreSummary bad = Score(meas, wrong, ScoreOptions{}).summary;
-  EXPECT_EQ(good.verdict, "consistent") << good.BriefReport();
-  EXPECT_EQ(bad.verdict, "inconsistent") << bad.BriefReport();
+  EXPECT_EQ(good.verdict, Verdict::kConsistent) << good.BriefReport();
+  EXPECT_EQ(bad.verdict, Verdict::kInconsistent) << bad.BriefReport();
   EXPECT_LT(bad.margin, 0.0);
   EXPECT_GT(good.margin, 0.0);
   EXPECT_GT(good.skill, bad.skill);

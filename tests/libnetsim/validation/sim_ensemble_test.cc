@@ -75,7 +75,7 @@ const ScoreRow& Phase(const ScoreSummary& s, const std::string& name) {
 TEST(SimEnsembleTest, TheSpreadMakesTheChaoticPhaseConsistent) {
   const Twin twin = MakeTwin(40);
   const ScoreResult bare = Score(twin.measured, twin.model, Options());
-  EXPECT_EQ(bare.summary.verdict, "inconsistent");
+  EXPECT_EQ(bare.summary.verdict, Verdict::kInconsistent);
   EXPECT_GT(Phase(bare.summary, "contact").mean_d2, 50.0);
   EXPECT_EQ(Phase(bare.summary, "contact").sigma_sim_m, 0.0);
 
@@ -84,7 +84,7 @@ TEST(SimEnsembleTest, TheSpreadMakesTheChaoticPhaseConsistent) {
   EXPECT_GT(max_sigma, 0.01);
   const ScoreResult scored = Score(twin.measured, with, Options());
   const ScoreRow& contact = Phase(scored.summary, "contact");
-  EXPECT_EQ(scored.summary.verdict, "consistent") << scored.summary.mean_d2;
+  EXPECT_EQ(scored.summary.verdict, Verdict::kConsistent) << scored.summary.mean_d2;
   EXPECT_LT(contact.mean_d2, 4.0);
   // Both contributions stated: the spread in contact is centimetres, before it nothing.
   EXPECT_GT(contact.sigma_sim_m, 0.01);
@@ -101,7 +101,7 @@ TEST(SimEnsembleTest, AWrongModelStaysRejectedBeforeTheChaos) {
         twin.model.position[static_cast<size_t>(f) * twin.model.knots() + k].y() += 0.005;
   const KnotTracks with = AddEnsembleCovariance(twin.model, "model", twin.members);
   const ScoreResult scored = Score(twin.measured, with, Options());
-  EXPECT_EQ(scored.summary.verdict, "inconsistent");
+  EXPECT_EQ(scored.summary.verdict, Verdict::kInconsistent);
   EXPECT_GT(Phase(scored.summary, "ejection").mean_d2, 20.0);
 }
 

@@ -34,7 +34,7 @@ ScoreSummary Example() {
   s.tau_int = 8.2461;
   s.design_effect = 24.861;
   s.p_value = 0;
-  s.verdict = "inconsistent";
+  s.verdict = Verdict::kInconsistent;
   s.critical_mean_d2 = 4.4381;
   s.margin = -2.876e8;
   s.skill = 0.000317;
