@@ -38,7 +38,11 @@ void PrintUsage(std::FILE* out) {
                "knots, reconstructs their 3D tracks and scores simulations against them.\n\n"
                "subcommands:\n");
   for (const Command& c : Commands()) std::fprintf(out, "  %-12s %s\n", c.name, c.summary);
-  std::fprintf(out, "\n`netlab <subcommand> --help` for the options of each.\n");
+  std::fprintf(
+      out,
+      "\n`netlab <subcommand> --help` for the options of each.\n"
+      "exit status, every subcommand: 0 done, 1 bad input or a failed run (the error names\n"
+      "it), 2 usage error, 3 internal error (netlab's fault), 130 cancelled (Ctrl+C).\n");
 }
 
 }  // namespace
