@@ -231,6 +231,8 @@ void MainWindow::BuildWorkspace() {
   // One line per item: the Reason cut at its end ("…"), whole in the cell's tooltip and in the
   // status bar once the item is shown.
   review_table_->setWordWrap(false);
+  // One line per item, as high as the text needs.
+  review_table_->verticalHeader()->setDefaultSectionSize(review_table_->fontMetrics().height() + 8);
   review_table_->setTextElideMode(Qt::ElideRight);
   dock->setWidget(review_table_);
   dock->setMinimumWidth(480);
@@ -246,9 +248,6 @@ void MainWindow::BuildWorkspace() {
   colours_dock->setWidget(colours_label_);
   addDockWidget(Qt::RightDockWidgetArea, colours_dock);
   addDockWidget(Qt::RightDockWidgetArea, grid_dock);
-  // The panels 640 px wide: the queue's Reason column shows what a missing knot's reason says up
-  // to its expected place; the four views, stacked two by two, lose nothing of their height.
-  resizeDocks({dock}, {640}, Qt::Horizontal);
   colours_timer_ = new QTimer(this);
   colours_timer_->setSingleShot(true);
   colours_timer_->setInterval(150);
