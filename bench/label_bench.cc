@@ -489,6 +489,8 @@ void TallyErrors(const Shot& shot, const recon::LabelStore& store, std::vector<T
                            (r2.knot.px - truth_l.px).norm(), r2.knot.px.x() - truth_l.px.x(),
                            r2.knot.px.y() - truth_l.px.y());
             std::fprintf(stderr, "\n");
+          }
+          if (y.wrong <= named) {
             // NETLAB_WRONG_HISTORY: the knot's labels in this camera over the frames before,
             // each as source, state (a: accepted, r: review) and px off the truth.
             if (std::getenv("NETLAB_WRONG_HISTORY")) {
@@ -521,6 +523,8 @@ void TallyErrors(const Shot& shot, const recon::LabelStore& store, std::vector<T
               }
               std::fprintf(stderr, "\n");
             }
+          }
+          if (e > 0 && y.wrong <= named) {
             if (const char* dir = std::getenv("NETLAB_WRONG_CROPS"))  // a look at the place
               SaveCrop(image(c, t), truth_l.px, l.px,
                        std::string(dir) + "/wrong_" + shot.cameras[c] + "_" +

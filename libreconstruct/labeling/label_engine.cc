@@ -1187,6 +1187,8 @@ EngineCounts LabelEngine::CrossCheck(int t) {
   f.point.resize(f.knots);
   f.clean.resize(f.knots);
   EngineCounts total;
+  // 0. Labels at the picture's edge, whose knot may be outside it: no reference for the rest.
+  total.review += CheckPictureEdge(t);
   // 1. Epipolar consistency of the accepted labels.
   if (f.geometry) total.review += CheckEpipolar(&f);
   // 2. Fill Grid, pass after pass while a pass accepts labels (their points help the next).
@@ -1201,6 +1203,7 @@ EngineCounts LabelEngine::CrossCheck(int t) {
   // The labels Fill Grid accepted, checked like the rest (a candidate is accepted where the
   // cameras agree within the outlier threshold; each one's place is known better only now).
   if (f.geometry && filled > 0) total.review += CheckEpipolar(&f);
+  if (filled > 0) total.review += CheckPictureEdge(t);
   // 3. Where the target hides the knot.
   total.review += CheckHidden(t);
   // 4. The yarn colours.
@@ -1234,6 +1237,32 @@ int LabelEngine::CheckHidden(int t) {
     }
   if (flags.empty()) return 0;
   return Commit("the target's check (frame row " + std::to_string(t) + ")", flags).review;
+}
+
+int LabelEngine::CheckPictureEdge(int t) {
+  if (o_.picture_edge_px <= 0.0) return 0;
+  const LabelSet& set = store_->labels();
+  std::vector<LabelEdit> flags;
+  for (int c = 0; c < static_cast<int>(set.cameras.size()); ++c) {
+    cv::Size size;
+    for (int k = 0; k < set.knots(); ++k) {
+      const Label& l = set.at(c, t, k);
+      if (!l.accepted() || l.source == LabelSource::kManual || l.source == LabelSource::kImported)
+        continue;
+      if (size.empty()) size = Image(c, t).size();
+      if (size.empty()) break;
+      const double inside = std::min({l.px.x() + 0.5, size.width - 0.5 - l.px.x(), l.px.y() + 0.5,
+                                      size.height - 0.5 - l.px.y()});
+      if (inside >= o_.picture_edge_px) continue;
+      char why[128];
+      std::snprintf(why, sizeof why,
+                    "at the picture's edge (%.1f px inside it): the knot may lie outside it",
+                    std::max(inside, 0.0));
+      ToReview(c, t, k, why, &flags);
+    }
+  }
+  if (flags.empty()) return 0;
+  return Commit("the picture's edge (frame row " + std::to_string(t) + ")", flags).review;
 }
 
 LabelingSummary LabelEngine::LabelFrames(int first, int last, const FrameDone& after_frame) {

@@ -1269,6 +1269,35 @@ TEST(LabelEngine, ToolsLabelsThatAgreeWithEachOtherAgainstThePersonGoToReview) {
       << engine.reasons().at({0, 0, 7});
 }
 
+// A tool's label within picture_edge_px of the picture's outer edge goes to review, whichever
+// edge; one farther in stays, and so does the person's own click at the edge.
+TEST(LabelEngine, AToolsLabelAtThePicturesEdgeGoesToReview) {
+  const Shot shot = Render(1);
+  const cv::Size size = shot.images[0][0].size();
+  LabelSet labels = Empty(shot);
+  const auto put = [&](int k, double x, double y, LabelSource source) {
+    labels.at(0, 0, k) = Accepted(Eigen::Vector2d(x, y));
+    labels.at(0, 0, k).source = source;
+  };
+  const double w = size.width - 0.5, h = size.height - 0.5;  // the outer edge's far sides
+  put(0, w - 0.9, 40.0, LabelSource::kTracked);              // 0.9 px inside the right edge
+  put(1, 40.0, -0.5 + 1.2, LabelSource::kFindNode);          // 1.2 px inside the top
+  put(2, 40.0, h - 0.1, LabelSource::kProjected);            // 0.1 px inside the bottom
+  put(3, w - 2.5, 60.0, LabelSource::kTracked);              // 2.5 px in: stays
+  put(4, -0.5 + 0.5, 60.0, LabelSource::kManual);            // the person's: stays
+  LabelStore store(labels);
+  LabelEngine engine(&store, nullptr, Images(shot));
+  EXPECT_EQ(engine.CheckPictureEdge(0), 3);
+  for (int k = 0; k < 5; ++k)
+    EXPECT_EQ(store.at(0, 0, k).state, k < 3 ? LabelState::kNeedsReview : LabelState::kAccepted)
+        << "knot " << k;
+  ASSERT_TRUE(engine.reasons().count({0, 0, 0}));
+  EXPECT_NE(engine.reasons().at({0, 0, 0}).find("at the picture's edge (0.9 px inside it)"),
+            std::string::npos)
+      << engine.reasons().at({0, 0, 0});
+  EXPECT_EQ(engine.CheckPictureEdge(0), 0) << "a label kept for review is not flagged again";
+}
+
 // A box between camera a and one knot: a tool's label of that knot in a goes to review (the
 // other two cameras place the knot behind the box); the person's own label there would not, and
 // the knots beside it, which a sees past the box, stay accepted.
