@@ -4,9 +4,9 @@
 //   bench_simulate --threads N [--window SECONDS] [CASE ...]   one thread against N
 //   bench_simulate --integrator implicit [--no-physical] [--substep-contact] [CASE ...]
 //                                                                    another integrator
-//   bench_simulate --sensitivity [--floor] [--keep-coupling] [--parameter NAME ...]
-//                  [--integrator NAME] [--stretching NAME] [--dt-factor F] [--window SECONDS]
-//                  [CASE ...]
+//   bench_simulate --sensitivity [--floor] [--keep-coupling] [--physical-inertia]
+//                  [--parameter NAME ...] [--integrator NAME] [--stretching NAME] [--dt-factor F]
+//                  [--window SECONDS] [CASE ...]
 //   bench_simulate --add-noise SIGMA_M SEED IN.h5 OUT.h5
 //                                   the knot tracks of IN (netlab simulate) plus Gaussian noise
 //                                   of SIGMA_M per coordinate (seeded), /knots/covariance
@@ -23,9 +23,10 @@
 // reference's response and that of the explicit step at half its step. --keep-coupling holds the
 // coupling penalty (kappa = 100 max(EI, GJ) / l^2, a numerical device of the explicit model) at
 // its nominal value when EI or GJ changes. --stretching sets the implicit integrator's stretching
-// step (backward_euler, sdirk2) of the tested runs. Wall time and "x real time" are those of the
-// changed run under the tested integrator, in process CPU time (one core, whatever the machine's
-// load).
+// step (backward_euler, sdirk2) of the tested runs. --physical-inertia runs every one of them
+// with the physical rotational inertia (the explicit step then set by the frames). Wall time and "x
+// real time" are those of the changed run under the tested integrator, in process CPU time (one
+// core, whatever the machine's load).
 //
 // Per case: the scenario's run (its integrator, automatic dt, rotational inertia scaled) with its
 // segments, dt, steps, wall time, segment-steps/s and real-time factor; its error against a
@@ -194,7 +195,7 @@ double Rms(const std::vector<std::vector<Vector3d>>& r) {
 // the two responses are.
 int Sensitivity(const std::string& dir, const std::vector<std::string>& cases, double window,
                 const char* integrator, const std::vector<std::string>& only, double dt_factor,
-                bool with_floor, bool keep_coupling, const char* stretching) {
+                bool with_floor, bool keep_coupling, const char* stretching, bool physical) {
   std::printf(
       "| case | parameter | factor | reference response RMS / max (mm) | %s response RMS / max "
       "(mm) | relative error | reference floor | %s CPU (s) | x real time | reference CPU (s) |\n"
@@ -209,9 +210,9 @@ int Sensitivity(const std::string& dir, const std::vector<std::string>& cases, d
       return 2;
     }
     const double w = std::min(window, s.duration);
-    const Trajectory ref = Run(s, w, 1, 1.0, false, 1, "explicit");
-    const Trajectory def = Run(s, w, 1, dt_factor, false, 1, integrator);
-    const Trajectory half = with_floor ? Run(s, w, 1, 0.5, false, 1, "explicit") : Trajectory{};
+    const Trajectory ref = Run(s, w, 1, 1.0, physical, 1, "explicit");
+    const Trajectory def = Run(s, w, 1, dt_factor, physical, 1, integrator);
+    const Trajectory half = with_floor ? Run(s, w, 1, 0.5, physical, 1, "explicit") : Trajectory{};
     std::printf(
         "| %s | nominal | 1 | – | %.3f / %.3f from the reference | – | – | %.2f | %.2f | %.2f "
         "|%s\n",
@@ -228,8 +229,8 @@ int Sensitivity(const std::string& dir, const std::vector<std::string>& cases, d
         changed.model.coupling_stiffness_ratio *= std::max(a.bend_stiffness, a.twist_stiffness) /
                                                   std::max(b.bend_stiffness, b.twist_stiffness);
       }
-      const Trajectory ref_p = Run(changed, w, 1, 1.0, false, 1, "explicit");
-      const Trajectory def_p = Run(changed, w, 1, dt_factor, false, 1, integrator);
+      const Trajectory ref_p = Run(changed, w, 1, 1.0, physical, 1, "explicit");
+      const Trajectory def_p = Run(changed, w, 1, dt_factor, physical, 1, integrator);
       const auto r_ref = Response(ref, ref_p), r_def = Response(def, def_p);
       std::vector<std::vector<Vector3d>> diff = r_def;
       double max_ref = 0.0, max_def = 0.0;
@@ -242,7 +243,7 @@ int Sensitivity(const std::string& dir, const std::vector<std::string>& cases, d
       const double rms_ref = Rms(r_ref);
       double floor = -1.0;
       if (with_floor) {
-        const Trajectory half_p = Run(changed, w, 1, 0.5, false, 1, "explicit");
+        const Trajectory half_p = Run(changed, w, 1, 0.5, physical, 1, "explicit");
         std::vector<std::vector<Vector3d>> d = Response(half, half_p);
         for (size_t f = 0; f < d.size() && f < r_ref.size(); ++f)
           for (size_t k = 0; k < d[f].size() && k < r_ref[f].size(); ++k) d[f][k] -= r_ref[f][k];
@@ -308,6 +309,7 @@ int main(int argc, char** argv) {
   bool sensitivity = false;
   bool floor = false;
   bool keep_coupling = false;
+  bool physical_inertia = false;
   double dt_factor = 1.0;
   std::vector<std::string> only;
   std::vector<std::string> cases;
@@ -327,6 +329,8 @@ int main(int argc, char** argv) {
       sensitivity = true;
     } else if (!std::strcmp(argv[i], "--keep-coupling")) {
       keep_coupling = true;
+    } else if (!std::strcmp(argv[i], "--physical-inertia")) {
+      physical_inertia = true;
     } else if (!std::strcmp(argv[i], "--stretching") && i + 1 < argc) {
       stretching = argv[++i];
     } else if (!std::strcmp(argv[i], "--floor")) {
@@ -348,7 +352,7 @@ int main(int argc, char** argv) {
   if (sensitivity) {
     if (cases.empty()) cases = {"net_a_0.5", "net_b_0.5"};
     return Sensitivity(dir, cases, window, integrator, only, dt_factor, floor, keep_coupling,
-                       stretching);
+                       stretching, physical_inertia);
   }
   if (cases.empty())
     cases = {"cantilever", "pendulum",  "net_capture", "net_a_0.5",
