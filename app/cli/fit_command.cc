@@ -20,6 +20,7 @@
 #include "common/files.h"
 #include "common/output_paths.h"
 #include "libnetsim/characterization/material_file.h"
+#include "libnetsim/identification/fit_file.h"
 #include "libnetsim/identification/shot_fit.h"
 
 namespace netlab::app {
@@ -80,90 +81,8 @@ constexpr char kHelp[] =
     "exit status: 0 fitted (see each parameter's \"identified\"), 1 bad input or a failed\n"
     "simulation, 2 usage error.\n";
 
-std::string Number(double value) {
-  if (std::isnan(value)) return ".nan";
-  if (std::isinf(value)) return value > 0 ? ".inf" : "-.inf";
-  char text[32];
-  std::snprintf(text, sizeof text, "%.6g", value);
-  return text;
-}
-
-// A YAML double-quoted scalar: quotes and backslashes escaped.
-std::string Quoted(const std::string& text) {
-  std::string out = "\"";
-  for (char c : text) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out + "\"";
-}
-
-// fit.yaml: readable by people and by any YAML reader.
-std::string FitYaml(const std::vector<std::string>& scenarios,
-                    const std::vector<std::string>& measured, const netsim::FitResult& r) {
-  std::ostringstream o;
-  o << "# netlab fit: " << scenarios[0] << " against " << measured[0];
-  if (scenarios.size() > 1) o << " and " << scenarios.size() - 1 << " more shots";
-  o << "\n# " << r.parameters.size() << " parameters, " << r.simulations << " simulations, "
-    << Number(r.wall_s) << " s. Rerun the fitted shot" << (scenarios.size() > 1 ? "s" : "")
-    << ":\n";
-  for (size_t k = 0; k < scenarios.size(); ++k) {
-    o << "#   netlab simulate " << scenarios[k];
-    for (const auto& s : r.fitted_sets[k]) o << " --set " << s.Text();
-    o << " --out fitted" << (scenarios.size() > 1 ? std::to_string(k + 1) : "") << ".h5\n";
-  }
-  o << "scenario: " << Quoted(scenarios[0]) << "\nmeasured: " << Quoted(measured[0]) << "\n";
-  o << "parameters:\n";
-  for (const auto& p : r.parameters) {
-    o << "  " << p.parameter.name << ": {value: " << Number(p.value)
-      << ", sigma: " << Number(p.sigma) << ", units: " << Quoted(p.parameter.units)
-      << ", start: " << Number(p.parameter.start) << ", data_sigma: " << Number(p.data_sigma)
-      << ", identified: " << (p.identified ? "true" : "false")
-      << ", rough: " << (p.rough ? "true" : "false")
-      << ", ambiguous: " << (p.ambiguous ? "true" : "false")
-      << ", alternative: " << Number(p.alternative)
-      << ", alternative_rise: " << Number(p.alternative_rise) << ", check: [" << Number(p.check[0])
-      << ", " << Number(p.check[1]) << "]"
-      << ", determined_by: " << Quoted(netsim::DeterminedByName(p.determined_by));
-    if (p.has_prior)
-      o << ", prior: {value: " << Number(p.prior_value) << ", sigma: " << Number(p.prior_sigma)
-        << "}";
-    o << "}\n";
-  }
-  o << "# correlation of the fitted coordinates (ln(value) for materials and drag), rows and\n"
-    << "# columns in the order of `parameters`\ncorrelation:\n";
-  for (int i = 0; i < r.correlation.rows(); ++i) {
-    o << "  - [";
-    for (int j = 0; j < r.correlation.cols(); ++j)
-      o << (j ? ", " : "") << Number(r.correlation(i, j));
-    o << "]\n";
-  }
-  o << "cost_initial: " << Number(r.cost_initial) << "\ncost_final: " << Number(r.cost_final)
-    << "\nresiduals: " << r.residuals << "\ninflation: " << Number(r.inflation)
-    << "\nsimulations: " << r.simulations << "\niterations: " << r.iterations
-    << "\nwall_s: " << Number(r.wall_s) << "\nduration_s: " << Number(r.duration_s)
-    << "\ndt_s: " << Number(r.dt_s) << "  # the automatic step held for every run; 0: the "
-    << "scenario's own\n";
-  o << "score: {rms_mm: " << Number(r.score.rms_m * 1e3) << ", mean_d2: " << Number(r.score.mean_d2)
-    << ", p_value: " << Number(r.score.p_value)
-    << ", verdict: " << netsim::VerdictName(r.score.verdict) << "}\n";
-  o << "set:\n";
-  for (const auto& s : r.fitted_set) o << "  - " << Quoted(s.Text()) << "\n";
-  o << "notes:" << (r.notes.empty() ? " []" : "") << "\n";
-  for (const auto& note : r.notes) o << "  - " << Quoted(note) << "\n";
-  if (scenarios.size() > 1) {
-    o << "# every shot (the keys above are the first one's)\nshots:\n";
-    for (size_t k = 0; k < scenarios.size(); ++k) {
-      const netsim::ScoreSummary& sc = r.scores[k];
-      o << "  - scenario: " << Quoted(scenarios[k]) << "\n    measured: " << Quoted(measured[k])
-        << "\n    score: {rms_mm: " << Number(sc.rms_m * 1e3) << ", mean_d2: " << Number(sc.mean_d2)
-        << ", p_value: " << Number(sc.p_value) << ", verdict: " << netsim::VerdictName(sc.verdict)
-        << "}\n    inflation: " << Number(r.inflations[k]) << "\n    set:\n";
-      for (const auto& s : r.fitted_sets[k]) o << "      - " << Quoted(s.Text()) << "\n";
-    }
-  }
-  return o.str();
-}
+// A number as fit.yaml writes it.
+std::string Number(double value) { return netsim::FitNumber(value); }
 
 // The table a person reads: each parameter from its start to its estimate, and what set it.
 std::string Summary(const netsim::FitResult& r) {
@@ -434,7 +353,7 @@ int RunFit(const std::vector<std::string>& args) {
     }
     const netsim::FitResult result = netsim::FitShots(shots, parameters, options);
     bar.Break();
-    WriteTextFile(out, FitYaml(scenarios, measured_paths, result));
+    netsim::WriteFit(out, scenarios, measured_paths, result);
     if (!quiet || !cl.Flag("json")) std::cerr << Summary(result) << "  wrote " << out << "\n";
     if (cl.Flag("json")) PrintJson(result, out);
     return 0;
