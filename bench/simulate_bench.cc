@@ -5,7 +5,8 @@
 //   bench_simulate --integrator implicit [--no-physical] [--substep-contact] [CASE ...]
 //                                                                    another integrator
 //   bench_simulate --sensitivity [--floor] [--keep-coupling] [--physical-inertia]
-//                  [--parameter NAME ...] [--integrator NAME] [--stretching NAME] [--dt-factor F]
+//                  [--parameter NAME ...] [--factor F] [--integrator NAME] [--stretching NAME]
+//                  [--dt-factor F]
 //                  [--window SECONDS] [CASE ...]
 //   bench_simulate --add-noise SIGMA_M SEED IN.h5 OUT.h5
 //                                   the knot tracks of IN (netlab simulate) plus Gaussian noise
@@ -24,7 +25,9 @@
 // coupling penalty (kappa = 100 max(EI, GJ) / l^2, a numerical device of the explicit model) at
 // its nominal value when EI or GJ changes. --stretching sets the implicit integrator's stretching
 // step (backward_euler, sdirk2) of the tested runs. --physical-inertia runs every one of them
-// with the physical rotational inertia (the explicit step then set by the frames). Wall time and "x
+// with the physical rotational inertia (the explicit step then set by the frames). --factor F
+// changes every parameter by F instead of its own factor (F near 1: whether the flight
+// amplifies a small change). Wall time and "x
 // real time" are those of the changed run under the tested integrator, in process CPU time (one
 // core, whatever the machine's load).
 //
@@ -195,7 +198,8 @@ double Rms(const std::vector<std::vector<Vector3d>>& r) {
 // the two responses are.
 int Sensitivity(const std::string& dir, const std::vector<std::string>& cases, double window,
                 const char* integrator, const std::vector<std::string>& only, double dt_factor,
-                bool with_floor, bool keep_coupling, const char* stretching, bool physical) {
+                bool with_floor, bool keep_coupling, const char* stretching, bool physical,
+                double factor) {
   std::printf(
       "| case | parameter | factor | reference response RMS / max (mm) | %s response RMS / max "
       "(mm) | relative error | reference floor | %s CPU (s) | x real time | reference CPU (s) |\n"
@@ -219,7 +223,8 @@ int Sensitivity(const std::string& dir, const std::vector<std::string>& cases, d
         case_name.c_str(), Compare(def, ref).rms_mm, Compare(def, ref).max_mm, def.cpu_s,
         def.sim_time / def.cpu_s, ref.cpu_s, ref.stable && def.stable ? "" : " UNSTABLE");
     std::fflush(stdout);
-    for (const Parameter& p : kParameters) {
+    for (Parameter p : kParameters) {
+      if (factor > 0.0) p.factor = factor;
       if (!only.empty() && std::find(only.begin(), only.end(), p.name) == only.end()) continue;
       Scenario changed = Changed(s, p);
       if (keep_coupling && !s.materials.empty()) {
@@ -310,6 +315,7 @@ int main(int argc, char** argv) {
   bool floor = false;
   bool keep_coupling = false;
   bool physical_inertia = false;
+  double factor = 0.0;
   double dt_factor = 1.0;
   std::vector<std::string> only;
   std::vector<std::string> cases;
@@ -329,6 +335,8 @@ int main(int argc, char** argv) {
       sensitivity = true;
     } else if (!std::strcmp(argv[i], "--keep-coupling")) {
       keep_coupling = true;
+    } else if (!std::strcmp(argv[i], "--factor") && i + 1 < argc) {
+      factor = std::atof(argv[++i]);
     } else if (!std::strcmp(argv[i], "--physical-inertia")) {
       physical_inertia = true;
     } else if (!std::strcmp(argv[i], "--stretching") && i + 1 < argc) {
@@ -352,7 +360,7 @@ int main(int argc, char** argv) {
   if (sensitivity) {
     if (cases.empty()) cases = {"net_a_0.5", "net_b_0.5"};
     return Sensitivity(dir, cases, window, integrator, only, dt_factor, floor, keep_coupling,
-                       stretching, physical_inertia);
+                       stretching, physical_inertia, factor);
   }
   if (cases.empty())
     cases = {"cantilever", "pendulum",  "net_capture", "net_a_0.5",
