@@ -1269,6 +1269,41 @@ TEST(LabelEngine, ToolsLabelsThatAgreeWithEachOtherAgainstThePersonGoToReview) {
       << engine.reasons().at({0, 0, 7});
 }
 
+// A knot hidden in every camera for three frames (a black disk over it and its links' first
+// centimetres, as a fold or the target would hide it) stays without an accepted label there: no
+// label tracked onto what is left, none placed from its path or its neighbours; a label the
+// engine keeps says why. Its neighbours stay labeled, each its own.
+TEST(LabelEngine, AKnotHiddenInEveryCameraIsNotLabeledWhileHidden) {
+  constexpr int kKnot = 12, kFrames = 6;
+  Shot shot = Render(kFrames);
+  for (int t = 2; t <= 4; ++t)
+    for (int c = 0; c < 3; ++c) {
+      const Eigen::Vector2d q = shot.Truth(c, t, kKnot);
+      cv::circle(shot.images[c][t], cv::Point(cvRound(q.x()), cvRound(q.y())), 14,
+                 cv::Scalar(0, 0, 0), cv::FILLED);
+    }
+  LabelSet labels = Empty(shot);
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < kKnots; ++k) labels.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
+  LabelStore store(labels);
+  LabelEngine engine(&store, &shot.rig, Images(shot));
+  engine.TrackFrames(0, kFrames - 1);
+  for (int t = 2; t <= 4; ++t)
+    for (int c = 0; c < 3; ++c) {
+      const Label& l = store.at(c, t, kKnot);
+      EXPECT_FALSE(l.accepted()) << "frame " << t << " camera " << c << ": "
+                                 << (l.px - shot.Truth(c, t, kKnot)).norm() << " px off";
+      if (l.present()) EXPECT_TRUE(engine.reasons().count({c, t, kKnot}));
+    }
+  for (int t = 1; t < kFrames; ++t) {
+    int others = 0;
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < kKnots; ++k) others += k != kKnot && store.at(c, t, k).accepted();
+    EXPECT_GE(others, 3 * (kKnots - 1) - 3) << "frame " << t;
+    CheckAccepted(shot, store, t);
+  }
+}
+
 // A tool's label within picture_edge_px of the picture's outer edge goes to review, whichever
 // edge; one farther in stays, and so does the person's own click at the edge.
 TEST(LabelEngine, AToolsLabelAtThePicturesEdgeGoesToReview) {
