@@ -256,11 +256,7 @@ SimulationRoom::SimulationRoom(QWidget* parent)
                 StopProgress();
                 if (!Alive()) return;
                 const int i = run.index;
-                const std::string folder =
-                    QFileInfo(QString::fromStdString(reconstruction_->session().project().path))
-                        .absolutePath()
-                        .toStdString();
-                simulation_->SetScore(std::move(run), folder);
+                simulation_->SetScore(std::move(run), ProjectFolder());
                 status_->setText(
                     simulation_->simulation(i).score
                         ? "Scored " + QString::fromStdString(simulation_->simulation(i).name) + "."
@@ -280,7 +276,7 @@ SimulationRoom::SimulationRoom(QWidget* parent)
               [this](FitRun run) {
                 StopProgress();
                 if (!Alive()) return;
-                simulation_->SetFit(std::move(run));
+                simulation_->SetFit(std::move(run), ProjectFolder());
                 fit_->setText(simulation_->FitText(selected_));
                 status_->setText(simulation_->fit()->cancelled ? "Fit cancelled."
                                  : simulation_->fit()->result  ? "Fitted."
@@ -560,6 +556,7 @@ void SimulationRoom::Show(SimulationPresenter* simulation,
   d2_chart_->SetScore(nullptr);
   verdict_->setText("Not scored yet.");
   verdict_->setStyleSheet({});
+  fit_->setText("");
   shown_frame_ = -1;
   frame_ = 0;
   to_score_.clear();
@@ -579,6 +576,7 @@ void SimulationRoom::Show(SimulationPresenter* simulation,
     slider_->setValue(0);
     slider_->blockSignals(false);
     measured_->setText(reconstruction_->Summary());
+    fit_->setText(simulation_->FitText());
     RefreshTable();
     if (simulation_->simulations() > 0) Select(0);
     RequestFrame();
@@ -944,6 +942,12 @@ void SimulationRoom::Fit() {
   progress_->setRange(0, 0);  // busy: the fit's ETA is in the status line
   progress_timer_->start();
   RefreshButtons();
+}
+
+std::string SimulationRoom::ProjectFolder() const {
+  return QFileInfo(QString::fromStdString(reconstruction_->session().project().path))
+      .absolutePath()
+      .toStdString();
 }
 
 void SimulationRoom::OpenReport() {

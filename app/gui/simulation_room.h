@@ -134,6 +134,8 @@ class SimulationRoom : public QWidget {
   // a score asked for while one runs waits its turn.
   void Score(int i);
   void OpenReport();
+  // The project file's folder: the score and fit files are written there.
+  std::string ProjectFolder() const;
   // Fits the free parameters of the scenario (with its overrides) to the tracks on a worker.
   void Fit();
   void Cancel();

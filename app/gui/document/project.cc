@@ -47,7 +47,7 @@ Project LoadProject(const std::string& path) {
   if (root.node()["net"] && root.node()["net"].IsMap())
     RefuseDuplicateKeys(root.node()["net"], path, "net.");
   root.AllowOnly({"netlab_project", "experiment", "rig", "coloring", "target", "labels", "net",
-                  "illumination", "tracks", "simulations"});
+                  "illumination", "tracks", "simulations", "scores", "fits"});
   if (root.Int("netlab_project") != 1)
     throw InputError(root.Where("netlab_project") + ": version 1 expected");
   Project p;
@@ -68,6 +68,34 @@ Project LoadProject(const std::string& path) {
       if (!item.IsScalar() || item.as<std::string>().empty())
         throw InputError(root.Where("simulations") + ": each entry must be a file name");
       p.simulations.push_back(Resolve(folder, item.as<std::string>()));
+    }
+  }
+  if (root.Has("scores")) {
+    const YAML::Node list = root.Get("scores");
+    if (!list.IsSequence())
+      throw InputError(root.Where("scores") +
+                       ": a list of {simulation: sim.h5, score: score_sim.h5, report: "
+                       "score_sim.html} expected");
+    for (const YAML::Node& item : list) {
+      if (!item.IsMap() || !item["simulation"] || !item["score"])
+        throw InputError(root.Where("scores") +
+                         ": each entry needs simulation and score ({simulation: sim.h5, score: "
+                         "score_sim.h5, report: score_sim.html})");
+      const YamlMap entry(item, path, "scores");
+      entry.AllowOnly({"simulation", "score", "report"});
+      p.scores.push_back({Resolve(folder, entry.String("simulation")),
+                          Resolve(folder, entry.String("score")),
+                          Resolve(folder, entry.String("report", ""))});
+    }
+  }
+  if (root.Has("fits")) {
+    const YAML::Node list = root.Get("fits");
+    if (!list.IsSequence())
+      throw InputError(root.Where("fits") + ": a list of netlab fit files expected ([fit.yaml])");
+    for (const YAML::Node& item : list) {
+      if (!item.IsScalar() || item.as<std::string>().empty())
+        throw InputError(root.Where("fits") + ": each entry must be a file name");
+      p.fits.push_back(Resolve(folder, item.as<std::string>()));
     }
   }
   if (root.Has("illumination")) {
@@ -114,6 +142,23 @@ void SaveProject(const Project& project, const std::string& path) {
   if (!project.simulations.empty()) {
     out << YAML::Key << "simulations" << YAML::Value << YAML::Flow << YAML::BeginSeq;
     for (const std::string& s : project.simulations) out << Relative(folder, s);
+    out << YAML::EndSeq;
+  }
+  if (!project.scores.empty()) {
+    out << YAML::Key << "scores" << YAML::Value << YAML::BeginSeq;
+    for (const ProjectScore& s : project.scores) {
+      out << YAML::Flow << YAML::BeginMap;
+      out << YAML::Key << "simulation" << YAML::Value << Relative(folder, s.simulation);
+      out << YAML::Key << "score" << YAML::Value << Relative(folder, s.score);
+      if (!s.report.empty())
+        out << YAML::Key << "report" << YAML::Value << Relative(folder, s.report);
+      out << YAML::EndMap;
+    }
+    out << YAML::EndSeq;
+  }
+  if (!project.fits.empty()) {
+    out << YAML::Key << "fits" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    for (const std::string& f : project.fits) out << Relative(folder, f);
     out << YAML::EndSeq;
   }
   out << YAML::Key << "net" << YAML::Value << YAML::Flow << YAML::BeginMap;

@@ -17,6 +17,10 @@
 //                                       # --out; the simulation room writes it)
 //   simulations: [sim.h5, sim_no_drag.h5]  # optional: netlab simulate results, scored against
 //                                       # the tracks in the simulation room
+//   scores:                             # optional: each simulation's score as netlab score
+//     - {simulation: sim.h5, score: score_sim.h5, report: score_sim.html}  # --out, --report
+//                                       # write them (the simulation room writes them)
+//   fits: [fit_net.yaml]                # optional: netlab fit --out files (the room's fits)
 //   net: {rows: 11, cols: 11, mesh: 0.1}  # the grid; mesh (m, knot to knot) optional; and
 //                                       # knotless: true for a net without knot balls (Net B)
 //   illumination: 0.85                  # optional: how brightly the yarns are lit, for the colour
@@ -33,6 +37,11 @@
 
 namespace netlab::gui {
 
+// A simulation's score files: netlab score's --out and --report.
+struct ProjectScore {
+  std::string simulation, score, report;  // absolute; report "" when none
+};
+
 struct Project {
   std::string path;        // the project file itself (absolute)
   std::string experiment;  // absolute paths, resolved against the project's folder
@@ -42,6 +51,8 @@ struct Project {
   std::string labels;
   std::string tracks;                    // "" when none
   std::vector<std::string> simulations;  // absolute
+  std::vector<ProjectScore> scores;      // absolute, one per simulation at most
+  std::vector<std::string> fits;         // absolute
   int rows = 0, cols = 0;                // the net's knots
   double mesh_m = 0.0;                   // link length, m; 0: estimated by the engine
   bool knotless = false;  // no knot balls: an edge knot is where its links' colours change

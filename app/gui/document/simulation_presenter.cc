@@ -15,6 +15,7 @@
 #include "common/errors.h"
 #include "common/files.h"
 #include "common/yaml_util.h"
+#include "libnetsim/identification/fit_file.h"
 #include "libnetsim/scenario/run_scenario.h"
 #include "libnetsim/validation/score_file.h"
 #include "libnetsim/validation/score_report.h"
@@ -143,6 +144,15 @@ std::vector<std::string> SimulationPresenter::OpenFromProject(
     if (!run.tracks) errors.push_back(run.error);
     Add(std::move(run));
   }
+  // The score files the project names (the room scores its simulations again on opening and
+  // writes them anew); the last fit.
+  for (const ProjectScore& score : project.scores)
+    for (Simulation& s : simulations_)
+      if (s.path == score.simulation && s.score_path.empty()) {
+        s.score_path = score.score;
+        s.report_path = score.report;
+      }
+  if (!project.fits.empty() && !fit_) fit_path_ = project.fits.back();
   return errors;
 }
 
@@ -198,6 +208,70 @@ void SimulationPresenter::SetScore(ScoreRun run, const std::string& folder) {
     s.report_path = stem + ".html";
   } catch (const std::exception& e) {
     s.score_error = std::string("scored, but the files could not be written: ") + e.what();
+    return;
+  }
+  try {
+    Project project = LoadProject(session_->project().path);
+    const ProjectScore entry{std::filesystem::absolute(s.path).lexically_normal().string(),
+                             s.score_path, s.report_path};
+    auto same = [&](const ProjectScore& p) { return p.simulation == entry.simulation; };
+    project.scores.erase(std::remove_if(project.scores.begin(), project.scores.end(), same),
+                         project.scores.end());
+    project.scores.push_back(entry);
+    SaveProject(project, project.path);
+  } catch (const std::exception& e) {
+    s.score_error = std::string("scored, but not named in the project: ") + e.what();
+  }
+}
+
+void SimulationPresenter::SetFit(FitRun run, const std::string& folder) {
+  fit_ = std::move(run);
+  if (!fit_->result || folder.empty()) return;
+  const std::string path =
+      (std::filesystem::path(folder) / ("fit_" + Stem(fit_->scenario_path) + ".yaml")).string();
+  try {
+    Project project = LoadProject(session_->project().path);
+    netsim::WriteFit(path, {fit_->scenario_path}, {project.tracks}, *fit_->result);
+    fit_path_ = path;
+    const std::string absolute = std::filesystem::absolute(path).lexically_normal().string();
+    if (std::find(project.fits.begin(), project.fits.end(), absolute) == project.fits.end()) {
+      project.fits.push_back(absolute);
+      SaveProject(project, project.path);
+    }
+  } catch (const std::exception& e) {
+    fit_->result->notes.push_back(std::string("fitted, but not saved: ") + e.what());
+  }
+}
+
+QString SimulationPresenter::FitFileText(const std::string& path) {
+  try {
+    const YAML::Node root = LoadYamlFile(path);
+    QString text = QString("Fit read from %1:").arg(QString::fromStdString(path));
+    for (auto it = root["parameters"].begin(); it != root["parameters"].end(); ++it) {
+      const YAML::Node p = it->second;
+      text += QString("\n  %1 = %2 ± %3 %4 (%5)")
+                  .arg(QString::fromStdString(it->first.as<std::string>()))
+                  .arg(QString::fromStdString(p["value"].as<std::string>()))
+                  .arg(QString::fromStdString(p["sigma"].as<std::string>()))
+                  .arg(QString::fromStdString(p["units"].as<std::string>("")))
+                  .arg(p["identified"].as<bool>(false)
+                           ? "identified by the " +
+                                 QString::fromStdString(p["determined_by"].as<std::string>(""))
+                           : QString("not identified"));
+    }
+    text += QString("\nCost %1 → %2 in %3 iterations, %4 simulations.")
+                .arg(QString::fromStdString(root["cost_initial"].as<std::string>("?")))
+                .arg(QString::fromStdString(root["cost_final"].as<std::string>("?")))
+                .arg(QString::fromStdString(root["iterations"].as<std::string>("?")))
+                .arg(QString::fromStdString(root["simulations"].as<std::string>("?")));
+    if (const YAML::Node score = root["score"])
+      text += QString("\nThe fitted model: %1, RMS %2 mm, mean d² %3.")
+                  .arg(QString::fromStdString(score["verdict"].as<std::string>("?")))
+                  .arg(QString::fromStdString(score["rms_mm"].as<std::string>("?")))
+                  .arg(QString::fromStdString(score["mean_d2"].as<std::string>("?")));
+    return text;
+  } catch (const std::exception& e) {
+    return QString("The project's fit cannot be read: ") + e.what();
   }
 }
 
@@ -249,6 +323,7 @@ FitJob SimulationPresenter::MakeFitJob(const std::string& scenario_path,
 
 FitRun SimulationPresenter::Fit(const FitJob& job, const ProgressReporter& progress) {
   FitRun run;
+  run.scenario_path = job.scenario_path;
   if (progress.cancelled()) {
     run.cancelled = true;
     return run;
@@ -278,7 +353,7 @@ QString SimulationPresenter::ProgressText(const Progress& p, double elapsed_s) {
 }
 
 QString SimulationPresenter::FitText(int start) const {
-  if (!fit_) return "";
+  if (!fit_) return fit_path_.empty() ? QString() : FitFileText(fit_path_);
   if (fit_->cancelled) return "Fit cancelled.";
   if (!fit_->result) return "Fit failed: " + QString::fromStdString(fit_->error);
   const netsim::FitResult& r = *fit_->result;

@@ -75,6 +75,7 @@ struct FitJob {
   netsim::FitOptions options;
 };
 struct FitRun {
+  std::string scenario_path;
   std::optional<netsim::FitResult> result;
   std::string error;
   bool cancelled = false;
@@ -145,7 +146,8 @@ class SimulationPresenter {
                         netsim::Alignment alignment = netsim::Alignment::kTimeAndRigid) const;
   static ScoreRun RunScore(const ScoreJob& job);  // any thread
   // The answer (GUI thread). With `folder` non-empty, score_NAME.h5 and score_NAME.html are
-  // written there as netlab score --out --report writes them (their paths kept).
+  // written there as netlab score --out --report writes them (their paths kept) and named in
+  // the project file's `scores`.
   void SetScore(ScoreRun run, const std::string& folder = "");
   // The verdict in words: "consistent: ..." / "inconsistent: ...", the numbers behind it and
   // the RMS; "not scored yet" or the reason it could not be.
@@ -177,12 +179,20 @@ class SimulationPresenter {
   // Any thread, reporting as FitShot does (FitOptions::progress); a cancel of the reporter's
   // token stops the fit's simulations under way (the answer says cancelled).
   static FitRun Fit(const FitJob& job, const ProgressReporter& progress = {});
-  void SetFit(FitRun run) { fit_ = std::move(run); }
+  // The answer (GUI thread). A fit with a result and `folder` non-empty is written there as
+  // fit_SCENARIO.yaml, the file netlab fit --out writes (its `measured` the project's tracks),
+  // and named in the project file's `fits`; fit_path() is the file ("" : none).
+  void SetFit(FitRun run, const std::string& folder = "");
   const FitRun* fit() const { return fit_ ? &*fit_ : nullptr; }
+  const std::string& fit_path() const { return fit_path_; }
   // The fitted values with sigma and whether the flight data, a prior or neither determined
   // each; the cost from start to end; the fitted model's score beside the starting one's (the
-  // simulation `start` when scored, -1: none).
+  // simulation `start` when scored, -1: none). Without a fit run here, the project's last fit
+  // file read (FitFileText).
   QString FitText(int start = -1) const;
+  // A fit.yaml's values with sigma and who determined each, its cost and the fitted model's
+  // score; the reason when the file cannot be read.
+  static QString FitFileText(const std::string& path);
   // One line of a fit's progress `elapsed_s` into the fit: stage, iteration, cost, simulations,
   // time and ETA.
   static QString ProgressText(const Progress& p, double elapsed_s);
@@ -191,6 +201,7 @@ class SimulationPresenter {
 
  private:
   std::optional<FitRun> fit_;
+  std::string fit_path_;
   const Session* session_;
   const ReconstructionPresenter* reconstruction_;
   std::deque<Simulation> simulations_;  // a deque: an added one moves no score a chart shows

@@ -21,6 +21,7 @@
 #include <QPushButton>
 #include <QTableWidget>
 #include <QTest>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -30,6 +31,7 @@
 #include "app/gui/document/project.h"
 #include "app/gui/knot_grid.h"
 #include "app/gui/main_window.h"
+#include "common/hdf5_util.h"
 #include "libreconstruct/labels/label_set.h"
 #include "tests/app/cli/run_netlab.h"
 #include "tests/app/gui/small_shot_film.h"
@@ -56,6 +58,31 @@ const fs::path& Dir() {
 }
 
 void Click(QWidget* widget) { QTest::mouseClick(widget, Qt::LeftButton); }
+
+// A dataset of an HDF5 file, as doubles.
+std::vector<double> ReadDoubles(const std::string& path, const std::string& dataset) {
+  const h5::Id file = h5::OpenFileReadOnly(path);
+  size_t n = 1;
+  for (hsize_t d : h5::DatasetDims(file.get(), dataset)) n *= d;
+  std::vector<double> values(n);
+  h5::ReadDataset(file.get(), dataset, H5T_NATIVE_DOUBLE, values.data());
+  return values;
+}
+
+std::string ReadRootAttribute(const std::string& path, const std::string& name) {
+  const h5::Id file = h5::OpenFileReadOnly(path);
+  return h5::ReadStringAttribute(file.get(), name);
+}
+
+// A text file's lines but those that hold the wall time.
+std::vector<std::string> LinesButTime(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("wall_s:", 0) != 0 && line.find(" simulations, ") == std::string::npos)
+      lines.push_back(line);
+  return lines;
+}
 
 bool WaitIdle(const SimulationRoom& room, int timeout_ms) {
   QElapsedTimer clock;
@@ -228,6 +255,34 @@ TEST_F(SimulationRoomTest, TheTrueSimulationLiesOnTheLabelsAndIsConsistentTheNoD
   ASSERT_EQ(saved.simulations.size(), 2u);
   EXPECT_EQ(saved.simulations[0], (Dir() / "sim.h5").string());
   EXPECT_EQ(saved.simulations[1], (Dir() / "sim_no_drag.h5").string());
+  ASSERT_EQ(saved.scores.size(), 2u);
+  EXPECT_EQ(saved.scores[0].simulation, (Dir() / "sim.h5").string());
+  EXPECT_EQ(saved.scores[0].score, (Dir() / "score_sim.h5").string());
+  EXPECT_EQ(saved.scores[0].report, (Dir() / "score_sim.html").string());
+  EXPECT_EQ(saved.scores[1].score, (Dir() / "score_sim_no_drag.h5").string());
+  {  // Stored relative to the project's folder.
+    std::ifstream in(d + "/project.yaml");
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_NE(text.find("{simulation: sim.h5, score: score_sim.h5, report: score_sim.html}"),
+              std::string::npos)
+        << text;
+  }
+  // The score file is the one netlab score writes from the same tracks and simulation.
+  const auto cli = RunNetlab("score --measured " + saved.tracks + " --sim " + d +
+                             "/sim_no_drag.h5 --out " + d + "/cli_score.h5 --align time --quiet");
+  ASSERT_EQ(cli.status, 0) << cli.err;
+  for (const char* dataset : {"/residual", "/d2", "/knots/rms_m", "/error_vs_time/rms_m",
+                              "/summary/mean_d2", "/summary/rms_mm", "/alignment/time_offset_s"}) {
+    const std::vector<double> room_values = ReadDoubles(saved.scores[1].score, dataset);
+    const std::vector<double> cli_values = ReadDoubles(d + "/cli_score.h5", dataset);
+    ASSERT_EQ(room_values.size(), cli_values.size()) << dataset;
+    ASSERT_FALSE(room_values.empty()) << dataset;
+    for (size_t i = 0; i < cli_values.size(); ++i)
+      if (!(std::isnan(cli_values[i]) && std::isnan(room_values[i])))
+        ASSERT_EQ(room_values[i], cli_values[i]) << dataset << "[" << i << "]";
+  }
+  EXPECT_EQ(ReadRootAttribute(saved.scores[1].score, "verdict"),
+            ReadRootAttribute(d + "/cli_score.h5", "verdict"));
 
   if (const char* out = getenv("NETLAB_SIMULATION_SCREENSHOT")) {
     room->Select(1);
@@ -323,6 +378,29 @@ TEST_F(SimulationRoomTest, AFitOfTheDragCoefficientIsCancelledThenRunToTheEnd) {
   const std::string text = room->fit_label()->text().toStdString();
   EXPECT_NE(text.find("drag.drag_coefficient = "), std::string::npos) << text;
   EXPECT_NE(text.find("The fitted model: consistent"), std::string::npos) << text;
+
+  // Saved as netlab fit --out saves it, named in the project; the project reopens on it.
+  const std::string fit_path = w.simulation()->fit_path();
+  EXPECT_EQ(fit_path, d + "/fit_shot.yaml");
+  const Project saved = LoadProject(d + "/project.yaml");
+  ASSERT_EQ(saved.fits.size(), 1u);
+  EXPECT_EQ(saved.fits[0], fit_path);
+  const auto cli =
+      RunNetlab("fit " + d + "/shot.yaml --measured " + saved.tracks +
+                " --free drag.drag_coefficient --set drag.drag_coefficient=0.8 --out " + d +
+                "/cli_fit.yaml --quiet");
+  ASSERT_EQ(cli.status, 0) << cli.err;
+  EXPECT_EQ(LinesButTime(fit_path), LinesButTime(d + "/cli_fit.yaml"));
+  MainWindow reopened;
+  reopened.resize(1500, 1000);
+  reopened.show();
+  ASSERT_TRUE(reopened.OpenProject(QString::fromStdString(d + "/project.yaml"), false));
+  reopened.ShowRoom(MainWindow::Room::kSimulation);
+  ASSERT_TRUE(reopened.WaitForIdle());
+  const std::string again = reopened.simulation_room()->fit_label()->text().toStdString();
+  EXPECT_NE(again.find("Fit read from " + fit_path), std::string::npos) << again;
+  EXPECT_NE(again.find("drag.drag_coefficient = "), std::string::npos) << again;
+  EXPECT_NE(again.find("The fitted model: consistent"), std::string::npos) << again;
 }
 
 }  // namespace
