@@ -16,6 +16,7 @@
 #include <QPushButton>
 #include <QSlider>
 #include <QSplitter>
+#include <QTableView>
 #include <QTableWidget>
 #include <QTimer>
 #include <QVBoxLayout>
@@ -420,6 +421,28 @@ ReconstructionRoom::ReconstructionRoom(QWidget* parent)
   problems_->setEditTriggers(QAbstractItemView::NoEditTriggers);
   problems_->verticalHeader()->hide();
   left_layout->addWidget(problems_, 1);
+  auto* knots_row = new QHBoxLayout;
+  knots_row->addWidget(new QLabel("This frame's knots (a click: the label):"));
+  knot_filter_ = new QComboBox;
+  knot_filter_->addItems({"all", "outliers", "degenerate"});
+  knot_filter_->setToolTip(
+      "all: every knot of the net; outliers: the knots with a view left out as an outlier; "
+      "degenerate: the points left out for their sigma");
+  knots_row->addWidget(knot_filter_);
+  knots_row->addStretch(1);
+  left_layout->addLayout(knots_row);
+  knot_model_ = new KnotErrorModel(this);
+  knot_table_ = new QTableView;
+  knot_table_->setObjectName("reconstruction_knot_errors");
+  knot_table_->setModel(knot_model_);
+  knot_table_->setSortingEnabled(true);
+  knot_table_->sortByColumn(KnotErrorModel::kKnot, Qt::AscendingOrder);
+  knot_table_->setSelectionBehavior(QAbstractItemView::SelectRows);
+  knot_table_->setEditTriggers(QAbstractItemView::NoEditTriggers);
+  knot_table_->verticalHeader()->hide();
+  knot_table_->verticalHeader()->setDefaultSectionSize(knot_table_->fontMetrics().height() + 6);
+  knot_table_->horizontalHeader()->setStretchLastSection(true);
+  left_layout->addWidget(knot_table_, 1);
   knot_ = new QLabel("Click a knot in the 3D view: its residual and sigma.");
   knot_->setWordWrap(true);
   left_layout->addWidget(knot_);
@@ -466,6 +489,19 @@ ReconstructionRoom::ReconstructionRoom(QWidget* parent)
   connect(slider_, &QSlider::valueChanged, this, [this](int t) { SetFrame(t); });
   connect(show_sigma_, &QCheckBox::toggled, view_, &NetView3D::SetShowSigma);
   connect(view_, &NetView3D::knotClicked, this, [this](int) { RefreshKnot(); });
+  connect(knot_filter_, &QComboBox::currentIndexChanged, this, [this] { RefreshKnotTable(); });
+  connect(knot_table_, &QTableView::clicked, this, [this](const QModelIndex& index) {
+    if (!presenter_ || !index.isValid()) return;
+    const KnotErrorModel::Row& r = knot_model_->row(index.row());
+    int camera = -1;  // the first outlier view's camera, else any that has the label
+    if (!r.outlier_cameras.empty()) {
+      const std::string name = knot_model_->camera_name(r.outlier_cameras.front());
+      const auto& names = presenter_->session().camera_names();
+      for (int c = 0; c < static_cast<int>(names.size()); ++c)
+        if (names[c] == name) camera = c;
+    }
+    emit showLabel(camera, frame_, r.knot);
+  });
   connect(problems_, &QTableWidget::cellClicked, this, [this](int row, int) {
     if (row < 0 || row >= static_cast<int>(rows_.size())) return;
     const Problem& p = rows_[row];
@@ -527,7 +563,16 @@ void ReconstructionRoom::SetFrame(int t) {
                             .arg(t)
                             .arg(presenter_->session().frames()));
   RefreshKnot();
+  RefreshKnotTable();
   if (changed) emit frameChanged(t);
+}
+
+void ReconstructionRoom::RefreshKnotTable() {
+  const int row = presenter_ ? presenter_->TrackRow(frame_) : -1;
+  knot_model_->Set(presenter_ ? presenter_->tracks() : nullptr, row,
+                   static_cast<KnotErrorModel::Filter>(knot_filter_->currentIndex()));
+  knot_table_->resizeColumnsToContents();
+  knot_table_->horizontalHeader()->setStretchLastSection(true);
 }
 
 void ReconstructionRoom::Triangulate() {

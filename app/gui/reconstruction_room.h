@@ -5,7 +5,10 @@
 // labels' sigma, the link-length prior, the smoothness prior, the labels under review), Triangulate
 // (progress, Cancel) and Export (tracks.h5 and xyzpts.csv / xyzres.csv, the CLI's files). On the
 // left the outliers and degenerate points with why (a click takes the person to that label in
-// the labeling room); on the right the net in 3D at the frame of the slider (NetView3D).
+// the labeling room), and below them the current frame's knots with their reprojection residual
+// and 3D sigma (KnotErrorModel: every knot, the outliers or the degenerate points; sortable; a
+// click takes the person to that label); on the right the net in 3D at the frame of the slider
+// (NetView3D).
 
 #include <QWidget>
 #include <atomic>
@@ -25,6 +28,7 @@ class QLabel;
 class QProgressBar;
 class QPushButton;
 class QSlider;
+class QTableView;
 class QTableWidget;
 class QTimer;
 
@@ -113,6 +117,10 @@ class ReconstructionRoom : public QWidget {
   QLabel* summary_label() const { return summary_; }
   QLabel* knot_label() const { return knot_; }
   QTableWidget* problems_table() const { return problems_; }
+  // The current frame's knots with their residual and sigma, filtered by knot_filter_box.
+  QTableView* knot_table() const { return knot_table_; }
+  KnotErrorModel* knot_model() const { return knot_model_; }
+  QComboBox* knot_filter_box() const { return knot_filter_; }
   QSlider* frame_slider() const { return slider_; }
   NetView3D* view() const { return view_; }
   int frame() const { return frame_; }
@@ -140,6 +148,7 @@ class ReconstructionRoom : public QWidget {
   void Triangulate();
   void Refresh();
   void RefreshKnot();
+  void RefreshKnotTable();
   bool Alive() const;
 
   ReconstructionPresenter* presenter_ = nullptr;
@@ -153,6 +162,9 @@ class ReconstructionRoom : public QWidget {
   QProgressBar* progress_ = nullptr;
   QLabel *status_ = nullptr, *summary_ = nullptr, *knot_ = nullptr, *frame_label_ = nullptr;
   QTableWidget* problems_ = nullptr;
+  QComboBox* knot_filter_ = nullptr;
+  QTableView* knot_table_ = nullptr;
+  KnotErrorModel* knot_model_ = nullptr;
   QSlider* slider_ = nullptr;
   NetView3D* view_ = nullptr;
   QTimer* progress_timer_ = nullptr;

@@ -1,9 +1,11 @@
 #include "app/gui/document/reconstruction_presenter.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <map>
 #include <stdexcept>
 
@@ -219,6 +221,142 @@ void ReconstructionPresenter::Export(const std::string& tracks_path,
     recon::WriteXyzRes(res, *tracks, rows, cols);
   }
   outputs.Commit();
+}
+
+void KnotErrorModel::Set(const KnotTracks* tracks, int row, Filter filter) {
+  beginResetModel();
+  rows_.clear();
+  filter_ = filter;
+  if (tracks != nullptr && row >= 0 && row < tracks->frames()) {
+    const int knots = tracks->knots();
+    cameras_ = tracks->camera_names;
+    cols_ = 1;
+    for (const auto& g : tracks->grid) cols_ = std::max(cols_, g[1] + 1);
+    const int frame = tracks->frame_index.empty() ? row : tracks->frame_index[row];
+    for (int k = 0; k < knots; ++k) {
+      const size_t i = static_cast<size_t>(row) * knots + k;
+      Row r;
+      r.knot = tracks->grid[k][0] * cols_ + tracks->grid[k][1];
+      r.valid = tracks->valid[i] != 0;
+      r.degenerate = !tracks->degenerate.empty() && tracks->degenerate[i] != 0;
+      r.residual_px = r.valid && !tracks->reprojection_error_px.empty()
+                          ? tracks->reprojection_error_px[i]
+                          : std::numeric_limits<double>::quiet_NaN();
+      r.sigma_mm = std::numeric_limits<double>::quiet_NaN();
+      if ((r.valid || r.degenerate) && !tracks->covariance.empty()) {
+        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(tracks->covariance[i],
+                                                                   Eigen::EigenvaluesOnly);
+        r.sigma_mm = std::sqrt(std::max(eigen.eigenvalues().maxCoeff(), 0.0)) * 1e3;
+      }
+      for (const KnotTracks::Outlier& o : tracks->outliers)
+        if (o.frame == frame && o.knot == k) {
+          r.outlier_cameras.push_back(o.camera);
+          r.outlier_px.push_back(o.residual_px);
+        }
+      if (filter == Filter::kOutliers && r.outlier_cameras.empty()) continue;
+      if (filter == Filter::kDegenerate && !r.degenerate) continue;
+      rows_.push_back(std::move(r));
+    }
+  }
+  endResetModel();
+  if (sort_column_ >= 0) sort(sort_column_, sort_order_);
+}
+
+std::string KnotErrorModel::camera_name(int camera) const {
+  return camera >= 0 && camera < static_cast<int>(cameras_.size()) ? cameras_[camera] : "";
+}
+
+int KnotErrorModel::rowCount(const QModelIndex& parent) const {
+  return parent.isValid() ? 0 : static_cast<int>(rows_.size());
+}
+
+int KnotErrorModel::columnCount(const QModelIndex& parent) const {
+  return parent.isValid() ? 0 : kColumns;
+}
+
+double KnotErrorModel::Key(const Row& r, int column) const {
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  switch (column) {
+    case kKnot: return r.knot;
+    case kStatus: return r.degenerate ? 3 : !r.outlier_cameras.empty() ? 2 : r.valid ? 0 : 1;
+    case kResidual: return std::isnan(r.residual_px) ? kNone : r.residual_px;
+    case kSigma: return std::isnan(r.sigma_mm) ? kNone : r.sigma_mm;
+    case kOutliers: {
+      double worst = r.outlier_cameras.empty() ? -1.0 : 0.0;
+      for (double px : r.outlier_px) worst = std::max(worst, std::isnan(px) ? kNone : px);
+      return worst;
+    }
+    default: return 0.0;
+  }
+}
+
+QVariant KnotErrorModel::data(const QModelIndex& index, int role) const {
+  if (!index.isValid() || index.row() >= rowCount() || index.column() >= kColumns) return {};
+  const Row& r = rows_[index.row()];
+  if (role == Qt::UserRole) return Key(r, index.column());
+  if (role == Qt::TextAlignmentRole && index.column() >= kResidual && index.column() <= kSigma)
+    return QVariant::fromValue(Qt::AlignRight | Qt::AlignVCenter);
+  if (role != Qt::DisplayRole && role != Qt::ToolTipRole) return {};
+  QString outliers;
+  for (size_t j = 0; j < r.outlier_cameras.size(); ++j)
+    outliers +=
+        QString("%1%2 %3")
+            .arg(j ? ", " : "")
+            .arg(QString::fromStdString(camera_name(r.outlier_cameras[j])))
+            .arg(std::isnan(r.outlier_px[j]) ? QString("(no point)")
+                                             : QString("%1 px").arg(r.outlier_px[j], 0, 'f', 2));
+  switch (index.column()) {
+    case kKnot: return QString("(%1,%2)").arg(r.knot / cols_).arg(r.knot % cols_);
+    case kStatus:
+      if (r.degenerate) return QString("degenerate");
+      if (!r.outlier_cameras.empty()) return QString("outlier view");
+      return r.valid ? QString("ok") : QString("no point");
+    case kResidual:
+      return std::isnan(r.residual_px) ? QString("—") : QString::number(r.residual_px, 'f', 3);
+    case kSigma: return std::isnan(r.sigma_mm) ? QString("—") : QString::number(r.sigma_mm, 'f', 3);
+    case kOutliers: return outliers;
+    default: return {};
+  }
+}
+
+QVariant KnotErrorModel::headerData(int section, Qt::Orientation orientation, int role) const {
+  if (orientation != Qt::Horizontal || section < 0 || section >= kColumns) return {};
+  if (role == Qt::DisplayRole) {
+    static const char* const kNames[] = {"Knot", "Status", "Residual px", "σ mm", "Outlier views"};
+    return QString(kNames[section]);
+  }
+  if (role == Qt::ToolTipRole) {
+    static const char* const kTips[] = {
+        "The knot (row, col)", "A point; degenerate (left out); with an outlier view; no point",
+        "The RMS reprojection residual over the point's inlier views",
+        "The 3D standard deviation along the point's least certain axis",
+        "The views left out as outliers, with their residual"};
+    return QString(kTips[section]);
+  }
+  return {};
+}
+
+void KnotErrorModel::sort(int column, Qt::SortOrder order) {
+  if (column < 0 || column >= kColumns) return;
+  sort_column_ = column;
+  sort_order_ = order;
+  emit layoutAboutToBeChanged({}, QAbstractItemModel::VerticalSortHint);
+  const QModelIndexList before = persistentIndexList();
+  std::vector<int> knots_before;
+  for (const QModelIndex& i : before) knots_before.push_back(rows_[i.row()].knot);
+  std::stable_sort(rows_.begin(), rows_.end(), [&](const Row& a, const Row& b) {
+    const double ka = Key(a, column), kb = Key(b, column);
+    if (ka == kb) return a.knot < b.knot;
+    return order == Qt::AscendingOrder ? ka < kb : ka > kb;
+  });
+  QModelIndexList after;
+  for (size_t j = 0; j < before.size(); ++j) {
+    int row = 0;
+    while (rows_[row].knot != knots_before[j]) ++row;
+    after.push_back(index(row, before[j].column()));
+  }
+  changePersistentIndexList(before, after);
+  emit layoutChanged({}, QAbstractItemModel::VerticalSortHint);
 }
 
 }  // namespace netlab::gui

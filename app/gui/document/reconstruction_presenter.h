@@ -13,6 +13,7 @@
 //   const KnotTracks* tracks = reconstruction.tracks();
 //   reconstruction.Export("tracks.h5", "out/");            // tracks.h5, out/xyzpts.csv, ...
 
+#include <QAbstractTableModel>
 #include <QString>
 #include <atomic>
 #include <functional>
@@ -113,6 +114,49 @@ class ReconstructionPresenter {
   std::string tracks_path_;
   std::set<int> updated_rows_;
   std::shared_ptr<const int> alive_ = std::make_shared<const int>(0);
+};
+
+// The knots at one frame of the tracks, a row each: the knot (row, col), its status (a point;
+// degenerate; with outlier views, named; no point), its reprojection residual (px: the RMS over
+// its inlier views), its 3D sigma (mm: the square root of its covariance's largest eigenvalue)
+// and its outlier views' residuals. Filtered to every knot, the knots with an outlier view or the
+// degenerate points; sortable by any column (Qt::UserRole holds the number sorted on; a missing
+// value sorts after every number).
+class KnotErrorModel : public QAbstractTableModel {
+ public:
+  enum Column { kKnot, kStatus, kResidual, kSigma, kOutliers, kColumns };
+  enum class Filter { kAll, kOutliers, kDegenerate };
+  struct Row {
+    int knot = 0;
+    bool valid = false, degenerate = false;
+    double residual_px = 0.0, sigma_mm = 0.0;  // NaN: none
+    std::vector<int> outlier_cameras;          // the tracks' camera_names indices
+    std::vector<double> outlier_px;            // [outlier_cameras.size()]
+  };
+
+  using QAbstractTableModel::QAbstractTableModel;
+  // The knots of `tracks` (null: none) at its row `row` (-1: none), as `filter` keeps them.
+  void Set(const KnotTracks* tracks, int row, Filter filter);
+  Filter filter() const { return filter_; }
+  const Row& row(int i) const { return rows_.at(i); }
+  // The name of the tracks' camera `camera` ("" when the tracks name none).
+  std::string camera_name(int camera) const;
+
+  int rowCount(const QModelIndex& parent = {}) const override;
+  int columnCount(const QModelIndex& parent = {}) const override;
+  QVariant data(const QModelIndex& index, int role = Qt::DisplayRole) const override;
+  QVariant headerData(int section, Qt::Orientation orientation,
+                      int role = Qt::DisplayRole) const override;
+  void sort(int column, Qt::SortOrder order = Qt::AscendingOrder) override;
+
+ private:
+  double Key(const Row& r, int column) const;
+  std::vector<Row> rows_;
+  std::vector<std::string> cameras_;
+  int cols_ = 1;
+  Filter filter_ = Filter::kAll;
+  int sort_column_ = -1;
+  Qt::SortOrder sort_order_ = Qt::AscendingOrder;
 };
 
 }  // namespace netlab::gui

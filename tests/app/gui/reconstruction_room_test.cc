@@ -10,13 +10,17 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
+#include <QAbstractItemModelTester>
 #include <QApplication>
 #include <QComboBox>
 #include <QDoubleSpinBox>
 #include <QElapsedTimer>
+#include <QHeaderView>
 #include <QLabel>
 #include <QPushButton>
 #include <QSlider>
+#include <QTableView>
 #include <QTableWidget>
 #include <QTest>
 #include <cstdio>
@@ -141,6 +145,60 @@ TEST_F(ReconstructionRoomTest, TriangulateClickAnOutlierLandOnItsLabelAndExportA
   QTest::keyClick(&w, Qt::Key_4, Qt::ControlModifier);
   EXPECT_EQ(w.room(), MainWindow::Room::kReconstruction);
   EXPECT_EQ(room->frame(), kMovedFrame);
+
+  // The frame's knots with their residual and sigma: a model Qt's tester finds sound, sorted by a
+  // header click, filtered to the outliers; a click on the moved knot's row lands on its label.
+  KnotErrorModel* model = room->knot_model();
+  QAbstractItemModelTester tester(model, QAbstractItemModelTester::FailureReportingMode::Fatal);
+  ASSERT_EQ(model->rowCount(), 36);
+  const KnotTracks* moved_tracks = w.reconstruction()->tracks();
+  ASSERT_NE(moved_tracks, nullptr);
+  const int moved_row = w.reconstruction()->TrackRow(kMovedFrame);
+  for (int i = 0; i < model->rowCount(); ++i) {
+    const KnotErrorModel::Row& r = model->row(i);
+    const size_t at = static_cast<size_t>(moved_row) * 36 + r.knot;
+    if (!moved_tracks->valid[at]) continue;
+    EXPECT_DOUBLE_EQ(r.residual_px, moved_tracks->reprojection_error_px[at]);
+    EXPECT_NEAR(r.sigma_mm * r.sigma_mm * 1e-6,
+                Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(moved_tracks->covariance[at])
+                    .eigenvalues()
+                    .maxCoeff(),
+                1e-15);
+  }
+  QHeaderView* header = room->knot_table()->horizontalHeader();
+  const int residual_x = header->sectionViewportPosition(KnotErrorModel::kResidual) + 5;
+  QTest::mouseClick(header->viewport(), Qt::LeftButton, {}, QPoint(residual_x, 5));
+  if (header->sortIndicatorOrder() != Qt::DescendingOrder)
+    QTest::mouseClick(header->viewport(), Qt::LeftButton, {}, QPoint(residual_x, 5));
+  ASSERT_EQ(header->sortIndicatorSection(), KnotErrorModel::kResidual);
+  for (int i = 1; i < model->rowCount(); ++i)
+    EXPECT_GE(model->index(i - 1, KnotErrorModel::kResidual).data(Qt::UserRole).toDouble(),
+              model->index(i, KnotErrorModel::kResidual).data(Qt::UserRole).toDouble())
+        << "row " << i;
+  room->knot_filter_box()->setCurrentText("outliers");
+  ASSERT_GE(model->rowCount(), 1);
+  ASSERT_LE(model->rowCount(), 3);
+  int knot_row = -1;
+  for (int i = 0; i < model->rowCount(); ++i)
+    if (model->row(i).knot == MovedKnot()) knot_row = i;
+  ASSERT_GE(knot_row, 0);
+  EXPECT_EQ(model->index(knot_row, KnotErrorModel::kStatus).data().toString(), "outlier view");
+  EXPECT_TRUE(model->index(knot_row, KnotErrorModel::kOutliers)
+                  .data()
+                  .toString()
+                  .startsWith(QString::fromStdString(w.session()->camera_names()[kMovedCamera])))
+      << model->index(knot_row, KnotErrorModel::kOutliers).data().toString().toStdString();
+  QTableView* knots = room->knot_table();
+  QTest::mouseClick(knots->viewport(), Qt::LeftButton, {},
+                    knots->visualRect(model->index(knot_row, 0)).center());
+  EXPECT_EQ(w.room(), MainWindow::Room::kLabeling);
+  EXPECT_EQ(w.frame(), kMovedFrame);
+  EXPECT_EQ(w.camera(), kMovedCamera);
+  EXPECT_EQ(w.knot(), MovedKnot());
+  QTest::keyClick(&w, Qt::Key_4, Qt::ControlModifier);
+  room->knot_filter_box()->setCurrentText("degenerate");
+  for (int i = 0; i < model->rowCount(); ++i) EXPECT_TRUE(model->row(i).degenerate);
+  room->knot_filter_box()->setCurrentText("all");
 
   // The 3D view follows the slider; the labeling room opens at the frame left.
   NetView3D* view = room->view();
