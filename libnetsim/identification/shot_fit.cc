@@ -948,6 +948,32 @@ Eigen::MatrixXd DataInformation(const std::vector<FitShotInput>& inputs,
 // of the best's, times the data's inflation.
 constexpr double kAsWell = 3.841458820694124;
 
+// Why a material parameter whose sigma is small is not marked identified when the only doubt is
+// another basin of the cost (Report).
+std::string AnotherBasinNote(const FittedParameter& f) {
+  char numbers[160];
+  std::snprintf(numbers, sizeof numbers,
+                " (%.4g +- %.3g) is not marked identified although its sigma is small: ", f.value,
+                f.sigma);
+  std::string where;
+  if (std::isnan(f.alternative)) {
+    where =
+        "a last stage of the fit from the scan's other valley failed, so where that valley "
+        "leads is unknown";
+  } else {
+    char other[160];
+    std::snprintf(other, sizeof other, "%.4g there, its cost %+.3g", f.alternative,
+                  f.alternative_rise);
+    where = "a last stage of the fit (" + f.alternative_from + ") ended in another basin (" +
+            other + ")";
+  }
+  return f.parameter.name + numbers + where +
+         ". fit marks no material parameter identified while another basin stands, however much "
+         "worse that basin fits: its scans look along one parameter at a time, and the basin the "
+         "truth is in can be the one that fits worse (docs/fit.md, Several valleys). The estimate "
+         "is the best end found; a bench prior (--prior) settles which basin is the thread's";
+}
+
 // Estimates, sigmas, whether each is identified (sigma below half the reference spread: the
 // prior's sigma, else the parameter's spread, fit_parameters.h), for the scenario ones that
 // look identified whether the cost is smooth enough for sigma to mean something, and whether
@@ -1025,6 +1051,8 @@ void Report(const ShotCost& cost, const std::vector<FitParameter>& parameters,
         f.alternative_rise = elsewhere->cost - result->cost_final;
         f.alternative_from = elsewhere->from;
       }
+      // Held back by the other basin alone, however much worse it fits: say so in words.
+      if (looks_identified[i] && !f.rough) result->notes.push_back(AnotherBasinNote(f));
     }
     f.identified = looks_identified[i] && !f.rough && !f.ambiguous;
     f.determined_by = f.identified  ? DeterminedBy::kFlightData
