@@ -10,8 +10,9 @@
 namespace netlab::gui {
 
 namespace {
-constexpr double kMargin = 22.0;  // px for the row and column numbers
-}
+constexpr double kMargin = 22.0;     // px for the row and column numbers
+constexpr double kMinScaleMm = 1.0;  // the error colours' scale reaches at least this
+}  // namespace
 
 KnotGrid::KnotGrid(QWidget* parent) : QWidget(parent) {
   setFocusPolicy(Qt::ClickFocus);
@@ -49,9 +50,55 @@ void KnotGrid::SetOffered(std::vector<int> knots, bool identified) {
   update();
 }
 
+void KnotGrid::SetErrors(std::vector<double> errors_mm, QString source) {
+  if (errors_mm.size() != cells_.size()) errors_mm.clear();
+  // The scale's top: the largest error, at least 1 mm (a simulation on the labels to a fraction
+  // of a micrometre is all green, not its rounding noise in red).
+  worst_mm_ = kMinScaleMm;
+  for (double e : errors_mm)
+    if (std::isfinite(e)) worst_mm_ = std::max(worst_mm_, e);
+  errors_mm_ = std::move(errors_mm);
+  error_source_ = std::move(source);
+  update();
+}
+
+QColor KnotGrid::ErrorColour(double fraction) {
+  const double f = std::clamp(fraction, 0.0, 1.0);  // green, yellow, red
+  return f < 0.5 ? QColor::fromRgbF(2 * f, 0.75, 0.1)
+                 : QColor::fromRgbF(1.0, 0.75 * (2 - 2 * f), 0.1);
+}
+
+QColor KnotGrid::ErrorColour(int knot) const {
+  if (knot < 0 || knot >= static_cast<int>(errors_mm_.size()) || !std::isfinite(errors_mm_[knot]))
+    return {};
+  return ErrorColour(errors_mm_[knot] / worst_mm_);
+}
+
+QString KnotGrid::ErrorLegend() const {
+  if (errors_mm_.empty()) return "";
+  return QString("%1: 0 (green) to %2 mm (red)").arg(error_source_).arg(worst_mm_, 0, 'g', 3);
+}
+
+QString KnotGrid::KnotToolTip(int k) const {
+  if (k < 0 || k >= rows_ * cols_) return toolTip();
+  const Cell& c = cells_[k];
+  QString state = c.hidden            ? "marked hidden here"
+                  : c.label.isValid() ? "labeled here"
+                                      : "no label here";
+  if (std::find(offered_.begin(), offered_.end(), k) != offered_.end())
+    state += identified_ ? "; the colours identify it" : "; the colours fit it";
+  QString text = QString("knot (%1, %2): %3").arg(k / cols_).arg(k % cols_).arg(state);
+  if (!errors_mm_.empty())
+    text += std::isfinite(errors_mm_[k])
+                ? QString("\n%1: %2 mm").arg(error_source_).arg(errors_mm_[k], 0, 'f', 2)
+                : QString("\n%1: not compared").arg(error_source_);
+  return text;
+}
+
 double KnotGrid::Pitch() const {
   if (rows_ < 1 || cols_ < 1) return 1.0;
-  return std::max(4.0, std::min((width() - kMargin - 6) / cols_, (height() - kMargin - 6) / rows_));
+  return std::max(4.0, std::min((width() - kMargin - 6) / cols_,
+                                (height() - kMargin - 6 - LegendHeight()) / rows_));
 }
 
 QPointF KnotGrid::Origin() const {
@@ -59,7 +106,7 @@ QPointF KnotGrid::Origin() const {
   // Centred in the space right of and below the numbers.
   const double w = p * cols_, h = p * rows_;
   return {kMargin + std::max(0.0, (width() - kMargin - w) / 2) + p / 2,
-          kMargin + std::max(0.0, (height() - kMargin - h) / 2) + p / 2};
+          kMargin + std::max(0.0, (height() - kMargin - LegendHeight() - h) / 2) + p / 2};
 }
 
 QPointF KnotGrid::KnotCentre(int knot) const {
@@ -98,19 +145,7 @@ bool KnotGrid::event(QEvent* event) {
   if (event->type() == QEvent::ToolTip && rows_ > 0) {
     auto* help = static_cast<QHelpEvent*>(event);
     const int k = KnotAt(help->pos());
-    if (k < 0) {
-      QToolTip::showText(help->globalPos(), toolTip(), this);
-    } else {
-      const Cell& c = cells_[k];
-      QString state = c.hidden            ? "marked hidden here"
-                      : c.label.isValid() ? "labeled here"
-                                          : "no label here";
-      if (std::find(offered_.begin(), offered_.end(), k) != offered_.end())
-        state += identified_ ? "; the colours identify it" : "; the colours fit it";
-      QToolTip::showText(help->globalPos(),
-                         QString("knot (%1, %2): %3").arg(k / cols_).arg(k % cols_).arg(state),
-                         this);
-    }
+    QToolTip::showText(help->globalPos(), k < 0 ? toolTip() : KnotToolTip(k), this);
     return true;
   }
   return QWidget::event(event);
@@ -165,6 +200,20 @@ void KnotGrid::paintEvent(QPaintEvent*) {
     if (i < rows_)
       painter.drawText(QRectF(0, o.y() + i * p - p / 2, kMargin - 4, p),
                        Qt::AlignRight | Qt::AlignVCenter, QString::number(i));
+  }
+  // The errors, as squares behind the discs, and their scale below the grid.
+  if (!errors_mm_.empty()) {
+    painter.setPen(Qt::NoPen);
+    const double half = std::max(r + 1.5, 0.45 * p);
+    for (int k = 0; k < rows_ * cols_; ++k) {
+      const QColor colour = ErrorColour(k);
+      if (!colour.isValid()) continue;
+      painter.setBrush(colour);
+      painter.drawRect(QRectF(KnotCentre(k) - QPointF(half, half), QSizeF(2 * half, 2 * half)));
+    }
+    painter.setPen(ink);
+    painter.drawText(QRectF(4, height() - LegendHeight(), width() - 8, LegendHeight()),
+                     Qt::AlignCenter, ErrorLegend());
   }
   // The discs.
   for (int k = 0; k < rows_ * cols_; ++k) {

@@ -3,8 +3,10 @@
 // each filled with the colour of its label in the current camera and frame (as the views draw
 // it; empty: no label, crossed: marked hidden), the knot to label ringed in blue, and the knots
 // the colours of a junction fit (I) ringed in yellow, the one they identify in a thicker ring.
-// A click on a disc, or the arrow keys while the grid has the focus, picks the knot a click in a
-// view labels next.
+// Once a score exists, each knot's error against the simulation as a square behind its disc,
+// green (0) through yellow to red (the largest, or 1 mm when all are smaller), the scale in a line
+// below the grid and each knot's value in its tooltip. A click on a disc, or the arrow keys while
+// the grid has the focus, picks the knot a click in a view labels next.
 
 #include <QColor>
 #include <QWidget>
@@ -34,6 +36,16 @@ class KnotGrid : public QWidget {
   void SetOffered(std::vector<int> knots, bool identified);
   const std::vector<int>& offered() const { return offered_; }
   bool identified() const { return identified_; }
+  // Each knot's error, mm (row-major; NaN: none), and what it is against ("RMS error against
+  // sim.h5"); an empty list (or one of another size) shows none.
+  void SetErrors(std::vector<double> errors_mm, QString source);
+  const std::vector<double>& errors_mm() const { return errors_mm_; }
+  // The colour of knot k's error (invalid: none shown), and of a fraction of the largest error.
+  QColor ErrorColour(int knot) const;
+  static QColor ErrorColour(double fraction);
+  // The legend line below the grid ("" : no errors shown) and a knot's tooltip.
+  QString ErrorLegend() const;
+  QString KnotToolTip(int knot) const;
 
   // Knot k's disc centre in widget coordinates, and the knot under a point (-1: none).
   QPointF KnotCentre(int knot) const;
@@ -54,6 +66,7 @@ class KnotGrid : public QWidget {
  private:
   // The grid's geometry in the widget: the spacing of the discs and the first disc's centre.
   double Pitch() const;
+  double LegendHeight() const { return errors_mm_.empty() ? 0.0 : 16.0; }
   QPointF Origin() const;
   void Pick(int knot);
 
@@ -62,6 +75,9 @@ class KnotGrid : public QWidget {
   int selected_ = -1;
   std::vector<int> offered_;
   bool identified_ = false;
+  std::vector<double> errors_mm_;
+  double worst_mm_ = 0.0;
+  QString error_source_;
 };
 
 }  // namespace netlab::gui

@@ -637,6 +637,10 @@ void MainWindow::RefreshKnotGrid() {
   }
   knot_grid_->SetCells(std::move(cells));
   knot_grid_->SetSelected(knot());
+  QString source;  // the simulation room's score, per knot
+  std::vector<double> errors;
+  if (simulation_) errors = simulation_->ShownKnotErrorsMm(&source);
+  knot_grid_->SetErrors(std::move(errors), source);
 }
 
 void MainWindow::ClearHint() {
@@ -1497,6 +1501,7 @@ void MainWindow::ShowRoom(Room room) {
     case Room::kLabeling:
       stack_->setCurrentWidget(workspace_);
       if (left_at && *left_at != frame()) SetFrame(*left_at);
+      RefreshKnotGrid();  // a score made in the simulation room colours it
       FocusView();
       break;
     case Room::kReconstruction:

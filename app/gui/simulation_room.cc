@@ -638,6 +638,7 @@ void SimulationRoom::RequestFrame() {
 void SimulationRoom::Select(int i) {
   if (!simulation_ || i < 0 || i >= simulation_->simulations()) return;
   selected_ = i;
+  simulation_->SetShown(i);
   if (table_->currentRow() != i) {
     table_->blockSignals(true);
     table_->selectRow(i);
@@ -675,9 +676,7 @@ void SimulationRoom::RefreshErrorGrid() {
     for (int k = 0; k < rows * cols; ++k) {
       const double rms = score->summary.per_knot[k].rms_m;
       if (!std::isfinite(rms)) continue;
-      const double f = std::clamp(rms / worst, 0.0, 1.0);  // green, yellow, red
-      cells[k].label = f < 0.5 ? QColor::fromRgbF(2 * f, 0.75, 0.1)
-                               : QColor::fromRgbF(1.0, 0.75 * (2 - 2 * f), 0.1);
+      cells[k].label = KnotGrid::ErrorColour(rms / worst);
     }
     error_grid_caption_->setText(
         QString("Per knot: RMS 0 (green) to %1 mm (red)").arg(worst * 1e3, 0, 'g', 3));

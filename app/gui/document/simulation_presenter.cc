@@ -533,6 +533,21 @@ std::optional<double> SimulationPresenter::LabelDistancePx(int i, int c, int t, 
   return (label.px - *sim).norm();
 }
 
+std::vector<double> SimulationPresenter::ShownKnotErrorsMm(QString* source) const {
+  if (shown_ < 0 || shown_ >= simulations() || !simulations_[shown_].score) return {};
+  const netsim::ScoreResult& r = *simulations_[shown_].score;
+  const int rows = session_->project().rows, cols = session_->project().cols;
+  std::vector<double> errors(rows * cols, kNaN);
+  for (size_t k = 0; k < r.grid.size() && k < r.summary.per_knot.size(); ++k) {
+    const auto [row, col] = r.grid[k];
+    if (row >= 0 && row < rows && col >= 0 && col < cols)
+      errors[row * cols + col] = r.summary.per_knot[k].rms_m * 1e3;
+  }
+  if (source != nullptr)
+    *source = "RMS error against " + QString::fromStdString(simulations_[shown_].name);
+  return errors;
+}
+
 std::optional<double> SimulationPresenter::ResidualM(int i, int t, int knot) const {
   const Simulation& s = simulations_.at(i);
   const int row = reconstruction_ ? reconstruction_->TrackRow(t) : -1;

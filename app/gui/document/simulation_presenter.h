@@ -167,6 +167,12 @@ class SimulationPresenter {
   // The pixel distance between the label of `knot` in (c, t) and its simulated knot (nullopt:
   // no label or not drawn).
   std::optional<double> LabelDistancePx(int i, int c, int t, int knot) const;
+  // The simulation the person looks at (the simulation room's selection; -1: none).
+  void SetShown(int i) { shown_ = i; }
+  int shown() const { return shown_; }
+  // Each knot's RMS error (mm) in the shown simulation's score, row-major over the project's
+  // grid (NaN: not compared), and what it is in words; empty when it is not scored.
+  std::vector<double> ShownKnotErrorsMm(QString* source) const;
   // The score's 3D residual |measured - simulated| at (t, knot), m (nullopt: not compared).
   std::optional<double> ResidualM(int i, int t, int knot) const;
 
@@ -202,6 +208,7 @@ class SimulationPresenter {
  private:
   std::optional<FitRun> fit_;
   std::string fit_path_;
+  int shown_ = -1;
   const Session* session_;
   const ReconstructionPresenter* reconstruction_;
   std::deque<Simulation> simulations_;  // a deque: an added one moves no score a chart shows

@@ -248,6 +248,40 @@ TEST_F(SimulationRoomTest, TheTrueSimulationLiesOnTheLabelsAndIsConsistentTheNoD
   EXPECT_EQ(room->simulations_table()->item(0, 1)->text(), "consistent");
   EXPECT_EQ(room->simulations_table()->item(1, 1)->text(), "inconsistent");
 
+  // The labeling room's Net grid dock: each knot coloured by its error in the shown score, the
+  // worst red, the scale below the grid, the value in the knot's tooltip.
+  QTest::keyClick(&w, Qt::Key_3, Qt::ControlModifier);
+  ASSERT_EQ(w.room(), MainWindow::Room::kLabeling);
+  KnotGrid* grid = w.knot_grid();
+  const netsim::ScoreResult& score = *w.simulation()->simulation(1).score;
+  ASSERT_EQ(grid->errors_mm().size(), 36u);
+  int worst_knot = -1, best_knot = -1;
+  for (size_t k = 0; k < score.grid.size(); ++k) {
+    const int knot = score.grid[k][0] * 6 + score.grid[k][1];
+    EXPECT_DOUBLE_EQ(grid->errors_mm()[knot], score.summary.per_knot[k].rms_m * 1e3);
+    if (worst_knot < 0 || grid->errors_mm()[knot] > grid->errors_mm()[worst_knot])
+      worst_knot = knot;
+    if (best_knot < 0 || grid->errors_mm()[knot] < grid->errors_mm()[best_knot]) best_knot = knot;
+  }
+  ASSERT_GT(grid->errors_mm()[worst_knot], grid->errors_mm()[best_knot]);
+  EXPECT_EQ(grid->ErrorColour(worst_knot), KnotGrid::ErrorColour(1.0));  // red
+  EXPECT_GT(grid->ErrorColour(best_knot).greenF(), grid->ErrorColour(worst_knot).greenF() + 0.3);
+  EXPECT_TRUE(grid->ErrorLegend().contains("RMS error against sim_no_drag.h5: 0 (green) to"))
+      << grid->ErrorLegend().toStdString();
+  EXPECT_TRUE(grid->KnotToolTip(worst_knot)
+                  .contains(QString("%1 mm").arg(grid->errors_mm()[worst_knot], 0, 'f', 2)))
+      << grid->KnotToolTip(worst_knot).toStdString();
+  // The true simulation shown instead: its errors of 0 mm all green (the scale reaches 1 mm).
+  QTest::keyClick(&w, Qt::Key_5, Qt::ControlModifier);
+  room->Select(0);
+  QTest::keyClick(&w, Qt::Key_3, Qt::ControlModifier);
+  EXPECT_TRUE(grid->ErrorLegend().contains("against sim.h5: 0 (green) to 1 mm (red)"))
+      << grid->ErrorLegend().toStdString();
+  for (int k = 0; k < 36; ++k) EXPECT_EQ(grid->ErrorColour(k), KnotGrid::ErrorColour(0.0)) << k;
+  QTest::keyClick(&w, Qt::Key_5, Qt::ControlModifier);
+  ASSERT_EQ(w.room(), MainWindow::Room::kSimulation);
+  room->Select(1);
+
   // Everything in the project, in the CLI's files: the tracks and both simulations named.
   const Project saved = LoadProject(d + "/project.yaml");
   EXPECT_EQ(saved.tracks, (Dir() / "tracks.h5").string());
