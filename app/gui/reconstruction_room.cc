@@ -442,7 +442,7 @@ ReconstructionRoom::ReconstructionRoom(QWidget* parent)
   knot_table_->verticalHeader()->hide();
   knot_table_->verticalHeader()->setDefaultSectionSize(knot_table_->fontMetrics().height() + 6);
   knot_table_->horizontalHeader()->setStretchLastSection(true);
-  left_layout->addWidget(knot_table_, 1);
+  left_layout->addWidget(knot_table_, 2);  // the frame's 36..121 knots get the room
   knot_ = new QLabel("Click a knot in the 3D view: its residual and sigma.");
   knot_->setWordWrap(true);
   left_layout->addWidget(knot_);
