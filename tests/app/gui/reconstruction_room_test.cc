@@ -96,6 +96,14 @@ class ReconstructionRoomTest : public ::testing::Test {
   }
 };
 
+// The labeling room shown at the moved label: its frame, camera and knot.
+void ExpectOnTheMovedLabel(MainWindow& w) {
+  EXPECT_EQ(w.room(), MainWindow::Room::kLabeling);
+  EXPECT_EQ(w.frame(), kMovedFrame);
+  EXPECT_EQ(w.camera(), kMovedCamera);
+  EXPECT_EQ(w.knot(), MovedKnot());
+}
+
 TEST_F(ReconstructionRoomTest, TriangulateClickAnOutlierLandOnItsLabelAndExportAsTheCli) {
   const std::string d = Dir().string();
   MainWindow w;
@@ -136,10 +144,7 @@ TEST_F(ReconstructionRoomTest, TriangulateClickAnOutlierLandOnItsLabelAndExportA
   table->scrollToItem(table->item(row, 0));
   QTest::mouseClick(table->viewport(), Qt::LeftButton, {},
                     table->visualItemRect(table->item(row, 0)).center());
-  EXPECT_EQ(w.room(), MainWindow::Room::kLabeling);
-  EXPECT_EQ(w.frame(), kMovedFrame);
-  EXPECT_EQ(w.camera(), kMovedCamera);
-  EXPECT_EQ(w.knot(), MovedKnot());
+  ExpectOnTheMovedLabel(w);
   EXPECT_EQ(w.maximised(), kMovedCamera);
   // And back.
   QTest::keyClick(&w, Qt::Key_4, Qt::ControlModifier);
@@ -191,10 +196,7 @@ TEST_F(ReconstructionRoomTest, TriangulateClickAnOutlierLandOnItsLabelAndExportA
   QTableView* knots = room->knot_table();
   QTest::mouseClick(knots->viewport(), Qt::LeftButton, {},
                     knots->visualRect(model->index(knot_row, 0)).center());
-  EXPECT_EQ(w.room(), MainWindow::Room::kLabeling);
-  EXPECT_EQ(w.frame(), kMovedFrame);
-  EXPECT_EQ(w.camera(), kMovedCamera);
-  EXPECT_EQ(w.knot(), MovedKnot());
+  ExpectOnTheMovedLabel(w);
   QTest::keyClick(&w, Qt::Key_4, Qt::ControlModifier);
   room->knot_filter_box()->setCurrentText("degenerate");
   for (int i = 0; i < model->rowCount(); ++i) EXPECT_TRUE(model->row(i).degenerate);

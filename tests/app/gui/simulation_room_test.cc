@@ -111,6 +111,15 @@ class SimulationRoomTest : public ::testing::Test {
   }
 };
 
+// The window on `project`, in the simulation room, once the room's work is done.
+void OpenInTheSimulationRoom(MainWindow* w, const std::string& project) {
+  w->resize(1500, 1000);
+  w->show();
+  ASSERT_TRUE(w->OpenProject(QString::fromStdString(project), false));
+  w->ShowRoom(MainWindow::Room::kSimulation);
+  ASSERT_TRUE(w->WaitForIdle());
+}
+
 // Score the selected simulation by mouse; the verdict's text once done.
 std::string ScoreSelected(SimulationRoom* room) {
   Click(room->score_button());
@@ -367,11 +376,7 @@ TEST_F(SimulationRoomTest, AProjectWithTracksAndSimulationsOpensOnTheirVerdicts)
 TEST_F(SimulationRoomTest, AFitOfTheDragCoefficientIsCancelledThenRunToTheEnd) {
   const std::string d = Dir().string();
   MainWindow w;
-  w.resize(1500, 1000);
-  w.show();
-  ASSERT_TRUE(w.OpenProject(QString::fromStdString(d + "/project.yaml"), false));
-  w.ShowRoom(MainWindow::Room::kSimulation);
-  ASSERT_TRUE(w.WaitForIdle());
+  ASSERT_NO_FATAL_FAILURE(OpenInTheSimulationRoom(&w, d + "/project.yaml"));
   SimulationRoom* room = w.simulation_room();
   room->sigma_box()->setValue(0.1);
   QTest::mouseClick(room->triangulate_button(), Qt::LeftButton);
@@ -426,11 +431,7 @@ TEST_F(SimulationRoomTest, AFitOfTheDragCoefficientIsCancelledThenRunToTheEnd) {
   ASSERT_EQ(cli.status, 0) << cli.err;
   EXPECT_EQ(LinesButTime(fit_path), LinesButTime(d + "/cli_fit.yaml"));
   MainWindow reopened;
-  reopened.resize(1500, 1000);
-  reopened.show();
-  ASSERT_TRUE(reopened.OpenProject(QString::fromStdString(d + "/project.yaml"), false));
-  reopened.ShowRoom(MainWindow::Room::kSimulation);
-  ASSERT_TRUE(reopened.WaitForIdle());
+  ASSERT_NO_FATAL_FAILURE(OpenInTheSimulationRoom(&reopened, d + "/project.yaml"));
   const std::string again = reopened.simulation_room()->fit_label()->text().toStdString();
   EXPECT_NE(again.find("Fit read from " + fit_path), std::string::npos) << again;
   EXPECT_NE(again.find("drag.drag_coefficient = "), std::string::npos) << again;
