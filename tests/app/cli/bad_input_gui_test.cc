@@ -30,6 +30,13 @@ class BadInputGui : public CommandTest {
     Write("two_documents.yaml", "netlab_project: 1\n---\nnetlab_project: 2\n");
     Write("syntax.yaml", "netlab_project: 1\nrig: [unclosed\n");
     std::filesystem::create_directory(Path("folder.yaml"));
+    const std::string project =
+        "netlab_project: 1\nexperiment: e.yaml\nrig: r.yaml\nlabels: l.h5\nnet: {rows: 2, cols: "
+        "2}\n";
+    Write("score_names.yaml", project + "scores: [score_sim.h5]\n");
+    Write("score_typo.yaml",
+          project + "scores:\n  - {simulation: sim.h5, score: score_sim.h5, reprot: r.html}\n");
+    Write("fits_map.yaml", project + "fits: {fit: fit.yaml}\n");
   }
   void Write(const std::string& name, const std::string& text) {
     std::ofstream(Path(name)) << text;
@@ -66,6 +73,18 @@ TEST_F(BadInputGui, EachKindEndsInAClearError) {
            1,
            {"{dir}/two_documents.yaml:3: a second YAML document"}},
           {"not YAML", "gui {dir}/syntax.yaml" + shot, 1, {"{dir}/syntax.yaml", "YAML"}},
+          {"a score named without its simulation",
+           "gui {dir}/score_names.yaml" + shot,
+           1,
+           {"{dir}/score_names.yaml:6", "scores", "each entry needs simulation and score"}},
+          {"a misspelt key of a score",
+           "gui {dir}/score_typo.yaml" + shot,
+           1,
+           {"{dir}/score_typo.yaml", "reprot"}},
+          {"fits as a map",
+           "gui {dir}/fits_map.yaml" + shot,
+           1,
+           {"{dir}/fits_map.yaml:6", "fits", "a list of netlab fit files expected"}},
           {"a folder as the project", "gui {dir}/folder.yaml" + shot, 1, {"{dir}/folder.yaml"}},
           {"a missing project",
            "gui {dir}/missing.yaml" + shot,
