@@ -204,7 +204,7 @@ void KnotGrid::paintEvent(QPaintEvent*) {
   // The errors, as squares behind the discs, and their scale below the grid.
   if (!errors_mm_.empty()) {
     painter.setPen(Qt::NoPen);
-    const double half = std::max(r + 1.5, 0.45 * p);
+    const double half = r + std::max(2.0, 0.1 * p);  // a frame round the disc
     for (int k = 0; k < rows_ * cols_; ++k) {
       const QColor colour = ErrorColour(k);
       if (!colour.isValid()) continue;
