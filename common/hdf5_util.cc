@@ -318,6 +318,10 @@ std::mutex& Mutex() {
 
 const UnitFactors kSeconds = {
     {"s", 1.0}, {"ms", 1e-3}, {"us", 1e-6}, {"\u00b5s", 1e-6}, {"ns", 1e-9}};
+const UnitFactors kMetres = {
+    {"m", 1.0}, {"cm", 1e-2}, {"mm", 1e-3}, {"um", 1e-6}, {"\u00b5m", 1e-6}};
+const UnitFactors kSquareMetres = {{"m^2", 1.0},   {"m2", 1.0},   {"cm^2", 1e-4},
+                                   {"mm^2", 1e-6}, {"mm2", 1e-6}, {"um^2", 1e-12}};
 const UnitFactors kPixels = {{"px", 1.0}};
 
 double UnitsFactor(hid_t file, const std::string& path, const std::string& name,

@@ -77,8 +77,10 @@ void SetUnits(hid_t loc, const std::string& name, const std::string& units);
 // A unit a reader accepts and the factor that turns it into the unit netlab keeps in memory
 // (the first of the list).
 using UnitFactors = std::vector<std::pair<std::string, double>>;
-extern const UnitFactors kSeconds;  // s, ms, us, ns
-extern const UnitFactors kPixels;   // px
+extern const UnitFactors kSeconds;       // s, ms, us, ns
+extern const UnitFactors kMetres;        // m, cm, mm, um
+extern const UnitFactors kSquareMetres;  // m^2, cm^2, mm^2, um^2 (covariances)
+extern const UnitFactors kPixels;        // px
 
 // The factor that turns dataset `name`'s values (in file `path`) into the unit netlab keeps in
 // memory, from its "units" attribute: a unit a file states is converted or refused, never

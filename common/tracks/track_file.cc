@@ -44,13 +44,6 @@ void WriteGrid(hid_t knots, const std::vector<std::array<int, 2>>& grid,
   h5::WriteStringAttribute(dataset.get(), "names", h5::JoinLines(net_names));
 }
 
-const std::vector<std::pair<std::string, double>> kTimeUnits = {
-    {"s", 1.0}, {"ms", 1e-3}, {"us", 1e-6}, {"\u00b5s", 1e-6}, {"ns", 1e-9}};
-const std::vector<std::pair<std::string, double>> kLengthUnits = {
-    {"m", 1.0}, {"cm", 1e-2}, {"mm", 1e-3}, {"um", 1e-6}, {"\u00b5m", 1e-6}};
-const std::vector<std::pair<std::string, double>> kAreaUnits = {
-    {"m^2", 1.0}, {"m2", 1.0}, {"cm^2", 1e-4}, {"mm^2", 1e-6}, {"mm2", 1e-6}, {"um^2", 1e-12}};
-
 // /knots/degenerate and the /degenerate group, when the tracks carry the flags.
 void WriteDegenerate(hid_t file, hid_t knots, const KnotTracks& tracks) {
   if (tracks.degenerate.empty()) return;
@@ -303,7 +296,7 @@ KnotTracks ReadKnotTracks(const std::string& path) {
 
   tracks.time.resize(t);
   h5::ReadDataset(f, "/time", H5T_NATIVE_DOUBLE, tracks.time.data());
-  if (const double to_s = h5::UnitsFactor(f, path, "/time", kTimeUnits); to_s != 1.0)
+  if (const double to_s = h5::UnitsFactor(f, path, "/time", h5::kSeconds); to_s != 1.0)
     for (double& time : tracks.time) time *= to_s;
   // A time that stands still or runs back (a decreasing /time read as "frames 0:-8") is refused
   // here, for every reader: render, triangulate --truth, score.
@@ -328,7 +321,7 @@ KnotTracks ReadKnotTracks(const std::string& path) {
   }
   tracks.position.resize(t * k);
   h5::ReadDataset(f, "/knots/position", H5T_NATIVE_DOUBLE, tracks.position.data());
-  if (const double to_m = h5::UnitsFactor(f, path, "/knots/position", kLengthUnits); to_m != 1.0)
+  if (const double to_m = h5::UnitsFactor(f, path, "/knots/position", h5::kMetres); to_m != 1.0)
     for (Eigen::Vector3d& p : tracks.position) p *= to_m;
   tracks.valid.resize(t * k);
   h5::ReadDataset(f, "/knots/valid", H5T_NATIVE_UINT8, tracks.valid.data());
@@ -341,7 +334,7 @@ KnotTracks ReadKnotTracks(const std::string& path) {
     expect("/knots/covariance", {t, k, 3, 3});
     tracks.covariance.resize(t * k);
     h5::ReadDataset(f, "/knots/covariance", H5T_NATIVE_DOUBLE, tracks.covariance.data());
-    if (const double to_m2 = h5::UnitsFactor(f, path, "/knots/covariance", kAreaUnits);
+    if (const double to_m2 = h5::UnitsFactor(f, path, "/knots/covariance", h5::kSquareMetres);
         to_m2 != 1.0)
       for (Eigen::Matrix3d& c : tracks.covariance) c *= to_m2;
   }
@@ -385,7 +378,7 @@ KnotTracks ReadKnotTracks(const std::string& path) {
     if (h5::DatasetDims(f, "/contact_start") != std::vector<hsize_t>{1})
       fail("/contact_start must hold one time (s)");
     h5::ReadDataset(f, "/contact_start", H5T_NATIVE_DOUBLE, &tracks.contact_start_s);
-    tracks.contact_start_s *= h5::UnitsFactor(f, path, "/contact_start", kTimeUnits);
+    tracks.contact_start_s *= h5::UnitsFactor(f, path, "/contact_start", h5::kSeconds);
   }
   return tracks;
 }
@@ -399,7 +392,7 @@ std::vector<std::vector<Eigen::Vector3d>> ReadNodePositions(const std::string& p
     throw std::runtime_error(path + ": /nodes/position must be [T,N,3]");
   std::vector<Eigen::Vector3d> flat(dims[0] * dims[1]);
   h5::ReadDataset(file.get(), "/nodes/position", H5T_NATIVE_DOUBLE, flat.data());
-  if (const double to_m = h5::UnitsFactor(file.get(), path, "/nodes/position", kLengthUnits);
+  if (const double to_m = h5::UnitsFactor(file.get(), path, "/nodes/position", h5::kMetres);
       to_m != 1.0)
     for (Eigen::Vector3d& p : flat) p *= to_m;
   for (hsize_t i = 0; i < dims[0]; ++i)

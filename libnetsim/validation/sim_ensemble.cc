@@ -10,6 +10,7 @@
 
 #include "common/errors.h"
 #include "common/hdf5_util.h"
+#include "common/memory.h"
 
 namespace netlab::netsim {
 namespace {
@@ -35,13 +36,16 @@ std::vector<EnsembleMember> ReadSweepMembers(const std::string& path) {
   if (!h5::Exists(file.get(), "/knots/grid"))
     throw InputError(path + ": no /knots/grid: no run of this sweep built its net");
   const std::vector<hsize_t> gdims = h5::DatasetDims(file.get(), "/knots/grid");
-  const int knots = static_cast<int>(gdims.at(0));
+  if (gdims.size() != 2 || gdims[1] != 2 || gdims[0] == 0)
+    throw InputError(path + ": /knots/grid must be [K, 2] with K > 0");
+  const int knots = static_cast<int>(gdims[0]);
   std::vector<std::array<int, 2>> grid(knots);
   h5::ReadDataset(file.get(), "/knots/grid", H5T_NATIVE_INT, grid.data());
   std::vector<int> net(knots, 0);
   if (h5::Exists(file.get(), "/knots/net"))
     h5::ReadDataset(file.get(), "/knots/net", H5T_NATIVE_INT, net.data());
   std::vector<EnsembleMember> members;
+  double bytes = 0.0;  // what the members read so far take
   for (int i = 0;; ++i) {
     const std::string group = "/tracks/" + std::to_string(i);
     if (!h5::Exists(file.get(), group)) break;
@@ -57,10 +61,26 @@ std::vector<EnsembleMember> ReadSweepMembers(const std::string& path) {
     if (dims.size() != 3 || static_cast<int>(dims[1]) != knots || dims[2] != 3)
       throw InputError(m.name + "/knots/position: not [T, " + std::to_string(knots) +
                        ", 3] as /knots/grid lists the knots");
+    if (!h5::Exists(file.get(), group + "/time") ||
+        h5::DatasetDims(file.get(), group + "/time") != std::vector<hsize_t>{dims[0]})
+      throw InputError(m.name + "/time: missing or not [" + std::to_string(dims[0]) +
+                       "] as its /knots/position's frames");
+    // A dataset's extent costs nothing to declare: sized before anything is allocated (a
+    // position and a flag per knot-frame, a time per frame; every member is kept).
+    bytes += static_cast<double>(dims[0]) * (8.0 + knots * 25.0);
+    if (const std::string shortfall = MemoryShortfall(bytes); !shortfall.empty())
+      throw InputError(m.name + ": " + std::to_string(dims[0]) + " frames of " +
+                       std::to_string(knots) +
+                       " knots (with the members before it): reading them " + shortfall);
     t.time.resize(dims[0]);
     t.position.resize(dims[0] * knots);
     h5::ReadDataset(file.get(), group + "/time", H5T_NATIVE_DOUBLE, t.time.data());
     h5::ReadDataset(file.get(), group + "/knots/position", H5T_NATIVE_DOUBLE, t.position.data());
+    // A unit the file states is converted or refused (h5::UnitsFactor), never ignored.
+    const double to_s = h5::UnitsFactor(file.get(), path, group + "/time", h5::kSeconds);
+    const double to_m = h5::UnitsFactor(file.get(), path, group + "/knots/position", h5::kMetres);
+    for (double& time : t.time) time *= to_s;
+    for (Eigen::Vector3d& p : t.position) p *= to_m;
     t.valid.assign(t.position.size(), 1);
     for (size_t j = 0; j < t.position.size(); ++j)
       if (!t.position[j].allFinite()) t.valid[j] = 0;

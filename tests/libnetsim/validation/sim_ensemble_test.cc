@@ -8,9 +8,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <random>
 
 #include "common/errors.h"
+#include "common/hdf5_util.h"
 #include "libnetsim/validation/score.h"
 #include "score_test_data.h"
 
@@ -133,6 +135,63 @@ TEST(SimEnsembleTest, RefusesOneMemberAnotherNetAndAShortRun) {
     FAIL() << "a short run accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("member 0: covers"), std::string::npos) << e.what();
+  }
+}
+
+// A sweep file of two finished runs of a 2-knot net, 3 frames each: run 0 in metres and seconds,
+// run 1 the same motion in millimetres and milliseconds; `time_frames` the length of run 1's
+// /time (3: as its positions).
+std::string WriteSweep(const std::string& name, hsize_t time_frames) {
+  const std::string path =
+      (std::filesystem::path(::testing::TempDir()) / ("sim_ensemble_" + name + ".h5")).string();
+  std::lock_guard<std::mutex> lock(h5::Mutex());
+  const h5::Id file = h5::CreateFile(path);
+  h5::WriteStringAttribute(file.get(), "format", "netlab-sweep");
+  h5::Id knots = h5::CreateGroup(file.get(), "knots");
+  const int grid[2][2] = {{0, 0}, {0, 1}};
+  h5::WriteDataset(knots.get(), "grid", H5T_NATIVE_INT, {2, 2}, grid);
+  h5::Id tracks = h5::CreateGroup(file.get(), "tracks");
+  for (int run = 0; run < 2; ++run) {
+    const double to_unit = run == 0 ? 1.0 : 1e3;
+    h5::Id g = h5::CreateGroup(tracks.get(), std::to_string(run));
+    h5::WriteStringAttribute(g.get(), "status", "ok");
+    const hsize_t frames = run == 0 ? 3 : time_frames;
+    std::vector<double> time(frames);
+    for (hsize_t f = 0; f < frames; ++f) time[f] = 0.01 * static_cast<double>(f) * to_unit;
+    h5::WriteDataset(g.get(), "time", H5T_NATIVE_DOUBLE, {frames}, time.data());
+    h5::SetUnits(g.get(), "time", run == 0 ? "s" : "ms");
+    h5::Id k = h5::CreateGroup(g.get(), "knots");
+    std::vector<double> position(3 * 2 * 3);
+    for (int f = 0; f < 3; ++f)
+      for (int knot = 0; knot < 2; ++knot)
+        for (int axis = 0; axis < 3; ++axis)
+          position[(f * 2 + knot) * 3 + axis] = (0.1 * knot + 0.02 * f + 0.001 * axis) * to_unit;
+    h5::WriteDataset(k.get(), "position", H5T_NATIVE_DOUBLE, {3, 2, 3}, position.data());
+    h5::SetUnits(k.get(), "position", run == 0 ? "m" : "mm");
+  }
+  return path;
+}
+
+// A sweep's runs are read in the units the file states, and a run whose /time does not match its
+// positions' frames is refused by name before anything is read into memory.
+TEST(SimEnsembleTest, ReadsASweepsRunsInTheirUnitsAndRefusesATimeOfAnotherLength) {
+  const std::vector<EnsembleMember> members = ReadEnsemble(WriteSweep("units", 3));
+  ASSERT_EQ(members.size(), 2u);
+  for (int f = 0; f < 3; ++f) {
+    EXPECT_NEAR(members[1].tracks.time[f], members[0].tracks.time[f], 1e-12) << "frame " << f;
+    for (int k = 0; k < 2; ++k)
+      EXPECT_LT(
+          (members[1].tracks.position[f * 2 + k] - members[0].tracks.position[f * 2 + k]).norm(),
+          1e-12)
+          << "frame " << f << " knot " << k;
+  }
+  EXPECT_NEAR(members[0].tracks.position[5].x(), 0.14, 1e-12);  // frame 2, knot 1, in metres
+  try {
+    ReadEnsemble(WriteSweep("long_time", 1000));
+    FAIL() << "a /time of 1000 frames for 3 frames of positions accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/tracks/1/time: missing or not [3]"), std::string::npos)
+        << e.what();
   }
 }
 
