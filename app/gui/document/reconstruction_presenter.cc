@@ -350,9 +350,9 @@ void KnotErrorModel::sort(int column, Qt::SortOrder order) {
     return order == Qt::AscendingOrder ? ka < kb : ka > kb;
   });
   QModelIndexList after;
-  for (size_t j = 0; j < before.size(); ++j) {
+  for (qsizetype j = 0; j < before.size(); ++j) {
     int row = 0;
-    while (rows_[row].knot != knots_before[j]) ++row;
+    while (rows_[row].knot != knots_before[static_cast<size_t>(j)]) ++row;
     after.push_back(index(row, before[j].column()));
   }
   changePersistentIndexList(before, after);
