@@ -226,6 +226,7 @@ void MainWindow::BuildWorkspace() {
   review_table_->setSelectionBehavior(QAbstractItemView::SelectRows);
   review_table_->setSelectionMode(QAbstractItemView::SingleSelection);
   review_table_->setSortingEnabled(true);
+  review_table_->installEventFilter(this);
   review_table_->horizontalHeader()->setStretchLastSection(true);
   review_table_->verticalHeader()->setVisible(false);
   // One line per item: the Reason cut at its end ("…"), whole in the cell's tooltip and in the
@@ -525,6 +526,35 @@ void MainWindow::FocusView() {
 }
 
 bool MainWindow::eventFilter(QObject* watched, QEvent* event) {
+  if (watched == review_table_ && event->type() == QEvent::ShortcutOverride) {
+    // The queue's own keys (Home, End, the arrows, the pages, Enter) move in the queue as sorted
+    // and show its item, not the window's frame shortcuts (Home: first frame); the labeling keys
+    // (A, D, Space, ...) stay the window's.
+    const auto* key = static_cast<QKeyEvent*>(event);
+    const int k = key->key();
+    if ((key->modifiers() & ~Qt::KeypadModifier) == Qt::NoModifier &&
+        (k == Qt::Key_Home || k == Qt::Key_End || k == Qt::Key_Up || k == Qt::Key_Down ||
+         k == Qt::Key_PageUp || k == Qt::Key_PageDown || k == Qt::Key_Return ||
+         k == Qt::Key_Enter)) {
+      event->accept();
+      return true;
+    }
+    return QMainWindow::eventFilter(watched, event);
+  }
+  if (watched == review_table_ && event->type() == QEvent::KeyPress && review_table_->model()) {
+    // Home and End: the queue's first and last item as sorted (a table's own Home and End move
+    // along the row, and every column of a row is the same item).
+    const auto* key = static_cast<QKeyEvent*>(event);
+    const int rows = review_table_->model()->rowCount();
+    if ((key->modifiers() & ~Qt::KeypadModifier) == Qt::NoModifier &&
+        (key->key() == Qt::Key_Home || key->key() == Qt::Key_End) && rows > 0) {
+      const int column = std::max(0, review_table_->currentIndex().column());
+      review_table_->setCurrentIndex(
+          review_table_->model()->index(key->key() == Qt::Key_Home ? 0 : rows - 1, column));
+      return true;
+    }
+    return QMainWindow::eventFilter(watched, event);
+  }
   auto* box = qobject_cast<QSpinBox*>(watched);
   if (box == nullptr ||
       (event->type() != QEvent::ShortcutOverride && event->type() != QEvent::KeyPress))
@@ -686,19 +716,23 @@ void MainWindow::RefreshStatus() {
   if (!session_ || frame() < 0) return;
   status_frame_->setText(presenter_->FrameStatus());
   status_knot_->setText(presenter_->KnotStatus());
-  colours_timer_->start();
+  ShowColours();
+}
+
+void MainWindow::ShowColours() {
+  if (!session_ || frame() < 0) return;
+  // At once the knot as selected, its expected colours (also for a knot with no label, as a
+  // missing knot of the queue); what its yarns say follows (RequestColours).
+  colours_.Drop();
+  colours_label_->setText(presenter_->ColoursText(session_->ExpectedColours(knot())));
+  if (session_->document().at(camera(), frame(), knot()).present()) colours_timer_->start();
 }
 
 void MainWindow::RequestColours() {
   if (!session_ || frame() < 0 || !colours_label_->isVisible()) return;
   const int c = camera(), t = frame(), k = knot();
   const recon::Label& label = session_->document().at(c, t, k);
-  if (!label.present()) {
-    colours_.Drop();
-    colours_label_->setText(QString("<b>%1</b>: no label.").arg(presenter_->Where()));
-    return;
-  }
-  colours_label_->setText(QString("<b>%1</b>: reading the yarns…").arg(presenter_->Where()));
+  if (!label.present()) return;
   const Session* session = session_.get();
   const Eigen::Vector2d px = label.px;
   const recon::YarnDirections yarns =

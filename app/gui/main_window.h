@@ -178,6 +178,9 @@ class MainWindow : public QMainWindow {
   void AdvanceAfterFix(const LabelKey& key, bool was_queued);
   // In the review queue: a label for review or a missing knot.
   bool InQueue(int camera, int t, int knot) const;
+  // The Knot colours panel: the selected knot's expected colours at once, then RequestColours
+  // reads its yarns (after a short pause, off the GUI thread) when it has a label.
+  void ShowColours();
   // The selected knot's colour check in the current camera, on a worker; OnColoursRead shows it.
   void RequestColours();
   void OnColoursRead(std::optional<Session::KnotColours> colours);

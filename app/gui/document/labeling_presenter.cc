@@ -307,6 +307,12 @@ QString LabelingPresenter::ColoursText(const std::optional<Session::KnotColours>
                 .arg(std::lround(link.srgb[1]))
                 .arg(std::lround(link.srgb[2]))
                 .arg(QString::fromStdString(link.dye), QString::fromStdString(link.side));
+  if (!k.read) {
+    const bool labeled =
+        session_->document().at(cursor_->camera(), cursor_->frame(), cursor_->knot()).present();
+    return text + (labeled ? "<br>reading the yarns…"
+                           : "<br>no label here: the yarns are read once it has one");
+  }
   using recon::IdentityVerdict;
   const char* colour = k.verdict == IdentityVerdict::kConsistent ? "#1b7837"
                        : k.verdict == IdentityVerdict::kMismatch ? "#b2182b"

@@ -116,7 +116,8 @@ class LabelingPresenter {
   // The status bar after Find Node at the cursor's knot in camera c.
   QString FindNodeMessage(int c, const recon::FindNodeResult& result) const;
   // The knot colours panel (rich text) for the cursor's knot, from its colour check (nullopt: no
-  // colouring or no readable frame).
+  // colouring or no readable frame), or its expected colours alone (Session::ExpectedColours:
+  // the knot has no label, or its yarns are being read).
   QString ColoursText(const std::optional<Session::KnotColours>& colours) const;
 
  private:

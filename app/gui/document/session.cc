@@ -327,15 +327,12 @@ int Session::ApplyTrackRun(const TrackRun& run) {
   return document_->Apply(name, run.edits);
 }
 
-std::optional<Session::KnotColours> Session::CheckKnotColours(
-    int camera, int t, int knot, const Eigen::Vector2d& px,
-    const recon::YarnDirections& yarns) const {
+std::optional<Session::KnotColours> Session::ExpectedColours(int knot) const {
   if (!codebook_ || knot < 0 || knot >= project_.knots()) return std::nullopt;
-  const cv::Mat image = Image(camera, t);
-  if (image.empty() || image.type() != CV_8UC3) return std::nullopt;
   static const char* const kSides[4] = {"right", "down", "left", "up"};
   const std::array<int, 4> around = recon::GridSlots(project_.rows, project_.cols, knot);
   KnotColours out;
+  out.read = false;
   // The code's colours run over the knot's links in slot order (CodebookFromColoring).
   const recon::CodebookKnot& code = codebook_->knots[knot];
   int link = 0;
@@ -344,11 +341,22 @@ std::optional<Session::KnotColours> Session::CheckKnotColours(
     const recon::PaletteColour& dye = codebook_->palette[code.link_colours[link++]];
     out.expected.push_back({kSides[s], dye.name, recon::LinearBgrToSrgb(dye.linear_bgr)});
   }
+  return out;
+}
+
+std::optional<Session::KnotColours> Session::CheckKnotColours(
+    int camera, int t, int knot, const Eigen::Vector2d& px,
+    const recon::YarnDirections& yarns) const {
+  std::optional<KnotColours> out = ExpectedColours(knot);
+  if (!out) return std::nullopt;
+  const cv::Mat image = Image(camera, t);
+  if (image.empty() || image.type() != CV_8UC3) return std::nullopt;
   const recon::IdentityCheck check =
       recon::CheckIdentity(image, *codebook_, knot, px, yarns, identity_);
-  out.verdict = check.verdict;
-  out.why = check.why;
-  out.knots_read = check.knots_read;
+  out->read = true;
+  out->verdict = check.verdict;
+  out->why = check.why;
+  out->knots_read = check.knots_read;
   return out;
 }
 

@@ -150,10 +150,14 @@ class Session {
     recon::IdentityVerdict verdict = recon::IdentityVerdict::kUnreadable;
     std::string why;              // the check's line for the reviewer
     std::vector<int> knots_read;  // the knots the colours fit (one: identified)
+    bool read = true;             // false: the expected colours alone (no label to read at)
   };
   std::optional<KnotColours> CheckKnotColours(int camera, int t, int knot,
                                               const Eigen::Vector2d& px,
                                               const recon::YarnDirections& yarns) const;
+  // The link colours `knot`'s code expects, without reading the image (`read` false): what the
+  // person looks for at a knot that has no label yet. nullopt without a colouring.
+  std::optional<KnotColours> ExpectedColours(int knot) const;
 
   // The knot picker's hint: which knot the junction inside the brush (centre, radius in px) of
   // (camera, t) is, from its yarn colours (recon::ReadJunctionIdentity). Knots with an accepted
