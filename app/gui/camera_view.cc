@@ -363,6 +363,7 @@ void CameraView::mousePressEvent(QMouseEvent* event) {
   const int near = (event->modifiers() & Qt::ShiftModifier) ? -1 : LabelNear(event->position());
   if (near >= 0) {
     dragging_ = near;
+    drag_was_selected_ = near == overlay_.selected_knot;
     for (const auto& m : overlay_.labels)
       if (m.knot == near) drag_px_ = m.px;
     emit labelSelected(camera_, near);
@@ -411,8 +412,12 @@ void CameraView::mouseReleaseEvent(QMouseEvent* event) {
     for (const auto& m : overlay_.labels)
       if (m.knot == knot) original = m.px;
     // A drag of less than a screen pixel is a selection, not a move.
+    // A click on the selected knot's own label is a click for the tools (Find Node there, as
+    // the review message says a click fixes), not a selection again.
     if ((ToWidget(drag_px_) - ToWidget(original)).manhattanLength() >= 1.0)
       emit labelDragged(camera_, knot, drag_px_);
+    else if (drag_was_selected_)
+      emit clicked(camera_, ToImage(event->position()), event->modifiers());
     update();
   }
 }

@@ -137,7 +137,8 @@ class CameraView : public QWidget {
   bool fit_mode_ = true;
   // Interaction.
   std::optional<QPointF> pan_from_;
-  int dragging_ = -1;  // the knot being dragged
+  int dragging_ = -1;               // the knot being dragged
+  bool drag_was_selected_ = false;  // the pressed label was the selected knot's already
   Eigen::Vector2d drag_px_;
   QPointF cursor_;
   bool cursor_inside_ = false;

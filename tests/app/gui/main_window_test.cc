@@ -956,11 +956,7 @@ TEST_F(MainWindowTest, ASeverityClickPutsTheWorstItemFirstAndEnterShowsIt) {
 
 // A label under review for one reason, fixed by a Find Node click the other cameras disagree
 // with: the queue's row says the new reason (and its severity), not the old one.
-// Disabled: it fails. The click lands on the label itself, and a press on a label without Shift
-// selects it for a drag (CameraView::mousePressEvent, LabelNear) instead of running Find Node: the
-// label keeps its place, state and old reason, and the status bar keeps Space's "Review 1 of 1 ...
-// a click fixes with Find Node" message, which promises what the click does not do.
-TEST_F(MainWindowTest, DISABLED_TheQueueSaysTheReasonOfTheLabelAsItIsAfterAFindNodeClick) {
+TEST_F(MainWindowTest, TheQueueSaysTheReasonOfTheLabelAsItIsAfterAFindNodeClick) {
   const recon::LabelSet truth = Truth();
   const std::string project = MakeProjectFile("stale", (Dir() / "shot/labels_true.h5").string());
   MainWindow w;
