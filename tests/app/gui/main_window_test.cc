@@ -323,6 +323,17 @@ int KnotSeenByAll(const recon::LabelSet& truth, int t, int from = 0) {
   return -1;
 }
 
+// A person deletes camera c's label of knot k at frame t: goes to the frame, clicks the label,
+// presses Delete.
+void DeleteByHand(MainWindow* w, int c, int t, int k) {
+  w->SetFrame(t);
+  ASSERT_TRUE(w->WaitForFrame());
+  QTest::mouseClick(w->view(c), Qt::LeftButton, Qt::NoModifier,
+                    w->view(c)->ToWidget(w->session()->document().at(c, t, k).px).toPoint());
+  ASSERT_EQ(w->knot(), k);
+  QTest::keyClick(w, Qt::Key_Delete);
+}
+
 // Presses Space until the window is at (camera, t, knot); false when the queue has gone round.
 bool SpaceTo(MainWindow* w, int camera, int t, int knot) {
   for (int i = 0; i <= w->review_table()->model()->rowCount(); ++i) {
@@ -413,12 +424,7 @@ TEST_F(MainWindowTest, AStatusMessageHasTheBarsWidthAndIsWholeInItsTooltip) {
   Session* s = w.session();
   const int t = 7, c = 2, k = KnotSeenByAll(truth, t);
   ASSERT_GE(k, 0);
-  w.SetFrame(t);
-  ASSERT_TRUE(w.WaitForFrame());
-  QTest::mouseClick(w.view(c), Qt::LeftButton, Qt::NoModifier,
-                    w.view(c)->ToWidget(s->document().at(c, t, k).px).toPoint());
-  ASSERT_EQ(w.knot(), k);
-  QTest::keyClick(&w, Qt::Key_Delete);
+  ASSERT_NO_FATAL_FAILURE(DeleteByHand(&w, c, t, k));
   // The readouts are shown while no message is.
   w.statusBar()->clearMessage();
   QCoreApplication::processEvents();
@@ -1055,12 +1061,7 @@ TEST_F(MainWindowTest, TheQueuesReasonColumnShowsAMissingKnotsReasonOnOneLine) {
   Session* s = w.session();
   const int t = 7, c = 2, k = KnotSeenByAll(truth, t);
   ASSERT_GE(k, 0);
-  w.SetFrame(t);
-  ASSERT_TRUE(w.WaitForFrame());
-  QTest::mouseClick(w.view(c), Qt::LeftButton, Qt::NoModifier,
-                    w.view(c)->ToWidget(s->document().at(c, t, k).px).toPoint());
-  ASSERT_EQ(w.knot(), k);
-  QTest::keyClick(&w, Qt::Key_Delete);
+  ASSERT_NO_FATAL_FAILURE(DeleteByHand(&w, c, t, k));
   w.SetFrame(0);
   ASSERT_TRUE(SpaceTo(&w, c, t, k));
   QCoreApplication::processEvents();
@@ -1094,12 +1095,7 @@ TEST_F(MainWindowTest, TheColoursPanelShowsTheSelectedMissingKnotsExpectedColour
   for (const auto& [mc, mt, mk] : s->missing().Items()) s->MarkHidden(mc, mt, mk);
   const int t = 7, c = 2, k = KnotSeenByAll(truth, t);
   ASSERT_GE(k, 0);
-  w.SetFrame(t);
-  ASSERT_TRUE(w.WaitForFrame());
-  QTest::mouseClick(w.view(c), Qt::LeftButton, Qt::NoModifier,
-                    w.view(c)->ToWidget(s->document().at(c, t, k).px).toPoint());
-  ASSERT_EQ(w.knot(), k);
-  QTest::keyClick(&w, Qt::Key_Delete);
+  ASSERT_NO_FATAL_FAILURE(DeleteByHand(&w, c, t, k));
   ASSERT_FALSE(s->document().at(c, t, k).present());
   // Elsewhere first (knot 0 of camera 0 at frame 0), then Space to the missing knot.
   w.SetFrame(0);
