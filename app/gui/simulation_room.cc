@@ -127,9 +127,14 @@ void ScoreChart::paintEvent(QPaintEvent*) {
       if (b <= a) continue;
       painter.fillRect(QRectF(a, plot.top(), b - a, plot.height()),
                        p % 2 ? QColor(245, 245, 245) : QColor(232, 238, 246));
+      // The name where it fits whole, else cut with "…" where three letters fit, else none (a
+      // phase a few pixels wide showed its name's first letter, read with the next one's).
+      const QString name = painter.fontMetrics().elidedText(
+          QString::fromStdString(row.name), Qt::ElideRight, static_cast<int>(b - a - 4));
+      if (name.size() < 4 && name != QString::fromStdString(row.name)) continue;
       painter.setPen(QColor(90, 90, 90));
       painter.drawText(QRectF(a + 2, plot.top(), b - a - 4, 14), Qt::AlignLeft | Qt::AlignTop,
-                       QString::fromStdString(row.name));
+                       name);
     }
   }
   // Axes and ticks.

@@ -192,7 +192,6 @@ class SimulationRoom : public QWidget {
   LatestRequest<TriangulationRun> triangulator_;
   LatestRequest<SimulationRun> simulator_;
   LatestRequest<ScoreRun> scorer_;
-  LatestRequest<Loaded> loader_;
   // The fit's progress line, written by its worker and shown by the progress timer.
   struct FitStatus {
     std::mutex mutex;
@@ -200,6 +199,7 @@ class SimulationRoom : public QWidget {
   };
   std::shared_ptr<FitStatus> fit_status_ = std::make_shared<FitStatus>();
   LatestRequest<FitRun> fitter_;
+  LatestRequest<Loaded> loader_;
 };
 
 }  // namespace netlab::gui

@@ -12,9 +12,9 @@ namespace netlab {
 namespace {
 
 TEST(Progress, FractionIsDoneOverTotalClampedAndZeroWithoutATotal) {
-  EXPECT_DOUBLE_EQ((Progress{"runs", 3.4, 12}).fraction(), 3.4 / 12);
-  EXPECT_DOUBLE_EQ((Progress{"runs", 13, 12}).fraction(), 1.0);
-  EXPECT_DOUBLE_EQ((Progress{"fit", 5, 0}).fraction(), 0.0);
+  EXPECT_DOUBLE_EQ((Progress{"runs", 3.4, 12, ""}).fraction(), 3.4 / 12);
+  EXPECT_DOUBLE_EQ((Progress{"runs", 13, 12, ""}).fraction(), 1.0);
+  EXPECT_DOUBLE_EQ((Progress{"fit", 5, 0, ""}).fraction(), 0.0);
 }
 
 TEST(CancelToken, ACopyCancelsTheOriginalFromAnotherThread) {

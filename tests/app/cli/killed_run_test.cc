@@ -66,8 +66,9 @@ class KilledRun : public CommandTest {
     for (const auto& entry : std::filesystem::directory_iterator(dir_)) {
       const std::string name = entry.path().filename().string();
       const std::string base = std::filesystem::path(out).filename().string();
-      if (name.rfind(base, 0) == 0)
+      if (name.rfind(base, 0) == 0) {
         EXPECT_TRUE(name == base || name == base + ".partial") << "left behind: " << name;
+      }
     }
   }
 };

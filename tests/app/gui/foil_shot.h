@@ -71,9 +71,9 @@ inline FoilShot RenderFoilShot(const std::string& name) {
             seen.cam_from_world.rotation;
       cv::Mat image = calib::RenderTarget(seen, rays, prints, poses[f], options);
       if (c == 3 && f == kFrames - 1) image.setTo(90);
-      char name[32];
-      std::snprintf(name, sizeof name, "view_%03d.png", f);
-      cv::imwrite((folder / name).string(), image);
+      char file[32];
+      std::snprintf(file, sizeof file, "view_%03d.png", f);
+      cv::imwrite((folder / file).string(), image);
     }
     shot.globs.emplace_back(camera.name, (folder / "*.png").string());
   }

@@ -421,7 +421,6 @@ TEST_F(MainWindowTest, AStatusMessageHasTheBarsWidthAndIsWholeInItsTooltip) {
   MainWindow w;
   ASSERT_NO_FATAL_FAILURE(OpenShown(w, project));
   w.resize(700, 800);
-  Session* s = w.session();
   const int t = 7, c = 2, k = KnotSeenByAll(truth, t);
   ASSERT_GE(k, 0);
   ASSERT_NO_FATAL_FAILURE(DeleteByHand(&w, c, t, k));
@@ -890,8 +889,11 @@ TEST_F(MainWindowTest, ADoubleClickedReviewRowShowsItsCameraAlone) {
   // The view shown is camera 2's, at that frame; no other camera's view is.
   EXPECT_EQ(w.maximised(), 2);
   EXPECT_TRUE(w.view(2)->isVisible());
-  for (int c = 0; c < s->cameras(); ++c)
-    if (c != 2) EXPECT_FALSE(w.view(c)->isVisible()) << c;
+  for (int c = 0; c < s->cameras(); ++c) {
+    if (c != 2) {
+      EXPECT_FALSE(w.view(c)->isVisible()) << c;
+    }
+  }
   EXPECT_TRUE(w.view(2)->has_image());
   const QString caption = w.view(2)->overlay().caption;
   EXPECT_TRUE(caption.startsWith(QString::fromStdString(s->camera_names()[2]) + " · frame " +
@@ -994,7 +996,6 @@ TEST_F(MainWindowTest, TheQueueSaysTheReasonOfTheLabelAsItIsAfterAFindNodeClick)
   QCoreApplication::processEvents();
   ASSERT_EQ(s->document().at(c, t, k).state, recon::LabelState::kNeedsReview)
       << w.statusBar()->currentMessage().toStdString();
-  { const recon::Label& l = s->document().at(c, t, k); }
   const std::string now = s->document().Reason(c, t, k);
   ASSERT_NE(now.find("from where the other cameras' labels put the knot"), std::string::npos)
       << now;
@@ -1058,7 +1059,6 @@ TEST_F(MainWindowTest, TheQueuesReasonColumnShowsAMissingKnotsReasonOnOneLine) {
       MakeProjectFile("reason_column", (Dir() / "shot/labels_true.h5").string());
   MainWindow w;
   ASSERT_NO_FATAL_FAILURE(OpenShown(w, project));
-  Session* s = w.session();
   const int t = 7, c = 2, k = KnotSeenByAll(truth, t);
   ASSERT_GE(k, 0);
   ASSERT_NO_FATAL_FAILURE(DeleteByHand(&w, c, t, k));

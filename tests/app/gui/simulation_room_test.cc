@@ -320,9 +320,11 @@ TEST_F(SimulationRoomTest, TheTrueSimulationLiesOnTheLabelsAndIsConsistentTheNoD
     const std::vector<double> cli_values = ReadDoubles(d + "/cli_score.h5", dataset);
     ASSERT_EQ(room_values.size(), cli_values.size()) << dataset;
     ASSERT_FALSE(room_values.empty()) << dataset;
-    for (size_t i = 0; i < cli_values.size(); ++i)
-      if (!(std::isnan(cli_values[i]) && std::isnan(room_values[i])))
+    for (size_t i = 0; i < cli_values.size(); ++i) {
+      if (!(std::isnan(cli_values[i]) && std::isnan(room_values[i]))) {
         ASSERT_EQ(room_values[i], cli_values[i]) << dataset << "[" << i << "]";
+      }
+    }
   }
   EXPECT_EQ(ReadRootAttribute(saved.scores[1].score, "verdict"),
             ReadRootAttribute(d + "/cli_score.h5", "verdict"));

@@ -51,8 +51,9 @@ TEST(SummaryFields, KeysAreUniqueAndEveryFileFieldIsAScalarOrText) {
       EXPECT_TRUE(field.kind == SummaryKind::kInt || field.kind == SummaryKind::kNumber ||
                   field.kind == SummaryKind::kText)
           << field.key << ": score.h5's /summary holds numbers and text only";
-      if (field.kind != SummaryKind::kText)
+      if (field.kind != SummaryKind::kText) {
         EXPECT_FALSE(field.unit.empty()) << field.key << " has no units attribute";
+      }
     }
   }
   EXPECT_EQ(FindSummaryField("rms_mm").value(Example()).number, 1.2);

@@ -1293,7 +1293,9 @@ TEST(LabelEngine, AKnotHiddenInEveryCameraIsNotLabeledWhileHidden) {
       const Label& l = store.at(c, t, kKnot);
       EXPECT_FALSE(l.accepted()) << "frame " << t << " camera " << c << ": "
                                  << (l.px - shot.Truth(c, t, kKnot)).norm() << " px off";
-      if (l.present()) EXPECT_TRUE(engine.reasons().count({c, t, kKnot}));
+      if (l.present()) {
+        EXPECT_TRUE(engine.reasons().count({c, t, kKnot}));
+      }
     }
   for (int t = 1; t < kFrames; ++t) {
     int others = 0;

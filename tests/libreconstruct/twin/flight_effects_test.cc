@@ -89,7 +89,9 @@ TEST(DepthOfField, TheBlurCircleOfAPointFollowsTheThinLens) {
     const double added = Variance(blurred) - Variance(sharp);
     EXPECT_NEAR(added, c_formula * c_formula / 16.0, 0.03 * c_formula * c_formula / 16.0 + 0.02)
         << "d " << d << " m, c " << c_formula << " px";
-    if (d == 2.0) EXPECT_EQ(cv::norm(blurred, sharp, cv::NORM_INF), 0.0);
+    if (d == 2.0) {
+      EXPECT_EQ(cv::norm(blurred, sharp, cv::NORM_INF), 0.0);
+    }
   }
 }
 
