@@ -1251,8 +1251,7 @@ int LabelEngine::CheckPictureEdge(int t) {
         continue;
       if (size.empty()) size = Image(c, t).size();
       if (size.empty()) break;
-      const double inside = std::min({l.px.x() + 0.5, size.width - 0.5 - l.px.x(), l.px.y() + 0.5,
-                                      size.height - 0.5 - l.px.y()});
+      const double inside = InsideOuterEdgePx(l.px, size.width, size.height);
       if (inside >= o_.picture_edge_px) continue;
       char why[128];
       std::snprintf(why, sizeof why,

@@ -12,6 +12,12 @@
 #include "libreconstruct/labeling/label_engine.h"
 
 namespace netlab::recon {
+
+double InsideOuterEdgePx(const Eigen::Vector2d& q, int width, int height) {
+  if (!q.allFinite()) return std::numeric_limits<double>::quiet_NaN();
+  return std::min({q.x() + 0.5, width - 0.5 - q.x(), q.y() + 0.5, height - 0.5 - q.y()});
+}
+
 namespace {
 
 // Does the segment from `from` to `to` pass through the box (strictly before `to`)?
@@ -80,9 +86,7 @@ std::optional<Eigen::Vector2d> SeenAt(const calib::Camera& camera, const Eigen::
   }
   const Eigen::Vector2d q = calib::Project(camera.intrinsics, p_in_cam);
   const calib::CameraIntrinsics& in = camera.intrinsics;
-  // The image's outer edge: pixel centres at integers, -0.5 .. width - 0.5.
-  if (!q.allFinite() || q.x() < margin - 0.5 || q.y() < margin - 0.5 ||
-      q.x() > in.width - 0.5 - margin || q.y() > in.height - 0.5 - margin) {
+  if (!(InsideOuterEdgePx(q, in.width, in.height) >= margin)) {
     if (why) *why = "its point projects to " + Px(q) + ", outside the image";
     return std::nullopt;
   }

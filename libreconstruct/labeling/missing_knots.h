@@ -66,6 +66,11 @@ struct Target {
 bool TargetHides(const Target& target, const Eigen::Vector3d& from, const Eigen::Vector3d& to,
                  double time_s, double grow_m = 0.0);
 
+// How far the image point q lies inside the outer edge of a width x height image (px; negative:
+// outside, NaN: q is not finite): pixel centres at integers, the edge at -0.5 and size - 0.5, as
+// `netlab render` counts a knot in view.
+double InsideOuterEdgePx(const Eigen::Vector2d& q, int width, int height);
+
 struct MissingKnotsOptions {
   // Each view's reprojection residual at the triangulated point at most this (px): the
   // engine's epipolar tolerance (LabelEngineOptions::epipolar_tolerance_px).

@@ -233,6 +233,9 @@ void KnotErrorModel::Set(const KnotTracks* tracks, int row, Filter filter) {
     cols_ = 1;
     for (const auto& g : tracks->grid) cols_ = std::max(cols_, g[1] + 1);
     const int frame = tracks->frame_index.empty() ? row : tracks->frame_index[row];
+    std::vector<std::vector<const KnotTracks::Outlier*>> outliers(knots);  // this frame's, by knot
+    for (const KnotTracks::Outlier& o : tracks->outliers)
+      if (o.frame == frame && o.knot >= 0 && o.knot < knots) outliers[o.knot].push_back(&o);
     for (int k = 0; k < knots; ++k) {
       const size_t i = static_cast<size_t>(row) * knots + k;
       Row r;
@@ -248,11 +251,10 @@ void KnotErrorModel::Set(const KnotTracks* tracks, int row, Filter filter) {
                                                                    Eigen::EigenvaluesOnly);
         r.sigma_mm = std::sqrt(std::max(eigen.eigenvalues().maxCoeff(), 0.0)) * 1e3;
       }
-      for (const KnotTracks::Outlier& o : tracks->outliers)
-        if (o.frame == frame && o.knot == k) {
-          r.outlier_cameras.push_back(o.camera);
-          r.outlier_px.push_back(o.residual_px);
-        }
+      for (const KnotTracks::Outlier* o : outliers[k]) {
+        r.outlier_cameras.push_back(o->camera);
+        r.outlier_px.push_back(o->residual_px);
+      }
       if (filter == Filter::kOutliers && r.outlier_cameras.empty()) continue;
       if (filter == Filter::kDegenerate && !r.degenerate) continue;
       rows_.push_back(std::move(r));
@@ -297,14 +299,6 @@ QVariant KnotErrorModel::data(const QModelIndex& index, int role) const {
   if (role == Qt::TextAlignmentRole && index.column() >= kResidual && index.column() <= kSigma)
     return QVariant::fromValue(Qt::AlignRight | Qt::AlignVCenter);
   if (role != Qt::DisplayRole && role != Qt::ToolTipRole) return {};
-  QString outliers;
-  for (size_t j = 0; j < r.outlier_cameras.size(); ++j)
-    outliers +=
-        QString("%1%2 %3")
-            .arg(j ? ", " : "")
-            .arg(QString::fromStdString(camera_name(r.outlier_cameras[j])))
-            .arg(std::isnan(r.outlier_px[j]) ? QString("(no point)")
-                                             : QString("%1 px").arg(r.outlier_px[j], 0, 'f', 2));
   switch (index.column()) {
     case kKnot: return QString("(%1,%2)").arg(r.knot / cols_).arg(r.knot % cols_);
     case kStatus:
@@ -314,7 +308,17 @@ QVariant KnotErrorModel::data(const QModelIndex& index, int role) const {
     case kResidual:
       return std::isnan(r.residual_px) ? QString("—") : QString::number(r.residual_px, 'f', 3);
     case kSigma: return std::isnan(r.sigma_mm) ? QString("—") : QString::number(r.sigma_mm, 'f', 3);
-    case kOutliers: return outliers;
+    case kOutliers: {
+      QString outliers;
+      for (size_t j = 0; j < r.outlier_cameras.size(); ++j)
+        outliers += QString("%1%2 %3")
+                        .arg(j ? ", " : "")
+                        .arg(QString::fromStdString(camera_name(r.outlier_cameras[j])))
+                        .arg(std::isnan(r.outlier_px[j])
+                                 ? QString("(no point)")
+                                 : QString("%1 px").arg(r.outlier_px[j], 0, 'f', 2));
+      return outliers;
+    }
     default: return {};
   }
 }
