@@ -51,7 +51,8 @@ double WorstSigma(const ProjectedPoint& q, double sigma) {
   return sigma * std::sqrt(std::max(0.0, eig.eigenvalues()[1]));
 }
 
-// Find Node's junction is checked against the knot's path where that fixes it to this (px).
+// Find Node's junction is confirmed by the knot's path, or by the other cameras' place, only
+// where that fixes the knot to this (px; the path and the place's standard deviation).
 constexpr double kPathCheckSigmaPx = 1.0;
 
 // The 99.9 % quantile of chi^2 with `dof` degrees of freedom (Wilson and Hilferty's cube-root
@@ -737,22 +738,28 @@ std::vector<Observation> LabelEngine::OtherViews(int camera, int t, int knot) co
 std::optional<PointEstimate> LabelEngine::MotionPoint(int camera, int t, int knot) const {
   if (!rig_ || o_.motion_frames < 1) return std::nullopt;
   const LabelSet& set = store_->labels();
-  // The knot's own labels (no placed ones) of every camera in frame row s (of the other cameras
-  // in t itself).
-  const auto views_in = [&](int s, std::vector<TimedObservation>* views) {
-    const std::vector<Observation> in_s = OtherViews(s == t ? camera : -1, s, knot);
+  // The knot's own labels (no placed ones) in frame row s of every camera but `but` (-1: all).
+  const auto views_in = [&](int s, int but, std::vector<TimedObservation>* views) {
+    const std::vector<Observation> in_s = OtherViews(but, s, knot);
     for (const Observation& v : in_s) views->push_back({static_cast<double>(s), v});
     return !in_s.empty();
   };
   std::vector<TimedObservation> now;
-  if (!views_in(t, &now)) return std::nullopt;
+  if (!views_in(t, camera, &now)) return std::nullopt;
   const double sigma2 = o_.label_sigma_px * o_.label_sigma_px;
-  // The frame rows before t (else after: tracking backwards), the adjacent one among them.
+  // The frame rows before t (else after: tracking backwards), the adjacent one among them. This
+  // camera's own labels join the path only where it has one in the adjacent row: its place two
+  // rows past its last label is that label's error carried on by the path, grown each row (in
+  // the wrapping, three such second places in a row were 2.1-2.3 px off, the first of each pair
+  // 0.8-1.3 px), while its place one row on is what the path is for.
   for (const int step : {-1, 1}) {
+    const int adjacent = t + step;
+    if (adjacent < 0 || adjacent >= set.frames()) continue;
+    const int but = Observed(set.at(camera, adjacent, knot)) ? -1 : camera;
     std::vector<TimedObservation> views = now;
     for (int i = 1; i <= o_.motion_frames; ++i) {
       const int s = t + step * i;
-      if (s < 0 || s >= set.frames() || (!views_in(s, &views) && i == 1)) break;
+      if (s < 0 || s >= set.frames() || (!views_in(s, but, &views) && i == 1)) break;
     }
     if (views.size() == now.size()) continue;
     const PointEstimate e = FitConstantVelocity(*rig_, views, t);
@@ -943,7 +950,19 @@ std::string LabelEngine::FoundNodeDoubt(int camera, int t, int knot, const Junct
       ProjectAgreeingViews(*rig_, RigIndex(camera), others, topt);
   if (!q) return confirmed ? "" : unconfirmed;
   const double off = (q->px - j.px).norm();
-  if (off <= o_.projection_tolerance_px) return "";
+  if (off <= o_.projection_tolerance_px) {
+    // Their place confirms the junction only where it is sure to a pixel: the near pair's two
+    // views, 15 degrees apart, put a knot in a far camera to 1.7-2.6 px (for the labels' noise),
+    // and junctions 2.5 px from the knot passed within the tolerance of such places.
+    const double sure = WorstSigma(*q, o_.label_sigma_px);
+    if (confirmed || sure <= kPathCheckSigmaPx) return "";
+    char why[160];
+    std::snprintf(why, sizeof why,
+                  "%.1f px from where the other cameras' labels put the knot, but they fix it "
+                  "only to %.1f px here, and nothing else confirms the junction",
+                  off, sure);
+    return why;
+  }
   char why[112];
   std::snprintf(why, sizeof why, "%.1f px from where the other cameras' labels put the knot", off);
   return why;

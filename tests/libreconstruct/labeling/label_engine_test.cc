@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <cmath>
 #include <opencv2/core.hpp>
@@ -960,6 +961,41 @@ TEST(LabelEngine, TheKnotsPathIsNotTakenWhereOneViewAloneMovesIt) {
   }
 }
 
+// The path carries a camera's own track one frame row past its last label, not two: camera b
+// labels knot 12 in frames 0-4, camera a in frames 0-2. In frame 3 the path (b's views and a's
+// own) puts the knot in a to 0.3 px; in frame 4, two rows past a's last label, a's labels leave
+// the path and b's alone do not fix it: no point, also where a's frame 3 holds the place the
+// path made (a placed label is no view of its own). With a's label of frame 3 it is placed.
+TEST(LabelEngine, TheKnotsPathCarriesACamerasTrackOneFramePastItsLastLabel) {
+  const Shot shot = Render(5);
+  const int k = 12;
+  LabelSet labels = Empty(shot);
+  for (int t = 0; t < 5; ++t) labels.at(1, t, k) = Accepted(shot.Truth(1, t, k));
+  for (int t = 0; t < 3; ++t) labels.at(0, t, k) = Accepted(shot.Truth(0, t, k));
+  {
+    LabelStore store(labels);
+    LabelEngine engine(&store, &shot.rig, Images(shot));
+    const std::optional<PointEstimate> next = engine.MotionPoint(0, 3, k);
+    ASSERT_TRUE(next.has_value());
+    EXPECT_LT((shot.rig.cameras[0].ProjectWorld(next->position) - shot.Truth(0, 3, k)).norm(), 0.3);
+    EXPECT_FALSE(engine.MotionPoint(0, 4, k).has_value());
+  }
+  Label placed = Accepted(shot.Truth(0, 3, k));
+  placed.source = LabelSource::kProjected;
+  labels.at(0, 3, k) = placed;
+  {
+    LabelStore store(labels);
+    LabelEngine engine(&store, &shot.rig, Images(shot));
+    EXPECT_FALSE(engine.MotionPoint(0, 4, k).has_value());
+  }
+  labels.at(0, 3, k) = Accepted(shot.Truth(0, 3, k));
+  LabelStore store(std::move(labels));
+  LabelEngine engine(&store, &shot.rig, Images(shot));
+  const std::optional<PointEstimate> after = engine.MotionPoint(0, 4, k);
+  ASSERT_TRUE(after.has_value());
+  EXPECT_LT((shot.rig.cameras[0].ProjectWorld(after->position) - shot.Truth(0, 4, k)).norm(), 0.3);
+}
+
 // Knot 12 as cameras b and c label it, both 1.2 mm off the same way (a consistent pair of
 // views, their residuals nil, as when one label is off along the epipolar line), 2-4 px from
 // the junction camera a shows: the brush keeps a's junction for review, saying how far the
@@ -1100,6 +1136,40 @@ TEST(LabelEngine, FindNodeKeepsAJunctionNothingConfirmsForReview) {
   LabelEngine engine(&store, &shot.rig, Images(shot));
   ASSERT_EQ(engine.FindNodeAt(0, 0, 12, shot.Truth(0, 0, 12), 6.0).status, FindNodeStatus::kFound);
   EXPECT_TRUE(store.at(0, 0, 12).accepted()) << engine.reasons().at({0, 0, 12});
+}
+
+// Two other cameras' place confirms a junction only where it fixes the knot to a pixel: camera
+// a has no other label, cameras b and c label every knot. With the labels' noise such that
+// their place of knot 12 in a is sure to 0.8 px, a's junction there is accepted; at 1.5 px
+// (as the near pair's two views put a knot in a far camera) it is kept for review, saying so.
+TEST(LabelEngine, FindNodeTakesTheOtherCamerasWordOnlyWhereTheyFixTheKnot) {
+  const Shot shot = Render(1);
+  LabelSet labels = Empty(shot);
+  for (int c = 1; c < 3; ++c)
+    for (int k = 0; k < kKnots; ++k) labels.at(c, 0, k) = Accepted(shot.Truth(c, 0, k));
+  const std::optional<ProjectedPoint> q =
+      ProjectAgreeingViews(shot.rig, 0, {{1, shot.Truth(1, 0, 12)}, {2, shot.Truth(2, 0, 12)}});
+  ASSERT_TRUE(q.has_value());
+  const double unit = std::sqrt(
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(q->unit_covariance).eigenvalues()[1]);
+  for (const double sure_px : {0.8, 1.5}) {
+    LabelEngineOptions options;
+    options.label_sigma_px = sure_px / unit;
+    LabelStore store(labels);
+    LabelEngine engine(&store, &shot.rig, Images(shot), options);
+    ASSERT_FALSE(engine.OthersPlace(0, 0, 12).has_value()) << sure_px;
+    const FindNodeResult r = engine.FindNodeAt(0, 0, 12, shot.Truth(0, 0, 12), 6.0);
+    ASSERT_EQ(r.status, FindNodeStatus::kFound) << r.why;
+    EXPECT_LT((store.at(0, 0, 12).px - shot.Truth(0, 0, 12)).norm(), 0.3);
+    if (sure_px < 1.0) {
+      EXPECT_TRUE(store.at(0, 0, 12).accepted()) << engine.reasons().at({0, 0, 12});
+      continue;
+    }
+    EXPECT_EQ(store.at(0, 0, 12).state, LabelState::kNeedsReview);
+    ASSERT_TRUE(engine.reasons().count({0, 0, 12}));
+    EXPECT_NE(engine.reasons().at({0, 0, 12}).find("they fix it only to 1.5 px"), std::string::npos)
+        << engine.reasons().at({0, 0, 12});
+  }
 }
 
 // One other camera's label of the knot: the junction must lie on that label's epipolar line.
