@@ -81,8 +81,9 @@ echo "  no-drag simulation: $(verdict "$out/score_no_drag.json")" \
   "  (report: $out/score_no_drag.html)" >&2
 echo "  frames, truth and calibration images in $out/shot; rig in $out/rig_calibrated.yaml;" \
   "labels in $out/labels.h5; 3D tracks in $out/tracks.h5" >&2
-# The finished project: the shot, the rig, the labels, their tracks and both simulations (the
-# window scores them against the tracks as step 6 did, time+rigid, and shows the verdicts).
+# The finished project: the shot, the rig, the labels, their tracks, both simulations and
+# their scores (the labeling room's Net grid colours each knot by its saved error at once; the
+# simulation room scores them again as step 6 did, time+rigid, and shows the verdicts).
 cat > "$out/project.yaml" <<EOF
 netlab_project: 1
 experiment: shot/experiment.yaml
@@ -91,6 +92,9 @@ coloring: coloring.yaml
 labels: labels.h5
 tracks: tracks.h5
 simulations: [sim.h5, sim_no_drag.h5]
+scores:
+  - {simulation: sim.h5, score: score.h5, report: score.html}
+  - {simulation: sim_no_drag.h5, score: score_no_drag.h5, report: score_no_drag.html}
 EOF
 echo "  the project in $out/project.yaml; open it in the workstation on the verdicts" \
   "(docs/gui.md):" >&2

@@ -575,6 +575,9 @@ void SimulationRoom::Show(SimulationPresenter* simulation,
     if (!text.isEmpty()) status_->setText("Cannot read: " + text.trimmed());
     if (reconstruction_->tracks() != nullptr)
       for (int i = before; i < simulation_->simulations(); ++i) to_score_.push_back(i);
+    // Scored again as the project's saved score was (its alignment), to the same colours.
+    const QString alignment = QString::fromStdString(simulation_->SavedScoreAlignment());
+    if (alignment_->findText(alignment) >= 0) alignment_->setCurrentText(alignment);
     const Session& s = reconstruction_->session();
     slider_->blockSignals(true);
     slider_->setRange(0, std::max(0, s.frames() - 1));
@@ -583,7 +586,13 @@ void SimulationRoom::Show(SimulationPresenter* simulation,
     measured_->setText(reconstruction_->Summary());
     fit_->setText(simulation_->FitText());
     RefreshTable();
-    if (simulation_->simulations() > 0) Select(0);
+    // The simulation whose saved score the Net grid showed before the room opened, else the
+    // first.
+    int first = simulation_->simulations() > 0 ? 0 : -1;
+    const std::string saved = simulation_->SavedScoreSimulation();
+    for (int i = 0; i < simulation_->simulations(); ++i)
+      if (!saved.empty() && simulation_->simulation(i).path == saved) first = i;
+    Select(first);
     RequestFrame();
     if (!to_score_.empty()) {
       const int next = to_score_.front();

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
 
 #include "app/gui/document/project.h"
@@ -14,6 +15,7 @@
 #include "app/gui/document/session.h"
 #include "common/errors.h"
 #include "common/files.h"
+#include "common/hdf5_util.h"
 #include "common/yaml_util.h"
 #include "libnetsim/identification/fit_file.h"
 #include "libnetsim/scenario/run_scenario.h"
@@ -534,18 +536,89 @@ std::optional<double> SimulationPresenter::LabelDistancePx(int i, int c, int t, 
 }
 
 std::vector<double> SimulationPresenter::ShownKnotErrorsMm(QString* source) const {
-  if (shown_ < 0 || shown_ >= simulations() || !simulations_[shown_].score) return {};
-  const netsim::ScoreResult& r = *simulations_[shown_].score;
   const int rows = session_->project().rows, cols = session_->project().cols;
-  std::vector<double> errors(rows * cols, kNaN);
-  for (size_t k = 0; k < r.grid.size() && k < r.summary.per_knot.size(); ++k) {
-    const auto [row, col] = r.grid[k];
-    if (row >= 0 && row < rows && col >= 0 && col < cols)
-      errors[row * cols + col] = r.summary.per_knot[k].rms_m * 1e3;
+  std::string sim_path, score_path;
+  if (shown_ >= 0 && shown_ < simulations()) {
+    const Simulation& s = simulations_[shown_];
+    sim_path = s.path;
+    score_path = s.score_path;
+    if (s.score) {
+      const netsim::ScoreResult& r = *s.score;
+      std::vector<double> errors(rows * cols, kNaN);
+      for (size_t k = 0; k < r.grid.size() && k < r.summary.per_knot.size(); ++k) {
+        const auto [row, col] = r.grid[k];
+        if (row >= 0 && row < rows && col >= 0 && col < cols)
+          errors[row * cols + col] = r.summary.per_knot[k].rms_m * 1e3;
+      }
+      if (source != nullptr) *source = "RMS error against " + QString::fromStdString(s.name);
+      return errors;
+    }
+  } else {
+    sim_path = SavedScoreSimulation();
+    for (const ProjectScore& p : session_->project().scores)
+      if (p.simulation == sim_path) score_path = p.score;
   }
+  if (score_path.empty()) return {};
+  const SavedErrors& saved = ReadSavedErrors(score_path);
   if (source != nullptr)
-    *source = "RMS error against " + QString::fromStdString(simulations_[shown_].name);
-  return errors;
+    *source =
+        saved.error.empty()
+            ? "RMS error against " +
+                  QString::fromStdString(std::filesystem::path(sim_path).filename().string()) +
+                  " (saved)"
+            : QString::fromStdString(saved.error);
+  return saved.mm;
+}
+
+std::string SimulationPresenter::SavedScoreSimulation() const {
+  const Project& project = session_->project();
+  for (const std::string& sim : project.simulations)
+    for (const ProjectScore& p : project.scores)
+      if (p.simulation == sim && !p.score.empty()) return sim;
+  return "";
+}
+
+std::string SimulationPresenter::SavedScoreAlignment() const {
+  const std::string sim = SavedScoreSimulation();
+  for (const ProjectScore& p : session_->project().scores)
+    if (!sim.empty() && p.simulation == sim) return ReadSavedErrors(p.score).alignment;
+  return "";
+}
+
+const SimulationPresenter::SavedErrors& SimulationPresenter::ReadSavedErrors(
+    const std::string& score_path) const {
+  if (saved_errors_ && saved_errors_->score_path == score_path) return *saved_errors_;
+  saved_errors_ = SavedErrors{score_path, {}, "", ""};
+  const int rows = session_->project().rows, cols = session_->project().cols;
+  try {
+    const std::lock_guard<std::mutex> lock(h5::Mutex());
+    const h5::Id file = h5::OpenFileReadOnly(score_path);
+    const std::vector<hsize_t> grid_dims = h5::DatasetDims(file.get(), "/knots/grid");
+    const std::vector<hsize_t> rms_dims = h5::DatasetDims(file.get(), "/knots/rms_m");
+    if (grid_dims.size() != 2 || grid_dims[1] != 2 || rms_dims.size() != 1 ||
+        rms_dims[0] != grid_dims[0])
+      throw std::runtime_error("/knots/grid is not [K, 2] beside /knots/rms_m [K]");
+    const size_t knots = rms_dims[0];
+    std::vector<int> grid(2 * knots);
+    std::vector<double> rms(knots);
+    h5::ReadDataset(file.get(), "/knots/grid", H5T_NATIVE_INT, grid.data());
+    h5::ReadDataset(file.get(), "/knots/rms_m", H5T_NATIVE_DOUBLE, rms.data());
+    const double to_m = h5::UnitsFactor(file.get(), score_path, "/knots/rms_m", h5::kMetres);
+    std::vector<double> mm(rows * cols, kNaN);
+    for (size_t k = 0; k < knots; ++k) {
+      const int row = grid[2 * k], col = grid[2 * k + 1];
+      if (row < 0 || row >= rows || col < 0 || col >= cols)
+        throw std::runtime_error("/knots/grid's knot (" + std::to_string(row) + "," +
+                                 std::to_string(col) + ") is not on the project's " +
+                                 std::to_string(rows) + " x " + std::to_string(cols) + " net");
+      mm[row * cols + col] = rms[k] * to_m * 1e3;
+    }
+    saved_errors_->mm = std::move(mm);
+    saved_errors_->alignment = h5::ReadStringAttribute(file.get(), "alignment");
+  } catch (const std::exception& e) {
+    saved_errors_->error = "the saved score " + score_path + " cannot be read: " + e.what();
+  }
+  return *saved_errors_;
 }
 
 std::optional<double> SimulationPresenter::ResidualM(int i, int t, int knot) const {

@@ -171,8 +171,18 @@ class SimulationPresenter {
   void SetShown(int i) { shown_ = i; }
   int shown() const { return shown_; }
   // Each knot's RMS error (mm) in the shown simulation's score, row-major over the project's
-  // grid (NaN: not compared), and what it is in words; empty when it is not scored.
+  // grid (NaN: not compared), and what it is in words; empty when it is not scored. Until the
+  // shown simulation is scored here (and before the room shows one: the simulation of
+  // SavedScoreSimulation()), the score file the project names for it, read once (its
+  // /knots/grid and /knots/rms_m): the Net grid has the saved colours as soon as the project is
+  // open. A saved file that cannot be read gives none, its reason in `source`.
   std::vector<double> ShownKnotErrorsMm(QString* source) const;
+  // The simulation (absolute path) whose saved score colours the Net grid before the room shows
+  // one: the first of the project's simulations with a score file ("" : none).
+  std::string SavedScoreSimulation() const;
+  // The alignment of that saved score, as --align names it ("" : none, or unreadable): the room
+  // scores the simulation again with it, to the same colours.
+  std::string SavedScoreAlignment() const;
   // The score's 3D residual |measured - simulated| at (t, knot), m (nullopt: not compared).
   std::optional<double> ResidualM(int i, int t, int knot) const;
 
@@ -206,6 +216,15 @@ class SimulationPresenter {
   std::weak_ptr<const int> lifetime() const { return alive_; }
 
  private:
+  // A saved score file's per-knot errors, mm, row-major (read once per file).
+  struct SavedErrors {
+    std::string score_path;
+    std::vector<double> mm;
+    std::string alignment;  // the root attribute
+    std::string error;      // why the file could not be read
+  };
+  const SavedErrors& ReadSavedErrors(const std::string& score_path) const;
+  mutable std::optional<SavedErrors> saved_errors_;
   std::optional<FitRun> fit_;
   std::string fit_path_;
   int shown_ = -1;

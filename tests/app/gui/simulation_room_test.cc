@@ -69,6 +69,15 @@ std::vector<double> ReadDoubles(const std::string& path, const std::string& data
   return values;
 }
 
+std::vector<int> ReadInts(const std::string& path, const std::string& dataset) {
+  const h5::Id file = h5::OpenFileReadOnly(path);
+  size_t n = 1;
+  for (hsize_t d : h5::DatasetDims(file.get(), dataset)) n *= d;
+  std::vector<int> values(n);
+  h5::ReadDataset(file.get(), dataset, H5T_NATIVE_INT, values.data());
+  return values;
+}
+
 std::string ReadRootAttribute(const std::string& path, const std::string& name) {
   const h5::Id file = h5::OpenFileReadOnly(path);
   return h5::ReadStringAttribute(file.get(), name);
@@ -370,6 +379,84 @@ TEST_F(SimulationRoomTest, AProjectWithTracksAndSimulationsOpensOnTheirVerdicts)
   EXPECT_EQ(table->item(1, 1)->text(), "inconsistent");
   EXPECT_TRUE(room->verdict_label()->text().contains("consistent"));
   EXPECT_TRUE(room->frame_shown());
+}
+
+// A project with a score saved by netlab score (no simulation room opened): the labeling room's
+// Net grid has its per-knot colours, values and tooltips as soon as the project is open, read
+// from the score file; the room, opened afterwards, scores again to the same values.
+TEST_F(SimulationRoomTest, TheNetGridShowsTheSavedScoreBeforeTheSimulationRoomIsShown) {
+  const std::string d = Dir().string();
+  Project p = LoadProject(d + "/project.yaml");
+  ASSERT_EQ(
+      RunNetlab("triangulate --rig " + p.rig + " --labels " + p.labels +
+                " --knots 6x6 --fps 179 --sigma-px 0.1 --out " + d + "/saved_tracks.h5 --quiet")
+          .status,
+      0);
+  ASSERT_EQ(
+      RunNetlab("simulate " + d + "/no_drag.yaml --out " + d + "/saved_no_drag.h5 --quiet").status,
+      0);
+  const std::string score_path = d + "/saved_score.h5";
+  const auto scored = RunNetlab("score --measured " + d + "/saved_tracks.h5 --sim " + d +
+                                "/saved_no_drag.h5 --out " + score_path + " --align time --quiet");
+  ASSERT_EQ(scored.status, 0) << scored.err;
+  p.tracks = d + "/saved_tracks.h5";
+  p.simulations = {d + "/saved_no_drag.h5"};
+  p.scores = {{d + "/saved_no_drag.h5", score_path, ""}};
+  p.fits.clear();
+  const std::string project = d + "/saved_score.yaml";
+  SaveProject(p, project);
+  // The score file's per-knot RMS, mm, row-major.
+  const std::vector<int> grid_rc = ReadInts(score_path, "/knots/grid");
+  const std::vector<double> rms_m = ReadDoubles(score_path, "/knots/rms_m");
+  ASSERT_EQ(rms_m.size(), 36u);
+  std::vector<double> saved_mm(36);
+  for (size_t k = 0; k < rms_m.size(); ++k)
+    saved_mm[grid_rc[2 * k] * 6 + grid_rc[2 * k + 1]] = rms_m[k] * 1e3;
+
+  MainWindow w;
+  w.resize(1500, 1000);
+  w.show();
+  ASSERT_TRUE(w.OpenProject(QString::fromStdString(project), false));
+  ASSERT_TRUE(w.WaitForFrame());
+  ASSERT_EQ(w.room(), MainWindow::Room::kLabeling);
+  EXPECT_EQ(w.simulation()->simulations(), 0);  // the room has loaded nothing
+  KnotGrid* grid = w.knot_grid();
+  ASSERT_EQ(grid->errors_mm().size(), 36u);
+  int worst = 0, best = 0;
+  for (int k = 0; k < 36; ++k) {
+    EXPECT_DOUBLE_EQ(grid->errors_mm()[k], saved_mm[k]) << k;
+    if (saved_mm[k] > saved_mm[worst]) worst = k;
+    if (saved_mm[k] < saved_mm[best]) best = k;
+  }
+  ASSERT_GT(saved_mm[worst], saved_mm[best] + 0.1);
+  EXPECT_EQ(grid->ErrorColour(worst), KnotGrid::ErrorColour(1.0));  // red
+  EXPECT_GT(grid->ErrorColour(best).greenF(), grid->ErrorColour(worst).greenF() + 0.3);
+  EXPECT_TRUE(
+      grid->ErrorLegend().contains("RMS error against saved_no_drag.h5 (saved): 0 (green) to"))
+      << grid->ErrorLegend().toStdString();
+  EXPECT_TRUE(grid->KnotToolTip(worst).contains(QString("%1 mm").arg(saved_mm[worst], 0, 'f', 2)))
+      << grid->KnotToolTip(worst).toStdString();
+  // A frame change keeps them (read once, not again).
+  const int first_frame = w.frame();
+  QTest::keyClick(&w, Qt::Key_F);
+  ASSERT_TRUE(w.WaitForFrame());
+  EXPECT_EQ(w.frame(), first_frame + 1);
+  ASSERT_EQ(grid->errors_mm().size(), 36u);
+  EXPECT_DOUBLE_EQ(grid->errors_mm()[worst], saved_mm[worst]);
+
+  // The room scores the simulation again with the saved score's alignment: the same values.
+  w.ShowRoom(MainWindow::Room::kSimulation);
+  ASSERT_TRUE(w.WaitForIdle());
+  SimulationRoom* room = w.simulation_room();
+  EXPECT_EQ(room->alignment_box()->currentText(), "time");
+  ASSERT_EQ(room->selected(), 0);
+  ASSERT_TRUE(w.simulation()->simulation(0).score.has_value())
+      << room->status_label()->text().toStdString();
+  w.ShowRoom(MainWindow::Room::kLabeling);
+  ASSERT_EQ(grid->errors_mm().size(), 36u);
+  for (int k = 0; k < 36; ++k) EXPECT_NEAR(grid->errors_mm()[k], saved_mm[k], 1e-9) << k;
+  EXPECT_TRUE(grid->ErrorLegend().contains("RMS error against saved_no_drag.h5: 0 (green) to"))
+      << grid->ErrorLegend().toStdString();
 }
 
 // A fit of the drag coefficient from the window, started from 0.8 (the shot's is 1.2): cancelled
