@@ -713,6 +713,16 @@ void MainWindow::IdentifyAtCursor() {
 }
 
 void MainWindow::RefreshStatus() {
+  // The status bar speaks of the room shown: the labeling room's frame, camera and knot; the
+  // reconstruction and simulation rooms' own slider's frame; no frame in the other rooms.
+  if (room_ != Room::kLabeling) {
+    status_knot_->clear();
+    status_cursor_->clear();
+    status_frame_->setText(room_ == Room::kReconstruction ? reconstruction_room_->FrameStatus()
+                           : room_ == Room::kSimulation   ? simulation_room_->FrameStatus()
+                                                          : QString());
+    return;
+  }
   if (!session_ || frame() < 0) return;
   status_frame_->setText(presenter_->FrameStatus());
   status_knot_->setText(presenter_->KnotStatus());
@@ -1486,8 +1496,11 @@ void MainWindow::BuildRooms() {
   reconstruction_room_ = new ReconstructionRoom;
   stack_->addWidget(reconstruction_room_);
   connect(reconstruction_room_, &ReconstructionRoom::showLabel, this, &MainWindow::ShowLabel);
+  connect(reconstruction_room_, &ReconstructionRoom::frameChanged, this,
+          &MainWindow::RefreshStatus);
   simulation_room_ = new SimulationRoom;
   stack_->addWidget(simulation_room_);
+  connect(simulation_room_, &SimulationRoom::frameChanged, this, &MainWindow::RefreshStatus);
 
   for (QDockWidget* dock : findChildren<QDockWidget*>()) labeling_bars_.push_back(dock);
   for (QToolBar* bar : findChildren<QToolBar*>()) labeling_bars_.push_back(bar);
@@ -1549,6 +1562,7 @@ void MainWindow::ShowRoom(Room room) {
       simulation_room_->SetFrame(left_at.value_or(frame()));
       break;
   }
+  RefreshStatus();
 }
 
 void MainWindow::ShowLabel(int camera, int t, int knot) {

@@ -558,10 +558,7 @@ void ReconstructionRoom::SetFrame(int t) {
   const bool changed = t != frame_;
   frame_ = t;
   view_->SetRow(presenter_->TrackRow(t));
-  frame_label_->setText(QString("frame %1 (row %2 of %3)")
-                            .arg(presenter_->session().frame_number(t))
-                            .arg(t)
-                            .arg(presenter_->session().frames()));
+  frame_label_->setText(presenter_->FrameStatus(t));
   RefreshKnot();
   RefreshKnotTable();
   if (changed) emit frameChanged(t);

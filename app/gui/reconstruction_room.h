@@ -125,6 +125,8 @@ class ReconstructionRoom : public QWidget {
   NetView3D* view() const { return view_; }
   int frame() const { return frame_; }
   void SetFrame(int t);
+  // The slider's frame in words (ReconstructionPresenter::FrameStatus; "" : nothing open).
+  QString FrameStatus() const { return presenter_ ? presenter_->FrameStatus(frame_) : QString(); }
   bool busy() const { return triangulator_.pending(); }
   // Export without its dialog: the tracks to `tracks_path`, xyzpts.csv and xyzres.csv beside it.
   bool ExportTo(const QString& tracks_path);

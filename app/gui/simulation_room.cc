@@ -1021,8 +1021,7 @@ void SimulationRoom::RefreshOverlays() {
     overlay.caption = caption;
     views_[c]->SetOverlay(std::move(overlay));
   }
-  frame_label_->setText(
-      QString("frame %1 (row %2 of %3)").arg(session.frame_number(t)).arg(t).arg(session.frames()));
+  frame_label_->setText(reconstruction_->FrameStatus(t));
 }
 
 void SimulationRoom::OnCursor(int camera, const Eigen::Vector2d& px) {

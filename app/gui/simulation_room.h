@@ -107,6 +107,10 @@ class SimulationRoom : public QWidget {
   CameraView* view(int c) const { return views_[c]; }
   int frame() const { return frame_; }
   void SetFrame(int t);
+  // The slider's frame in words (ReconstructionPresenter::FrameStatus; "" : nothing open).
+  QString FrameStatus() const {
+    return reconstruction_ ? reconstruction_->FrameStatus(frame_) : QString();
+  }
   // The simulation drawn and scored (-1: none).
   int selected() const { return selected_; }
   void Select(int i);

@@ -178,6 +178,15 @@ int ReconstructionPresenter::TrackRow(int t) const {
   return -1;
 }
 
+QString ReconstructionPresenter::FrameStatus(int t) const {
+  if (t < 0 || t >= session_->frames()) return "";
+  return QString("frame %1 (%2 of %3) · t = %4 s")
+      .arg(session_->frame_number(t))
+      .arg(t + 1)
+      .arg(session_->frames())
+      .arg(session_->frame_number(t) / session_->fps(), 0, 'f', 4);
+}
+
 QString ReconstructionPresenter::Summary() const {
   if (!run_) return "Not triangulated yet.";
   if (!run_->result && run_->error.empty())

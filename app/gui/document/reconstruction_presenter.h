@@ -90,6 +90,9 @@ class ReconstructionPresenter {
   QString Summary() const;
   // The tracks' row of frame row t of the session (-1: none).
   int TrackRow(int t) const;
+  // Frame row t in words, as the status bar and the rooms' sliders say it: "frame 212 (21 of
+  // 27) · t = 1.1844 s" (the recording's frame number, the row counted from 1, frame / fps).
+  QString FrameStatus(int t) const;
 
   // After an edit of the labels: the tracks of these frame rows triangulated again from the
   // current labels, knot by knot (Session::Triangulate: the accepted labels of two views or more,

@@ -19,6 +19,8 @@
 #include <QLabel>
 #include <QLineEdit>
 #include <QPushButton>
+#include <QSlider>
+#include <QStatusBar>
 #include <QTableWidget>
 #include <QTest>
 #include <cmath>
@@ -31,6 +33,7 @@
 #include "app/gui/document/project.h"
 #include "app/gui/knot_grid.h"
 #include "app/gui/main_window.h"
+#include "app/gui/reconstruction_room.h"
 #include "common/hdf5_util.h"
 #include "libreconstruct/labels/label_set.h"
 #include "tests/app/cli/run_netlab.h"
@@ -457,6 +460,58 @@ TEST_F(SimulationRoomTest, TheNetGridShowsTheSavedScoreBeforeTheSimulationRoomIs
   for (int k = 0; k < 36; ++k) EXPECT_NEAR(grid->errors_mm()[k], saved_mm[k], 1e-9) << k;
   EXPECT_TRUE(grid->ErrorLegend().contains("RMS error against saved_no_drag.h5: 0 (green) to"))
       << grid->ErrorLegend().toStdString();
+}
+
+// The status bar speaks of the room shown: the labeling room's frame, camera and knot there; the
+// simulation and reconstruction rooms' own slider's frame; no frame in the calibration room.
+TEST_F(SimulationRoomTest, TheStatusBarSaysTheFrameOfTheRoomShown) {
+  const std::string d = Dir().string();
+  Project p = LoadProject(d + "/project.yaml");
+  p.tracks.clear();
+  p.simulations.clear();
+  p.scores.clear();
+  p.fits.clear();
+  SaveProject(p, d + "/status.yaml");
+  MainWindow w;
+  w.resize(1500, 1000);
+  w.show();
+  ASSERT_TRUE(w.OpenProject(QString::fromStdString(d + "/status.yaml"), false));
+  w.SetFrame(3);
+  ASSERT_TRUE(w.WaitForFrame());
+  // What the status bar's readouts say (a message hides them: none given here).
+  const auto bar = [&w] {
+    w.statusBar()->clearMessage();
+    QStringList texts;
+    for (QLabel* label : w.statusBar()->findChildren<QLabel*>())
+      if (!label->text().isEmpty()) texts << label->text();
+    return texts.join(" | ");
+  };
+  const ReconstructionPresenter& frames = *w.reconstruction();
+  EXPECT_TRUE(bar().contains(frames.FrameStatus(3))) << bar().toStdString();
+  EXPECT_TRUE(bar().contains("knot (")) << bar().toStdString();
+
+  QTest::keyClick(&w, Qt::Key_5, Qt::ControlModifier);
+  ASSERT_EQ(w.room(), MainWindow::Room::kSimulation);
+  ASSERT_TRUE(w.WaitForIdle());
+  EXPECT_EQ(bar(), frames.FrameStatus(3));
+  w.simulation_room()->frame_slider()->setValue(10);
+  EXPECT_EQ(bar(), frames.FrameStatus(10));
+
+  QTest::keyClick(&w, Qt::Key_4, Qt::ControlModifier);
+  ASSERT_EQ(w.room(), MainWindow::Room::kReconstruction);
+  EXPECT_EQ(bar(), frames.FrameStatus(10));  // the frame the simulation room was left at
+  w.reconstruction_room()->frame_slider()->setValue(15);
+  EXPECT_EQ(bar(), frames.FrameStatus(15));
+
+  QTest::keyClick(&w, Qt::Key_2, Qt::ControlModifier);
+  ASSERT_EQ(w.room(), MainWindow::Room::kCalibration);
+  EXPECT_FALSE(bar().contains("frame ")) << bar().toStdString();
+
+  QTest::keyClick(&w, Qt::Key_3, Qt::ControlModifier);
+  ASSERT_EQ(w.room(), MainWindow::Room::kLabeling);
+  ASSERT_TRUE(w.WaitForFrame());
+  EXPECT_TRUE(bar().contains(frames.FrameStatus(w.frame()))) << bar().toStdString();
+  EXPECT_TRUE(bar().contains("knot (")) << bar().toStdString();
 }
 
 // A fit of the drag coefficient from the window, started from 0.8 (the shot's is 1.2): cancelled
