@@ -13,9 +13,13 @@
 
 namespace netlab::recon {
 
+Eigen::Vector2d InsideOuterEdgeByAxisPx(const Eigen::Vector2d& q, int width, int height) {
+  if (!q.allFinite()) return Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  return {std::min(q.x() + 0.5, width - 0.5 - q.x()), std::min(q.y() + 0.5, height - 0.5 - q.y())};
+}
+
 double InsideOuterEdgePx(const Eigen::Vector2d& q, int width, int height) {
-  if (!q.allFinite()) return std::numeric_limits<double>::quiet_NaN();
-  return std::min({q.x() + 0.5, width - 0.5 - q.x(), q.y() + 0.5, height - 0.5 - q.y()});
+  return InsideOuterEdgeByAxisPx(q, width, height).minCoeff();
 }
 
 namespace {
@@ -73,21 +77,60 @@ std::string Px(const Eigen::Vector2d& q) {
   return s;
 }
 
-// Where `camera` sees the world point p: in front of it, inside its image's outer edge by
-// `margin` px (negative: at most that far outside), and its own projection (the pixel undistorts
-// back to p's ray: a lens model's polynomial can fold a point far outside the field of view into
-// the image). `why` (when given) says why not.
-std::optional<Eigen::Vector2d> SeenAt(const calib::Camera& camera, const Eigen::Vector3d& p,
-                                      double margin, std::string* why = nullptr) {
-  const Eigen::Vector3d p_in_cam = camera.cam_from_world * p;
+// A knot's point (1.-3. of the header) and, where the cameras place it (1.), its covariance for
+// 1 px of label noise and the label noise taken (px per axis); zero for a rough point (2., 3.),
+// whose error is not known to the pixel.
+struct KnotPlace {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d unit_covariance = Eigen::Matrix3d::Zero();  // m^2 / px^2
+  double label_sigma_px = 0.0;
+};
+
+// How far beyond the image's outer edge `camera` may see the point of `place` and still list it
+// (px, along x and y; negative: the least it must lie inside): its projection's standard
+// deviation times edge_sigmas, at most beyond_edge_px; a rough point's beyond_edge_px (header,
+// MissingKnotsOptions).
+Eigen::Vector2d EdgeSlack(const calib::Camera& camera, const KnotPlace& place,
+                          const MissingKnotsOptions& o) {
+  if (o.margin_px > 0.0) return Eigen::Vector2d::Constant(-o.margin_px);
+  Eigen::Vector2d px;
+  Eigen::Matrix<double, 2, 3> j;
+  if (!(place.label_sigma_px > 0.0) || !PixelAndJacobian(camera, place.position, &px, &j))
+    return Eigen::Vector2d::Constant(o.beyond_edge_px);  // a rough point: its error not known
+  const Eigen::Matrix2d cov = j * place.unit_covariance * j.transpose();
+  Eigen::Vector2d slack;
+  for (int a = 0; a < 2; ++a) {
+    slack[a] = o.edge_sigmas * place.label_sigma_px * std::sqrt(std::max(cov(a, a), 0.0));
+    slack[a] = std::isfinite(slack[a]) ? std::min(slack[a], o.beyond_edge_px) : o.beyond_edge_px;
+  }
+  return slack;
+}
+
+// Where `camera` sees the point of `place`: in front of it, inside its image's outer edge (or
+// beyond it by at most EdgeSlack along each axis), and its own projection (the pixel undistorts
+// back to the point's ray: a lens model's polynomial can fold a point far outside the field of
+// view into the image). `why` (when given) says why not.
+std::optional<Eigen::Vector2d> SeenAt(const calib::Camera& camera, const KnotPlace& place,
+                                      const MissingKnotsOptions& o, std::string* why = nullptr) {
+  const Eigen::Vector3d p_in_cam = camera.cam_from_world * place.position;
   if (!(p_in_cam.z() > 0.0)) {
     if (why) *why = "its point is behind the camera";
     return std::nullopt;
   }
   const Eigen::Vector2d q = calib::Project(camera.intrinsics, p_in_cam);
   const calib::CameraIntrinsics& in = camera.intrinsics;
-  if (!(InsideOuterEdgePx(q, in.width, in.height) >= margin)) {
-    if (why) *why = "its point projects to " + Px(q) + ", outside the image";
+  const Eigen::Vector2d slack = EdgeSlack(camera, place, o);
+  const Eigen::Vector2d inside = InsideOuterEdgeByAxisPx(q, in.width, in.height);
+  if (!(inside.x() >= -slack.x() && inside.y() >= -slack.y())) {
+    if (why) {
+      const int a = inside.x() < inside.y() ? 0 : 1;  // the axis it is furthest out along
+      char s[192];
+      std::snprintf(s, sizeof s,
+                    "its point projects to %s, outside the image (%.2f px beyond its edge; its "
+                    "error allows %.2f)",
+                    Px(q).c_str(), -inside[a], std::max(slack[a], 0.0));
+      *why = inside.allFinite() ? s : "its point projects to " + Px(q) + ", outside the image";
+    }
     return std::nullopt;
   }
   const Eigen::Vector2d ray = p_in_cam.head<2>() / p_in_cam.z();
@@ -97,11 +140,6 @@ std::optional<Eigen::Vector2d> SeenAt(const calib::Camera& camera, const Eigen::
     return std::nullopt;
   }
   return q;
-}
-
-// How far inside the image's outer edge an expected point must be (px; negative: outside).
-double Margin(const MissingKnotsOptions& o) {
-  return o.margin_px > 0.0 ? o.margin_px : -o.beyond_edge_px;
 }
 
 // Whether camera c has a label of one of knot k's grid neighbours in frame row t.
@@ -116,6 +154,7 @@ bool HasLabeledNeighbour(const LabelSet& labels, int c, int t, int k) {
 struct ViewsPoint {
   bool valid = false;
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d unit_covariance = Eigen::Matrix3d::Zero();  // m^2 / px^2
   std::vector<int> seen_in, under_review;
   double rms_px = 0.0;
   int lone_camera = -1;  // the one camera with a label (accepted or under review), or -1
@@ -180,6 +219,7 @@ class Points {
       }
       out.valid = true;
       out.position = e.position;
+      out.unit_covariance = e.unit_covariance;
       out.seen_in = seen;
       out.under_review = review;
       out.rms_px = e.rms_px;
@@ -304,9 +344,8 @@ std::optional<Eigen::Vector3d> OnRay(const calib::Camera& camera, const Eigen::V
 
 // Knot k's point in frame row t (1.-3. of the header), with where it came from in `out`; none,
 // with `why` (when given) saying why, when nothing places it.
-std::optional<Eigen::Vector3d> KnotPoint(Points& points, int t, int k,
-                                         const MissingKnotsOptions& options, MissingKnot* out,
-                                         std::string* why) {
+std::optional<KnotPlace> KnotPoint(Points& points, int t, int k, const MissingKnotsOptions& options,
+                                   MissingKnot* out, std::string* why) {
   const LabelSet& labels = points.labels();
   MissingKnot& m = *out;
   m.t = t;
@@ -318,7 +357,7 @@ std::optional<Eigen::Vector3d> KnotPoint(Points& points, int t, int k,
     m.seen_in = v.seen_in;
     m.under_review = v.under_review;
     m.rms_px = v.rms_px;
-    return v.position;
+    return KnotPlace{v.position, v.unit_covariance, std::max(options.label_sigma_px, v.rms_px)};
   }
   std::optional<Rough> rough = FromNeighbours(points, t, k, options);
   m.basis = MissingBasis::kNeighbours;
@@ -341,9 +380,9 @@ std::optional<Eigen::Vector3d> KnotPoint(Points& points, int t, int k,
   if (p) {
     m.seen_in = {v.lone_camera};
     if (!labels.at(v.lone_camera, t, k).accepted()) m.under_review = {v.lone_camera};
-    return p;
+    return KnotPlace{*p};
   }
-  return rough->position;
+  return KnotPlace{rough->position};
 }
 
 std::string Names(const std::vector<int>& cameras, const std::vector<std::string>& names) {
@@ -386,6 +425,14 @@ bool MissingKnotsOptions::IsValid(std::string* why) const {
     *why = "beyond_edge_px must be >= 0 (px)";
     return false;
   }
+  if (!(label_sigma_px >= 0.0)) {
+    *why = "label_sigma_px must be >= 0 (px)";
+    return false;
+  }
+  if (!(edge_sigmas >= 0.0)) {
+    *why = "edge_sigmas must be >= 0";
+    return false;
+  }
   if (!(neighbour_agreement >= 0.0)) {
     *why = "neighbour_agreement must be >= 0";
     return false;
@@ -423,13 +470,14 @@ std::vector<MissingKnot> FindMissingKnots(const LabelSet& labels, const calib::R
     }
     if (open.empty()) continue;
     MissingKnot m;
-    const std::optional<Eigen::Vector3d> p = KnotPoint(points, t, k, options, &m, nullptr);
+    const std::optional<KnotPlace> p = KnotPoint(points, t, k, options, &m, nullptr);
     if (!p) continue;
     for (int c : open) {
       const calib::Camera& camera = rig.cameras[rig_index[c]];
-      const auto q = SeenAt(camera, *p, Margin(options));
+      const auto q = SeenAt(camera, *p, options);
       if (!q) continue;
-      if (TargetHides(options.target, camera.Center(), *p, time_s, options.target_grow_m)) continue;
+      if (TargetHides(options.target, camera.Center(), p->position, time_s, options.target_grow_m))
+        continue;
       m.camera = c;
       m.expected_px = *q;
       out.push_back(m);
@@ -452,15 +500,15 @@ std::string WhyNotMissing(const LabelSet& labels, const calib::Rig& rig,
   Points points(labels, rig, rig_index, options);
   MissingKnot m;
   std::string why;
-  const std::optional<Eigen::Vector3d> p = KnotPoint(points, t, knot, options, &m, &why);
+  const std::optional<KnotPlace> p = KnotPoint(points, t, knot, options, &m, &why);
   if (!p) return why;
   const calib::Camera& cam = rig.cameras[rig_index[camera]];
-  const auto q = SeenAt(cam, *p, Margin(options), &why);
+  const auto q = SeenAt(cam, *p, options, &why);
   if (!q) return why;
   m.camera = camera;
   m.expected_px = *q;
   const double time_s = options.target.empty() ? 0.0 : labels.frame_index[t] / options.target.fps;
-  if (TargetHides(options.target, cam.Center(), *p, time_s, options.target_grow_m))
+  if (TargetHides(options.target, cam.Center(), p->position, time_s, options.target_grow_m))
     return "the target hides its point (" + MissingReason(m, labels.cameras) + ")";
   return "";
 }
