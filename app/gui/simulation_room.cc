@@ -33,6 +33,9 @@
 namespace netlab::gui {
 namespace {
 
+// The hover line before the mouse is over a knot.
+constexpr char kHoverPrompt[] = "Point at a knot: its label's distance to its simulated knot.";
+
 // The labels in this room: one colour, apart from the simulated net's cyan.
 const QColor kLabelColour(255, 150, 0);
 
@@ -58,6 +61,10 @@ double TickStep(double max) {
     if (m * power >= raw) return m * power;
   return 10.0 * power;
 }
+
+// A tick's value as a person reads an axis: 3000, not 3e+03 (the steps are round, so six
+// digits cut only the sums' rounding: 0.30000000000000004 reads 0.3; -0 reads 0).
+QString TickLabel(double v) { return QString::number(v == 0.0 ? 0.0 : v, 'g', 6); }
 
 }  // namespace
 
@@ -147,13 +154,12 @@ void ScoreChart::paintEvent(QPaintEvent*) {
   for (double y = 0; y <= y1 + 1e-12; y += ystep) {
     painter.drawLine(QPointF(plot.left() - 3, Y(y)), QPointF(plot.left(), Y(y)));
     painter.drawText(QRectF(0, Y(y) - 7, plot.left() - 5, 14), Qt::AlignRight | Qt::AlignVCenter,
-                     QString::number(y, 'g', 3));
+                     TickLabel(y));
   }
   const double xstep = TickStep(x1 - x0);
   for (double x = std::ceil(x0 / xstep) * xstep; x <= x1 + 1e-12; x += xstep) {
     painter.drawLine(QPointF(X(x), plot.bottom()), QPointF(X(x), plot.bottom() + 3));
-    painter.drawText(QRectF(X(x) - 30, plot.bottom() + 3, 60, 14), Qt::AlignCenter,
-                     QString::number(x, 'g', 3));
+    painter.drawText(QRectF(X(x) - 30, plot.bottom() + 3, 60, 14), Qt::AlignCenter, TickLabel(x));
   }
   if (kind_ == Kind::kErrorOverTime) {
     for (int c = 0; c < 3; ++c) {
@@ -396,7 +402,7 @@ SimulationRoom::SimulationRoom(QWidget* parent)
   frame_label_->setMinimumWidth(200);
   slider_row->addWidget(frame_label_);
   views_layout->addLayout(slider_row);
-  hover_ = new QLabel("Point at a knot: its label's distance to its simulated knot.");
+  hover_ = new QLabel(kHoverPrompt);
   hover_->setObjectName("simulation_hover");
   views_layout->addWidget(hover_);
   splitter->addWidget(views_box);
@@ -564,6 +570,8 @@ void SimulationRoom::Show(SimulationPresenter* simulation,
   fit_->setText("");
   shown_frame_ = -1;
   frame_ = 0;
+  hover_camera_ = -1;
+  hover_->setText(kHoverPrompt);
   to_score_.clear();
   scoring_ = -1;
   if (simulation_) {
@@ -1022,10 +1030,13 @@ void SimulationRoom::RefreshOverlays() {
     views_[c]->SetOverlay(std::move(overlay));
   }
   frame_label_->setText(reconstruction_->FrameStatus(t));
+  if (hover_camera_ >= 0) OnCursor(hover_camera_, hover_px_);
 }
 
 void SimulationRoom::OnCursor(int camera, const Eigen::Vector2d& px) {
   if (!simulation_ || camera >= reconstruction_->session().cameras()) return;
+  hover_camera_ = camera;
+  hover_px_ = px;
   const Session& session = reconstruction_->session();
   const int t = frame_;
   // The knot nearest the cursor among the labels and the simulated knots, within 12 screen px.
@@ -1041,7 +1052,7 @@ void SimulationRoom::OnCursor(int camera, const Eigen::Vector2d& px) {
   for (size_t i = 0; i < sim.knots.size(); ++i)
     if ((sim.px[i] - px).norm() < best_d) best_d = (sim.px[i] - px).norm(), best = sim.knots[i];
   if (best < 0) {
-    hover_->setText("Point at a knot: its label's distance to its simulated knot.");
+    hover_->setText(kHoverPrompt);
     return;
   }
   const int cols = session.project().cols;

@@ -147,7 +147,11 @@ class SimulationRoom : public QWidget {
   void RefreshOverlays();
   void RefreshTable();
   void RefreshButtons();
+  // The hover line for the cursor at `px` in a view; said again for the last cursor whenever
+  // the overlays change (another simulation, frame or alignment), never left stale.
   void OnCursor(int camera, const Eigen::Vector2d& px);
+  int hover_camera_ = -1;  // the view the cursor was last over (-1: none yet)
+  Eigen::Vector2d hover_px_ = Eigen::Vector2d::Zero();
   void StartProgress(const QString& what);
   void StopProgress();
   bool Alive() const;

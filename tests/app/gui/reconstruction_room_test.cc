@@ -1,10 +1,11 @@
 // The reconstruction room in the window (Qt's offscreen platform), driven by mouse and keys, on
 // the command tests' small net rendered by `netlab render` (0.1 s) with its true labels and rig,
-// one label moved 12 px off its knot: Triangulate (netlab triangulate's engine on a worker), the
-// moved label listed as an outlier with why; a click on it lands on that label in the labeling
-// room (its frame, its camera maximised, its knot) and Ctrl+4 comes back. The 3D view follows the
-// frame slider and the window's frame; a drag turns it, the wheel zooms. Export writes tracks.h5
-// equal to `netlab triangulate`'s from the same labels, and xyzpts.csv / xyzres.csv beside it.
+// one label moved 12 px off its knot: Triangulate (netlab triangulate's engine on a worker;
+// cancelled once, then run to the end), the moved label listed as an outlier with why; a click on
+// it lands on that label in the labeling room (its frame, its camera maximised, its knot) and
+// Ctrl+4 comes back. The 3D view follows the frame slider and the window's frame; a drag turns it,
+// the wheel zooms. Export writes tracks.h5 equal to `netlab triangulate`'s from the same labels,
+// and xyzpts.csv / xyzres.csv beside it equal to its --csv files byte for byte.
 
 #include "app/gui/reconstruction_room.h"
 
@@ -41,6 +42,11 @@ namespace netlab::gui {
 namespace {
 
 namespace fs = std::filesystem;
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
 using testing::RunNetlab;
 
 constexpr int kLastFrame = 17;                     // frames 0..17 (0.1 s at 179 fps)
@@ -122,6 +128,15 @@ TEST_F(ReconstructionRoomTest, TriangulateClickAnOutlierLandOnItsLabelAndExportA
   EXPECT_EQ(room->adjustment_box()->currentText(), "points");
   room->sigma_box()->selectAll();
   QTest::keyClicks(room->sigma_box(), "0.100");
+  // Cancelled at once: said, nothing kept, the room free again.
+  QTest::mouseClick(room->triangulate_button(), Qt::LeftButton);
+  ASSERT_TRUE(room->cancel_button()->isEnabled());
+  QTest::mouseClick(room->cancel_button(), Qt::LeftButton);
+  EXPECT_EQ(room->status_label()->text(), "Triangulation cancelled.");
+  EXPECT_FALSE(room->busy());
+  EXPECT_EQ(w.reconstruction()->tracks(), nullptr);
+  EXPECT_FALSE(room->export_button()->isEnabled());
+  // Then to the end.
   QTest::mouseClick(room->triangulate_button(), Qt::LeftButton);
   ASSERT_TRUE(WaitIdle(*room, 60000));
   ASSERT_TRUE(room->export_button()->isEnabled()) << room->status_label()->text().toStdString();
@@ -237,12 +252,17 @@ TEST_F(ReconstructionRoomTest, TriangulateClickAnOutlierLandOnItsLabelAndExportA
   // Export: the CLI's files, its numbers.
   fs::create_directories(Dir() / "export");
   ASSERT_TRUE(room->ExportTo(QString::fromStdString((Dir() / "export/tracks.h5").string())));
-  EXPECT_TRUE(fs::exists(Dir() / "export/xyzpts.csv"));
-  EXPECT_TRUE(fs::exists(Dir() / "export/xyzres.csv"));
-  const auto cli = RunNetlab("triangulate --rig " + d + "/shot/rig_true.yaml --labels " + d +
-                             "/labels.h5 --knots 6x6 --fps 179 --sigma-px 0.1 --experiment " + d +
-                             "/shot/experiment.yaml --out " + d + "/cli_tracks.h5 --quiet");
+  const auto cli =
+      RunNetlab("triangulate --rig " + d + "/shot/rig_true.yaml --labels " + d +
+                "/labels.h5 --knots 6x6 --fps 179 --sigma-px 0.1 --experiment " + d +
+                "/shot/experiment.yaml --out " + d + "/cli_tracks.h5 --csv " + d + "/cli_ --quiet");
   ASSERT_EQ(cli.status, 0) << cli.err;
+  // The DLTdv files are the CLI's --csv files, byte for byte.
+  for (const char* name : {"xyzpts.csv", "xyzres.csv"}) {
+    const std::string ours = ReadText((Dir() / "export" / name).string());
+    EXPECT_FALSE(ours.empty()) << name;
+    EXPECT_EQ(ours, ReadText(d + "/cli_" + name)) << name;
+  }
   const KnotTracks ours = ReadKnotTracks(d + "/export/tracks.h5");
   const KnotTracks theirs = ReadKnotTracks(d + "/cli_tracks.h5");
   ASSERT_EQ(ours.position.size(), theirs.position.size());

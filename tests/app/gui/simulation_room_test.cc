@@ -27,6 +27,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 
 #include "app/gui/camera_view.h"
@@ -251,6 +252,14 @@ TEST_F(SimulationRoomTest, TheTrueSimulationLiesOnTheLabelsAndIsConsistentTheNoD
   const std::string no_drag = ScoreSelected(room);
   EXPECT_NE(no_drag.find("inconsistent"), std::string::npos) << no_drag;
   std::printf("no-drag simulation: %s\n", no_drag.c_str());
+  // The hover line follows the selection: the knot still under the cursor, its distances to the
+  // no-drag simulation (no longer the true one's 0.00).
+  const std::optional<double> residual = w.simulation()->ResidualM(1, room->frame(), mark.knot);
+  ASSERT_TRUE(residual.has_value());
+  EXPECT_GT(*residual, 1e-4);
+  EXPECT_TRUE(room->hover_label()->text().contains(
+      QString("measured to simulated %1 mm").arg(*residual * 1e3, 0, 'f', 2)))
+      << room->hover_label()->text().toStdString();
   // Its charts: the error over time of every class (its worst class over 5 mm at the end of the
   // flight), the d² histogram.
   const std::vector<int> points = room->error_chart()->series_points();
@@ -439,6 +448,10 @@ TEST_F(SimulationRoomTest, TheNetGridShowsTheSavedScoreBeforeTheSimulationRoomIs
       << grid->ErrorLegend().toStdString();
   EXPECT_TRUE(grid->KnotToolTip(worst).contains(QString("%1 mm").arg(saved_mm[worst], 0, 'f', 2)))
       << grid->KnotToolTip(worst).toStdString();
+  if (const char* out = getenv("NETLAB_NET_GRID_SCREENSHOT")) {
+    ASSERT_TRUE(w.grab().save(out));
+    std::printf("wrote %s\n", out);
+  }
   // A frame change keeps them (read once, not again).
   const int first_frame = w.frame();
   QTest::keyClick(&w, Qt::Key_F);
