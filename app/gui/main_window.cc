@@ -1514,6 +1514,9 @@ void MainWindow::ShowRoom(Room room) {
   std::optional<int> left_at;
   if (room_ == Room::kReconstruction && room != room_) left_at = reconstruction_room_->frame();
   if (room_ == Room::kSimulation && room != room_) left_at = simulation_room_->frame();
+  // A message of the labeling room (a label's reason, the way back to the room it came from)
+  // leaves with it.
+  if (room_ == Room::kLabeling && !labeling) statusBar()->clearMessage();
   room_ = room;
   {
     const QSignalBlocker block(rooms_);

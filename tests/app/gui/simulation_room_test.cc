@@ -475,8 +475,9 @@ TEST_F(SimulationRoomTest, TheNetGridShowsTheSavedScoreBeforeTheSimulationRoomIs
       << grid->ErrorLegend().toStdString();
 }
 
-// The status bar speaks of the room shown: the labeling room's frame, camera and knot there; the
-// simulation and reconstruction rooms' own slider's frame; no frame in the calibration room.
+// The status bar speaks of the room shown: the labeling room's frame, camera and knot there (and
+// its messages); the simulation and reconstruction rooms' own slider's frame; no frame in the
+// calibration room.
 TEST_F(SimulationRoomTest, TheStatusBarSaysTheFrameOfTheRoomShown) {
   const std::string d = Dir().string();
   Project p = LoadProject(d + "/project.yaml");
@@ -503,8 +504,11 @@ TEST_F(SimulationRoomTest, TheStatusBarSaysTheFrameOfTheRoomShown) {
   EXPECT_TRUE(bar().contains(frames.FrameStatus(3))) << bar().toStdString();
   EXPECT_TRUE(bar().contains("knot (")) << bar().toStdString();
 
+  // A message of the labeling room leaves with it.
+  w.statusBar()->showMessage("The label of knot (3, 0) in cam1 (Ctrl+5: back)", 60000);
   QTest::keyClick(&w, Qt::Key_5, Qt::ControlModifier);
   ASSERT_EQ(w.room(), MainWindow::Room::kSimulation);
+  EXPECT_EQ(w.statusBar()->currentMessage(), "");
   ASSERT_TRUE(w.WaitForIdle());
   EXPECT_EQ(bar(), frames.FrameStatus(3));
   w.simulation_room()->frame_slider()->setValue(10);
