@@ -134,11 +134,18 @@ void ScoreChart::paintEvent(QPaintEvent*) {
       if (b <= a) continue;
       painter.fillRect(QRectF(a, plot.top(), b - a, plot.height()),
                        p % 2 ? QColor(245, 245, 245) : QColor(232, 238, 246));
-      // The name where it fits whole, else cut with "…" where three letters fit, else none (a
-      // phase a few pixels wide showed its name's first letter, read with the next one's).
-      const QString name = painter.fontMetrics().elidedText(
-          QString::fromStdString(row.name), Qt::ElideRight, static_cast<int>(b - a - 4));
-      if (name.size() < 4 && name != QString::fromStdString(row.name)) continue;
+      // The name and the phase's RMS error where they fit whole, else the name alone, cut with
+      // "…" where three letters fit, else none (a phase a few pixels wide showed its name's
+      // first letter, read with the next one's).
+      const QString phase = QString::fromStdString(row.name);
+      const int room = static_cast<int>(b - a - 4);
+      QString name = std::isfinite(row.rms_m)
+                         ? QString("%1 %2 mm").arg(phase).arg(row.rms_m * 1e3, 0, 'g', 3)
+                         : phase;
+      if (painter.fontMetrics().horizontalAdvance(name) > room) {
+        name = painter.fontMetrics().elidedText(phase, Qt::ElideRight, room);
+        if (name.size() < 4 && name != phase) continue;
+      }
       painter.setPen(QColor(90, 90, 90));
       painter.drawText(QRectF(a + 2, plot.top(), b - a - 4, 14), Qt::AlignLeft | Qt::AlignTop,
                        name);
@@ -288,7 +295,7 @@ SimulationRoom::SimulationRoom(QWidget* parent)
                 StopProgress();
                 if (!Alive()) return;
                 simulation_->SetFit(std::move(run), ProjectFolder());
-                fit_->setText(simulation_->FitText(selected_));
+                fit_->setText(simulation_->FitText());
                 status_->setText(simulation_->fit()->cancelled ? "Fit cancelled."
                                  : simulation_->fit()->result  ? "Fitted."
                                                                : "The fit failed.");

@@ -38,8 +38,8 @@ namespace netlab::gui {
 class KnotGrid;
 
 // A score's charts, drawn with QPainter (offscreen too): the error over time (the RMS of |r| per
-// knot class per measured frame, mm, the phases shaded and named) or the d² histogram against
-// chi²(3)'s expected counts.
+// knot class per measured frame, mm, the phases shaded and named with their RMS where it fits) or
+// the d² histogram against chi²(3)'s expected counts.
 class ScoreChart : public QWidget {
   Q_OBJECT
 

@@ -1,7 +1,10 @@
 #include "app/gui/document/simulation_presenter.h"
 
+#include <unistd.h>
+
 #include <QFileInfo>
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <chrono>
 #include <cmath>
@@ -340,6 +343,33 @@ FitRun SimulationPresenter::Fit(const FitJob& job, const ProgressReporter& progr
   } catch (const std::exception& e) {
     run.error = e.what();
   }
+  if (!run.result) return run;
+  // The start: simulated once (to a file of its own, removed after) and scored as the fitted
+  // model is, against the same tracks with the fit's score options.
+  progress.Report("the start", run.result->simulations, run.result->simulations,
+                  "simulating and scoring the scenario with its overrides");
+  static std::atomic<int> starts{0};
+  const std::string out =
+      (std::filesystem::temp_directory_path() /
+       ("netlab_fit_start_" + std::to_string(getpid()) + "_" + std::to_string(starts++) + ".h5"))
+          .string();
+  const SimulationRun start =
+      Simulate({job.scenario_path, job.options.set, out, 0.0}, progress.Silent());
+  std::error_code ignored;
+  std::filesystem::remove(out, ignored);
+  if (start.cancelled) {
+    run.start_error = "cancelled";
+  } else if (!start.tracks) {
+    run.start_error = start.error;
+  } else {
+    try {
+      run.start_score = netsim::Score(job.measured, *start.tracks, job.options.score,
+                                      "the triangulated labels", "the start")
+                            .summary;
+    } catch (const std::exception& e) {
+      run.start_error = e.what();
+    }
+  }
   return run;
 }
 
@@ -354,7 +384,7 @@ QString SimulationPresenter::ProgressText(const Progress& p, double elapsed_s) {
                     .arg(Seconds(eta_s));
 }
 
-QString SimulationPresenter::FitText(int start) const {
+QString SimulationPresenter::FitText() const {
   if (!fit_) return fit_path_.empty() ? QString() : FitFileText(fit_path_);
   if (fit_->cancelled) return "Fit cancelled.";
   if (!fit_->result) return "Fit failed: " + QString::fromStdString(fit_->error);
@@ -386,13 +416,14 @@ QString SimulationPresenter::FitText(int start) const {
               .arg(QString::fromStdString(netsim::VerdictName(r.score.verdict)))
               .arg(r.score.rms_m * 1e3, 0, 'g', 3)
               .arg(r.score.mean_d2, 0, 'g', 3);
-  if (start >= 0 && start < simulations() && simulations_[start].score) {
-    const netsim::ScoreSummary& s = simulations_[start].score->summary;
-    text += QString("\nThe start (%1): %2, RMS %3 mm, mean d² %4.")
-                .arg(QString::fromStdString(simulations_[start].name))
+  if (fit_->start_score) {
+    const netsim::ScoreSummary& s = *fit_->start_score;
+    text += QString("\nThe start (the scenario with its overrides): %1, RMS %2 mm, mean d² %3.")
                 .arg(QString::fromStdString(netsim::VerdictName(s.verdict)))
                 .arg(s.rms_m * 1e3, 0, 'g', 3)
                 .arg(s.mean_d2, 0, 'g', 3);
+  } else {
+    text += "\nThe start not scored: " + QString::fromStdString(fit_->start_error);
   }
   for (const std::string& note : r.notes) text += "\nnote: " + QString::fromStdString(note);
   return text;

@@ -79,6 +79,10 @@ struct FitRun {
   std::optional<netsim::FitResult> result;
   std::string error;
   bool cancelled = false;
+  // The start's score: the scenario with its overrides simulated and scored against the same
+  // tracks with the fit's score options (nullopt: not scored, the reason in start_error).
+  std::optional<netsim::ScoreSummary> start_score;
+  std::string start_error;
 };
 
 // A simulation in the room.
@@ -193,7 +197,8 @@ class SimulationPresenter {
   FitJob MakeFitJob(const std::string& scenario_path, const std::vector<std::string>& overrides,
                     const std::string& free) const;
   // Any thread, reporting as FitShot does (FitOptions::progress); a cancel of the reporter's
-  // token stops the fit's simulations under way (the answer says cancelled).
+  // token stops the fit's simulations under way (the answer says cancelled). After the fit, the
+  // start (the scenario with its overrides) simulated once and scored, for FitText.
   static FitRun Fit(const FitJob& job, const ProgressReporter& progress = {});
   // The answer (GUI thread). A fit with a result and `folder` non-empty is written there as
   // fit_SCENARIO.yaml, the file netlab fit --out writes (its `measured` the project's tracks),
@@ -202,10 +207,9 @@ class SimulationPresenter {
   const FitRun* fit() const { return fit_ ? &*fit_ : nullptr; }
   const std::string& fit_path() const { return fit_path_; }
   // The fitted values with sigma and whether the flight data, a prior or neither determined
-  // each; the cost from start to end; the fitted model's score beside the starting one's (the
-  // simulation `start` when scored, -1: none). Without a fit run here, the project's last fit
-  // file read (FitFileText).
-  QString FitText(int start = -1) const;
+  // each; the cost from start to end; the fitted model's score beside the start's (FitRun's
+  // start_score). Without a fit run here, the project's last fit file read (FitFileText).
+  QString FitText() const;
   // A fit.yaml's values with sigma and who determined each, its cost and the fitted model's
   // score; the reason when the file cannot be read.
   static QString FitFileText(const std::string& path);

@@ -63,23 +63,19 @@ const fs::path& Dir() {
 
 void Click(QWidget* widget) { QTest::mouseClick(widget, Qt::LeftButton); }
 
-// A dataset of an HDF5 file, as doubles.
-std::vector<double> ReadDoubles(const std::string& path, const std::string& dataset) {
+// A dataset of an HDF5 file, as values of `type` (H5T_NATIVE_DOUBLE, H5T_NATIVE_INT).
+template <typename T>
+std::vector<T> ReadValues(const std::string& path, const std::string& dataset, hid_t type) {
   const h5::Id file = h5::OpenFileReadOnly(path);
   size_t n = 1;
   for (hsize_t d : h5::DatasetDims(file.get(), dataset)) n *= d;
-  std::vector<double> values(n);
-  h5::ReadDataset(file.get(), dataset, H5T_NATIVE_DOUBLE, values.data());
+  std::vector<T> values(n);
+  h5::ReadDataset(file.get(), dataset, type, values.data());
   return values;
 }
 
-std::vector<int> ReadInts(const std::string& path, const std::string& dataset) {
-  const h5::Id file = h5::OpenFileReadOnly(path);
-  size_t n = 1;
-  for (hsize_t d : h5::DatasetDims(file.get(), dataset)) n *= d;
-  std::vector<int> values(n);
-  h5::ReadDataset(file.get(), dataset, H5T_NATIVE_INT, values.data());
-  return values;
+std::vector<double> ReadDoubles(const std::string& path, const std::string& dataset) {
+  return ReadValues<double>(path, dataset, H5T_NATIVE_DOUBLE);
 }
 
 std::string ReadRootAttribute(const std::string& path, const std::string& name) {
@@ -418,7 +414,7 @@ TEST_F(SimulationRoomTest, TheNetGridShowsTheSavedScoreBeforeTheSimulationRoomIs
   const std::string project = d + "/saved_score.yaml";
   SaveProject(p, project);
   // The score file's per-knot RMS, mm, row-major.
-  const std::vector<int> grid_rc = ReadInts(score_path, "/knots/grid");
+  const std::vector<int> grid_rc = ReadValues<int>(score_path, "/knots/grid", H5T_NATIVE_INT);
   const std::vector<double> rms_m = ReadDoubles(score_path, "/knots/rms_m");
   ASSERT_EQ(rms_m.size(), 36u);
   std::vector<double> saved_mm(36);
@@ -533,7 +529,8 @@ TEST_F(SimulationRoomTest, TheStatusBarSaysTheFrameOfTheRoomShown) {
 
 // A fit of the drag coefficient from the window, started from 0.8 (the shot's is 1.2): cancelled
 // at once (said, nothing kept), then run to the end: 1.2 within its sigma's reach, the flight
-// data naming it, the fitted model "consistent".
+// data naming it, the fitted model "consistent" (RMS 0.000 mm) beside the start's score (RMS
+// 1.10 mm).
 TEST_F(SimulationRoomTest, AFitOfTheDragCoefficientIsCancelledThenRunToTheEnd) {
   const std::string d = Dir().string();
   MainWindow w;
@@ -578,6 +575,17 @@ TEST_F(SimulationRoomTest, AFitOfTheDragCoefficientIsCancelledThenRunToTheEnd) {
   const std::string text = room->fit_label()->text().toStdString();
   EXPECT_NE(text.find("drag.drag_coefficient = "), std::string::npos) << text;
   EXPECT_NE(text.find("The fitted model: consistent"), std::string::npos) << text;
+  // Beside it the start's score: the scenario with drag 0.8, simulated and scored alike.
+  ASSERT_TRUE(fit.start_score.has_value()) << fit.start_error;
+  std::printf("start: %s, RMS %.3f mm, mean d2 %.3g; fitted: RMS %.3f mm\n",
+              netsim::VerdictName(fit.start_score->verdict).c_str(), fit.start_score->rms_m * 1e3,
+              fit.start_score->mean_d2, fit.result->score.rms_m * 1e3);
+  EXPECT_GT(fit.start_score->rms_m, 2 * fit.result->score.rms_m);
+  EXPECT_NE(text.find("The start (the scenario with its overrides): " +
+                      netsim::VerdictName(fit.start_score->verdict) + ", RMS " +
+                      QString::number(fit.start_score->rms_m * 1e3, 'g', 3).toStdString() + " mm"),
+            std::string::npos)
+      << text;
 
   // Saved as netlab fit --out saves it, named in the project; the project reopens on it.
   const std::string fit_path = w.simulation()->fit_path();
