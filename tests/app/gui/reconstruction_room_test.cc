@@ -128,6 +128,17 @@ TEST_F(ReconstructionRoomTest, TriangulateClickAnOutlierLandOnItsLabelAndExportA
   EXPECT_EQ(room->adjustment_box()->currentText(), "points");
   room->sigma_box()->selectAll();
   QTest::keyClicks(room->sigma_box(), "0.100");
+  // The options reach the engine's job: a link-length prior without bundle adjustment is
+  // refused with why, as netlab triangulate refuses it.
+  room->adjustment_box()->setCurrentText("none");
+  room->link_box()->setValue(0.1);
+  QTest::mouseClick(room->triangulate_button(), Qt::LeftButton);
+  EXPECT_EQ(room->status_label()->text(),
+            "Cannot triangulate: the priors (link length, smoothing) need bundle adjustment of the "
+            "points or the rig");
+  EXPECT_FALSE(room->busy());
+  room->adjustment_box()->setCurrentText("points");
+  room->link_box()->setValue(0.0);
   // Cancelled at once: said, nothing kept, the room free again.
   QTest::mouseClick(room->triangulate_button(), Qt::LeftButton);
   ASSERT_TRUE(room->cancel_button()->isEnabled());
