@@ -371,7 +371,8 @@ SimulationRoom::SimulationRoom(QWidget* parent)
   free_edit_->setObjectName("simulation_free");
   free_edit_->setPlaceholderText(
       "free parameters of the scenario, as netlab fit --free: drag.drag_coefficient,"
-      "materials.nylon_1mm.bend_stiffness,time_offset");
+      "materials.nylon_1mm.bend_stiffness,time_offset (or tick keys in the Scenario tab's Fit "
+      "column)");
   fit_row->addWidget(free_edit_, 1);
   fit_button_ = new QPushButton("Fit");
   fit_button_->setToolTip(
@@ -486,12 +487,14 @@ SimulationRoom::SimulationRoom(QWidget* parent)
   auto* form_page = new QWidget;
   auto* form_layout = new QVBoxLayout(form_page);
   form_layout->setContentsMargins(0, 4, 0, 0);
-  form_ = new QTableWidget(0, 2);
+  form_ = new QTableWidget(0, 3);
   form_->setObjectName("simulation_form");
-  form_->setHorizontalHeaderLabels({"Key (--set's dotted path)", "Value"});
-  form_->horizontalHeader()->setStretchLastSection(true);
+  form_->setHorizontalHeaderLabels({"Key (--set's dotted path)", "Value", "Fit"});
+  form_->horizontalHeader()->setSectionResizeMode(1, QHeaderView::Stretch);
   form_->verticalHeader()->hide();
-  form_->setToolTip("The scenario's main keys; a changed value becomes a --set override");
+  form_->setToolTip(
+      "The scenario's main keys; a changed value becomes a --set override, a number ticked in "
+      "Fit a free parameter of the fit");
   form_layout->addWidget(form_, 1);
   form_check_ = new QLabel("Choose a scenario: its keys are listed here.");
   form_check_->setWordWrap(true);
@@ -532,10 +535,23 @@ SimulationRoom::SimulationRoom(QWidget* parent)
   connect(report_button_, &QPushButton::clicked, this, &SimulationRoom::OpenReport);
   connect(fit_button_, &QPushButton::clicked, this, &SimulationRoom::Fit);
   connect(scenario_edit_, &QLineEdit::editingFinished, this, &SimulationRoom::FillForm);
-  connect(scenario_edit_, &QLineEdit::textChanged, this, [this] { form_->setRowCount(0); });
+  connect(scenario_edit_, &QLineEdit::textChanged, this, [this] {
+    form_->setRowCount(0);
+    form_path_.clear();  // the same file typed again is listed again
+  });
   connect(overrides_edit_, &QLineEdit::editingFinished, this, &SimulationRoom::CheckScenario);
   connect(form_, &QTableWidget::cellChanged, this, [this](int row, int column) {
-    if (filling_form_ || column != 1) return;
+    if (filling_form_) return;
+    if (column == 2) {  // ticked or not: the key among the free parameters or not
+      const QString key = form_->item(row, 0)->text();
+      QStringList free;
+      for (const QString& part : free_edit_->text().split(',', Qt::SkipEmptyParts))
+        if (part.trimmed() != key) free << part.trimmed();
+      if (form_->item(row, 2)->checkState() == Qt::Checked) free << key;
+      free_edit_->setText(free.join(','));
+      return;
+    }
+    if (column != 1) return;
     SetOverride(form_->item(row, 0)->text(), form_->item(row, 1)->text().trimmed());
   });
   connect(show_simulated_, &QCheckBox::toggled, this, [this] { RefreshOverlays(); });
@@ -888,8 +904,23 @@ void SimulationRoom::FillForm() {
     form_->setItem(static_cast<int>(i), 0, key);
     form_->setItem(static_cast<int>(i), 1,
                    new QTableWidgetItem(QString::fromStdString(rows[i].second)));
+    // A number can be a free parameter of the fit: a box, ticked when the fit names it already.
+    auto* free = new QTableWidgetItem;
+    free->setFlags(Qt::ItemIsEnabled);
+    bool number = false;
+    QString::fromStdString(rows[i].second).toDouble(&number);
+    if (number) {
+      free->setFlags(Qt::ItemIsEnabled | Qt::ItemIsUserCheckable);
+      const QStringList named = free_edit_->text().split(',', Qt::SkipEmptyParts);
+      const bool ticked = std::any_of(named.begin(), named.end(), [&](const QString& part) {
+        return part.trimmed() == key->text();
+      });
+      free->setCheckState(ticked ? Qt::Checked : Qt::Unchecked);
+    }
+    form_->setItem(static_cast<int>(i), 2, free);
   }
   form_->resizeColumnToContents(0);
+  form_->resizeColumnToContents(2);
   filling_form_ = false;
   CheckScenario();
 }

@@ -543,10 +543,26 @@ TEST_F(SimulationRoomTest, AFitOfTheDragCoefficientIsCancelledThenRunToTheEnd) {
 
   QTest::mouseClick(room->scenario_edit(), Qt::LeftButton);
   QTest::keyClicks(room->scenario_edit(), QString::fromStdString(d + "/shot.yaml"));
+  QTest::keyClick(room->scenario_edit(), Qt::Key_Return);  // its keys listed in the form
   QTest::mouseClick(room->overrides_edit(), Qt::LeftButton);
   QTest::keyClicks(room->overrides_edit(), "drag.drag_coefficient=0.8");
-  QTest::mouseClick(room->free_edit(), Qt::LeftButton);
-  QTest::keyClicks(room->free_edit(), "drag.drag_coefficient");
+  // The free parameter chosen among the scenario's keys: ticked in the form's Fit column (a
+  // number only).
+  QTableWidget* form = room->form();
+  int drag_row = -1, text_row = -1;
+  for (int r = 0; r < form->rowCount(); ++r) {
+    if (form->item(r, 0)->text() == "drag.drag_coefficient") drag_row = r;
+    bool number = false;
+    form->item(r, 1)->text().toDouble(&number);
+    if (!number) text_row = r;
+  }
+  ASSERT_GE(drag_row, 0) << form->rowCount() << " keys listed";
+  ASSERT_GE(text_row, 0);
+  EXPECT_FALSE(form->item(text_row, 2)->flags() & Qt::ItemIsUserCheckable)
+      << form->item(text_row, 0)->text().toStdString();
+  ASSERT_TRUE(form->item(drag_row, 2)->flags() & Qt::ItemIsUserCheckable);
+  form->item(drag_row, 2)->setCheckState(Qt::Checked);
+  EXPECT_EQ(room->free_edit()->text(), "drag.drag_coefficient");
   Click(room->fit_button());
   EXPECT_TRUE(room->cancel_button()->isEnabled());
   Click(room->cancel_button());
