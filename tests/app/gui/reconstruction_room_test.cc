@@ -4,8 +4,9 @@
 // cancelled once, then run to the end), the moved label listed as an outlier with why; a click on
 // it lands on that label in the labeling room (its frame, its camera maximised, its knot) and
 // Ctrl+4 comes back. The 3D view follows the frame slider and the window's frame; a drag turns it,
-// the wheel zooms. Export writes tracks.h5 equal to `netlab triangulate`'s from the same labels,
-// and xyzpts.csv / xyzres.csv beside it equal to its --csv files byte for byte.
+// a right drag pans it, the wheel zooms. Export writes tracks.h5 equal to `netlab triangulate`'s
+// from the same labels, and xyzpts.csv / xyzres.csv beside it equal to its --csv files byte for
+// byte.
 
 #include "app/gui/reconstruction_room.h"
 
@@ -24,9 +25,11 @@
 #include <QTableView>
 #include <QTableWidget>
 #include <QTest>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 
 #include "app/gui/camera_view.h"
@@ -259,6 +262,22 @@ TEST_F(ReconstructionRoomTest, TriangulateClickAnOutlierLandOnItsLabelAndExportA
                     QPoint(0, 120), Qt::NoButton, Qt::NoModifier, Qt::NoScrollPhase, false);
   QApplication::sendEvent(view, &wheel);
   EXPECT_LT(view->distance(), distance);
+  // A right drag pans: the net follows the mouse, the view's angle and distance stay.
+  const Eigen::Vector3d knot = tracks->Position(kMovedFrame, MovedKnot());
+  const std::optional<QPointF> before_pan = view->ToScreen(knot);
+  ASSERT_TRUE(before_pan.has_value());
+  const double turned = view->yaw(), zoomed = view->distance();
+  QTest::mousePress(view, Qt::RightButton, {}, QPoint(100, 100));
+  QMouseEvent pan(QEvent::MouseMove, QPointF(160, 100), view->mapToGlobal(QPointF(160, 100)),
+                  Qt::RightButton, Qt::RightButton, Qt::NoModifier);
+  QApplication::sendEvent(view, &pan);
+  QTest::mouseRelease(view, Qt::RightButton, {}, QPoint(160, 100));
+  const std::optional<QPointF> after_pan = view->ToScreen(knot);
+  ASSERT_TRUE(after_pan.has_value());
+  EXPECT_GT(after_pan->x() - before_pan->x(), 30.0);
+  EXPECT_LT(std::abs(after_pan->y() - before_pan->y()), 15.0);
+  EXPECT_EQ(view->yaw(), turned);
+  EXPECT_EQ(view->distance(), zoomed);
 
   // Export: the CLI's files, its numbers.
   fs::create_directories(Dir() / "export");
