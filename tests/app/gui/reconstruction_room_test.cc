@@ -46,6 +46,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// A drag with `button` held from `from` to `to` (one move between press and release).
+void Drag(QWidget* widget, Qt::MouseButton button, QPoint from, QPoint to) {
+  QTest::mousePress(widget, button, {}, from);
+  QMouseEvent move(QEvent::MouseMove, QPointF(to), widget->mapToGlobal(QPointF(to)), button, button,
+                   Qt::NoModifier);
+  QApplication::sendEvent(widget, &move);
+  QTest::mouseRelease(widget, button, {}, to);
+}
+
 std::string ReadText(const std::string& path) {
   std::ifstream in(path);
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -252,11 +261,7 @@ TEST_F(ReconstructionRoomTest, TriangulateClickAnOutlierLandOnItsLabelAndExportA
       << room->knot_label()->text().toStdString();
   // A drag turns the view, the wheel zooms it.
   const double yaw = view->yaw(), distance = view->distance();
-  QTest::mousePress(view, Qt::LeftButton, {}, QPoint(100, 100));
-  QMouseEvent move(QEvent::MouseMove, QPointF(160, 110), view->mapToGlobal(QPointF(160, 110)),
-                   Qt::LeftButton, Qt::LeftButton, Qt::NoModifier);
-  QApplication::sendEvent(view, &move);
-  QTest::mouseRelease(view, Qt::LeftButton, {}, QPoint(160, 110));
+  Drag(view, Qt::LeftButton, QPoint(100, 100), QPoint(160, 110));
   EXPECT_NE(view->yaw(), yaw);
   QWheelEvent wheel(QPointF(100, 100), view->mapToGlobal(QPointF(100, 100)), QPoint(),
                     QPoint(0, 120), Qt::NoButton, Qt::NoModifier, Qt::NoScrollPhase, false);
@@ -267,11 +272,7 @@ TEST_F(ReconstructionRoomTest, TriangulateClickAnOutlierLandOnItsLabelAndExportA
   const std::optional<QPointF> before_pan = view->ToScreen(knot);
   ASSERT_TRUE(before_pan.has_value());
   const double turned = view->yaw(), zoomed = view->distance();
-  QTest::mousePress(view, Qt::RightButton, {}, QPoint(100, 100));
-  QMouseEvent pan(QEvent::MouseMove, QPointF(160, 100), view->mapToGlobal(QPointF(160, 100)),
-                  Qt::RightButton, Qt::RightButton, Qt::NoModifier);
-  QApplication::sendEvent(view, &pan);
-  QTest::mouseRelease(view, Qt::RightButton, {}, QPoint(160, 100));
+  Drag(view, Qt::RightButton, QPoint(100, 100), QPoint(160, 100));
   const std::optional<QPointF> after_pan = view->ToScreen(knot);
   ASSERT_TRUE(after_pan.has_value());
   EXPECT_GT(after_pan->x() - before_pan->x(), 30.0);
