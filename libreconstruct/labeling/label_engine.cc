@@ -1705,19 +1705,47 @@ bool LabelEngine::ConfirmCandidates(const FrameCheck& f, int k,
     *why = "Fill Grid: the cameras agree on a point farther than a link from its neighbours";
     return false;
   }
-  // The candidates the triangulation keeps as inliers are accepted.
+  // The candidates the triangulation keeps as inliers are accepted, each where the rest do not
+  // contradict it. A candidate's residual in the joint point is smaller than its distance from
+  // where the other views put the knot, and with one other view it only has to lie near that
+  // view's epipolar line: in the wrapping such candidates were accepted 2.2-6.5 px from the
+  // knot. So the other views, where they fix the knot to a pixel, must put it within
+  // projection_tolerance_px of the candidate, and this camera's own labels, where it has one in
+  // an adjacent frame row, must have it move as its neighbours did or as it was moving (within
+  // place_motion_px, as for a placement).
   bool confirmed = false;
+  std::string doubt;
   for (size_t i = first; i < obs.size(); ++i) {
     const bool inlier =
         std::find(e.inliers.begin(), e.inliers.end(), static_cast<int>(i)) != e.inliers.end();
     const FillCandidate& cand = list[i - first];
-    if (inlier) {
-      confirmed = true;
-      edits->push_back(
-          {cand.camera, f.t, k, Made(cand.px, LabelSource::kFillGrid, cand.confidence, true)});
+    if (!inlier) continue;
+    std::vector<Observation> rest = obs;
+    rest.erase(rest.begin() + static_cast<std::ptrdiff_t>(i));
+    const std::optional<ProjectedPoint> q =
+        rest.size() >= 2 ? ProjectAgreeingViews(*rig_, RigIndex(cand.camera), rest, f.topt)
+                         : std::nullopt;
+    if (q && WorstSigma(*q, o_.label_sigma_px) <= kPathCheckSigmaPx &&
+        (q->px - cand.px).norm() > o_.projection_tolerance_px) {
+      doubt = "Fill Grid: the junction is " + Px((q->px - cand.px).norm()) +
+              " px from where the other cameras' labels put the knot";
+      continue;
     }
+    std::optional<double> moved = MotionOff(cand.camera, f.t, k, cand.px);
+    const std::optional<double> own = VelocityOff(cand.camera, f.t, k, cand.px);
+    if (own && (!moved || *own < *moved)) moved = own;
+    if (moved && *moved > o_.place_motion_px) {
+      doubt = "Fill Grid: the junction moved " + Px(*moved) +
+              " px otherwise than the knot's neighbours and its own path since the adjacent "
+              "frame";
+      continue;
+    }
+    confirmed = true;
+    edits->push_back(
+        {cand.camera, f.t, k, Made(cand.px, LabelSource::kFillGrid, cand.confidence, true)});
   }
-  if (!confirmed) *why = "Fill Grid: off the epipolar geometry of the other cameras";
+  if (!confirmed)
+    *why = doubt.empty() ? "Fill Grid: off the epipolar geometry of the other cameras" : doubt;
   return confirmed;
 }
 

@@ -825,6 +825,43 @@ TEST(LabelEngine, FillGridPlacesAKnotThatMovedAsItWasMoving) {
   }
 }
 
+// Fill Grid's candidates for knot 12 in cameras a and c, which moved 3 mm besides the net in
+// frame 1 (as a crossing of another layer a fold brings under the knot's place does): b's label
+// and the two candidates agree with each other, but each camera saw the knot in frame 0, and
+// since then it moved otherwise than its neighbours: kept for review, saying so. Without those
+// labels of frame 0 nothing contradicts them and they are accepted.
+TEST(LabelEngine, FillGridDoubtsACandidateThatMovedOtherwiseThanItsNeighbours) {
+  const Shot shot = Render(2, {}, {{12, Eigen::Vector3d(0.0, 0.003, 0.0)}});
+  LabelEngineOptions options;
+  options.link_length_m = kMesh;
+  for (const bool before : {true, false}) {
+    LabelSet labels = Empty(shot);
+    for (int t = 0; t < 2; ++t)
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < kKnots; ++k)
+          if (!(k == 12 && (t == 1 || !before) && c != 1))
+            labels.at(c, t, k) = Accepted(shot.Truth(c, t, k));
+    LabelStore store(std::move(labels));
+    LabelEngine engine(&store, &shot.rig, Images(shot), options);
+    engine.CrossCheck(1);
+    for (const int c : {0, 2}) {
+      const Label& l = store.at(c, 1, 12);
+      ASSERT_TRUE(l.present()) << c << " " << before;
+      EXPECT_LT((l.px - shot.Truth(c, 1, 12)).norm(), 0.3);
+      EXPECT_EQ(l.source, LabelSource::kFillGrid);
+      if (!before) {
+        EXPECT_TRUE(l.accepted()) << c;
+        continue;
+      }
+      EXPECT_EQ(l.state, LabelState::kNeedsReview) << c;
+      ASSERT_TRUE(engine.reasons().count({c, 1, 12}));
+      EXPECT_NE(engine.reasons().at({c, 1, 12}).find("otherwise than the knot's neighbours"),
+                std::string::npos)
+          << engine.reasons().at({c, 1, 12});
+    }
+  }
+}
+
 // Knot 12 moved 3 mm besides the net in frame 1 (a junction of another layer of a folded net,
 // where the knot is not): Find Node finds its junction there, with its yarns towards its
 // neighbours, and no other camera to go by; but since frame 0 it moved otherwise than its
