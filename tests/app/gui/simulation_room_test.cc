@@ -389,6 +389,39 @@ TEST_F(SimulationRoomTest, AProjectWithTracksAndSimulationsOpensOnTheirVerdicts)
   EXPECT_TRUE(room->frame_shown());
 }
 
+// From the command line: netlab gui PROJECT --room simulation opens the simulation room, which
+// scores the project's simulations with no click and names their score files in the project;
+// --room reconstruction opens the reconstruction room, which writes nothing.
+TEST_F(SimulationRoomTest, TheCommandLineOpensTheReconstructionAndTheSimulationRoom) {
+  const std::string d = Dir().string();
+  Project p = LoadProject(d + "/project.yaml");
+  ASSERT_EQ(
+      RunNetlab("triangulate --rig " + p.rig + " --labels " + p.labels +
+                " --knots 6x6 --fps 179 --sigma-px 0.1 --out " + d + "/room_tracks.h5 --quiet")
+          .status,
+      0);
+  p.tracks = d + "/room_tracks.h5";
+  p.simulations = {d + "/sim.h5"};  // the shot's own simulation (FilmSmallShot)
+  p.scores.clear();
+  p.fits.clear();
+  const std::string project = d + "/rooms.yaml";
+  SaveProject(p, project);
+  const std::string png = d + "/room.png";
+  const auto reconstruction =
+      RunNetlab("gui " + project + " --room reconstruction --screenshot " + png);
+  EXPECT_EQ(reconstruction.status, 0) << reconstruction.err;
+  EXPECT_TRUE(fs::exists(png));
+  EXPECT_TRUE(LoadProject(project).scores.empty());
+  fs::remove(png);
+  const auto simulation = RunNetlab("gui " + project + " --room simulation --screenshot " + png);
+  EXPECT_EQ(simulation.status, 0) << simulation.err;
+  EXPECT_TRUE(fs::exists(png));
+  const Project scored = LoadProject(project);
+  ASSERT_EQ(scored.scores.size(), 1u);
+  EXPECT_EQ(scored.scores[0].simulation, p.simulations[0]);
+  EXPECT_TRUE(fs::exists(scored.scores[0].score));
+}
+
 // A project with a score saved by netlab score (no simulation room opened): the labeling room's
 // Net grid has its per-knot colours, values and tooltips as soon as the project is open, read
 // from the score file; the room, opened afterwards, scores again to the same values.
