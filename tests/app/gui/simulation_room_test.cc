@@ -93,6 +93,13 @@ std::vector<std::string> LinesButTime(const std::string& path) {
   return lines;
 }
 
+// The project's labels triangulated by netlab triangulate (the labels' sigma 0.1 px) into `out`.
+void TriangulateWithTheCli(const Project& p, const std::string& out) {
+  const auto run = RunNetlab("triangulate --rig " + p.rig + " --labels " + p.labels +
+                             " --knots 6x6 --fps 179 --sigma-px 0.1 --out " + out + " --quiet");
+  ASSERT_EQ(run.status, 0) << run.err;
+}
+
 bool WaitIdle(const SimulationRoom& room, int timeout_ms) {
   QElapsedTimer clock;
   clock.start();
@@ -361,10 +368,7 @@ TEST_F(SimulationRoomTest, AProjectWithTracksAndSimulationsOpensOnTheirVerdicts)
   const std::string d = Dir().string();
   const std::string project = d + "/verdicts.yaml";
   Project p = LoadProject(d + "/project.yaml");
-  ASSERT_EQ(RunNetlab("triangulate --rig " + p.rig + " --labels " + p.labels +
-                      " --knots 6x6 --fps 179 --sigma-px 0.1 --out " + d + "/cli_tracks.h5 --quiet")
-                .status,
-            0);
+  ASSERT_NO_FATAL_FAILURE(TriangulateWithTheCli(p, d + "/cli_tracks.h5"));
   ASSERT_EQ(
       RunNetlab("simulate " + d + "/no_drag.yaml --out " + d + "/cli_no_drag.h5 --quiet").status,
       0);
@@ -395,11 +399,7 @@ TEST_F(SimulationRoomTest, AProjectWithTracksAndSimulationsOpensOnTheirVerdicts)
 TEST_F(SimulationRoomTest, TheCommandLineOpensTheReconstructionAndTheSimulationRoom) {
   const std::string d = Dir().string();
   Project p = LoadProject(d + "/project.yaml");
-  ASSERT_EQ(
-      RunNetlab("triangulate --rig " + p.rig + " --labels " + p.labels +
-                " --knots 6x6 --fps 179 --sigma-px 0.1 --out " + d + "/room_tracks.h5 --quiet")
-          .status,
-      0);
+  ASSERT_NO_FATAL_FAILURE(TriangulateWithTheCli(p, d + "/room_tracks.h5"));
   p.tracks = d + "/room_tracks.h5";
   p.simulations = {d + "/sim.h5"};  // the shot's own simulation (FilmSmallShot)
   p.scores.clear();
@@ -428,11 +428,7 @@ TEST_F(SimulationRoomTest, TheCommandLineOpensTheReconstructionAndTheSimulationR
 TEST_F(SimulationRoomTest, TheNetGridShowsTheSavedScoreBeforeTheSimulationRoomIsShown) {
   const std::string d = Dir().string();
   Project p = LoadProject(d + "/project.yaml");
-  ASSERT_EQ(
-      RunNetlab("triangulate --rig " + p.rig + " --labels " + p.labels +
-                " --knots 6x6 --fps 179 --sigma-px 0.1 --out " + d + "/saved_tracks.h5 --quiet")
-          .status,
-      0);
+  ASSERT_NO_FATAL_FAILURE(TriangulateWithTheCli(p, d + "/saved_tracks.h5"));
   ASSERT_EQ(
       RunNetlab("simulate " + d + "/no_drag.yaml --out " + d + "/saved_no_drag.h5 --quiet").status,
       0);
