@@ -829,6 +829,13 @@ std::optional<double> LabelEngine::VelocityOff(int camera, int t, int knot,
   return std::nullopt;
 }
 
+std::optional<double> LabelEngine::OwnMotionOff(int camera, int t, int knot,
+                                                const Eigen::Vector2d& px) const {
+  const std::optional<double> moved = MotionOff(camera, t, knot, px);
+  const std::optional<double> own = VelocityOff(camera, t, knot, px);
+  return own && (!moved || *own < *moved) ? own : moved;
+}
+
 bool LabelEngine::LabelNear(int camera, int t, int knot, const Eigen::Vector2d& px) const {
   const LabelSet& set = store_->labels();
   for (int j = 0; j < set.knots(); ++j) {
@@ -1514,9 +1521,7 @@ std::optional<LabelEdit> LabelEngine::PlaceAtProjection(FrameCheck* f, const Fil
   // from its label in an adjacent frame row as its neighbours did, or as it was moving (its
   // labels in the frame rows before, at constant velocity); where neither is known, it lies
   // where this camera's tracking took it (the flow's end, or the junction it found there).
-  std::optional<double> moved = MotionOff(c, t, k, *q);
-  const std::optional<double> own = VelocityOff(c, t, k, *q);
-  if (own && (!moved || *own < *moved)) moved = own;
+  std::optional<double> moved = OwnMotionOff(c, t, k, *q);
   const Label& tracked = set.at(c, t, k);
   if (!moved && tracked.present() && tracked.source == LabelSource::kTracked)
     moved = (tracked.px - *q).norm();
@@ -1731,9 +1736,7 @@ bool LabelEngine::ConfirmCandidates(const FrameCheck& f, int k,
               " px from where the other cameras' labels put the knot";
       continue;
     }
-    std::optional<double> moved = MotionOff(cand.camera, f.t, k, cand.px);
-    const std::optional<double> own = VelocityOff(cand.camera, f.t, k, cand.px);
-    if (own && (!moved || *own < *moved)) moved = own;
+    const std::optional<double> moved = OwnMotionOff(cand.camera, f.t, k, cand.px);
     if (moved && *moved > o_.place_motion_px) {
       doubt = "Fill Grid: the junction moved " + Px(*moved) +
               " px otherwise than the knot's neighbours and its own path since the adjacent "

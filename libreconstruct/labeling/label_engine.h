@@ -343,6 +343,9 @@ class LabelEngine {
   // frame rows before t (else after), at constant velocity, put it (px); nullopt where there are
   // fewer than two such labels.
   std::optional<double> VelocityOff(int camera, int t, int knot, const Eigen::Vector2d& px) const;
+  // The smaller of MotionOff and VelocityOff, where either is known: how far px is from where
+  // this camera's own labels say the knot moved (as its neighbours did, or as it was moving).
+  std::optional<double> OwnMotionOff(int camera, int t, int knot, const Eigen::Vector2d& px) const;
   // Whether another knot's accepted label in (camera, t) is within exclusion_px of `px`.
   bool LabelNear(int camera, int t, int knot, const Eigen::Vector2d& px) const;
   // The image positions of a knot's neighbours in (camera, t), right, down, left, up: accepted
