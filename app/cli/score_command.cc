@@ -1,5 +1,8 @@
-// netlab score --measured tracks.h5 --sim sim.h5 --out score.h5 [--report report.html]
-//              [--align none|time|rigid|time+rigid] [--json]
+// netlab score --measured tracks.h5[,tracks2.h5,...] --sim sim.h5 --out score.h5
+//              [--report report.html] [--align none|time|rigid|time+rigid] [--json]
+// Scores a simulation against measured knot tracks (libnetsim/validation/score.h); with several
+// measured files (repeats of one case), scores each shot on its own, pools the test over them and
+// gives the spread between them (libnetsim/validation/repeats.h). docs/score.md.
 
 #include <algorithm>
 #include <array>
@@ -7,8 +10,10 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <iostream>
 #include <map>
+#include <optional>
 
 #include "app/cli/commands.h"
 #include "app/cli/json_writer.h"
@@ -18,6 +23,7 @@
 #include "common/hdf5_util.h"
 #include "common/output_paths.h"
 #include "common/tracks/track_file.h"
+#include "libnetsim/validation/repeats.h"
 #include "libnetsim/validation/score.h"
 #include "libnetsim/validation/score_file.h"
 #include "libnetsim/validation/score_report.h"
@@ -39,7 +45,8 @@ std::vector<std::string> SplitList(const std::string& text) {
 }
 
 constexpr char kHelp[] =
-    "usage: netlab score --measured tracks.h5 --sim sim.h5 --out score.h5 [--report report.html]\n"
+    "usage: netlab score --measured tracks.h5[,tracks2.h5,...] --sim sim.h5 --out score.h5\n"
+    "                    [--report report.html]\n"
     "                    [--sim-ensemble ens.h5|a.h5,b.h5,...]\n"
     "                    [--align none|time|rigid|time+rigid] [--json]\n\n"
     "Scores a simulation against measured knot tracks (the paper's sec. 4.1 validation): aligns\n"
@@ -47,7 +54,10 @@ constexpr char kHelp[] =
     "measurement has, its Mahalanobis distance d2 with the measured covariance, and tests\n"
     "whether the simulation is consistent with the measurement uncertainty (docs/score.md).\n\n"
     "options:\n"
-    "  --measured FILE     knot tracks with /knots/covariance (netlab triangulate)\n"
+    "  --measured FILES    knot tracks with /knots/covariance (netlab triangulate); a comma\n"
+    "                      list of repeats of the case (the same net): each shot scored on\n"
+    "                      its own (its own time offset and rigid alignment), the test pooled\n"
+    "                      over them, and the spread between them per phase and knot class\n"
     "  --sim FILE          knot tracks of the simulation (netlab simulate), on the same net\n"
     "  --out FILE          score.h5: residuals, d2, per-knot/class/phase tables, alignment\n"
     "  --report FILE       also a self-contained HTML report with plots (open it in a browser)\n"
@@ -75,7 +85,10 @@ constexpr char kHelp[] =
     "                      knots, points, rms_mm, rms_percent_of_side, max_mm, mean_d2, dof,\n"
     "                      p_value, verdict, time_offset_s, time_offset_sigma_s, skill,\n"
     "                      per_class (corner/edge/inner rms_mm), headline, left_out_points,\n"
-    "                      weighted_rms_mm, degenerate_points, wall_s and more\n\n"
+    "                      weighted_rms_mm, degenerate_points, wall_s and more; with repeats\n"
+    "                      also shots (per file: verdict, mean_d2, rms_mm, time_offset_s),\n"
+    "                      pooled (verdict, mean_d2, dof, p_value) and repeat_spread_mm per\n"
+    "                      phase; the top-level verdict, mean_d2, dof, p_value are pooled\n\n"
     "exit status: 0 scored (whatever the verdict), 1 bad input, 2 usage error.\n";
 
 // The variances a knot-track file may state, m^2: a standard deviation of 1e-20 m to 1 km (netlab's
@@ -160,8 +173,106 @@ void CheckContactTime(double t, const std::string& what, const KnotTracks& sim,
   throw InputError(what + " " + span + sim_path + range);
 }
 
-// The JSON summary: every field summary_fields.h prints in the JSON, in its order.
-void PrintJson(const netsim::ScoreSummary& s) {
+// The measured files of --measured: one, or a comma list of repeats. An empty item is a usage
+// error; a file given twice (by the same name or another path to it) a bad input.
+std::vector<std::string> MeasuredPaths(const std::string& list) {
+  std::vector<std::string> paths;
+  size_t start = 0;
+  while (true) {
+    const size_t comma = list.find(',', start);
+    const std::string item = list.substr(start, comma == std::string::npos ? comma : comma - start);
+    if (item.empty())
+      throw UsageError("--measured '" + list + "': an empty file name in the list (item " +
+                       std::to_string(paths.size() + 1) + ")");
+    paths.push_back(item);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  for (size_t i = 0; i < paths.size(); ++i)
+    for (size_t j = 0; j < i; ++j) {
+      std::error_code error;
+      if (paths[i] == paths[j] || std::filesystem::equivalent(paths[i], paths[j], error))
+        throw InputError("--measured: " + paths[i] + " (item " + std::to_string(i + 1) + ") is " +
+                         (paths[i] == paths[j] ? "" : paths[j] + ", ") + "item " +
+                         std::to_string(j + 1) +
+                         " again: repeats are different shots, each given once");
+    }
+  return paths;
+}
+
+void JsonPhaseRows(JsonWriter& json, const std::vector<netsim::SpreadRow>& rows) {
+  json.BeginObject();
+  for (const netsim::SpreadRow& row : rows) json.Key(row.name).Number(row.rms_m * 1e3);
+  json.EndObject();
+}
+
+// With repeats: one object per shot, the pooled test and the spread between the shots.
+void JsonRepeats(JsonWriter& json, const netsim::RepeatsResult& repeats) {
+  const netsim::RepeatsSummary& r = repeats.summary;
+  json.Key("shots").BeginArray();
+  for (size_t i = 0; i < repeats.shots.size(); ++i) {
+    const netsim::ScoreSummary& s = repeats.shots[i].summary;
+    json.BeginObject();
+    json.Key("path").String(r.names[i]);
+    json.Key("verdict").String(netsim::VerdictName(s.verdict));
+    json.Key("mean_d2").Number(s.mean_d2);
+    json.Key("dof").Number(s.dof);
+    json.Key("p_value").Number(s.p_value);
+    json.Key("points").Int(s.points);
+    json.Key("rms_mm").Number(s.rms_m * 1e3);
+    json.Key("max_mm").Number(s.max_m * 1e3);
+    json.Key("time_offset_s").Number(s.time_offset_s);
+    json.Key("time_offset_sigma_s").Number(s.time_offset_sigma_s);
+    json.EndObject();
+  }
+  json.EndArray();
+  json.Key("pooled").BeginObject();
+  json.Key("verdict").String(netsim::VerdictName(r.verdict));
+  json.Key("mean_d2").Number(r.mean_d2);
+  json.Key("dof").Number(r.dof);
+  json.Key("p_value").Number(r.p_value);
+  json.Key("points").Int(r.points);
+  json.Key("effective_points").Number(r.effective_points);
+  json.Key("critical_mean_d2").Number(r.critical_mean_d2);
+  json.Key("margin").Number(r.margin);
+  json.Key("rms_mm").Number(r.rms_m * 1e3);
+  json.EndObject();
+  json.Key("repeat_spread_mm");
+  JsonPhaseRows(json, r.spread_per_phase);
+  json.Key("repeat_spread_per_class_mm");
+  JsonPhaseRows(json, {r.spread_per_class.begin(), r.spread_per_class.end()});
+  json.Key("repeat_spread_all_mm").Number(r.spread.rms_m * 1e3);
+}
+
+// The text summary's lines on the repeats: one per shot, the pooled test, the spread.
+std::string RepeatsReport(const netsim::RepeatsResult& repeats) {
+  const netsim::RepeatsSummary& r = repeats.summary;
+  std::string text = "repeats: " + std::to_string(repeats.shots.size()) + " shots\n";
+  char line[400];
+  for (size_t i = 0; i < repeats.shots.size(); ++i) {
+    const netsim::ScoreSummary& s = repeats.shots[i].summary;
+    std::snprintf(line, sizeof(line),
+                  "  %s: offset %.3f ms, RMS %.4g mm, mean d2 %.4g, p %.3g, %s\n",
+                  r.names[i].c_str(), s.time_offset_s * 1e3, s.rms_m * 1e3, s.mean_d2, s.p_value,
+                  netsim::VerdictName(s.verdict).c_str());
+    text += line;
+  }
+  std::snprintf(line, sizeof(line),
+                "  pooled: %d knot-frames, RMS %.4g mm, mean d2 %.4g (dof %.0f, rejects above "
+                "%.4g), p %.3g, %s\n  spread between the shots: %.4g mm",
+                r.points, r.rms_m * 1e3, r.mean_d2, r.dof, r.critical_mean_d2, r.p_value,
+                netsim::VerdictName(r.verdict).c_str(), r.spread.rms_m * 1e3);
+  text += line;
+  for (const netsim::SpreadRow& row : r.spread_per_phase) {
+    std::snprintf(line, sizeof(line), "; %s %.4g", row.name.c_str(), row.rms_m * 1e3);
+    text += line;
+  }
+  return text + " mm\n";
+}
+
+// The JSON summary: every field summary_fields.h prints in the JSON, in its order; with repeats
+// then shots, pooled and the spread.
+void PrintJson(const netsim::ScoreSummary& s, const netsim::RepeatsResult* repeats = nullptr) {
   using netsim::SummaryKind;
   JsonWriter json;
   json.BeginObject();
@@ -204,6 +315,7 @@ void PrintJson(const netsim::ScoreSummary& s) {
         break;
     }
   }
+  if (repeats) JsonRepeats(json, *repeats);
   json.EndObject();
   std::cout << json.str() << std::endl;
 }
@@ -223,7 +335,9 @@ int RunScore(const std::vector<std::string>& args) {
     if (!cl.positional().empty())
       throw UsageError("unexpected argument '" + cl.positional()[0] + "'");
     const auto start = std::chrono::steady_clock::now();
-    const std::string measured_path = cl.Required("measured"), sim_path = cl.Required("sim");
+    const std::vector<std::string> measured_paths = MeasuredPaths(cl.Required("measured"));
+    const std::string& measured_path = measured_paths[0];
+    const std::string sim_path = cl.Required("sim");
     const std::string out = cl.Required("out");
     const std::string report = cl.Option("report").value_or("");
     const std::string ensemble = cl.Option("sim-ensemble").value_or("");
@@ -243,21 +357,31 @@ int RunScore(const std::vector<std::string>& args) {
     if (!options.IsValid(&why)) throw UsageError(why);
     const bool quiet = cl.Flag("quiet");
     // Before any work: no output over an input or the other output, every output writable.
-    std::vector<NamedPath> inputs = {{"--measured", measured_path}, {"--sim", sim_path}};
+    std::vector<NamedPath> inputs;
+    for (const std::string& path : measured_paths) inputs.push_back({"--measured", path});
+    inputs.push_back({"--sim", sim_path});
     if (!ensemble.empty())
       for (const std::string& part : SplitList(ensemble))
         inputs.push_back({"--sim-ensemble", part});
     CheckOutputPaths(inputs, {{"--out", out}, {"--report", report}});
 
+    const std::string measured_list = cl.Required("measured");
     if (!quiet)
-      std::fprintf(stderr, "reading %s and %s\n", measured_path.c_str(), sim_path.c_str());
-    const KnotTracks measured = ReadKnotTracks(measured_path);
+      std::fprintf(stderr, "reading %s and %s\n", measured_list.c_str(), sim_path.c_str());
+    std::vector<KnotTracks> shots;
+    for (const std::string& path : measured_paths) {
+      shots.push_back(ReadKnotTracks(path));
+      CheckSomethingToCompare(shots.back(), path, true);
+      CheckGrid(shots.back(), path);
+      CheckCovariances(shots.back(), path);
+    }
+    const KnotTracks& measured = shots[0];
+    std::vector<const KnotTracks*> shot_tracks;
+    for (const KnotTracks& shot : shots) shot_tracks.push_back(&shot);
+    netsim::CheckSameNet(shot_tracks, measured_paths);
     KnotTracks sim = ReadKnotTracks(sim_path);
-    CheckSomethingToCompare(measured, measured_path, true);
     CheckSomethingToCompare(sim, sim_path, false);
-    CheckGrid(measured, measured_path);
     CheckGrid(sim, sim_path);
-    CheckCovariances(measured, measured_path);
     CheckCovariances(sim, sim_path);
     const bool sim_had_covariance = !sim.covariance.empty();
     CheckContactTime(options.contact_time_s, "--contact-time", sim, sim_path);
@@ -265,8 +389,12 @@ int RunScore(const std::vector<std::string>& args) {
     if (!std::isfinite(options.contact_time_s))
       CheckContactTime(sim.contact_start_s, sim_path + ":/contact_start", sim, sim_path);
     if (!quiet)
-      std::fprintf(stderr, "scoring %d x %d knot-frames against %d simulated frames\n",
-                   measured.frames(), measured.knots(), sim.frames());
+      std::fprintf(stderr, "scoring %d x %d knot-frames%s against %d simulated frames\n",
+                   measured.frames(), measured.knots(),
+                   shots.size() > 1
+                       ? (", and " + std::to_string(shots.size() - 1) + " repeats").c_str()
+                       : "",
+                   sim.frames());
     int members = 0;
     double ensemble_max_sigma_m = 0.0;
     if (!ensemble.empty()) {
@@ -275,26 +403,39 @@ int RunScore(const std::vector<std::string>& args) {
       members = static_cast<int>(runs.size());
       sim = netsim::AddEnsembleCovariance(sim, sim_path, runs, &ensemble_max_sigma_m);
     }
-    netsim::ScoreResult result = netsim::Score(measured, sim, options, measured_path, sim_path);
+    // One shot: scored as it is. Repeats: each on its own, then pooled (the result shown is the
+    // first shot's with the pooled test).
+    std::optional<netsim::RepeatsResult> repeats;
+    if (shots.size() > 1)
+      repeats = netsim::ScoreRepeats(shot_tracks, measured_paths, sim, options, sim_path);
+    netsim::ScoreResult result =
+        repeats ? repeats->combined
+                : netsim::Score(measured, sim, options, measured_path, sim_path);
     if (members > 0) {
-      result.summary.ensemble_members = members;
       char text[200];
       std::snprintf(text, sizeof(text),
                     "the spread of %d ensemble runs (%s; largest sigma %.3g mm)%s", members,
                     ensemble.c_str(), ensemble_max_sigma_m * 1e3,
                     sim_had_covariance ? " added to the simulation's /knots/covariance" : "");
+      result.summary.ensemble_members = members;
       result.summary.sim_uncertainty = text;
+      if (repeats)
+        for (netsim::ScoreResult& shot : repeats->shots) {
+          shot.summary.ensemble_members = members;
+          shot.summary.sim_uncertainty = text;
+        }
     }
+    const netsim::RepeatsResult* pooled = repeats ? &*repeats : nullptr;
     {
       // Both put in place together once both are complete.
       OutputSet outputs({out, report});
-      netsim::WriteScore(out, result);
+      netsim::WriteScore(out, result, pooled);
       if (!report.empty()) {
         netsim::ReportInfo info;
-        info.measured_path = measured_path;
+        info.measured_path = measured_list;
         info.sim_path = sim_path;
         info.score_path = out;
-        netsim::WriteScoreReport(report, result, info);
+        netsim::WriteScoreReport(report, result, info, pooled);
       }
       outputs.Commit();
     }
@@ -304,9 +445,10 @@ int RunScore(const std::vector<std::string>& args) {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (!quiet || !cl.Flag("json")) {
       std::cerr << result.summary.BriefReport();
+      if (pooled) std::cerr << RepeatsReport(*pooled);
       std::cerr << "  wrote " << out << (report.empty() ? "" : " and " + report) << "\n";
     }
-    if (cl.Flag("json")) PrintJson(result.summary);
+    if (cl.Flag("json")) PrintJson(result.summary, pooled);
     return 0;
   });
 }

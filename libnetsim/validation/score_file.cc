@@ -5,6 +5,7 @@
 
 #include "common/files.h"
 #include "common/hdf5_util.h"
+#include "libnetsim/validation/repeats.h"
 #include "libnetsim/validation/summary_fields.h"
 
 namespace netlab::netsim {
@@ -45,9 +46,111 @@ void WriteRows(hid_t loc, const std::vector<ScoreRow>& rows, bool spans) {
   h5::WriteStringAttribute(loc, "names", names);
 }
 
+// One column per spread row set: rms_m and points (and the simulated span of phases).
+void WriteSpread(hid_t loc, const std::vector<SpreadRow>& rows, bool spans) {
+  std::vector<double> rms, points, start, end;
+  std::string names;
+  for (const SpreadRow& r : rows) {
+    rms.push_back(r.rms_m);
+    points.push_back(r.points);
+    start.push_back(r.start_s);
+    end.push_back(r.end_s);
+    names += (names.empty() ? "" : "\n") + r.name;
+  }
+  const std::vector<hsize_t> dims = {rows.size()};
+  Write(loc, "rms_m", dims, rms.data(), "m");
+  Write(loc, "points", dims, points.data(), "knot-frames");
+  if (spans) {
+    Write(loc, "start_s", dims, start.data(), "s (simulated)");
+    Write(loc, "end_s", dims, end.data(), "s (simulated)");
+  }
+  h5::WriteStringAttribute(loc, "names", names);
+}
+
+// /repeats: the pooled test, one row per shot, each shot's tables, the spread between them.
+void WriteRepeats(hid_t f, const RepeatsResult& repeats) {
+  const RepeatsSummary& r = repeats.summary;
+  h5::Id group = h5::CreateGroup(f, "repeats");
+  const hid_t g = group.get();
+  std::string names, verdicts;
+  for (size_t i = 0; i < repeats.shots.size(); ++i) {
+    if (i > 0) {
+      names += '\n';
+      verdicts += '\n';
+    }
+    names += r.names[i];
+    verdicts += VerdictName(repeats.shots[i].summary.verdict);
+  }
+  h5::WriteStringAttribute(g, "names", names);
+
+  h5::Id pooled = h5::CreateGroup(g, "pooled");
+  h5::WriteStringAttribute(pooled.get(), "verdict", VerdictName(r.verdict));
+  WriteScalar(pooled.get(), "points", r.points, "knot-frames");
+  WriteScalar(pooled.get(), "rms_m", r.rms_m, "m");
+  WriteScalar(pooled.get(), "mean_d2", r.mean_d2, "1");
+  WriteScalar(pooled.get(), "dof", r.dof, "1");
+  WriteScalar(pooled.get(), "effective_points", r.effective_points, "knot-frames");
+  WriteScalar(pooled.get(), "p_value", r.p_value, "1");
+  WriteScalar(pooled.get(), "critical_mean_d2", r.critical_mean_d2, "1");
+  WriteScalar(pooled.get(), "margin", r.margin, "1");
+
+  // One row per shot, the files' order.
+  h5::Id shots = h5::CreateGroup(g, "shots");
+  std::vector<double> offset, offset_sigma, mean_d2, dof, p_value, rms, max, points;
+  for (const ScoreResult& shot : repeats.shots) {
+    const ScoreSummary& s = shot.summary;
+    offset.push_back(s.time_offset_s);
+    offset_sigma.push_back(s.time_offset_sigma_s);
+    mean_d2.push_back(s.mean_d2);
+    dof.push_back(s.dof);
+    p_value.push_back(s.p_value);
+    rms.push_back(s.rms_m);
+    max.push_back(s.max_m);
+    points.push_back(s.points);
+  }
+  const std::vector<hsize_t> dims = {repeats.shots.size()};
+  const hid_t sg = shots.get();
+  Write(sg, "time_offset_s", dims, offset.data(), "s");
+  Write(sg, "time_offset_sigma_s", dims, offset_sigma.data(), "s");
+  Write(sg, "mean_d2", dims, mean_d2.data(), "1");
+  Write(sg, "dof", dims, dof.data(), "1");
+  Write(sg, "p_value", dims, p_value.data(), "1");
+  Write(sg, "rms_m", dims, rms.data(), "m");
+  Write(sg, "max_m", dims, max.data(), "m");
+  Write(sg, "points", dims, points.data(), "knot-frames");
+  h5::WriteStringAttribute(sg, "names", names);
+  h5::WriteStringAttribute(sg, "verdicts", verdicts);
+
+  for (size_t i = 0; i < repeats.shots.size(); ++i) {
+    const ScoreSummary& s = repeats.shots[i].summary;
+    h5::Id shot = h5::CreateGroup(g, "shot_" + std::to_string(i));
+    h5::WriteStringAttribute(shot.get(), "name", r.names[i]);
+    h5::WriteStringAttribute(shot.get(), "verdict", VerdictName(s.verdict));
+    h5::Id per_class = h5::CreateGroup(shot.get(), "per_class");
+    WriteRows(per_class.get(), {s.per_class.begin(), s.per_class.end()}, false);
+    h5::Id per_phase = h5::CreateGroup(shot.get(), "per_phase");
+    WriteRows(per_phase.get(), s.per_phase, true);
+    h5::Id align = h5::CreateGroup(shot.get(), "alignment");
+    WriteScalar(align.get(), "time_offset_s", s.time_offset_s, "s");
+    WriteScalar(align.get(), "time_offset_sigma_s", s.time_offset_sigma_s, "s");
+    const Eigen::Matrix3d rotation_rows = s.rotation.transpose();
+    Write(align.get(), "rotation", {3, 3}, rotation_rows.data(), "1 (x_in_meas = R x_in_sim + t)");
+    Write(align.get(), "translation", {3}, s.translation.data(), "m");
+  }
+
+  h5::Id spread = h5::CreateGroup(g, "spread");
+  WriteSpread(spread.get(), {r.spread}, false);
+  h5::Id per_phase = h5::CreateGroup(spread.get(), "per_phase");
+  WriteSpread(per_phase.get(), r.spread_per_phase, true);
+  h5::Id per_class = h5::CreateGroup(spread.get(), "per_class");
+  WriteSpread(per_class.get(), {r.spread_per_class.begin(), r.spread_per_class.end()}, false);
+}
+
 }  // namespace
 
-void WriteScore(const std::string& path, const ScoreResult& r) {
+void WriteScore(const std::string& path, const ScoreResult& r) { WriteScore(path, r, nullptr); }
+
+void WriteScore(const std::string& path, const ScoreResult& r, const RepeatsResult* repeats) {
   const ScoreSummary& s = r.summary;
   const std::string partial = path + ".partial";
   const hsize_t t = r.time.size(), k = r.grid.size();
@@ -127,6 +230,7 @@ void WriteScore(const std::string& path, const ScoreResult& r) {
       else
         WriteScalar(g, key, field.value(s).number, std::string(field.unit));
     }
+    if (repeats) WriteRepeats(f, *repeats);
     H5Fflush(f, H5F_SCOPE_GLOBAL);
   }
   RenameInto(partial, path);

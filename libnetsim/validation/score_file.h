@@ -22,6 +22,21 @@
 //               covariance [6,6] (rotation vector rad, translation m)}  meas_from_sim
 //   /summary/<field>               [1]       the --json fields, units as attributes
 // Root attributes: format = "netlab-score", version = "1", verdict, alignment, notes.
+//
+// With repeats (several measured files, repeats.h) everything above is the first shot's, except
+// the test (root attribute verdict; /summary/{mean_d2, dof, effective_points, p_value,
+// critical_mean_d2, margin, verdict}), which is pooled; and
+//   /repeats                       attribute names: the measured files, one a line
+//   /repeats/pooled/{points, rms_m, mean_d2, dof, effective_points, p_value, critical_mean_d2,
+//                    margin} [1]   attribute verdict
+//   /repeats/shots/{time_offset_s, time_offset_sigma_s, mean_d2, dof, p_value, rms_m, max_m,
+//                   points} [S]    one row per shot; attributes names, verdicts
+//   /repeats/shot_<i>/{per_class/*, per_phase/*}   shot i's tables, as /per_class, /per_phase
+//   /repeats/shot_<i>/alignment/{time_offset_s, time_offset_sigma_s [1], rotation, translation}
+//                                  attributes name, verdict
+//   /repeats/spread/{rms_m, points} [1]            the spread between the shots, all knot-frames
+//   /repeats/spread/per_phase/{rms_m, points, start_s, end_s} [4]  (simulated time)
+//   /repeats/spread/per_class/{rms_m, points} [3]  corner, edge, inner (attribute "names")
 
 #include <string>
 
@@ -31,7 +46,11 @@ namespace netlab::netsim {
 
 inline constexpr char kScoreFileFormat[] = "netlab-score";
 
+struct RepeatsResult;
+
 // Writes `result` to `path` via "<path>.partial" and a rename. Throws std::runtime_error.
 void WriteScore(const std::string& path, const ScoreResult& result);
+// The same with the /repeats group of `repeats` (none when null); `result` is repeats->combined.
+void WriteScore(const std::string& path, const ScoreResult& result, const RepeatsResult* repeats);
 
 }  // namespace netlab::netsim

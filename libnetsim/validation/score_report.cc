@@ -9,6 +9,7 @@
 
 #include "common/files.h"
 #include "common/html.h"
+#include "libnetsim/validation/repeats.h"
 
 namespace netlab::netsim {
 namespace {
@@ -402,13 +403,69 @@ void WriteAlignmentTable(std::ostringstream& o, const ScoreSummary& s) {
     << Row({"degrees of freedom", Num(s.dof, 8)}) << "</table>\n";
 }
 
+// Repeats: one row per shot, the pooled test, and the spread between the shots beside the
+// model's error, per phase and per knot class.
+void WriteRepeats(std::ostringstream& o, const RepeatsResult& repeats) {
+  const RepeatsSummary& r = repeats.summary;
+  o << "<h2 id=\"repeats\">Repeats</h2>\n<p class=\"caption\">" << repeats.shots.size()
+    << " shots of the case, each scored on its own (its own time offset"
+    << (repeats.shots[0].summary.alignment == Alignment::kRigid ||
+                repeats.shots[0].summary.alignment == Alignment::kTimeAndRigid
+            ? " and rigid alignment"
+            : "")
+    << "); the verdict above pools them: each shot's Σd² over its correlation inflation adds "
+       "up to one χ² over all of them.</p>\n<table id=\"repeat-shots\">"
+    << Row({"shot", "time offset (ms)", "knot-frames", "RMS (mm)", "max (mm)", "mean d²", "p",
+            "verdict"},
+           "th");
+  for (size_t i = 0; i < repeats.shots.size(); ++i) {
+    const ScoreSummary& s = repeats.shots[i].summary;
+    o << Row({Escape(r.names[i]),
+              Fixed(s.time_offset_s * 1e3, 3) + " ± " + Fixed(s.time_offset_sigma_s * 1e3, 3),
+              std::to_string(s.points), Fixed(s.rms_m * 1e3, 3), Fixed(s.max_m * 1e3, 2),
+              Fixed(s.mean_d2, 2), Num(s.p_value, 3), VerdictName(s.verdict)});
+  }
+  o << Row({"<b>pooled</b>", "", std::to_string(r.points), Fixed(r.rms_m * 1e3, 3), "",
+            Fixed(r.mean_d2, 2), Num(r.p_value, 3), "<b>" + VerdictName(r.verdict) + "</b>"});
+  o << "</table>\n<p class=\"caption\">Pooled: mean d² over all " << r.points << " knot-frames, "
+    << Fixed(r.effective_points, 0) << " independent points, the test rejects above "
+    << Fixed(r.critical_mean_d2, 2) << ".</p>\n";
+  o << "<h3>The spread between the repeats beside the model's error</h3>\n"
+       "<table id=\"repeat-spread\">"
+    << Row({"", "simulated time (s)", "knot-frames", "spread between shots (mm)",
+            "model's RMS error (mm)"},
+           "th");
+  for (const SpreadRow& row : r.spread_per_phase)
+    o << Row({"phase: " + row.name, Fixed(row.start_s, 3) + " – " + Fixed(row.end_s, 3),
+              std::to_string(row.points), Fixed(row.rms_m * 1e3, 3),
+              Fixed(row.error_rms_m * 1e3, 3)});
+  for (const SpreadRow& row : r.spread_per_class)
+    o << Row({row.name, "", std::to_string(row.points), Fixed(row.rms_m * 1e3, 3),
+              Fixed(row.error_rms_m * 1e3, 3)});
+  o << Row({"all", "", std::to_string(r.spread.points), Fixed(r.spread.rms_m * 1e3, 3),
+            Fixed(r.spread.error_rms_m * 1e3, 3)});
+  o << "</table>\n<p class=\"caption\">Spread: at the first shot's frames, every shot's "
+       "measured knot at the same simulated time (its own offset; linear between its two frames "
+       "around it), in the simulation's frame; the RMS distance of one shot from the shots' mean, "
+       "√(Σ|x − x̄|² / Σ(n − 1)). It is the experiment's reproducibility: a model error well "
+       "below it cannot be told from one shot to the next. The plots and tables below are the "
+       "first shot's ("
+    << Escape(r.names[0]) << ").</p>\n";
+}
+
 }  // namespace
 
 std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info) {
+  return ScoreReportHtml(r, info, nullptr);
+}
+
+std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info,
+                            const RepeatsResult* repeats) {
   std::ostringstream o;
   WriteHead(o, r.summary);
   WriteVerdict(o, r.summary, info);
   WriteNotes(o, r.summary);
+  if (repeats) WriteRepeats(o, *repeats);
   WritePlots(o, r);
   WriteClassAndPhaseTables(o, r.summary);
   WriteAlignmentTable(o, r.summary);
@@ -418,6 +475,11 @@ std::string ScoreReportHtml(const ScoreResult& r, const ReportInfo& info) {
 
 void WriteScoreReport(const std::string& path, const ScoreResult& result, const ReportInfo& info) {
   WriteTextFile(path, ScoreReportHtml(result, info));
+}
+
+void WriteScoreReport(const std::string& path, const ScoreResult& result, const ReportInfo& info,
+                      const RepeatsResult* repeats) {
+  WriteTextFile(path, ScoreReportHtml(result, info, repeats));
 }
 
 }  // namespace netlab::netsim

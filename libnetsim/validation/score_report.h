@@ -27,10 +27,20 @@ struct ReportInfo {
   std::string score_path;  // the score.h5 written next to it
 };
 
+struct RepeatsResult;
+
 // The report as HTML text.
 std::string ScoreReportHtml(const ScoreResult& result, const ReportInfo& info);
+// With repeats (repeats.h; `result` is repeats->combined): a "Repeats" section after the notes,
+// <table id="repeat-shots"> (one row per shot, then the pooled row) and <table
+// id="repeat-spread"> (the spread between the shots beside the model's error, per phase, per
+// knot class and over all).
+std::string ScoreReportHtml(const ScoreResult& result, const ReportInfo& info,
+                            const RepeatsResult* repeats);
 
 // Writes it to `path` via "<path>.partial" and a rename. Throws std::runtime_error.
 void WriteScoreReport(const std::string& path, const ScoreResult& result, const ReportInfo& info);
+void WriteScoreReport(const std::string& path, const ScoreResult& result, const ReportInfo& info,
+                      const RepeatsResult* repeats);
 
 }  // namespace netlab::netsim

@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <random>
 
 #include "common/hdf5_util.h"
@@ -175,6 +177,145 @@ TEST_F(ScoreCommand, AnEnsembleGivesSigmaSimPerPhaseAndABadOneIsRefused) {
   EXPECT_NE(r.err.find("same net"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(Path("score.h5")));
   EXPECT_FALSE(std::filesystem::exists(Path("report.html")));
+}
+
+}  // namespace
+
+namespace {
+
+// Repeats: three shots of one flight launched at their own times with their own noise. Each is
+// scored on its own (its own offset), the test is pooled, the spread between them is the noise.
+TEST_F(ScoreCommand, RepeatsAreScoredEachOnItsOwnAndPooled) {
+  const double t0[3] = {0.0123, 0.0057, 0.0201};
+  std::string list;
+  for (int i = 0; i < 3; ++i) {
+    std::mt19937 rng(40 + i);
+    const std::string path = Path("shot" + std::to_string(i) + ".h5");
+    netlab::WriteKnotTracks(path, Flight(6, 6, 100, t0[i], 5e-4, &rng));
+    list += (list.empty() ? "" : ",") + path;
+  }
+  netlab::WriteKnotTracks(Path("sim.h5"), Flight(6, 6, 160, 0.0, 0.0, nullptr));
+  const auto r = RunNetlab("score --measured " + list + " --sim " + Path("sim.h5") + " --out " +
+                           Path("score.h5") + " --report " + Path("report.html") + " --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto json = LastJson(r.out);
+  ASSERT_TRUE(json.has("shots"));
+  ASSERT_EQ(json["shots"].array().size(), 3u);
+  double dof = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    const auto& shot = json["shots"].array()[i];
+    EXPECT_EQ(shot["path"].string(), Path("shot" + std::to_string(i) + ".h5"));
+    EXPECT_EQ(shot["verdict"].string(), "consistent");
+    EXPECT_NEAR(shot["time_offset_s"].number(), t0[i], 2e-4) << i;
+    EXPECT_NEAR(shot["mean_d2"].number(), 3.0, 0.3) << i;
+    EXPECT_NEAR(shot["rms_mm"].number(), 0.5 * std::sqrt(3.0), 0.1) << i;
+    dof += shot["dof"].number();
+  }
+  const auto& pooled = json["pooled"];
+  EXPECT_EQ(pooled["verdict"].string(), "consistent");
+  EXPECT_EQ(pooled["dof"].number(), dof);
+  EXPECT_EQ(pooled["dof"].number(), 3 * (3 * 100 * 36 - 1));
+  EXPECT_GT(pooled["p_value"].number(), 0.01);
+  // The top level's test is the pooled one; the rest is the first shot's.
+  EXPECT_EQ(json["verdict"].string(), pooled["verdict"].string());
+  EXPECT_EQ(json["mean_d2"].number(), pooled["mean_d2"].number());
+  EXPECT_EQ(json["dof"].number(), pooled["dof"].number());
+  EXPECT_EQ(json["p_value"].number(), pooled["p_value"].number());
+  EXPECT_EQ(json["time_offset_s"].number(), json["shots"].array()[0]["time_offset_s"].number());
+  // The spread: 0.5 mm per axis between shots, sqrt(3) x 0.5 mm in 3-D, in every phase measured.
+  bool some_phase = false;
+  for (const char* phase : {"ejection", "spreading", "opened", "contact"}) {
+    ASSERT_TRUE(json["repeat_spread_mm"].has(phase)) << phase;
+    if (json["repeat_spread_mm"][phase].is_null()) continue;
+    some_phase = true;
+    EXPECT_NEAR(json["repeat_spread_mm"][phase].number(), 0.5 * std::sqrt(3.0), 0.15) << phase;
+  }
+  EXPECT_TRUE(some_phase);
+  EXPECT_NEAR(json["repeat_spread_all_mm"].number(), 0.5 * std::sqrt(3.0), 0.08);
+  EXPECT_NE(r.err.find("pooled:"), std::string::npos) << r.err;
+
+  // score.h5: the first shot's tables, the pooled verdict, and /repeats.
+  netlab::h5::Id file = netlab::h5::OpenFileReadOnly(Path("score.h5"));
+  EXPECT_EQ(netlab::h5::ReadStringAttribute(file.get(), "verdict"), "consistent");
+  EXPECT_EQ(netlab::h5::DatasetDims(file.get(), "/residual"), (std::vector<hsize_t>{100, 36, 3}));
+  EXPECT_EQ(netlab::h5::DatasetDims(file.get(), "/repeats/shots/time_offset_s"),
+            (std::vector<hsize_t>{3}));
+  double offsets[3];
+  netlab::h5::ReadDataset(file.get(), "/repeats/shots/time_offset_s", H5T_NATIVE_DOUBLE, offsets);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(offsets[i], t0[i], 2e-4) << i;
+  EXPECT_TRUE(netlab::h5::Exists(file.get(), "/repeats/shot_2/per_phase/rms_m"));
+  EXPECT_TRUE(netlab::h5::Exists(file.get(), "/repeats/spread/per_phase/rms_m"));
+  EXPECT_TRUE(netlab::h5::Exists(file.get(), "/repeats/pooled/p_value"));
+
+  // The report's Repeats section: a row per shot and the pooled one.
+  std::ifstream in(Path("report.html"));
+  const std::string html((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t section = html.find("<h2 id=\"repeats\">Repeats</h2>");
+  ASSERT_NE(section, std::string::npos);
+  const size_t table = html.find("<table id=\"repeat-shots\">", section);
+  const size_t end = html.find("</table>", table);
+  ASSERT_NE(table, std::string::npos);
+  const std::string shots = html.substr(table, end - table);
+  for (int i = 0; i < 3; ++i)
+    EXPECT_NE(shots.find("<td>" + Path("shot" + std::to_string(i) + ".h5") + "</td>"),
+              std::string::npos)
+        << i;
+  EXPECT_NE(shots.find("<td><b>pooled</b></td>"), std::string::npos);
+  EXPECT_NE(html.find("<table id=\"repeat-spread\">", end), std::string::npos);
+}
+
+// One measured file: no repeats fields.
+TEST_F(ScoreCommand, OneMeasuredFileHasNoRepeats) {
+  std::mt19937 rng(7);
+  netlab::WriteKnotTracks(Path("tracks.h5"), Flight(6, 6, 40, 0.01, 5e-4, &rng));
+  netlab::WriteKnotTracks(Path("sim.h5"), Flight(6, 6, 80, 0.0, 0.0, nullptr));
+  const auto r =
+      RunNetlab("score --measured " + Path("tracks.h5") + " --sim " + Path("sim.h5") + " --out " +
+                Path("score.h5") + " --report " + Path("report.html") + " --json");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto json = LastJson(r.out);
+  EXPECT_FALSE(json.has("shots"));
+  EXPECT_FALSE(json.has("pooled"));
+  EXPECT_FALSE(json.has("repeat_spread_mm"));
+  netlab::h5::Id file = netlab::h5::OpenFileReadOnly(Path("score.h5"));
+  EXPECT_FALSE(netlab::h5::Exists(file.get(), "/repeats"));
+  std::ifstream in(Path("report.html"));
+  const std::string html((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(html.find("id=\"repeats\""), std::string::npos);
+}
+
+// Bad repeats: an empty item, a file twice, another net, a shot outside the simulation's time;
+// each named, and nothing left under --out or --report.
+TEST_F(ScoreCommand, BadRepeatsAreRefusedNamingTheFile) {
+  std::mt19937 rng(11);
+  netlab::WriteKnotTracks(Path("a.h5"), Flight(6, 6, 40, 0.0, 5e-4, &rng));
+  netlab::WriteKnotTracks(Path("b.h5"), Flight(6, 6, 40, 0.005, 5e-4, &rng));
+  netlab::WriteKnotTracks(Path("sim.h5"), Flight(6, 6, 80, 0.0, 0.0, nullptr));
+  netlab::WriteKnotTracks(Path("other.h5"), Flight(6, 5, 40, 0.0, 5e-4, &rng));
+  KnotTracks late = Flight(6, 6, 40, 0.0, 5e-4, &rng);
+  for (double& t : late.time) t += 5.0;
+  netlab::WriteKnotTracks(Path("late.h5"), late);
+  const std::string tail = " --sim " + Path("sim.h5") + " --out " + Path("score.h5") +
+                           " --report " + Path("report.html");
+  auto refused = [&](const std::string& list, int status, const std::vector<std::string>& words) {
+    const auto r = RunNetlab("score --measured " + list + tail);
+    EXPECT_EQ(r.status, status) << list << "\n" << r.err;
+    for (const std::string& word : words)
+      EXPECT_NE(r.err.find(word), std::string::npos) << list << ": " << word << "\n" << r.err;
+    EXPECT_FALSE(std::filesystem::exists(Path("score.h5"))) << list;
+    EXPECT_FALSE(std::filesystem::exists(Path("report.html"))) << list;
+    EXPECT_FALSE(std::filesystem::exists(Path("score.h5.partial"))) << list;
+  };
+  refused(Path("a.h5") + ",," + Path("b.h5"), 2, {"--measured", "an empty file name", "item 2"});
+  refused(Path("a.h5") + "," + Path("b.h5") + ",", 2, {"an empty file name", "item 3"});
+  refused(Path("a.h5") + "," + Path("b.h5") + "," + Path("a.h5"), 1,
+          {Path("a.h5") + " (item 3) is item 1 again"});
+  refused(Path("a.h5") + "," + Path("b.h5") + "," + dir_.string() + "/./a.h5", 1,
+          {"(item 3) is " + Path("a.h5") + ", item 1 again"});
+  refused(Path("a.h5") + "," + Path("other.h5"), 1,
+          {Path("other.h5") + " is not a repeat of " + Path("a.h5"), "30 knots", "36"});
+  refused(Path("a.h5") + "," + Path("late.h5"), 1,
+          {"no overlap in time", Path("late.h5") + " spans 5"});
 }
 
 }  // namespace

@@ -1,0 +1,235 @@
+#include "libnetsim/validation/repeats.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "common/errors.h"
+
+namespace netlab::netsim {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::string KnotText(const KnotTracks& tracks, int k) {
+  std::string text =
+      "(" + std::to_string(tracks.grid[k][0]) + "," + std::to_string(tracks.grid[k][1]) + ")";
+  if (!tracks.net.empty()) text += " of net " + std::to_string(tracks.net[k]);
+  return text;
+}
+
+// Sums of one spread row: sum |x - x_bar|^2 and sum (n - 1).
+struct SpreadSums {
+  double squares = 0.0, dof = 0.0;
+  int points = 0;
+  void Add(double s, int n) {
+    squares += s;
+    dof += n - 1;
+    ++points;
+  }
+  void Finish(SpreadRow* row) const {
+    row->points = points;
+    row->rms_m = dof > 0 ? std::sqrt(squares / dof) : kNaN;
+  }
+};
+
+// The trace of a measured knot-frame's covariance, m^2: its own, or 3 meas_sigma^2 without one.
+double CovarianceTrace(const KnotTracks& meas, size_t i, double meas_sigma_m) {
+  return meas.covariance.empty() ? 3 * meas_sigma_m * meas_sigma_m : meas.covariance[i].trace();
+}
+
+// Shot `shot`'s measured knot k at its measured time u, in the simulation's frame: linear between
+// the two frames around u, both informative. False where there are none. `lost_variance`: how much
+// less noise variance (trace, m^2) the interpolated point has than one measured frame at u,
+// f (1 - f) tr(C_a + C_b) for weights 1 - f and f.
+bool AlignedKnot(const KnotTracks& meas, const ScoreResult& shot, int k, double u,
+                 double meas_sigma_m, Eigen::Vector3d* x, double* lost_variance) {
+  const std::vector<double>& time = meas.time;
+  const int knots = meas.knots();
+  const double tol = 1e-9 * std::max(1.0, std::abs(u));
+  if (time.empty() || u < time.front() - tol || u > time.back() + tol) return false;
+  int j = static_cast<int>(std::upper_bound(time.begin(), time.end(), u) - time.begin()) - 1;
+  j = std::clamp(j, 0, std::max(0, meas.frames() - 2));
+  const int j1 = std::min(j + 1, meas.frames() - 1);
+  const size_t a = static_cast<size_t>(j) * knots + k, b = static_cast<size_t>(j1) * knots + k;
+  const double span = time[j1] - time[j];
+  const double f = span > 0 ? std::clamp((u - time[j]) / span, 0.0, 1.0) : 0.0;
+  // A frame of weight (nearly) zero need not be informative.
+  const bool need_a = f < 1.0 - 1e-9;
+  const bool need_b = f > 1e-9;
+  const std::vector<uint8_t>& usable = shot.informative.empty() ? shot.compared : shot.informative;
+  if ((need_a && !usable[a]) || (need_b && !usable[b])) return false;
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  if (need_a) p += (1.0 - f) * meas.position[a];
+  if (need_b) p += f * meas.position[b];
+  *lost_variance =
+      need_a && need_b
+          ? f * (1.0 - f) *
+                (CovarianceTrace(meas, a, meas_sigma_m) + CovarianceTrace(meas, b, meas_sigma_m))
+          : 0.0;
+  const ScoreSummary& s = shot.summary;
+  *x = s.rotation.transpose() * (p - s.translation);
+  return true;
+}
+
+// The RMS error over the shots' rows picked by `row_of`, each weighed by its informative points.
+template <typename RowOf>
+double PooledError(const std::vector<ScoreResult>& shots, RowOf row_of) {
+  double e2 = 0.0;
+  int n = 0;
+  for (const ScoreResult& shot : shots) {
+    const ScoreRow* row = row_of(shot.summary);
+    if (!row) continue;
+    const int informative = row->points - row->left_out;
+    if (informative <= 0 || !std::isfinite(row->rms_m)) continue;
+    e2 += row->rms_m * row->rms_m * informative;
+    n += informative;
+  }
+  return n > 0 ? std::sqrt(e2 / n) : kNaN;
+}
+
+}  // namespace
+
+void CheckSameNet(const std::vector<const KnotTracks*>& measured,
+                  const std::vector<std::string>& names) {
+  if (measured.empty()) return;
+  const KnotTracks& first = *measured[0];
+  for (size_t i = 1; i < measured.size(); ++i) {
+    const KnotTracks& other = *measured[i];
+    const std::string what = names[i] + " is not a repeat of " + names[0] + ": ";
+    if (other.knots() != first.knots())
+      throw InputError(what + "it has " + std::to_string(other.knots()) + " knots, " + names[0] +
+                       " " + std::to_string(first.knots()) +
+                       " (/knots/grid): repeats of one case fly the same net");
+    for (int k = 0; k < first.knots(); ++k) {
+      const int net_a = first.net.empty() ? 0 : first.net[k];
+      const int net_b = other.net.empty() ? 0 : other.net[k];
+      if (other.grid[k] == first.grid[k] && net_a == net_b) continue;
+      throw InputError(what + "its knot " + std::to_string(k) + " is " + KnotText(other, k) +
+                       ", in " + names[0] + " " + KnotText(first, k) +
+                       " (/knots/grid): repeats of one case fly the same net");
+    }
+  }
+}
+
+RepeatsSummary PoolRepeats(const std::vector<const KnotTracks*>& measured,
+                           const std::vector<std::string>& names,
+                           const std::vector<ScoreResult>& shots, const ScoreOptions& options) {
+  RepeatsSummary r;
+  r.names = names;
+  // The pooled test: independent shots' scaled chi^2 add up.
+  double d2 = 0.0, x = 0.0, nu_eff = 0.0, e2 = 0.0;
+  int informative = 0;
+  for (const ScoreResult& shot : shots) {
+    const ScoreSummary& s = shot.summary;
+    const double inflation = s.tau_int * s.design_effect;
+    const double sum = s.mean_d2 * s.points;
+    r.points += s.points;
+    r.dof += s.dof;
+    r.effective_points += s.points / inflation;
+    d2 += sum;
+    x += sum / inflation;
+    nu_eff += s.dof / inflation;
+    const int n = s.points - s.left_out;
+    if (n > 0 && std::isfinite(s.rms_m)) {
+      e2 += s.rms_m * s.rms_m * n;
+      informative += n;
+    }
+  }
+  r.rms_m = informative > 0 ? std::sqrt(e2 / informative) : kNaN;
+  r.mean_d2 = r.points > 0 ? d2 / r.points : kNaN;
+  r.scaled_d2 = x;
+  r.effective_dof = nu_eff;
+  r.p_value = UpperGammaQ(nu_eff / 2, x / 2);
+  // The pooled mean d2 at which X reaches the quantile, every shot's sum scaled alike.
+  r.critical_mean_d2 =
+      x > 0 ? Chi2Quantile(1 - options.significance, nu_eff) / x * r.mean_d2 : kNaN;
+  r.margin = r.critical_mean_d2 - r.mean_d2;
+  r.verdict = r.p_value >= options.significance ? Verdict::kConsistent : Verdict::kInconsistent;
+
+  // The spread between the shots at the first shot's frames, on the simulation's clock.
+  const KnotTracks& ref = *measured[0];
+  const ScoreResult& first = shots[0];
+  const double tau0 = first.summary.time_offset_s;
+  const int knots = ref.knots();
+  SpreadSums all, per_class[3];
+  std::vector<SpreadSums> per_phase(first.summary.per_phase.size());
+  std::vector<Eigen::Vector3d> xs;
+  for (int t = 0; t < ref.frames(); ++t) {
+    const double s = ref.time[t] + tau0;
+    for (int k = 0; k < knots; ++k) {
+      xs.clear();
+      double lost = 0.0;
+      for (size_t i = 0; i < shots.size(); ++i) {
+        Eigen::Vector3d p;
+        double lost_i = 0.0;
+        if (!AlignedKnot(*measured[i], shots[i], k, s - shots[i].summary.time_offset_s,
+                         options.meas_sigma_m, &p, &lost_i))
+          continue;
+        xs.push_back(p);
+        lost += lost_i;
+      }
+      const int n = static_cast<int>(xs.size());
+      if (n < 2) continue;
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      for (const Eigen::Vector3d& p : xs) mean += p;
+      mean /= n;
+      // Independent points of noise variances v_i give E sum |x - x_bar|^2 = (n - 1) / n sum v_i:
+      // the noise the interpolation averaged away is put back so.
+      double squares = (n - 1.0) / n * lost;
+      for (const Eigen::Vector3d& p : xs) squares += (p - mean).squaredNorm();
+      all.Add(squares, n);
+      per_class[first.knot_class[k]].Add(squares, n);
+      for (size_t p = 0; p < per_phase.size(); ++p) {
+        const ScoreRow& phase = first.summary.per_phase[p];
+        if (ref.time[t] >= phase.start_s && ref.time[t] < phase.end_s) per_phase[p].Add(squares, n);
+      }
+    }
+  }
+  r.spread.name = "all";
+  all.Finish(&r.spread);
+  r.spread.error_rms_m = r.rms_m;
+  for (int c = 0; c < 3; ++c) {
+    r.spread_per_class[c].name = kKnotClassNames[c];
+    per_class[c].Finish(&r.spread_per_class[c]);
+    r.spread_per_class[c].error_rms_m =
+        PooledError(shots, [c](const ScoreSummary& s) { return &s.per_class[c]; });
+  }
+  for (size_t p = 0; p < per_phase.size(); ++p) {
+    SpreadRow row;
+    row.name = first.summary.per_phase[p].name;
+    row.start_s = first.summary.per_phase[p].start_s + tau0;
+    row.end_s = first.summary.per_phase[p].end_s + tau0;
+    per_phase[p].Finish(&row);
+    row.error_rms_m = PooledError(shots, [p](const ScoreSummary& s) {
+      return p < s.per_phase.size() ? &s.per_phase[p] : nullptr;
+    });
+    r.spread_per_phase.push_back(row);
+  }
+  return r;
+}
+
+RepeatsResult ScoreRepeats(const std::vector<const KnotTracks*>& measured,
+                           const std::vector<std::string>& names, const KnotTracks& sim,
+                           const ScoreOptions& options, const std::string& sim_name) {
+  CheckSameNet(measured, names);
+  RepeatsResult result;
+  for (size_t i = 0; i < measured.size(); ++i)
+    result.shots.push_back(Score(*measured[i], sim, options, names[i], sim_name));
+  result.summary = PoolRepeats(measured, names, result.shots, options);
+  result.combined = result.shots[0];
+  ScoreSummary& c = result.combined.summary;
+  const RepeatsSummary& r = result.summary;
+  c.mean_d2 = r.mean_d2;
+  c.dof = r.dof;
+  c.effective_points = r.effective_points;
+  c.p_value = r.p_value;
+  c.critical_mean_d2 = r.critical_mean_d2;
+  c.margin = r.margin;
+  c.verdict = r.verdict;
+  c.covariance_too_large =
+      1 - UpperGammaQ(r.effective_dof / 2, r.scaled_d2 / 2) < options.significance;
+  return result;
+}
+
+}  // namespace netlab::netsim

@@ -1,0 +1,214 @@
+#include "libnetsim/validation/repeats.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <random>
+#include <stdexcept>
+
+#include "common/errors.h"
+#include "libnetsim/scenario/run_scenario.h"
+#include "libnetsim/scenario/scenario.h"
+
+namespace netlab::netsim {
+namespace {
+
+constexpr double kFps = 179.0;
+constexpr double kNoise = 3e-4;  // m per axis
+
+// A 5 x 5 net with drag, flying 0.6 s (the scene of score_test's wrong-model test).
+constexpr char kScene[] = R"(
+name: small_net
+duration: 0.6
+output_interval: 0.005586592178770949
+integrator: {type: explicit, dt: auto}
+drag: {air_density: 1.0, drag_coefficient: 1.2}
+materials:
+  nylon: {diameter: 1.0e-3, linear_density: 8.95e-4, stretch_stiffness: 1571,
+          stretch_damping: 7.6e-4, bend_stiffness: 9.82e-5, bend_damping: 6.0e-9,
+          twist_stiffness: 7.07e-5, twist_damping: 5.7e-11}
+nets:
+  - {name: net, material: nylon, knots: [5, 5], mesh: 0.1, segments_per_link: 2,
+     center: [0, 0, 0], normal: [1, 0, 0], x_axis: [0, 1, 0], knot_mass: 3e-05,
+     corner_mass: 0.02, velocity: [0.8, 0, 0],
+     corner_velocities: [[0.05, -0.05, -0.05], [0.05, 0.05, -0.05], [0.05, -0.05, 0.05],
+                         [0.05, 0.05, 0.05]]}
+)";
+
+// The true net and the same one without air drag, simulated once for the whole file.
+class Repeats : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    const std::string dir =
+        std::filesystem::temp_directory_path() / ("netlab_repeats_" + std::to_string(getpid()));
+    std::filesystem::create_directories(dir);
+    auto run = [&](const std::string& text, const std::string& name) {
+      RunOptions run_options;
+      run_options.out_path = dir + "/" + name;
+      EXPECT_TRUE(RunScenario(ParseScenario(text, name, dir), run_options).stable);
+      return ReadKnotTracks(run_options.out_path);
+    };
+    std::string no_drag = kScene;
+    no_drag.erase(no_drag.find("drag: {"), no_drag.find("materials:") - no_drag.find("drag: {"));
+    right_ = new KnotTracks(run(kScene, "right.h5"));
+    wrong_ = new KnotTracks(run(no_drag, "wrong.h5"));
+    std::filesystem::remove_all(dir);
+  }
+  static void TearDownTestSuite() {
+    delete right_;
+    delete wrong_;
+  }
+
+  // A shot of the true net: its launch `tau` s after the simulation's t = 0 on the measured
+  // clock (t_sim = t_meas + tau), measured with kNoise per axis from noise seed `seed`.
+  static KnotTracks Shot(double tau, unsigned seed) {
+    KnotTracks meas = *right_;
+    for (double& t : meas.time) t -= tau;
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> normal(0.0, kNoise);
+    for (auto& p : meas.position) p += Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+    meas.covariance.assign(meas.position.size(), Eigen::Matrix3d::Identity() * kNoise * kNoise);
+    return meas;
+  }
+
+  static KnotTracks* right_;
+  static KnotTracks* wrong_;
+};
+KnotTracks* Repeats::right_ = nullptr;
+KnotTracks* Repeats::wrong_ = nullptr;
+
+// Three shots with their own launch times and noise seeds: the pooled test accepts the true model
+// and rejects the one without drag; each shot's offset is its own; the spread between the shots
+// is the noise put in, sqrt(3) x 0.3 mm.
+TEST_F(Repeats, ThreeTwinsPoolTheTestFindTheirOwnOffsetsAndSpreadByTheirNoise) {
+  const double taus[3] = {0.0, 3 / kFps, -2 / kFps};
+  const KnotTracks shots[3] = {Shot(taus[0], 21), Shot(taus[1], 22), Shot(taus[2], 23)};
+  const std::vector<const KnotTracks*> measured = {&shots[0], &shots[1], &shots[2]};
+  const std::vector<std::string> names = {"a.h5", "b.h5", "c.h5"};
+
+  const RepeatsResult good = ScoreRepeats(measured, names, *right_, ScoreOptions{}, "right.h5");
+  const RepeatsResult bad = ScoreRepeats(measured, names, *wrong_, ScoreOptions{}, "wrong.h5");
+  ASSERT_EQ(good.shots.size(), 3u);
+  EXPECT_EQ(good.summary.verdict, Verdict::kConsistent) << good.combined.summary.BriefReport();
+  EXPECT_EQ(bad.summary.verdict, Verdict::kInconsistent) << bad.combined.summary.BriefReport();
+  EXPECT_GT(good.summary.margin, 0.0);
+  EXPECT_LT(bad.summary.margin, 0.0);
+  EXPECT_NEAR(good.summary.mean_d2, 3.0, 0.3);
+  // The combined summary carries the pooled test; the rest is the first shot's.
+  EXPECT_EQ(good.combined.summary.verdict, good.summary.verdict);
+  EXPECT_EQ(good.combined.summary.dof, good.summary.dof);
+  EXPECT_EQ(good.combined.summary.rms_m, good.shots[0].summary.rms_m);
+
+  double dof = 0.0;
+  int points = 0;
+  for (int i = 0; i < 3; ++i) {
+    const ScoreSummary& s = good.shots[i].summary;
+    EXPECT_EQ(s.verdict, Verdict::kConsistent) << names[i] << "\n" << s.BriefReport();
+    // Each shot's own offset, to a fraction of a millisecond (a frame is 5.6 ms).
+    EXPECT_NEAR(s.time_offset_s, taus[i], 2e-4) << names[i];
+    EXPECT_LT(std::abs(s.time_offset_s - taus[i]), 4 * s.time_offset_sigma_s + 2e-5) << names[i];
+    dof += s.dof;
+    points += s.points;
+  }
+  EXPECT_EQ(good.summary.dof, dof);
+  EXPECT_EQ(good.summary.points, points);
+
+  // The spread: noise only, sqrt(3) sigma in 3-D, over every knot-frame the shots share.
+  const double expected = std::sqrt(3.0) * kNoise;
+  EXPECT_GT(good.summary.spread.points, 0.9 * good.shots[0].summary.points);
+  EXPECT_NEAR(good.summary.spread.rms_m, expected, 0.05 * expected);
+  for (const SpreadRow& row : good.summary.spread_per_class)
+    EXPECT_NEAR(row.rms_m, expected, 0.1 * expected) << row.name;
+  ASSERT_EQ(good.summary.spread_per_phase.size(), good.shots[0].summary.per_phase.size());
+  for (const SpreadRow& row : good.summary.spread_per_phase)
+    if (row.points >= 100) EXPECT_NEAR(row.rms_m, expected, 0.15 * expected) << row.name;
+  // The spread does not depend on the model scored against, the model's error does.
+  EXPECT_NEAR(bad.summary.spread.rms_m, good.summary.spread.rms_m, 0.05 * expected);
+  EXPECT_GT(bad.summary.spread.error_rms_m, 2 * good.summary.spread.error_rms_m);
+}
+
+// Shots moved apart along x by a known amount: the spread is that amount, not the noise.
+TEST_F(Repeats, TheSpreadIsTheDistanceBetweenTheShots) {
+  KnotTracks shots[3] = {Shot(0.0, 31), Shot(0.0, 32), Shot(0.0, 33)};
+  const double shift = 5e-3;  // m: shot 1 at -shift, shot 2 at +shift along y
+  for (auto& p : shots[1].position) p.y() -= shift;
+  for (auto& p : shots[2].position) p.y() += shift;
+  RepeatsSummary r;
+  {
+    std::vector<ScoreResult> scored;
+    ScoreOptions options;
+    options.alignment = Alignment::kNone;
+    for (const KnotTracks& shot : shots) scored.push_back(Score(shot, *right_, options));
+    r = PoolRepeats({&shots[0], &shots[1], &shots[2]}, {"a", "b", "c"}, scored, options);
+  }
+  // Offsets 0, -s, +s about their mean: sum of squares 2 s^2 over n - 1 = 2, plus the noise.
+  const double expected = std::sqrt(shift * shift + 3 * kNoise * kNoise);
+  EXPECT_NEAR(r.spread.rms_m, expected, 0.02 * expected);
+  // Moved 5 mm, the shots are not the simulation: rejected together.
+  EXPECT_EQ(r.verdict, Verdict::kInconsistent);
+}
+
+// One shot pooled is that shot's test.
+TEST_F(Repeats, OneShotPooledIsItsOwnTest) {
+  const KnotTracks shot = Shot(1 / kFps, 41);
+  const std::vector<ScoreResult> scored = {Score(shot, *right_, ScoreOptions{})};
+  const RepeatsSummary r = PoolRepeats({&shot}, {"a"}, scored, ScoreOptions{});
+  const ScoreSummary& s = scored[0].summary;
+  EXPECT_NEAR(r.p_value, s.p_value, 1e-12);
+  EXPECT_NEAR(r.mean_d2, s.mean_d2, 1e-12);
+  EXPECT_NEAR(r.critical_mean_d2, s.critical_mean_d2, 1e-9 * s.critical_mean_d2);
+  EXPECT_EQ(r.verdict, s.verdict);
+  EXPECT_EQ(r.spread.points, 0);
+  EXPECT_TRUE(std::isnan(r.spread.rms_m));
+}
+
+std::string ErrorOf(const std::vector<const KnotTracks*>& measured, const KnotTracks& sim) {
+  std::vector<std::string> names;
+  for (size_t i = 0; i < measured.size(); ++i) names.push_back(std::string(1, 'a' + i) + ".h5");
+  try {
+    ScoreRepeats(measured, names, sim, ScoreOptions{}, "sim.h5");
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST_F(Repeats, RepeatsOfDifferentNetsAreRefusedNamingBothFilesAndTheKnot) {
+  const KnotTracks a = Shot(0.0, 51);
+  KnotTracks b = Shot(0.0, 52);
+  b.grid[7] = {9, 9};
+  std::string error = ErrorOf({&a, &b}, *right_);
+  EXPECT_NE(error.find("b.h5 is not a repeat of a.h5"), std::string::npos) << error;
+  EXPECT_NE(error.find("knot 7 is (9,9) of net 0, in a.h5 (1,2) of net 0"), std::string::npos)
+      << error;
+
+  // Another net size.
+  KnotTracks c = Shot(0.0, 53);
+  c.grid.pop_back();
+  c.valid.clear();
+  std::vector<Eigen::Vector3d> positions;
+  for (int t = 0; t < a.frames(); ++t)
+    for (int k = 0; k < 24; ++k) {
+      positions.push_back(a.Position(t, k));
+      c.valid.push_back(1);
+    }
+  c.position = positions;
+  c.covariance.resize(positions.size());
+  error = ErrorOf({&a, &a, &c}, *right_);
+  EXPECT_NE(error.find("c.h5 is not a repeat of a.h5: it has 24 knots, a.h5 25"), std::string::npos)
+      << error;
+}
+
+TEST_F(Repeats, AShotOutsideTheSimulationsTimeIsRefusedNamingIt) {
+  const KnotTracks a = Shot(0.0, 61);
+  const KnotTracks b = Shot(-5.0, 62);  // launched 5 s after the simulation ends
+  const std::string error = ErrorOf({&a, &b}, *right_);
+  EXPECT_NE(error.find("no overlap in time"), std::string::npos) << error;
+  EXPECT_NE(error.find("b.h5 spans 5"), std::string::npos) << error;
+  EXPECT_NE(error.find("sim.h5 0"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace netlab::netsim
