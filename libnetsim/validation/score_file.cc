@@ -21,14 +21,15 @@ void WriteScalar(hid_t loc, const std::string& name, double value, const std::st
   Write(loc, name, {1}, &value, units);
 }
 
-// The per-row tables: one dataset per column.
-void WriteRows(hid_t loc, const std::vector<ScoreRow>& rows, bool spans) {
-  std::vector<double> rms, max, d2, points, start, end;
+// A row table, one dataset per column: rms_m, points, the names and, for phases (spans), each
+// row's start_s and end_s in `time_units`. Score rows and spread rows alike.
+template <typename Row>
+void WriteTable(hid_t loc, const std::vector<Row>& rows, bool spans,
+                const std::string& time_units) {
+  std::vector<double> rms, points, start, end;
   std::string names;
-  for (const ScoreRow& r : rows) {
+  for (const Row& r : rows) {
     rms.push_back(r.rms_m);
-    max.push_back(r.max_m);
-    d2.push_back(r.mean_d2);
     points.push_back(r.points);
     start.push_back(r.start_s);
     end.push_back(r.end_s);
@@ -36,35 +37,30 @@ void WriteRows(hid_t loc, const std::vector<ScoreRow>& rows, bool spans) {
   }
   const std::vector<hsize_t> dims = {rows.size()};
   Write(loc, "rms_m", dims, rms.data(), "m");
-  Write(loc, "max_m", dims, max.data(), "m");
-  Write(loc, "mean_d2", dims, d2.data(), "1");
   Write(loc, "points", dims, points.data(), "knot-frames");
   if (spans) {
-    Write(loc, "start_s", dims, start.data(), "s");
-    Write(loc, "end_s", dims, end.data(), "s");
+    Write(loc, "start_s", dims, start.data(), time_units);
+    Write(loc, "end_s", dims, end.data(), time_units);
   }
   h5::WriteStringAttribute(loc, "names", names);
 }
 
-// One column per spread row set: rms_m and points (and the simulated span of phases).
-void WriteSpread(hid_t loc, const std::vector<SpreadRow>& rows, bool spans) {
-  std::vector<double> rms, points, start, end;
-  std::string names;
-  for (const SpreadRow& r : rows) {
-    rms.push_back(r.rms_m);
-    points.push_back(r.points);
-    start.push_back(r.start_s);
-    end.push_back(r.end_s);
-    names += (names.empty() ? "" : "\n") + r.name;
+// The per-row tables of a score: the common columns, max_m and mean_d2.
+void WriteRows(hid_t loc, const std::vector<ScoreRow>& rows, bool spans) {
+  WriteTable(loc, rows, spans, "s");
+  std::vector<double> max, d2;
+  for (const ScoreRow& r : rows) {
+    max.push_back(r.max_m);
+    d2.push_back(r.mean_d2);
   }
   const std::vector<hsize_t> dims = {rows.size()};
-  Write(loc, "rms_m", dims, rms.data(), "m");
-  Write(loc, "points", dims, points.data(), "knot-frames");
-  if (spans) {
-    Write(loc, "start_s", dims, start.data(), "s (simulated)");
-    Write(loc, "end_s", dims, end.data(), "s (simulated)");
-  }
-  h5::WriteStringAttribute(loc, "names", names);
+  Write(loc, "max_m", dims, max.data(), "m");
+  Write(loc, "mean_d2", dims, d2.data(), "1");
+}
+
+// The spread between repeats, per row: rms_m and points (and the simulated span of phases).
+void WriteSpread(hid_t loc, const std::vector<SpreadRow>& rows, bool spans) {
+  WriteTable(loc, rows, spans, "s (simulated)");
 }
 
 // /repeats: the pooled test, one row per shot, each shot's tables, the spread between them.

@@ -1,16 +1,13 @@
 #include "libnetsim/validation/repeats.h"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
-#include <filesystem>
 #include <random>
 #include <stdexcept>
 
 #include "common/errors.h"
-#include "libnetsim/scenario/run_scenario.h"
-#include "libnetsim/scenario/scenario.h"
+#include "tests/libnetsim/validation/score_test_data.h"
 
 namespace netlab::netsim {
 namespace {
@@ -18,43 +15,13 @@ namespace {
 constexpr double kFps = 179.0;
 constexpr double kNoise = 3e-4;  // m per axis
 
-// A 5 x 5 net with drag, flying 0.6 s (the scene of score_test's wrong-model test).
-constexpr char kScene[] = R"(
-name: small_net
-duration: 0.6
-output_interval: 0.005586592178770949
-integrator: {type: explicit, dt: auto}
-drag: {air_density: 1.0, drag_coefficient: 1.2}
-materials:
-  nylon: {diameter: 1.0e-3, linear_density: 8.95e-4, stretch_stiffness: 1571,
-          stretch_damping: 7.6e-4, bend_stiffness: 9.82e-5, bend_damping: 6.0e-9,
-          twist_stiffness: 7.07e-5, twist_damping: 5.7e-11}
-nets:
-  - {name: net, material: nylon, knots: [5, 5], mesh: 0.1, segments_per_link: 2,
-     center: [0, 0, 0], normal: [1, 0, 0], x_axis: [0, 1, 0], knot_mass: 3e-05,
-     corner_mass: 0.02, velocity: [0.8, 0, 0],
-     corner_velocities: [[0.05, -0.05, -0.05], [0.05, 0.05, -0.05], [0.05, -0.05, 0.05],
-                         [0.05, 0.05, 0.05]]}
-)";
-
 // The true net and the same one without air drag, simulated once for the whole file.
 class Repeats : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    const std::string dir =
-        std::filesystem::temp_directory_path() / ("netlab_repeats_" + std::to_string(getpid()));
-    std::filesystem::create_directories(dir);
-    auto run = [&](const std::string& text, const std::string& name) {
-      RunOptions run_options;
-      run_options.out_path = dir + "/" + name;
-      EXPECT_TRUE(RunScenario(ParseScenario(text, name, dir), run_options).stable);
-      return ReadKnotTracks(run_options.out_path);
-    };
-    std::string no_drag = kScene;
-    no_drag.erase(no_drag.find("drag: {"), no_drag.find("materials:") - no_drag.find("drag: {"));
-    right_ = new KnotTracks(run(kScene, "right.h5"));
-    wrong_ = new KnotTracks(run(no_drag, "wrong.h5"));
-    std::filesystem::remove_all(dir);
+    testing::DragModels models = testing::SimulateDragModels();
+    right_ = new KnotTracks(std::move(models.right));
+    wrong_ = new KnotTracks(std::move(models.wrong));
   }
   static void TearDownTestSuite() {
     delete right_;

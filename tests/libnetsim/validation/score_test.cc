@@ -1,15 +1,12 @@
 #include "libnetsim/validation/score.h"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
-#include <filesystem>
 #include <random>
 
-#include "libnetsim/scenario/run_scenario.h"
-#include "libnetsim/scenario/scenario.h"
+#include "tests/libnetsim/validation/score_test_data.h"
 
 namespace netlab::netsim {
 namespace {
@@ -289,38 +286,7 @@ TEST(Score, PointsOfHugeSigmaLeaveTheErrorsInMillimetresButNotTheTest) {
 // A wrong model: the real net (made by the simulator) against one with no air drag, measured
 // with 0.3 mm noise.
 TEST(Score, APerturbedSimulationIsRejectedAndTheRightOneIsNot) {
-  const std::string dir =
-      std::filesystem::temp_directory_path() / ("netlab_score_" + std::to_string(getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string scene = R"(
-name: small_net
-duration: 0.6
-output_interval: 0.005586592178770949
-integrator: {type: explicit, dt: auto}
-drag: {air_density: 1.0, drag_coefficient: 1.2}
-materials:
-  nylon: {diameter: 1.0e-3, linear_density: 8.95e-4, stretch_stiffness: 1571,
-          stretch_damping: 7.6e-4, bend_stiffness: 9.82e-5, bend_damping: 6.0e-9,
-          twist_stiffness: 7.07e-5, twist_damping: 5.7e-11}
-nets:
-  - {name: net, material: nylon, knots: [5, 5], mesh: 0.1, segments_per_link: 2,
-     center: [0, 0, 0], normal: [1, 0, 0], x_axis: [0, 1, 0], knot_mass: 3e-05,
-     corner_mass: 0.02, velocity: [0.8, 0, 0],
-     corner_velocities: [[0.05, -0.05, -0.05], [0.05, 0.05, -0.05], [0.05, -0.05, 0.05],
-                         [0.05, 0.05, 0.05]]}
-)";
-  auto run = [&](const std::string& text, const std::string& name) {
-    RunOptions run_options;
-    run_options.out_path = dir + "/" + name;
-    EXPECT_TRUE(RunScenario(ParseScenario(text, name, dir), run_options).stable);
-    return ReadKnotTracks(run_options.out_path);
-  };
-  const KnotTracks right = run(scene, "right.h5");
-  std::string no_drag = scene;
-  no_drag.erase(no_drag.find("drag: {"), no_drag.find("materials:") - no_drag.find("drag: {"));
-  const KnotTracks wrong = run(no_drag, "wrong.h5");
-  std::filesystem::remove_all(dir);
-
+  const auto [right, wrong] = testing::SimulateDragModels();
   KnotTracks meas = right;
   std::mt19937 rng(3);
   std::normal_distribution<double> normal(0.0, 3e-4);

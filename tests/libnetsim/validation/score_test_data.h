@@ -1,6 +1,7 @@
 #pragma once
 // A small scored shot for the file and report tests: a 6 x 6 net flying and opening, measured
-// with 1 mm noise, one corner missing for a while, scored with a time fit.
+// with 1 mm noise, one corner missing for a while, scored with a time fit. And a right and a
+// wrong model made by the simulator: a 5 x 5 net flown with air drag and without it.
 
 #include <unistd.h>
 
@@ -11,6 +12,8 @@
 #include <vector>
 
 #include "common/hdf5_util.h"
+#include "libnetsim/scenario/run_scenario.h"
+#include "libnetsim/scenario/scenario.h"
 #include "libnetsim/validation/score.h"
 
 namespace netlab::netsim::testing {
@@ -64,6 +67,47 @@ inline std::filesystem::path ScratchDir(const std::string& tag) {
                     ::testing::UnitTest::GetInstance()->current_test_info()->name());
   std::filesystem::create_directories(dir);
   return dir;
+}
+
+// A 5 x 5 net with air drag, flying 0.6 s: the simulator's "real" net of the wrong-model tests.
+inline constexpr char kDragScene[] = R"(
+name: small_net
+duration: 0.6
+output_interval: 0.005586592178770949
+integrator: {type: explicit, dt: auto}
+drag: {air_density: 1.0, drag_coefficient: 1.2}
+materials:
+  nylon: {diameter: 1.0e-3, linear_density: 8.95e-4, stretch_stiffness: 1571,
+          stretch_damping: 7.6e-4, bend_stiffness: 9.82e-5, bend_damping: 6.0e-9,
+          twist_stiffness: 7.07e-5, twist_damping: 5.7e-11}
+nets:
+  - {name: net, material: nylon, knots: [5, 5], mesh: 0.1, segments_per_link: 2,
+     center: [0, 0, 0], normal: [1, 0, 0], x_axis: [0, 1, 0], knot_mass: 3e-05,
+     corner_mass: 0.02, velocity: [0.8, 0, 0],
+     corner_velocities: [[0.05, -0.05, -0.05], [0.05, 0.05, -0.05], [0.05, -0.05, 0.05],
+                         [0.05, 0.05, 0.05]]}
+)";
+
+// kDragScene simulated as it is (right) and without its air drag (wrong), in a scratch folder
+// removed afterwards.
+struct DragModels {
+  KnotTracks right, wrong;
+};
+inline DragModels SimulateDragModels() {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("netlab_drag_models_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  auto run = [&](const std::string& text, const std::string& name) {
+    RunOptions run_options;
+    run_options.out_path = (dir / name).string();
+    EXPECT_TRUE(RunScenario(ParseScenario(text, name, dir.string()), run_options).stable);
+    return ReadKnotTracks(run_options.out_path);
+  };
+  std::string no_drag = kDragScene;
+  no_drag.erase(no_drag.find("drag: {"), no_drag.find("materials:") - no_drag.find("drag: {"));
+  DragModels models{run(kDragScene, "right.h5"), run(no_drag, "wrong.h5")};
+  std::filesystem::remove_all(dir);
+  return models;
 }
 
 }  // namespace netlab::netsim::testing
