@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Seeds for `netlab label`: the four corner knots of the first frame in each camera, taken from
 a rendered shot's truth.h5 (standing for a person's 16 clicks), written as a DLTdv8-style
-xypts.csv with one row (frame 0) and only the corners' columns.
+xypts.csv with only the corners' columns: a row per frame number (a row of NaN for each frame
+before the shot's first, whose number is truth.h5's /frame_index[0]), the last one filled.
 
 usage: seed_corners.py truth.h5 ROWSxCOLS out.csv CAMERA...   (cameras in the experiment's order)
 
@@ -36,6 +37,7 @@ def main():
     rows, cols = (int(n) for n in shape.lower().split("x"))
     knots = rows * cols
     corners = [0, cols - 1, (rows - 1) * cols, knots - 1]  # row-major knot index
+    first_frame = dump(truth, "/frame_index", (0,), (1,), "i")[0]
     header, values = [], []
     for k in corners:
         for c, camera in enumerate(cameras):
@@ -45,8 +47,9 @@ def main():
             header += [column + "_X", column + "_Y"]
             seen = visibility[k] == 0
             values += [repr(px[2 * k]) if seen else "NaN", repr(px[2 * k + 1]) if seen else "NaN"]
+    empty = ",".join(["NaN"] * len(header)) + "\n"
     with open(out, "w") as f:
-        f.write(",".join(header) + "\n" + ",".join(values) + "\n")
+        f.write(",".join(header) + "\n" + empty * first_frame + ",".join(values) + "\n")
 
 
 if __name__ == "__main__":
