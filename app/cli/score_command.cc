@@ -223,6 +223,7 @@ void JsonRepeats(JsonWriter& json, const netsim::RepeatsResult& repeats) {
     json.Key("max_mm").Number(s.max_m * 1e3);
     json.Key("time_offset_s").Number(s.time_offset_s);
     json.Key("time_offset_sigma_s").Number(s.time_offset_sigma_s);
+    json.Key("spread_time_offset_s").Number(r.spread_time_offset_s[i]);
     json.EndObject();
   }
   json.EndArray();
@@ -252,9 +253,10 @@ std::string RepeatsReport(const netsim::RepeatsResult& repeats) {
   for (size_t i = 0; i < repeats.shots.size(); ++i) {
     const netsim::ScoreSummary& s = repeats.shots[i].summary;
     std::snprintf(line, sizeof(line),
-                  "  %s: offset %.3f ms, RMS %.4g mm, mean d2 %.4g, p %.3g, %s\n",
-                  r.names[i].c_str(), s.time_offset_s * 1e3, s.rms_m * 1e3, s.mean_d2, s.p_value,
-                  netsim::VerdictName(s.verdict).c_str());
+                  "  %s: offset %.3f ms (clock %+.3f ms from the first shot's), RMS %.4g mm, mean "
+                  "d2 %.4g, p %.3g, %s\n",
+                  r.names[i].c_str(), s.time_offset_s * 1e3, r.spread_time_offset_s[i] * 1e3,
+                  s.rms_m * 1e3, s.mean_d2, s.p_value, netsim::VerdictName(s.verdict).c_str());
     text += line;
   }
   std::snprintf(line, sizeof(line),
@@ -263,7 +265,9 @@ std::string RepeatsReport(const netsim::RepeatsResult& repeats) {
                 r.points, r.rms_m * 1e3, r.mean_d2, r.dof, r.critical_mean_d2, r.p_value,
                 netsim::VerdictName(r.verdict).c_str(), r.spread.rms_m * 1e3);
   text += line;
+  // The phases the shots share frames of (the others have no spread to give).
   for (const netsim::SpreadRow& row : r.spread_per_phase) {
+    if (row.points == 0) continue;
     std::snprintf(line, sizeof(line), "; %s %.4g", row.name.c_str(), row.rms_m * 1e3);
     text += line;
   }

@@ -11,16 +11,18 @@
 //   sum d2 is scaled alike;
 // - the spread between the repeats, the experiment's reproducibility: at the first shot's frames,
 //   simulated time s = t + tau_0; every shot's measured knot at s (its own measured time s -
-//   tau_i, interpolated linearly between its two measured frames around it, both informative),
-//   carried into the simulation's frame by its own rigid alignment (x = R_i^T (x_meas - t_i)).
-//   Where n >= 2 shots have the knot, their mean x_bar; the spread of a set of knot-frames is
-//   sqrt(sum |x_i - x_bar|^2 / sum (n - 1)): the RMS distance (3-D) of one shot from the mean of
-//   infinitely many, unbiased in the count of shots. Interpolating between two frames with weights
-//   1 - f and f averages their noise: the variance it removes, f (1 - f) tr(C_a + C_b) by the
-//   stated covariances (3 meas_sigma^2 each without), is added back ((n - 1) / n of it, as the
-//   sum above takes), so measurement noise of sigma per axis alone gives sqrt(3) sigma whatever
-//   fraction of a frame the shots' offsets differ by.
-//   Given per phase (the first shot's phases), per knot class, and over all.
+//   tau_i, with tau_i its fitted offset moved to where the shot lies closest to the first shot,
+//   so that a model whose error grows over the flight does not set the shots apart; interpolated
+//   linearly between its two measured frames around it, both informative), carried into the
+//   simulation's frame by its own rigid alignment (x = R_i^T (x_meas - t_i)). Where n >= 2 shots
+//   have the knot, their mean x_bar; the spread of a set of knot-frames is sqrt(sum |x_i - x_bar|^2
+//   / sum (n - 1)): the RMS distance (3-D) of one shot from the mean of infinitely many, unbiased
+//   in the count of shots. Interpolating between two frames with weights 1 - f and f averages their
+//   noise: the variance it removes, f (1 - f) tr(C_a + C_b) by the stated covariances (3
+//   meas_sigma^2 each without), is added back ((n - 1) / n of it, as the sum above takes), so
+//   measurement noise of sigma per axis alone gives sqrt(3) sigma whatever fraction of a frame the
+//   shots' offsets differ by. Given per phase (the first shot's phases), per knot class, and over
+//   all.
 
 #include <array>
 #include <string>
@@ -61,6 +63,9 @@ struct RepeatsSummary {
   SpreadRow spread;                           // over every knot-frame
   std::vector<SpreadRow> spread_per_phase;    // ejection, spreading, opened, contact
   std::array<SpreadRow, 3> spread_per_class;  // kKnotClassNames order
+  // Each shot's clock against the first shot's as the spread aligns them, s (t_first = t_i +
+  // offset at the same moment of the flight; 0 for the first shot).
+  std::vector<double> spread_time_offset_s;
 };
 
 struct RepeatsResult {

@@ -179,9 +179,6 @@ class Scorer {
   const ScoreOptions& options_;
 };
 
-bool FitsTime(Alignment a) { return a == Alignment::kTime || a == Alignment::kTimeAndRigid; }
-bool FitsRigid(Alignment a) { return a == Alignment::kRigid || a == Alignment::kTimeAndRigid; }
-
 // The measured time span must overlap the simulation's by half at offset tau.
 bool EnoughOverlap(const KnotTracks& meas, const SimInterpolant& interp, double tau) {
   const double lo = std::max(meas.time.front() + tau, interp.begin());
@@ -273,6 +270,9 @@ void FinishRow(ScoreRow* row) {
 }
 
 }  // namespace
+
+bool FitsTime(Alignment a) { return a == Alignment::kTime || a == Alignment::kTimeAndRigid; }
+bool FitsRigid(Alignment a) { return a == Alignment::kRigid || a == Alignment::kTimeAndRigid; }
 
 bool ParseAlignment(const std::string& text, Alignment* alignment) {
   static const std::map<std::string, Alignment> names = {{"none", Alignment::kNone},

@@ -47,6 +47,10 @@ enum class Alignment { kNone, kTime, kRigid, kTimeAndRigid };
 // "none" | "time" | "rigid" | "time+rigid"; false for anything else.
 bool ParseAlignment(const std::string& text, Alignment* alignment);
 std::string AlignmentName(Alignment alignment);
+// Whether an alignment fits the time offset (time, time+rigid) or the rigid motion (rigid,
+// time+rigid).
+bool FitsTime(Alignment alignment);
+bool FitsRigid(Alignment alignment);
 
 // The consistency test's answer: consistent when its p-value is at least the significance.
 enum class Verdict { kConsistent, kInconsistent };

@@ -108,6 +108,7 @@ void WriteRepeats(hid_t f, const RepeatsResult& repeats) {
   const hid_t sg = shots.get();
   Write(sg, "time_offset_s", dims, offset.data(), "s");
   Write(sg, "time_offset_sigma_s", dims, offset_sigma.data(), "s");
+  Write(sg, "spread_time_offset_s", dims, r.spread_time_offset_s.data(), "s");
   Write(sg, "mean_d2", dims, mean_d2.data(), "1");
   Write(sg, "dof", dims, dof.data(), "1");
   Write(sg, "p_value", dims, p_value.data(), "1");

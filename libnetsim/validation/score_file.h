@@ -29,8 +29,10 @@
 //   /repeats                       attribute names: the measured files, one a line
 //   /repeats/pooled/{points, rms_m, mean_d2, dof, effective_points, p_value, critical_mean_d2,
 //                    margin} [1]   attribute verdict
-//   /repeats/shots/{time_offset_s, time_offset_sigma_s, mean_d2, dof, p_value, rms_m, max_m,
-//                   points} [S]    one row per shot; attributes names, verdicts
+//   /repeats/shots/{time_offset_s, time_offset_sigma_s, spread_time_offset_s, mean_d2, dof,
+//                   p_value, rms_m, max_m, points} [S]    one row per shot; attributes names,
+//                   verdicts (spread_time_offset_s: its clock against the first shot's, as the
+//                   spread aligns them)
 //   /repeats/shot_<i>/{per_class/*, per_phase/*}   shot i's tables, as /per_class, /per_phase
 //   /repeats/shot_<i>/alignment/{time_offset_s, time_offset_sigma_s [1], rotation, translation}
 //                                  attributes name, verdict

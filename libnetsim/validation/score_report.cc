@@ -415,17 +415,18 @@ void WriteRepeats(std::ostringstream& o, const RepeatsResult& repeats) {
             : "")
     << "); the verdict above pools them: each shot's Σd² over its correlation inflation adds "
        "up to one χ² over all of them.</p>\n<table id=\"repeat-shots\">"
-    << Row({"shot", "time offset (ms)", "knot-frames", "RMS (mm)", "max (mm)", "mean d²", "p",
-            "verdict"},
+    << Row({"shot", "time offset (ms)", "clock vs the first shot (ms)", "knot-frames", "RMS (mm)",
+            "max (mm)", "mean d²", "p", "verdict"},
            "th");
   for (size_t i = 0; i < repeats.shots.size(); ++i) {
     const ScoreSummary& s = repeats.shots[i].summary;
     o << Row({Escape(r.names[i]),
               Fixed(s.time_offset_s * 1e3, 3) + " ± " + Fixed(s.time_offset_sigma_s * 1e3, 3),
+              i < r.spread_time_offset_s.size() ? Fixed(r.spread_time_offset_s[i] * 1e3, 3) : "",
               std::to_string(s.points), Fixed(s.rms_m * 1e3, 3), Fixed(s.max_m * 1e3, 2),
               Fixed(s.mean_d2, 2), Num(s.p_value, 3), VerdictName(s.verdict)});
   }
-  o << Row({"<b>pooled</b>", "", std::to_string(r.points), Fixed(r.rms_m * 1e3, 3), "",
+  o << Row({"<b>pooled</b>", "", "", std::to_string(r.points), Fixed(r.rms_m * 1e3, 3), "",
             Fixed(r.mean_d2, 2), Num(r.p_value, 3), "<b>" + VerdictName(r.verdict) + "</b>"});
   o << "</table>\n<p class=\"caption\">Pooled: mean d² over all " << r.points << " knot-frames, "
     << Fixed(r.effective_points, 0) << " independent points, the test rejects above "
@@ -445,8 +446,10 @@ void WriteRepeats(std::ostringstream& o, const RepeatsResult& repeats) {
   o << Row({"all", "", std::to_string(r.spread.points), Fixed(r.spread.rms_m * 1e3, 3),
             Fixed(r.spread.error_rms_m * 1e3, 3)});
   o << "</table>\n<p class=\"caption\">Spread: at the first shot's frames, every shot's "
-       "measured knot at the same simulated time (its own offset; linear between its two frames "
-       "around it), in the simulation's frame; the RMS distance of one shot from the shots' mean, "
+       "measured knot at the same moment of the flight (the shots' clocks aligned to the first "
+       "shot's where they lie closest to it: the column above; linear between a shot's two "
+       "frames around that moment), in the simulation's frame; the RMS distance of one shot from "
+       "the shots' mean, "
        "√(Σ|x − x̄|² / Σ(n − 1)). It is the experiment's reproducibility: a model error well "
        "below it cannot be told from one shot to the next. The plots and tables below are the "
        "first shot's ("
