@@ -190,9 +190,15 @@ RepeatsSummary PoolRepeats(const std::vector<const KnotTracks*>& measured,
                            const std::vector<ScoreResult>& shots, const ScoreOptions& options) {
   RepeatsSummary r;
   r.names = names;
-  // The pooled test: independent shots' scaled chi^2 add up.
+  // The pooled test: Fisher's combination of the shots' own tests. Under "the simulation is
+  // right" the shots' p-values are independent and uniform, and F = -2 sum ln p_i ~ chi^2(2 S).
+  // (The shots' scaled chi^2 summed instead weighs each by its correlation inflation: a shot
+  // whose errors run through the flight, c ~ 70, counts little beside one of uncorrelated noise,
+  // c ~ 2, whose covariances are too large, and the second's deficit of d2 hid the first's
+  // excess.) Each shot's p at its sum d2 scaled by lambda: P(chi^2(nu_i / c_i) >= lambda X_i).
   double d2 = 0.0, x = 0.0, nu_eff = 0.0, e2 = 0.0;
   int informative = 0;
+  std::vector<std::pair<double, double>> scaled;  // (nu_i / c_i, X_i) per shot
   for (const ScoreResult& shot : shots) {
     const ScoreSummary& s = shot.summary;
     const double inflation = s.tau_int * s.design_effect;
@@ -203,20 +209,40 @@ RepeatsSummary PoolRepeats(const std::vector<const KnotTracks*>& measured,
     d2 += sum;
     x += sum / inflation;
     nu_eff += s.dof / inflation;
+    scaled.emplace_back(s.dof / inflation, sum / inflation);
     const int n = s.points - s.left_out;
     if (n > 0 && std::isfinite(s.rms_m)) {
       e2 += s.rms_m * s.rms_m * n;
       informative += n;
     }
   }
+  const auto fisher_p = [&](double lambda) {
+    double f = 0.0;
+    for (const auto& [nu, xi] : scaled)
+      f -= 2.0 * std::log(std::max(UpperGammaQ(nu / 2, lambda * xi / 2), 1e-300));
+    return UpperGammaQ(static_cast<double>(scaled.size()), f / 2);
+  };
   r.rms_m = informative > 0 ? std::sqrt(e2 / informative) : kNaN;
   r.mean_d2 = r.points > 0 ? d2 / r.points : kNaN;
   r.scaled_d2 = x;
   r.effective_dof = nu_eff;
-  r.p_value = UpperGammaQ(nu_eff / 2, x / 2);
-  // The pooled mean d2 at which X reaches the quantile, every shot's sum scaled alike.
-  r.critical_mean_d2 =
-      x > 0 ? Chi2Quantile(1 - options.significance, nu_eff) / x * r.mean_d2 : kNaN;
+  r.p_value = fisher_p(1.0);
+  // The pooled mean d2 at which the combined p reaches the significance, every shot's sum d2
+  // scaled alike (p falls as the scale grows): bisection on the scale's logarithm.
+  if (x > 0) {
+    double lo = 1e-6, hi = 1e6;
+    if (fisher_p(hi) >= options.significance || fisher_p(lo) < options.significance) {
+      r.critical_mean_d2 = kNaN;
+    } else {
+      for (int i = 0; i < 200 && hi / lo > 1 + 1e-12; ++i) {
+        const double mid = std::sqrt(lo * hi);
+        (fisher_p(mid) >= options.significance ? lo : hi) = mid;
+      }
+      r.critical_mean_d2 = std::sqrt(lo * hi) * r.mean_d2;
+    }
+  } else {
+    r.critical_mean_d2 = kNaN;
+  }
   r.margin = r.critical_mean_d2 - r.mean_d2;
   r.verdict = r.p_value >= options.significance ? Verdict::kConsistent : Verdict::kInconsistent;
 

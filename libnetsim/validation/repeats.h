@@ -3,12 +3,14 @@
 // (docs/score.md, "Repeats"). Each shot is scored on its own by Score (its own time offset and,
 // when asked, its own rigid alignment); then
 //
-// - the pooled test: the shots are independent, so each shot's scaled chi^2 (sum d2_i / c_i of
-//   nu_i / c_i degrees of freedom, c_i its correlation inflation: score.h) adds up:
-//   X = sum_i sum d2_i / c_i ~ chi^2(sum_i nu_i / c_i) under "the simulation is right". The
-//   pooled mean d2 is sum_i sum d2_i / sum_i N_i, dof = sum_i nu_i, p = P(chi^2 >= X); the
-//   critical mean d2 is the pooled mean d2 at which p reaches the significance when every shot's
-//   sum d2 is scaled alike;
+// - the pooled test: Fisher's combination of the shots' own tests. The shots are independent,
+//   so under "the simulation is right" their p-values are independent and uniform, and
+//   F = -2 sum_i ln p_i ~ chi^2(2 S) over S shots; p = P(chi^2(2 S) >= F). A shot the model
+//   misses rejects the pool however well the others fit (a sum of the shots' scaled chi^2 weighs
+//   each by its correlation inflation, and let a shot of uncorrelated noise with too large
+//   covariances outvote two the model missed: repeats_test). The pooled mean d2 is
+//   sum_i sum d2_i / sum_i N_i, dof = sum_i nu_i; the critical mean d2 is the pooled mean d2 at
+//   which p reaches the significance when every shot's sum d2 is scaled alike;
 // - the spread between the repeats, the experiment's reproducibility: at the first shot's frames,
 //   simulated time s = t + tau_0; every shot's measured knot at s (its own measured time s -
 //   tau_i, with tau_i its fitted offset moved to where the shot lies closest to the first shot,
@@ -53,7 +55,7 @@ struct RepeatsSummary {
   double mean_d2 = 0.0;         // sum of all d2 / points
   double dof = 0.0;             // sum of the shots' nu
   double effective_points = 0;  // sum of the shots' N / c
-  double scaled_d2 = 0.0;       // X = sum of the shots' sum d2 / c
+  double scaled_d2 = 0.0;       // sum of the shots' sum d2 / c
   double effective_dof = 0.0;   // sum of the shots' nu / c
   double p_value = 1.0;
   double critical_mean_d2 = 0.0;

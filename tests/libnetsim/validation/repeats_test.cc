@@ -158,6 +158,35 @@ TEST_F(Repeats, TheSpreadOfShotsOverOtherStretchesDoesNotDependOnTheModel) {
     EXPECT_NEAR(bad.summary.spread_time_offset_s[i], 0.0, 5e-5) << names[i];
 }
 
+// A shot the model misses is not outvoted by one whose covariances are too large. Summing each
+// shot's chi^2 over its own correlation inflation gave the well-behaved shot (uncorrelated
+// noise, c ~ 1.3, its sigma stated twice too large: mean d2 0.77) the weight to cancel the
+// other's excess (an error over the whole flight, c ~ 390: mean d2 14.7, p 2e-12): pooled p = 1.
+// As on docs/score.md's repeats launched 1 % apart. Fisher's combination of the p-values
+// rejects.
+TEST_F(Repeats, AShotTheModelMissesIsNotOutvotedByOneWithTooLargeCovariances) {
+  KnotTracks loose = Shot(0.0, 81);
+  for (Eigen::Matrix3d& c : loose.covariance) c *= 4.0;
+  // Launched a little faster sideways than the model: an error growing over the flight, the
+  // same in every knot (3 mm/s, 1.8 mm at 0.6 s), correlated over time and across the net.
+  KnotTracks shifted = Shot(0.0, 82);
+  for (int t = 0; t < shifted.frames(); ++t)
+    for (int k = 0; k < shifted.knots(); ++k)
+      shifted.position[static_cast<size_t>(t) * shifted.knots() + k].y() += 3e-3 * shifted.time[t];
+  const RepeatsResult r =
+      ScoreRepeats({&loose, &shifted}, {"loose.h5", "shifted.h5"}, *right_, ScoreOptions{});
+  ASSERT_EQ(r.shots.size(), 2u);
+  EXPECT_EQ(r.shots[0].summary.verdict, Verdict::kConsistent);
+  EXPECT_EQ(r.shots[1].summary.verdict, Verdict::kInconsistent);
+  EXPECT_LT(r.shots[0].summary.mean_d2, 1.0);
+  EXPECT_EQ(r.summary.verdict, Verdict::kInconsistent) << "pooled p " << r.summary.p_value;
+  EXPECT_LT(r.summary.margin, 0.0);
+  // Where the pooled test flips: every shot's d2 scaled alike to the critical mean d2 gives p at
+  // the significance.
+  EXPECT_GT(r.summary.critical_mean_d2, 0.0);
+  EXPECT_LT(r.summary.critical_mean_d2, r.summary.mean_d2);
+}
+
 // One shot pooled is that shot's test.
 TEST_F(Repeats, OneShotPooledIsItsOwnTest) {
   const KnotTracks shot = Shot(1 / kFps, 41);
