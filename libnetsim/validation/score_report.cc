@@ -413,8 +413,9 @@ void WriteRepeats(std::ostringstream& o, const RepeatsResult& repeats) {
                 repeats.shots[0].summary.alignment == Alignment::kTimeAndRigid
             ? " and rigid alignment"
             : "")
-    << "); the verdict above pools them: each shot's Σd² over its correlation inflation adds "
-       "up to one χ² over all of them.</p>\n<table id=\"repeat-shots\">"
+    << "); the verdict above pools their tests by Fisher's method, −2 Σ ln p over the shots "
+       "against χ² of twice as many degrees of freedom as shots: a shot the model misses "
+       "rejects the pool however well the others fit.</p>\n<table id=\"repeat-shots\">"
     << Row({"shot", "time offset (ms)", "clock vs the first shot (ms)", "knot-frames", "RMS (mm)",
             "max (mm)", "mean d²", "p", "verdict"},
            "th");
