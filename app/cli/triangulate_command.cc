@@ -25,6 +25,7 @@
 #include "common/output_paths.h"
 #include "common/tracks/track_file.h"
 #include "libreconstruct/geometry/bundle_adjust.h"
+#include "libreconstruct/geometry/camera_motion.h"
 #include "libreconstruct/geometry/camera_offsets.h"
 #include "libreconstruct/geometry/track_export.h"
 #include "libreconstruct/labels/label_set.h"
@@ -202,7 +203,8 @@ struct Outcome {
   std::optional<recon::OffsetEstimate> offsets;  // with --estimate-offsets
   bool result_offsets_applied = false;           // --apply-offsets
   recon::FrameTimes times;
-  std::string csv_pts, csv_res;  // with --csv
+  std::string csv_pts, csv_res;             // with --csv
+  std::vector<recon::CameraMotion> motion;  // the cameras that moved during the shot
   std::vector<std::string> warnings;
   double wall_s = 0.0;
 };
@@ -428,6 +430,20 @@ void PrintJson(const TriangulateArgs& a, const Outcome& o) {
     json.Key("truth_degenerate_rms_m").Number(aligned ? o.truth->degenerate_rms_m : nan);
     json.Key("truth_degenerate_max_m").Number(aligned ? o.truth->degenerate_max_m : nan);
   }
+  // The cameras that moved during the shot: the frames, the largest departure.
+  json.Key("moved_cameras").BeginArray();
+  for (const recon::CameraMotion& m : o.motion) {
+    if (m.moved.empty()) continue;
+    json.BeginObject();
+    json.Key("camera").String(m.camera);
+    json.Key("frames").BeginArray();
+    for (const auto& [first, last] : m.moved) json.BeginArray().Int(first).Int(last).EndArray();
+    json.EndArray();
+    json.Key("largest_departure_px").Number(m.largest_departure_px);
+    json.Key("largest_departure_frame").Int(m.largest_departure_frame);
+    json.EndObject();
+  }
+  json.EndArray();
   json.Key("warnings").BeginArray();
   for (const std::string& w : o.warnings) json.String(w);
   json.EndArray();
@@ -522,7 +538,9 @@ int RunTriangulate(const std::vector<std::string>& args) {
     WriteOutputs(a, tracks, &o);
     if (truth) o.truth = recon::CompareWithTruth(tracks, *truth);
     o.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    o.motion = recon::DetectCameraMotion(rig, labels, a.options);
     o.warnings = recon::SequenceWarnings(o.result);
+    for (const std::string& w : recon::CameraMotionSentences(o.motion)) o.warnings.push_back(w);
     if (o.offsets && o.result_offsets_applied)
       for (const recon::CameraOffset& c : o.offsets->cameras)
         if (!c.determined && c.why != "no labels of this camera")

@@ -286,8 +286,9 @@ void SequenceSolver::TriangulateAll() {
 }
 
 void SequenceSolver::ScaleThreshold(double sigma) {
-  tri_.outlier_threshold_px = std::max(o_.min_threshold_px, o_.outlier_sigmas * sigma);
-  tri_.huber_px = std::max(2.0 * sigma, 0.4 * o_.min_threshold_px);
+  const TriangulationOptions scaled = TriangulationForNoise(o_, sigma);
+  tri_.outlier_threshold_px = scaled.outlier_threshold_px;
+  tri_.huber_px = scaled.huber_px;
 }
 
 // With auto_threshold: the threshold scaled to the given noise, or to the one estimated from the
@@ -807,6 +808,13 @@ void SequenceSolver::InvertInformation(int k, SequenceResult* result) const {
 }
 
 }  // namespace
+
+TriangulationOptions TriangulationForNoise(const SequenceOptions& options, double sigma_px) {
+  TriangulationOptions t = options.triangulation;
+  t.outlier_threshold_px = std::max(options.min_threshold_px, options.outlier_sigmas * sigma_px);
+  t.huber_px = std::max(2.0 * sigma_px, 0.4 * options.min_threshold_px);
+  return t;
+}
 
 bool ParseAdjustment(const std::string& name, Adjustment* mode) {
   if (name == "none")

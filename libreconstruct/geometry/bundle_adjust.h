@@ -161,6 +161,11 @@ struct SequenceResult {
   double triangulate_s = 0.0, adjust_s = 0.0;
 };
 
+// The per-point triangulation options for labels of `sigma_px` px of noise, as auto_threshold
+// sets them: options.triangulation with the outlier threshold outlier_sigmas x sigma (at least
+// min_threshold_px) and the Huber scale 2 sigma (at least 0.4 min_threshold_px).
+TriangulationOptions TriangulationForNoise(const SequenceOptions& options, double sigma_px);
+
 // Throws netlab::InputError when the labels use a camera the rig lacks (naming it).
 SequenceResult ReconstructSequence(const calib::Rig& rig, const LabelSet& labels,
                                    const SequenceOptions& options);

@@ -199,12 +199,9 @@ OffsetEstimate EstimateCameraOffsets(const calib::Rig& rig, const LabelSet& labe
       estimate.cameras[c].why = "the reference";
     }
   }
-  TriangulationOptions tri = options.triangulation;
-  if (options.sigma_px > 0.0 && options.auto_threshold) {
-    tri.outlier_threshold_px =
-        std::max(options.min_threshold_px, options.outlier_sigmas * options.sigma_px);
-    tri.huber_px = std::max(2.0 * options.sigma_px, 0.4 * options.min_threshold_px);
-  }
+  const TriangulationOptions tri = options.sigma_px > 0.0 && options.auto_threshold
+                                       ? TriangulationForNoise(options, options.sigma_px)
+                                       : options.triangulation;
 
   // The sums of camera c's step at the offsets `at`: every knot-frame it labels, against the
   // point the other cameras (their labels moved by their offsets) put there; the knots of group
