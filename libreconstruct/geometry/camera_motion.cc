@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <limits>
 
-#include "common/errors.h"
 #include "libreconstruct/geometry/camera_offsets.h"
 #include "libreconstruct/geometry/triangulation.h"
 
@@ -123,14 +122,7 @@ std::vector<CameraMotion> DetectCameraMotion(const calib::Rig& rig, const LabelS
                                              const SequenceOptions& options,
                                              const CameraMotionOptions& motion) {
   const int cameras = static_cast<int>(rig.cameras.size());
-  std::vector<int> label_of(cameras, -1);
-  for (size_t lc = 0; lc < labels.cameras.size(); ++lc) {
-    const int c = rig.Find(labels.cameras[lc]);
-    if (c < 0)
-      throw InputError("the labels use camera '" + labels.cameras[lc] +
-                       "', which the rig does not have");
-    label_of[c] = static_cast<int>(lc);
-  }
+  const std::vector<int> label_of = LabelCameraOfRigCamera(rig, labels);
   // Every label but the projected ones, those under review too: a camera that moved has its
   // labels put under review by the labeling's epipolar check (on the twin with cam2 jumping 1.5
   // mm, all of them after the jump), and the median does not heed the few wrong ones.

@@ -171,13 +171,8 @@ bool LabelAtFrameTime(const LabelSet& labels, int c, int t, int k, double offset
   return true;
 }
 
-OffsetEstimate EstimateCameraOffsets(const calib::Rig& rig, const LabelSet& labels,
-                                     const SequenceOptions& options,
-                                     const OffsetOptions& offset_options) {
-  const int cameras = static_cast<int>(rig.cameras.size());
-  const int frames = labels.frames(), knots = labels.knots();
-  // The labels' camera of each rig camera (-1: none).
-  std::vector<int> label_of(cameras, -1);
+std::vector<int> LabelCameraOfRigCamera(const calib::Rig& rig, const LabelSet& labels) {
+  std::vector<int> label_of(rig.cameras.size(), -1);
   for (size_t lc = 0; lc < labels.cameras.size(); ++lc) {
     const int c = rig.Find(labels.cameras[lc]);
     if (c < 0)
@@ -185,6 +180,15 @@ OffsetEstimate EstimateCameraOffsets(const calib::Rig& rig, const LabelSet& labe
                        "', which the rig does not have");
     label_of[c] = static_cast<int>(lc);
   }
+  return label_of;
+}
+
+OffsetEstimate EstimateCameraOffsets(const calib::Rig& rig, const LabelSet& labels,
+                                     const SequenceOptions& options,
+                                     const OffsetOptions& offset_options) {
+  const int cameras = static_cast<int>(rig.cameras.size());
+  const int frames = labels.frames(), knots = labels.knots();
+  const std::vector<int> label_of = LabelCameraOfRigCamera(rig, labels);
   const std::vector<std::vector<uint8_t>> usable = UsableLabels(labels, options);
   OffsetEstimate estimate;
   estimate.cameras.resize(cameras);

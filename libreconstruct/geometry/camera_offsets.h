@@ -64,6 +64,10 @@ bool LabelAtFrameTime(const LabelSet& labels, int c, int t, int k, double offset
 std::vector<std::vector<uint8_t>> UsableLabels(const LabelSet& labels,
                                                const SequenceOptions& options);
 
+// The labels' camera of each rig camera (-1: the labels have none). InputError naming a camera
+// of the labels the rig does not have.
+std::vector<int> LabelCameraOfRigCamera(const calib::Rig& rig, const LabelSet& labels);
+
 struct OffsetOptions {
   double max_sigma_frames = 0.05;  // an offset less certain than this is not determined
   int min_observations = 20;       // fewer views of moving knots: not determined
