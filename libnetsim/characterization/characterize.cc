@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "common/errors.h"
+#include "common/minimize.h"
 #include "libnetsim/characterization/damped_oscillator.h"
 #include "libnetsim/characterization/heavy_cantilever.h"
 
@@ -130,21 +131,6 @@ Eigen::VectorXd ShapeResiduals(const CantileverTest& c, double u) {
 
 double TipDeflection(const CantileverTest& c, double u) {
   return -SolveHeavyCantilever(c.length, std::exp(u), kFitSegments).points.back().y();
-}
-
-// Golden-section search for the minimum of f on [a, b].
-template <typename F>
-double GoldenSection(F f, double a, double b, double tolerance) {
-  const double r = 0.5 * (std::sqrt(5.0) - 1.0);
-  double c = b - r * (b - a), d = a + r * (b - a), fc = f(c), fd = f(d);
-  while (b - a > tolerance) {
-    if (fc < fd) {
-      b = d, d = c, fd = fc, c = b - r * (b - a), fc = f(c);
-    } else {
-      a = c, c = d, fc = fd, d = a + r * (b - a), fd = f(d);
-    }
-  }
-  return 0.5 * (a + b);
 }
 
 // u = ln alpha and its standard uncertainty from the shape points: a scan of u over +-6 e-folds

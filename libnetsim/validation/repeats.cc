@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "common/errors.h"
+#include "common/minimize.h"
 
 namespace netlab::netsim {
 namespace {
@@ -129,7 +130,6 @@ std::vector<double> ShotsAlignedToEachOther(const std::vector<const KnotTracks*>
   const KnotTracks& ref = *measured[0];
   if (!FitsTime(options.alignment) || ref.frames() < 2) return tau;
   const double frame = (ref.time.back() - ref.time.front()) / (ref.frames() - 1);
-  constexpr double kGolden = 0.6180339887498949;
   for (size_t i = 1; i < shots.size(); ++i) {
     auto cost = [&](double x) {
       const double c = PairMeanSquare(measured, shots, i, x, options.meas_sigma_m);
@@ -143,19 +143,8 @@ std::vector<double> ShotsAlignedToEachOther(const std::vector<const KnotTracks*>
       const double c = cost(x);
       if (c < grid_cost) grid_best = x, grid_cost = c;
     }
-    double lo = grid_best - 0.5 * frame, hi = grid_best + 0.5 * frame;
-    double x1 = hi - kGolden * (hi - lo), x2 = lo + kGolden * (hi - lo);
-    double c1 = cost(x1), c2 = cost(x2);
-    while (hi - lo > 1e-4 * frame) {
-      if (c1 <= c2) {
-        hi = x2, x2 = x1, c2 = c1;
-        x1 = hi - kGolden * (hi - lo), c1 = cost(x1);
-      } else {
-        lo = x1, x1 = x2, c1 = c2;
-        x2 = lo + kGolden * (hi - lo), c2 = cost(x2);
-      }
-    }
-    const double best = 0.5 * (lo + hi);
+    const double best =
+        GoldenSection(cost, grid_best - 0.5 * frame, grid_best + 0.5 * frame, 1e-4 * frame);
     tau[i] = cost(best) <= grid_cost ? best : grid_best;
   }
   return tau;
